@@ -1,0 +1,21 @@
+#!/usr/bin/env bash
+# Install the system packages the build and tests need, if they are missing.
+# Debian/Ubuntu; installs only when running as root (CI), otherwise says what to install.
+set -euo pipefail
+
+need=()
+[ -f /usr/include/cmocka.h ] || need+=(libcmocka-dev)
+command -v cc >/dev/null 2>&1 || need+=(gcc)
+command -v make >/dev/null 2>&1 || need+=(make)
+
+if [ ${#need[@]} -eq 0 ]; then
+    exit 0
+fi
+if [ "$(id -u)" -ne 0 ] || ! command -v apt-get >/dev/null 2>&1; then
+    echo "missing packages: ${need[*]} - install them (Debian: sudo apt-get install ${need[*]})" >&2
+    exit 1
+fi
+echo "installing: ${need[*]}"
+export DEBIAN_FRONTEND=noninteractive
+apt-get update -qq
+apt-get install -y -qq "${need[@]}" >/dev/null
