@@ -5,7 +5,8 @@
  * s(t) = S0 (1 - cos(2 pi t / T)) (stops every T = 120 s, 20 m/s peak); the path curvature
  * is constant, so heading advances by s/R and after 600 s the car has driven 6000 m = five
  * laps and is back at the start. The body rolls out of the turn with lateral acceleration
- * and pitches and rolls on its suspension, so all three gyro and accelerometer axes work.
+ * and pitches and rolls on its suspension, so all three gyro and accelerometer axes work
+ * (kin_circle, tests/support/motions.c).
  */
 #include <math.h>
 #include <setjmp.h>
@@ -14,44 +15,12 @@
 #include <stdint.h>
 #include <cmocka.h>
 
+#include "motions.h"
 #include "nav_run.h"
 #include "test_util.h"
 
 #define PI 3.14159265358979323846
 #define DEG (PI / 180.0)
-
-typedef struct {
-    double s0_mps;      /* mean speed */
-    double period_s;    /* stop-and-go period */
-    double radius_m;    /* circle radius */
-    double heading0_rad;
-} circle_t;
-
-static void kin_circle(const void *ctx, double t, kin_t *k)
-{
-    const circle_t *c = ctx;
-    const double w = 2.0 * PI / c->period_s;
-    const double s = c->s0_mps * (1.0 - cos(w * t));
-    const double sd = c->s0_mps * w * sin(w * t);
-    const double dist = c->s0_mps * (t - sin(w * t) / w);
-    const double H = c->heading0_rad + dist / c->radius_m;
-    const double Hd = s / c->radius_m;
-    k->v_n_mps[0] = s * sin(H);
-    k->v_n_mps[1] = s * cos(H);
-    k->v_n_mps[2] = 0.0;
-    k->a_n_mps2[0] = sd * sin(H) + s * Hd * cos(H);
-    k->a_n_mps2[1] = sd * cos(H) - s * Hd * sin(H);
-    k->a_n_mps2[2] = 0.0;
-    /* body roll: 0.008 rad per m/s^2 of lateral acceleration s^2/R, out of the turn
-     * (right turn, left side down: negative roll), plus suspension motion */
-    const double k_roll = 0.008, wr = 2.0 * PI / 3.1, wp = 2.0 * PI / 7.0;
-    const double roll = -k_roll * s * s / c->radius_m + 0.005 * sin(wr * t);
-    const double roll_rate = -k_roll * 2.0 * s * sd / c->radius_m + 0.005 * wr * cos(wr * t);
-    const double pitch = 0.01 * sin(wp * t);
-    const double pitch_rate = 0.01 * wp * cos(wp * t);
-    truth_q_from_euler(roll, pitch, H, k->q_bn);
-    truth_w_nb_from_euler_rates(roll, pitch, roll_rate, pitch_rate, Hd, k->w_nb_b_rps);
-}
 
 static const circle_t CIRCLE = {10.0, 120.0, 6000.0 / (2.0 * PI * 5.0), 20.0 * DEG};
 

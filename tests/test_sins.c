@@ -10,6 +10,7 @@
 #include <stdint.h>
 #include <cmocka.h>
 
+#include "motions.h"
 #include "nav_run.h"
 #include "sins.h"
 #include "test_util.h"
@@ -23,23 +24,6 @@
 #endif
 
 #define DEG (3.14159265358979323846 / 180.0)
-
-/* ---- a stationary vehicle, tilted and turned so that no axis is trivially aligned ---- */
-typedef struct {
-    double roll, pitch, heading;
-} still_t;
-
-static void kin_still(const void *ctx, double t, kin_t *k)
-{
-    const still_t *s = ctx;
-    (void)t;
-    for (int i = 0; i < 3; i++) {
-        k->v_n_mps[i] = 0.0;
-        k->a_n_mps2[i] = 0.0;
-        k->w_nb_b_rps[i] = 0.0;
-    }
-    truth_q_from_euler(s->roll, s->pitch, s->heading, k->q_bn);
-}
 
 static run_spec_t still_spec(const still_t *still, double duration_s, double rate_hz)
 {
@@ -168,33 +152,6 @@ static void test_vertical_channel_diverges(void **state)
     assert_near(w_v_meas, w_v_expect, 0.02 * w_v_expect);
 }
 
-/* ---- classical coning: body axis x sweeps a cone of half-angle ALPHA at rate OMEGA ---- */
-typedef struct {
-    double alpha_rad, omega_rps;
-    double q0[4];
-} cone_t;
-
-static void kin_cone(const void *ctx, double t, kin_t *k)
-{
-    const cone_t *c = ctx;
-    const double sa2 = sin(0.5 * c->alpha_rad), ca2 = cos(0.5 * c->alpha_rad);
-    const double wt = c->omega_rps * t;
-    /* q_cone = [cos(a/2), 0, sin(a/2) cos(wt), sin(a/2) sin(wt)]; its body rate follows from
-     * w = 2 q* (x) dq/dt: (-2 W sin^2(a/2), -W sin(a) sin(wt), W sin(a) cos(wt)). */
-    const double qc[4] = {ca2, 0.0, sa2 * cos(wt), sa2 * sin(wt)};
-    for (int i = 0; i < 3; i++) {
-        k->v_n_mps[i] = 0.0;
-        k->a_n_mps2[i] = 0.0;
-    }
-    k->q_bn[0] = c->q0[0] * qc[0] - c->q0[1] * qc[1] - c->q0[2] * qc[2] - c->q0[3] * qc[3];
-    k->q_bn[1] = c->q0[0] * qc[1] + c->q0[1] * qc[0] + c->q0[2] * qc[3] - c->q0[3] * qc[2];
-    k->q_bn[2] = c->q0[0] * qc[2] - c->q0[1] * qc[3] + c->q0[2] * qc[0] + c->q0[3] * qc[1];
-    k->q_bn[3] = c->q0[0] * qc[3] + c->q0[1] * qc[2] - c->q0[2] * qc[1] + c->q0[3] * qc[0];
-    k->w_nb_b_rps[0] = -2.0 * c->omega_rps * sa2 * sa2;
-    k->w_nb_b_rps[1] = -c->omega_rps * sin(c->alpha_rad) * sin(wt);
-    k->w_nb_b_rps[2] = c->omega_rps * sin(c->alpha_rad) * cos(wt);
-}
-
 /*
  * GIVEN a classical coning motion (half-angle 1 deg, 2 Hz) sampled at 100 Hz, 60 s
  * WHEN the core integrates it with and without the two-sample coning correction
@@ -221,6 +178,83 @@ static void test_coning_compensation(void **state)
     assert_true(without.final_att_err_rad > 10.0 * with.final_att_err_rad);
 }
 
+
+static void init_still(sins_t *s)
+{
+    const sins_config_t cfg = sins_default_config();
+    const geo_pos_t pos = {45LL * 10000000LL * GEO_LSB_PER_DEG_E7, 0, 0};
+    const nav_real_t v[3] = {(nav_real_t)0.0, (nav_real_t)0.0, (nav_real_t)0.0};
+    const nav_real_t q[4] = {(nav_real_t)1.0, (nav_real_t)0.0, (nav_real_t)0.0, (nav_real_t)0.0};
+    assert_int_equal(sins_init(s, &cfg, &pos, v, q), NAV_OK);
+}
+
+/* the navigation state proper (not the bookkeeping of coning history) */
+static void assert_same_state(const sins_t *a, const sins_t *b)
+{
+    assert_memory_equal(&a->pos, &b->pos, sizeof a->pos);
+    assert_memory_equal(a->q_bn, b->q_bn, sizeof a->q_bn);
+    assert_memory_equal(a->v_n_mps, b->v_n_mps, sizeof a->v_n_mps);
+    assert_int_equal(a->n_steps, b->n_steps);
+}
+
+/*
+ * GIVEN a navigator at rest
+ * WHEN it is fed malformed increments (non-finite values, dt <= 0 or above max_dt_s, more
+ *      than half a turn in one sample) or increments that would leave the valid region
+ * THEN each is rejected with its documented code and the navigation state is unchanged.
+ */
+static void test_rejects_bad_input(void **state)
+{
+    (void)state;
+    sins_t s, before;
+    init_still(&s);
+    imu_inc_t good = {{(nav_real_t)0.0, (nav_real_t)0.0, (nav_real_t)0.0},
+                      {(nav_real_t)0.0, (nav_real_t)0.0, (nav_real_t)0.098},
+                      (nav_real_t)0.01};
+    assert_int_equal(sins_step(&s, &good), NAV_OK);
+    before = s;
+
+    imu_inc_t bad = good;
+    bad.dt_s = (nav_real_t)0.0;
+    assert_int_equal(sins_step(&s, &bad), NAV_EINVAL);
+    bad.dt_s = (nav_real_t)-0.01;
+    assert_int_equal(sins_step(&s, &bad), NAV_EINVAL);
+    bad.dt_s = (nav_real_t)0.5; /* > max_dt_s 0.2: a gap in the data, not one sample */
+    assert_int_equal(sins_step(&s, &bad), NAV_EINVAL);
+    bad.dt_s = (nav_real_t)NAN;
+    assert_int_equal(sins_step(&s, &bad), NAV_EINVAL);
+    bad = good;
+    bad.dtheta_b_rad[1] = (nav_real_t)NAN;
+    assert_int_equal(sins_step(&s, &bad), NAV_EINVAL);
+    bad = good;
+    bad.dv_b_mps[0] = (nav_real_t)INFINITY;
+    assert_int_equal(sins_step(&s, &bad), NAV_EINVAL);
+    bad = good;
+    bad.dtheta_b_rad[2] = (nav_real_t)3.5; /* more than pi in one sample */
+    assert_int_equal(sins_step(&s, &bad), NAV_EINVAL);
+    bad = good;
+    bad.dv_b_mps[1] = (nav_real_t)2000.0; /* would exceed 1000 m/s */
+    assert_int_equal(sins_step(&s, &bad), NAV_ERANGE);
+    assert_same_state(&s, &before);
+    assert_int_equal(s.have_prev, 0); /* coning history is not trusted across a gap */
+
+    /* and init refuses what it cannot navigate from */
+    sins_t t;
+    const sins_config_t cfg = sins_default_config();
+    const geo_pos_t pole = {895LL * 1000000LL * GEO_LSB_PER_DEG_E7, 0, 0};
+    const geo_pos_t ok = {0, 0, 0};
+    const nav_real_t v0[3] = {(nav_real_t)0.0, (nav_real_t)0.0, (nav_real_t)0.0};
+    const nav_real_t vnan[3] = {(nav_real_t)NAN, (nav_real_t)0.0, (nav_real_t)0.0};
+    const nav_real_t q1[4] = {(nav_real_t)1.0, (nav_real_t)0.0, (nav_real_t)0.0, (nav_real_t)0.0};
+    const nav_real_t q0[4] = {(nav_real_t)0.0, (nav_real_t)0.0, (nav_real_t)0.0, (nav_real_t)0.0};
+    assert_int_equal(sins_init(&t, &cfg, &pole, v0, q1), NAV_EINVAL);
+    assert_int_equal(sins_init(&t, &cfg, &ok, vnan, q1), NAV_EINVAL);
+    assert_int_equal(sins_init(&t, &cfg, &ok, v0, q0), NAV_EINVAL);
+    sins_config_t bad_cfg = cfg;
+    bad_cfg.max_dt_s = (nav_real_t)0.0;
+    assert_int_equal(sins_init(&t, &bad_cfg, &ok, v0, q1), NAV_EINVAL);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -228,6 +262,7 @@ int main(void)
         cmocka_unit_test(test_schuler_period),
         cmocka_unit_test(test_vertical_channel_diverges),
         cmocka_unit_test(test_coning_compensation),
+        cmocka_unit_test(test_rejects_bad_input),
     };
     return cmocka_run_group_tests_name("sins_" VARIANT, tests, NULL, NULL);
 }

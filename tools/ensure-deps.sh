@@ -7,6 +7,7 @@ need=()
 [ -f /usr/include/cmocka.h ] || need+=(libcmocka-dev)
 command -v cc >/dev/null 2>&1 || need+=(gcc)
 command -v make >/dev/null 2>&1 || need+=(make)
+command -v arm-none-eabi-gcc >/dev/null 2>&1 || need+=(gcc-arm-none-eabi libnewlib-arm-none-eabi)
 
 if [ ${#need[@]} -eq 0 ]; then
     exit 0

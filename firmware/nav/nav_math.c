@@ -133,6 +133,9 @@ void dcm_to_euler(const mat3_t *Cm, nav_real_t *roll_rad, nav_real_t *pitch_rad,
     nav_real_t hdg = nav_atan2(C[0][1], C[1][1]);
     if (hdg < NAV_C(0.0)) {
         hdg += NAV_C(6.283185307179586);
+        if (hdg >= NAV_C(6.283185307179586)) {
+            hdg = NAV_C(0.0); /* -tiny + 2 pi rounds up to 2 pi itself */
+        }
     }
     *heading_rad = hdg;
 }
@@ -175,6 +178,12 @@ int rotvec_to_dquat(const nav_real_t phi_rad[3], nav_real_t dq[4])
 
 void nav_acc_add(nav_real_t *hi, nav_real_t *lo, nav_real_t inc)
 {
+#if defined(NAV_ACC_PLAIN)
+    /* numerics study only (make numerics): what plain accumulation would cost */
+    *hi += inc;
+    *lo = NAV_C(0.0);
+    return;
+#endif
     const nav_real_t y = inc + *lo;
     const nav_real_t s = *hi + y;
     const nav_real_t yv = s - *hi;
