@@ -15,15 +15,7 @@
 int main(void)
 {
     const still_t still = {2.0 * DEG, -1.0 * DEG, 30.0 * DEG};
-    run_spec_t spec = {0};
-    spec.kin = kin_still;
-    spec.ctx = &still;
-    spec.lat0_rad = 45.0 * DEG;
-    spec.lon0_rad = 10.0 * DEG;
-    spec.h0_m = 100.0;
-    spec.duration_s = 3600.0;
-    spec.coning_sculling = 1;
-    spec.vdamp = 1;
+    run_spec_t spec = run_spec_default(kin_still, &still, 3600.0, 10.0);
     const double rates[] = {10.0, 100.0, 400.0};
     printf("stationary 1 h at 45 deg N, exact increments, vertical damped:\n");
     printf("  rate_hz  f32_max_horiz_m  f64_max_horiz_m  f32_att_err_rad\n");

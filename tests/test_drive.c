@@ -26,17 +26,7 @@ static const circle_t CIRCLE = {10.0, 120.0, 6000.0 / (2.0 * PI * 5.0), 20.0 * D
 
 static run_spec_t circle_spec(void)
 {
-    run_spec_t spec = {0};
-    spec.kin = kin_circle;
-    spec.ctx = &CIRCLE;
-    spec.lat0_rad = 45.0 * DEG;
-    spec.lon0_rad = 10.0 * DEG;
-    spec.h0_m = 100.0;
-    spec.rate_hz = 100.0;
-    spec.duration_s = 600.0;
-    spec.coning_sculling = 1;
-    spec.vdamp = 1;
-    return spec;
+    return run_spec_default(kin_circle, &CIRCLE, 600.0, 100.0);
 }
 
 /*

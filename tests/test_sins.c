@@ -27,17 +27,7 @@
 
 static run_spec_t still_spec(const still_t *still, double duration_s, double rate_hz)
 {
-    run_spec_t spec = {0};
-    spec.kin = kin_still;
-    spec.ctx = still;
-    spec.lat0_rad = 45.0 * DEG;
-    spec.lon0_rad = 10.0 * DEG;
-    spec.h0_m = 100.0;
-    spec.rate_hz = rate_hz;
-    spec.duration_s = duration_s;
-    spec.coning_sculling = 1;
-    spec.vdamp = 1;
-    return spec;
+    return run_spec_default(kin_still, still, duration_s, rate_hz);
 }
 
 /*

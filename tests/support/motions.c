@@ -1,6 +1,8 @@
 /* motions.c - see motions.h. */
 #include "motions.h"
 
+#include "nav_run.h"
+
 #include <math.h>
 
 #define PI 3.14159265358979323846
@@ -62,4 +64,19 @@ void kin_cone(const void *ctx, double t, kin_t *k)
     k->w_nb_b_rps[0] = -2.0 * c->omega_rps * sa2 * sa2;
     k->w_nb_b_rps[1] = -c->omega_rps * sin(c->alpha_rad) * sin(wt);
     k->w_nb_b_rps[2] = c->omega_rps * sin(c->alpha_rad) * cos(wt);
+}
+
+run_spec_t run_spec_default(kin_fn kin, const void *ctx, double duration_s, double rate_hz)
+{
+    run_spec_t spec = {0};
+    spec.kin = kin;
+    spec.ctx = ctx;
+    spec.lat0_rad = 45.0 * PI / 180.0;
+    spec.lon0_rad = 10.0 * PI / 180.0;
+    spec.h0_m = 100.0;
+    spec.rate_hz = rate_hz;
+    spec.duration_s = duration_s;
+    spec.coning_sculling = 1;
+    spec.vdamp = 1;
+    return spec;
 }

@@ -38,6 +38,9 @@ typedef struct {
     double truth_lat_rad, truth_lon_rad, truth_h_m; /* truth at the end */
 } run_result_t;
 
+/* The common test site: 45 deg N, 10 deg E, 100 m; coning/sculling on; vertical damped. */
+run_spec_t run_spec_default(kin_fn kin, const void *ctx, double duration_s, double rate_hz);
+
 void nav_run_f32(const run_spec_t *spec, run_result_t *res);
 void nav_run_f64(const run_spec_t *spec, run_result_t *res);
 
