@@ -47,9 +47,13 @@ static void test_stationary_1h(void **state)
     NAV_RUN(&spec, &r);
     assert_int_equal(r.rc, 0);
 #if defined(NAV_REAL_DOUBLE)
-    const double tol_m = 0.05;
+    /* issue #2 asks < 0.05 m; double rounding (1e-16) leaves nothing measurable, so any
+     * inconsistency of mechanization and Earth model shows well above 1 mm */
+    const double tol_m = 0.001;
 #else
-    const double tol_m = 1.0;
+    /* issue #2 asks < 1 m; the float32 attitude alone is rounded by up to 3e-8 rad, which
+     * the Schuler loop turns into up to 2 R 3e-8 = 0.38 m (docs/numeric-design.md) */
+    const double tol_m = 0.5;
 #endif
     print_message("[" VARIANT "] stationary 1 h: max horizontal drift %.4f m, final %.4f m, "
                   "attitude %.3g rad\n",
@@ -69,7 +73,7 @@ static int find_peaks(const double *y, size_t n, double *t_peak, int max_peaks)
     int found = 0;
     for (size_t i = 1; i + 1 < n && found < max_peaks; i++) {
         if (y[i] > 0.5 * ymax && y[i] > y[i - 1] && y[i] >= y[i + 1]) {
-            const double den = y[i - 1] - 2.0 * y[i] + y[i + 1];
+            const double den = y[i - 1] - 2.0 * y[i] + y[i + 1]; /* < 0 at a strict peak */
             t_peak[found++] = (double)i + 0.5 * (y[i - 1] - y[i + 1]) / den;
         }
     }
@@ -240,9 +244,49 @@ static void test_rejects_bad_input(void **state)
     assert_int_equal(sins_init(&t, &cfg, &pole, v0, q1), NAV_EINVAL);
     assert_int_equal(sins_init(&t, &cfg, &ok, vnan, q1), NAV_EINVAL);
     assert_int_equal(sins_init(&t, &cfg, &ok, v0, q0), NAV_EINVAL);
+    const geo_pos_t deep = {0, 0, -2000000LL * GEO_LSB_PER_MM}; /* 2 km below the ellipsoid */
+    assert_int_equal(sins_init(&t, &cfg, &deep, v0, q1), NAV_EINVAL);
     sins_config_t bad_cfg = cfg;
     bad_cfg.max_dt_s = (nav_real_t)0.0;
     assert_int_equal(sins_init(&t, &bad_cfg, &ok, v0, q1), NAV_EINVAL);
+    bad_cfg = cfg;
+    bad_cfg.vdamp_tau_s = (nav_real_t)1e-3; /* a loop faster than the samples is unstable */
+    assert_int_equal(sins_init(&t, &bad_cfg, &ok, v0, q1), NAV_EINVAL);
+    bad_cfg.vdamp_tau_s = (nav_real_t)NAN;
+    assert_int_equal(sins_init(&t, &bad_cfg, &ok, v0, q1), NAV_EINVAL);
+
+    /* climbing out of the valid height range is refused, not overflowed */
+    const geo_pos_t high = {0, 0, GEO_H_MAX_LSB - 1000LL * GEO_LSB_PER_MM}; /* 1 m below */
+    const nav_real_t up[3] = {(nav_real_t)0.0, (nav_real_t)0.0, (nav_real_t)900.0};
+    assert_int_equal(sins_init(&t, &cfg, &high, up, q1), NAV_OK);
+    const sins_t t0 = t;
+    assert_int_equal(sins_step(&t, &good), NAV_ERANGE);
+    assert_same_state(&t, &t0);
+}
+
+/*
+ * GIVEN a stationary vehicle, 10 m initial height error, vertical damping (tau = 100 s)
+ *       toward the true height
+ * WHEN the core navigates for 200 s
+ * THEN the loop is critically damped with both poles at -1/tau:
+ *      dh'' + (2/tau) dh' + dh/tau^2 = 0 with dh(0) = h0 and dh'(0) = dv(0) - k1 h0 =
+ *      -2 h0/tau (the velocity is exact, the height feedback acts at once), so
+ *      dh(t) = h0 (1 - t/tau) exp(-t/tau) = -1.353 m at t = 2 tau (2 % for the discrete
+ *      loop). A wrong k1 or a k2 without the 2g/R term misses this by far more.
+ */
+static void test_vertical_damping_response(void **state)
+{
+    (void)state;
+    const still_t still = {0.0, 0.0, 0.0};
+    run_spec_t spec = still_spec(&still, 200.0, 10.0);
+    spec.init_h_err_m = 10.0;
+    run_result_t r;
+    NAV_RUN(&spec, &r);
+    assert_int_equal(r.rc, 0);
+    const double expect = 10.0 * (1.0 - 2.0) * exp(-2.0);
+    print_message("[" VARIANT "] vertical damping: 10 m -> %.3f m after 2 tau, expected %.3f m\n",
+                  r.final_h_m - r.truth_h_m, expect);
+    assert_near(r.final_h_m - r.truth_h_m, expect, 0.02 * fabs(expect));
 }
 
 int main(void)
@@ -251,6 +295,7 @@ int main(void)
         cmocka_unit_test(test_stationary_1h),
         cmocka_unit_test(test_schuler_period),
         cmocka_unit_test(test_vertical_channel_diverges),
+        cmocka_unit_test(test_vertical_damping_response),
         cmocka_unit_test(test_coning_compensation),
         cmocka_unit_test(test_rejects_bad_input),
     };

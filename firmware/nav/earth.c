@@ -36,6 +36,15 @@ int geo_pos_add(geo_pos_t *pos, nav_real_t dlat_rad, nav_real_t dlon_rad, nav_re
         !(nav_fabs(dh_m) <= NAV_C(1e5))) {
         return NAV_ERANGE; /* also catches NaN, for which every comparison is false */
     }
+    if (pos->lat > GEO_LSB_180DEG / 2 || pos->lat < -GEO_LSB_180DEG / 2 ||
+        pos->lon > GEO_LSB_180DEG || pos->lon <= -GEO_LSB_180DEG || pos->h > GEO_H_MAX_LSB ||
+        pos->h < GEO_H_MIN_LSB) {
+        return NAV_ERANGE; /* bounded inputs keep every sum below far from int64 overflow */
+    }
+    const int64_t h = pos->h + round_to_lsb(dh_m * HLSB_PER_M);
+    if (h > GEO_H_MAX_LSB || h < GEO_H_MIN_LSB) {
+        return NAV_ERANGE;
+    }
     const int64_t lat = pos->lat + round_to_lsb(dlat_rad * LSB_PER_RAD);
     if (lat > GEO_LSB_180DEG / 2 || lat < -GEO_LSB_180DEG / 2) {
         return NAV_ERANGE;
@@ -48,7 +57,7 @@ int geo_pos_add(geo_pos_t *pos, nav_real_t dlat_rad, nav_real_t dlon_rad, nav_re
     }
     pos->lat = lat;
     pos->lon = lon;
-    pos->h += round_to_lsb(dh_m * HLSB_PER_M);
+    pos->h = h;
     return NAV_OK;
 }
 

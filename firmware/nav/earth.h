@@ -31,6 +31,10 @@
 #define GEO_LSB_PER_DEG_E7 16777216LL /* 2^24 */
 #define GEO_LSB_PER_MM 16777216LL     /* 2^24 */
 #define GEO_LSB_180DEG (1800000000LL * GEO_LSB_PER_DEG_E7)
+/* Heights the Earth model is valid for (normal gravity series, TR8350.2 eq. 4-3): from
+ * below the Dead Sea to far above any road. */
+#define GEO_H_MIN_LSB (-1000000LL * GEO_LSB_PER_MM)  /* -1 km */
+#define GEO_H_MAX_LSB (20000000LL * GEO_LSB_PER_MM)  /* +20 km */
 
 typedef struct {
     int64_t lat;  /* geodetic latitude, north positive, GEO_LSB_PER_DEG_E7 per 1e-7 deg */
@@ -62,10 +66,11 @@ nav_real_t geo_lon_rad(const geo_pos_t *pos);
 nav_real_t geo_h_m(const geo_pos_t *pos);
 
 /*
- * pos += (dlat_rad, dlon_rad, dh_m). Increments are rounded to the nearest LSB; longitude
- * wraps to (-180, 180] degrees. Returns NAV_OK, or NAV_ERANGE (pos unchanged) if an
- * increment is not finite or larger than 0.1 rad / 100 km, or the latitude would leave
- * [-90, 90] degrees.
+ * pos += (dlat_rad, dlon_rad, dh_m). pos must be valid: |lat| <= 90 deg, lon in
+ * (-180, 180] deg, height within [GEO_H_MIN_LSB, GEO_H_MAX_LSB]. Increments are rounded to
+ * the nearest LSB; longitude wraps to (-180, 180] degrees. Returns NAV_OK, or NAV_ERANGE
+ * (pos unchanged) if pos is not valid, an increment is not finite or larger than 0.1 rad /
+ * 100 km, or the result would leave the valid latitudes or heights.
  */
 int geo_pos_add(geo_pos_t *pos, nav_real_t dlat_rad, nav_real_t dlon_rad, nav_real_t dh_m);
 

@@ -69,8 +69,10 @@ void dcm_to_euler(const mat3_t *C_bn, nav_real_t *roll_rad, nav_real_t *pitch_ra
 int rotvec_to_dquat(const nav_real_t phi_rad[3], nav_real_t dq[4]);
 
 /*
- * Compensated accumulation: (*hi + *lo) += inc without rounding loss (Knuth's TwoSum).
- * *lo carries what float rounding drops from *hi; hi alone is the value to use.
+ * Compensated accumulation: (*hi + *lo) += inc (Knuth's TwoSum of hi and inc + lo).
+ * *lo carries what float rounding drops from *hi; hi alone is the value to use. The only
+ * rounding left is that of inc + lo, relative to the increment, not to hi: after N steps
+ * the sum is exact within N eps^2 |hi| / 2 (test_compensated_accumulation).
  * Needs strict IEEE evaluation: the build forbids -ffast-math and uses -ffp-contract=off.
  */
 void nav_acc_add(nav_real_t *hi, nav_real_t *lo, nav_real_t inc);

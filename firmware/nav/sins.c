@@ -28,12 +28,13 @@ static void copy3(const nav_real_t in[3], nav_real_t out[3])
 int sins_init(sins_t *s, const sins_config_t *cfg, const geo_pos_t *pos,
               const nav_real_t v_n_mps[3], const nav_real_t q_bn[4])
 {
-    if (!(cfg->max_dt_s > NAV_C(0.0)) || !(cfg->max_dt_s <= NAV_C(1.0)) ||
-        !(cfg->vdamp_tau_s >= NAV_C(0.0)) || !nav_isfinite(cfg->vdamp_tau_s)) {
+    const nav_real_t tau = cfg->vdamp_tau_s;
+    if (!(cfg->max_dt_s > NAV_C(0.0)) || !(cfg->max_dt_s <= NAV_C(1.0)) || !(tau >= NAV_C(0.0)) ||
+        !nav_isfinite(tau) || (tau > NAV_C(0.0) && tau < NAV_C(10.0) * cfg->max_dt_s)) {
         return NAV_EINVAL;
     }
     if (pos->lat > MAX_LAT_LSB || pos->lat < -MAX_LAT_LSB || pos->lon > GEO_LSB_180DEG ||
-        pos->lon <= -GEO_LSB_180DEG) {
+        pos->lon <= -GEO_LSB_180DEG || pos->h > GEO_H_MAX_LSB || pos->h < GEO_H_MIN_LSB) {
         return NAV_EINVAL;
     }
     if (!finite3(v_n_mps) || !(vec3_norm(v_n_mps) <= MAX_SPEED_MPS)) {
@@ -59,6 +60,7 @@ int sins_init(sins_t *s, const sins_config_t *cfg, const geo_pos_t *pos,
         s->dtheta_prev_b_rad[i] = NAV_C(0.0);
         s->dv_prev_b_mps[i] = NAV_C(0.0);
     }
+    s->dt_prev_s = NAV_C(0.0);
     s->h_ref_m = NAV_C(0.0);
     s->have_prev = 0u;
     s->h_ref_valid = 0u;
@@ -112,7 +114,9 @@ int sins_step(sins_t *s, const imu_inc_t *inc)
     const nav_real_t *dth = inc->dtheta_b_rad;
     const nav_real_t *dv = inc->dv_b_mps;
     const nav_real_t zero3[3] = {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)};
-    const int use_prev = s->have_prev && s->cfg.coning_sculling;
+    /* the two-sample corrections assume equal intervals; after a dropped sample skip them */
+    const int same_dt = s->have_prev && nav_fabs(dt - s->dt_prev_s) <= NAV_C(0.01) * dt;
+    const int use_prev = same_dt && s->cfg.coning_sculling;
     const nav_real_t *dth_prev = use_prev ? s->dtheta_prev_b_rad : zero3;
     const nav_real_t *dv_prev = use_prev ? s->dv_prev_b_mps : zero3;
     const nav_real_t half = NAV_C(0.5), twelfth = NAV_C(1.0) / NAV_C(12.0);
@@ -126,8 +130,9 @@ int sins_step(sins_t *s, const imu_inc_t *inc)
 
     /* ---- velocity (seed 001 eqs. 3-5, increment form) ---- */
     nav_real_t v_mid[3], w_en[3], w_in[3];
+    const nav_real_t extrap = s->have_prev ? half * dt / s->dt_prev_s : NAV_C(0.0);
     for (int i = 0; i < 3; i++) {
-        v_mid[i] = s->v_n_mps[i] + half * (s->v_n_mps[i] - s->v_n_prev_mps[i]);
+        v_mid[i] = s->v_n_mps[i] + extrap * (s->v_n_mps[i] - s->v_n_prev_mps[i]);
     }
     earth_transport_rate(&e, h, v_mid, w_en);
     for (int i = 0; i < 3; i++) {
@@ -239,6 +244,7 @@ int sins_step(sins_t *s, const imu_inc_t *inc)
     copy3(v_new_lo, s->v_n_lo_mps);
     copy3(dth, s->dtheta_prev_b_rad);
     copy3(dv, s->dv_prev_b_mps);
+    s->dt_prev_s = dt;
     s->have_prev = 1u;
     s->n_steps++;
     return NAV_OK;

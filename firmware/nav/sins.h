@@ -30,7 +30,8 @@ typedef struct {
     uint8_t coning_sculling; /* 1: apply the two-sample coning and sculling terms */
     nav_real_t max_dt_s;     /* sins_step rejects intervals longer than this */
     nav_real_t vdamp_tau_s;  /* vertical damping time constant when a height reference
-                                is set (sins_set_height_ref); 0: always undamped */
+                                is set (sins_set_height_ref); 0: always undamped; else at
+                                least 10 max_dt_s, or the discrete loop goes unstable */
 } sins_config_t;
 
 typedef struct {
@@ -43,6 +44,7 @@ typedef struct {
     nav_real_t v_n_prev_mps[3]; /* velocity one step earlier (mid-interval extrapolation) */
     nav_real_t dtheta_prev_b_rad[3]; /* previous increments for coning and sculling */
     nav_real_t dv_prev_b_mps[3];
+    nav_real_t dt_prev_s;       /* interval of the previous accepted step */
     nav_real_t h_ref_m;         /* height reference for vertical damping */
     uint8_t have_prev;          /* previous increments are valid */
     uint8_t h_ref_valid;
@@ -62,8 +64,9 @@ sins_config_t sins_default_config(void);
 /*
  * Start navigating from a known state: position pos, Earth-relative velocity v_n_mps
  * (ENU, m/s), attitude q_bn (normalized here). Returns NAV_OK, or NAV_EINVAL (s untouched)
- * if a value is not finite, |lat| > 89 deg, |v| > 1000 m/s, |q| is far from 1, or the
- * config is out of range (max_dt_s in (0, 1], vdamp_tau_s >= 0).
+ * if a value is not finite, |lat| > 89 deg, the height is outside [-1, 20] km, |v| > 1000
+ * m/s, |q| is far from 1, or the config is out of range (max_dt_s in (0, 1], vdamp_tau_s
+ * 0 or >= 10 max_dt_s).
  */
 int sins_init(sins_t *s, const sins_config_t *cfg, const geo_pos_t *pos,
               const nav_real_t v_n_mps[3], const nav_real_t q_bn[4]);
@@ -71,9 +74,11 @@ int sins_init(sins_t *s, const sins_config_t *cfg, const geo_pos_t *pos,
 /*
  * Advance the state by one IMU interval. Returns NAV_OK; NAV_EINVAL if the increment is
  * not finite, dt_s is outside (0, max_dt_s], or the rotation exceeds pi in one interval;
- * NAV_ERANGE if the result would leave the valid region (|lat| > 89 deg, |v| > 1000 m/s).
- * On an error the state is unchanged, and the next accepted step has no coning/sculling
- * history (it cannot be trusted across a rejected sample).
+ * NAV_ERANGE if the result would leave the valid region (|lat| > 89 deg, height outside
+ * [-1, 20] km, |v| > 1000 m/s). On an error the state is unchanged, and the next accepted
+ * step has no coning/sculling history (it cannot be trusted across a rejected sample).
+ * Intervals may vary; the two-sample corrections are used only between equal intervals
+ * (within 1 %), and the mid-interval velocity extrapolation scales with dt/dt_prev.
  */
 int sins_step(sins_t *s, const imu_inc_t *inc);
 

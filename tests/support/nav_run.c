@@ -62,6 +62,10 @@ void NAV_RUN(const run_spec_t *spec, run_result_t *res)
     res->max_att_err_rad = 0.0;
     res->final_att_err_rad = 0.0;
 
+    if (!(spec->rate_hz >= 1.0) || !(spec->duration_s >= 0.0)) {
+        res->rc = -22; /* the runner samples the error once per second */
+        return;
+    }
     const double dt = 1.0 / spec->rate_hz;
     const long n_steps = lround(spec->duration_s * spec->rate_hz);
     const long per_second = lround(spec->rate_hz);
