@@ -66,6 +66,22 @@ void kin_cone(const void *ctx, double t, kin_t *k)
     k->w_nb_b_rps[2] = c->omega_rps * sin(c->alpha_rad) * cos(wt);
 }
 
+void kin_scull(const void *ctx, double t, kin_t *k)
+{
+    const scull_t *c = ctx;
+    const double wt = c->omega_rps * t;
+    k->v_n_mps[0] = 0.0;
+    k->v_n_mps[1] = c->a0_mps2 / c->omega_rps * (1.0 - cos(wt));
+    k->v_n_mps[2] = 0.0;
+    k->a_n_mps2[0] = 0.0;
+    k->a_n_mps2[1] = c->a0_mps2 * sin(wt);
+    k->a_n_mps2[2] = 0.0;
+    const double psi = c->psi0_rad * sin(wt);
+    truth_q_from_euler(0.0, 0.0, psi, k->q_bn);
+    truth_w_nb_from_euler_rates(0.0, 0.0, 0.0, 0.0, c->psi0_rad * c->omega_rps * cos(wt),
+                                k->w_nb_b_rps);
+}
+
 run_spec_t run_spec_default(kin_fn kin, const void *ctx, double duration_s, double rate_hz)
 {
     run_spec_t spec = {0};

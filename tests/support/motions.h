@@ -34,4 +34,13 @@ typedef struct {
 } cone_t;
 void kin_cone(const void *ctx, double t, kin_t *k);
 
+/* Classical sculling: the body yaws back and forth (heading psi0 sin(w t)) while it
+ * accelerates along north in phase (a_N = a0 sin(w t), from rest): a rotation about z and
+ * an acceleration along y oscillating together, which rectify into a spurious horizontal
+ * acceleration along x unless the sculling term corrects it. */
+typedef struct {
+    double a0_mps2, omega_rps, psi0_rad;
+} scull_t;
+void kin_scull(const void *ctx, double t, kin_t *k);
+
 #endif
