@@ -1,8 +1,12 @@
-# navecu - top-level build. `make` builds the host firmware core; `make test` builds and
-# runs every test twice: plainly and under AddressSanitizer + UBSan. See README.md.
+# navecu - top-level build. `make` builds the host firmware (build/host/navecu);
+# `make test` builds and runs every test: C unit tests plainly and under
+# AddressSanitizer + UBSan, the Python tests, the codec/doc freshness checks and the
+# Cortex-M4F cross-build. See README.md.
 
 CC ?= cc
 BUILD := build
+VENV := .venv
+PY := $(VENV)/bin/python
 
 CSTD   := -std=c11
 WARN   := -Wall -Wextra -Werror -Wpedantic -Wconversion -Wdouble-promotion -Wfloat-equal \
@@ -14,87 +18,88 @@ FPFLAGS := -ffp-contract=off -fno-math-errno
 CFLAGS_BASE := $(CSTD) -O2 -g $(WARN) $(FPFLAGS)
 SAN_FLAGS := -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
 
+# firmware/ sees only its own folders and the HAL interface (docs/architecture.md)
+FW_INC := -Ifirmware/nav -Ifirmware/can -Ifirmware/can/gen -Ifirmware/app -Ihal
+HOST_INC := $(FW_INC) -Ihal/linux -Itests/support
+
 CORE_SRC := $(wildcard firmware/nav/*.c)
-CORE_INC := -Ifirmware/nav
+CODEC_GEN := firmware/can/gen/navecu_can.c firmware/can/gen/navecu_can.h
+APP_SRC := firmware/can/e2e.c firmware/can/gen/navecu_can.c firmware/app/app.c
+HAL_LINUX_SRC := hal/linux/hal_linux.c
 SUPPORT_SRC_F64 := tests/support/truth.c tests/support/motions.c
 SUPPORT_SRC_BOTH := tests/support/nav_run.c
 # tests built once per numeric variant (f32 firmware, f64 reference)
 TESTS_VARIANT := test_nav_math test_earth test_sins
+# tests of the float32 firmware only (application, codec, HAL)
+TESTS_F32 := test_e2e test_codec
 # tests that link both variants themselves
-TESTS_SINGLE := test_drive
+TESTS_BOTH := test_drive
 
-.PHONY: all test test-plain test-asan test-cross sim clean help numerics
+.PHONY: all test test-c test-plain test-asan test-cross test-python codec codec-check \
+        doc-check venv sim clean help numerics deps
 # keep objects of pattern-built test programs between runs
 .SECONDARY:
-all: $(BUILD)/host/libnavcore_f32.a $(BUILD)/host/libnavcore_f64.a
+
+all: $(BUILD)/host/navecu
 
 help:
-	@echo "make          build the navigation core for the host (build/host/)"
-	@echo "make test     build and run all unit tests, plain and with ASan+UBSan"
-	@echo "make sim      simulate a drive and report accuracy (arrives with issue #4)"
-	@echo "make cross    build the core for the Cortex-M4F and check it has no double arithmetic"
-	@echo "make numerics measure what compensated float32 accumulation buys (docs/numeric-design.md)"
-	@echo "make clean    remove build/"
+	@echo "make               build the host firmware: build/host/navecu (see --help)"
+	@echo "make test          all tests: C plain and ASan+UBSan, Python, codec, M4F build"
+	@echo "make sim           simulate a drive and report accuracy (arrives with issue #4)"
+	@echo "make codec         regenerate the CAN codec from firmware/can/navecu.dbc"
+	@echo "make cross         build the firmware for the Cortex-M4F, check: no double math"
+	@echo "make numerics      the float32 accuracy study (docs/numeric-design.md)"
+	@echo "make clean         remove build/"
 
-# $(1) = flavour (host | asan), $(2) = extra flags
+# $(1) = flavour (host | asan | plainacc), $(2) = extra flags
 define FLAVOUR
 $(BUILD)/$(1)/f32/%.o: %.c
 	@mkdir -p $$(@D)
-	$$(CC) $$(CFLAGS_BASE) $(2) $$(CORE_INC) -Itests/support -MMD -MP -c $$< -o $$@
+	$$(CC) $$(CFLAGS_BASE) -D_DEFAULT_SOURCE $(2) $$(HOST_INC) -MMD -MP -c $$< -o $$@
 $(BUILD)/$(1)/f64/%.o: %.c
 	@mkdir -p $$(@D)
-	$$(CC) $$(CFLAGS_BASE) $(2) -DNAV_REAL_DOUBLE $$(CORE_INC) -Itests/support -MMD -MP -c $$< -o $$@
+	$$(CC) $$(CFLAGS_BASE) -D_DEFAULT_SOURCE $(2) -DNAV_REAL_DOUBLE $$(HOST_INC) -MMD -MP -c $$< -o $$@
 
 $(BUILD)/$(1)/libnavcore_f32.a: $(CORE_SRC:%.c=$(BUILD)/$(1)/f32/%.o)
 	$$(AR) rcs $$@ $$^
 $(BUILD)/$(1)/libnavcore_f64.a: $(CORE_SRC:%.c=$(BUILD)/$(1)/f64/%.o)
 	$$(AR) rcs $$@ $$^
+$(BUILD)/$(1)/libnavapp.a: $(APP_SRC:%.c=$(BUILD)/$(1)/f32/%.o)
+	$$(AR) rcs $$@ $$^
+$(BUILD)/$(1)/libhal_linux.a: $(HAL_LINUX_SRC:%.c=$(BUILD)/$(1)/f32/%.o)
+	$$(AR) rcs $$@ $$^
 $(BUILD)/$(1)/libtestsupport.a: $(SUPPORT_SRC_F64:%.c=$(BUILD)/$(1)/f64/%.o) \
 		$(SUPPORT_SRC_BOTH:%.c=$(BUILD)/$(1)/f32/%.o) $(SUPPORT_SRC_BOTH:%.c=$(BUILD)/$(1)/f64/%.o)
 	$$(AR) rcs $$@ $$^
 
-$(1)_LIBS := $(BUILD)/$(1)/libtestsupport.a $(BUILD)/$(1)/libnavcore_f32.a $(BUILD)/$(1)/libnavcore_f64.a
-$(BUILD)/$(1)/tests/%_f32: $(BUILD)/$(1)/f32/tests/%.o $$($(1)_LIBS)
-	@mkdir -p $$(@D)
+$(1)_LIBS := $(BUILD)/$(1)/libtestsupport.a $(BUILD)/$(1)/libnavapp.a \
+             $(BUILD)/$(1)/libnavcore_f32.a $(BUILD)/$(1)/libnavcore_f64.a
+
+$(BUILD)/$(1)/navecu: $(BUILD)/$(1)/f32/host_sim/main.o $(BUILD)/$(1)/libnavapp.a \
+		$(BUILD)/$(1)/libhal_linux.a $(BUILD)/$(1)/libnavcore_f32.a
+	$$(CC) $(2) $$^ -lm -o $$@
+
+$(foreach t,$(TESTS_VARIANT),$(BUILD)/$(1)/tests/$(t)_f32): $(BUILD)/$(1)/tests/%_f32: $(BUILD)/$(1)/f32/tests/%.o $$($(1)_LIBS)
 	$$(CC) $(2) $$^ -lcmocka -lm -o $$@
-$(BUILD)/$(1)/tests/%_f64: $(BUILD)/$(1)/f64/tests/%.o $$($(1)_LIBS)
-	@mkdir -p $$(@D)
+$(foreach t,$(TESTS_VARIANT),$(BUILD)/$(1)/tests/$(t)_f64): $(BUILD)/$(1)/tests/%_f64: $(BUILD)/$(1)/f64/tests/%.o $$($(1)_LIBS)
 	$$(CC) $(2) $$^ -lcmocka -lm -o $$@
-$(BUILD)/$(1)/tests/%: $(BUILD)/$(1)/f64/tests/%.o $$($(1)_LIBS)
-	@mkdir -p $$(@D)
+$(foreach t,$(TESTS_F32),$(BUILD)/$(1)/tests/$(t)): $(BUILD)/$(1)/tests/%: $(BUILD)/$(1)/f32/tests/%.o $$($(1)_LIBS)
+	$$(CC) $(2) $$^ -lcmocka -lm -o $$@
+$(foreach t,$(TESTS_BOTH),$(BUILD)/$(1)/tests/$(t)): $(BUILD)/$(1)/tests/%: $(BUILD)/$(1)/f64/tests/%.o $$($(1)_LIBS)
+	$$(CC) $(2) $$^ -lcmocka -lm -o $$@
+# the application against an in-memory HAL; the Linux HAL on its own
+$(BUILD)/$(1)/tests/test_app: $(BUILD)/$(1)/f32/tests/test_app.o $(BUILD)/$(1)/f32/tests/support/fake_hal.o $$($(1)_LIBS)
+	$$(CC) $(2) $$^ -lcmocka -lm -o $$@
+$(BUILD)/$(1)/tests/test_hal_linux: $(BUILD)/$(1)/f32/tests/test_hal_linux.o $(BUILD)/$(1)/libhal_linux.a
 	$$(CC) $(2) $$^ -lcmocka -lm -o $$@
 
 $(1)_TEST_BINS := $(foreach t,$(TESTS_VARIANT),$(BUILD)/$(1)/tests/$(t)_f32 $(BUILD)/$(1)/tests/$(t)_f64) \
-                  $(foreach t,$(TESTS_SINGLE),$(BUILD)/$(1)/tests/$(t))
+                  $(foreach t,$(TESTS_F32) $(TESTS_BOTH) test_app test_hal_linux,$(BUILD)/$(1)/tests/$(t))
 endef
 
 $(eval $(call FLAVOUR,host,))
 $(eval $(call FLAVOUR,asan,$(SAN_FLAGS)))
 $(eval $(call FLAVOUR,plainacc,-DNAV_ACC_PLAIN))
-
-# ---- Cortex-M4F: the same core sources, single-precision FPU, hard float ABI ----
-ARM_CC := arm-none-eabi-gcc
-ARM_NM := arm-none-eabi-nm
-M4_FLAGS := -mcpu=cortex-m4 -mfpu=fpv4-sp-d16 -mfloat-abi=hard -mthumb
-$(BUILD)/m4/%.o: %.c
-	@mkdir -p $(@D)
-	$(ARM_CC) $(CFLAGS_BASE) $(M4_FLAGS) $(CORE_INC) -MMD -MP -c $< -o $@
-$(BUILD)/m4/libnavcore.a: $(CORE_SRC:%.c=$(BUILD)/m4/%.o)
-	arm-none-eabi-ar rcs $@ $^
-
-# The M4F FPU is single precision: any double operation becomes a libgcc call
-# (__aeabi_dadd, __aeabi_f2d, ...). The core must need none.
-cross test-cross: $(BUILD)/m4/libnavcore.a
-	@if $(ARM_NM) $< | grep -E ' U (__aeabi_(d|f2d|l2d|ul2d|i2d|ui2d)|(sin|cos|tan|sqrt|atan2|asin|acos|atan|fabs|exp|log|pow|floor|ceil)$$)'; then \
-	  echo "cross: the Cortex-M4F core uses double-precision arithmetic (above)"; exit 1; fi
-	@echo "cross: navigation core built for Cortex-M4F, no double-precision arithmetic"
-	@arm-none-eabi-size -t $(CORE_SRC:%.c=$(BUILD)/m4/%.o) | tail -1 | \
-	  awk '{print "cross: core code size " $$1 " bytes text, " $$3 " bytes bss"}'
-
-# ---- numerics study: compensated vs plain float32 accumulation ----
-numerics: $(BUILD)/host/tests/study_numerics $(BUILD)/plainacc/tests/study_numerics
-	@echo "== float32 with compensated accumulation (the firmware)"; $(BUILD)/host/tests/study_numerics
-	@echo "== float32 with plain accumulation (-DNAV_ACC_PLAIN)"; $(BUILD)/plainacc/tests/study_numerics
 
 # Each binary's cmocka summary goes to stderr; merge it so CI logs carry it.
 define RUN_TESTS
@@ -112,15 +117,71 @@ test-plain: $(host_TEST_BINS)
 test-asan: $(asan_TEST_BINS)
 	$(call RUN_TESTS,$(asan_TEST_BINS),ASan+UBSan build)
 
+test-c: test-plain test-asan
+
+# Python tests drive the host executable (plain build) through real CAN logs.
+test-python: venv $(BUILD)/host/navecu
+	NAVECU_BIN=$(BUILD)/host/navecu $(PY) -m pytest -q tests/python
+
 test: deps
+	$(MAKE) codec-check doc-check
 	$(MAKE) test-plain
 	$(MAKE) test-asan
+	$(MAKE) test-python
 	$(MAKE) test-cross
 
-# Install what the tests need when it is missing (CI runs as root on a fresh machine).
-.PHONY: deps
+# Install what the build needs when it is missing (CI runs as root on a fresh machine).
 deps:
 	@./tools/ensure-deps.sh
+
+# ---- Python environment: pinned, git-ignored ----
+venv: $(VENV)/.stamp
+$(VENV)/.stamp: tools/requirements.txt
+	@./tools/ensure-deps.sh
+	python3 -m venv $(VENV)
+	$(VENV)/bin/pip install -q --disable-pip-version-check -r tools/requirements.txt
+	@touch $@
+
+# ---- the CAN codec, generated from the DBC ----
+codec: venv
+	PYTHON=$(PY) ./tools/gen_codec.sh
+
+codec-check: venv
+	@tmp=$$(mktemp -d) && PYTHON=$(PY) ./tools/gen_codec.sh $$tmp && \
+	if diff -u firmware/can/gen $$tmp >/dev/null; then echo "codec: firmware/can/gen is up to date with the DBC"; rm -rf $$tmp; \
+	else diff -u firmware/can/gen $$tmp | head -40; rm -rf $$tmp; \
+	  echo "codec: firmware/can/gen is STALE - run 'make codec' and commit"; exit 1; fi
+
+doc-check: venv
+	$(PY) tools/gen_can_doc.py --check
+
+# ---- Cortex-M4F: the same firmware sources, single-precision FPU, hard float ABI ----
+ARM_CC := arm-none-eabi-gcc
+ARM_NM := arm-none-eabi-nm
+M4_FLAGS := -mcpu=cortex-m4 -mfpu=fpv4-sp-d16 -mfloat-abi=hard -mthumb
+M4_SRC := $(CORE_SRC) $(APP_SRC)
+$(BUILD)/m4/%.o: %.c
+	@mkdir -p $(@D)
+	$(ARM_CC) $(CFLAGS_BASE) $(M4_FLAGS) $(FW_INC) -MMD -MP -c $< -o $@
+$(BUILD)/m4/libnavecu.a: $(M4_SRC:%.c=$(BUILD)/m4/%.o)
+	arm-none-eabi-ar rcs $@ $^
+
+# The M4F FPU is single precision: any double operation becomes a libgcc call
+# (__aeabi_dadd, __aeabi_f2d, ...) or a double libm call. The firmware must need none.
+cross test-cross: $(BUILD)/m4/libnavecu.a
+	@if $(ARM_NM) $< | grep -E ' U (__aeabi_(d|f2d|l2d|ul2d|i2d|ui2d)|(sin|cos|tan|sqrt|atan2|asin|acos|atan|fabs|exp|log|pow|floor|ceil|round)$$)'; then \
+	  echo "cross: the Cortex-M4F firmware uses double-precision arithmetic (above)"; exit 1; fi
+	@echo "cross: firmware (core, codec, application) built for Cortex-M4F, no double-precision arithmetic"
+	@arm-none-eabi-size -t $(M4_SRC:%.c=$(BUILD)/m4/%.o) | tail -1 | \
+	  awk '{print "cross: firmware code size " $$1 " bytes text, " $$3 " bytes bss"}'
+
+# ---- numerics study: compensated vs plain float32 accumulation ----
+numerics: $(BUILD)/host/tests/study_numerics $(BUILD)/plainacc/tests/study_numerics
+	@echo "== float32 with compensated accumulation (the firmware)"; $(BUILD)/host/tests/study_numerics
+	@echo "== float32 with plain accumulation (-DNAV_ACC_PLAIN)"; $(BUILD)/plainacc/tests/study_numerics
+$(BUILD)/%/tests/study_numerics: $(BUILD)/%/f64/tests/study_numerics.o $(BUILD)/%/libtestsupport.a \
+		$(BUILD)/%/libnavcore_f32.a $(BUILD)/%/libnavcore_f64.a
+	$(CC) $^ -lm -o $@
 
 sim:
 	@echo "make sim arrives with the simulator issue (#4): drive simulation, firmware run and"

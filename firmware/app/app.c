@@ -1,0 +1,586 @@
+/* app.c - the navecu application; see app.h. */
+#include "app.h"
+
+#include <string.h>
+
+#include "navecu_can.h"
+
+enum { TX_HEIGHT = 0, TX_VEL, TX_ATT, TX_STATUS, TX_CAL };
+
+#define LSB_PER_E7 GEO_LSB_PER_DEG_E7
+#define PI_F NAV_C(3.14159265358979323846)
+#define DEG_PER_RAD NAV_C(57.29577951308232)
+#define GNSS_MIN_SATS 4u
+#define GNSS_MIN_FIX 3u          /* 3D */
+#define GNSS_COURSE_MIN_MPS NAV_C(5.0) /* GNSS course is a heading only when moving */
+#define IMU_STALE_US 500000u
+
+app_config_t app_default_config(void)
+{
+    app_config_t cfg;
+    cfg.imu_rate_hz = 100u;
+    cfg.nav_rate_hz = 50u;
+    cfg.status_rate_hz = 10u;
+    cfg.level_s = 10u;
+    return cfg;
+}
+
+static void count(uint32_t *c)
+{
+    if (*c < UINT32_MAX) {
+        (*c)++;
+    }
+}
+
+/* count a rejection and remember when, for the REJECTED flag */
+static void reject(app_t *a, uint32_t *c)
+{
+    count(c);
+    a->last_reject_sample = a->n_samples;
+    a->rejected_recently = 1u;
+}
+
+static void reset_navigation(app_t *a)
+{
+    /* Everything but configuration, health counters and output counters. */
+    const app_config_t cfg = a->cfg;
+    const app_health_t health = a->health;
+    uint8_t tx[sizeof a->tx_counter];
+    memcpy(tx, a->tx_counter, sizeof tx);
+    const uint32_t sent = a->frames_sent, send_errors = a->send_errors;
+    const uint64_t n = a->n_samples;
+    memset(a, 0, sizeof *a);
+    a->cfg = cfg;
+    a->health = health;
+    memcpy(a->tx_counter, tx, sizeof tx);
+    a->frames_sent = sent;
+    a->send_errors = send_errors;
+    a->n_samples = n; /* time runs on through a reset */
+    a->mode = APP_MODE_WAIT_INIT;
+}
+
+int app_init(app_t *app, const app_config_t *cfg)
+{
+    if (cfg->imu_rate_hz < 10u || cfg->imu_rate_hz > 400u || cfg->nav_rate_hz == 0u ||
+        cfg->status_rate_hz == 0u || cfg->level_s == 0u || cfg->level_s > 600u) {
+        return NAV_EINVAL;
+    }
+    memset(app, 0, sizeof *app);
+    app->cfg = *cfg;
+    app->mode = APP_MODE_WAIT_INIT;
+    return NAV_OK;
+}
+
+/* ---------------------------------------------------------------- output ---- */
+
+static void send(app_t *a, hal_t *hal, uint32_t id, const uint8_t data[8])
+{
+    hal_can_frame_t f;
+    memset(&f, 0, sizeof f);
+    f.id = id;
+    f.dlc = 8u;
+    memcpy(f.data, data, 8u);
+    if (hal_can_send(hal, &f) == 0) {
+        a->frames_sent++;
+    } else {
+        count(&a->send_errors);
+    }
+}
+
+/* alive counter of an E2E output: return the current value and advance */
+static uint8_t next_tx_counter(app_t *a, int which)
+{
+    const uint8_t c = a->tx_counter[which];
+    a->tx_counter[which] = e2e_counter_next(c);
+    return c;
+}
+
+/* fixed-point LSB (GEO_LSB_PER_*) to a coarser integer unit, rounding half away from 0 */
+static int64_t lsb_div_round(int64_t x, int64_t div)
+{
+    return (x >= 0 ? x + div / 2 : x - div / 2) / div;
+}
+
+static nav_real_t clampr(nav_real_t x, nav_real_t lo, nav_real_t hi)
+{
+    return x < lo ? lo : (x > hi ? hi : x);
+}
+
+static void emit_navigation(app_t *a, hal_t *hal)
+{
+    uint8_t d[8];
+    const sins_t *s = &a->nav;
+
+    struct navecu_can_nav_position_t p;
+    p.latitude = (int32_t)lsb_div_round(s->pos.lat, LSB_PER_E7);
+    p.longitude = (int32_t)lsb_div_round(s->pos.lon, LSB_PER_E7);
+    navecu_can_nav_position_pack(d, &p, sizeof d);
+    send(a, hal, NAVECU_CAN_NAV_POSITION_FRAME_ID, d);
+
+    struct navecu_can_nav_height_t h;
+    h.height = (int32_t)lsb_div_round(s->pos.h, 10 * GEO_LSB_PER_MM); /* 0.01 m */
+    h.vert_accuracy = 255u; /* no error model before the Kalman filter: "unknown" */
+    h.nav_counter = next_tx_counter(a, TX_HEIGHT);
+    h.nav_crc = 0u;
+    navecu_can_nav_height_pack(d, &h, sizeof d);
+    e2e_protect(NAVECU_CAN_NAV_HEIGHT_FRAME_ID, d);
+    send(a, hal, NAVECU_CAN_NAV_HEIGHT_FRAME_ID, d);
+
+    struct navecu_can_nav_velocity_t v;
+    const nav_real_t vmax = NAV_C(327.67);
+    v.vel_east = navecu_can_nav_velocity_vel_east_encode(clampr(s->v_n_mps[0], -vmax, vmax));
+    v.vel_north = navecu_can_nav_velocity_vel_north_encode(clampr(s->v_n_mps[1], -vmax, vmax));
+    v.vel_up = navecu_can_nav_velocity_vel_up_encode(clampr(s->v_n_mps[2], -vmax, vmax));
+    v.nav_counter = next_tx_counter(a, TX_VEL);
+    v.nav_crc = 0u;
+    navecu_can_nav_velocity_pack(d, &v, sizeof d);
+    e2e_protect(NAVECU_CAN_NAV_VELOCITY_FRAME_ID, d);
+    send(a, hal, NAVECU_CAN_NAV_VELOCITY_FRAME_ID, d);
+
+    nav_real_t roll, pitch, heading;
+    sins_euler(s, &roll, &pitch, &heading);
+    struct navecu_can_nav_attitude_t at;
+    at.roll = navecu_can_nav_attitude_roll_encode(roll * DEG_PER_RAD);
+    at.pitch = navecu_can_nav_attitude_pitch_encode(pitch * DEG_PER_RAD);
+    at.heading = navecu_can_nav_attitude_heading_encode(heading * DEG_PER_RAD);
+    if (at.heading >= 36000u) {
+        at.heading = 0u; /* 359.996 deg rounds to 360.00: that is north */
+    }
+    at.nav_counter = next_tx_counter(a, TX_ATT);
+    at.nav_crc = 0u;
+    navecu_can_nav_attitude_pack(d, &at, sizeof d);
+    e2e_protect(NAVECU_CAN_NAV_ATTITUDE_FRAME_ID, d);
+    send(a, hal, NAVECU_CAN_NAV_ATTITUDE_FRAME_ID, d);
+}
+
+static uint16_t sat16(uint32_t x)
+{
+    return x > UINT16_MAX ? (uint16_t)UINT16_MAX : (uint16_t)x;
+}
+
+static uint8_t sat8(uint32_t x)
+{
+    return x > UINT8_MAX ? (uint8_t)UINT8_MAX : (uint8_t)x;
+}
+
+static uint16_t health_flags(const app_t *a, const hal_t *hal)
+{
+    uint16_t fl = a->flags_sticky;
+    if (a->have_sample && hal_time_us(hal) - a->last_imu_t_us > IMU_STALE_US) {
+        fl |= APP_FLAG_IMU_STALE;
+    }
+    if (!a->have_gnss || a->n_samples - a->last_gnss_sample > 2u * a->cfg.imu_rate_hz) {
+        fl |= APP_FLAG_NO_GNSS;
+    }
+    if (a->rejected_recently && a->n_samples - a->last_reject_sample <= a->cfg.imu_rate_hz) {
+        fl |= APP_FLAG_REJECTED;
+    }
+    if (a->mode != APP_MODE_NAVIGATING && a->init_pos_valid && !a->init_heading_valid) {
+        fl |= APP_FLAG_NO_HEADING;
+    }
+    return fl;
+}
+
+static void emit_status(app_t *a, hal_t *hal)
+{
+    uint8_t d[8];
+    const app_health_t *h = &a->health;
+    struct navecu_can_nav_status_t st;
+    memset(&st, 0, sizeof st);
+    st.status_page = 0u;
+    st.mode = (uint8_t)a->mode;
+    st.health_flags = health_flags(a, hal);
+    st.horiz_accuracy = UINT16_MAX; /* no error model before the Kalman filter: "unknown" */
+    st.nav_counter = next_tx_counter(a, TX_STATUS);
+    navecu_can_nav_status_pack(d, &st, sizeof d);
+    e2e_protect(NAVECU_CAN_NAV_STATUS_FRAME_ID, d);
+    send(a, hal, NAVECU_CAN_NAV_STATUS_FRAME_ID, d);
+
+    /* one page of counters per status cycle, in rotation */
+    memset(&st, 0, sizeof st);
+    st.status_page = a->status_page == 0u ? 1u : a->status_page;
+    if (st.status_page == 1u) {
+        st.cnt_unknown_id = sat16(h->unknown_id);
+        st.cnt_bad_dlc = sat16(h->bad_dlc);
+        st.cnt_bad_crc = sat8(h->bad_crc);
+    } else if (st.status_page == 2u) {
+        st.cnt_bad_counter = sat16(h->bad_counter);
+        st.cnt_imu_pair_broken = sat16(h->imu_pair_broken);
+        st.cnt_imu_lost = sat8(h->imu_lost);
+    } else {
+        st.cnt_bad_value = sat16(h->bad_value + h->nav_rejected + h->cmd_rejected);
+        st.cnt_gnss_rejected = sat16(h->gnss_rejected);
+        st.cnt_log_line_bad = sat8(h->log_line_bad);
+    }
+    a->status_page = (uint8_t)(st.status_page >= 3u ? 1u : st.status_page + 1u);
+    st.nav_counter = next_tx_counter(a, TX_STATUS);
+    navecu_can_nav_status_pack(d, &st, sizeof d);
+    e2e_protect(NAVECU_CAN_NAV_STATUS_FRAME_ID, d);
+    send(a, hal, NAVECU_CAN_NAV_STATUS_FRAME_ID, d);
+}
+
+static void emit_calibration(app_t *a, hal_t *hal)
+{
+    uint8_t d[8];
+    struct navecu_can_nav_calibration_t c;
+    memset(&c, 0, sizeof c);
+    c.cal_valid = 0u; /* one-point calibration arrives with its own issue */
+    c.cal_stored = 0u;
+    c.nav_counter = next_tx_counter(a, TX_CAL);
+    navecu_can_nav_calibration_pack(d, &c, sizeof d);
+    e2e_protect(NAVECU_CAN_NAV_CALIBRATION_FRAME_ID, d);
+    send(a, hal, NAVECU_CAN_NAV_CALIBRATION_FRAME_ID, d);
+}
+
+static void emit_due(app_t *a, hal_t *hal)
+{
+    const uint64_t n = a->n_samples;
+    const uint32_t imu = a->cfg.imu_rate_hz;
+    const uint32_t nav_div = a->cfg.nav_rate_hz >= imu ? 1u : imu / a->cfg.nav_rate_hz;
+    const uint32_t st_div = a->cfg.status_rate_hz >= imu ? 1u : imu / a->cfg.status_rate_hz;
+    if (a->mode == APP_MODE_NAVIGATING && n % nav_div == 0u) {
+        emit_navigation(a, hal);
+    }
+    if (n % st_div == 0u) {
+        emit_status(a, hal);
+    }
+    if (n % imu == 0u) {
+        emit_calibration(a, hal);
+    }
+}
+
+/* ------------------------------------------------------- initialization ---- */
+
+static void start_levelling_if_ready(app_t *a)
+{
+    if (a->mode == APP_MODE_WAIT_INIT && a->init_pos_valid && a->init_heading_valid) {
+        a->mode = APP_MODE_LEVELLING;
+        a->level_n = 0u;
+        a->level_sum_raw[0] = a->level_sum_raw[1] = a->level_sum_raw[2] = 0;
+    }
+}
+
+/* Levelling: the mean specific force of a vehicle at rest is C_nb (0, 0, g), whose body
+ * components are g (-cos(p) sin(r), sin(p), cos(p) cos(r)) (docs/frames.md). */
+static void start_navigation(app_t *a)
+{
+    const nav_real_t fx = (nav_real_t)a->level_sum_raw[0];
+    const nav_real_t fy = (nav_real_t)a->level_sum_raw[1];
+    const nav_real_t fz = (nav_real_t)a->level_sum_raw[2];
+    const nav_real_t pitch = nav_atan2(fy, nav_sqrt(fx * fx + fz * fz));
+    const nav_real_t roll = nav_atan2(-fx, fz);
+    nav_real_t q[4];
+    quat_from_euler(roll, pitch, a->init_heading_rad, q);
+    const geo_pos_t pos = {(int64_t)a->init_lat_e7 * LSB_PER_E7,
+                           (int64_t)a->init_lon_e7 * LSB_PER_E7,
+                           (int64_t)a->init_h_cm * 10 * GEO_LSB_PER_MM};
+    const nav_real_t v0[3] = {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)};
+    const sins_config_t scfg = sins_default_config();
+    if (sins_init(&a->nav, &scfg, &pos, v0, q) != NAV_OK) {
+        reject(a, &a->health.bad_value);
+        a->mode = APP_MODE_FAULT;
+        return;
+    }
+    /* Hold the vertical channel at the initial height until GNSS heights arrive. */
+    sins_set_height_ref(&a->nav, (nav_real_t)a->init_h_cm * NAV_C(0.01));
+    a->mode = APP_MODE_NAVIGATING;
+}
+
+/* ------------------------------------------------------------------ IMU ---- */
+
+static void process_sample(app_t *a, hal_t *hal, const int16_t w_raw[3], const int16_t v_raw[3])
+{
+    a->n_samples++;
+    if (a->mode == APP_MODE_LEVELLING) {
+        for (int i = 0; i < 3; i++) {
+            a->level_sum_raw[i] += v_raw[i];
+        }
+        a->level_n++;
+        if (a->level_n >= (uint32_t)a->cfg.level_s * a->cfg.imu_rate_hz) {
+            start_navigation(a);
+        }
+    } else if (a->mode == APP_MODE_NAVIGATING) {
+        imu_inc_t inc;
+        inc.dtheta_b_rad[0] = navecu_can_imu_rate_angle_inc_x_decode(w_raw[0]);
+        inc.dtheta_b_rad[1] = navecu_can_imu_rate_angle_inc_y_decode(w_raw[1]);
+        inc.dtheta_b_rad[2] = navecu_can_imu_rate_angle_inc_z_decode(w_raw[2]);
+        inc.dv_b_mps[0] = navecu_can_imu_accel_vel_inc_x_decode(v_raw[0]);
+        inc.dv_b_mps[1] = navecu_can_imu_accel_vel_inc_y_decode(v_raw[1]);
+        inc.dv_b_mps[2] = navecu_can_imu_accel_vel_inc_z_decode(v_raw[2]);
+        inc.dt_s = NAV_C(1.0) / (nav_real_t)a->cfg.imu_rate_hz;
+        if (sins_step(&a->nav, &inc) != NAV_OK) {
+            reject(a, &a->health.nav_rejected);
+        }
+    }
+    emit_due(a, hal);
+}
+
+static void on_imu_rate(app_t *a, const hal_can_frame_t *f)
+{
+    struct navecu_can_imu_rate_t m;
+    navecu_can_imu_rate_unpack(&m, f->data, 8u);
+    if (m.imu_counter > E2E_COUNTER_MAX) {
+        reject(a, &a->health.bad_counter);
+        return;
+    }
+    if (a->rate_pending) {
+        reject(a, &a->health.imu_pair_broken); /* the previous IMU_Rate got no IMU_Accel */
+    }
+    a->rate_pending = 1u;
+    a->rate_counter = m.imu_counter;
+    a->rate_raw[0] = m.angle_inc_x;
+    a->rate_raw[1] = m.angle_inc_y;
+    a->rate_raw[2] = m.angle_inc_z;
+    if (m.imu_fault) {
+        a->flags_sticky |= APP_FLAG_IMU_FAULT;
+    } else {
+        a->flags_sticky &= (uint16_t)~APP_FLAG_IMU_FAULT;
+    }
+}
+
+static void on_imu_accel(app_t *a, hal_t *hal, const hal_can_frame_t *f)
+{
+    struct navecu_can_imu_accel_t m;
+    navecu_can_imu_accel_unpack(&m, f->data, 8u);
+    if (!a->rate_pending || m.imu_counter != a->rate_counter) {
+        a->rate_pending = 0u;
+        reject(a, &a->health.imu_pair_broken);
+        return;
+    }
+    a->rate_pending = 0u;
+    const int step = e2e_counter_step(&a->rx_imu, m.imu_counter);
+    if (step <= 0) {
+        reject(a, &a->health.bad_counter); /* repeated sample or invalid counter */
+        return;
+    }
+    const int16_t v_raw[3] = {m.vel_inc_x, m.vel_inc_y, m.vel_inc_z};
+    /* Lost samples (step > 1) are bridged with this sample's increments: the motion in
+     * the gap is unknown, and repeating the nearest sample keeps time and the Earth-rate
+     * and gravity terms right. Counted in imu_lost. */
+    for (int k = 1; k < step; k++) {
+        count(&a->health.imu_lost);
+        a->rejected_recently = 1u;
+        a->last_reject_sample = a->n_samples;
+        process_sample(a, hal, a->rate_raw, v_raw);
+    }
+    process_sample(a, hal, a->rate_raw, v_raw);
+    a->have_sample = 1u;
+    a->last_imu_t_us = f->t_us;
+}
+
+/* ----------------------------------------------------------------- GNSS ---- */
+
+static int lat_lon_ok(int32_t lat_e7, int32_t lon_e7)
+{
+    return lat_e7 >= -900000000 && lat_e7 <= 900000000 && lon_e7 > -1800000000 &&
+           lon_e7 <= 1800000000;
+}
+
+static void on_gnss_status(app_t *a, const hal_can_frame_t *f)
+{
+    struct navecu_can_gnss_status_t m;
+    navecu_can_gnss_status_unpack(&m, f->data, 8u);
+    const int have_pos = a->gnss_pos_pending;
+    const int have_vel = a->gnss_vel_pending;
+    const int have_h = a->gnss_h_pending;
+    a->gnss_pos_pending = a->gnss_vel_pending = a->gnss_h_pending = 0u;
+    if (m.fix_type < GNSS_MIN_FIX || m.num_satellites < GNSS_MIN_SATS) {
+        return; /* no usable fix: not an error, the receiver says so */
+    }
+    if (!have_pos) {
+        reject(a, &a->health.gnss_rejected); /* a fix reported without its position */
+        return;
+    }
+    a->have_gnss = 1u;
+    a->last_gnss_sample = a->n_samples;
+    if (have_h && a->mode == APP_MODE_NAVIGATING) {
+        sins_set_height_ref(&a->nav, (nav_real_t)a->gnss_h_cm * NAV_C(0.01));
+    }
+    if (a->mode == APP_MODE_WAIT_INIT && !a->init_pos_valid) {
+        a->init_pos_valid = 1u;
+        a->init_lat_e7 = a->gnss_lat_e7;
+        a->init_lon_e7 = a->gnss_lon_e7;
+        a->init_h_cm = have_h ? a->gnss_h_cm : 0;
+    }
+    if (a->mode == APP_MODE_WAIT_INIT && !a->init_heading_valid && have_vel) {
+        const nav_real_t ve = navecu_can_gnss_velocity_vel_east_decode(a->gnss_vel_raw[0]);
+        const nav_real_t vn = navecu_can_gnss_velocity_vel_north_decode(a->gnss_vel_raw[1]);
+        if (ve * ve + vn * vn >= GNSS_COURSE_MIN_MPS * GNSS_COURSE_MIN_MPS) {
+            nav_real_t hdg = nav_atan2(ve, vn);
+            if (hdg < NAV_C(0.0)) {
+                hdg += NAV_C(2.0) * PI_F;
+            }
+            a->init_heading_rad = hdg;
+            a->init_heading_valid = 1u;
+        }
+    }
+    start_levelling_if_ready(a);
+}
+
+/* ------------------------------------------------------------- commands ---- */
+
+static void on_cmd_control(app_t *a, hal_t *hal, const hal_can_frame_t *f)
+{
+    struct navecu_can_cmd_control_t m;
+    navecu_can_cmd_control_unpack(&m, f->data, 8u);
+    const int step = e2e_counter_step(&a->rx_cmd, m.cmd_counter);
+    if (step <= 0) {
+        reject(a, &a->health.bad_counter);
+        return;
+    }
+    switch (m.command) {
+    case 0u: /* None */
+        break;
+    case 1u: /* Reset */
+        reset_navigation(a);
+        break;
+    case 2u: /* SetInitialPosition */
+        if (!a->known_pos_valid || !navecu_can_cmd_control_height_is_in_range(m.height) ||
+            (m.heading_valid && !navecu_can_cmd_control_heading_is_in_range(m.heading))) {
+            reject(a, &a->health.cmd_rejected);
+            break;
+        }
+        const int32_t lat_e7 = a->known_lat_e7, lon_e7 = a->known_lon_e7;
+        reset_navigation(a);
+        a->init_pos_valid = 1u;
+        a->init_lat_e7 = lat_e7;
+        a->init_lon_e7 = lon_e7;
+        a->init_h_cm = m.height * 10;
+        a->init_heading_valid = m.heading_valid ? 1u : 0u;
+        a->init_heading_rad = (nav_real_t)m.heading * NAV_C(0.01) / DEG_PER_RAD;
+        start_levelling_if_ready(a);
+        break;
+    case 3u: /* StoreCalibration: nothing to store before the calibration exists */
+        reject(a, &a->health.cmd_rejected);
+        break;
+    case 4u: /* EraseCalibration */
+        if (hal_nvm_erase(hal) != 0) {
+            a->flags_sticky |= APP_FLAG_NVM_ERROR;
+        } else {
+            a->flags_sticky &= (uint16_t)~APP_FLAG_NVM_ERROR;
+        }
+        break;
+    default:
+        reject(a, &a->health.cmd_rejected);
+        break;
+    }
+}
+
+/* ------------------------------------------------------------- dispatch ---- */
+
+/* 1 if the message with this identifier carries an E2E CRC in byte 7 */
+static int is_e2e(uint32_t id)
+{
+    return id == NAVECU_CAN_IMU_RATE_FRAME_ID || id == NAVECU_CAN_IMU_ACCEL_FRAME_ID ||
+           id == NAVECU_CAN_WHEEL_SPEEDS_FRAME_ID || id == NAVECU_CAN_GNSS_VELOCITY_FRAME_ID ||
+           id == NAVECU_CAN_CMD_CONTROL_FRAME_ID;
+}
+
+void app_handle_frame(app_t *a, hal_t *hal, const hal_can_frame_t *f)
+{
+    a->health.log_line_bad = hal_can_rx_malformed(hal);
+    const uint32_t id = f->id;
+    if (f->extended) {
+        reject(a, &a->health.unknown_id);
+        return;
+    }
+    switch (id) {
+    case NAVECU_CAN_IMU_RATE_FRAME_ID:
+    case NAVECU_CAN_IMU_ACCEL_FRAME_ID:
+    case NAVECU_CAN_WHEEL_SPEEDS_FRAME_ID:
+    case NAVECU_CAN_GNSS_POSITION_FRAME_ID:
+    case NAVECU_CAN_GNSS_VELOCITY_FRAME_ID:
+    case NAVECU_CAN_GNSS_STATUS_FRAME_ID:
+    case NAVECU_CAN_GNSS_HEIGHT_FRAME_ID:
+    case NAVECU_CAN_CMD_KNOWN_POSITION_FRAME_ID:
+    case NAVECU_CAN_CMD_CONTROL_FRAME_ID:
+        break;
+    case NAVECU_CAN_NAV_POSITION_FRAME_ID:
+    case NAVECU_CAN_NAV_HEIGHT_FRAME_ID:
+    case NAVECU_CAN_NAV_VELOCITY_FRAME_ID:
+    case NAVECU_CAN_NAV_ATTITUDE_FRAME_ID:
+    case NAVECU_CAN_NAV_STATUS_FRAME_ID:
+    case NAVECU_CAN_NAV_CALIBRATION_FRAME_ID:
+        return; /* our own outputs, seen on a shared bus */
+    default:
+        reject(a, &a->health.unknown_id);
+        return;
+    }
+    if (f->dlc != 8u) {
+        reject(a, &a->health.bad_dlc);
+        return;
+    }
+    if (is_e2e(id) && !e2e_crc_ok(id, f->data)) {
+        reject(a, &a->health.bad_crc);
+        return;
+    }
+
+    switch (id) {
+    case NAVECU_CAN_IMU_RATE_FRAME_ID:
+        on_imu_rate(a, f);
+        break;
+    case NAVECU_CAN_IMU_ACCEL_FRAME_ID:
+        on_imu_accel(a, hal, f);
+        break;
+    case NAVECU_CAN_WHEEL_SPEEDS_FRAME_ID: {
+        /* Validated now; the odometer that uses it arrives with its own issue. */
+        struct navecu_can_wheel_speeds_t m;
+        navecu_can_wheel_speeds_unpack(&m, f->data, 8u);
+        if (e2e_counter_step(&a->rx_wheel, m.wheel_counter) <= 0) {
+            reject(a, &a->health.bad_counter);
+        }
+        break;
+    }
+    case NAVECU_CAN_GNSS_POSITION_FRAME_ID: {
+        struct navecu_can_gnss_position_t m;
+        navecu_can_gnss_position_unpack(&m, f->data, 8u);
+        if (!lat_lon_ok(m.latitude, m.longitude)) {
+            reject(a, &a->health.gnss_rejected); /* impossible position */
+            a->gnss_pos_pending = 0u;
+            break;
+        }
+        a->gnss_lat_e7 = m.latitude;
+        a->gnss_lon_e7 = m.longitude;
+        a->gnss_pos_pending = 1u;
+        break;
+    }
+    case NAVECU_CAN_GNSS_VELOCITY_FRAME_ID: {
+        struct navecu_can_gnss_velocity_t m;
+        navecu_can_gnss_velocity_unpack(&m, f->data, 8u);
+        a->gnss_vel_raw[0] = m.vel_east;
+        a->gnss_vel_raw[1] = m.vel_north;
+        a->gnss_vel_raw[2] = m.vel_up;
+        a->gnss_vel_pending = 1u;
+        break;
+    }
+    case NAVECU_CAN_GNSS_HEIGHT_FRAME_ID: {
+        struct navecu_can_gnss_height_t m;
+        navecu_can_gnss_height_unpack(&m, f->data, 8u);
+        if (!navecu_can_gnss_height_height_is_in_range(m.height)) {
+            reject(a, &a->health.bad_value);
+            break;
+        }
+        a->gnss_h_cm = m.height;
+        a->gnss_h_pending = 1u;
+        break;
+    }
+    case NAVECU_CAN_GNSS_STATUS_FRAME_ID:
+        on_gnss_status(a, f);
+        break;
+    case NAVECU_CAN_CMD_KNOWN_POSITION_FRAME_ID: {
+        struct navecu_can_cmd_known_position_t m;
+        navecu_can_cmd_known_position_unpack(&m, f->data, 8u);
+        if (!lat_lon_ok(m.latitude, m.longitude)) {
+            reject(a, &a->health.bad_value);
+            break;
+        }
+        a->known_lat_e7 = m.latitude;
+        a->known_lon_e7 = m.longitude;
+        a->known_pos_valid = 1u;
+        break;
+    }
+    default: /* NAVECU_CAN_CMD_CONTROL_FRAME_ID */
+        on_cmd_control(a, hal, f);
+        break;
+    }
+}

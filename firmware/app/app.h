@@ -1,0 +1,116 @@
+/*
+ * app.h - the navecu application: CAN in, navigation core, CAN out.
+ *
+ * The application owns the navigator. It decodes and validates every received frame
+ * (length, E2E CRC and alive counter, value ranges, plausibility), assembles IMU samples
+ * from IMU_Rate + IMU_Accel pairs, feeds the strapdown core, and emits the NAV_* frames.
+ *
+ * Time base: the IMU sample counter and the configured IMU rate, never the arrival time of
+ * frames, so the same input gives the same output frames however fast it arrives. Output
+ * frames are produced inside app_handle_frame, right after the IMU sample that is due.
+ *
+ * Everything rejected is counted in app_health_t and reported in NAV_Status pages 1..3.
+ * Includes only the core, the CAN codec and hal/hal.h (docs/architecture.md).
+ */
+#ifndef NAVECU_APP_H
+#define NAVECU_APP_H
+
+#include <stdint.h>
+
+#include "e2e.h"
+#include "hal.h"
+#include "sins.h"
+
+typedef struct {
+    uint16_t imu_rate_hz;    /* IMU sample rate, 10..400 */
+    uint16_t nav_rate_hz;    /* NAV_Position/Height/Velocity/Attitude rate, <= imu_rate_hz */
+    uint16_t status_rate_hz; /* NAV_Status rate, <= imu_rate_hz */
+    uint16_t level_s;        /* accelerometer levelling time before navigation starts */
+} app_config_t;
+
+/* Counters of everything the application refused; saturating at UINT32_MAX. */
+typedef struct {
+    uint32_t unknown_id;       /* frames with an identifier the protocol does not define */
+    uint32_t bad_dlc;          /* frames of a known message with DLC != 8 */
+    uint32_t bad_crc;          /* E2E CRC mismatch */
+    uint32_t bad_counter;      /* alive counter repeated or invalid (15): frame dropped */
+    uint32_t imu_pair_broken;  /* IMU_Rate without its IMU_Accel or the reverse */
+    uint32_t imu_lost;         /* IMU samples missing (counter steps > 1), bridged */
+    uint32_t bad_value;        /* out-of-range or implausible physical value */
+    uint32_t gnss_rejected;    /* GNSS epochs refused (impossible position, bad fix) */
+    uint32_t log_line_bad;     /* malformed source frames skipped by the HAL */
+    uint32_t cmd_rejected;     /* commands refused (missing known position, bad state) */
+    uint32_t nav_rejected;     /* IMU samples the strapdown core refused */
+} app_health_t;
+
+typedef enum {
+    APP_MODE_WAIT_INIT = 0,  /* waiting for an initial position (command or GNSS) */
+    APP_MODE_LEVELLING = 1,  /* standing still, averaging the accelerometers */
+    APP_MODE_NAVIGATING = 2,
+    APP_MODE_FAULT = 3,
+} app_mode_t;
+
+/* HealthFlags bits of NAV_Status page 0 */
+#define APP_FLAG_IMU_STALE 0x0001u    /* no IMU sample for more than 0.5 s of bus time */
+#define APP_FLAG_IMU_FAULT 0x0002u    /* the IMU reports a fault */
+#define APP_FLAG_NO_GNSS 0x0004u      /* no usable GNSS epoch in the last 2 s of IMU time */
+#define APP_FLAG_REJECTED 0x0008u     /* some input was rejected in the last second */
+#define APP_FLAG_NVM_ERROR 0x0010u    /* the last NVM operation failed */
+#define APP_FLAG_NO_HEADING 0x0020u   /* waiting for a heading (command or GNSS course) */
+
+typedef struct {
+    app_config_t cfg;
+    app_health_t health;
+    app_mode_t mode;
+    uint16_t flags_sticky; /* flags that persist until cleared by their cause */
+    sins_t nav;
+
+    /* E2E receive state per protected input */
+    e2e_counter_t rx_imu, rx_wheel, rx_cmd;
+    /* IMU pair assembly */
+    uint8_t rate_pending;
+    uint8_t rate_counter;
+    int16_t rate_raw[3];
+    uint8_t have_sample;        /* a sample has been processed (for bridging) */
+    int16_t last_rate_raw[3];
+    int16_t last_accel_raw[3];
+    uint64_t n_samples;         /* IMU samples processed: the time base */
+    uint64_t last_imu_t_us;     /* HAL time of the last IMU sample (staleness only) */
+    uint64_t last_reject_sample;
+    uint8_t rejected_recently;
+
+    /* initial state */
+    uint8_t known_pos_valid;
+    int32_t known_lat_e7, known_lon_e7;
+    uint8_t init_pos_valid, init_heading_valid;
+    int32_t init_lat_e7, init_lon_e7;
+    int32_t init_h_cm;
+    nav_real_t init_heading_rad;
+    int64_t level_sum_raw[3];   /* sum of raw velocity increments during levelling */
+    uint32_t level_n;
+
+    /* GNSS epoch assembly */
+    uint8_t gnss_pos_pending, gnss_vel_pending, gnss_h_pending;
+    int32_t gnss_lat_e7, gnss_lon_e7, gnss_h_cm;
+    int16_t gnss_vel_raw[3];
+    uint64_t last_gnss_sample;
+    uint8_t have_gnss;
+
+    /* output */
+    uint8_t tx_counter[6];      /* alive counters of the E2E-protected outputs */
+    uint8_t status_page;        /* next counter page of NAV_Status (1..3) */
+    uint32_t frames_sent;
+    uint32_t send_errors;
+} app_t;
+
+/* Defaults: IMU 100 Hz, outputs 50 Hz, status 10 Hz, levelling 10 s. */
+app_config_t app_default_config(void);
+
+/* Start in APP_MODE_WAIT_INIT. Returns NAV_OK, or NAV_EINVAL for a config out of range. */
+int app_init(app_t *app, const app_config_t *cfg);
+
+/* Process one received frame; may send frames through hal. Never fails: whatever is
+ * wrong with the frame is counted in app->health. */
+void app_handle_frame(app_t *app, hal_t *hal, const hal_can_frame_t *frame);
+
+#endif

@@ -1,0 +1,59 @@
+/*
+ * hal.h - the hardware abstraction layer: everything the application needs from a board.
+ *
+ * One implementation is linked per target (hal/linux/ for the host, hal/cortex_m4f/ for
+ * the ECU). All functions take the HAL instance first, return 0 or a negative errno value
+ * (values from <errno.h> of the implementation's C library; the application only compares
+ * against the HAL_E* names below), never block unless stated, and never allocate.
+ */
+#ifndef NAVECU_HAL_H
+#define NAVECU_HAL_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#define HAL_EAGAIN (-11)  /* nothing available now (receive queue empty) */
+#define HAL_EINVAL (-22)  /* bad argument */
+#define HAL_EIO (-5)      /* device or file error */
+#define HAL_ENODATA (-61) /* end of input: a log replay has no more frames */
+#define HAL_ENOSPC (-28)  /* out of space (NVM region, TX queue) */
+
+/* A classic CAN frame. */
+typedef struct {
+    uint32_t id;      /* 11-bit standard or 29-bit extended identifier */
+    uint8_t extended; /* 1: 29-bit identifier */
+    uint8_t dlc;      /* number of data bytes, 0..8 */
+    uint8_t data[8];
+    uint64_t t_us;    /* receive timestamp on the HAL clock (set by the HAL on receive) */
+} hal_can_frame_t;
+
+typedef struct hal hal_t; /* defined by the implementation */
+
+/*
+ * Receive one frame into *f. Returns 0; HAL_EAGAIN if none is waiting; HAL_ENODATA when
+ * a finite source (a log replay) is exhausted; HAL_EIO on a device error. A malformed
+ * frame from the source is not returned: it is counted (hal_can_rx_malformed) and skipped.
+ */
+int hal_can_receive(hal_t *hal, hal_can_frame_t *f);
+
+/* Queue one frame for transmission. Returns 0, HAL_EINVAL (dlc > 8), HAL_ENOSPC, HAL_EIO. */
+int hal_can_send(hal_t *hal, const hal_can_frame_t *f);
+
+/* Number of malformed source frames skipped so far (garbage or truncated log lines). */
+uint32_t hal_can_rx_malformed(const hal_t *hal);
+
+/* Monotonic time in microseconds since an arbitrary origin. On a log replay: the
+ * timestamp of the last frame received, so replay runs as fast as it can. */
+uint64_t hal_time_us(const hal_t *hal);
+
+/* Non-volatile storage: one region of hal_nvm_size() bytes. Reads of erased bytes give
+ * 0xFF. Writes may need a prior erase on real flash; callers erase, then write. */
+size_t hal_nvm_size(const hal_t *hal);
+int hal_nvm_read(hal_t *hal, size_t offset, void *buf, size_t len);
+int hal_nvm_write(hal_t *hal, size_t offset, const void *buf, size_t len);
+int hal_nvm_erase(hal_t *hal);
+
+/* Kick the watchdog. Must be called at least every 100 ms by the main loop. */
+void hal_watchdog_kick(hal_t *hal);
+
+#endif /* NAVECU_HAL_H */

@@ -1,0 +1,503 @@
+/*
+ * hal_linux.c - the HAL of hal.h on a Linux host (contracts in hal_linux.h).
+ *
+ * The RX log is parsed by hand, not with sscanf: every malformed form must be caught
+ * and counted, the timestamp converted without floating point, and nothing may depend
+ * on the locale.
+ */
+#include "hal_linux.h"
+
+#include <errno.h>
+#include <inttypes.h>
+#include <string.h>
+
+#define US_PER_S UINT64_C(1000000)
+#define STD_ID_MAX UINT32_C(0x7FF)
+#define EXT_ID_MAX UINT32_C(0x1FFFFFFF)
+#define FRAC_DIGITS_MAX 9u
+
+/* longest TX line: "(" 20 digits "." 6 digits ") " iface " " 8 digits "#" 16 digits "\n" */
+#define TX_LINE_MAX (1u + 20u + 1u + 6u + 2u + HAL_LINUX_IFACE_MAX + 1u + 8u + 1u + 16u + 1u)
+
+static const char default_iface[] = "can0";
+
+enum line_kind { LINE_FRAME, LINE_BLANK, LINE_MALFORMED };
+
+static uint32_t sat_inc_u32(uint32_t n)
+{
+    return n == UINT32_MAX ? n : n + 1u;
+}
+
+static int is_blank(char c)
+{
+    return c == ' ' || c == '\t' || c == '\r';
+}
+
+/* printable ASCII other than space: what an interface name may hold */
+static int is_graph_ascii(char c)
+{
+    return c > ' ' && c <= '~';
+}
+
+static int is_digit(char c)
+{
+    return c >= '0' && c <= '9';
+}
+
+/* value of hex digit c, or -1 */
+static int hex_value(char c)
+{
+    if (c >= '0' && c <= '9') {
+        return c - '0';
+    }
+    if (c >= 'a' && c <= 'f') {
+        return c - 'a' + 10;
+    }
+    if (c >= 'A' && c <= 'F') {
+        return c - 'A' + 10;
+    }
+    return -1;
+}
+
+static size_t skip_blanks(const char *s, size_t i, size_t n)
+{
+    while (i < n && is_blank(s[i])) {
+        i++;
+    }
+    return i;
+}
+
+/*
+ * Parse "(seconds.fraction)" at s[*i..n) into *t_us; advance *i past ")". Returns 0, or
+ * -1 if malformed or out of the uint64_t microsecond range.
+ */
+static int parse_timestamp(const char *s, size_t *i, size_t n, uint64_t *t_us)
+{
+    size_t k = *i;
+    uint64_t sec = 0u;
+    uint64_t frac_us = 0u;
+    unsigned n_sec = 0u;
+    unsigned n_frac = 0u;
+
+    if (k >= n || s[k] != '(') {
+        return -1;
+    }
+    k++;
+    while (k < n && is_digit(s[k])) {
+        const uint64_t d = (uint64_t)(s[k] - '0');
+        if (sec > (UINT64_MAX - d) / 10u) {
+            return -1;
+        }
+        sec = sec * 10u + d;
+        n_sec++;
+        k++;
+    }
+    if (n_sec == 0u || k >= n || s[k] != '.') {
+        return -1;
+    }
+    k++;
+    while (k < n && is_digit(s[k])) {
+        if (n_frac >= FRAC_DIGITS_MAX) {
+            return -1;
+        }
+        /* the first six digits are microseconds; later ones are below 1 us: truncated */
+        if (n_frac < 6u) {
+            frac_us = frac_us * 10u + (uint64_t)(s[k] - '0');
+        }
+        n_frac++;
+        k++;
+    }
+    if (n_frac == 0u || k >= n || s[k] != ')') {
+        return -1;
+    }
+    k++;
+    for (unsigned j = n_frac; j < 6u; j++) {
+        frac_us *= 10u;
+    }
+    if (sec > (UINT64_MAX - frac_us) / US_PER_S) {
+        return -1;
+    }
+    *t_us = sec * US_PER_S + frac_us;
+    *i = k;
+    return 0;
+}
+
+/*
+ * Parse "ID#DATA" occupying exactly s[i..n) into *f (id, extended, dlc, data). Returns 0,
+ * or -1 if malformed, remote, CAN FD, or an error frame.
+ */
+static int parse_frame(const char *s, size_t i, size_t n, hal_can_frame_t *f)
+{
+    uint32_t id = 0u;
+    size_t n_id = 0u;
+
+    while (i < n && s[i] != '#') {
+        const int v = hex_value(s[i]);
+        if (v < 0 || n_id >= 8u) {
+            return -1;
+        }
+        id = (id << 4) | (uint32_t)v;
+        n_id++;
+        i++;
+    }
+    if (i >= n) {
+        return -1; /* no '#' */
+    }
+    if (n_id == 3u) {
+        if (id > STD_ID_MAX) {
+            return -1;
+        }
+        f->extended = 0u;
+    } else if (n_id == 8u) {
+        /* also rejects error frames and anything else with flag bits above bit 28 */
+        if (id > EXT_ID_MAX) {
+            return -1;
+        }
+        f->extended = 1u;
+    } else {
+        return -1;
+    }
+    f->id = id;
+    i++; /* '#'; a following '#' (CAN FD) or 'R' (remote) fails the hex test below */
+
+    const size_t n_hex = n - i;
+    if (n_hex % 2u != 0u || n_hex > 16u) {
+        return -1;
+    }
+    for (size_t b = 0u; b < n_hex / 2u; b++) {
+        const int hi = hex_value(s[i + 2u * b]);
+        const int lo = hex_value(s[i + 2u * b + 1u]);
+        if (hi < 0 || lo < 0) {
+            return -1;
+        }
+        f->data[b] = (uint8_t)((hi << 4) | lo);
+    }
+    f->dlc = (uint8_t)(n_hex / 2u);
+    return 0;
+}
+
+/* Classify one RX line s[0..n) (newline removed); on LINE_FRAME fill *f completely. */
+static enum line_kind parse_line(const char *s, size_t n, hal_can_frame_t *f)
+{
+    hal_can_frame_t g;
+    size_t i = skip_blanks(s, 0u, n);
+
+    if (i == n) {
+        return LINE_BLANK;
+    }
+    memset(&g, 0, sizeof g);
+    if (parse_timestamp(s, &i, n, &g.t_us) != 0) {
+        return LINE_MALFORMED;
+    }
+
+    /* interface */
+    size_t start = skip_blanks(s, i, n);
+    if (start == i) {
+        return LINE_MALFORMED; /* no blank after ")" */
+    }
+    i = start;
+    while (i < n && is_graph_ascii(s[i])) {
+        i++;
+    }
+    if (i == start || i - start > HAL_LINUX_IFACE_MAX || i == n || !is_blank(s[i])) {
+        return LINE_MALFORMED;
+    }
+
+    /* frame, then nothing but blanks */
+    start = skip_blanks(s, i, n);
+    i = start;
+    while (i < n && !is_blank(s[i])) {
+        i++;
+    }
+    if (i == start || skip_blanks(s, i, n) != n) {
+        return LINE_MALFORMED;
+    }
+    if (parse_frame(s, start, i, &g) != 0) {
+        return LINE_MALFORMED;
+    }
+    *f = g;
+    return LINE_FRAME;
+}
+
+int hal_can_receive(hal_t *hal, hal_can_frame_t *f)
+{
+    if (hal == NULL || f == NULL) {
+        return HAL_EINVAL;
+    }
+    if (hal->rx == NULL || hal->rx_eof != 0u) {
+        return HAL_ENODATA;
+    }
+    for (;;) {
+        size_t n = 0u;
+        int overlong = 0;
+        int c;
+
+        /* one line: keep the first HAL_LINUX_LINE_MAX characters, drop the rest */
+        while ((c = getc(hal->rx)) != EOF && c != '\n') {
+            if (n < HAL_LINUX_LINE_MAX) {
+                hal->line[n++] = (char)c;
+            } else {
+                overlong = 1;
+            }
+        }
+        if (c == EOF) {
+            if (ferror(hal->rx)) {
+                return HAL_EIO;
+            }
+            if (n == 0u && !overlong) {
+                hal->rx_eof = 1u;
+                return HAL_ENODATA;
+            }
+            /* a last line without newline: parse it; the next call sees EOF again */
+        }
+        if (overlong) {
+            hal->rx_malformed = sat_inc_u32(hal->rx_malformed);
+            continue;
+        }
+        switch (parse_line(hal->line, n, f)) {
+        case LINE_FRAME:
+            hal->t_us = f->t_us;
+            hal->rx_frames = sat_inc_u32(hal->rx_frames);
+            return 0;
+        case LINE_MALFORMED:
+            hal->rx_malformed = sat_inc_u32(hal->rx_malformed);
+            break;
+        case LINE_BLANK:
+        default:
+            break;
+        }
+    }
+}
+
+uint32_t hal_can_rx_malformed(const hal_t *hal)
+{
+    return hal->rx_malformed;
+}
+
+uint64_t hal_time_us(const hal_t *hal)
+{
+    return hal->t_us;
+}
+
+/* write v as `digits` uppercase hex digits at p; returns p + digits */
+static char *put_hex(char *p, uint32_t v, unsigned digits)
+{
+    static const char hex[] = "0123456789ABCDEF";
+    for (unsigned d = digits; d > 0u; d--) {
+        p[d - 1u] = hex[v & 0xFu];
+        v >>= 4;
+    }
+    return p + digits;
+}
+
+int hal_can_send(hal_t *hal, const hal_can_frame_t *f)
+{
+    char line[TX_LINE_MAX + 1u]; /* + NUL from snprintf */
+
+    if (hal == NULL || f == NULL || f->dlc > 8u || f->extended > 1u ||
+        f->id > (f->extended != 0u ? EXT_ID_MAX : STD_ID_MAX)) {
+        return HAL_EINVAL;
+    }
+    if (hal->tx == NULL) {
+        hal->tx_frames = sat_inc_u32(hal->tx_frames);
+        return 0;
+    }
+    const int head = snprintf(line, sizeof line, "(%010" PRIu64 ".%06" PRIu64 ") %s ",
+                              hal->t_us / US_PER_S, hal->t_us % US_PER_S, hal->iface);
+    if (head < 0 || (size_t)head >= sizeof line) {
+        return HAL_EIO; /* cannot happen: the buffer holds the longest line */
+    }
+    char *p = line + head;
+    p = put_hex(p, f->id, f->extended != 0u ? 8u : 3u);
+    *p++ = '#';
+    for (unsigned b = 0u; b < f->dlc; b++) {
+        p = put_hex(p, f->data[b], 2u);
+    }
+    *p++ = '\n';
+    const size_t len = (size_t)(p - line);
+    /* ferror also reports a failed flush of earlier, buffered lines */
+    if (fwrite(line, 1u, len, hal->tx) != len || ferror(hal->tx)) {
+        return HAL_EIO;
+    }
+    hal->tx_frames = sat_inc_u32(hal->tx_frames);
+    return 0;
+}
+
+size_t hal_nvm_size(const hal_t *hal)
+{
+    (void)hal;
+    return HAL_LINUX_NVM_SIZE;
+}
+
+static int nvm_range_ok(size_t offset, size_t len)
+{
+    /* written so that offset + len cannot overflow */
+    return offset <= HAL_LINUX_NVM_SIZE && len <= HAL_LINUX_NVM_SIZE - offset;
+}
+
+/* write src[0..len) to the NVM file at offset, if there is a file; 0 or HAL_EIO */
+static int nvm_file_write(hal_t *hal, size_t offset, const void *src, size_t len)
+{
+    if (hal->nvm_file == NULL) {
+        return 0;
+    }
+    /* offset <= 4096 fits a long */
+    if (fseek(hal->nvm_file, (long)offset, SEEK_SET) != 0 ||
+        fwrite(src, 1u, len, hal->nvm_file) != len || fflush(hal->nvm_file) != 0) {
+        return HAL_EIO;
+    }
+    return 0;
+}
+
+int hal_nvm_read(hal_t *hal, size_t offset, void *buf, size_t len)
+{
+    if (hal == NULL || (buf == NULL && len > 0u) || !nvm_range_ok(offset, len)) {
+        return HAL_EINVAL;
+    }
+    if (len > 0u) {
+        memcpy(buf, hal->nvm + offset, len);
+    }
+    return 0;
+}
+
+int hal_nvm_write(hal_t *hal, size_t offset, const void *buf, size_t len)
+{
+    if (hal == NULL || (buf == NULL && len > 0u) || !nvm_range_ok(offset, len)) {
+        return HAL_EINVAL;
+    }
+    if (len == 0u) {
+        return 0;
+    }
+    /* file first: the mirror only changes once the data is stored */
+    const int rc = nvm_file_write(hal, offset, buf, len);
+    if (rc != 0) {
+        return rc;
+    }
+    memcpy(hal->nvm + offset, buf, len);
+    return 0;
+}
+
+int hal_nvm_erase(hal_t *hal)
+{
+    uint8_t erased[HAL_LINUX_NVM_SIZE];
+
+    if (hal == NULL) {
+        return HAL_EINVAL;
+    }
+    memset(erased, 0xFF, sizeof erased);
+    const int rc = nvm_file_write(hal, 0u, erased, sizeof erased);
+    if (rc != 0) {
+        return rc;
+    }
+    memcpy(hal->nvm, erased, sizeof erased);
+    return 0;
+}
+
+void hal_watchdog_kick(hal_t *hal)
+{
+    hal->watchdog_kicks++;
+}
+
+/* Open or create the NVM file and load it into hal->nvm. 0 or HAL_EIO. */
+static int nvm_open(hal_t *hal, const char *path)
+{
+    hal->nvm_file = fopen(path, "r+b");
+    if (hal->nvm_file == NULL) {
+        if (errno != ENOENT) {
+            return HAL_EIO;
+        }
+        /* "w+x": fail rather than truncate a file that appeared meanwhile */
+        hal->nvm_file = fopen(path, "w+bx");
+        if (hal->nvm_file == NULL) {
+            return HAL_EIO;
+        }
+        return nvm_file_write(hal, 0u, hal->nvm, sizeof hal->nvm);
+    }
+    if (fread(hal->nvm, 1u, sizeof hal->nvm, hal->nvm_file) != sizeof hal->nvm ||
+        getc(hal->nvm_file) != EOF || ferror(hal->nvm_file)) {
+        return HAL_EIO; /* short, long, or unreadable: not an NVM image of ours */
+    }
+    return 0;
+}
+
+int hal_linux_open(hal_t *hal, const char *rx_log_path, const char *tx_log_path,
+                   const char *nvm_path)
+{
+    if (hal == NULL) {
+        return HAL_EINVAL;
+    }
+    memset(hal, 0, sizeof *hal);
+    memcpy(hal->iface, default_iface, sizeof default_iface);
+    memset(hal->nvm, 0xFF, sizeof hal->nvm);
+
+    int rc = 0;
+    if (rx_log_path != NULL) {
+        hal->rx = fopen(rx_log_path, "rb");
+        if (hal->rx == NULL) {
+            rc = HAL_EIO;
+        }
+    }
+    if (rc == 0 && tx_log_path != NULL) {
+        hal->tx = fopen(tx_log_path, "wb");
+        if (hal->tx == NULL) {
+            rc = HAL_EIO;
+        }
+    }
+    if (rc == 0 && nvm_path != NULL) {
+        rc = nvm_open(hal, nvm_path);
+    }
+    if (rc != 0) {
+        hal_linux_close(hal);
+        memset(hal->nvm, 0xFF, sizeof hal->nvm);
+    }
+    return rc;
+}
+
+void hal_linux_close(hal_t *hal)
+{
+    if (hal == NULL) {
+        return;
+    }
+    if (hal->rx != NULL) {
+        (void)fclose(hal->rx);
+        hal->rx = NULL;
+    }
+    if (hal->tx != NULL) {
+        (void)fclose(hal->tx); /* flushes */
+        hal->tx = NULL;
+    }
+    if (hal->nvm_file != NULL) {
+        (void)fclose(hal->nvm_file);
+        hal->nvm_file = NULL;
+    }
+    hal->rx_eof = 1u;
+}
+
+void hal_linux_set_iface(hal_t *hal, const char *name)
+{
+    if (name == NULL || name[0] == '\0') {
+        memcpy(hal->iface, default_iface, sizeof default_iface);
+        return;
+    }
+    size_t n = 0u;
+    while (n < HAL_LINUX_IFACE_MAX && name[n] != '\0') {
+        hal->iface[n] = is_graph_ascii(name[n]) ? name[n] : '_';
+        n++;
+    }
+    hal->iface[n] = '\0';
+}
+
+uint64_t hal_linux_watchdog_kicks(const hal_t *hal)
+{
+    return hal->watchdog_kicks;
+}
+
+uint32_t hal_linux_rx_frames(const hal_t *hal)
+{
+    return hal->rx_frames;
+}
+
+uint32_t hal_linux_tx_frames(const hal_t *hal)
+{
+    return hal->tx_frames;
+}

@@ -1,0 +1,115 @@
+/*
+ * hal_linux.h - the HAL of hal.h on a Linux host: CAN from a candump log replay, CAN
+ * transmission appended to a candump log, NVM in memory or backed by a file, and a
+ * watchdog that only counts kicks.
+ *
+ * The caller owns the struct hal (on the stack or static); nothing is allocated. One
+ * instance per replay; the functions are not thread-safe.
+ *
+ * Log format (can-utils `candump -l`), one frame per line:
+ *     (1436509052.249713) vcan0 123#DEADBEEF
+ * - timestamp: "(" seconds "." 1..9 fraction digits ")", decimal; converted to integer
+ *   microseconds exactly (digits past the sixth are truncated, never rounded); it must fit
+ *   a uint64_t in microseconds;
+ * - interface: 1..HAL_LINUX_IFACE_MAX printable non-blank ASCII characters; any name is
+ *   accepted on receive (no filtering by interface);
+ * - frame: 3 hex digits (standard ID <= 0x7FF) or 8 hex digits (extended ID < 2^29), "#",
+ *   then 0..8 data bytes as pairs of hex digits; upper or lower case.
+ * Fields are separated by runs of spaces or tabs; blanks (space, tab, CR) before the first
+ * and after the last field are ignored, so CRLF logs replay. A line of only blanks is
+ * skipped without counting. Everything else is counted in hal_can_rx_malformed() and
+ * skipped: garbage, unbalanced parentheses, a missing field or an extra one, bad hex, an
+ * odd number of data digits, more than 8 data bytes, an ID out of range for its digit
+ * count or with another digit count, remote frames ("123#R"), CAN FD frames ("123##..."),
+ * error frames (the CAN_ERR_FLAG makes an 8-digit ID >= 0x20000000), and a line longer
+ * than HAL_LINUX_LINE_MAX characters before its newline (the rest of it is read and
+ * dropped; counted once). A last line without a newline is parsed like any other.
+ */
+#ifndef NAVECU_HAL_LINUX_H
+#define NAVECU_HAL_LINUX_H
+
+#include <stdint.h>
+#include <stdio.h>
+
+#include "hal.h"
+
+#define HAL_LINUX_NVM_SIZE 4096u /* bytes in the NVM region */
+#define HAL_LINUX_LINE_MAX 128u  /* longest RX log line, characters before the newline */
+#define HAL_LINUX_IFACE_MAX 15u  /* longest interface name (IFNAMSIZ - 1) */
+
+/* One Linux host HAL. Fields are private to hal_linux.c; tests read them through the
+ * accessor functions below. */
+struct hal {
+    FILE *rx;                 /* candump log replayed as CAN receive; NULL: none */
+    FILE *tx;                 /* candump log transmitted frames go to; NULL: discarded */
+    FILE *nvm_file;           /* file behind the NVM region; NULL: in memory only */
+    uint64_t t_us;            /* timestamp of the last frame received, 0 before any */
+    uint64_t watchdog_kicks;  /* hal_watchdog_kick calls since open */
+    uint32_t rx_malformed;    /* malformed RX lines skipped (saturates at UINT32_MAX) */
+    uint32_t rx_frames;       /* frames returned by hal_can_receive (saturates) */
+    uint32_t tx_frames;       /* frames accepted by hal_can_send (saturates) */
+    uint8_t rx_eof;           /* 1: the RX log is exhausted, HAL_ENODATA from now on */
+    char iface[HAL_LINUX_IFACE_MAX + 1u]; /* interface name written in the TX log */
+    char line[HAL_LINUX_LINE_MAX];        /* RX line buffer, not NUL-terminated */
+    uint8_t nvm[HAL_LINUX_NVM_SIZE];      /* the NVM region (mirror of nvm_file) */
+};
+
+/*
+ * Open a host HAL into caller-owned *hal (any previous contents are overwritten; a HAL
+ * that is open must be closed first or its files leak).
+ *   rx_log_path: candump log replayed by hal_can_receive; NULL: hal_can_receive returns
+ *                HAL_ENODATA at once.
+ *   tx_log_path: file hal_can_send appends candump lines to, created or truncated here;
+ *                NULL: sent frames are checked and discarded.
+ *   nvm_path:    file backing the NVM region, exactly HAL_LINUX_NVM_SIZE bytes; created
+ *                filled with 0xFF if it does not exist; NULL: in memory only, erased.
+ * The TX interface name is "can0" (hal_linux_set_iface changes it), the clock is 0.
+ * Returns 0; HAL_EINVAL if hal is NULL; HAL_EIO if a file cannot be opened, created, or
+ * read, or the NVM file has another size. On an error every file opened here is closed
+ * again, and hal_linux_close(hal) is harmless.
+ */
+int hal_linux_open(hal_t *hal, const char *rx_log_path, const char *tx_log_path,
+                   const char *nvm_path);
+
+/*
+ * Flush the TX log and close every file. The NVM file is already up to date (writes go
+ * through). A flush error here is not reported: hal_can_send returns HAL_EIO for errors
+ * seen while sending. Safe to call twice, and after a failed hal_linux_open.
+ */
+void hal_linux_close(hal_t *hal);
+
+/*
+ * Set the interface name written in TX log lines (call after hal_linux_open, which sets
+ * "can0"). At most HAL_LINUX_IFACE_MAX characters are kept; a character that is not
+ * printable non-blank ASCII is written as '_', so the TX log stays a valid RX log.
+ * NULL or "" restores "can0".
+ */
+void hal_linux_set_iface(hal_t *hal, const char *name);
+
+/* hal_watchdog_kick calls since hal_linux_open. */
+uint64_t hal_linux_watchdog_kicks(const hal_t *hal);
+
+/* Frames returned by hal_can_receive / accepted by hal_can_send since hal_linux_open
+ * (saturating at UINT32_MAX). */
+uint32_t hal_linux_rx_frames(const hal_t *hal);
+uint32_t hal_linux_tx_frames(const hal_t *hal);
+
+/*
+ * What hal.h leaves to the implementation, on this host:
+ * - hal_can_receive: HAL_ENODATA at the end of the log and on every call after it;
+ *   HAL_EIO on a read error; never HAL_EAGAIN (a replay has no idle time). The frame's
+ *   t_us is its log timestamp, passed through even when it goes backwards.
+ * - hal_time_us: the t_us of the last frame received (0 before any); not monotonic if
+ *   the log is not.
+ * - hal_can_send: writes "(SSSSSSSSSS.UUUUUU) IFACE ID#DATA\n" stamped hal_time_us(), so
+ *   the TX log is a deterministic function of the RX log; ID as %03X or %08X, data as
+ *   uppercase hex pairs. HAL_EINVAL if dlc > 8, extended is not 0 or 1, or the ID does not
+ *   fit 11 (standard) or 29 (extended) bits; HAL_EIO on a write error (including one
+ *   from an earlier buffered write); never HAL_ENOSPC.
+ * - NVM: HAL_LINUX_NVM_SIZE bytes; HAL_EINVAL if offset + len > size or buf is NULL with
+ *   len > 0; writes overwrite (flash's only-clear-bits rule is not modelled) and go
+ *   through to the file, HAL_EIO on a file error (the range's contents are then
+ *   unspecified).
+ */
+
+#endif /* NAVECU_HAL_LINUX_H */

@@ -1,0 +1,423 @@
+/*
+ * test_app.c - the application against an in-memory HAL (tests/support/fake_hal.c):
+ * initialization by command, navigation from exactly-encoded IMU data, output rates and
+ * E2E, determinism, and every kind of bad input counted, never fatal.
+ */
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <string.h>
+#include <cmocka.h>
+
+#include "app.h"
+#include "e2e.h"
+#include "fake_hal.h"
+#include "motions.h"
+#include "navecu_can.h"
+#include "test_util.h"
+
+#define PI 3.14159265358979323846
+#define DEG (PI / 180.0)
+#define LAT0_DEG 45.0
+#define LON0_DEG 10.0
+#define H0_M 100.0
+#define RATE_HZ 100
+
+static hal_t hal;
+static app_t app;
+
+/* ---- frame builders (the real encoding: generated codec + E2E) ---- */
+
+static hal_can_frame_t frame(uint32_t id, const uint8_t d[8])
+{
+    hal_can_frame_t f;
+    memset(&f, 0, sizeof f);
+    f.id = id;
+    f.dlc = 8u;
+    memcpy(f.data, d, 8u);
+    f.t_us = hal.t_us;
+    return f;
+}
+
+static void feed(const hal_can_frame_t *f)
+{
+    app_handle_frame(&app, &hal, f);
+}
+
+static void send_imu_pair(const int16_t w[3], const int16_t v[3], uint8_t counter)
+{
+    uint8_t d[8];
+    struct navecu_can_imu_rate_t r = {w[0], w[1], w[2], counter, 0u, 0u};
+    navecu_can_imu_rate_pack(d, &r, 8u);
+    e2e_protect(NAVECU_CAN_IMU_RATE_FRAME_ID, d);
+    hal_can_frame_t f = frame(NAVECU_CAN_IMU_RATE_FRAME_ID, d);
+    feed(&f);
+    struct navecu_can_imu_accel_t a = {v[0], v[1], v[2], counter, 0u};
+    navecu_can_imu_accel_pack(d, &a, 8u);
+    e2e_protect(NAVECU_CAN_IMU_ACCEL_FRAME_ID, d);
+    f = frame(NAVECU_CAN_IMU_ACCEL_FRAME_ID, d);
+    feed(&f);
+}
+
+static uint8_t cmd_counter;
+
+static void send_init_commands(double heading_deg)
+{
+    uint8_t d[8];
+    struct navecu_can_cmd_known_position_t k = {(int32_t)lround(LAT0_DEG * 1e7),
+                                                 (int32_t)lround(LON0_DEG * 1e7)};
+    navecu_can_cmd_known_position_pack(d, &k, 8u);
+    hal_can_frame_t f = frame(NAVECU_CAN_CMD_KNOWN_POSITION_FRAME_ID, d);
+    feed(&f);
+    struct navecu_can_cmd_control_t c;
+    memset(&c, 0, sizeof c);
+    c.command = 2u;
+    c.heading_valid = 1u;
+    c.heading = (uint16_t)lround(heading_deg * 100.0);
+    c.height = (int32_t)lround(H0_M * 10.0);
+    c.cmd_counter = cmd_counter;
+    cmd_counter = e2e_counter_next(cmd_counter);
+    navecu_can_cmd_control_pack(d, &c, 8u);
+    e2e_protect(NAVECU_CAN_CMD_CONTROL_FRAME_ID, d);
+    f = frame(NAVECU_CAN_CMD_CONTROL_FRAME_ID, d);
+    feed(&f);
+}
+
+/* ---- a vehicle standing still, its exact IMU increments quantised with carry ---- */
+
+typedef struct {
+    truth_gen_t gen;
+    double carry_w[3], carry_v[3]; /* in LSB */
+    uint8_t counter;
+} imu_src_t;
+
+static imu_src_t src;
+static const still_t STILL = {2.0 * DEG, -1.0 * DEG, 30.0 * DEG};
+
+static void imu_src_init(void)
+{
+    memset(&src, 0, sizeof src);
+    truth_init(&src.gen, kin_still, &STILL, LAT0_DEG * DEG, LON0_DEG * DEG, H0_M);
+}
+
+static void imu_src_next(int16_t w[3], int16_t v[3])
+{
+    double dth[3], dv[3];
+    truth_step(&src.gen, 1.0 / RATE_HZ, dth, dv);
+    for (int i = 0; i < 3; i++) {
+        const double wl = dth[i] * 65536.0 + src.carry_w[i];
+        const double vl = dv[i] * 2048.0 + src.carry_v[i];
+        w[i] = (int16_t)lround(wl);
+        v[i] = (int16_t)lround(vl);
+        src.carry_w[i] = wl - w[i];
+        src.carry_v[i] = vl - v[i];
+    }
+}
+
+/* run n seconds of stationary IMU data */
+static void run_still(int seconds)
+{
+    for (int k = 0; k < seconds * RATE_HZ; k++) {
+        int16_t w[3], v[3];
+        imu_src_next(w, v);
+        hal.t_us += 1000000u / RATE_HZ;
+        send_imu_pair(w, v, src.counter);
+        src.counter = e2e_counter_next(src.counter);
+    }
+}
+
+static int setup(void **state)
+{
+    (void)state;
+    fake_hal_reset(&hal);
+    const app_config_t cfg = app_default_config();
+    assert_int_equal(app_init(&app, &cfg), NAV_OK);
+    imu_src_init();
+    cmd_counter = 0u;
+    return 0;
+}
+
+static const hal_can_frame_t *last_tx(uint32_t id)
+{
+    for (uint32_t i = hal.tx_n; i > 0u; i--) {
+        if (hal.tx[i - 1u].id == id) {
+            return &hal.tx[i - 1u];
+        }
+    }
+    return NULL;
+}
+
+static uint32_t tx_count(uint32_t id)
+{
+    uint32_t n = 0u;
+    for (uint32_t i = 0u; i < hal.tx_n; i++) {
+        n += hal.tx[i].id == id;
+    }
+    return n;
+}
+
+/*
+ * GIVEN a known position and heading by command, then 60 s of a tilted vehicle standing
+ *       still (exact increments through the real encoding, remainder carried)
+ * WHEN the application levels for 10 s and navigates
+ * THEN NAV_Position stays within 0.5 m of the start, NAV_Attitude shows the true roll,
+ *      pitch and heading within 0.01 deg, and nothing was rejected.
+ */
+static void test_stationary_navigation(void **state)
+{
+    (void)state;
+    send_init_commands(30.0);
+    assert_int_equal(app.mode, APP_MODE_LEVELLING);
+    run_still(60);
+    assert_int_equal(app.mode, APP_MODE_NAVIGATING);
+
+    const hal_can_frame_t *p = last_tx(NAVECU_CAN_NAV_POSITION_FRAME_ID);
+    assert_non_null(p);
+    struct navecu_can_nav_position_t pos;
+    navecu_can_nav_position_unpack(&pos, p->data, 8u);
+    const double dn_m = (pos.latitude * 1e-7 - LAT0_DEG) * DEG * 6367381.8;
+    const double de_m = (pos.longitude * 1e-7 - LON0_DEG) * DEG * 6388838.3 * cos(LAT0_DEG * DEG);
+    print_message("stationary 60 s: NAV_Position %.3f m from the start\n", hypot(dn_m, de_m));
+    assert_true(hypot(dn_m, de_m) < 0.5);
+
+    struct navecu_can_nav_attitude_t att;
+    navecu_can_nav_attitude_unpack(&att, last_tx(NAVECU_CAN_NAV_ATTITUDE_FRAME_ID)->data, 8u);
+    assert_near(att.roll * 0.01, 2.0, 0.01);
+    assert_near(att.pitch * 0.01, -1.0, 0.01);
+    assert_near(att.heading * 0.01, 30.0, 0.01);
+
+    const app_health_t zero = {0};
+    assert_memory_equal(&app.health, &zero, sizeof zero);
+}
+
+/*
+ * GIVEN navigation running at the default rates (IMU 100 Hz)
+ * WHEN 10 s pass
+ * THEN NAV_Position/Height/Velocity/Attitude come at 50 Hz, NAV_Status at 10 Hz (page 0
+ *      plus one counter page), NAV_Calibration at 1 Hz; every protected output has a valid
+ *      CRC and its alive counter steps by one.
+ */
+static void test_output_rates_and_e2e(void **state)
+{
+    (void)state;
+    send_init_commands(30.0);
+    run_still(10); /* levelling */
+    hal.tx_n = 0u;
+    run_still(10);
+    assert_int_equal(tx_count(NAVECU_CAN_NAV_POSITION_FRAME_ID), 500);
+    assert_int_equal(tx_count(NAVECU_CAN_NAV_HEIGHT_FRAME_ID), 500);
+    assert_int_equal(tx_count(NAVECU_CAN_NAV_VELOCITY_FRAME_ID), 500);
+    assert_int_equal(tx_count(NAVECU_CAN_NAV_ATTITUDE_FRAME_ID), 500);
+    assert_int_equal(tx_count(NAVECU_CAN_NAV_STATUS_FRAME_ID), 200);
+    assert_int_equal(tx_count(NAVECU_CAN_NAV_CALIBRATION_FRAME_ID), 10);
+    e2e_counter_t ctr[0x20];
+    memset(ctr, 0, sizeof ctr);
+    for (uint32_t i = 0; i < hal.tx_n; i++) {
+        const hal_can_frame_t *f = &hal.tx[i];
+        assert_int_equal(f->dlc, 8);
+        if (f->id == NAVECU_CAN_NAV_POSITION_FRAME_ID) {
+            continue; /* 64 bits of coordinates: no E2E (docs/can.md) */
+        }
+        assert_true(e2e_crc_ok(f->id, f->data));
+        const uint8_t c = (uint8_t)(f->data[6] & 0x0Fu); /* NavCounter: bits 48..51 */
+        assert_int_equal(e2e_counter_step(&ctr[f->id - 0x300u], c), 1);
+    }
+}
+
+/* Same input twice, fresh application: byte-identical output frames. */
+static void test_deterministic(void **state)
+{
+    (void)state;
+    static hal_can_frame_t first[FAKE_TX_MAX];
+    send_init_commands(30.0);
+    run_still(15);
+    const uint32_t n1 = hal.tx_n;
+    memcpy(first, hal.tx, n1 * sizeof first[0]);
+    setup(NULL);
+    send_init_commands(30.0);
+    run_still(15);
+    assert_int_equal(hal.tx_n, n1);
+    assert_memory_equal(first, hal.tx, n1 * sizeof first[0]);
+}
+
+/*
+ * GIVEN a navigating application
+ * WHEN every kind of bad input arrives
+ * THEN each is counted in its health counter (and reported in NAV_Status), none changes
+ *      the navigation, and navigation goes on.
+ */
+static void test_bad_input_counted(void **state)
+{
+    (void)state;
+    send_init_commands(30.0);
+    run_still(12);
+    assert_int_equal(app.mode, APP_MODE_NAVIGATING);
+    uint8_t d[8] = {0};
+    hal_can_frame_t f;
+    int16_t w[3], v[3];
+
+    /* unknown standard and extended identifiers */
+    f = frame(0x7FFu, d);
+    feed(&f);
+    f.extended = 1u;
+    f.id = 0x18FEF100u;
+    feed(&f);
+    assert_int_equal(app.health.unknown_id, 2);
+
+    /* wrong DLC of a known message */
+    imu_src_next(w, v);
+    struct navecu_can_imu_rate_t r = {w[0], w[1], w[2], src.counter, 0u, 0u};
+    navecu_can_imu_rate_pack(d, &r, 8u);
+    e2e_protect(NAVECU_CAN_IMU_RATE_FRAME_ID, d);
+    f = frame(NAVECU_CAN_IMU_RATE_FRAME_ID, d);
+    f.dlc = 6u;
+    feed(&f);
+    assert_int_equal(app.health.bad_dlc, 1);
+
+    /* corrupted payload: CRC mismatch */
+    f.dlc = 8u;
+    f.data[2] ^= 0x10u;
+    feed(&f);
+    assert_int_equal(app.health.bad_crc, 1);
+
+    /* a repeated sample (same counter twice) is dropped */
+    send_imu_pair(w, v, src.counter);
+    const uint64_t n_before = app.n_samples;
+    send_imu_pair(w, v, src.counter);
+    assert_int_equal(app.health.bad_counter, 1);
+    assert_int_equal(app.n_samples, n_before);
+    src.counter = e2e_counter_next(src.counter);
+
+    /* two samples lost: bridged, counted, time advances by three samples */
+    imu_src_next(w, v);
+    imu_src_next(w, v);
+    imu_src_next(w, v);
+    src.counter = e2e_counter_next(e2e_counter_next(src.counter));
+    send_imu_pair(w, v, src.counter);
+    src.counter = e2e_counter_next(src.counter);
+    assert_int_equal(app.health.imu_lost, 2);
+    assert_int_equal(app.n_samples, n_before + 3u);
+
+    /* half pairs: IMU_Rate twice, then IMU_Accel with a foreign counter */
+    imu_src_next(w, v);
+    r.imu_counter = src.counter;
+    navecu_can_imu_rate_pack(d, &r, 8u);
+    e2e_protect(NAVECU_CAN_IMU_RATE_FRAME_ID, d);
+    f = frame(NAVECU_CAN_IMU_RATE_FRAME_ID, d);
+    feed(&f);
+    feed(&f);
+    assert_int_equal(app.health.imu_pair_broken, 1);
+    struct navecu_can_imu_accel_t acc = {v[0], v[1], v[2], e2e_counter_next(src.counter), 0u};
+    navecu_can_imu_accel_pack(d, &acc, 8u);
+    e2e_protect(NAVECU_CAN_IMU_ACCEL_FRAME_ID, d);
+    f = frame(NAVECU_CAN_IMU_ACCEL_FRAME_ID, d);
+    feed(&f);
+    assert_int_equal(app.health.imu_pair_broken, 2);
+
+    /* the invalid alive counter 15 */
+    r.imu_counter = 15u;
+    navecu_can_imu_rate_pack(d, &r, 8u);
+    e2e_protect(NAVECU_CAN_IMU_RATE_FRAME_ID, d);
+    f = frame(NAVECU_CAN_IMU_RATE_FRAME_ID, d);
+    feed(&f);
+    assert_int_equal(app.health.bad_counter, 2);
+
+    /* a GNSS fix at an impossible position, a known position off the globe, a GNSS height
+     * outside its range */
+    struct navecu_can_gnss_position_t gp = {950000000, 0};
+    navecu_can_gnss_position_pack(d, &gp, 8u);
+    f = frame(NAVECU_CAN_GNSS_POSITION_FRAME_ID, d);
+    feed(&f);
+    assert_int_equal(app.health.gnss_rejected, 1);
+    struct navecu_can_cmd_known_position_t kp = {0, -1800000001};
+    navecu_can_cmd_known_position_pack(d, &kp, 8u);
+    f = frame(NAVECU_CAN_CMD_KNOWN_POSITION_FRAME_ID, d);
+    feed(&f);
+    struct navecu_can_gnss_height_t gh = {-200000, 0u}; /* -2000 m */
+    navecu_can_gnss_height_pack(d, &gh, 8u);
+    f = frame(NAVECU_CAN_GNSS_HEIGHT_FRAME_ID, d);
+    feed(&f);
+    assert_int_equal(app.health.bad_value, 2);
+
+    /* an unknown command */
+    struct navecu_can_cmd_control_t c;
+    memset(&c, 0, sizeof c);
+    c.command = 9u;
+    c.cmd_counter = cmd_counter;
+    navecu_can_cmd_control_pack(d, &c, 8u);
+    e2e_protect(NAVECU_CAN_CMD_CONTROL_FRAME_ID, d);
+    f = frame(NAVECU_CAN_CMD_CONTROL_FRAME_ID, d);
+    feed(&f);
+    assert_int_equal(app.health.cmd_rejected, 1);
+
+    /* navigation went on through all of it and reports what it rejected */
+    assert_int_equal(app.mode, APP_MODE_NAVIGATING);
+    hal.tx_n = 0u;
+    run_still(1);
+    struct navecu_can_nav_status_t st;
+    int pages_seen = 0;
+    for (uint32_t i = 0; i < hal.tx_n; i++) {
+        if (hal.tx[i].id != NAVECU_CAN_NAV_STATUS_FRAME_ID) {
+            continue;
+        }
+        memset(&st, 0, sizeof st);
+        navecu_can_nav_status_unpack(&st, hal.tx[i].data, 8u);
+        if (st.status_page == 0u) {
+            assert_int_equal(st.mode, APP_MODE_NAVIGATING);
+            assert_true(st.health_flags & APP_FLAG_REJECTED);
+        } else if (st.status_page == 1u) {
+            assert_int_equal(st.cnt_unknown_id, 2);
+            assert_int_equal(st.cnt_bad_dlc, 1);
+            assert_int_equal(st.cnt_bad_crc, 1);
+            pages_seen |= 1;
+        } else if (st.status_page == 2u) {
+            assert_int_equal(st.cnt_bad_counter, 2);
+            assert_int_equal(st.cnt_imu_pair_broken, 2);
+            assert_int_equal(st.cnt_imu_lost, 2);
+            pages_seen |= 2;
+        } else if (st.status_page == 3u) {
+            assert_int_equal(st.cnt_bad_value, 3); /* bad values + the refused command */
+            assert_int_equal(st.cnt_gnss_rejected, 1);
+            pages_seen |= 4;
+        }
+    }
+    assert_int_equal(pages_seen, 7);
+    const hal_can_frame_t *p = last_tx(NAVECU_CAN_NAV_POSITION_FRAME_ID);
+    struct navecu_can_nav_position_t pos;
+    navecu_can_nav_position_unpack(&pos, p->data, 8u);
+    assert_near(pos.latitude * 1e-7, LAT0_DEG, 1e-5); /* about 1 m */
+}
+
+/* SetInitialPosition without a known position is refused; the app keeps waiting. */
+static void test_init_needs_known_position(void **state)
+{
+    (void)state;
+    uint8_t d[8];
+    struct navecu_can_cmd_control_t c;
+    memset(&c, 0, sizeof c);
+    c.command = 2u;
+    c.heading_valid = 1u;
+    navecu_can_cmd_control_pack(d, &c, 8u);
+    e2e_protect(NAVECU_CAN_CMD_CONTROL_FRAME_ID, d);
+    hal_can_frame_t f = frame(NAVECU_CAN_CMD_CONTROL_FRAME_ID, d);
+    feed(&f);
+    assert_int_equal(app.health.cmd_rejected, 1);
+    assert_int_equal(app.mode, APP_MODE_WAIT_INIT);
+    run_still(1);
+    assert_null(last_tx(NAVECU_CAN_NAV_POSITION_FRAME_ID)); /* nothing to report yet */
+    assert_non_null(last_tx(NAVECU_CAN_NAV_STATUS_FRAME_ID));
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test_setup(test_stationary_navigation, setup),
+        cmocka_unit_test_setup(test_output_rates_and_e2e, setup),
+        cmocka_unit_test_setup(test_deterministic, setup),
+        cmocka_unit_test_setup(test_bad_input_counted, setup),
+        cmocka_unit_test_setup(test_init_needs_known_position, setup),
+    };
+    return cmocka_run_group_tests_name("app", tests, NULL, NULL);
+}
