@@ -124,6 +124,7 @@ test-python: venv $(BUILD)/host/navecu
 	NAVECU_BIN=$(BUILD)/host/navecu $(PY) -m pytest -q tests/python
 
 test: deps
+	./tools/check_layers.sh
 	$(MAKE) codec-check doc-check
 	$(MAKE) test-plain
 	$(MAKE) test-asan
@@ -184,8 +185,9 @@ $(BUILD)/%/tests/study_numerics: $(BUILD)/%/f64/tests/study_numerics.o $(BUILD)/
 	$(CC) $^ -lm -o $@
 
 sim:
-	@echo "make sim arrives with the simulator issue (#4): drive simulation, firmware run and"
-	@echo "accuracy report are not built yet. 'make test' runs the navigation core's tests."
+	@echo "make sim arrives with the simulator issue (#4): drive simulation and accuracy"
+	@echo "report are not built yet. Today: 'make' builds build/host/navecu, which replays a"
+	@echo "CAN log (see its --help); 'make test' runs every test."
 	@exit 2
 
 clean:

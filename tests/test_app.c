@@ -46,19 +46,26 @@ static void feed(const hal_can_frame_t *f)
     app_handle_frame(&app, &hal, f);
 }
 
-static void send_imu_pair(const int16_t w[3], const int16_t v[3], uint8_t counter)
+/* the two frames of one IMU sample, with the pair CRC in IMU_Accel (docs/can.md) */
+static void make_imu_pair(const int32_t w[3], const int32_t v[3], uint8_t counter,
+                          hal_can_frame_t *rate, hal_can_frame_t *accel)
 {
-    uint8_t d[8];
-    struct navecu_can_imu_rate_t r = {w[0], w[1], w[2], counter, 0u, 0u};
-    navecu_can_imu_rate_pack(d, &r, 8u);
-    e2e_protect(NAVECU_CAN_IMU_RATE_FRAME_ID, d);
-    hal_can_frame_t f = frame(NAVECU_CAN_IMU_RATE_FRAME_ID, d);
-    feed(&f);
-    struct navecu_can_imu_accel_t a = {v[0], v[1], v[2], counter, 0u};
-    navecu_can_imu_accel_pack(d, &a, 8u);
-    e2e_protect(NAVECU_CAN_IMU_ACCEL_FRAME_ID, d);
-    f = frame(NAVECU_CAN_IMU_ACCEL_FRAME_ID, d);
-    feed(&f);
+    uint8_t dr[8], da[8];
+    struct navecu_can_imu_rate_t r = {w[0], w[1], w[2], counter};
+    navecu_can_imu_rate_pack(dr, &r, 8u);
+    struct navecu_can_imu_accel_t a = {v[0], v[1], v[2], 0u, counter, 0u};
+    navecu_can_imu_accel_pack(da, &a, 8u);
+    da[7] = e2e_pair_crc(NAVECU_CAN_IMU_ACCEL_FRAME_ID, dr, da);
+    *rate = frame(NAVECU_CAN_IMU_RATE_FRAME_ID, dr);
+    *accel = frame(NAVECU_CAN_IMU_ACCEL_FRAME_ID, da);
+}
+
+static void send_imu_pair(const int32_t w[3], const int32_t v[3], uint8_t counter)
+{
+    hal_can_frame_t fr, fa;
+    make_imu_pair(w, v, counter, &fr, &fa);
+    feed(&fr);
+    feed(&fa);
 }
 
 static uint8_t cmd_counter;
@@ -102,15 +109,15 @@ static void imu_src_init(void)
     truth_init(&src.gen, kin_still, &STILL, LAT0_DEG * DEG, LON0_DEG * DEG, H0_M);
 }
 
-static void imu_src_next(int16_t w[3], int16_t v[3])
+static void imu_src_next(int32_t w[3], int32_t v[3])
 {
     double dth[3], dv[3];
     truth_step(&src.gen, 1.0 / RATE_HZ, dth, dv);
     for (int i = 0; i < 3; i++) {
-        const double wl = dth[i] * 65536.0 + src.carry_w[i];
-        const double vl = dv[i] * 2048.0 + src.carry_v[i];
-        w[i] = (int16_t)lround(wl);
-        v[i] = (int16_t)lround(vl);
+        const double wl = dth[i] * 2097152.0 + src.carry_w[i]; /* LSB 2^-21 rad */
+        const double vl = dv[i] * 4096.0 + src.carry_v[i];     /* LSB 2^-12 m/s */
+        w[i] = (int32_t)lround(wl);
+        v[i] = (int32_t)lround(vl);
         src.carry_w[i] = wl - w[i];
         src.carry_v[i] = vl - v[i];
     }
@@ -120,7 +127,7 @@ static void imu_src_next(int16_t w[3], int16_t v[3])
 static void run_still(int seconds)
 {
     for (int k = 0; k < seconds * RATE_HZ; k++) {
-        int16_t w[3], v[3];
+        int32_t w[3], v[3];
         imu_src_next(w, v);
         hal.t_us += 1000000u / RATE_HZ;
         send_imu_pair(w, v, src.counter);
@@ -161,7 +168,7 @@ static uint32_t tx_count(uint32_t id)
 /*
  * GIVEN a known position and heading by command, then 60 s of a tilted vehicle standing
  *       still (exact increments through the real encoding, remainder carried)
- * WHEN the application levels for 10 s and navigates
+ * WHEN the application levels for 30 s (default) and navigates for 30 s
  * THEN NAV_Position stays within 0.5 m of the start, NAV_Attitude shows the true roll,
  *      pitch and heading within 0.01 deg, and nothing was rejected.
  */
@@ -173,13 +180,14 @@ static void test_stationary_navigation(void **state)
     run_still(60);
     assert_int_equal(app.mode, APP_MODE_NAVIGATING);
 
+    assert_int_equal(hal.tx_dropped, 0); /* the capture holds every frame sent */
     const hal_can_frame_t *p = last_tx(NAVECU_CAN_NAV_POSITION_FRAME_ID);
     assert_non_null(p);
     struct navecu_can_nav_position_t pos;
     navecu_can_nav_position_unpack(&pos, p->data, 8u);
     const double dn_m = (pos.latitude * 1e-7 - LAT0_DEG) * DEG * 6367381.8;
     const double de_m = (pos.longitude * 1e-7 - LON0_DEG) * DEG * 6388838.3 * cos(LAT0_DEG * DEG);
-    print_message("stationary 60 s: NAV_Position %.3f m from the start\n", hypot(dn_m, de_m));
+    print_message("stationary, 30 s navigating: NAV_Position %.3f m from the start\n", hypot(dn_m, de_m));
     assert_true(hypot(dn_m, de_m) < 0.5);
 
     struct navecu_can_nav_attitude_t att;
@@ -203,9 +211,10 @@ static void test_output_rates_and_e2e(void **state)
 {
     (void)state;
     send_init_commands(30.0);
-    run_still(10); /* levelling */
+    run_still(30); /* levelling */
     hal.tx_n = 0u;
     run_still(10);
+    assert_int_equal(hal.tx_dropped, 0);
     assert_int_equal(tx_count(NAVECU_CAN_NAV_POSITION_FRAME_ID), 500);
     assert_int_equal(tx_count(NAVECU_CAN_NAV_HEIGHT_FRAME_ID), 500);
     assert_int_equal(tx_count(NAVECU_CAN_NAV_VELOCITY_FRAME_ID), 500);
@@ -232,12 +241,12 @@ static void test_deterministic(void **state)
     (void)state;
     static hal_can_frame_t first[FAKE_TX_MAX];
     send_init_commands(30.0);
-    run_still(15);
+    run_still(35);
     const uint32_t n1 = hal.tx_n;
     memcpy(first, hal.tx, n1 * sizeof first[0]);
     setup(NULL);
     send_init_commands(30.0);
-    run_still(15);
+    run_still(35);
     assert_int_equal(hal.tx_n, n1);
     assert_memory_equal(first, hal.tx, n1 * sizeof first[0]);
 }
@@ -252,11 +261,11 @@ static void test_bad_input_counted(void **state)
 {
     (void)state;
     send_init_commands(30.0);
-    run_still(12);
+    run_still(32);
     assert_int_equal(app.mode, APP_MODE_NAVIGATING);
     uint8_t d[8] = {0};
-    hal_can_frame_t f;
-    int16_t w[3], v[3];
+    hal_can_frame_t f, fr, fa;
+    int32_t w[3], v[3];
 
     /* unknown standard and extended identifiers */
     f = frame(0x7FFu, d);
@@ -268,18 +277,17 @@ static void test_bad_input_counted(void **state)
 
     /* wrong DLC of a known message */
     imu_src_next(w, v);
-    struct navecu_can_imu_rate_t r = {w[0], w[1], w[2], src.counter, 0u, 0u};
-    navecu_can_imu_rate_pack(d, &r, 8u);
-    e2e_protect(NAVECU_CAN_IMU_RATE_FRAME_ID, d);
-    f = frame(NAVECU_CAN_IMU_RATE_FRAME_ID, d);
+    make_imu_pair(w, v, src.counter, &fr, &fa);
+    f = fr;
     f.dlc = 6u;
     feed(&f);
     assert_int_equal(app.health.bad_dlc, 1);
 
-    /* corrupted payload: CRC mismatch */
-    f.dlc = 8u;
+    /* corrupted IMU_Rate payload: the pair CRC in IMU_Accel catches it */
+    f = fr;
     f.data[2] ^= 0x10u;
     feed(&f);
+    feed(&fa);
     assert_int_equal(app.health.bad_crc, 1);
 
     /* a repeated sample (same counter twice) is dropped */
@@ -302,26 +310,17 @@ static void test_bad_input_counted(void **state)
 
     /* half pairs: IMU_Rate twice, then IMU_Accel with a foreign counter */
     imu_src_next(w, v);
-    r.imu_counter = src.counter;
-    navecu_can_imu_rate_pack(d, &r, 8u);
-    e2e_protect(NAVECU_CAN_IMU_RATE_FRAME_ID, d);
-    f = frame(NAVECU_CAN_IMU_RATE_FRAME_ID, d);
-    feed(&f);
-    feed(&f);
+    make_imu_pair(w, v, src.counter, &fr, &fa);
+    feed(&fr);
+    feed(&fr);
     assert_int_equal(app.health.imu_pair_broken, 1);
-    struct navecu_can_imu_accel_t acc = {v[0], v[1], v[2], e2e_counter_next(src.counter), 0u};
-    navecu_can_imu_accel_pack(d, &acc, 8u);
-    e2e_protect(NAVECU_CAN_IMU_ACCEL_FRAME_ID, d);
-    f = frame(NAVECU_CAN_IMU_ACCEL_FRAME_ID, d);
-    feed(&f);
+    make_imu_pair(w, v, e2e_counter_next(src.counter), &fr, &fa);
+    feed(&fa);
     assert_int_equal(app.health.imu_pair_broken, 2);
 
     /* the invalid alive counter 15 */
-    r.imu_counter = 15u;
-    navecu_can_imu_rate_pack(d, &r, 8u);
-    e2e_protect(NAVECU_CAN_IMU_RATE_FRAME_ID, d);
-    f = frame(NAVECU_CAN_IMU_RATE_FRAME_ID, d);
-    feed(&f);
+    make_imu_pair(w, v, 15u, &fr, &fa);
+    feed(&fr);
     assert_int_equal(app.health.bad_counter, 2);
 
     /* a GNSS fix at an impossible position, a known position off the globe, a GNSS height

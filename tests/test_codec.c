@@ -80,10 +80,10 @@ static void test_short_buffer_rejected(void **state)
 static void test_physical_scaling(void **state)
 {
     (void)state;
-    const float lsb_a = 1.52587890625e-05f;
-    const float a[] = {-0.5f, -0.123456f, 0.0f, 7.29e-7f, 0.4999847412109375f};
+    const float lsb_a = 4.76837158203125e-07f; /* 2^-21 rad */
+    const float a[] = {-0.25f, -0.123456f, 0.0f, 7.29e-7f, 0.249999523162842f};
     for (size_t i = 0; i < sizeof a / sizeof a[0]; i++) {
-        const int16_t raw = navecu_can_imu_rate_angle_inc_x_encode(a[i]);
+        const int32_t raw = navecu_can_imu_rate_angle_inc_x_encode(a[i]);
         const float back = navecu_can_imu_rate_angle_inc_x_decode(raw);
         assert_true(fabsf(back - a[i]) <= 0.5f * lsb_a);
     }
@@ -113,17 +113,15 @@ static void test_python_vectors(void **state)
 {
     (void)state;
     uint8_t b[8];
-    /* IMU_Rate {AngleIncX: -0.25, AngleIncY: 0.0001, AngleIncZ: 0.4999847412109375,
-     *           ImuCounter: 9, ImuFault: 1, ImuCrc: 0xA5} */
-    hex_to_bytes("00c00700ff7f19a5", b);
+    /* IMU_Rate raw {AngleIncX: -262144, AngleIncY: 21, AngleIncZ: 524287, ImuCounter: 9}
+     * (encode(..., scaling=False)) */
+    hex_to_bytes("00005c0100ffff97", b);
     struct navecu_can_imu_rate_t r;
     navecu_can_imu_rate_unpack(&r, b, 8u);
-    assert_int_equal(r.angle_inc_x, -16384);
-    assert_int_equal(r.angle_inc_y, 7); /* 0.0001 / 2^-16 = 6.55, rounded */
-    assert_int_equal(r.angle_inc_z, 32767);
+    assert_int_equal(r.angle_inc_x, -262144); /* -0.125 rad */
+    assert_int_equal(r.angle_inc_y, 21);
+    assert_int_equal(r.angle_inc_z, 524287); /* the largest: 0.25 rad - 1 LSB */
     assert_int_equal(r.imu_counter, 9);
-    assert_int_equal(r.imu_fault, 1);
-    assert_int_equal(r.imu_crc, 0xA5);
     /* NAV_Position {Latitude: 45.1234567, Longitude: -75.7654321} */
     hex_to_bytes("074be51acf1cd7d2", b);
     struct navecu_can_nav_position_t p = {451234567, -757654321};

@@ -33,6 +33,24 @@ static void test_protect_and_check(void **state)
     }
 }
 
+/* the IMU pair: one CRC over both frames; a bit flipped in either is caught */
+static void test_pair_crc(void **state)
+{
+    (void)state;
+    uint8_t first[8] = {1, 2, 3, 4, 5, 6, 7, 0x98};
+    uint8_t second[8] = {9, 10, 11, 12, 13, 14, 0x05, 0};
+    second[7] = e2e_pair_crc(0x101u, first, second);
+    for (int byte = 0; byte < 15; byte++) {
+        uint8_t *p = byte < 8 ? &first[byte] : &second[byte - 8];
+        for (int bit = 0; bit < 8; bit++) {
+            *p ^= (uint8_t)(1u << bit);
+            assert_int_not_equal(second[7], e2e_pair_crc(0x101u, first, second));
+            *p ^= (uint8_t)(1u << bit);
+        }
+    }
+    assert_int_equal(second[7], e2e_pair_crc(0x101u, first, second));
+}
+
 static void test_counter_steps(void **state)
 {
     (void)state;
@@ -54,6 +72,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_crc_check_value),
         cmocka_unit_test(test_protect_and_check),
+        cmocka_unit_test(test_pair_crc),
         cmocka_unit_test(test_counter_steps),
     };
     return cmocka_run_group_tests_name("e2e", tests, NULL, NULL);

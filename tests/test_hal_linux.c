@@ -139,6 +139,8 @@ static void test_rx_valid_forms(void **state)
                  "(1436509052.249717) can1 000#\n"               /* std id 0, dlc 0 */
                  "(1436509052.249718) c 1FFFFFFF#aB\n"           /* max ext, mixed case */
                  "(1436509052.249719)\tcan0\t\t7ff#00  \r\n"     /* tabs, CRLF */
+                 "(1436509052.249720) vcan0 123#DEADBEEF R\n"    /* python-can direction */
+                 "(1436509052.249721) vcan0 123#DEADBEEF  T\n"
                  "(0000000001.500000) can0 00000000#0011223344556677"); /* no newline */
     expect_frame(&hal, 0x123, 0, 4, dead, UINT64_C(1436509052249713));
     expect_frame(&hal, 0x12345678, 1, 0, NULL, UINT64_C(1436509052249714));
@@ -147,10 +149,12 @@ static void test_rx_valid_forms(void **state)
     expect_frame(&hal, 0x000, 0, 0, NULL, UINT64_C(1436509052249717));
     expect_frame(&hal, 0x1FFFFFFF, 1, 1, mixed, UINT64_C(1436509052249718));
     expect_frame(&hal, 0x7FF, 0, 1, eight, UINT64_C(1436509052249719));
+    expect_frame(&hal, 0x123, 0, 4, dead, UINT64_C(1436509052249720));
+    expect_frame(&hal, 0x123, 0, 4, dead, UINT64_C(1436509052249721));
     expect_frame(&hal, 0x00000000, 1, 8, eight, UINT64_C(1500000));
     expect_end(&hal);
     assert_int_equal(hal_can_rx_malformed(&hal), 0);
-    assert_int_equal(hal_linux_rx_frames(&hal), 8);
+    assert_int_equal(hal_linux_rx_frames(&hal), 10);
     hal_linux_close(&hal);
 }
 
@@ -224,7 +228,9 @@ static const char *const malformed[] = {
     "(1.000000)",
     "(1.000000)vcan0 123#00",               /* no blank after ) */
     "vcan0 123#00",                         /* missing timestamp */
-    "(1.000000) vcan0 123#00 R",            /* extra field */
+    "(1.000000) vcan0 123#00 X",            /* extra field (only R or T may follow) */
+    "(1.000000) vcan0 123#00 R R",
+    "(1.000000) vcan0 123#00 RT",
     "(1.000000) vcan0 123#00 123#00",
     "(1.000000) vcan0 12G#00",              /* bad hex in ID */
     "(1.000000) vcan0 123#0G",              /* bad hex in data */

@@ -21,7 +21,7 @@ app_config_t app_default_config(void)
     cfg.imu_rate_hz = 100u;
     cfg.nav_rate_hz = 50u;
     cfg.status_rate_hz = 10u;
-    cfg.level_s = 10u;
+    cfg.level_s = 30u; /* docs/can.md: levelling error ~ LSB / level time */
     return cfg;
 }
 
@@ -256,17 +256,21 @@ static void start_levelling_if_ready(app_t *a)
     if (a->mode == APP_MODE_WAIT_INIT && a->init_pos_valid && a->init_heading_valid) {
         a->mode = APP_MODE_LEVELLING;
         a->level_n = 0u;
-        a->level_sum_raw[0] = a->level_sum_raw[1] = a->level_sum_raw[2] = 0;
+        for (int i = 0; i < 3; i++) {
+            a->level_wsum[i] = NAV_C(0.0);
+            a->level_wsum_lo[i] = NAV_C(0.0);
+        }
     }
 }
 
 /* Levelling: the mean specific force of a vehicle at rest is C_nb (0, 0, g), whose body
- * components are g (-cos(p) sin(r), sin(p), cos(p) cos(r)) (docs/frames.md). */
+ * components are g (-cos(p) sin(r), sin(p), cos(p) cos(r)) (docs/frames.md). Only the
+ * direction of the weighted sum matters. */
 static void start_navigation(app_t *a)
 {
-    const nav_real_t fx = (nav_real_t)a->level_sum_raw[0];
-    const nav_real_t fy = (nav_real_t)a->level_sum_raw[1];
-    const nav_real_t fz = (nav_real_t)a->level_sum_raw[2];
+    const nav_real_t fx = a->level_wsum[0];
+    const nav_real_t fy = a->level_wsum[1];
+    const nav_real_t fz = a->level_wsum[2];
     const nav_real_t pitch = nav_atan2(fy, nav_sqrt(fx * fx + fz * fz));
     const nav_real_t roll = nav_atan2(-fx, fz);
     nav_real_t q[4];
@@ -288,15 +292,23 @@ static void start_navigation(app_t *a)
 
 /* ------------------------------------------------------------------ IMU ---- */
 
-static void process_sample(app_t *a, hal_t *hal, const int16_t w_raw[3], const int16_t v_raw[3])
+static void process_sample(app_t *a, hal_t *hal, const int32_t w_raw[3], const int32_t v_raw[3])
 {
     a->n_samples++;
     if (a->mode == APP_MODE_LEVELLING) {
-        for (int i = 0; i < 3; i++) {
-            a->level_sum_raw[i] += v_raw[i];
-        }
+        /* The specific force is the least-squares slope of the summed increments over the
+         * window, i.e. a mean with parabolic weights w_k = k (N - k). A plain mean is off
+         * by up to one LSB / window length, because the sender's quantisation carry is
+         * unknown at both ends of the window; the parabolic weights give the ends almost
+         * no weight, which cuts that error by about sqrt(N) (docs/can.md, IMU). */
+        const uint32_t n_total = (uint32_t)a->cfg.level_s * a->cfg.imu_rate_hz;
         a->level_n++;
-        if (a->level_n >= (uint32_t)a->cfg.level_s * a->cfg.imu_rate_hz) {
+        const nav_real_t k = (nav_real_t)a->level_n;
+        const nav_real_t w = k * ((nav_real_t)n_total - k);
+        for (int i = 0; i < 3; i++) {
+            nav_acc_add(&a->level_wsum[i], &a->level_wsum_lo[i], w * (nav_real_t)v_raw[i]);
+        }
+        if (a->level_n >= n_total) {
             start_navigation(a);
         }
     } else if (a->mode == APP_MODE_NAVIGATING) {
@@ -328,14 +340,10 @@ static void on_imu_rate(app_t *a, const hal_can_frame_t *f)
     }
     a->rate_pending = 1u;
     a->rate_counter = m.imu_counter;
+    memcpy(a->rate_data, f->data, 8u);
     a->rate_raw[0] = m.angle_inc_x;
     a->rate_raw[1] = m.angle_inc_y;
     a->rate_raw[2] = m.angle_inc_z;
-    if (m.imu_fault) {
-        a->flags_sticky |= APP_FLAG_IMU_FAULT;
-    } else {
-        a->flags_sticky &= (uint16_t)~APP_FLAG_IMU_FAULT;
-    }
 }
 
 static void on_imu_accel(app_t *a, hal_t *hal, const hal_can_frame_t *f)
@@ -348,12 +356,22 @@ static void on_imu_accel(app_t *a, hal_t *hal, const hal_can_frame_t *f)
         return;
     }
     a->rate_pending = 0u;
+    /* one E2E data element in two frames: the CRC covers IMU_Rate too */
+    if (f->data[7] != e2e_pair_crc(NAVECU_CAN_IMU_ACCEL_FRAME_ID, a->rate_data, f->data)) {
+        reject(a, &a->health.bad_crc);
+        return;
+    }
+    if (m.imu_fault) {
+        a->flags_sticky |= APP_FLAG_IMU_FAULT;
+    } else {
+        a->flags_sticky &= (uint16_t)~APP_FLAG_IMU_FAULT;
+    }
     const int step = e2e_counter_step(&a->rx_imu, m.imu_counter);
     if (step <= 0) {
         reject(a, &a->health.bad_counter); /* repeated sample or invalid counter */
         return;
     }
-    const int16_t v_raw[3] = {m.vel_inc_x, m.vel_inc_y, m.vel_inc_z};
+    const int32_t v_raw[3] = {m.vel_inc_x, m.vel_inc_y, m.vel_inc_z};
     /* Lost samples (step > 1) are bridged with this sample's increments: the motion in
      * the gap is unknown, and repeating the nearest sample keeps time and the Earth-rate
      * and gravity terms right. Counted in imu_lost. */
@@ -468,11 +486,11 @@ static void on_cmd_control(app_t *a, hal_t *hal, const hal_can_frame_t *f)
 
 /* ------------------------------------------------------------- dispatch ---- */
 
-/* 1 if the message with this identifier carries an E2E CRC in byte 7 */
+/* 1 if the message with this identifier carries its own E2E CRC in byte 7 (the IMU pair
+ * is checked as a whole when IMU_Accel arrives) */
 static int is_e2e(uint32_t id)
 {
-    return id == NAVECU_CAN_IMU_RATE_FRAME_ID || id == NAVECU_CAN_IMU_ACCEL_FRAME_ID ||
-           id == NAVECU_CAN_WHEEL_SPEEDS_FRAME_ID || id == NAVECU_CAN_GNSS_VELOCITY_FRAME_ID ||
+    return id == NAVECU_CAN_WHEEL_SPEEDS_FRAME_ID || id == NAVECU_CAN_GNSS_VELOCITY_FRAME_ID ||
            id == NAVECU_CAN_CMD_CONTROL_FRAME_ID;
 }
 

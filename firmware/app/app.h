@@ -68,12 +68,11 @@ typedef struct {
     /* E2E receive state per protected input */
     e2e_counter_t rx_imu, rx_wheel, rx_cmd;
     /* IMU pair assembly */
-    uint8_t rate_pending;
+    uint8_t rate_pending;       /* an IMU_Rate waits for its IMU_Accel */
     uint8_t rate_counter;
-    int16_t rate_raw[3];
-    uint8_t have_sample;        /* a sample has been processed (for bridging) */
-    int16_t last_rate_raw[3];
-    int16_t last_accel_raw[3];
+    uint8_t rate_data[8];       /* its payload, covered by the pair CRC */
+    int32_t rate_raw[3];
+    uint8_t have_sample;        /* a sample has been processed (staleness) */
     uint64_t n_samples;         /* IMU samples processed: the time base */
     uint64_t last_imu_t_us;     /* HAL time of the last IMU sample (staleness only) */
     uint64_t last_reject_sample;
@@ -86,8 +85,9 @@ typedef struct {
     int32_t init_lat_e7, init_lon_e7;
     int32_t init_h_cm;
     nav_real_t init_heading_rad;
-    int64_t level_sum_raw[3];   /* sum of raw velocity increments during levelling */
-    uint32_t level_n;
+    nav_real_t level_wsum[3];   /* weighted sum of velocity increments (levelling) */
+    nav_real_t level_wsum_lo[3];
+    uint32_t level_n;           /* samples levelled so far */
 
     /* GNSS epoch assembly */
     uint8_t gnss_pos_pending, gnss_vel_pending, gnss_h_pending;
@@ -103,7 +103,7 @@ typedef struct {
     uint32_t send_errors;
 } app_t;
 
-/* Defaults: IMU 100 Hz, outputs 50 Hz, status 10 Hz, levelling 10 s. */
+/* Defaults: IMU 100 Hz, outputs 50 Hz, status 10 Hz, levelling 30 s. */
 app_config_t app_default_config(void);
 
 /* Start in APP_MODE_WAIT_INIT. Returns NAV_OK, or NAV_EINVAL for a config out of range. */

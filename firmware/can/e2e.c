@@ -27,6 +27,16 @@ void e2e_protect(uint32_t can_id, uint8_t data[8])
     data[7] = e2e_frame_crc(can_id, data);
 }
 
+uint8_t e2e_pair_crc(uint32_t second_id, const uint8_t first[8], const uint8_t second[8])
+{
+    const uint8_t id_bytes[2] = {(uint8_t)(second_id & 0xFFu),
+                                 (uint8_t)((second_id >> 8) & 0xFFu)};
+    uint8_t crc = e2e_crc8_update(0xFFu, id_bytes, 2u);
+    crc = e2e_crc8_update(crc, first, 8u);
+    crc = e2e_crc8_update(crc, second, 7u);
+    return (uint8_t)(crc ^ 0xFFu);
+}
+
 int e2e_crc_ok(uint32_t can_id, const uint8_t data[8])
 {
     return data[7] == e2e_frame_crc(can_id, data);

@@ -23,6 +23,13 @@ void e2e_protect(uint32_t can_id, uint8_t data[8]);
 /* 1 if data[7] holds the right CRC, else 0. */
 int e2e_crc_ok(uint32_t can_id, const uint8_t data[8]);
 
+/*
+ * The CRC of a data element sent as two frames (the IMU sample: IMU_Rate, then IMU_Accel):
+ * over the second frame's identifier (2 bytes, low first), all 8 bytes of the first frame
+ * and bytes 0..6 of the second; it goes in byte 7 of the second frame.
+ */
+uint8_t e2e_pair_crc(uint32_t second_id, const uint8_t first[8], const uint8_t second[8]);
+
 typedef struct {
     uint8_t last;  /* last accepted counter */
     uint8_t valid; /* a counter has been accepted since init or resync */

@@ -203,13 +203,21 @@ static enum line_kind parse_line(const char *s, size_t n, hal_can_frame_t *f)
         return LINE_MALFORMED;
     }
 
-    /* frame, then nothing but blanks */
+    /* frame, then an optional direction token ("R" or "T", as python-can and newer
+     * candump write it), then nothing but blanks */
     start = skip_blanks(s, i, n);
     i = start;
     while (i < n && !is_blank(s[i])) {
         i++;
     }
-    if (i == start || skip_blanks(s, i, n) != n) {
+    if (i == start) {
+        return LINE_MALFORMED;
+    }
+    size_t rest = skip_blanks(s, i, n);
+    if (rest < n && rest > i && (s[rest] == 'R' || s[rest] == 'T')) {
+        rest = skip_blanks(s, rest + 1u, n);
+    }
+    if (rest != n) {
         return LINE_MALFORMED;
     }
     if (parse_frame(s, start, i, &g) != 0) {

@@ -146,9 +146,9 @@ int navecu_can_imu_rate_pack(
     const struct navecu_can_imu_rate_t *src_p,
     size_t size)
 {
-    uint16_t angle_inc_x;
-    uint16_t angle_inc_y;
-    uint16_t angle_inc_z;
+    uint32_t angle_inc_x;
+    uint32_t angle_inc_y;
+    uint32_t angle_inc_z;
 
     if (size < 8u) {
         return (-EINVAL);
@@ -156,18 +156,19 @@ int navecu_can_imu_rate_pack(
 
     memset(&dst_p[0], 0, 8);
 
-    angle_inc_x = (uint16_t)src_p->angle_inc_x;
-    dst_p[0] |= pack_left_shift_u16(angle_inc_x, 0u, 0xffu);
-    dst_p[1] |= pack_right_shift_u16(angle_inc_x, 8u, 0xffu);
-    angle_inc_y = (uint16_t)src_p->angle_inc_y;
-    dst_p[2] |= pack_left_shift_u16(angle_inc_y, 0u, 0xffu);
-    dst_p[3] |= pack_right_shift_u16(angle_inc_y, 8u, 0xffu);
-    angle_inc_z = (uint16_t)src_p->angle_inc_z;
-    dst_p[4] |= pack_left_shift_u16(angle_inc_z, 0u, 0xffu);
-    dst_p[5] |= pack_right_shift_u16(angle_inc_z, 8u, 0xffu);
-    dst_p[6] |= pack_left_shift_u8(src_p->imu_counter, 0u, 0x0fu);
-    dst_p[6] |= pack_left_shift_u8(src_p->imu_fault, 4u, 0x10u);
-    dst_p[7] |= pack_left_shift_u8(src_p->imu_crc, 0u, 0xffu);
+    angle_inc_x = (uint32_t)src_p->angle_inc_x;
+    dst_p[0] |= pack_left_shift_u32(angle_inc_x, 0u, 0xffu);
+    dst_p[1] |= pack_right_shift_u32(angle_inc_x, 8u, 0xffu);
+    dst_p[2] |= pack_right_shift_u32(angle_inc_x, 16u, 0x0fu);
+    angle_inc_y = (uint32_t)src_p->angle_inc_y;
+    dst_p[2] |= pack_left_shift_u32(angle_inc_y, 4u, 0xf0u);
+    dst_p[3] |= pack_right_shift_u32(angle_inc_y, 4u, 0xffu);
+    dst_p[4] |= pack_right_shift_u32(angle_inc_y, 12u, 0xffu);
+    angle_inc_z = (uint32_t)src_p->angle_inc_z;
+    dst_p[5] |= pack_left_shift_u32(angle_inc_z, 0u, 0xffu);
+    dst_p[6] |= pack_right_shift_u32(angle_inc_z, 8u, 0xffu);
+    dst_p[7] |= pack_right_shift_u32(angle_inc_z, 16u, 0x0fu);
+    dst_p[7] |= pack_left_shift_u8(src_p->imu_counter, 4u, 0xf0u);
 
     return (8);
 }
@@ -177,26 +178,42 @@ int navecu_can_imu_rate_unpack(
     const uint8_t *src_p,
     size_t size)
 {
-    uint16_t angle_inc_x;
-    uint16_t angle_inc_y;
-    uint16_t angle_inc_z;
+    uint32_t angle_inc_x;
+    uint32_t angle_inc_y;
+    uint32_t angle_inc_z;
 
     if (size < 8u) {
         return (-EINVAL);
     }
 
-    angle_inc_x = unpack_right_shift_u16(src_p[0], 0u, 0xffu);
-    angle_inc_x |= unpack_left_shift_u16(src_p[1], 8u, 0xffu);
-    dst_p->angle_inc_x = (int16_t)angle_inc_x;
-    angle_inc_y = unpack_right_shift_u16(src_p[2], 0u, 0xffu);
-    angle_inc_y |= unpack_left_shift_u16(src_p[3], 8u, 0xffu);
-    dst_p->angle_inc_y = (int16_t)angle_inc_y;
-    angle_inc_z = unpack_right_shift_u16(src_p[4], 0u, 0xffu);
-    angle_inc_z |= unpack_left_shift_u16(src_p[5], 8u, 0xffu);
-    dst_p->angle_inc_z = (int16_t)angle_inc_z;
-    dst_p->imu_counter = unpack_right_shift_u8(src_p[6], 0u, 0x0fu);
-    dst_p->imu_fault = unpack_right_shift_u8(src_p[6], 4u, 0x10u);
-    dst_p->imu_crc = unpack_right_shift_u8(src_p[7], 0u, 0xffu);
+    angle_inc_x = unpack_right_shift_u32(src_p[0], 0u, 0xffu);
+    angle_inc_x |= unpack_left_shift_u32(src_p[1], 8u, 0xffu);
+    angle_inc_x |= unpack_left_shift_u32(src_p[2], 16u, 0x0fu);
+
+    if ((angle_inc_x & (1u << 19)) != 0u) {
+        angle_inc_x |= 0xfff00000u;
+    }
+
+    dst_p->angle_inc_x = (int32_t)angle_inc_x;
+    angle_inc_y = unpack_right_shift_u32(src_p[2], 4u, 0xf0u);
+    angle_inc_y |= unpack_left_shift_u32(src_p[3], 4u, 0xffu);
+    angle_inc_y |= unpack_left_shift_u32(src_p[4], 12u, 0xffu);
+
+    if ((angle_inc_y & (1u << 19)) != 0u) {
+        angle_inc_y |= 0xfff00000u;
+    }
+
+    dst_p->angle_inc_y = (int32_t)angle_inc_y;
+    angle_inc_z = unpack_right_shift_u32(src_p[5], 0u, 0xffu);
+    angle_inc_z |= unpack_left_shift_u32(src_p[6], 8u, 0xffu);
+    angle_inc_z |= unpack_left_shift_u32(src_p[7], 16u, 0x0fu);
+
+    if ((angle_inc_z & (1u << 19)) != 0u) {
+        angle_inc_z |= 0xfff00000u;
+    }
+
+    dst_p->angle_inc_z = (int32_t)angle_inc_z;
+    dst_p->imu_counter = unpack_right_shift_u8(src_p[7], 4u, 0xf0u);
 
     return (0);
 }
@@ -210,70 +227,64 @@ int navecu_can_imu_rate_init(struct navecu_can_imu_rate_t *msg_p)
     return 0;
 }
 
-int16_t navecu_can_imu_rate_angle_inc_x_encode(float value)
+int32_t navecu_can_imu_rate_angle_inc_x_encode(float value)
 {
-    return (int16_t)(roundf(value / 1.52587890625e-05f));
+    return (int32_t)(roundf(value / 4.76837158203125e-07f));
 }
 
-float navecu_can_imu_rate_angle_inc_x_decode(int16_t value)
+float navecu_can_imu_rate_angle_inc_x_decode(int32_t value)
 {
-    return ((float)value * 1.52587890625e-05f);
+    return ((float)value * 4.76837158203125e-07f);
 }
 
-bool navecu_can_imu_rate_angle_inc_x_is_in_range(int16_t value)
+bool navecu_can_imu_rate_angle_inc_x_is_in_range(int32_t value)
 {
-    (void)value;
-
-    return (true);
+    return ((value >= -524288) && (value <= 524287));
 }
 
 bool navecu_can_imu_rate_angle_inc_x_is_in_phys_range(float value)
 {
-    return ((value >= -0.5f) && (value <= 0.4999847412109375f));
+    return ((value >= -0.25f) && (value <= 0.249999523162842f));
 }
 
-int16_t navecu_can_imu_rate_angle_inc_y_encode(float value)
+int32_t navecu_can_imu_rate_angle_inc_y_encode(float value)
 {
-    return (int16_t)(roundf(value / 1.52587890625e-05f));
+    return (int32_t)(roundf(value / 4.76837158203125e-07f));
 }
 
-float navecu_can_imu_rate_angle_inc_y_decode(int16_t value)
+float navecu_can_imu_rate_angle_inc_y_decode(int32_t value)
 {
-    return ((float)value * 1.52587890625e-05f);
+    return ((float)value * 4.76837158203125e-07f);
 }
 
-bool navecu_can_imu_rate_angle_inc_y_is_in_range(int16_t value)
+bool navecu_can_imu_rate_angle_inc_y_is_in_range(int32_t value)
 {
-    (void)value;
-
-    return (true);
+    return ((value >= -524288) && (value <= 524287));
 }
 
 bool navecu_can_imu_rate_angle_inc_y_is_in_phys_range(float value)
 {
-    return ((value >= -0.5f) && (value <= 0.4999847412109375f));
+    return ((value >= -0.25f) && (value <= 0.249999523162842f));
 }
 
-int16_t navecu_can_imu_rate_angle_inc_z_encode(float value)
+int32_t navecu_can_imu_rate_angle_inc_z_encode(float value)
 {
-    return (int16_t)(roundf(value / 1.52587890625e-05f));
+    return (int32_t)(roundf(value / 4.76837158203125e-07f));
 }
 
-float navecu_can_imu_rate_angle_inc_z_decode(int16_t value)
+float navecu_can_imu_rate_angle_inc_z_decode(int32_t value)
 {
-    return ((float)value * 1.52587890625e-05f);
+    return ((float)value * 4.76837158203125e-07f);
 }
 
-bool navecu_can_imu_rate_angle_inc_z_is_in_range(int16_t value)
+bool navecu_can_imu_rate_angle_inc_z_is_in_range(int32_t value)
 {
-    (void)value;
-
-    return (true);
+    return ((value >= -524288) && (value <= 524287));
 }
 
 bool navecu_can_imu_rate_angle_inc_z_is_in_phys_range(float value)
 {
-    return ((value >= -0.5f) && (value <= 0.4999847412109375f));
+    return ((value >= -0.25f) && (value <= 0.249999523162842f));
 }
 
 uint8_t navecu_can_imu_rate_imu_counter_encode(float value)
@@ -296,56 +307,14 @@ bool navecu_can_imu_rate_imu_counter_is_in_phys_range(float value)
     return ((value >= 0.0f) && (value <= 14.0f));
 }
 
-uint8_t navecu_can_imu_rate_imu_fault_encode(float value)
-{
-    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
-}
-
-float navecu_can_imu_rate_imu_fault_decode(uint8_t value)
-{
-    return ((float)value);
-}
-
-bool navecu_can_imu_rate_imu_fault_is_in_range(uint8_t value)
-{
-    return (value <= 1u);
-}
-
-bool navecu_can_imu_rate_imu_fault_is_in_phys_range(float value)
-{
-    return ((value >= 0.0f) && (value <= 1.0f));
-}
-
-uint8_t navecu_can_imu_rate_imu_crc_encode(float value)
-{
-    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
-}
-
-float navecu_can_imu_rate_imu_crc_decode(uint8_t value)
-{
-    return ((float)value);
-}
-
-bool navecu_can_imu_rate_imu_crc_is_in_range(uint8_t value)
-{
-    (void)value;
-
-    return (true);
-}
-
-bool navecu_can_imu_rate_imu_crc_is_in_phys_range(float value)
-{
-    return ((value >= 0.0f) && (value <= 255.0f));
-}
-
 int navecu_can_imu_accel_pack(
     uint8_t *dst_p,
     const struct navecu_can_imu_accel_t *src_p,
     size_t size)
 {
-    uint16_t vel_inc_x;
-    uint16_t vel_inc_y;
-    uint16_t vel_inc_z;
+    uint32_t vel_inc_x;
+    uint32_t vel_inc_y;
+    uint32_t vel_inc_z;
 
     if (size < 8u) {
         return (-EINVAL);
@@ -353,16 +322,20 @@ int navecu_can_imu_accel_pack(
 
     memset(&dst_p[0], 0, 8);
 
-    vel_inc_x = (uint16_t)src_p->vel_inc_x;
-    dst_p[0] |= pack_left_shift_u16(vel_inc_x, 0u, 0xffu);
-    dst_p[1] |= pack_right_shift_u16(vel_inc_x, 8u, 0xffu);
-    vel_inc_y = (uint16_t)src_p->vel_inc_y;
-    dst_p[2] |= pack_left_shift_u16(vel_inc_y, 0u, 0xffu);
-    dst_p[3] |= pack_right_shift_u16(vel_inc_y, 8u, 0xffu);
-    vel_inc_z = (uint16_t)src_p->vel_inc_z;
-    dst_p[4] |= pack_left_shift_u16(vel_inc_z, 0u, 0xffu);
-    dst_p[5] |= pack_right_shift_u16(vel_inc_z, 8u, 0xffu);
-    dst_p[6] |= pack_left_shift_u8(src_p->imu_counter, 0u, 0x0fu);
+    vel_inc_x = (uint32_t)src_p->vel_inc_x;
+    dst_p[0] |= pack_left_shift_u32(vel_inc_x, 0u, 0xffu);
+    dst_p[1] |= pack_right_shift_u32(vel_inc_x, 8u, 0xffu);
+    dst_p[2] |= pack_right_shift_u32(vel_inc_x, 16u, 0x01u);
+    vel_inc_y = (uint32_t)src_p->vel_inc_y;
+    dst_p[2] |= pack_left_shift_u32(vel_inc_y, 1u, 0xfeu);
+    dst_p[3] |= pack_right_shift_u32(vel_inc_y, 7u, 0xffu);
+    dst_p[4] |= pack_right_shift_u32(vel_inc_y, 15u, 0x03u);
+    vel_inc_z = (uint32_t)src_p->vel_inc_z;
+    dst_p[4] |= pack_left_shift_u32(vel_inc_z, 2u, 0xfcu);
+    dst_p[5] |= pack_right_shift_u32(vel_inc_z, 6u, 0xffu);
+    dst_p[6] |= pack_right_shift_u32(vel_inc_z, 14u, 0x07u);
+    dst_p[6] |= pack_left_shift_u8(src_p->imu_fault, 3u, 0x08u);
+    dst_p[6] |= pack_left_shift_u8(src_p->imu_counter, 4u, 0xf0u);
     dst_p[7] |= pack_left_shift_u8(src_p->imu_crc, 0u, 0xffu);
 
     return (8);
@@ -373,24 +346,43 @@ int navecu_can_imu_accel_unpack(
     const uint8_t *src_p,
     size_t size)
 {
-    uint16_t vel_inc_x;
-    uint16_t vel_inc_y;
-    uint16_t vel_inc_z;
+    uint32_t vel_inc_x;
+    uint32_t vel_inc_y;
+    uint32_t vel_inc_z;
 
     if (size < 8u) {
         return (-EINVAL);
     }
 
-    vel_inc_x = unpack_right_shift_u16(src_p[0], 0u, 0xffu);
-    vel_inc_x |= unpack_left_shift_u16(src_p[1], 8u, 0xffu);
-    dst_p->vel_inc_x = (int16_t)vel_inc_x;
-    vel_inc_y = unpack_right_shift_u16(src_p[2], 0u, 0xffu);
-    vel_inc_y |= unpack_left_shift_u16(src_p[3], 8u, 0xffu);
-    dst_p->vel_inc_y = (int16_t)vel_inc_y;
-    vel_inc_z = unpack_right_shift_u16(src_p[4], 0u, 0xffu);
-    vel_inc_z |= unpack_left_shift_u16(src_p[5], 8u, 0xffu);
-    dst_p->vel_inc_z = (int16_t)vel_inc_z;
-    dst_p->imu_counter = unpack_right_shift_u8(src_p[6], 0u, 0x0fu);
+    vel_inc_x = unpack_right_shift_u32(src_p[0], 0u, 0xffu);
+    vel_inc_x |= unpack_left_shift_u32(src_p[1], 8u, 0xffu);
+    vel_inc_x |= unpack_left_shift_u32(src_p[2], 16u, 0x01u);
+
+    if ((vel_inc_x & (1u << 16)) != 0u) {
+        vel_inc_x |= 0xfffe0000u;
+    }
+
+    dst_p->vel_inc_x = (int32_t)vel_inc_x;
+    vel_inc_y = unpack_right_shift_u32(src_p[2], 1u, 0xfeu);
+    vel_inc_y |= unpack_left_shift_u32(src_p[3], 7u, 0xffu);
+    vel_inc_y |= unpack_left_shift_u32(src_p[4], 15u, 0x03u);
+
+    if ((vel_inc_y & (1u << 16)) != 0u) {
+        vel_inc_y |= 0xfffe0000u;
+    }
+
+    dst_p->vel_inc_y = (int32_t)vel_inc_y;
+    vel_inc_z = unpack_right_shift_u32(src_p[4], 2u, 0xfcu);
+    vel_inc_z |= unpack_left_shift_u32(src_p[5], 6u, 0xffu);
+    vel_inc_z |= unpack_left_shift_u32(src_p[6], 14u, 0x07u);
+
+    if ((vel_inc_z & (1u << 16)) != 0u) {
+        vel_inc_z |= 0xfffe0000u;
+    }
+
+    dst_p->vel_inc_z = (int32_t)vel_inc_z;
+    dst_p->imu_fault = unpack_right_shift_u8(src_p[6], 3u, 0x08u);
+    dst_p->imu_counter = unpack_right_shift_u8(src_p[6], 4u, 0xf0u);
     dst_p->imu_crc = unpack_right_shift_u8(src_p[7], 0u, 0xffu);
 
     return (0);
@@ -405,70 +397,84 @@ int navecu_can_imu_accel_init(struct navecu_can_imu_accel_t *msg_p)
     return 0;
 }
 
-int16_t navecu_can_imu_accel_vel_inc_x_encode(float value)
+int32_t navecu_can_imu_accel_vel_inc_x_encode(float value)
 {
-    return (int16_t)(roundf(value / 0.00048828125f));
+    return (int32_t)(roundf(value / 0.000244140625f));
 }
 
-float navecu_can_imu_accel_vel_inc_x_decode(int16_t value)
+float navecu_can_imu_accel_vel_inc_x_decode(int32_t value)
 {
-    return ((float)value * 0.00048828125f);
+    return ((float)value * 0.000244140625f);
 }
 
-bool navecu_can_imu_accel_vel_inc_x_is_in_range(int16_t value)
+bool navecu_can_imu_accel_vel_inc_x_is_in_range(int32_t value)
 {
-    (void)value;
-
-    return (true);
+    return ((value >= -65536) && (value <= 65535));
 }
 
 bool navecu_can_imu_accel_vel_inc_x_is_in_phys_range(float value)
 {
-    return ((value >= -16.0f) && (value <= 15.99951171875f));
+    return ((value >= -16.0f) && (value <= 15.999755859375f));
 }
 
-int16_t navecu_can_imu_accel_vel_inc_y_encode(float value)
+int32_t navecu_can_imu_accel_vel_inc_y_encode(float value)
 {
-    return (int16_t)(roundf(value / 0.00048828125f));
+    return (int32_t)(roundf(value / 0.000244140625f));
 }
 
-float navecu_can_imu_accel_vel_inc_y_decode(int16_t value)
+float navecu_can_imu_accel_vel_inc_y_decode(int32_t value)
 {
-    return ((float)value * 0.00048828125f);
+    return ((float)value * 0.000244140625f);
 }
 
-bool navecu_can_imu_accel_vel_inc_y_is_in_range(int16_t value)
+bool navecu_can_imu_accel_vel_inc_y_is_in_range(int32_t value)
 {
-    (void)value;
-
-    return (true);
+    return ((value >= -65536) && (value <= 65535));
 }
 
 bool navecu_can_imu_accel_vel_inc_y_is_in_phys_range(float value)
 {
-    return ((value >= -16.0f) && (value <= 15.99951171875f));
+    return ((value >= -16.0f) && (value <= 15.999755859375f));
 }
 
-int16_t navecu_can_imu_accel_vel_inc_z_encode(float value)
+int32_t navecu_can_imu_accel_vel_inc_z_encode(float value)
 {
-    return (int16_t)(roundf(value / 0.00048828125f));
+    return (int32_t)(roundf(value / 0.000244140625f));
 }
 
-float navecu_can_imu_accel_vel_inc_z_decode(int16_t value)
+float navecu_can_imu_accel_vel_inc_z_decode(int32_t value)
 {
-    return ((float)value * 0.00048828125f);
+    return ((float)value * 0.000244140625f);
 }
 
-bool navecu_can_imu_accel_vel_inc_z_is_in_range(int16_t value)
+bool navecu_can_imu_accel_vel_inc_z_is_in_range(int32_t value)
 {
-    (void)value;
-
-    return (true);
+    return ((value >= -65536) && (value <= 65535));
 }
 
 bool navecu_can_imu_accel_vel_inc_z_is_in_phys_range(float value)
 {
-    return ((value >= -16.0f) && (value <= 15.99951171875f));
+    return ((value >= -16.0f) && (value <= 15.999755859375f));
+}
+
+uint8_t navecu_can_imu_accel_imu_fault_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_imu_accel_imu_fault_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_imu_accel_imu_fault_is_in_range(uint8_t value)
+{
+    return (value <= 1u);
+}
+
+bool navecu_can_imu_accel_imu_fault_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 1.0f));
 }
 
 uint8_t navecu_can_imu_accel_imu_counter_encode(float value)
@@ -984,12 +990,12 @@ float navecu_can_gnss_velocity_gnss_epoch_decode(uint8_t value)
 
 bool navecu_can_gnss_velocity_gnss_epoch_is_in_range(uint8_t value)
 {
-    return (value <= 15u);
+    return (value <= 14u);
 }
 
 bool navecu_can_gnss_velocity_gnss_epoch_is_in_phys_range(float value)
 {
-    return ((value >= 0.0f) && (value <= 15.0f));
+    return ((value >= 0.0f) && (value <= 14.0f));
 }
 
 uint8_t navecu_can_gnss_velocity_speed_accuracy_encode(float value)
@@ -1189,12 +1195,12 @@ float navecu_can_gnss_status_gnss_epoch_decode(uint8_t value)
 
 bool navecu_can_gnss_status_gnss_epoch_is_in_range(uint8_t value)
 {
-    return (value <= 15u);
+    return (value <= 14u);
 }
 
 bool navecu_can_gnss_status_gnss_epoch_is_in_phys_range(float value)
 {
-    return ((value >= 0.0f) && (value <= 15.0f));
+    return ((value >= 0.0f) && (value <= 14.0f));
 }
 
 uint32_t navecu_can_gnss_status_time_of_week_encode(float value)
@@ -1305,12 +1311,12 @@ float navecu_can_gnss_height_gnss_epoch_decode(uint8_t value)
 
 bool navecu_can_gnss_height_gnss_epoch_is_in_range(uint8_t value)
 {
-    return (value <= 15u);
+    return (value <= 14u);
 }
 
 bool navecu_can_gnss_height_gnss_epoch_is_in_phys_range(float value)
 {
-    return ((value >= 0.0f) && (value <= 15.0f));
+    return ((value >= 0.0f) && (value <= 14.0f));
 }
 
 int navecu_can_cmd_known_position_pack(

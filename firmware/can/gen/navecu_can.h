@@ -103,7 +103,7 @@ extern "C" {
 #define NAVECU_CAN_NAV_HEIGHT_CYCLE_TIME_MS (20u)
 #define NAVECU_CAN_NAV_VELOCITY_CYCLE_TIME_MS (20u)
 #define NAVECU_CAN_NAV_ATTITUDE_CYCLE_TIME_MS (20u)
-#define NAVECU_CAN_NAV_STATUS_CYCLE_TIME_MS (100u)
+#define NAVECU_CAN_NAV_STATUS_CYCLE_TIME_MS (50u)
 #define NAVECU_CAN_NAV_CALIBRATION_CYCLE_TIME_MS (1000u)
 
 /* Signal choices. */
@@ -148,11 +148,10 @@ extern "C" {
 #define NAVECU_CAN_IMU_RATE_ANGLE_INC_Y_NAME "AngleIncY"
 #define NAVECU_CAN_IMU_RATE_ANGLE_INC_Z_NAME "AngleIncZ"
 #define NAVECU_CAN_IMU_RATE_IMU_COUNTER_NAME "ImuCounter"
-#define NAVECU_CAN_IMU_RATE_IMU_FAULT_NAME "ImuFault"
-#define NAVECU_CAN_IMU_RATE_IMU_CRC_NAME "ImuCrc"
 #define NAVECU_CAN_IMU_ACCEL_VEL_INC_X_NAME "VelIncX"
 #define NAVECU_CAN_IMU_ACCEL_VEL_INC_Y_NAME "VelIncY"
 #define NAVECU_CAN_IMU_ACCEL_VEL_INC_Z_NAME "VelIncZ"
+#define NAVECU_CAN_IMU_ACCEL_IMU_FAULT_NAME "ImuFault"
 #define NAVECU_CAN_IMU_ACCEL_IMU_COUNTER_NAME "ImuCounter"
 #define NAVECU_CAN_IMU_ACCEL_IMU_CRC_NAME "ImuCrc"
 #define NAVECU_CAN_WHEEL_SPEEDS_WHEEL_SPEED_FL_NAME "WheelSpeedFL"
@@ -226,31 +225,31 @@ extern "C" {
 /**
  * Signals in message IMU_Rate.
  *
- * One IMU sample (with IMU_Accel, same ImuCounter): angle increments over the sample interval, body frame x right, y forward, z up. The sender carries each axis's quantisation remainder into the next sample.
+ * First frame of one IMU sample (IMU_Accel follows with the same ImuCounter): angle increments over the sample interval, body frame x right, y forward, z up, 2^-21 rad. The sender carries each axis's quantisation remainder into the next sample.
  *
  * All signal values are as on the CAN bus.
  */
 struct navecu_can_imu_rate_t {
     /**
-     * Range: -32768..32767 (-0.5..0.49998 rad)
-     * Scale: 1.52587890625e-05
+     * Range: -524288..524287 (-0.25..0.25 rad)
+     * Scale: 4.76837158203125e-07
      * Offset: 0
      */
-    int16_t angle_inc_x;
+    int32_t angle_inc_x;
 
     /**
-     * Range: -32768..32767 (-0.5..0.49998 rad)
-     * Scale: 1.52587890625e-05
+     * Range: -524288..524287 (-0.25..0.25 rad)
+     * Scale: 4.76837158203125e-07
      * Offset: 0
      */
-    int16_t angle_inc_y;
+    int32_t angle_inc_y;
 
     /**
-     * Range: -32768..32767 (-0.5..0.49998 rad)
-     * Scale: 1.52587890625e-05
+     * Range: -524288..524287 (-0.25..0.25 rad)
+     * Scale: 4.76837158203125e-07
      * Offset: 0
      */
-    int16_t angle_inc_z;
+    int32_t angle_inc_z;
 
     /**
      * Range: 0..14 (0..14 -)
@@ -258,6 +257,36 @@ struct navecu_can_imu_rate_t {
      * Offset: 0
      */
     uint8_t imu_counter;
+};
+
+/**
+ * Signals in message IMU_Accel.
+ *
+ * Second frame of one IMU sample: velocity increments over the sample interval, body frame, 2^-12 m/s, remainder carried as for IMU_Rate. ImuCrc covers IMU_Rate's 8 bytes and this frame's bytes 0..6.
+ *
+ * All signal values are as on the CAN bus.
+ */
+struct navecu_can_imu_accel_t {
+    /**
+     * Range: -65536..65535 (-16..15.99976 m/s)
+     * Scale: 0.000244140625
+     * Offset: 0
+     */
+    int32_t vel_inc_x;
+
+    /**
+     * Range: -65536..65535 (-16..15.99976 m/s)
+     * Scale: 0.000244140625
+     * Offset: 0
+     */
+    int32_t vel_inc_y;
+
+    /**
+     * Range: -65536..65535 (-16..15.99976 m/s)
+     * Scale: 0.000244140625
+     * Offset: 0
+     */
+    int32_t vel_inc_z;
 
     /**
      * Range: 0..1 (0..1 -)
@@ -265,43 +294,6 @@ struct navecu_can_imu_rate_t {
      * Offset: 0
      */
     uint8_t imu_fault;
-
-    /**
-     * Range: 0..255 (0..255 -)
-     * Scale: 1
-     * Offset: 0
-     */
-    uint8_t imu_crc;
-};
-
-/**
- * Signals in message IMU_Accel.
- *
- * One IMU sample (with IMU_Rate, same ImuCounter): velocity increments over the sample interval, body frame. Remainder carried as for IMU_Rate.
- *
- * All signal values are as on the CAN bus.
- */
-struct navecu_can_imu_accel_t {
-    /**
-     * Range: -32768..32767 (-16..15.99951 m/s)
-     * Scale: 0.00048828125
-     * Offset: 0
-     */
-    int16_t vel_inc_x;
-
-    /**
-     * Range: -32768..32767 (-16..15.99951 m/s)
-     * Scale: 0.00048828125
-     * Offset: 0
-     */
-    int16_t vel_inc_y;
-
-    /**
-     * Range: -32768..32767 (-16..15.99951 m/s)
-     * Scale: 0.00048828125
-     * Offset: 0
-     */
-    int16_t vel_inc_z;
 
     /**
      * Range: 0..14 (0..14 -)
@@ -420,7 +412,7 @@ struct navecu_can_gnss_velocity_t {
     int16_t vel_up;
 
     /**
-     * Range: 0..15 (0..15 -)
+     * Range: 0..14 (0..14 -)
      * Scale: 1
      * Offset: 0
      */
@@ -478,7 +470,7 @@ struct navecu_can_gnss_status_t {
     uint16_t vert_accuracy;
 
     /**
-     * Range: 0..15 (0..15 -)
+     * Range: 0..14 (0..14 -)
      * Scale: 1
      * Offset: 0
      */
@@ -506,7 +498,7 @@ struct navecu_can_gnss_height_t {
     int32_t height;
 
     /**
-     * Range: 0..15 (0..15 -)
+     * Range: 0..14 (0..14 -)
      * Scale: 1
      * Offset: 0
      */
@@ -730,7 +722,7 @@ struct navecu_can_nav_attitude_t {
 /**
  * Signals in message NAV_Status.
  *
- * Multiplexed: page 0 at 10 Hz, pages 1..3 (health counters, saturating) in rotation at 10 Hz.
+ * Multiplexed: every 100 ms two frames, page 0 and one of the counter pages 1..3 in rotation (counters saturate), hence a 50 ms mean cycle.
  *
  * All signal values are as on the CAN bus.
  */
@@ -938,7 +930,7 @@ int navecu_can_imu_rate_init(struct navecu_can_imu_rate_t *msg_p);
  *
  * @return Encoded signal.
  */
-int16_t navecu_can_imu_rate_angle_inc_x_encode(float value);
+int32_t navecu_can_imu_rate_angle_inc_x_encode(float value);
 
 /**
  * Decode given signal by applying scaling and offset.
@@ -947,7 +939,7 @@ int16_t navecu_can_imu_rate_angle_inc_x_encode(float value);
  *
  * @return Decoded signal.
  */
-float navecu_can_imu_rate_angle_inc_x_decode(int16_t value);
+float navecu_can_imu_rate_angle_inc_x_decode(int32_t value);
 
 /**
  * Check that given signal is in allowed range.
@@ -956,7 +948,7 @@ float navecu_can_imu_rate_angle_inc_x_decode(int16_t value);
  *
  * @return true if in range, false otherwise.
  */
-bool navecu_can_imu_rate_angle_inc_x_is_in_range(int16_t value);
+bool navecu_can_imu_rate_angle_inc_x_is_in_range(int32_t value);
 
 /**
  * Check that given physical value is in allowed range before encoding.
@@ -978,7 +970,7 @@ bool navecu_can_imu_rate_angle_inc_x_is_in_phys_range(float value);
  *
  * @return Encoded signal.
  */
-int16_t navecu_can_imu_rate_angle_inc_y_encode(float value);
+int32_t navecu_can_imu_rate_angle_inc_y_encode(float value);
 
 /**
  * Decode given signal by applying scaling and offset.
@@ -987,7 +979,7 @@ int16_t navecu_can_imu_rate_angle_inc_y_encode(float value);
  *
  * @return Decoded signal.
  */
-float navecu_can_imu_rate_angle_inc_y_decode(int16_t value);
+float navecu_can_imu_rate_angle_inc_y_decode(int32_t value);
 
 /**
  * Check that given signal is in allowed range.
@@ -996,7 +988,7 @@ float navecu_can_imu_rate_angle_inc_y_decode(int16_t value);
  *
  * @return true if in range, false otherwise.
  */
-bool navecu_can_imu_rate_angle_inc_y_is_in_range(int16_t value);
+bool navecu_can_imu_rate_angle_inc_y_is_in_range(int32_t value);
 
 /**
  * Check that given physical value is in allowed range before encoding.
@@ -1018,7 +1010,7 @@ bool navecu_can_imu_rate_angle_inc_y_is_in_phys_range(float value);
  *
  * @return Encoded signal.
  */
-int16_t navecu_can_imu_rate_angle_inc_z_encode(float value);
+int32_t navecu_can_imu_rate_angle_inc_z_encode(float value);
 
 /**
  * Decode given signal by applying scaling and offset.
@@ -1027,7 +1019,7 @@ int16_t navecu_can_imu_rate_angle_inc_z_encode(float value);
  *
  * @return Decoded signal.
  */
-float navecu_can_imu_rate_angle_inc_z_decode(int16_t value);
+float navecu_can_imu_rate_angle_inc_z_decode(int32_t value);
 
 /**
  * Check that given signal is in allowed range.
@@ -1036,7 +1028,7 @@ float navecu_can_imu_rate_angle_inc_z_decode(int16_t value);
  *
  * @return true if in range, false otherwise.
  */
-bool navecu_can_imu_rate_angle_inc_z_is_in_range(int16_t value);
+bool navecu_can_imu_rate_angle_inc_z_is_in_range(int32_t value);
 
 /**
  * Check that given physical value is in allowed range before encoding.
@@ -1092,86 +1084,6 @@ bool navecu_can_imu_rate_imu_counter_is_in_range(uint8_t value);
 bool navecu_can_imu_rate_imu_counter_is_in_phys_range(float value);
 
 /**
- * Encode given signal by applying scaling and offset.
- *
- * @param[in] value Signal to encode.
- *
- * @return Encoded signal.
- */
-uint8_t navecu_can_imu_rate_imu_fault_encode(float value);
-
-/**
- * Decode given signal by applying scaling and offset.
- *
- * @param[in] value Signal to decode.
- *
- * @return Decoded signal.
- */
-float navecu_can_imu_rate_imu_fault_decode(uint8_t value);
-
-/**
- * Check that given signal is in allowed range.
- *
- * @param[in] value Signal to check.
- *
- * @return true if in range, false otherwise.
- */
-bool navecu_can_imu_rate_imu_fault_is_in_range(uint8_t value);
-
-/**
- * Check that given physical value is in allowed range before encoding.
- *
- * Use this BEFORE calling _encode() to avoid silent integer overflow:
- *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
- *   is_in_phys_range(-1.0) correctly returns false.
- *
- * @param[in] value Physical signal value to check.
- *
- * @return true if in range, false otherwise.
- */
-bool navecu_can_imu_rate_imu_fault_is_in_phys_range(float value);
-
-/**
- * Encode given signal by applying scaling and offset.
- *
- * @param[in] value Signal to encode.
- *
- * @return Encoded signal.
- */
-uint8_t navecu_can_imu_rate_imu_crc_encode(float value);
-
-/**
- * Decode given signal by applying scaling and offset.
- *
- * @param[in] value Signal to decode.
- *
- * @return Decoded signal.
- */
-float navecu_can_imu_rate_imu_crc_decode(uint8_t value);
-
-/**
- * Check that given signal is in allowed range.
- *
- * @param[in] value Signal to check.
- *
- * @return true if in range, false otherwise.
- */
-bool navecu_can_imu_rate_imu_crc_is_in_range(uint8_t value);
-
-/**
- * Check that given physical value is in allowed range before encoding.
- *
- * Use this BEFORE calling _encode() to avoid silent integer overflow:
- *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
- *   is_in_phys_range(-1.0) correctly returns false.
- *
- * @param[in] value Physical signal value to check.
- *
- * @return true if in range, false otherwise.
- */
-bool navecu_can_imu_rate_imu_crc_is_in_phys_range(float value);
-
-/**
  * Pack message IMU_Accel.
  *
  * @param[out] dst_p Buffer to pack the message into.
@@ -1215,7 +1127,7 @@ int navecu_can_imu_accel_init(struct navecu_can_imu_accel_t *msg_p);
  *
  * @return Encoded signal.
  */
-int16_t navecu_can_imu_accel_vel_inc_x_encode(float value);
+int32_t navecu_can_imu_accel_vel_inc_x_encode(float value);
 
 /**
  * Decode given signal by applying scaling and offset.
@@ -1224,7 +1136,7 @@ int16_t navecu_can_imu_accel_vel_inc_x_encode(float value);
  *
  * @return Decoded signal.
  */
-float navecu_can_imu_accel_vel_inc_x_decode(int16_t value);
+float navecu_can_imu_accel_vel_inc_x_decode(int32_t value);
 
 /**
  * Check that given signal is in allowed range.
@@ -1233,7 +1145,7 @@ float navecu_can_imu_accel_vel_inc_x_decode(int16_t value);
  *
  * @return true if in range, false otherwise.
  */
-bool navecu_can_imu_accel_vel_inc_x_is_in_range(int16_t value);
+bool navecu_can_imu_accel_vel_inc_x_is_in_range(int32_t value);
 
 /**
  * Check that given physical value is in allowed range before encoding.
@@ -1255,7 +1167,7 @@ bool navecu_can_imu_accel_vel_inc_x_is_in_phys_range(float value);
  *
  * @return Encoded signal.
  */
-int16_t navecu_can_imu_accel_vel_inc_y_encode(float value);
+int32_t navecu_can_imu_accel_vel_inc_y_encode(float value);
 
 /**
  * Decode given signal by applying scaling and offset.
@@ -1264,7 +1176,7 @@ int16_t navecu_can_imu_accel_vel_inc_y_encode(float value);
  *
  * @return Decoded signal.
  */
-float navecu_can_imu_accel_vel_inc_y_decode(int16_t value);
+float navecu_can_imu_accel_vel_inc_y_decode(int32_t value);
 
 /**
  * Check that given signal is in allowed range.
@@ -1273,7 +1185,7 @@ float navecu_can_imu_accel_vel_inc_y_decode(int16_t value);
  *
  * @return true if in range, false otherwise.
  */
-bool navecu_can_imu_accel_vel_inc_y_is_in_range(int16_t value);
+bool navecu_can_imu_accel_vel_inc_y_is_in_range(int32_t value);
 
 /**
  * Check that given physical value is in allowed range before encoding.
@@ -1295,7 +1207,7 @@ bool navecu_can_imu_accel_vel_inc_y_is_in_phys_range(float value);
  *
  * @return Encoded signal.
  */
-int16_t navecu_can_imu_accel_vel_inc_z_encode(float value);
+int32_t navecu_can_imu_accel_vel_inc_z_encode(float value);
 
 /**
  * Decode given signal by applying scaling and offset.
@@ -1304,7 +1216,7 @@ int16_t navecu_can_imu_accel_vel_inc_z_encode(float value);
  *
  * @return Decoded signal.
  */
-float navecu_can_imu_accel_vel_inc_z_decode(int16_t value);
+float navecu_can_imu_accel_vel_inc_z_decode(int32_t value);
 
 /**
  * Check that given signal is in allowed range.
@@ -1313,7 +1225,7 @@ float navecu_can_imu_accel_vel_inc_z_decode(int16_t value);
  *
  * @return true if in range, false otherwise.
  */
-bool navecu_can_imu_accel_vel_inc_z_is_in_range(int16_t value);
+bool navecu_can_imu_accel_vel_inc_z_is_in_range(int32_t value);
 
 /**
  * Check that given physical value is in allowed range before encoding.
@@ -1327,6 +1239,46 @@ bool navecu_can_imu_accel_vel_inc_z_is_in_range(int16_t value);
  * @return true if in range, false otherwise.
  */
 bool navecu_can_imu_accel_vel_inc_z_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_imu_accel_imu_fault_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_imu_accel_imu_fault_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_imu_accel_imu_fault_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_imu_accel_imu_fault_is_in_phys_range(float value);
 
 /**
  * Encode given signal by applying scaling and offset.

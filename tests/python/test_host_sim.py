@@ -1,0 +1,119 @@
+"""End to end: a CAN log through the host firmware (build/host/navecu).
+
+The stationary log is written by tools/gen_stationary_log.py with exact IMU increments
+through the real encoding (E2E, remainder carry); the firmware's output log is read back
+with python-can and decoded with cantools from the same DBC.
+"""
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import can
+import cantools
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+DBC = ROOT / "firmware" / "can" / "navecu.dbc"
+NAVECU = Path(os.environ.get("NAVECU_BIN", ROOT / "build" / "host" / "navecu"))
+
+LAT0_DEG, LON0_DEG, H0_M = 45.0, 10.0, 100.0
+R_M_45, R_N_45 = 6367381.8156, 6388838.2901  # WGS-84 radii at 45 deg (test_earth.c)
+
+
+def run(*args, **kw):
+    return subprocess.run([str(a) for a in args], check=True, capture_output=True, text=True, **kw)
+
+
+@pytest.fixture(scope="module")
+def stationary(tmp_path_factory):
+    """A 10-minute stationary log (tilted, heading 30 deg) and two firmware runs over it."""
+    if not NAVECU.exists():
+        pytest.fail(f"{NAVECU} not built: run 'make' first")
+    d = tmp_path_factory.mktemp("stationary")
+    log = d / "stationary.log"
+    run(sys.executable, ROOT / "tools" / "gen_stationary_log.py", "--out", log,
+        "--duration-s", 600, "--imu-rate-hz", 100, "--lat-deg", LAT0_DEG, "--lon-deg", LON0_DEG,
+        "--height-m", H0_M, "--heading-deg", 30, "--roll-deg", 2, "--pitch-deg", -1)
+    outs = []
+    for k in range(2):
+        out = d / f"nav{k}.log"
+        res = run(NAVECU, "--can-log", log, "--out", out)
+        outs.append((out, res.stderr))
+    return log, outs
+
+
+def horiz_dist_m(lat_deg, lon_deg):
+    dn = math.radians(lat_deg - LAT0_DEG) * (R_M_45 + H0_M)
+    de = math.radians(lon_deg - LON0_DEG) * (R_N_45 + H0_M) * math.cos(math.radians(LAT0_DEG))
+    return math.hypot(dn, de)
+
+
+def test_stationary_10min_within_1m(stationary):
+    """NAV_Position at the end of 10 min standing still is within 1 m of the start."""
+    _, outs = stationary
+    db = cantools.database.load_file(DBC, strict=True)
+    pos_id = db.get_message_by_name("NAV_Position").frame_id
+    last = None
+    n = 0
+    with can.LogReader(outs[0][0]) as reader:
+        for msg in reader:
+            if msg.arbitration_id == pos_id:
+                last = db.decode_message(msg.arbitration_id, msg.data)
+                n += 1
+    assert last is not None, "no NAV_Position frames"
+    err = horiz_dist_m(last["Latitude"], last["Longitude"])
+    print(f"stationary 600 s: {n} NAV_Position frames, final error {err:.3f} m; {outs[0][1]}")
+    # 50 Hz for the 570 s after 30 s of levelling, both ends included
+    assert n == 570 * 50 + 1
+    assert err < 1.0
+
+
+def test_output_byte_identical(stationary):
+    _, outs = stationary
+    assert outs[0][0].read_bytes() == outs[1][0].read_bytes()
+
+
+def test_nothing_rejected_on_clean_log(stationary):
+    _, outs = stationary
+    assert "unknown id 0, bad dlc 0, bad crc 0, bad counter 0" in outs[0][1]
+    assert "0 malformed lines" in outs[0][1]
+
+
+def test_cantools_cli_decodes_output(stationary):
+    """`cantools decode firmware/can/navecu.dbc < nav.log` reads the firmware's output."""
+    _, outs = stationary
+    lines = outs[0][0].read_text().splitlines(keepends=True)
+    head = "".join(lines[len(lines) // 2:len(lines) // 2 + 200])  # while navigating
+    res = subprocess.run([sys.executable, "-m", "cantools", "decode", str(DBC)], input=head,
+                         capture_output=True, text=True, check=True)
+    assert "NAV_Position(" in res.stdout and "Latitude: 4" in res.stdout
+    assert "NAV_Status(" in res.stdout
+
+
+def test_bad_log_lines_counted_not_fatal(stationary, tmp_path):
+    """A log with garbage, truncated lines and an unknown ID still runs to the end."""
+    log, _ = stationary
+    lines = log.read_text().splitlines(keepends=True)[:5000]
+    bad = (lines[:100] + ["garbage line\n", "(12.5) can0 10\n", "(1.000000) can0 7FF#00\n"]
+           + ["(1.0) can0 100#00112233445566778899\n"] + lines[100:])
+    src = tmp_path / "bad.log"
+    src.write_text("".join(bad))
+    out = tmp_path / "out.log"
+    res = run(NAVECU, "--can-log", src, "--out", out)
+    assert "3 malformed lines skipped" in res.stderr, res.stderr
+    assert "unknown id 1" in res.stderr, res.stderr
+
+
+def test_usage_errors():
+    res = subprocess.run([str(NAVECU)], capture_output=True, text=True)
+    assert res.returncode == 2 and "--can-log" in res.stderr
+    res = subprocess.run([str(NAVECU), "--help"], capture_output=True, text=True)
+    assert res.returncode == 0
+    for opt in ("--can-log", "--out", "--imu-rate-hz", "--nav-rate-hz", "--status-rate-hz",
+                "--level-s", "--nvm", "--iface", "--help"):
+        assert opt in res.stdout
+    res = subprocess.run([str(NAVECU), "--can-log", "/nonexistent", "--out", "/tmp/x.log"],
+                         capture_output=True, text=True)
+    assert res.returncode == 1

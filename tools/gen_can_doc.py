@@ -1,0 +1,254 @@
+#!/usr/bin/env python3
+"""Regenerate the per-message signal tables of docs/can.md from firmware/can/navecu.dbc.
+
+Only the text between the markers
+    <!-- BEGIN GENERATED: tools/gen_can_doc.py -->
+    <!-- END GENERATED -->
+is rewritten; the prose around it is hand-written. The hand-written overview table (rows
+starting "| 0x") is checked against the DBC (ID, name, sender, DLC, E2E) but not rewritten.
+
+    tools/gen_can_doc.py            rewrite docs/can.md
+    tools/gen_can_doc.py --check    exit 1 if docs/can.md is stale or its overview disagrees
+
+The meaning column is the DBC comment of the signal where there is one, else the text in
+MEANING below, followed by the value table and, for multiplexed signals, the page. A DBC
+signal with neither comment nor MEANING entry is an error: new signals must be documented.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import navecu_can  # noqa: E402
+
+ROOT = Path(__file__).resolve().parent.parent
+DOC = ROOT / "docs" / "can.md"
+BEGIN = "<!-- BEGIN GENERATED: tools/gen_can_doc.py -->"
+END = "<!-- END GENERATED -->"
+
+_INC = "over the sample interval, quantisation remainder carried to the next sample"
+_E2E_CRC = "E2E CRC8 SAE J1850 over ID and bytes 0..6"
+_IMU_CRC = ("E2E CRC8 SAE J1850 of the IMU sample, over this frame's ID, the 8 bytes of "
+            "IMU_Rate and bytes 0..6 of this frame")
+_NAV_CNT = "E2E alive counter 0..14, +1 per frame of this message"
+_HEIGHT = "height above the WGS-84 ellipsoid"
+
+# (message, signal) or signal -> meaning, for signals without a DBC comment.
+MEANING = {
+    "AngleIncX": "angle increment about body x (right), " + _INC,
+    "AngleIncY": "angle increment about body y (forward), " + _INC,
+    "AngleIncZ": "angle increment about body z (up), " + _INC,
+    "VelIncX": "velocity increment (integrated specific force) along body x (right), " + _INC,
+    "VelIncY": "velocity increment along body y (forward), " + _INC,
+    "VelIncZ": "velocity increment along body z (up); +g*dt at rest, " + _INC,
+    "ImuCounter": "E2E alive counter 0..14; the same value in the IMU_Rate and IMU_Accel "
+                  "of one sample",
+    "ImuFault": "1: the IMU reports a fault in this sample",
+    "ImuCrc": _IMU_CRC,
+    "WheelSpeedFL": "front-left wheel speed, positive rolling forward, negative backward",
+    "WheelSpeedFR": "front-right wheel speed, sign as FL",
+    "WheelSpeedRL": "rear-left wheel speed, sign as FL",
+    "WheelSpeedRR": "rear-right wheel speed, sign as FL",
+    "WheelCounter": "E2E alive counter 0..14",
+    "WheelCrc": _E2E_CRC,
+    ("GNSS_Position", "Latitude"): "geodetic latitude of the fix (WGS-84), north positive",
+    ("GNSS_Position", "Longitude"): "longitude of the fix, east positive",
+    "VelEast": "velocity east (ENU)",
+    "VelNorth": "velocity north",
+    "VelUp": "velocity up",
+    ("GNSS_Velocity", "GnssEpoch"): "number of the epoch this frame belongs to; also the "
+                                    "E2E counter, so 0..14 (15 invalid)",
+    "SpeedAccuracy": "receiver's speed accuracy estimate, saturated at 1.5 m/s",
+    "GnssVelCrc": _E2E_CRC,
+    "FixType": "fix type of the epoch",
+    "NumSatellites": "satellites used in the fix",
+    ("GNSS_Status", "HorizAccuracy"): "receiver's horizontal position accuracy estimate",
+    ("GNSS_Status", "VertAccuracy"): "receiver's vertical position accuracy estimate",
+    ("GNSS_Status", "GnssEpoch"): "number of the epoch this frame closes",
+    "TimeOfWeek": "GPS time of week of the epoch",
+    ("GNSS_Height", "Height"): _HEIGHT + " of the fix",
+    ("GNSS_Height", "GnssEpoch"): "number of the epoch this frame belongs to",
+    ("CMD_KnownPosition", "Latitude"): "geodetic latitude of the vehicle now (WGS-84)",
+    ("CMD_KnownPosition", "Longitude"): "longitude of the vehicle now",
+    "Command": "command to execute",
+    "HeadingValid": "1: Heading is given (SetInitialPosition)",
+    ("CMD_Control", "Heading"): "heading of the forward axis, clockwise from true north "
+                                "(SetInitialPosition)",
+    ("CMD_Control", "Height"): _HEIGHT + " (SetInitialPosition)",
+    "CmdCounter": "E2E alive counter 0..14",
+    "CmdCrc": _E2E_CRC,
+    ("NAV_Position", "Latitude"): "navigated geodetic latitude (WGS-84)",
+    ("NAV_Position", "Longitude"): "navigated longitude",
+    ("NAV_Height", "Height"): "navigated " + _HEIGHT,
+    ("NAV_Height", "VertAccuracy"): "estimated vertical accuracy, saturated",
+    "NavCounter": _NAV_CNT,
+    "NavCrc": _E2E_CRC,
+    "Roll": "roll, right side down positive",
+    "Pitch": "pitch, nose up positive",
+    ("NAV_Attitude", "Heading"): "heading of the forward axis, clockwise from true north",
+    "StatusPage": "multiplexer: page 0 state, pages 1..3 health counters",
+    ("NAV_Status", "HorizAccuracy"): "estimated horizontal position accuracy, saturated",
+    "CntUnknownId": "frames with an identifier not in the DBC",
+    "CntBadDlc": "frames of a known message with DLC other than 8",
+    "CntBadCrc": "frames with a wrong E2E CRC",
+    "CntBadCounter": "frames with a repeated or invalid (15) E2E counter",
+    "CntImuPairBroken": "IMU_Rate/IMU_Accel that did not form a pair",
+    "CntImuLost": "IMU samples lost (counter gaps)",
+    "CntBadValue": "frames with a value out of its range",
+    "CntGnssRejected": "GNSS epochs rejected",
+    "CntLogLineBad": "unreadable lines of a replayed candump log (host build)",
+    "HeadingCorrection": "heading correction from the calibration at a known point",
+    "OdoScaleError": "odometer scale factor error (relative)",
+    "CalValid": "1: a calibration is in use",
+    "CalStored": "1: the calibration in use is stored in NVM",
+}
+
+
+def fmt_num(x) -> str:
+    if x is None:
+        return ""
+    x = float(x)
+    if x == int(x) and abs(x) < 1e15:
+        return str(int(x))
+    return repr(x)
+
+
+def fmt_factor(x) -> str:
+    s = fmt_num(x)
+    m, e = math.frexp(float(x))
+    if m == 0.5 and e - 1 < -3:
+        s += f" (2^{e - 1})"
+    return s
+
+
+def meaning(msg, sig) -> str:
+    text = sig.comment or MEANING.get((msg.name, sig.name)) or MEANING.get(sig.name)
+    if not text:
+        raise SystemExit(f"gen_can_doc: {msg.name}.{sig.name} has no DBC comment and no "
+                         "MEANING entry in tools/gen_can_doc.py")
+    text = text.rstrip(".")
+    choices = sig.conversion.choices
+    if choices and not sig.comment:  # a DBC comment already explains the values
+        text += "; " + ", ".join(f"{k} {v}" for k, v in sorted(choices.items()))
+    if sig.multiplexer_ids:
+        pages = ", ".join(str(i) for i in sig.multiplexer_ids)
+        text = f"page {pages}: " + text
+    return text.replace("|", "/")
+
+
+def _signal_order(sig):
+    """Multiplexer first, then the multiplexed signals page by page, then the rest; by start
+    bit within each group."""
+    if sig.is_multiplexer:
+        return (0, 0, sig.start)
+    if sig.multiplexer_ids:
+        return (1, min(sig.multiplexer_ids), sig.start)
+    return (2, 0, sig.start)
+
+
+def generate(db) -> str:
+    out = []
+    for msg in sorted(db.messages, key=lambda m: m.frame_id):
+        e2e = navecu_can.e2e_signals(msg)
+        cycle = f"{msg.cycle_time} ms" if msg.cycle_time else "none in the DBC"
+        receivers = sorted({r for s in msg.signals for r in s.receivers})
+        out.append(f"### 0x{msg.frame_id:03X} {msg.name}")
+        out.append("")
+        first, second = navecu_can.IMU_PAIR
+        if not e2e:
+            e2e_text = "no E2E"
+        elif msg.name == first:
+            e2e_text = (f"E2E with {second} (one IMU sample): counter `{e2e[0].name}`, no CRC "
+                        f"of its own, {second}'s CRC covers all 8 bytes")
+        elif msg.name == second:
+            e2e_text = (f"E2E with {first} (one IMU sample): counter `{e2e[0].name}`, CRC "
+                        f"`{e2e[1].name}` over both frames")
+        else:
+            e2e_text = f"E2E: counter `{e2e[0].name}`, CRC `{e2e[1].name}`"
+        out.append(f"Sender {', '.join(msg.senders)}, receiver {', '.join(receivers)}; "
+                   f"{msg.length} bytes, standard ID; cycle time {cycle}; {e2e_text}.")
+        if msg.comment:
+            out.append("")
+            out.append(msg.comment)
+        out.append("")
+        out.append("| signal | start bit | length | signed | factor | offset | min | max | unit "
+                   "| meaning |")
+        out.append("|---|---:|---:|---|---|---|---|---|---|---|")
+        for sig in sorted(msg.signals, key=_signal_order):
+            name = f"{sig.name} (multiplexer)" if sig.is_multiplexer else sig.name
+            out.append(
+                f"| {name} | {sig.start} | {sig.length} | {'yes' if sig.is_signed else 'no'} "
+                f"| {fmt_factor(sig.conversion.scale)} | {fmt_num(sig.conversion.offset)} "
+                f"| {fmt_num(sig.minimum)} | {fmt_num(sig.maximum)} | {sig.unit or ''} "
+                f"| {meaning(msg, sig)} |")
+        out.append("")
+    return "\n".join(out)
+
+
+def check_overview(db, text: str) -> list:
+    """Differences between the hand-written overview rows ("| 0x...") and the DBC."""
+    problems, seen = [], set()
+    for line in text.split(BEGIN)[0].splitlines():
+        if not line.startswith("| 0x"):
+            continue
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) < 6:
+            problems.append(f"overview row has too few columns: {line}")
+            continue
+        fid, name, sender, dlc, _rate, e2e = cells[:6]
+        name = name.strip("`")
+        try:
+            msg = db.get_message_by_name(name)
+        except KeyError:
+            problems.append(f"overview names {name}, which is not in the DBC")
+            continue
+        seen.add(name)
+        want = {"ID": f"0x{msg.frame_id:03X}", "sender": ", ".join(msg.senders),
+                "DLC": str(msg.length), "E2E": "yes" if navecu_can.is_e2e(msg) else "no"}
+        got = {"ID": fid.upper().replace("0X", "0x"), "sender": sender, "DLC": dlc,
+               "E2E": e2e.split()[0].lower() if e2e else ""}
+        for key, value in want.items():
+            if got[key] != value:
+                problems.append(f"overview {name}: {key} is {got[key]!r}, DBC says {value!r}")
+    for msg in db.messages:
+        if msg.name not in seen:
+            problems.append(f"overview lacks {msg.name}")
+    return problems
+
+
+def render(doc_text: str, generated: str) -> str:
+    if doc_text.count(BEGIN) != 1 or doc_text.count(END) != 1:
+        raise SystemExit(f"gen_can_doc: {DOC} needs exactly one {BEGIN} and one {END}")
+    head, rest = doc_text.split(BEGIN)
+    _, tail = rest.split(END)
+    return f"{head}{BEGIN}\n\n{generated}\n{END}{tail}"
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description="Regenerate the signal tables of docs/can.md.")
+    p.add_argument("--check", action="store_true", help="exit 1 if the document is stale")
+    p.add_argument("--doc", type=Path, default=DOC)
+    a = p.parse_args(argv)
+    db = navecu_can.load_db()
+    text = a.doc.read_text(encoding="utf-8")
+    new = render(text, generate(db))
+    problems = check_overview(db, new)
+    for problem in problems:
+        print(f"gen_can_doc: {problem}", file=sys.stderr)
+    if a.check:
+        if new != text:
+            print(f"gen_can_doc: {a.doc} is stale; run tools/gen_can_doc.py", file=sys.stderr)
+            return 1
+        return 1 if problems else 0
+    if new != text:
+        a.doc.write_text(new, encoding="utf-8")
+        print(f"gen_can_doc: rewrote {a.doc}")
+    return 1 if problems else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
