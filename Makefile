@@ -61,15 +61,20 @@ $(BUILD)/$(1)/f64/%.o: %.c
 	$$(CC) $$(CFLAGS_BASE) -D_DEFAULT_SOURCE $(2) -DNAV_REAL_DOUBLE $$(HOST_INC) -MMD -MP -c $$< -o $$@
 
 $(BUILD)/$(1)/libnavcore_f32.a: $(CORE_SRC:%.c=$(BUILD)/$(1)/f32/%.o)
+	@mkdir -p $$(@D)
 	$$(AR) rcs $$@ $$^
 $(BUILD)/$(1)/libnavcore_f64.a: $(CORE_SRC:%.c=$(BUILD)/$(1)/f64/%.o)
+	@mkdir -p $$(@D)
 	$$(AR) rcs $$@ $$^
 $(BUILD)/$(1)/libnavapp.a: $(APP_SRC:%.c=$(BUILD)/$(1)/f32/%.o)
+	@mkdir -p $$(@D)
 	$$(AR) rcs $$@ $$^
 $(BUILD)/$(1)/libhal_linux.a: $(HAL_LINUX_SRC:%.c=$(BUILD)/$(1)/f32/%.o)
+	@mkdir -p $$(@D)
 	$$(AR) rcs $$@ $$^
 $(BUILD)/$(1)/libtestsupport.a: $(SUPPORT_SRC_F64:%.c=$(BUILD)/$(1)/f64/%.o) \
 		$(SUPPORT_SRC_BOTH:%.c=$(BUILD)/$(1)/f32/%.o) $(SUPPORT_SRC_BOTH:%.c=$(BUILD)/$(1)/f64/%.o)
+	@mkdir -p $$(@D)
 	$$(AR) rcs $$@ $$^
 
 $(1)_LIBS := $(BUILD)/$(1)/libtestsupport.a $(BUILD)/$(1)/libnavapp.a \
@@ -77,20 +82,27 @@ $(1)_LIBS := $(BUILD)/$(1)/libtestsupport.a $(BUILD)/$(1)/libnavapp.a \
 
 $(BUILD)/$(1)/navecu: $(BUILD)/$(1)/f32/host_sim/main.o $(BUILD)/$(1)/libnavapp.a \
 		$(BUILD)/$(1)/libhal_linux.a $(BUILD)/$(1)/libnavcore_f32.a
+	@mkdir -p $$(@D)
 	$$(CC) $(2) $$^ -lm -o $$@
 
 $(foreach t,$(TESTS_VARIANT),$(BUILD)/$(1)/tests/$(t)_f32): $(BUILD)/$(1)/tests/%_f32: $(BUILD)/$(1)/f32/tests/%.o $$($(1)_LIBS)
+	@mkdir -p $$(@D)
 	$$(CC) $(2) $$^ -lcmocka -lm -o $$@
 $(foreach t,$(TESTS_VARIANT),$(BUILD)/$(1)/tests/$(t)_f64): $(BUILD)/$(1)/tests/%_f64: $(BUILD)/$(1)/f64/tests/%.o $$($(1)_LIBS)
+	@mkdir -p $$(@D)
 	$$(CC) $(2) $$^ -lcmocka -lm -o $$@
 $(foreach t,$(TESTS_F32),$(BUILD)/$(1)/tests/$(t)): $(BUILD)/$(1)/tests/%: $(BUILD)/$(1)/f32/tests/%.o $$($(1)_LIBS)
+	@mkdir -p $$(@D)
 	$$(CC) $(2) $$^ -lcmocka -lm -o $$@
 $(foreach t,$(TESTS_BOTH),$(BUILD)/$(1)/tests/$(t)): $(BUILD)/$(1)/tests/%: $(BUILD)/$(1)/f64/tests/%.o $$($(1)_LIBS)
+	@mkdir -p $$(@D)
 	$$(CC) $(2) $$^ -lcmocka -lm -o $$@
 # the application against an in-memory HAL; the Linux HAL on its own
 $(BUILD)/$(1)/tests/test_app: $(BUILD)/$(1)/f32/tests/test_app.o $(BUILD)/$(1)/f32/tests/support/fake_hal.o $$($(1)_LIBS)
+	@mkdir -p $$(@D)
 	$$(CC) $(2) $$^ -lcmocka -lm -o $$@
 $(BUILD)/$(1)/tests/test_hal_linux: $(BUILD)/$(1)/f32/tests/test_hal_linux.o $(BUILD)/$(1)/libhal_linux.a
+	@mkdir -p $$(@D)
 	$$(CC) $(2) $$^ -lcmocka -lm -o $$@
 
 $(1)_TEST_BINS := $(foreach t,$(TESTS_VARIANT),$(BUILD)/$(1)/tests/$(t)_f32 $(BUILD)/$(1)/tests/$(t)_f64) \
@@ -182,6 +194,7 @@ numerics: $(BUILD)/host/tests/study_numerics $(BUILD)/plainacc/tests/study_numer
 	@echo "== float32 with plain accumulation (-DNAV_ACC_PLAIN)"; $(BUILD)/plainacc/tests/study_numerics
 $(BUILD)/%/tests/study_numerics: $(BUILD)/%/f64/tests/study_numerics.o $(BUILD)/%/libtestsupport.a \
 		$(BUILD)/%/libnavcore_f32.a $(BUILD)/%/libnavcore_f64.a
+	@mkdir -p $(@D)
 	$(CC) $^ -lm -o $@
 
 sim:
