@@ -42,8 +42,10 @@ int hal_can_send(hal_t *hal, const hal_can_frame_t *f);
 /* Number of malformed source frames skipped so far (garbage or truncated log lines). */
 uint32_t hal_can_rx_malformed(const hal_t *hal);
 
-/* Monotonic time in microseconds since an arbitrary origin. On a log replay: the
- * timestamp of the last frame received, so replay runs as fast as it can. */
+/* Time in microseconds since an arbitrary origin, monotonic on real hardware. On a log
+ * replay: the timestamp of the last frame received, so replay runs as fast as it can; a
+ * log whose timestamps go backwards makes it go backwards too (the application counts
+ * that and does not depend on it: its time base is the IMU sample counter). */
 uint64_t hal_time_us(const hal_t *hal);
 
 /* Non-volatile storage: one region of hal_nvm_size() bytes. Reads of erased bytes give

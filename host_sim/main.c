@@ -31,7 +31,7 @@ static void usage(FILE *out)
             "                       at most the IMU rate)\n"
             "  --status-rate-hz N   NAV_Status rate (default 10)\n"
             "  --level-s N          accelerometer levelling time before navigating, 1..600 s\n"
-            "                       (default 10)\n"
+            "                       (default 30)\n"
             "  --nvm FILE           file backing the non-volatile memory (default: none, in\n"
             "                       memory only)\n"
             "  --iface NAME         interface name written in OUT.log (default can0)\n"
@@ -134,6 +134,7 @@ int main(int argc, char **argv)
         if (rc == 0) {
             frames_in++;
             app_handle_frame(&app, &hal, &f);
+            app_poll(&app, &hal);
         } else if (rc != HAL_EAGAIN) {
             fprintf(stderr, "navecu: read error on '%s'\n", in_path);
             hal_linux_close(&hal);
@@ -141,6 +142,7 @@ int main(int argc, char **argv)
         }
         hal_watchdog_kick(&hal);
     }
+    app.health.log_line_bad = hal_can_rx_malformed(&hal); /* lines after the last frame */
     hal_linux_close(&hal);
 
     const app_health_t *h = &app.health;
@@ -155,11 +157,11 @@ int main(int argc, char **argv)
     fprintf(stderr,
             "navecu: rejected: unknown id %lu, bad dlc %lu, bad crc %lu, bad counter %lu, "
             "imu pair broken %lu, imu lost %lu, bad value %lu, gnss %lu, command %lu, "
-            "core %lu\n",
+            "core %lu, time jumps %lu\n",
             (unsigned long)h->unknown_id, (unsigned long)h->bad_dlc, (unsigned long)h->bad_crc,
             (unsigned long)h->bad_counter, (unsigned long)h->imu_pair_broken,
             (unsigned long)h->imu_lost, (unsigned long)h->bad_value,
             (unsigned long)h->gnss_rejected, (unsigned long)h->cmd_rejected,
-            (unsigned long)h->nav_rejected);
+            (unsigned long)h->nav_rejected, (unsigned long)h->time_jumps);
     return app.send_errors != 0 ? 1 : 0;
 }

@@ -409,12 +409,17 @@ static void test_bad_input_counted(void **state)
             assert_int_equal(st.cnt_imu_lost, 2);
             pages_seen |= 2;
         } else if (st.status_page == 3u) {
-            assert_int_equal(st.cnt_bad_value, 3); /* bad values + the refused command */
+            assert_int_equal(st.cnt_bad_value, 2);
             assert_int_equal(st.cnt_gnss_rejected, 1);
             pages_seen |= 4;
+        } else if (st.status_page == 4u) {
+            assert_int_equal(st.cnt_cmd_rejected, 1);
+            assert_int_equal(st.cnt_core_rejected, 0);
+            assert_int_equal(st.cnt_time_jumps, 0);
+            pages_seen |= 8;
         }
     }
-    assert_int_equal(pages_seen, 7);
+    assert_int_equal(pages_seen, 15);
     const hal_can_frame_t *p = last_tx(NAVECU_CAN_NAV_POSITION_FRAME_ID);
     struct navecu_can_nav_position_t pos;
     navecu_can_nav_position_unpack(&pos, p->data, 8u);
@@ -441,6 +446,239 @@ static void test_init_needs_known_position(void **state)
     assert_non_null(last_tx(NAVECU_CAN_NAV_STATUS_FRAME_ID));
 }
 
+/* every NAV_Position/Height/Velocity/Attitude frame sent, in order, into out[] */
+static uint32_t collect_nav(hal_can_frame_t *out, uint32_t max)
+{
+    uint32_t n = 0u;
+    for (uint32_t i = 0u; i < hal.tx_n && n < max; i++) {
+        const uint32_t id = hal.tx[i].id;
+        if (id >= NAVECU_CAN_NAV_POSITION_FRAME_ID && id <= NAVECU_CAN_NAV_ATTITUDE_FRAME_ID) {
+            out[n] = hal.tx[i];
+            out[n].t_us = 0u;
+            n++;
+        }
+    }
+    return n;
+}
+
+static void feed_junk(int which)
+{
+    uint8_t d[8] = {1, 2, 3, 4, 5, 6, 7, 8};
+    hal_can_frame_t f;
+    switch (which % 7) {
+    case 0: /* unknown identifier */
+        f = frame(0x555u, d);
+        break;
+    case 1: /* a known message with a short DLC */
+        f = frame(NAVECU_CAN_WHEEL_SPEEDS_FRAME_ID, d);
+        f.dlc = 3u;
+        break;
+    case 2: /* a command with a bad CRC */
+        f = frame(NAVECU_CAN_CMD_CONTROL_FRAME_ID, d);
+        break;
+    case 3: { /* a GNSS position off the globe */
+        struct navecu_can_gnss_position_t gp = {-950000000, 0};
+        navecu_can_gnss_position_pack(d, &gp, 8u);
+        f = frame(NAVECU_CAN_GNSS_POSITION_FRAME_ID, d);
+        break;
+    }
+    case 4: { /* a known position off the globe */
+        struct navecu_can_cmd_known_position_t kp = {910000000, 0};
+        navecu_can_cmd_known_position_pack(d, &kp, 8u);
+        f = frame(NAVECU_CAN_CMD_KNOWN_POSITION_FRAME_ID, d);
+        break;
+    }
+    case 5: /* an extended identifier */
+        f = frame(0x1234567u, d);
+        f.extended = 1u;
+        break;
+    default: { /* wheel speeds with the invalid counter 15 */
+        struct navecu_can_wheel_speeds_t w;
+        memset(&w, 0, sizeof w);
+        w.wheel_counter = 15u;
+        navecu_can_wheel_speeds_pack(d, &w, 8u);
+        e2e_protect(NAVECU_CAN_WHEEL_SPEEDS_FRAME_ID, d);
+        f = frame(NAVECU_CAN_WHEEL_SPEEDS_FRAME_ID, d);
+        break;
+    }
+    }
+    feed(&f);
+}
+
+/*
+ * GIVEN the same 40 s of IMU data twice, the second time with a rejected frame after
+ *       every IMU sample (seven kinds in turn)
+ * THEN every rejected frame is counted, and the navigation outputs are bit-identical.
+ */
+static void test_rejected_frames_change_nothing(void **state)
+{
+    (void)state;
+    static hal_can_frame_t clean[FAKE_TX_MAX], dirty[FAKE_TX_MAX];
+    send_init_commands(30.0);
+    run_still(40);
+    const uint32_t n_clean = collect_nav(clean, FAKE_TX_MAX);
+    assert_int_equal(hal.tx_dropped, 0);
+
+    setup(NULL);
+    send_init_commands(30.0);
+    for (int k = 0; k < 40 * RATE_HZ; k++) {
+        int32_t w[3], v[3];
+        imu_src_next(w, v);
+        hal.t_us += 1000000u / RATE_HZ;
+        send_imu_pair(w, v, src.counter);
+        src.counter = e2e_counter_next(src.counter);
+        feed_junk(k);
+    }
+    const uint32_t n_dirty = collect_nav(dirty, FAKE_TX_MAX);
+    assert_int_equal(hal.tx_dropped, 0);
+    const app_health_t *h = &app.health;
+    assert_int_equal(h->unknown_id, 2 * 4000 / 7 + 1);
+    assert_int_equal(h->unknown_id + h->bad_dlc + h->bad_crc + h->gnss_rejected +
+                         h->bad_value + h->bad_counter,
+                     4000);
+    assert_true(n_clean > 1000u);
+    assert_int_equal(n_dirty, n_clean);
+    assert_memory_equal(clean, dirty, n_clean * sizeof clean[0]);
+}
+
+/* A Reset, then an old command frame replayed: its counter is stale, it is dropped. */
+static void test_replayed_command_rejected(void **state)
+{
+    (void)state;
+    uint8_t d[8];
+    struct navecu_can_cmd_control_t c;
+    memset(&c, 0, sizeof c);
+    c.command = 1u; /* Reset */
+    c.cmd_counter = cmd_counter;
+    cmd_counter = e2e_counter_next(cmd_counter);
+    navecu_can_cmd_control_pack(d, &c, 8u);
+    e2e_protect(NAVECU_CAN_CMD_CONTROL_FRAME_ID, d);
+    const hal_can_frame_t reset = frame(NAVECU_CAN_CMD_CONTROL_FRAME_ID, d);
+    feed(&reset);
+    send_init_commands(30.0);
+    run_still(31);
+    assert_int_equal(app.mode, APP_MODE_NAVIGATING);
+    feed(&reset); /* the old Reset again */
+    assert_int_equal(app.mode, APP_MODE_NAVIGATING);
+    assert_int_equal(app.health.bad_counter, 1);
+}
+
+/* skip n IMU samples: the truth moves on, nothing is sent */
+static void skip_samples(int n)
+{
+    for (int k = 0; k < n; k++) {
+        int32_t w[3], v[3];
+        imu_src_next(w, v);
+        hal.t_us += 1000000u / RATE_HZ;
+        src.counter = e2e_counter_next(src.counter);
+    }
+}
+
+/*
+ * GIVEN navigation at 100 Hz
+ * WHEN 30 samples are lost (twice the counter's cycle: the counter alone sees nothing)
+ * THEN the receive time reveals them: 30 counted lost, bridged, time base right, flagged;
+ * AND WHEN 2 s are lost (beyond the 1 s that is bridged)
+ * THEN navigation stops (Fault) instead of going on with an untrustworthy solution.
+ */
+static void test_imu_gaps(void **state)
+{
+    (void)state;
+    send_init_commands(30.0);
+    run_still(31);
+    const uint64_t n0 = app.n_samples;
+    skip_samples(30);
+    run_still(1);
+    assert_int_equal(app.health.imu_lost, 30);
+    assert_int_equal(app.health.time_jumps, 1);
+    assert_int_equal(app.n_samples, n0 + 30u + 100u);
+    assert_int_equal(app.mode, APP_MODE_NAVIGATING);
+    hal.tx_n = 0u;
+    skip_samples(200);
+    run_still(1);
+    assert_int_equal(app.health.imu_lost, 230);
+    assert_int_equal(app.mode, APP_MODE_FAULT);
+    assert_int_equal(tx_count(NAVECU_CAN_NAV_POSITION_FRAME_ID), 0);
+    struct navecu_can_nav_status_t st;
+    memset(&st, 0, sizeof st);
+    navecu_can_nav_status_unpack(&st, hal.tx[0].data, 8u);
+    assert_int_equal(st.mode, APP_MODE_FAULT);
+    assert_true(st.health_flags & APP_FLAG_IMU_GAP);
+}
+
+/* While the IMU is silent, app_poll keeps NAV_Status going with the stale flag. */
+static void test_stale_imu_status(void **state)
+{
+    (void)state;
+    send_init_commands(30.0);
+    run_still(31);
+    hal.tx_n = 0u;
+    for (int k = 0; k < 200; k++) { /* 2 s of silence, polled every 10 ms */
+        hal.t_us += 10000u;
+        app_poll(&app, &hal);
+    }
+    const uint32_t n = tx_count(NAVECU_CAN_NAV_STATUS_FRAME_ID);
+    assert_in_range(n, 28, 32); /* two frames per 100 ms after 0.5 s of silence */
+    struct navecu_can_nav_status_t st;
+    memset(&st, 0, sizeof st);
+    navecu_can_nav_status_unpack(&st, last_tx(NAVECU_CAN_NAV_STATUS_FRAME_ID)->data, 8u);
+    hal_can_frame_t page0 = hal.tx[hal.tx_n - 2u];
+    navecu_can_nav_status_unpack(&st, page0.data, 8u);
+    assert_int_equal(st.status_page, 0);
+    assert_true(st.health_flags & APP_FLAG_IMU_STALE);
+}
+
+static void send_gnss_epoch(uint8_t vel_epoch, uint8_t status_epoch, double speed_north)
+{
+    uint8_t d[8];
+    hal_can_frame_t f;
+    struct navecu_can_gnss_position_t gp = {450000000, 100000000};
+    navecu_can_gnss_position_pack(d, &gp, 8u);
+    f = frame(NAVECU_CAN_GNSS_POSITION_FRAME_ID, d);
+    feed(&f);
+    struct navecu_can_gnss_velocity_t gv;
+    memset(&gv, 0, sizeof gv);
+    gv.vel_north = (int16_t)lround(speed_north * 100.0);
+    gv.gnss_epoch = vel_epoch;
+    navecu_can_gnss_velocity_pack(d, &gv, 8u);
+    e2e_protect(NAVECU_CAN_GNSS_VELOCITY_FRAME_ID, d);
+    f = frame(NAVECU_CAN_GNSS_VELOCITY_FRAME_ID, d);
+    feed(&f);
+    struct navecu_can_gnss_height_t gh = {10000, vel_epoch};
+    navecu_can_gnss_height_pack(d, &gh, 8u);
+    f = frame(NAVECU_CAN_GNSS_HEIGHT_FRAME_ID, d);
+    feed(&f);
+    struct navecu_can_gnss_status_t gs;
+    memset(&gs, 0, sizeof gs);
+    gs.fix_type = 3u;
+    gs.num_satellites = 9u;
+    gs.gnss_epoch = status_epoch;
+    navecu_can_gnss_status_pack(d, &gs, 8u);
+    f = frame(NAVECU_CAN_GNSS_STATUS_FRAME_ID, d);
+    feed(&f);
+}
+
+/*
+ * GNSS initialization: a course while driving north at 10 m/s, then a stop gives position,
+ * height and heading, and levelling starts. An epoch whose velocity and height carry
+ * another number than its status is refused.
+ */
+static void test_gnss_init_and_epochs(void **state)
+{
+    (void)state;
+    send_gnss_epoch(0u, 0u, 10.0);
+    assert_int_equal(app.mode, APP_MODE_WAIT_INIT);
+    send_gnss_epoch(1u, 2u, 0.0); /* mismatched: velocity and height dropped */
+    assert_int_equal(app.health.gnss_rejected, 1);
+    assert_int_equal(app.mode, APP_MODE_WAIT_INIT);
+    send_gnss_epoch(2u, 2u, 0.0); /* repeated velocity counter 2 after 1: fine, step 1 */
+    assert_int_equal(app.mode, APP_MODE_LEVELLING);
+    assert_near(app.init_heading_rad, 0.0, 1e-6);
+    assert_int_equal(app.init_h_cm, 10000);
+    send_gnss_epoch(2u, 2u, 0.0); /* the same velocity epoch again: a repeat */
+    assert_int_equal(app.health.bad_counter, 1);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -449,6 +687,11 @@ int main(void)
         cmocka_unit_test_setup(test_deterministic, setup),
         cmocka_unit_test_setup(test_bad_input_counted, setup),
         cmocka_unit_test_setup(test_init_needs_known_position, setup),
+        cmocka_unit_test_setup(test_rejected_frames_change_nothing, setup),
+        cmocka_unit_test_setup(test_replayed_command_rejected, setup),
+        cmocka_unit_test_setup(test_imu_gaps, setup),
+        cmocka_unit_test_setup(test_stale_imu_status, setup),
+        cmocka_unit_test_setup(test_gnss_init_and_epochs, setup),
     };
     return cmocka_run_group_tests_name("app", tests, NULL, NULL);
 }

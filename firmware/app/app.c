@@ -13,7 +13,9 @@ enum { TX_HEIGHT = 0, TX_VEL, TX_ATT, TX_STATUS, TX_CAL };
 #define GNSS_MIN_SATS 4u
 #define GNSS_MIN_FIX 3u          /* 3D */
 #define GNSS_COURSE_MIN_MPS NAV_C(5.0) /* GNSS course is a heading only when moving */
+#define GNSS_STILL_MPS NAV_C(0.3)      /* below this GNSS speed the vehicle may be still */
 #define IMU_STALE_US 500000u
+#define CMD_MAX_DELTA 3
 
 app_config_t app_default_config(void)
 {
@@ -42,20 +44,26 @@ static void reject(app_t *a, uint32_t *c)
 
 static void reset_navigation(app_t *a)
 {
-    /* Everything but configuration, health counters and output counters. */
-    const app_config_t cfg = a->cfg;
-    const app_health_t health = a->health;
-    uint8_t tx[sizeof a->tx_counter];
-    memcpy(tx, a->tx_counter, sizeof tx);
-    const uint32_t sent = a->frames_sent, send_errors = a->send_errors;
-    const uint64_t n = a->n_samples;
+    /* Everything but configuration, health, E2E receive and transmit state, the time base
+     * and the NVM fault: a reset restarts navigation, not the ECU. */
+    const app_t keep = *a;
     memset(a, 0, sizeof *a);
-    a->cfg = cfg;
-    a->health = health;
-    memcpy(a->tx_counter, tx, sizeof tx);
-    a->frames_sent = sent;
-    a->send_errors = send_errors;
-    a->n_samples = n; /* time runs on through a reset */
+    a->cfg = keep.cfg;
+    a->health = keep.health;
+    a->rx_imu = keep.rx_imu;
+    a->rx_wheel = keep.rx_wheel;
+    a->rx_cmd = keep.rx_cmd;
+    a->rx_gnss_vel = keep.rx_gnss_vel;
+    memcpy(a->tx_counter, keep.tx_counter, sizeof a->tx_counter);
+    a->status_page = keep.status_page;
+    a->frames_sent = keep.frames_sent;
+    a->send_errors = keep.send_errors;
+    a->n_samples = keep.n_samples; /* time runs on through a reset */
+    a->have_sample = keep.have_sample;
+    a->last_imu_t_us = keep.last_imu_t_us;
+    a->last_rx_t_us = keep.last_rx_t_us;
+    a->last_status_t_us = keep.last_status_t_us;
+    a->flags_sticky = (uint16_t)(keep.flags_sticky & (APP_FLAG_NVM_ERROR | APP_FLAG_IMU_FAULT));
     a->mode = APP_MODE_WAIT_INIT;
 }
 
@@ -166,8 +174,12 @@ static uint8_t sat8(uint32_t x)
 static uint16_t health_flags(const app_t *a, const hal_t *hal)
 {
     uint16_t fl = a->flags_sticky;
-    if (a->have_sample && hal_time_us(hal) - a->last_imu_t_us > IMU_STALE_US) {
+    const uint64_t now = hal_time_us(hal);
+    if (a->have_sample && now > a->last_imu_t_us && now - a->last_imu_t_us > IMU_STALE_US) {
         fl |= APP_FLAG_IMU_STALE;
+    }
+    if (a->had_gap && a->n_samples - a->last_gap_sample <= a->cfg.imu_rate_hz) {
+        fl |= APP_FLAG_IMU_GAP;
     }
     if (!a->have_gnss || a->n_samples - a->last_gnss_sample > 2u * a->cfg.imu_rate_hz) {
         fl |= APP_FLAG_NO_GNSS;
@@ -184,6 +196,8 @@ static uint16_t health_flags(const app_t *a, const hal_t *hal)
 static void emit_status(app_t *a, hal_t *hal)
 {
     uint8_t d[8];
+    a->health.log_line_bad = hal_can_rx_malformed(hal);
+    a->last_status_t_us = hal_time_us(hal);
     const app_health_t *h = &a->health;
     struct navecu_can_nav_status_t st;
     memset(&st, 0, sizeof st);
@@ -207,12 +221,16 @@ static void emit_status(app_t *a, hal_t *hal)
         st.cnt_bad_counter = sat16(h->bad_counter);
         st.cnt_imu_pair_broken = sat16(h->imu_pair_broken);
         st.cnt_imu_lost = sat8(h->imu_lost);
-    } else {
-        st.cnt_bad_value = sat16(h->bad_value + h->nav_rejected + h->cmd_rejected);
+    } else if (st.status_page == 3u) {
+        st.cnt_bad_value = sat16(h->bad_value);
         st.cnt_gnss_rejected = sat16(h->gnss_rejected);
         st.cnt_log_line_bad = sat8(h->log_line_bad);
+    } else {
+        st.cnt_cmd_rejected = sat16(h->cmd_rejected);
+        st.cnt_core_rejected = sat16(h->nav_rejected);
+        st.cnt_time_jumps = sat8(h->time_jumps);
     }
-    a->status_page = (uint8_t)(st.status_page >= 3u ? 1u : st.status_page + 1u);
+    a->status_page = (uint8_t)(st.status_page >= 4u ? 1u : st.status_page + 1u);
     st.nav_counter = next_tx_counter(a, TX_STATUS);
     navecu_can_nav_status_pack(d, &st, sizeof d);
     e2e_protect(NAVECU_CAN_NAV_STATUS_FRAME_ID, d);
@@ -251,15 +269,20 @@ static void emit_due(app_t *a, hal_t *hal)
 
 /* ------------------------------------------------------- initialization ---- */
 
+static void restart_levelling(app_t *a)
+{
+    a->level_n = 0u;
+    for (int i = 0; i < 3; i++) {
+        a->level_wsum[i] = NAV_C(0.0);
+        a->level_wsum_lo[i] = NAV_C(0.0);
+    }
+}
+
 static void start_levelling_if_ready(app_t *a)
 {
     if (a->mode == APP_MODE_WAIT_INIT && a->init_pos_valid && a->init_heading_valid) {
         a->mode = APP_MODE_LEVELLING;
-        a->level_n = 0u;
-        for (int i = 0; i < 3; i++) {
-            a->level_wsum[i] = NAV_C(0.0);
-            a->level_wsum_lo[i] = NAV_C(0.0);
-        }
+        restart_levelling(a);
     }
 }
 
@@ -361,29 +384,53 @@ static void on_imu_accel(app_t *a, hal_t *hal, const hal_can_frame_t *f)
         reject(a, &a->health.bad_crc);
         return;
     }
-    if (m.imu_fault) {
-        a->flags_sticky |= APP_FLAG_IMU_FAULT;
-    } else {
-        a->flags_sticky &= (uint16_t)~APP_FLAG_IMU_FAULT;
-    }
     const int step = e2e_counter_step(&a->rx_imu, m.imu_counter);
     if (step <= 0) {
         reject(a, &a->health.bad_counter); /* repeated sample or invalid counter */
         return;
     }
-    const int32_t v_raw[3] = {m.vel_inc_x, m.vel_inc_y, m.vel_inc_z};
-    /* Lost samples (step > 1) are bridged with this sample's increments: the motion in
-     * the gap is unknown, and repeating the nearest sample keeps time and the Earth-rate
-     * and gravity terms right. Counted in imu_lost. */
-    for (int k = 1; k < step; k++) {
-        count(&a->health.imu_lost);
-        a->rejected_recently = 1u;
-        a->last_reject_sample = a->n_samples;
-        process_sample(a, hal, a->rate_raw, v_raw);
+    if (m.imu_fault) {
+        a->flags_sticky |= APP_FLAG_IMU_FAULT;
+    } else {
+        a->flags_sticky &= (uint16_t)~APP_FLAG_IMU_FAULT;
     }
-    process_sample(a, hal, a->rate_raw, v_raw);
+    /* The 4-bit counter cannot see a gap of 15 samples or more. The receive time can:
+     * when more than half a counter cycle beyond the counter's step has elapsed, add the
+     * whole cycles it missed. (Time is used only here, for gaps; a replay at any speed
+     * that keeps samples less than 7 periods apart gives the same result.) */
+    uint64_t lost = (uint64_t)step - 1u;
+    if (a->have_sample && f->t_us > a->last_imu_t_us) {
+        const uint64_t period_us = 1000000u / a->cfg.imu_rate_hz;
+        const uint64_t by_time = (f->t_us - a->last_imu_t_us + period_us / 2u) / period_us;
+        if (by_time > (uint64_t)step + 7u) {
+            lost += (by_time - (uint64_t)step + 7u) / 15u * 15u;
+            count(&a->health.time_jumps);
+        }
+    }
+    const int32_t v_raw[3] = {m.vel_inc_x, m.vel_inc_y, m.vel_inc_z};
     a->have_sample = 1u;
     a->last_imu_t_us = f->t_us;
+    if (lost > 0u) {
+        /* Lost samples are bridged with this sample's increments: the motion in the gap is
+         * unknown, and repeating the nearest sample keeps time and the Earth-rate and
+         * gravity terms right. Beyond APP_MAX_BRIDGE_S the solution cannot be trusted. */
+        a->health.imu_lost = lost > UINT32_MAX - a->health.imu_lost
+                                 ? UINT32_MAX
+                                 : a->health.imu_lost + (uint32_t)lost;
+        a->had_gap = 1u;
+        if (lost > (uint64_t)APP_MAX_BRIDGE_S * a->cfg.imu_rate_hz) {
+            if (a->mode == APP_MODE_NAVIGATING || a->mode == APP_MODE_LEVELLING) {
+                a->mode = APP_MODE_FAULT;
+            }
+            a->n_samples += lost;
+        } else {
+            for (uint64_t k = 0u; k < lost; k++) {
+                process_sample(a, hal, a->rate_raw, v_raw);
+            }
+        }
+        a->last_gap_sample = a->n_samples; /* the flag holds for a second after the gap */
+    }
+    process_sample(a, hal, a->rate_raw, v_raw);
 }
 
 /* ----------------------------------------------------------------- GNSS ---- */
@@ -394,19 +441,46 @@ static int lat_lon_ok(int32_t lat_e7, int32_t lon_e7)
            lon_e7 <= 1800000000;
 }
 
+/* A GNSS_Status closes the epoch: the position, velocity and height received since the
+ * previous one belong to it if their epoch numbers match (docs/can.md, GNSS epochs). */
 static void on_gnss_status(app_t *a, const hal_can_frame_t *f)
 {
     struct navecu_can_gnss_status_t m;
     navecu_can_gnss_status_unpack(&m, f->data, 8u);
     const int have_pos = a->gnss_pos_pending;
-    const int have_vel = a->gnss_vel_pending;
-    const int have_h = a->gnss_h_pending;
+    int have_vel = a->gnss_vel_pending;
+    int have_h = a->gnss_h_pending;
+    const int pos_rejected = a->gnss_pos_rejected;
     a->gnss_pos_pending = a->gnss_vel_pending = a->gnss_h_pending = 0u;
+    a->gnss_pos_rejected = 0u;
+    if (m.gnss_epoch > E2E_COUNTER_MAX || m.fix_type > 6u) {
+        reject(a, &a->health.bad_value); /* values the protocol does not define */
+        return;
+    }
+    if ((have_vel && a->gnss_vel_epoch != m.gnss_epoch) ||
+        (have_h && a->gnss_h_epoch != m.gnss_epoch)) {
+        reject(a, &a->health.gnss_rejected); /* frames of another epoch: drop them */
+        have_vel = have_vel && a->gnss_vel_epoch == m.gnss_epoch;
+        have_h = have_h && a->gnss_h_epoch == m.gnss_epoch;
+    }
+    nav_real_t speed = NAV_C(-1.0);
+    nav_real_t course = NAV_C(0.0);
+    if (have_vel) {
+        const nav_real_t ve = navecu_can_gnss_velocity_vel_east_decode(a->gnss_vel_raw[0]);
+        const nav_real_t vn = navecu_can_gnss_velocity_vel_north_decode(a->gnss_vel_raw[1]);
+        speed = nav_sqrt(ve * ve + vn * vn);
+        course = nav_atan2(ve, vn);
+        if (course < NAV_C(0.0)) {
+            course += NAV_C(2.0) * PI_F;
+        }
+    }
     if (m.fix_type < GNSS_MIN_FIX || m.num_satellites < GNSS_MIN_SATS) {
         return; /* no usable fix: not an error, the receiver says so */
     }
     if (!have_pos) {
-        reject(a, &a->health.gnss_rejected); /* a fix reported without its position */
+        if (!pos_rejected) {
+            reject(a, &a->health.gnss_rejected); /* a fix reported without its position */
+        }
         return;
     }
     a->have_gnss = 1u;
@@ -414,25 +488,27 @@ static void on_gnss_status(app_t *a, const hal_can_frame_t *f)
     if (have_h && a->mode == APP_MODE_NAVIGATING) {
         sins_set_height_ref(&a->nav, (nav_real_t)a->gnss_h_cm * NAV_C(0.01));
     }
-    if (a->mode == APP_MODE_WAIT_INIT && !a->init_pos_valid) {
-        a->init_pos_valid = 1u;
-        a->init_lat_e7 = a->gnss_lat_e7;
-        a->init_lon_e7 = a->gnss_lon_e7;
-        a->init_h_cm = have_h ? a->gnss_h_cm : 0;
+    /* Levelling assumes the vehicle is still: GNSS motion restarts it. */
+    if (a->mode == APP_MODE_LEVELLING && speed > GNSS_STILL_MPS) {
+        restart_levelling(a);
     }
-    if (a->mode == APP_MODE_WAIT_INIT && !a->init_heading_valid && have_vel) {
-        const nav_real_t ve = navecu_can_gnss_velocity_vel_east_decode(a->gnss_vel_raw[0]);
-        const nav_real_t vn = navecu_can_gnss_velocity_vel_north_decode(a->gnss_vel_raw[1]);
-        if (ve * ve + vn * vn >= GNSS_COURSE_MIN_MPS * GNSS_COURSE_MIN_MPS) {
-            nav_real_t hdg = nav_atan2(ve, vn);
-            if (hdg < NAV_C(0.0)) {
-                hdg += NAV_C(2.0) * PI_F;
-            }
-            a->init_heading_rad = hdg;
+    /* Initialization from GNSS alone: the heading is the GNSS course while driving; the
+     * position, height and levelling come at the next stop. */
+    if (a->mode == APP_MODE_WAIT_INIT && !a->init_pos_valid) {
+        if (speed >= GNSS_COURSE_MIN_MPS) {
+            a->course_rad = course;
+            a->course_valid = 1u;
+        }
+        if (a->course_valid && have_h && speed >= NAV_C(0.0) && speed <= GNSS_STILL_MPS) {
+            a->init_pos_valid = 1u;
+            a->init_lat_e7 = a->gnss_lat_e7;
+            a->init_lon_e7 = a->gnss_lon_e7;
+            a->init_h_cm = a->gnss_h_cm;
+            a->init_heading_rad = a->course_rad;
             a->init_heading_valid = 1u;
+            start_levelling_if_ready(a);
         }
     }
-    start_levelling_if_ready(a);
 }
 
 /* ------------------------------------------------------------- commands ---- */
@@ -441,8 +517,10 @@ static void on_cmd_control(app_t *a, hal_t *hal, const hal_can_frame_t *f)
 {
     struct navecu_can_cmd_control_t m;
     navecu_can_cmd_control_unpack(&m, f->data, 8u);
+    /* Commands tolerate CMD_MAX_DELTA - 1 lost frames; a larger step is an old or foreign
+     * frame (E2E "wrong sequence"): dropped, and the counter resynchronizes on it. */
     const int step = e2e_counter_step(&a->rx_cmd, m.cmd_counter);
-    if (step <= 0) {
+    if (step <= 0 || step > CMD_MAX_DELTA) {
         reject(a, &a->health.bad_counter);
         return;
     }
@@ -497,6 +575,11 @@ static int is_e2e(uint32_t id)
 void app_handle_frame(app_t *a, hal_t *hal, const hal_can_frame_t *f)
 {
     a->health.log_line_bad = hal_can_rx_malformed(hal);
+    if (f->t_us < a->last_rx_t_us) {
+        count(&a->health.time_jumps); /* counted; the IMU counter keeps the time base */
+    } else {
+        a->last_rx_t_us = f->t_us;
+    }
     const uint32_t id = f->id;
     if (f->extended) {
         reject(a, &a->health.unknown_id);
@@ -555,6 +638,7 @@ void app_handle_frame(app_t *a, hal_t *hal, const hal_can_frame_t *f)
         if (!lat_lon_ok(m.latitude, m.longitude)) {
             reject(a, &a->health.gnss_rejected); /* impossible position */
             a->gnss_pos_pending = 0u;
+            a->gnss_pos_rejected = 1u;
             break;
         }
         a->gnss_lat_e7 = m.latitude;
@@ -565,6 +649,11 @@ void app_handle_frame(app_t *a, hal_t *hal, const hal_can_frame_t *f)
     case NAVECU_CAN_GNSS_VELOCITY_FRAME_ID: {
         struct navecu_can_gnss_velocity_t m;
         navecu_can_gnss_velocity_unpack(&m, f->data, 8u);
+        if (e2e_counter_step(&a->rx_gnss_vel, m.gnss_epoch) <= 0) {
+            reject(a, &a->health.bad_counter); /* repeated epoch or the invalid 15 */
+            break;
+        }
+        a->gnss_vel_epoch = m.gnss_epoch;
         a->gnss_vel_raw[0] = m.vel_east;
         a->gnss_vel_raw[1] = m.vel_north;
         a->gnss_vel_raw[2] = m.vel_up;
@@ -579,6 +668,7 @@ void app_handle_frame(app_t *a, hal_t *hal, const hal_can_frame_t *f)
             break;
         }
         a->gnss_h_cm = m.height;
+        a->gnss_h_epoch = m.gnss_epoch;
         a->gnss_h_pending = 1u;
         break;
     }
@@ -600,5 +690,16 @@ void app_handle_frame(app_t *a, hal_t *hal, const hal_can_frame_t *f)
     default: /* NAVECU_CAN_CMD_CONTROL_FRAME_ID */
         on_cmd_control(a, hal, f);
         break;
+    }
+}
+
+void app_poll(app_t *a, hal_t *hal)
+{
+    const uint64_t now = hal_time_us(hal);
+    const uint64_t stale_since = a->last_imu_t_us + IMU_STALE_US;
+    const uint64_t period_us = 1000000u / a->cfg.status_rate_hz;
+    if (a->have_sample && now > stale_since && now > a->last_status_t_us &&
+        now - a->last_status_t_us >= period_us) {
+        emit_status(a, hal);
     }
 }

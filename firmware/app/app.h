@@ -41,6 +41,7 @@ typedef struct {
     uint32_t log_line_bad;     /* malformed source frames skipped by the HAL */
     uint32_t cmd_rejected;     /* commands refused (missing known position, bad state) */
     uint32_t nav_rejected;     /* IMU samples the strapdown core refused */
+    uint32_t time_jumps;       /* receive time going backwards; IMU gaps seen only in time */
 } app_health_t;
 
 typedef enum {
@@ -57,6 +58,11 @@ typedef enum {
 #define APP_FLAG_REJECTED 0x0008u     /* some input was rejected in the last second */
 #define APP_FLAG_NVM_ERROR 0x0010u    /* the last NVM operation failed */
 #define APP_FLAG_NO_HEADING 0x0020u   /* waiting for a heading (command or GNSS course) */
+#define APP_FLAG_IMU_GAP 0x0040u      /* IMU samples were lost and bridged in the last second */
+
+/* IMU gaps up to this many seconds are bridged by repeating the next sample; a longer gap
+ * ends navigation (APP_MODE_FAULT) until the next SetInitialPosition. */
+#define APP_MAX_BRIDGE_S 1u
 
 typedef struct {
     app_config_t cfg;
@@ -65,8 +71,13 @@ typedef struct {
     uint16_t flags_sticky; /* flags that persist until cleared by their cause */
     sins_t nav;
 
-    /* E2E receive state per protected input */
-    e2e_counter_t rx_imu, rx_wheel, rx_cmd;
+    /* E2E receive state per protected input; kept through a reset, so that a replayed
+     * old frame is never taken for a first one */
+    e2e_counter_t rx_imu, rx_wheel, rx_cmd, rx_gnss_vel;
+    uint64_t last_rx_t_us;      /* latest receive time seen (time jumps) */
+    uint64_t last_status_t_us;  /* receive time of the last NAV_Status (app_poll) */
+    uint64_t last_gap_sample;   /* sample count at the last IMU gap */
+    uint8_t had_gap;
     /* IMU pair assembly */
     uint8_t rate_pending;       /* an IMU_Rate waits for its IMU_Accel */
     uint8_t rate_counter;
@@ -91,6 +102,10 @@ typedef struct {
 
     /* GNSS epoch assembly */
     uint8_t gnss_pos_pending, gnss_vel_pending, gnss_h_pending;
+    uint8_t gnss_pos_rejected;  /* this epoch's position was refused (count once) */
+    uint8_t gnss_vel_epoch, gnss_h_epoch;
+    uint8_t course_valid;       /* a GNSS course was seen while moving (GNSS init) */
+    nav_real_t course_rad;
     int32_t gnss_lat_e7, gnss_lon_e7, gnss_h_cm;
     int16_t gnss_vel_raw[3];
     uint64_t last_gnss_sample;
@@ -112,5 +127,9 @@ int app_init(app_t *app, const app_config_t *cfg);
 /* Process one received frame; may send frames through hal. Never fails: whatever is
  * wrong with the frame is counted in app->health. */
 void app_handle_frame(app_t *app, hal_t *hal, const hal_can_frame_t *frame);
+
+/* Call from the main loop (after each frame, or on a timer): while no IMU data arrives,
+ * NAV_Status goes on at its rate on the HAL clock with the IMU_STALE flag. */
+void app_poll(app_t *app, hal_t *hal);
 
 #endif

@@ -6,6 +6,7 @@ with python-can and decoded with cantools from the same DBC.
 """
 import math
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -75,10 +76,39 @@ def test_output_byte_identical(stationary):
     assert outs[0][0].read_bytes() == outs[1][0].read_bytes()
 
 
+def rejections(summary: str) -> dict:
+    """The counters of navecu's 'rejected:' summary line, by name."""
+    line = summary.split("rejected:", 1)[1].splitlines()[0]
+    return {m.group(1).strip(): int(m.group(2)) for m in re.finditer(r"([a-z ]+?) (\d+)(?:,|$)", line)}
+
+
 def test_nothing_rejected_on_clean_log(stationary):
     _, outs = stationary
-    assert "unknown id 0, bad dlc 0, bad crc 0, bad counter 0" in outs[0][1]
-    assert "0 malformed lines" in outs[0][1]
+    counts = rejections(outs[0][1])
+    assert len(counts) == 11 and all(v == 0 for v in counts.values()), counts
+    assert re.search(r"\b0 malformed lines skipped", outs[0][1])
+
+
+def frames_only(path: Path) -> list:
+    """The 'ID#DATA' fields of a candump log, without timestamps."""
+    return [line.split()[2] for line in path.read_text().splitlines()]
+
+
+def test_same_frames_at_any_replay_speed(stationary, tmp_path):
+    """The time base is the IMU counter: the log replayed 10x faster (receive times
+    compressed) or 3x slower gives the same output frames; only their timestamps follow
+    the receive clock."""
+    log, outs = stationary
+    reference = frames_only(outs[0][0])
+    for scale in (0.1, 3.0):
+        src = tmp_path / f"scaled{scale}.log"
+        with can.LogReader(log) as reader, can.Logger(str(src)) as writer:
+            for msg in reader:
+                msg.timestamp *= scale
+                writer.on_message_received(msg)
+        out = tmp_path / f"out{scale}.log"
+        run(NAVECU, "--can-log", src, "--out", out)
+        assert frames_only(out) == reference, f"replay x{1 / scale:g} differs"
 
 
 def test_cantools_cli_decodes_output(stationary):
@@ -102,8 +132,18 @@ def test_bad_log_lines_counted_not_fatal(stationary, tmp_path):
     src.write_text("".join(bad))
     out = tmp_path / "out.log"
     res = run(NAVECU, "--can-log", src, "--out", out)
-    assert "3 malformed lines skipped" in res.stderr, res.stderr
-    assert "unknown id 1" in res.stderr, res.stderr
+    assert re.search(r"\b3 malformed lines skipped", res.stderr), res.stderr
+    assert rejections(res.stderr)["unknown id"] == 1, res.stderr
+
+
+def test_trailing_garbage_counted(stationary, tmp_path):
+    """Malformed lines after the last frame are still counted and reported."""
+    log, _ = stationary
+    lines = log.read_text().splitlines(keepends=True)[:3000]
+    src = tmp_path / "tail.log"
+    src.write_text("".join(lines) + "not a frame\n(1.0) can0 12#\n")
+    res = run(NAVECU, "--can-log", src, "--out", tmp_path / "out.log")
+    assert re.search(r"\b2 malformed lines skipped", res.stderr), res.stderr
 
 
 def test_usage_errors():

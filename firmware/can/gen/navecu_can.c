@@ -2246,6 +2246,14 @@ int navecu_can_nav_status_pack(
         dst_p[5] |= pack_left_shift_u8(src_p->cnt_log_line_bad, 0u, 0xffu);
         break;
 
+    case 4:
+        dst_p[1] |= pack_left_shift_u16(src_p->cnt_cmd_rejected, 0u, 0xffu);
+        dst_p[2] |= pack_right_shift_u16(src_p->cnt_cmd_rejected, 8u, 0xffu);
+        dst_p[3] |= pack_left_shift_u16(src_p->cnt_core_rejected, 0u, 0xffu);
+        dst_p[4] |= pack_right_shift_u16(src_p->cnt_core_rejected, 8u, 0xffu);
+        dst_p[5] |= pack_left_shift_u8(src_p->cnt_time_jumps, 0u, 0xffu);
+        break;
+
     default:
         break;
     }
@@ -2298,6 +2306,14 @@ int navecu_can_nav_status_unpack(
         dst_p->cnt_gnss_rejected = unpack_right_shift_u16(src_p[3], 0u, 0xffu);
         dst_p->cnt_gnss_rejected |= unpack_left_shift_u16(src_p[4], 8u, 0xffu);
         dst_p->cnt_log_line_bad = unpack_right_shift_u8(src_p[5], 0u, 0xffu);
+        break;
+
+    case 4:
+        dst_p->cnt_cmd_rejected = unpack_right_shift_u16(src_p[1], 0u, 0xffu);
+        dst_p->cnt_cmd_rejected |= unpack_left_shift_u16(src_p[2], 8u, 0xffu);
+        dst_p->cnt_core_rejected = unpack_right_shift_u16(src_p[3], 0u, 0xffu);
+        dst_p->cnt_core_rejected |= unpack_left_shift_u16(src_p[4], 8u, 0xffu);
+        dst_p->cnt_time_jumps = unpack_right_shift_u8(src_p[5], 0u, 0xffu);
         break;
 
     default:
@@ -2444,6 +2460,28 @@ bool navecu_can_nav_status_cnt_bad_value_is_in_phys_range(float value)
     return ((value >= 0.0f) && (value <= 65535.0f));
 }
 
+uint16_t navecu_can_nav_status_cnt_cmd_rejected_encode(float value)
+{
+    return (uint16_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_nav_status_cnt_cmd_rejected_decode(uint16_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_nav_status_cnt_cmd_rejected_is_in_range(uint16_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_nav_status_cnt_cmd_rejected_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 65535.0f));
+}
+
 uint16_t navecu_can_nav_status_horiz_accuracy_encode(float value)
 {
     return (uint16_t)(cantools_unsigned_from_double(roundf(value / 0.01f)));
@@ -2532,6 +2570,28 @@ bool navecu_can_nav_status_cnt_gnss_rejected_is_in_phys_range(float value)
     return ((value >= 0.0f) && (value <= 65535.0f));
 }
 
+uint16_t navecu_can_nav_status_cnt_core_rejected_encode(float value)
+{
+    return (uint16_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_nav_status_cnt_core_rejected_decode(uint16_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_nav_status_cnt_core_rejected_is_in_range(uint16_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_nav_status_cnt_core_rejected_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 65535.0f));
+}
+
 uint8_t navecu_can_nav_status_cnt_bad_crc_encode(float value)
 {
     return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
@@ -2594,6 +2654,28 @@ bool navecu_can_nav_status_cnt_log_line_bad_is_in_range(uint8_t value)
 }
 
 bool navecu_can_nav_status_cnt_log_line_bad_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 255.0f));
+}
+
+uint8_t navecu_can_nav_status_cnt_time_jumps_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_nav_status_cnt_time_jumps_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_nav_status_cnt_time_jumps_is_in_range(uint8_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_nav_status_cnt_time_jumps_is_in_phys_range(float value)
 {
     return ((value >= 0.0f) && (value <= 255.0f));
 }

@@ -206,13 +206,16 @@ extern "C" {
 #define NAVECU_CAN_NAV_STATUS_CNT_UNKNOWN_ID_NAME "CntUnknownId"
 #define NAVECU_CAN_NAV_STATUS_CNT_BAD_COUNTER_NAME "CntBadCounter"
 #define NAVECU_CAN_NAV_STATUS_CNT_BAD_VALUE_NAME "CntBadValue"
+#define NAVECU_CAN_NAV_STATUS_CNT_CMD_REJECTED_NAME "CntCmdRejected"
 #define NAVECU_CAN_NAV_STATUS_HORIZ_ACCURACY_NAME "HorizAccuracy"
 #define NAVECU_CAN_NAV_STATUS_CNT_BAD_DLC_NAME "CntBadDlc"
 #define NAVECU_CAN_NAV_STATUS_CNT_IMU_PAIR_BROKEN_NAME "CntImuPairBroken"
 #define NAVECU_CAN_NAV_STATUS_CNT_GNSS_REJECTED_NAME "CntGnssRejected"
+#define NAVECU_CAN_NAV_STATUS_CNT_CORE_REJECTED_NAME "CntCoreRejected"
 #define NAVECU_CAN_NAV_STATUS_CNT_BAD_CRC_NAME "CntBadCrc"
 #define NAVECU_CAN_NAV_STATUS_CNT_IMU_LOST_NAME "CntImuLost"
 #define NAVECU_CAN_NAV_STATUS_CNT_LOG_LINE_BAD_NAME "CntLogLineBad"
+#define NAVECU_CAN_NAV_STATUS_CNT_TIME_JUMPS_NAME "CntTimeJumps"
 #define NAVECU_CAN_NAV_STATUS_NAV_COUNTER_NAME "NavCounter"
 #define NAVECU_CAN_NAV_STATUS_NAV_CRC_NAME "NavCrc"
 #define NAVECU_CAN_NAV_CALIBRATION_HEADING_CORRECTION_NAME "HeadingCorrection"
@@ -722,7 +725,7 @@ struct navecu_can_nav_attitude_t {
 /**
  * Signals in message NAV_Status.
  *
- * Multiplexed: every 100 ms two frames, page 0 and one of the counter pages 1..3 in rotation (counters saturate), hence a 50 ms mean cycle.
+ * Multiplexed: every 100 ms two frames, page 0 and one of the counter pages 1..4 in rotation (counters saturate), hence a 50 ms mean cycle.
  *
  * All signal values are as on the CAN bus.
  */
@@ -744,7 +747,7 @@ struct navecu_can_nav_status_t {
     uint8_t mode;
 
     /**
-     * bit 0 IMU data stale, bit 1 IMU fault reported, bit 2 no GNSS, bit 3 input rejected in the last second, bit 4 NVM error.
+     * bit 0 IMU data stale (none for 0.5 s), bit 1 IMU fault reported, bit 2 no usable GNSS epoch for 2 s, bit 3 input rejected in the last second, bit 4 NVM error, bit 5 waiting for a heading, bit 6 IMU samples were lost and bridged in the last second.
      *
      * Range: 0..65535 (0..65535 -)
      * Scale: 1
@@ -772,6 +775,13 @@ struct navecu_can_nav_status_t {
      * Offset: 0
      */
     uint16_t cnt_bad_value;
+
+    /**
+     * Range: 0..65535 (0..65535 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint16_t cnt_cmd_rejected;
 
     /**
      * Range: 0..65535 (0..655.35 m)
@@ -802,6 +812,13 @@ struct navecu_can_nav_status_t {
     uint16_t cnt_gnss_rejected;
 
     /**
+     * Range: 0..65535 (0..65535 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint16_t cnt_core_rejected;
+
+    /**
      * Range: 0..255 (0..255 -)
      * Scale: 1
      * Offset: 0
@@ -821,6 +838,13 @@ struct navecu_can_nav_status_t {
      * Offset: 0
      */
     uint8_t cnt_log_line_bad;
+
+    /**
+     * Range: 0..255 (0..255 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t cnt_time_jumps;
 
     /**
      * Range: 0..14 (0..14 -)
@@ -3891,6 +3915,46 @@ bool navecu_can_nav_status_cnt_bad_value_is_in_phys_range(float value);
  *
  * @return Encoded signal.
  */
+uint16_t navecu_can_nav_status_cnt_cmd_rejected_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_status_cnt_cmd_rejected_decode(uint16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_status_cnt_cmd_rejected_is_in_range(uint16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_status_cnt_cmd_rejected_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
 uint16_t navecu_can_nav_status_horiz_accuracy_encode(float value);
 
 /**
@@ -4051,6 +4115,46 @@ bool navecu_can_nav_status_cnt_gnss_rejected_is_in_phys_range(float value);
  *
  * @return Encoded signal.
  */
+uint16_t navecu_can_nav_status_cnt_core_rejected_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_status_cnt_core_rejected_decode(uint16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_status_cnt_core_rejected_is_in_range(uint16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_status_cnt_core_rejected_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
 uint8_t navecu_can_nav_status_cnt_bad_crc_encode(float value);
 
 /**
@@ -4163,6 +4267,46 @@ bool navecu_can_nav_status_cnt_log_line_bad_is_in_range(uint8_t value);
  * @return true if in range, false otherwise.
  */
 bool navecu_can_nav_status_cnt_log_line_bad_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_nav_status_cnt_time_jumps_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_status_cnt_time_jumps_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_status_cnt_time_jumps_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_status_cnt_time_jumps_is_in_phys_range(float value);
 
 /**
  * Encode given signal by applying scaling and offset.
