@@ -45,7 +45,8 @@ all: $(BUILD)/host/navecu
 help:
 	@echo "make               build the host firmware: build/host/navecu (see --help)"
 	@echo "make test          all tests: C plain and ASan+UBSan, Python, codec, M4F build"
-	@echo "make sim           simulate a drive and report accuracy (arrives with issue #4)"
+	@echo "make sim           simulate a drive, run the firmware, report accuracy and plots"
+	@echo "                   (SCENARIO=name for another tools/sim/scenarios/name.toml)"
 	@echo "make codec         regenerate the CAN codec from firmware/can/navecu.dbc"
 	@echo "make cross         build the firmware for the Cortex-M4F, check: no double math"
 	@echo "make numerics      the float32 accuracy study (docs/numeric-design.md)"
@@ -197,11 +198,10 @@ $(BUILD)/%/tests/study_numerics: $(BUILD)/%/f64/tests/study_numerics.o $(BUILD)/
 	@mkdir -p $(@D)
 	$(CC) $^ -lm -o $@
 
-sim:
-	@echo "make sim arrives with the simulator issue (#4): drive simulation and accuracy"
-	@echo "report are not built yet. Today: 'make' builds build/host/navecu, which replays a"
-	@echo "CAN log (see its --help); 'make test' runs every test."
-	@exit 2
+# ---- the drive simulator (tools/sim): scenario -> sensors -> CAN log -> firmware -> report
+SCENARIO ?= default
+sim: deps venv $(BUILD)/host/navecu
+	$(PY) -m tools.sim.run --scenario $(SCENARIO)
 
 clean:
 	rm -rf $(BUILD)
