@@ -35,6 +35,7 @@ TESTS_F32 := test_e2e test_codec
 # tests that link both variants themselves
 TESTS_BOTH := test_drive
 
+.PHONY: grades
 .PHONY: all test test-c test-plain test-asan test-cross test-python codec codec-check \
         doc-check venv sim clean help numerics deps
 # keep objects of pattern-built test programs between runs
@@ -47,6 +48,7 @@ help:
 	@echo "make test          all tests: C plain and ASan+UBSan, Python, codec, M4F build"
 	@echo "make sim           simulate a drive, run the firmware, report accuracy and plots"
 	@echo "                   (SCENARIO=name for another tools/sim/scenarios/name.toml)"
+	@echo "make grades        free-inertial error per IMU grade vs seed 003's Table 2"
 	@echo "make codec         regenerate the CAN codec from firmware/can/navecu.dbc"
 	@echo "make cross         build the firmware for the Cortex-M4F, check: no double math"
 	@echo "make numerics      the float32 accuracy study (docs/numeric-design.md)"
@@ -202,6 +204,10 @@ $(BUILD)/%/tests/study_numerics: $(BUILD)/%/f64/tests/study_numerics.o $(BUILD)/
 SCENARIO ?= default
 sim: deps venv $(BUILD)/host/navecu
 	$(PY) -m tools.sim.run --scenario $(SCENARIO)
+
+# free-inertial error by IMU grade beside seed 003's Table 2 (about 6 minutes)
+grades: deps venv $(BUILD)/host/navecu
+	$(PY) -m tools.sim.grades
 
 clean:
 	rm -rf $(BUILD)

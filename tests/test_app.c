@@ -679,6 +679,48 @@ static void test_gnss_init_and_epochs(void **state)
     assert_int_equal(app.health.bad_counter, 1);
 }
 
+static uint8_t att_counter;
+
+static void send_initial_attitude(double roll_rad, double pitch_rad)
+{
+    uint8_t d[8];
+    struct navecu_can_cmd_initial_attitude_t m;
+    memset(&m, 0, sizeof m);
+    m.init_roll = (int32_t)lround(roll_rad * 4194304.0); /* 2^-22 rad */
+    m.init_pitch = (int32_t)lround(pitch_rad * 4194304.0);
+    m.att_counter = att_counter;
+    att_counter = e2e_counter_next(att_counter);
+    navecu_can_cmd_initial_attitude_pack(d, &m, 8u);
+    e2e_protect(NAVECU_CAN_CMD_INITIAL_ATTITUDE_FRAME_ID, d);
+    hal_can_frame_t f = frame(NAVECU_CAN_CMD_INITIAL_ATTITUDE_FRAME_ID, d);
+    feed(&f);
+}
+
+/*
+ * GIVEN SetInitialPosition and then the true roll and pitch by CMD_InitialAttitude
+ * THEN navigation starts at once (no levelling), holds position over 30 s standing still,
+ *      and the same command outside levelling is refused.
+ */
+static void test_initial_attitude_skips_levelling(void **state)
+{
+    (void)state;
+    att_counter = 0u;
+    send_initial_attitude(STILL.roll, STILL.pitch); /* before any position: refused */
+    assert_int_equal(app.health.cmd_rejected, 1);
+    send_init_commands(30.0);
+    send_initial_attitude(STILL.roll, STILL.pitch);
+    assert_int_equal(app.mode, APP_MODE_NAVIGATING);
+    run_still(30);
+    struct navecu_can_nav_position_t pos;
+    navecu_can_nav_position_unpack(&pos, last_tx(NAVECU_CAN_NAV_POSITION_FRAME_ID)->data, 8u);
+    assert_near(pos.latitude * 1e-7, LAT0_DEG, 2e-7);  /* 2 cm */
+    assert_near(pos.longitude * 1e-7, LON0_DEG, 3e-7);
+    struct navecu_can_nav_attitude_t att;
+    navecu_can_nav_attitude_unpack(&att, last_tx(NAVECU_CAN_NAV_ATTITUDE_FRAME_ID)->data, 8u);
+    assert_near(att.roll * 0.01, 2.0, 0.01);
+    assert_near(att.pitch * 0.01, -1.0, 0.01);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -692,6 +734,7 @@ int main(void)
         cmocka_unit_test_setup(test_imu_gaps, setup),
         cmocka_unit_test_setup(test_stale_imu_status, setup),
         cmocka_unit_test_setup(test_gnss_init_and_epochs, setup),
+        cmocka_unit_test_setup(test_initial_attitude_skips_levelling, setup),
     };
     return cmocka_run_group_tests_name("app", tests, NULL, NULL);
 }

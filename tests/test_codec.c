@@ -59,6 +59,7 @@ static void test_every_message_round_trips(void **state)
     ROUND_TRIP(gnss_height);
     ROUND_TRIP(cmd_known_position);
     ROUND_TRIP(cmd_control);
+    ROUND_TRIP(cmd_initial_attitude);
     ROUND_TRIP(nav_position);
     ROUND_TRIP(nav_height);
     ROUND_TRIP(nav_velocity);

@@ -54,6 +54,7 @@ static void reset_navigation(app_t *a)
     a->rx_wheel = keep.rx_wheel;
     a->rx_cmd = keep.rx_cmd;
     a->rx_gnss_vel = keep.rx_gnss_vel;
+    a->rx_att = keep.rx_att;
     memcpy(a->tx_counter, keep.tx_counter, sizeof a->tx_counter);
     a->status_page = keep.status_page;
     a->frames_sent = keep.frames_sent;
@@ -289,13 +290,19 @@ static void start_levelling_if_ready(app_t *a)
 /* Levelling: the mean specific force of a vehicle at rest is C_nb (0, 0, g), whose body
  * components are g (-cos(p) sin(r), sin(p), cos(p) cos(r)) (docs/frames.md). Only the
  * direction of the weighted sum matters. */
+static void start_navigation_at(app_t *a, nav_real_t roll, nav_real_t pitch);
+
 static void start_navigation(app_t *a)
 {
     const nav_real_t fx = a->level_wsum[0];
     const nav_real_t fy = a->level_wsum[1];
     const nav_real_t fz = a->level_wsum[2];
-    const nav_real_t pitch = nav_atan2(fy, nav_sqrt(fx * fx + fz * fz));
-    const nav_real_t roll = nav_atan2(-fx, fz);
+    start_navigation_at(a, nav_atan2(-fx, fz), nav_atan2(fy, nav_sqrt(fx * fx + fz * fz)));
+}
+
+/* Navigate from the initial position and heading with this roll and pitch (rad). */
+static void start_navigation_at(app_t *a, nav_real_t roll, nav_real_t pitch)
+{
     nav_real_t q[4];
     quat_from_euler(roll, pitch, a->init_heading_rad, q);
     const geo_pos_t pos = {(int64_t)a->init_lat_e7 * LSB_PER_E7,
@@ -562,6 +569,29 @@ static void on_cmd_control(app_t *a, hal_t *hal, const hal_can_frame_t *f)
     }
 }
 
+/* Roll and pitch from another source end levelling at once (a perfect start). */
+static void on_cmd_initial_attitude(app_t *a, const hal_can_frame_t *f)
+{
+    struct navecu_can_cmd_initial_attitude_t m;
+    navecu_can_cmd_initial_attitude_unpack(&m, f->data, 8u);
+    const int step = e2e_counter_step(&a->rx_att, m.att_counter);
+    if (step <= 0 || step > CMD_MAX_DELTA) {
+        reject(a, &a->health.bad_counter);
+        return;
+    }
+    if (!navecu_can_cmd_initial_attitude_init_roll_is_in_range(m.init_roll) ||
+        !navecu_can_cmd_initial_attitude_init_pitch_is_in_range(m.init_pitch)) {
+        reject(a, &a->health.bad_value);
+        return;
+    }
+    if (a->mode != APP_MODE_LEVELLING) {
+        reject(a, &a->health.cmd_rejected); /* only between SetInitialPosition and navigating */
+        return;
+    }
+    start_navigation_at(a, navecu_can_cmd_initial_attitude_init_roll_decode(m.init_roll),
+                        navecu_can_cmd_initial_attitude_init_pitch_decode(m.init_pitch));
+}
+
 /* ------------------------------------------------------------- dispatch ---- */
 
 /* 1 if the message with this identifier carries its own E2E CRC in byte 7 (the IMU pair
@@ -569,7 +599,7 @@ static void on_cmd_control(app_t *a, hal_t *hal, const hal_can_frame_t *f)
 static int is_e2e(uint32_t id)
 {
     return id == NAVECU_CAN_WHEEL_SPEEDS_FRAME_ID || id == NAVECU_CAN_GNSS_VELOCITY_FRAME_ID ||
-           id == NAVECU_CAN_CMD_CONTROL_FRAME_ID;
+           id == NAVECU_CAN_CMD_CONTROL_FRAME_ID || id == NAVECU_CAN_CMD_INITIAL_ATTITUDE_FRAME_ID;
 }
 
 void app_handle_frame(app_t *a, hal_t *hal, const hal_can_frame_t *f)
@@ -595,6 +625,7 @@ void app_handle_frame(app_t *a, hal_t *hal, const hal_can_frame_t *f)
     case NAVECU_CAN_GNSS_HEIGHT_FRAME_ID:
     case NAVECU_CAN_CMD_KNOWN_POSITION_FRAME_ID:
     case NAVECU_CAN_CMD_CONTROL_FRAME_ID:
+    case NAVECU_CAN_CMD_INITIAL_ATTITUDE_FRAME_ID:
         break;
     case NAVECU_CAN_NAV_POSITION_FRAME_ID:
     case NAVECU_CAN_NAV_HEIGHT_FRAME_ID:
@@ -687,6 +718,9 @@ void app_handle_frame(app_t *a, hal_t *hal, const hal_can_frame_t *f)
         a->known_pos_valid = 1u;
         break;
     }
+    case NAVECU_CAN_CMD_INITIAL_ATTITUDE_FRAME_ID:
+        on_cmd_initial_attitude(a, f);
+        break;
     default: /* NAVECU_CAN_CMD_CONTROL_FRAME_ID */
         on_cmd_control(a, hal, f);
         break;

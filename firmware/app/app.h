@@ -73,7 +73,7 @@ typedef struct {
 
     /* E2E receive state per protected input; kept through a reset, so that a replayed
      * old frame is never taken for a first one */
-    e2e_counter_t rx_imu, rx_wheel, rx_cmd, rx_gnss_vel;
+    e2e_counter_t rx_imu, rx_wheel, rx_cmd, rx_gnss_vel, rx_att;
     uint64_t last_rx_t_us;      /* latest receive time seen (time jumps) */
     uint64_t last_status_t_us;  /* receive time of the last NAV_Status (app_poll) */
     uint64_t last_gap_sample;   /* sample count at the last IMU gap */

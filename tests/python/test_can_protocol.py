@@ -23,7 +23,7 @@ U = 7.292115e-5
 ANGLE_LSB = 2.0**-21
 VEL_LSB = 2.0**-12
 
-E2E_MESSAGES = {"IMU_Rate", "IMU_Accel", "WheelSpeeds", "GNSS_Velocity", "CMD_Control",
+E2E_MESSAGES = {"IMU_Rate", "IMU_Accel", "WheelSpeeds", "GNSS_Velocity", "CMD_Control", "CMD_InitialAttitude",
                 "NAV_Height", "NAV_Velocity", "NAV_Attitude", "NAV_Status", "NAV_Calibration"}
 
 
@@ -35,7 +35,7 @@ def db():
 # ------------------------------------------------------------------------------ DBC ----
 
 def test_dbc_loads_strict(db):
-    assert len(db.messages) == 15
+    assert len(db.messages) == 16
     for msg in db.messages:
         assert msg.length == 8 and not msg.is_extended_frame and not msg.is_fd, msg.name
         assert msg.frame_id <= 0x7FF

@@ -60,8 +60,10 @@ def scenario_path(name: str) -> Path:
     return p
 
 
-def frames(truth, dtheta, dv, wheels, gnss, db):
-    """Every input frame of the drive as (t_s, order, can.Message), unsorted."""
+def frames(truth, dtheta, dv, wheels, gnss, db, initial_attitude=False):
+    """Every input frame of the drive as (t_s, order, can.Message), unsorted. With
+    initial_attitude, a CMD_InitialAttitude with the true roll and pitch follows the
+    initialization commands: a perfect start, no levelling."""
     sender = nc.E2ESender(db)
     out = []
     lat0, lon0 = math.degrees(truth.lat_rad[0]), math.degrees(truth.lon_rad[0])
@@ -71,6 +73,9 @@ def frames(truth, dtheta, dv, wheels, gnss, db):
     out.append((0.0, 1, sender.encode("CMD_Control", {"Command": 2, "HeadingValid": 1,
                                                       "Heading": hdg0,
                                                       "Height": float(truth.h_m[0])}, 0.0)))
+    if initial_attitude:
+        out.append((0.0, 1, sender.encode("CMD_InitialAttitude", {
+            "InitRoll": float(truth.roll_rad[0]), "InitPitch": float(truth.pitch_rad[0])}, 0.0)))
     quant = nc.ImuQuantizer()
     for k in range(1, len(truth.t_s)):
         t = float(truth.t_s[k])
@@ -176,6 +181,9 @@ def main(argv=None) -> int:
     st.done(f"{out / 'report.json'} and {len(pngs)} plots")
     print()
     print(report.summary_table(rep))
+    print("note: the firmware navigates free-inertially after initialization; GNSS and odometer")
+    print("      fusion arrive with the odometer and Kalman-filter issues (#6, #7).")
+    print(f"plots: {', '.join(str(p) for p in pngs)}")
     return 0
 
 

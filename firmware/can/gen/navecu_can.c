@@ -1610,6 +1610,161 @@ bool navecu_can_cmd_control_cmd_crc_is_in_phys_range(float value)
     return ((value >= 0.0f) && (value <= 255.0f));
 }
 
+int navecu_can_cmd_initial_attitude_pack(
+    uint8_t *dst_p,
+    const struct navecu_can_cmd_initial_attitude_t *src_p,
+    size_t size)
+{
+    uint32_t init_pitch;
+    uint32_t init_roll;
+
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    memset(&dst_p[0], 0, 8);
+
+    init_roll = (uint32_t)src_p->init_roll;
+    dst_p[0] |= pack_left_shift_u32(init_roll, 0u, 0xffu);
+    dst_p[1] |= pack_right_shift_u32(init_roll, 8u, 0xffu);
+    dst_p[2] |= pack_right_shift_u32(init_roll, 16u, 0xffu);
+    init_pitch = (uint32_t)src_p->init_pitch;
+    dst_p[3] |= pack_left_shift_u32(init_pitch, 0u, 0xffu);
+    dst_p[4] |= pack_right_shift_u32(init_pitch, 8u, 0xffu);
+    dst_p[5] |= pack_right_shift_u32(init_pitch, 16u, 0xffu);
+    dst_p[6] |= pack_left_shift_u8(src_p->att_counter, 0u, 0x0fu);
+    dst_p[7] |= pack_left_shift_u8(src_p->att_crc, 0u, 0xffu);
+
+    return (8);
+}
+
+int navecu_can_cmd_initial_attitude_unpack(
+    struct navecu_can_cmd_initial_attitude_t *dst_p,
+    const uint8_t *src_p,
+    size_t size)
+{
+    uint32_t init_pitch;
+    uint32_t init_roll;
+
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    init_roll = unpack_right_shift_u32(src_p[0], 0u, 0xffu);
+    init_roll |= unpack_left_shift_u32(src_p[1], 8u, 0xffu);
+    init_roll |= unpack_left_shift_u32(src_p[2], 16u, 0xffu);
+
+    if ((init_roll & (1u << 23)) != 0u) {
+        init_roll |= 0xff000000u;
+    }
+
+    dst_p->init_roll = (int32_t)init_roll;
+    init_pitch = unpack_right_shift_u32(src_p[3], 0u, 0xffu);
+    init_pitch |= unpack_left_shift_u32(src_p[4], 8u, 0xffu);
+    init_pitch |= unpack_left_shift_u32(src_p[5], 16u, 0xffu);
+
+    if ((init_pitch & (1u << 23)) != 0u) {
+        init_pitch |= 0xff000000u;
+    }
+
+    dst_p->init_pitch = (int32_t)init_pitch;
+    dst_p->att_counter = unpack_right_shift_u8(src_p[6], 0u, 0x0fu);
+    dst_p->att_crc = unpack_right_shift_u8(src_p[7], 0u, 0xffu);
+
+    return (0);
+}
+
+int navecu_can_cmd_initial_attitude_init(struct navecu_can_cmd_initial_attitude_t *msg_p)
+{
+    if (msg_p == NULL) return -1;
+
+    memset(msg_p, 0, sizeof(struct navecu_can_cmd_initial_attitude_t));
+
+    return 0;
+}
+
+int32_t navecu_can_cmd_initial_attitude_init_roll_encode(float value)
+{
+    return (int32_t)(roundf(value / 2.384185791015625e-07f));
+}
+
+float navecu_can_cmd_initial_attitude_init_roll_decode(int32_t value)
+{
+    return ((float)value * 2.384185791015625e-07f);
+}
+
+bool navecu_can_cmd_initial_attitude_init_roll_is_in_range(int32_t value)
+{
+    return ((value >= -8388608) && (value <= 8388607));
+}
+
+bool navecu_can_cmd_initial_attitude_init_roll_is_in_phys_range(float value)
+{
+    return ((value >= -2.0f) && (value <= 1.99999976158142f));
+}
+
+int32_t navecu_can_cmd_initial_attitude_init_pitch_encode(float value)
+{
+    return (int32_t)(roundf(value / 2.384185791015625e-07f));
+}
+
+float navecu_can_cmd_initial_attitude_init_pitch_decode(int32_t value)
+{
+    return ((float)value * 2.384185791015625e-07f);
+}
+
+bool navecu_can_cmd_initial_attitude_init_pitch_is_in_range(int32_t value)
+{
+    return ((value >= -6588397) && (value <= 6588397));
+}
+
+bool navecu_can_cmd_initial_attitude_init_pitch_is_in_phys_range(float value)
+{
+    return ((value >= -1.5707963f) && (value <= 1.5707963f));
+}
+
+uint8_t navecu_can_cmd_initial_attitude_att_counter_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_cmd_initial_attitude_att_counter_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_cmd_initial_attitude_att_counter_is_in_range(uint8_t value)
+{
+    return (value <= 14u);
+}
+
+bool navecu_can_cmd_initial_attitude_att_counter_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 14.0f));
+}
+
+uint8_t navecu_can_cmd_initial_attitude_att_crc_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_cmd_initial_attitude_att_crc_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_cmd_initial_attitude_att_crc_is_in_range(uint8_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_cmd_initial_attitude_att_crc_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 255.0f));
+}
+
 int navecu_can_nav_position_pack(
     uint8_t *dst_p,
     const struct navecu_can_nav_position_t *src_p,

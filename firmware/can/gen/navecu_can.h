@@ -56,6 +56,7 @@ extern "C" {
 #define NAVECU_CAN_GNSS_HEIGHT_FRAME_ID (0x123u)
 #define NAVECU_CAN_CMD_KNOWN_POSITION_FRAME_ID (0x200u)
 #define NAVECU_CAN_CMD_CONTROL_FRAME_ID (0x201u)
+#define NAVECU_CAN_CMD_INITIAL_ATTITUDE_FRAME_ID (0x202u)
 #define NAVECU_CAN_NAV_POSITION_FRAME_ID (0x300u)
 #define NAVECU_CAN_NAV_HEIGHT_FRAME_ID (0x301u)
 #define NAVECU_CAN_NAV_VELOCITY_FRAME_ID (0x302u)
@@ -73,6 +74,7 @@ extern "C" {
 #define NAVECU_CAN_GNSS_HEIGHT_LENGTH (8u)
 #define NAVECU_CAN_CMD_KNOWN_POSITION_LENGTH (8u)
 #define NAVECU_CAN_CMD_CONTROL_LENGTH (8u)
+#define NAVECU_CAN_CMD_INITIAL_ATTITUDE_LENGTH (8u)
 #define NAVECU_CAN_NAV_POSITION_LENGTH (8u)
 #define NAVECU_CAN_NAV_HEIGHT_LENGTH (8u)
 #define NAVECU_CAN_NAV_VELOCITY_LENGTH (8u)
@@ -90,6 +92,7 @@ extern "C" {
 #define NAVECU_CAN_GNSS_HEIGHT_IS_EXTENDED (0)
 #define NAVECU_CAN_CMD_KNOWN_POSITION_IS_EXTENDED (0)
 #define NAVECU_CAN_CMD_CONTROL_IS_EXTENDED (0)
+#define NAVECU_CAN_CMD_INITIAL_ATTITUDE_IS_EXTENDED (0)
 #define NAVECU_CAN_NAV_POSITION_IS_EXTENDED (0)
 #define NAVECU_CAN_NAV_HEIGHT_IS_EXTENDED (0)
 #define NAVECU_CAN_NAV_VELOCITY_IS_EXTENDED (0)
@@ -136,6 +139,7 @@ extern "C" {
 #define NAVECU_CAN_GNSS_HEIGHT_NAME "GNSS_Height"
 #define NAVECU_CAN_CMD_KNOWN_POSITION_NAME "CMD_KnownPosition"
 #define NAVECU_CAN_CMD_CONTROL_NAME "CMD_Control"
+#define NAVECU_CAN_CMD_INITIAL_ATTITUDE_NAME "CMD_InitialAttitude"
 #define NAVECU_CAN_NAV_POSITION_NAME "NAV_Position"
 #define NAVECU_CAN_NAV_HEIGHT_NAME "NAV_Height"
 #define NAVECU_CAN_NAV_VELOCITY_NAME "NAV_Velocity"
@@ -184,6 +188,10 @@ extern "C" {
 #define NAVECU_CAN_CMD_CONTROL_HEIGHT_NAME "Height"
 #define NAVECU_CAN_CMD_CONTROL_CMD_COUNTER_NAME "CmdCounter"
 #define NAVECU_CAN_CMD_CONTROL_CMD_CRC_NAME "CmdCrc"
+#define NAVECU_CAN_CMD_INITIAL_ATTITUDE_INIT_ROLL_NAME "InitRoll"
+#define NAVECU_CAN_CMD_INITIAL_ATTITUDE_INIT_PITCH_NAME "InitPitch"
+#define NAVECU_CAN_CMD_INITIAL_ATTITUDE_ATT_COUNTER_NAME "AttCounter"
+#define NAVECU_CAN_CMD_INITIAL_ATTITUDE_ATT_CRC_NAME "AttCrc"
 #define NAVECU_CAN_NAV_POSITION_LATITUDE_NAME "Latitude"
 #define NAVECU_CAN_NAV_POSITION_LONGITUDE_NAME "Longitude"
 #define NAVECU_CAN_NAV_HEIGHT_HEIGHT_NAME "Height"
@@ -580,6 +588,43 @@ struct navecu_can_cmd_control_t {
      * Offset: 0
      */
     uint8_t cmd_crc;
+};
+
+/**
+ * Signals in message CMD_InitialAttitude.
+ *
+ * Roll and pitch known from another source (a survey, a previous alignment, a simulation's perfect start). Sent after SetInitialPosition, it ends levelling at once and navigation starts with this attitude.
+ *
+ * All signal values are as on the CAN bus.
+ */
+struct navecu_can_cmd_initial_attitude_t {
+    /**
+     * Range: -8388608..8388607 (-2..2.0 rad)
+     * Scale: 2.384185791015625e-07
+     * Offset: 0
+     */
+    int32_t init_roll;
+
+    /**
+     * Range: -6588397..6588397 (-1.5708..1.5708 rad)
+     * Scale: 2.384185791015625e-07
+     * Offset: 0
+     */
+    int32_t init_pitch;
+
+    /**
+     * Range: 0..14 (0..14 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t att_counter;
+
+    /**
+     * Range: 0..255 (0..255 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t att_crc;
 };
 
 /**
@@ -2842,6 +2887,203 @@ bool navecu_can_cmd_control_cmd_crc_is_in_range(uint8_t value);
  * @return true if in range, false otherwise.
  */
 bool navecu_can_cmd_control_cmd_crc_is_in_phys_range(float value);
+
+/**
+ * Pack message CMD_InitialAttitude.
+ *
+ * @param[out] dst_p Buffer to pack the message into.
+ * @param[in] src_p Data to pack.
+ * @param[in] size Size of dst_p.
+ *
+ * @return Size of packed data, or negative error code.
+ */
+int navecu_can_cmd_initial_attitude_pack(
+    uint8_t *dst_p,
+    const struct navecu_can_cmd_initial_attitude_t *src_p,
+    size_t size);
+
+/**
+ * Unpack message CMD_InitialAttitude.
+ *
+ * @param[out] dst_p Object to unpack the message into.
+ * @param[in] src_p Message to unpack.
+ * @param[in] size Size of src_p.
+ *
+ * @return zero(0) or negative error code.
+ */
+int navecu_can_cmd_initial_attitude_unpack(
+    struct navecu_can_cmd_initial_attitude_t *dst_p,
+    const uint8_t *src_p,
+    size_t size);
+
+/**
+ * Init message fields to default values from CMD_InitialAttitude.
+ *
+ * @param[in] msg_p Message to init.
+ *
+ * @return zero(0) on success or (-1) in case of nullptr argument.
+ */
+int navecu_can_cmd_initial_attitude_init(struct navecu_can_cmd_initial_attitude_t *msg_p);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+int32_t navecu_can_cmd_initial_attitude_init_roll_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_cmd_initial_attitude_init_roll_decode(int32_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_cmd_initial_attitude_init_roll_is_in_range(int32_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_cmd_initial_attitude_init_roll_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+int32_t navecu_can_cmd_initial_attitude_init_pitch_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_cmd_initial_attitude_init_pitch_decode(int32_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_cmd_initial_attitude_init_pitch_is_in_range(int32_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_cmd_initial_attitude_init_pitch_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_cmd_initial_attitude_att_counter_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_cmd_initial_attitude_att_counter_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_cmd_initial_attitude_att_counter_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_cmd_initial_attitude_att_counter_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_cmd_initial_attitude_att_crc_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_cmd_initial_attitude_att_crc_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_cmd_initial_attitude_att_crc_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_cmd_initial_attitude_att_crc_is_in_phys_range(float value);
 
 /**
  * Pack message NAV_Position.
