@@ -25,7 +25,7 @@ HOST_INC := $(FW_INC) -Ihal/linux -Itests/support
 CORE_SRC := $(wildcard firmware/nav/*.c)
 CODEC_GEN := firmware/can/gen/navecu_can.c firmware/can/gen/navecu_can.h
 APP_SRC := firmware/can/e2e.c firmware/can/gen/navecu_can.c firmware/app/app.c
-HAL_LINUX_SRC := hal/linux/hal_linux.c
+HAL_LINUX_SRC := hal/linux/hal_linux.c hal/linux/hal_socketcan.c
 SUPPORT_SRC_F64 := tests/support/truth.c tests/support/motions.c
 SUPPORT_SRC_BOTH := tests/support/nav_run.c
 # tests built once per numeric variant (f32 firmware, f64 reference)
@@ -199,6 +199,12 @@ $(BUILD)/%/tests/study_numerics: $(BUILD)/%/f64/tests/study_numerics.o $(BUILD)/
 		$(BUILD)/%/libnavcore_f32.a $(BUILD)/%/libnavcore_f64.a
 	@mkdir -p $(@D)
 	$(CC) $^ -lm -o $@
+
+# ---- vcan0 on a normal Linux machine (sudo); without kernel CAN the tests use
+# tools/vcan/with_vcan.sh, which boots User-Mode Linux with real vcan
+.PHONY: vcan
+vcan:
+	./tools/vcan/setup_vcan.sh
 
 # ---- the drive simulator (tools/sim): scenario -> sensors -> CAN log -> firmware -> report
 SCENARIO ?= default

@@ -2,30 +2,48 @@
  * host_sim/main.c - navecu on a Linux host, replaying a candump-format CAN log.
  *
  *   build/host/navecu --can-log IN.log --out OUT.log [options]
+ *   build/host/navecu --can vcan0 [--out OUT.log] [options]
  *
+ * Log mode:
  * Runs the firmware application over every frame of IN.log as fast as it can and writes
  * every frame it transmits to OUT.log (candump format), then prints a summary of the
  * run and of the health counters to stderr. The output depends only on the input and the
  * options: the application's time base is the IMU sample counter.
+ * Live mode: the same application on a SocketCAN interface until SIGINT or SIGTERM, then
+ * the same summary.
  */
 #include <errno.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "app.h"
 #include "hal_linux.h"
+#include "hal_socketcan.h"
+
+static volatile sig_atomic_t stop_requested;
+
+static void on_signal(int sig)
+{
+    (void)sig;
+    stop_requested = 1;
+}
 
 static void usage(FILE *out)
 {
     fprintf(out,
             "usage: navecu --can-log IN.log --out OUT.log [options]\n"
+            "       navecu --can IFACE [--out OUT.log] [options]\n"
             "\n"
             "Replay a candump-format CAN log (lines '(t) iface ID#DATA') into the navecu\n"
-            "firmware and write the frames it sends, in the same format, to OUT.log.\n"
+            "firmware and write the frames it sends, in the same format, to OUT.log; or run\n"
+            "the firmware live on a SocketCAN interface (e.g. vcan0) until SIGINT/SIGTERM.\n"
             "\n"
-            "  --can-log FILE       input log (required)\n"
-            "  --out FILE           output log, created or truncated (required)\n"
+            "  --can-log FILE       input log\n"
+            "  --can IFACE          live SocketCAN interface instead of a log\n"
+            "  --out FILE           output log, created or truncated (required with\n"
+            "                       --can-log; with --can it records what is sent)\n"
             "  --imu-rate-hz N      IMU sample rate of the log, 10..400 (default 100)\n"
             "  --nav-rate-hz N      NAV_Position/Height/Velocity/Attitude rate (default 50,\n"
             "                       at most the IMU rate)\n"
@@ -37,9 +55,10 @@ static void usage(FILE *out)
             "  --iface NAME         interface name written in OUT.log (default can0)\n"
             "  --help               this text\n"
             "\n"
-            "Exit status: 0 when the whole log was processed, 1 on an I/O error, 2 on a\n"
-            "usage error. Rejected input is never fatal: it is counted in NAV_Status and in\n"
-            "the summary printed to stderr.\n");
+            "Exit status: 0 when the whole log was processed (or the live run was stopped\n"
+            "by a signal), 1 on an I/O error or a missing interface, 2 on a usage error.\n"
+            "Rejected input is never fatal: it is counted in NAV_Status and in the summary\n"
+            "printed to stderr.\n");
 }
 
 /* parse an unsigned decimal in [lo, hi]; 0 on success */
@@ -58,6 +77,7 @@ static int parse_u16(const char *s, unsigned lo, unsigned hi, uint16_t *out)
 int main(int argc, char **argv)
 {
     const char *in_path = NULL, *out_path = NULL, *nvm_path = NULL, *iface = NULL;
+    const char *live_if = NULL;
     app_config_t cfg = app_default_config();
     int nav_rate_given = 0;
 
@@ -72,6 +92,9 @@ int main(int argc, char **argv)
             bad = 1;
         } else if (strcmp(a, "--can-log") == 0) {
             in_path = v;
+        } else if (strcmp(a, "--can") == 0) {
+            live_if = v;
+            bad = strlen(v) == 0 || strlen(v) > 15;
         } else if (strcmp(a, "--out") == 0) {
             out_path = v;
         } else if (strcmp(a, "--nvm") == 0) {
@@ -99,8 +122,9 @@ int main(int argc, char **argv)
         }
         i++;
     }
-    if (in_path == NULL || out_path == NULL) {
-        fprintf(stderr, "navecu: --can-log and --out are required (see --help)\n");
+    if ((in_path == NULL) == (live_if == NULL) || (in_path != NULL && out_path == NULL)) {
+        fprintf(stderr, "navecu: give either --can-log IN --out OUT, or --can IFACE "
+                        "(see --help)\n");
         return 2;
     }
     if (!nav_rate_given && cfg.nav_rate_hz > cfg.imu_rate_hz) {
@@ -113,7 +137,19 @@ int main(int argc, char **argv)
 
     static hal_t hal;
     static app_t app;
-    if (hal_linux_open(&hal, in_path, out_path, nvm_path) != 0) {
+    if (app_init(&app, &cfg) != 0) {
+        fprintf(stderr, "navecu: invalid configuration\n");
+        return 2;
+    }
+    if (live_if != NULL) {
+        uint32_t ids[HAL_SOCKETCAN_MAX_FILTERS];
+        const size_t n_ids = app_rx_ids(ids, HAL_SOCKETCAN_MAX_FILTERS);
+        if (hal_socketcan_open(&hal, live_if, ids, n_ids, out_path, nvm_path) != 0) {
+            fprintf(stderr, "navecu: cannot open CAN interface '%s': %s\n", live_if,
+                    strerror(errno));
+            return 1;
+        }
+    } else if (hal_linux_open(&hal, in_path, out_path, nvm_path) != 0) {
         fprintf(stderr, "navecu: cannot open '%s' or '%s': %s\n", in_path, out_path,
                 strerror(errno));
         return 1;
@@ -121,28 +157,46 @@ int main(int argc, char **argv)
     if (iface != NULL) {
         hal_linux_set_iface(&hal, iface);
     }
-    if (app_init(&app, &cfg) != 0) {
-        fprintf(stderr, "navecu: invalid configuration\n");
-        hal_linux_close(&hal);
-        return 2;
-    }
 
     unsigned long frames_in = 0;
     int rc;
     hal_can_frame_t f;
-    while ((rc = hal_can_receive(&hal, &f)) != HAL_ENODATA) {
-        if (rc == 0) {
-            frames_in++;
-            app_handle_frame(&app, &hal, &f);
+    if (live_if != NULL) {
+        struct sigaction sa;
+        memset(&sa, 0, sizeof sa);
+        sa.sa_handler = on_signal;
+        sigaction(SIGINT, &sa, NULL);
+        sigaction(SIGTERM, &sa, NULL);
+        fprintf(stderr, "navecu: running on %s until SIGINT/SIGTERM\n", live_if);
+        while (!stop_requested) {
+            if (hal_socketcan_wait(&hal, 20) < 0) {
+                fprintf(stderr, "navecu: poll failed on %s: %s\n", live_if, strerror(errno));
+                break;
+            }
+            while ((rc = hal_can_receive(&hal, &f)) == 0) {
+                frames_in++;
+                app_handle_frame(&app, &hal, &f);
+            }
             app_poll(&app, &hal);
-        } else if (rc != HAL_EAGAIN) {
-            fprintf(stderr, "navecu: read error on '%s'\n", in_path);
-            hal_linux_close(&hal);
-            return 1;
+            hal_watchdog_kick(&hal);
         }
-        hal_watchdog_kick(&hal);
+    } else {
+        while ((rc = hal_can_receive(&hal, &f)) != HAL_ENODATA) {
+            if (rc == 0) {
+                frames_in++;
+                app_handle_frame(&app, &hal, &f);
+                app_poll(&app, &hal);
+            } else if (rc != HAL_EAGAIN) {
+                fprintf(stderr, "navecu: read error on '%s'\n", in_path);
+                hal_linux_close(&hal);
+                return 1;
+            }
+            hal_watchdog_kick(&hal);
+        }
     }
     app.health.log_line_bad = hal_can_rx_malformed(&hal); /* lines after the last frame */
+    const unsigned long can_err = hal_socketcan_error_frames(&hal);
+    const unsigned long can_io = hal_socketcan_io_errors(&hal);
     hal_linux_close(&hal);
 
     const app_health_t *h = &app.health;
@@ -163,5 +217,10 @@ int main(int argc, char **argv)
             (unsigned long)h->imu_lost, (unsigned long)h->bad_value,
             (unsigned long)h->gnss_rejected, (unsigned long)h->cmd_rejected,
             (unsigned long)h->nav_rejected, (unsigned long)h->time_jumps);
+    if (live_if != NULL) {
+        fprintf(stderr, "navecu: CAN error frames %lu, socket errors %lu, send errors %lu\n",
+                can_err, can_io, (unsigned long)app.send_errors);
+        return 0; /* a live bus may refuse frames (interface down): counted, not fatal */
+    }
     return app.send_errors != 0 ? 1 : 0;
 }

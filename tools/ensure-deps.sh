@@ -8,6 +8,10 @@ need=()
 command -v cc >/dev/null 2>&1 || need+=(gcc)
 command -v make >/dev/null 2>&1 || need+=(make)
 command -v arm-none-eabi-gcc >/dev/null 2>&1 || need+=(gcc-arm-none-eabi libnewlib-arm-none-eabi)
+# live CAN tests: real SocketCAN vcan inside User-Mode Linux (docs/PLATFORM notes), can-utils
+command -v linux.uml >/dev/null 2>&1 || [ -x /usr/bin/linux ] || need+=(user-mode-linux)
+command -v insmod >/dev/null 2>&1 || need+=(kmod)
+command -v cansend >/dev/null 2>&1 || need+=(can-utils)
 
 if [ ${#need[@]} -eq 0 ]; then
     exit 0

@@ -737,3 +737,19 @@ void app_poll(app_t *a, hal_t *hal)
         emit_status(a, hal);
     }
 }
+
+size_t app_rx_ids(uint32_t *ids, size_t max)
+{
+    static const uint32_t rx[] = {
+        NAVECU_CAN_IMU_RATE_FRAME_ID,        NAVECU_CAN_IMU_ACCEL_FRAME_ID,
+        NAVECU_CAN_WHEEL_SPEEDS_FRAME_ID,    NAVECU_CAN_GNSS_POSITION_FRAME_ID,
+        NAVECU_CAN_GNSS_VELOCITY_FRAME_ID,   NAVECU_CAN_GNSS_STATUS_FRAME_ID,
+        NAVECU_CAN_GNSS_HEIGHT_FRAME_ID,     NAVECU_CAN_CMD_KNOWN_POSITION_FRAME_ID,
+        NAVECU_CAN_CMD_CONTROL_FRAME_ID,     NAVECU_CAN_CMD_INITIAL_ATTITUDE_FRAME_ID,
+    };
+    const size_t n = sizeof rx / sizeof rx[0];
+    for (size_t i = 0u; i < n && i < max; i++) {
+        ids[i] = rx[i];
+    }
+    return n;
+}

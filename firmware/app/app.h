@@ -15,6 +15,7 @@
 #ifndef NAVECU_APP_H
 #define NAVECU_APP_H
 
+#include <stddef.h>
 #include <stdint.h>
 
 #include "e2e.h"
@@ -127,6 +128,10 @@ int app_init(app_t *app, const app_config_t *cfg);
 /* Process one received frame; may send frames through hal. Never fails: whatever is
  * wrong with the frame is counted in app->health. */
 void app_handle_frame(app_t *app, hal_t *hal, const hal_can_frame_t *frame);
+
+/* The CAN identifiers the application receives (for receive filters): writes up to max
+ * of them to ids and returns how many there are. */
+size_t app_rx_ids(uint32_t *ids, size_t max);
 
 /* Call from the main loop (after each frame, or on a timer): while no IMU data arrives,
  * NAV_Status goes on at its rate on the HAL clock with the IMU_STALE flag. */

@@ -6,6 +6,7 @@
  * on the locale.
  */
 #include "hal_linux.h"
+#include "hal_socketcan.h"
 
 #include <errno.h>
 #include <inttypes.h>
@@ -232,6 +233,9 @@ int hal_can_receive(hal_t *hal, hal_can_frame_t *f)
     if (hal == NULL || f == NULL) {
         return HAL_EINVAL;
     }
+    if (hal->can_fd >= 0) {
+        return hal_socketcan_receive(hal, f);
+    }
     if (hal->rx == NULL || hal->rx_eof != 0u) {
         return HAL_ENODATA;
     }
@@ -284,7 +288,7 @@ uint32_t hal_can_rx_malformed(const hal_t *hal)
 
 uint64_t hal_time_us(const hal_t *hal)
 {
-    return hal->t_us;
+    return hal->can_fd >= 0 ? hal_socketcan_time_us() : hal->t_us;
 }
 
 /* write v as `digits` uppercase hex digits at p; returns p + digits */
@@ -306,12 +310,19 @@ int hal_can_send(hal_t *hal, const hal_can_frame_t *f)
         f->id > (f->extended != 0u ? EXT_ID_MAX : STD_ID_MAX)) {
         return HAL_EINVAL;
     }
+    if (hal->can_fd >= 0) {
+        const int rc = hal_socketcan_send(hal, f);
+        if (rc != 0) {
+            return rc;
+        }
+    }
     if (hal->tx == NULL) {
         hal->tx_frames = sat_inc_u32(hal->tx_frames);
         return 0;
     }
+    const uint64_t now_us = hal_time_us(hal);
     const int head = snprintf(line, sizeof line, "(%010" PRIu64 ".%06" PRIu64 ") %s ",
-                              hal->t_us / US_PER_S, hal->t_us % US_PER_S, hal->iface);
+                              now_us / US_PER_S, now_us % US_PER_S, hal->iface);
     if (head < 0 || (size_t)head >= sizeof line) {
         return HAL_EIO; /* cannot happen: the buffer holds the longest line */
     }
@@ -435,6 +446,7 @@ int hal_linux_open(hal_t *hal, const char *rx_log_path, const char *tx_log_path,
         return HAL_EINVAL;
     }
     memset(hal, 0, sizeof *hal);
+    hal->can_fd = -1;
     memcpy(hal->iface, default_iface, sizeof default_iface);
     memset(hal->nvm, 0xFF, sizeof hal->nvm);
 
@@ -466,6 +478,7 @@ void hal_linux_close(hal_t *hal)
     if (hal == NULL) {
         return;
     }
+    hal_socketcan_close(hal);
     if (hal->rx != NULL) {
         (void)fclose(hal->rx);
         hal->rx = NULL;

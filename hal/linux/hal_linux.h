@@ -52,6 +52,9 @@ struct hal {
     char iface[HAL_LINUX_IFACE_MAX + 1u]; /* interface name written in the TX log */
     char line[HAL_LINUX_LINE_MAX];        /* RX line buffer, not NUL-terminated */
     uint8_t nvm[HAL_LINUX_NVM_SIZE];      /* the NVM region (mirror of nvm_file) */
+    int can_fd;               /* live SocketCAN socket (hal_socketcan.c); -1: log replay */
+    uint32_t can_error_frames; /* CAN error frames received on the socket */
+    uint32_t can_io_errors;   /* failed socket reads/writes (interface down, queue full) */
 };
 
 /*

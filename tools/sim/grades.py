@@ -1,6 +1,6 @@
 """Free-inertial error by IMU grade, against seed 003's Table 2 (`make grades`).
 
-    python -m tools.sim.grades [--seeds 3] [--out out/grades]
+    python -m tools.sim.grades [--seeds 8] [--out out/grades]
 
 For each of seed 003's five grades, the IMU is described by Table 1 alone (`table1_spec`):
 turn-on biases and white noise, and nothing Table 1 does not give (scale factor,
@@ -118,8 +118,17 @@ def run_one(grade: str, seed: int, duration_s: float, tmp: Path, navecu: str) ->
 
 
 def median_or_none(xs):
-    xs = [x for x in xs if x is not None]
-    return float(np.median(xs)) if xs else None
+    """Median with 'never' (None) counted as infinitely late; None if the median is."""
+    m = float(np.median([math.inf if x is None else x for x in xs]))
+    return None if math.isinf(m) else m
+
+
+def span(xs):
+    """(min, max) with 'never' as None at the top."""
+    finite = [x for x in xs if x is not None]
+    lo = min(finite) if finite else None
+    hi = None if (not finite or len(finite) < len(xs)) else max(finite)
+    return [lo, hi]
 
 
 def main(argv=None) -> int:
@@ -146,6 +155,8 @@ def main(argv=None) -> int:
             rows.append({"grade": grade,
                          "error_100s_m": median_or_none([r["error_100s_m"] for r in runs]),
                          "time_to_100m_s": median_or_none([r["time_to_100m_s"] for r in runs]),
+                         "error_100s_m_range": span([r["error_100s_m"] for r in runs]),
+                         "time_to_100m_s_range": span([r["time_to_100m_s"] for r in runs]),
                          "paper_error_100s_m": p100, "paper_time_to_100m_s": pt})
     (out / "grades.json").write_text(json.dumps(rows, indent=2))
     (out / "grades_detail.json").write_text(json.dumps(

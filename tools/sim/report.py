@@ -6,7 +6,7 @@
 Writes report.json and three PNG plots (track map, horizontal error, heading error). The
 statistics cover the time the firmware was navigating (NAV_Position present), from the first
 NAV_Position frame to the end of the drive. Errors are horizontal distances on the WGS-84
-ellipsoid (local radii of curvature), heading errors wrapped to (-180, 180] degrees.
+ellipsoid (local radii of curvature), heading errors wrapped to [-180, 180) degrees.
 """
 from __future__ import annotations
 

@@ -104,7 +104,7 @@ def frames(truth, dtheta, dv, wheels, gnss, db, initial_attitude=False):
             "FixType": int(gnss["fix_type"][i]), "NumSatellites": int(gnss["num_sats"][i]),
             "HorizAccuracy": float(min(gnss["hacc_m"][i], 102.3)),
             "VertAccuracy": float(min(gnss["vacc_m"][i], 102.3)), "GnssEpoch": epoch,
-            "TimeOfWeek": round((GPS_TOW0_S + t) % 604800.0, 3)}, t)))
+            "TimeOfWeek": round((GPS_TOW0_S + float(gnss["t_meas_s"][i])) % 604800.0, 3)}, t)))
     return out
 
 
@@ -143,9 +143,12 @@ def main(argv=None) -> int:
     st.done(f"{truth.t_s[-1] / 60:.1f} min, {truth.dist_m[-1] / 1000:.2f} km")
 
     st.start(f"sensors: IMU {imu_name}, GNSS {gnss_name}, odometer")
-    dtheta, dv = sensors.apply_imu(truth, sensors.PRESETS[imu_name], a.seed)
-    wheels = sensors.wheel_speeds(truth, sensors.OdoSpec(), a.seed + 1)
-    gnss = sensors.gnss_epochs(truth, sensors.GNSS_PRESETS[gnss_name], a.seed + 2)
+    # one seed per model, distinct across --seed values
+    dtheta, dv = sensors.apply_imu(truth, sensors.PRESETS[imu_name], 3 * a.seed)
+    odo = sensors.OdoSpec(track_m=truth.vehicle["track_m"],
+                          wheelbase_m=truth.vehicle["wheelbase_m"])
+    wheels = sensors.wheel_speeds(truth, odo, 3 * a.seed + 1)
+    gnss = sensors.gnss_epochs(truth, sensors.GNSS_PRESETS[gnss_name], 3 * a.seed + 2)
     st.done(f"{len(gnss['t_s'])} GNSS epochs")
 
     st.start("CAN encoding")

@@ -1,0 +1,147 @@
+#!/usr/bin/env python3
+"""Run build/host/navecu live on vcan0, replay a log into it, record what it sends.
+
+Run inside a vcan environment (tools/vcan/with_vcan.sh). Prints one JSON line:
+{"mode", "sent", "retries", "replay_s", "recorded", "firmware_summary", "frames": [...]}
+where frames are the recorded 'ID#DATA' strings in order (NAV_* output).
+
+    with_vcan.sh .venv/bin/python tools/vcan/live_check.py --log IN.log --speed 1
+    with_vcan.sh .venv/bin/python tools/vcan/live_check.py --log IN.log --max-rate 3000
+    with_vcan.sh .venv/bin/python tools/vcan/live_check.py --interop
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import can
+
+ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT))
+from tools import can_replay, navecu_can  # noqa: E402
+
+NAV_IDS = list(range(0x300, 0x304)) + [0x310, 0x311]
+
+
+def start_firmware(extra=()):
+    proc = subprocess.Popen([os.environ.get("NAVECU_BIN", str(ROOT / "build/host/navecu")),
+                             "--can", "vcan0", *extra],
+                            stderr=subprocess.PIPE, text=True)
+    line = proc.stderr.readline()
+    if "running on" not in line:
+        raise SystemExit(f"navecu did not start: {line}{proc.stderr.read()}")
+    return proc
+
+
+def stop_firmware(proc) -> str:
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=20)
+    return err.strip()
+
+
+class Recorder(threading.Thread):
+    """Receives NAV_* frames until stopped; keeps 'ID#DATA' strings in order."""
+
+    def __init__(self):
+        super().__init__(daemon=True)
+        filters = [{"can_id": i, "can_mask": 0x7FF, "extended": False} for i in NAV_IDS]
+        self.bus = can.Bus(channel="vcan0", interface="socketcan", can_filters=filters,
+                           receive_own_messages=False)
+        # a Python reader in a UML guest can fall behind for a moment: give the socket room
+        # (SO_RCVBUFFORCE = 33, root only; else the capped SO_RCVBUF)
+        import socket
+        try:
+            self.bus.socket.setsockopt(socket.SOL_SOCKET, 33, 8 << 20)
+        except OSError:
+            self.bus.socket.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 8 << 20)
+        self.frames, self.stop, self.last = [], False, time.monotonic()
+
+    def run(self):
+        while not self.stop:
+            m = self.bus.recv(timeout=0.05)
+            if m is not None:
+                self.frames.append(f"{m.arbitration_id:03X}#{bytes(m.data).hex().upper()}")
+                self.last = time.monotonic()
+        self.bus.shutdown()
+
+    def finish(self, idle_s=1.0):
+        while time.monotonic() - self.last < idle_s:
+            time.sleep(0.05)
+        self.stop = True
+        self.join()
+
+
+def replay_mode(a) -> dict:
+    rec = Recorder()
+    rec.start()
+    fw = start_firmware()
+    r = can_replay.replay(a.log, "vcan0", speed=a.speed, max_rate=a.max_rate)
+    time.sleep(0.2)
+    # the firmware keeps NAV_Status going while the IMU is silent: stop it first, then
+    # let the recorder drain
+    summary = stop_firmware(fw)
+    rec.finish(0.5)
+    return {"mode": "speed" if a.speed else "max_rate", "sent": r["sent"],
+            "retries": r["retries"], "replay_s": r["seconds"], "recorded": len(rec.frames),
+            "firmware_summary": summary, "frames": rec.frames}
+
+
+def interop_mode() -> dict:
+    """cansend commands to the running firmware; candump sees its NAV_Status change."""
+    db = navecu_can.load_db()
+    sender = navecu_can.E2ESender(db)
+    kp = sender.encode("CMD_KnownPosition", {"Latitude": 45.0, "Longitude": 10.0})
+    ctl = sender.encode("CMD_Control", {"Command": 2, "HeadingValid": 1, "Heading": 30.0,
+                                        "Height": 100.0})
+    dump = ROOT / "build" / "interop_candump.log"
+    dump.parent.mkdir(exist_ok=True)
+    fw = start_firmware()
+    cd = subprocess.Popen(["candump", "-L", "vcan0,310:7FF"], stdout=open(dump, "w"))
+    time.sleep(0.3)
+    for msg in (kp, ctl):
+        subprocess.run(["cansend", "vcan0",
+                        f"{msg.arbitration_id:03X}#{bytes(msg.data).hex().upper()}"], check=True)
+    # a few IMU samples so that the firmware's status cycle runs (sample-driven)
+    quant = navecu_can.ImuQuantizer()
+    with can.Bus(channel="vcan0", interface="socketcan") as bus:
+        for k in range(30):
+            rate, accel = quant.signals([0.0, 0.0, 0.0], [0.0, 0.0, 0.098])
+            for m in sender.encode_imu_pair(rate, accel):
+                bus.send(m)
+            time.sleep(0.01)
+    time.sleep(0.3)
+    summary = stop_firmware(fw)
+    cd.terminate()
+    cd.wait()
+    modes = []
+    for line in dump.read_text().splitlines():
+        frame = line.split()[2]
+        data = bytes.fromhex(frame.split("#")[1])
+        sig = db.decode_message(0x310, data, decode_choices=False)
+        if sig["StatusPage"] == 0:
+            modes.append(int(sig["Mode"]))
+    return {"mode": "interop", "status_modes": modes, "firmware_summary": summary}
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--log")
+    g = ap.add_mutually_exclusive_group()
+    g.add_argument("--speed", type=float)
+    g.add_argument("--max-rate", type=float)
+    ap.add_argument("--interop", action="store_true")
+    a = ap.parse_args()
+    res = interop_mode() if a.interop else replay_mode(a)
+    print(json.dumps(res))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
