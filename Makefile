@@ -206,6 +206,11 @@ $(BUILD)/%/tests/study_numerics: $(BUILD)/%/f64/tests/study_numerics.o $(BUILD)/
 vcan:
 	./tools/vcan/setup_vcan.sh
 
+# benchmark, not a test: IMU frame -> NAV frame latency over vcan (out/bench/latency_vcan.json)
+.PHONY: bench-latency
+bench-latency: venv $(BUILD)/host/navecu
+	./tools/bench/latency_vcan.sh 60
+
 # ---- the drive simulator (tools/sim): scenario -> sensors -> CAN log -> firmware -> report
 SCENARIO ?= default
 sim: deps venv $(BUILD)/host/navecu

@@ -86,3 +86,17 @@ def test_cansend_candump_interop():
     r = live("--interop")
     # CMD_KnownPosition + CMD_Control SetInitialPosition sent with cansend: levelling (1)
     assert r["status_modes"] and all(m == 1 for m in r["status_modes"]), r
+
+
+def test_replay_killed_link_down_up_restart(logs):
+    """Replay half the log, stop it, take vcan0 down and up, replay the rest: the firmware
+    keeps running, reports the silence (IMU-stale status) and the gap (IMU samples lost,
+    Fault: a 2-s gap is beyond what it bridges), and counts the refused sends."""
+    log, _ = logs["short"]
+    r = live("--robust", "--log", str(log))
+    print({k: v for k, v in r.items()})
+    assert r["alive_after_down_up"] and r["alive"]
+    assert r["stale_status_frames"] >= 5
+    c = counters(r["firmware_summary"])
+    assert c["imu lost"] >= 100 and c["time jumps"] >= 1
+    assert "mode: fault" in r["firmware_summary"]

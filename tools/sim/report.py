@@ -197,7 +197,7 @@ def summary_table(rep: dict) -> str:
         return "n/a" if x is None else f"{x:.2f} {unit}"
 
     lines += [f"horizontal error: rms {f(h['rms'])}, p95 {f(h['p95'])}, max {f(h['max'])}, "
-              f"final {f(h['final'])} ({rep['final_error_pct_of_distance']:.2f} % of distance)",
+              f"final {f(h['final'])} ({f(rep['final_error_pct_of_distance'], '%')} of distance)",
               f"heading error:    rms {f(rep['heading_error_deg']['rms'], 'deg')}, "
               f"max {f(rep['heading_error_deg']['max'], 'deg')}"]
     for o in rep["outages"]:

@@ -8,6 +8,8 @@ where frames are the recorded 'ID#DATA' strings in order (NAV_* output).
     with_vcan.sh .venv/bin/python tools/vcan/live_check.py --log IN.log --speed 1
     with_vcan.sh .venv/bin/python tools/vcan/live_check.py --log IN.log --max-rate 3000
     with_vcan.sh .venv/bin/python tools/vcan/live_check.py --interop
+    with_vcan.sh .venv/bin/python tools/vcan/live_check.py --latency --log IN.log
+    with_vcan.sh .venv/bin/python tools/vcan/live_check.py --robust --log IN.log
 """
 from __future__ import annotations
 
@@ -30,7 +32,7 @@ from tools import can_replay, navecu_can  # noqa: E402
 NAV_IDS = list(range(0x300, 0x304)) + [0x310, 0x311]
 
 
-def start_firmware(extra=()):
+def start_firmware(extra=()):  # noqa: D103
     proc = subprocess.Popen([os.environ.get("NAVECU_BIN", str(ROOT / "build/host/navecu")),
                              "--can", "vcan0", *extra],
                             stderr=subprocess.PIPE, text=True)
@@ -47,11 +49,13 @@ def stop_firmware(proc) -> str:
 
 
 class Recorder(threading.Thread):
-    """Receives NAV_* frames until stopped; keeps 'ID#DATA' strings in order."""
+    """Receives NAV_* frames (and extra_ids) until stopped; keeps 'ID#DATA' strings in
+    order and the kernel receive timestamps."""
 
-    def __init__(self):
+    def __init__(self, extra_ids=()):
         super().__init__(daemon=True)
-        filters = [{"can_id": i, "can_mask": 0x7FF, "extended": False} for i in NAV_IDS]
+        filters = [{"can_id": i, "can_mask": 0x7FF, "extended": False}
+                   for i in NAV_IDS + list(extra_ids)]
         self.bus = can.Bus(channel="vcan0", interface="socketcan", can_filters=filters,
                            receive_own_messages=False)
         # a Python reader in a UML guest can fall behind for a moment: give the socket room
@@ -61,13 +65,18 @@ class Recorder(threading.Thread):
             self.bus.socket.setsockopt(socket.SOL_SOCKET, 33, 8 << 20)
         except OSError:
             self.bus.socket.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 8 << 20)
-        self.frames, self.stop, self.last = [], False, time.monotonic()
+        self.frames, self.times, self.stop, self.last = [], [], False, time.monotonic()
 
     def run(self):
         while not self.stop:
-            m = self.bus.recv(timeout=0.05)
+            try:
+                m = self.bus.recv(timeout=0.05)
+            except can.CanOperationError:  # the interface went down: keep listening
+                time.sleep(0.05)
+                continue
             if m is not None:
                 self.frames.append(f"{m.arbitration_id:03X}#{bytes(m.data).hex().upper()}")
+                self.times.append(m.timestamp)
                 self.last = time.monotonic()
         self.bus.shutdown()
 
@@ -130,6 +139,65 @@ def interop_mode() -> dict:
     return {"mode": "interop", "status_modes": modes, "firmware_summary": summary}
 
 
+def latency_mode(a) -> dict:
+    """Kernel receive time of each IMU_Accel (which completes an IMU sample) to that of the
+    NAV_Position it causes, both stamped by the recorder's socket, at real-time replay."""
+    rec = Recorder(extra_ids=[0x101])
+    rec.start()
+    fw = start_firmware(["--level-s", "1"])
+    can_replay.replay(a.log, "vcan0", speed=1.0)
+    time.sleep(0.2)
+    stop_firmware(fw)
+    rec.finish(0.5)
+    lat, last_imu = [], None
+    for f, t in zip(rec.frames, rec.times):
+        if f.startswith("101#"):
+            last_imu = t
+        elif f.startswith("300#") and last_imu is not None:
+            lat.append((t - last_imu) * 1e6)
+    lat.sort()
+    q = (lambda p: lat[min(len(lat) - 1, int(p * len(lat)))]) if lat else (lambda p: None)
+    return {"mode": "latency", "n": len(lat), "p50_us": q(0.50), "p99_us": q(0.99),
+            "max_us": lat[-1] if lat else None}
+
+
+def robust_mode(a) -> dict:
+    """Replay half the log, kill the replay, take vcan0 down and up, replay the rest: the
+    firmware keeps running, NAV_Status shows the gap (IMU stale), outputs resume."""
+    msgs = list(can.LogReader(a.log))
+    half = len(msgs) // 2
+    first, second = Path("/tmp/robust_a.log"), Path("/tmp/robust_b.log")
+    navecu_can.write_candump(first, msgs[:half])
+    navecu_can.write_candump(second, msgs[half:])
+    rec = Recorder()
+    rec.start()
+    fw = start_firmware(["--level-s", "1"])
+    can_replay.replay(str(first), "vcan0", max_rate=3000)
+    n_before = len(rec.frames)
+    time.sleep(1.5)                         # the replay is gone: IMU silent
+    subprocess.run(["ip", "link", "set", "vcan0", "down"], check=True)
+    time.sleep(0.5)
+    subprocess.run(["ip", "link", "set", "vcan0", "up"], check=True)
+    alive_after_down_up = fw.poll() is None
+    can_replay.replay(str(second), "vcan0", max_rate=3000)
+    time.sleep(0.3)
+    alive = fw.poll() is None
+    summary = stop_firmware(fw)
+    rec.finish(0.5)
+    db = navecu_can.load_db()
+    stale = 0
+    for f in rec.frames[n_before:]:
+        fid, data = f.split("#")
+        if fid == "310":
+            sig = db.decode_message(0x310, bytes.fromhex(data), decode_choices=False)
+            if sig["StatusPage"] == 0 and int(sig["HealthFlags"]) & 0x1:
+                stale += 1
+    pos_after = sum(1 for f in rec.frames[n_before:] if f.startswith("300#"))
+    return {"mode": "robust", "alive_after_down_up": alive_after_down_up, "alive": alive,
+            "stale_status_frames": stale, "nav_position_after_restart": pos_after,
+            "firmware_summary": summary}
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--log")
@@ -137,8 +205,17 @@ def main() -> int:
     g.add_argument("--speed", type=float)
     g.add_argument("--max-rate", type=float)
     ap.add_argument("--interop", action="store_true")
+    ap.add_argument("--latency", action="store_true")
+    ap.add_argument("--robust", action="store_true")
     a = ap.parse_args()
-    res = interop_mode() if a.interop else replay_mode(a)
+    if a.interop:
+        res = interop_mode()
+    elif a.latency:
+        res = latency_mode(a)
+    elif a.robust:
+        res = robust_mode(a)
+    else:
+        res = replay_mode(a)
     print(json.dumps(res))
     return 0
 
