@@ -27,57 +27,26 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import navecu_can  # noqa: E402
 
-# WGS-84, NIMA TR8350.2 (the values of firmware/nav/earth.h)
-WGS84_A_M = 6378137.0
-WGS84_F = 1.0 / 298.257223563
-WGS84_E2 = 6.69437999014e-3
-WGS84_OMEGA_IE_RPS = 7.292115e-5
-WGS84_GAMMA_E_MPS2 = 9.7803253359
-WGS84_SOMIGLIANA_K = 0.00193185265241
-WGS84_M = 0.00344978650684
+from sim import trajectory  # noqa: E402  (the simulator's WGS-84 model: one copy)
 
 WHEEL_RATE_HZ = 50.0
 
 
 def normal_gravity(lat_rad: float, h_m: float) -> float:
-    """Normal gravity magnitude (m/s^2), the formula of earth.c earth_gravity (in double):
-    Somigliana (TR8350.2 eq. 4-1) times the height series (eq. 4-3)."""
-    s2 = math.sin(lat_rad) ** 2
-    g0 = WGS84_GAMMA_E_MPS2 * (1.0 + WGS84_SOMIGLIANA_K * s2) / math.sqrt(1.0 - WGS84_E2 * s2)
-    inv_a = 1.0 / WGS84_A_M
-    k1 = 2.0 * inv_a * (1.0 + WGS84_F + WGS84_M - 2.0 * WGS84_F * s2)
-    k2 = 3.0 * inv_a * inv_a
-    return g0 * (1.0 - k1 * h_m + k2 * h_m * h_m)
+    """Normal gravity magnitude (m/s^2) as firmware/nav/earth.c computes it (TR8350.2 eqs.
+    4-1, 4-3), from tools/sim/trajectory.py."""
+    return float(trajectory.gravity(math.sin(lat_rad), h_m))
 
 
 def earth_rate_n(lat_rad: float) -> np.ndarray:
     """Earth rate in ENU: (0, U cos lat, U sin lat) rad/s."""
-    return np.array([0.0, WGS84_OMEGA_IE_RPS * math.cos(lat_rad),
-                     WGS84_OMEGA_IE_RPS * math.sin(lat_rad)])
-
-
-def _rx(a: float) -> np.ndarray:
-    c, s = math.cos(a), math.sin(a)
-    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
-
-
-def _ry(a: float) -> np.ndarray:
-    c, s = math.cos(a), math.sin(a)
-    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
-
-
-def _rz(a: float) -> np.ndarray:
-    c, s = math.cos(a), math.sin(a)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    return trajectory.earth_rate_n(lat_rad)
 
 
 def c_bn(roll_rad: float, pitch_rad: float, heading_rad: float) -> np.ndarray:
-    """Body-to-navigation DCM, v_n = C_bn v_b. Euler sequence 3-1-2 (docs/frames.md):
-    C_bn = Rz(-H) Rx(pitch) Ry(roll), R. the active rotation matrices about the axes;
-    heading H clockwise from north to the forward (y) axis (hence -H about up), pitch nose
-    up positive (about x right), roll right side down positive (about y forward).
-    Third row = (-cos p sin r, sin p, cos p cos r); y column = (sin H cos p, cos H cos p, sin p)."""
-    return _rz(-heading_rad) @ _rx(pitch_rad) @ _ry(roll_rad)
+    """Body-to-navigation DCM, v_n = C_bn v_b, Euler 3-1-2 of docs/frames.md:
+    C_bn = Rz(-H) Rx(pitch) Ry(roll)."""
+    return trajectory.quat_to_dcm(trajectory.quat_from_euler(roll_rad, pitch_rad, heading_rad))
 
 
 def stationary_increments(lat_deg, height_m, roll_deg, pitch_deg, heading_deg, dt_s):
