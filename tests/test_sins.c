@@ -146,6 +146,17 @@ static void test_vertical_channel_diverges(void **state)
     assert_near(w_v_meas, w_v_expect, 0.02 * w_v_expect);
 }
 
+/* the same motion with and without the two-sample coning/sculling corrections */
+static void run_with_and_without(run_spec_t *spec, run_result_t *with, run_result_t *without)
+{
+    spec->coning_sculling = 1;
+    NAV_RUN(spec, with);
+    spec->coning_sculling = 0;
+    NAV_RUN(spec, without);
+    assert_int_equal(with->rc, 0);
+    assert_int_equal(without->rc, 0);
+}
+
 /*
  * GIVEN a classical coning motion (half-angle 1 deg, 2 Hz) sampled at 100 Hz, 60 s
  * WHEN the core integrates it with and without the two-sample coning correction
@@ -160,12 +171,7 @@ static void test_coning_compensation(void **state)
     spec.kin = kin_cone;
     spec.ctx = &cone;
     run_result_t with, without;
-    spec.coning_sculling = 1;
-    NAV_RUN(&spec, &with);
-    spec.coning_sculling = 0;
-    NAV_RUN(&spec, &without);
-    assert_int_equal(with.rc, 0);
-    assert_int_equal(without.rc, 0);
+    run_with_and_without(&spec, &with, &without);
     print_message("[" VARIANT "] coning 60 s: attitude error %.3g rad without correction, "
                   "%.3g rad with (ratio %.0f)\n", without.final_att_err_rad,
                   with.final_att_err_rad, without.final_att_err_rad / with.final_att_err_rad);
@@ -302,12 +308,7 @@ static void test_sculling_compensation(void **state)
     const scull_t scull = {2.0, 2.0 * 2.0 * 3.14159265358979323846, 2.0 * DEG};
     run_spec_t spec = run_spec_default(kin_scull, &scull, 60.0, 100.0);
     run_result_t with, without;
-    spec.coning_sculling = 1;
-    NAV_RUN(&spec, &with);
-    spec.coning_sculling = 0;
-    NAV_RUN(&spec, &without);
-    assert_int_equal(with.rc, 0);
-    assert_int_equal(without.rc, 0);
+    run_with_and_without(&spec, &with, &without);
     print_message("[" VARIANT "] sculling 60 s: max horizontal error %.3g m without correction, "
                   "%.3g m with (ratio %.0f)\n", without.max_horiz_err_m, with.max_horiz_err_m,
                   without.max_horiz_err_m / with.max_horiz_err_m);

@@ -520,15 +520,24 @@ static void on_gnss_status(app_t *a, const hal_can_frame_t *f)
 
 /* ------------------------------------------------------------- commands ---- */
 
+/* A command's alive counter: CMD_MAX_DELTA - 1 lost frames are tolerated; a larger step is
+ * an old or foreign frame (E2E "wrong sequence"): dropped, counted, and the counter
+ * resynchronizes on it. Returns 1 to accept the command. */
+static int command_counter_ok(app_t *a, e2e_counter_t *c, uint8_t counter)
+{
+    const int step = e2e_counter_step(c, counter);
+    if (step <= 0 || step > CMD_MAX_DELTA) {
+        reject(a, &a->health.bad_counter);
+        return 0;
+    }
+    return 1;
+}
+
 static void on_cmd_control(app_t *a, hal_t *hal, const hal_can_frame_t *f)
 {
     struct navecu_can_cmd_control_t m;
     navecu_can_cmd_control_unpack(&m, f->data, 8u);
-    /* Commands tolerate CMD_MAX_DELTA - 1 lost frames; a larger step is an old or foreign
-     * frame (E2E "wrong sequence"): dropped, and the counter resynchronizes on it. */
-    const int step = e2e_counter_step(&a->rx_cmd, m.cmd_counter);
-    if (step <= 0 || step > CMD_MAX_DELTA) {
-        reject(a, &a->health.bad_counter);
+    if (!command_counter_ok(a, &a->rx_cmd, m.cmd_counter)) {
         return;
     }
     switch (m.command) {
@@ -574,9 +583,7 @@ static void on_cmd_initial_attitude(app_t *a, const hal_can_frame_t *f)
 {
     struct navecu_can_cmd_initial_attitude_t m;
     navecu_can_cmd_initial_attitude_unpack(&m, f->data, 8u);
-    const int step = e2e_counter_step(&a->rx_att, m.att_counter);
-    if (step <= 0 || step > CMD_MAX_DELTA) {
-        reject(a, &a->health.bad_counter);
+    if (!command_counter_ok(a, &a->rx_att, m.att_counter)) {
         return;
     }
     if (!navecu_can_cmd_initial_attitude_init_roll_is_in_range(m.init_roll) ||
