@@ -85,6 +85,8 @@ MEANING = {
     ("NAV_Position", "Longitude"): "navigated longitude",
     ("NAV_Height", "Height"): "navigated " + _HEIGHT,
     ("NAV_Height", "VertAccuracy"): "estimated vertical accuracy, saturated",
+    ("NAV_Height", "TimeOfValidity"): "IMU time of this NAV_* set (samples since the first "
+                                      "IMU sample / IMU rate) in ms, modulo 65536",
     "NavCounter": _NAV_CNT,
     "NavCrc": _E2E_CRC,
     "Roll": "roll, right side down positive",

@@ -129,6 +129,9 @@ static void emit_navigation(app_t *a, hal_t *hal)
     struct navecu_can_nav_height_t h;
     h.height = (int32_t)lsb_div_round(s->pos.h, 10 * GEO_LSB_PER_MM); /* 0.01 m */
     h.vert_accuracy = 255u; /* no error model before the Kalman filter: "unknown" */
+    /* time of validity on the IMU time base, so that a recorder need not trust arrival
+     * times: a vcan recording and a --can-log run carry the same value */
+    h.time_of_validity = (uint16_t)((a->n_samples * 1000u / a->cfg.imu_rate_hz) & 0xFFFFu);
     h.nav_counter = next_tx_counter(a, TX_HEIGHT);
     h.nav_crc = 0u;
     navecu_can_nav_height_pack(d, &h, sizeof d);

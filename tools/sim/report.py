@@ -31,19 +31,38 @@ def radii_m(lat_rad):
 
 
 def read_nav_log(path) -> dict:
-    """Decode NAV_Position / NAV_Attitude / NAV_Velocity / NAV_Status frames of a candump
-    log into arrays keyed by message; each has 't_s' and the signal columns."""
+    """Decode NAV_Position / NAV_Attitude / NAV_Velocity / NAV_Height / NAV_Status frames of
+    a candump log into arrays keyed by message; each has 't_s' and the signal columns.
+
+    't_s' is the firmware's own time of validity (NAV_Height TimeOfValidity, IMU time,
+    unwrapped from its 65.536 s modulus), not the log's timestamps: a recording made over
+    a live bus, at any replay speed, gives the same times as a --can-log run. Each
+    NAV_Position opens a navigation set (Position, Height, Velocity, Attitude) that takes
+    its NAV_Height's time; NAV_Status takes the time of the last set (NaN before one)."""
     db = nc.load_db()
     want = {db.get_message_by_name(n).frame_id: n
             for n in ("NAV_Position", "NAV_Attitude", "NAV_Velocity", "NAV_Height", "NAV_Status")}
     rows = {n: [] for n in want.values()}
+    cycle_rows, t_cycle, last_ms, wraps = [], math.nan, None, 0
     with can.LogReader(str(path)) as reader:
         for msg in reader:
             name = want.get(msg.arbitration_id)
             if name is None:
                 continue
             sig = db.decode_message(msg.arbitration_id, bytes(msg.data), decode_choices=False)
-            sig["t_s"] = msg.timestamp
+            if name == "NAV_Position":
+                cycle_rows = []
+            if name == "NAV_Height":
+                ms = int(sig["TimeOfValidity"])
+                if last_ms is not None and ms < last_ms:
+                    wraps += 1
+                last_ms = ms
+                t_cycle = (wraps * 65536 + ms) / 1000.0
+                for r in cycle_rows:
+                    r["t_s"] = t_cycle
+            sig["t_s"] = t_cycle
+            if name != "NAV_Status":
+                cycle_rows.append(sig)
             rows[name].append(sig)
     out = {}
     for name, lst in rows.items():

@@ -1886,6 +1886,8 @@ int navecu_can_nav_height_pack(
     dst_p[1] |= pack_right_shift_u32(height, 8u, 0xffu);
     dst_p[2] |= pack_right_shift_u32(height, 16u, 0xffu);
     dst_p[3] |= pack_left_shift_u8(src_p->vert_accuracy, 0u, 0xffu);
+    dst_p[4] |= pack_left_shift_u16(src_p->time_of_validity, 0u, 0xffu);
+    dst_p[5] |= pack_right_shift_u16(src_p->time_of_validity, 8u, 0xffu);
     dst_p[6] |= pack_left_shift_u8(src_p->nav_counter, 0u, 0x0fu);
     dst_p[7] |= pack_left_shift_u8(src_p->nav_crc, 0u, 0xffu);
 
@@ -1913,6 +1915,8 @@ int navecu_can_nav_height_unpack(
 
     dst_p->height = (int32_t)height;
     dst_p->vert_accuracy = unpack_right_shift_u8(src_p[3], 0u, 0xffu);
+    dst_p->time_of_validity = unpack_right_shift_u16(src_p[4], 0u, 0xffu);
+    dst_p->time_of_validity |= unpack_left_shift_u16(src_p[5], 8u, 0xffu);
     dst_p->nav_counter = unpack_right_shift_u8(src_p[6], 0u, 0x0fu);
     dst_p->nav_crc = unpack_right_shift_u8(src_p[7], 0u, 0xffu);
 
@@ -1968,6 +1972,28 @@ bool navecu_can_nav_height_vert_accuracy_is_in_range(uint8_t value)
 bool navecu_can_nav_height_vert_accuracy_is_in_phys_range(float value)
 {
     return ((value >= 0.0f) && (value <= 25.5f));
+}
+
+uint16_t navecu_can_nav_height_time_of_validity_encode(float value)
+{
+    return (uint16_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_nav_height_time_of_validity_decode(uint16_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_nav_height_time_of_validity_is_in_range(uint16_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_nav_height_time_of_validity_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 65535.0f));
 }
 
 uint8_t navecu_can_nav_height_nav_counter_encode(float value)
@@ -2899,6 +2925,9 @@ int navecu_can_nav_calibration_pack(
     dst_p[3] |= pack_right_shift_u16(odo_scale_error, 8u, 0xffu);
     dst_p[4] |= pack_left_shift_u8(src_p->cal_valid, 0u, 0x01u);
     dst_p[4] |= pack_left_shift_u8(src_p->cal_stored, 1u, 0x02u);
+    dst_p[4] |= pack_left_shift_u8(src_p->cal_status, 2u, 0x3cu);
+    dst_p[4] |= pack_left_shift_u8(src_p->cal_source, 6u, 0xc0u);
+    dst_p[5] |= pack_left_shift_u8(src_p->cal_count, 0u, 0xffu);
     dst_p[6] |= pack_left_shift_u8(src_p->nav_counter, 0u, 0x0fu);
     dst_p[7] |= pack_left_shift_u8(src_p->nav_crc, 0u, 0xffu);
 
@@ -2925,6 +2954,9 @@ int navecu_can_nav_calibration_unpack(
     dst_p->odo_scale_error = (int16_t)odo_scale_error;
     dst_p->cal_valid = unpack_right_shift_u8(src_p[4], 0u, 0x01u);
     dst_p->cal_stored = unpack_right_shift_u8(src_p[4], 1u, 0x02u);
+    dst_p->cal_status = unpack_right_shift_u8(src_p[4], 2u, 0x3cu);
+    dst_p->cal_source = unpack_right_shift_u8(src_p[4], 6u, 0xc0u);
+    dst_p->cal_count = unpack_right_shift_u8(src_p[5], 0u, 0xffu);
     dst_p->nav_counter = unpack_right_shift_u8(src_p[6], 0u, 0x0fu);
     dst_p->nav_crc = unpack_right_shift_u8(src_p[7], 0u, 0xffu);
 
@@ -3022,6 +3054,68 @@ bool navecu_can_nav_calibration_cal_stored_is_in_range(uint8_t value)
 bool navecu_can_nav_calibration_cal_stored_is_in_phys_range(float value)
 {
     return ((value >= 0.0f) && (value <= 1.0f));
+}
+
+uint8_t navecu_can_nav_calibration_cal_status_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_nav_calibration_cal_status_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_nav_calibration_cal_status_is_in_range(uint8_t value)
+{
+    return (value <= 15u);
+}
+
+bool navecu_can_nav_calibration_cal_status_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 15.0f));
+}
+
+uint8_t navecu_can_nav_calibration_cal_source_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_nav_calibration_cal_source_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_nav_calibration_cal_source_is_in_range(uint8_t value)
+{
+    return (value <= 3u);
+}
+
+bool navecu_can_nav_calibration_cal_source_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 3.0f));
+}
+
+uint8_t navecu_can_nav_calibration_cal_count_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_nav_calibration_cal_count_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_nav_calibration_cal_count_is_in_range(uint8_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_nav_calibration_cal_count_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 255.0f));
 }
 
 uint8_t navecu_can_nav_calibration_nav_counter_encode(float value)

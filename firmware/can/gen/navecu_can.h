@@ -123,11 +123,26 @@ extern "C" {
 #define NAVECU_CAN_CMD_CONTROL_COMMAND_SET_INITIAL_POSITION_CHOICE (2u)
 #define NAVECU_CAN_CMD_CONTROL_COMMAND_STORE_CALIBRATION_CHOICE (3u)
 #define NAVECU_CAN_CMD_CONTROL_COMMAND_ERASE_CALIBRATION_CHOICE (4u)
+#define NAVECU_CAN_CMD_CONTROL_COMMAND_CALIBRATE_HERE_CHOICE (5u)
+#define NAVECU_CAN_CMD_CONTROL_COMMAND_CALIBRATE_AT_GNSS_CHOICE (6u)
 
 #define NAVECU_CAN_NAV_STATUS_MODE_WAIT_INIT_CHOICE (0u)
 #define NAVECU_CAN_NAV_STATUS_MODE_LEVELLING_CHOICE (1u)
-#define NAVECU_CAN_NAV_STATUS_MODE_NAVIGATING_CHOICE (2u)
+#define NAVECU_CAN_NAV_STATUS_MODE_INERTIAL_CHOICE (2u)
 #define NAVECU_CAN_NAV_STATUS_MODE_FAULT_CHOICE (3u)
+#define NAVECU_CAN_NAV_STATUS_MODE_DEAD_RECKONING_CHOICE (4u)
+
+#define NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_NONE_CHOICE (0u)
+#define NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_FROM_NVM_CHOICE (1u)
+#define NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_ONE_POINT_CHOICE (2u)
+#define NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_REFUSED_TOO_CLOSE_CHOICE (3u)
+#define NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_REFUSED_NOT_READY_CHOICE (4u)
+#define NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_NVM_CORRUPT_CHOICE (5u)
+
+#define NAVECU_CAN_NAV_CALIBRATION_CAL_SOURCE_NONE_CHOICE (0u)
+#define NAVECU_CAN_NAV_CALIBRATION_CAL_SOURCE_KNOWN_POSITION_CHOICE (1u)
+#define NAVECU_CAN_NAV_CALIBRATION_CAL_SOURCE_GNSS_CHOICE (2u)
+#define NAVECU_CAN_NAV_CALIBRATION_CAL_SOURCE_FILTER_CHOICE (3u)
 
 /* Frame Names. */
 #define NAVECU_CAN_IMU_RATE_NAME "IMU_Rate"
@@ -196,6 +211,7 @@ extern "C" {
 #define NAVECU_CAN_NAV_POSITION_LONGITUDE_NAME "Longitude"
 #define NAVECU_CAN_NAV_HEIGHT_HEIGHT_NAME "Height"
 #define NAVECU_CAN_NAV_HEIGHT_VERT_ACCURACY_NAME "VertAccuracy"
+#define NAVECU_CAN_NAV_HEIGHT_TIME_OF_VALIDITY_NAME "TimeOfValidity"
 #define NAVECU_CAN_NAV_HEIGHT_NAV_COUNTER_NAME "NavCounter"
 #define NAVECU_CAN_NAV_HEIGHT_NAV_CRC_NAME "NavCrc"
 #define NAVECU_CAN_NAV_VELOCITY_VEL_EAST_NAME "VelEast"
@@ -230,6 +246,9 @@ extern "C" {
 #define NAVECU_CAN_NAV_CALIBRATION_ODO_SCALE_ERROR_NAME "OdoScaleError"
 #define NAVECU_CAN_NAV_CALIBRATION_CAL_VALID_NAME "CalValid"
 #define NAVECU_CAN_NAV_CALIBRATION_CAL_STORED_NAME "CalStored"
+#define NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_NAME "CalStatus"
+#define NAVECU_CAN_NAV_CALIBRATION_CAL_SOURCE_NAME "CalSource"
+#define NAVECU_CAN_NAV_CALIBRATION_CAL_COUNT_NAME "CalCount"
 #define NAVECU_CAN_NAV_CALIBRATION_NAV_COUNTER_NAME "NavCounter"
 #define NAVECU_CAN_NAV_CALIBRATION_NAV_CRC_NAME "NavCrc"
 
@@ -542,7 +561,7 @@ struct navecu_can_cmd_known_position_t {
 /**
  * Signals in message CMD_Control.
  *
- * Commands. Command: 0 none, 1 reset, 2 set initial position (from the last CMD_KnownPosition, Height and Heading here), 3 store calibration, 4 erase calibration.
+ * Commands. Command: 0 none, 1 reset, 2 set initial position (from the last CMD_KnownPosition, Height and Heading here), 3 store calibration, 4 erase calibration, 5 one-point calibration here (the last CMD_KnownPosition is where the car is now), 6 one-point calibration at the next accepted GNSS fix.
  *
  * All signal values are as on the CAN bus.
  */
@@ -669,6 +688,13 @@ struct navecu_can_nav_height_t {
     uint8_t vert_accuracy;
 
     /**
+     * Range: 0..65535 (0..65535 ms)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint16_t time_of_validity;
+
+    /**
      * Range: 0..14 (0..14 -)
      * Scale: 1
      * Offset: 0
@@ -783,7 +809,7 @@ struct navecu_can_nav_status_t {
     uint8_t status_page;
 
     /**
-     * 0 waiting for initial state, 1 levelling, 2 navigating, 3 fault.
+     * 0 waiting for initial state, 1 levelling, 2 inertial only (free SINS is the output), 3 fault, 4 dead reckoning (odometer distance along the SINS heading is the output).
      *
      * Range: 0..15 (0..15 -)
      * Scale: 1
@@ -939,6 +965,33 @@ struct navecu_can_nav_calibration_t {
      * Offset: 0
      */
     uint8_t cal_stored;
+
+    /**
+     * State of the heading/odometer calibration (seed 000 eqs 9-10): 0 none (defaults 0), 1 loaded from NVM at boot, 2 one-point calibration done this trip, 3 last request refused: the point is too close to the base to be informative, 4 last request refused: not navigating, no known point or no odometer, 5 NVM held no valid record (both slots corrupt): defaults in use.
+     *
+     * Range: 0..15 (0..15 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t cal_status;
+
+    /**
+     * Provenance of the estimates in use: 0 none, 1 one-point calibration at a CMD_KnownPosition, 2 one-point calibration at a GNSS fix, 3 the Kalman filter.
+     *
+     * Range: 0..3 (0..3 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t cal_source;
+
+    /**
+     * One-point calibrations done since boot (saturates).
+     *
+     * Range: 0..255 (0..255 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t cal_count;
 
     /**
      * Range: 0..14 (0..14 -)
@@ -3326,6 +3379,46 @@ bool navecu_can_nav_height_vert_accuracy_is_in_phys_range(float value);
  *
  * @return Encoded signal.
  */
+uint16_t navecu_can_nav_height_time_of_validity_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_height_time_of_validity_decode(uint16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_height_time_of_validity_is_in_range(uint16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_height_time_of_validity_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
 uint8_t navecu_can_nav_height_nav_counter_encode(float value);
 
 /**
@@ -4826,6 +4919,126 @@ bool navecu_can_nav_calibration_cal_stored_is_in_range(uint8_t value);
  * @return true if in range, false otherwise.
  */
 bool navecu_can_nav_calibration_cal_stored_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_nav_calibration_cal_status_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_calibration_cal_status_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_calibration_cal_status_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_calibration_cal_status_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_nav_calibration_cal_source_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_calibration_cal_source_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_calibration_cal_source_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_calibration_cal_source_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_nav_calibration_cal_count_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_calibration_cal_count_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_calibration_cal_count_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_calibration_cal_count_is_in_phys_range(float value);
 
 /**
  * Encode given signal by applying scaling and offset.
