@@ -24,16 +24,19 @@ HOST_INC := $(FW_INC) -Ihal/linux -Itests/support
 
 CORE_SRC := $(wildcard firmware/nav/*.c)
 CODEC_GEN := firmware/can/gen/navecu_can.c firmware/can/gen/navecu_can.h
-APP_SRC := firmware/can/e2e.c firmware/can/gen/navecu_can.c firmware/app/app.c
+APP_SRC := firmware/can/e2e.c firmware/can/gen/navecu_can.c firmware/app/app.c \
+           firmware/app/calstore.c
 HAL_LINUX_SRC := hal/linux/hal_linux.c hal/linux/hal_socketcan.c
 SUPPORT_SRC_F64 := tests/support/truth.c tests/support/motions.c
 SUPPORT_SRC_BOTH := tests/support/nav_run.c
 # tests built once per numeric variant (f32 firmware, f64 reference)
-TESTS_VARIANT := test_nav_math test_earth test_sins
+TESTS_VARIANT := test_nav_math test_earth test_sins test_dr
 # tests of the float32 firmware only (application, codec, HAL)
 TESTS_F32 := test_e2e test_codec
 # tests that link both variants themselves
 TESTS_BOTH := test_drive
+# tests of application modules against the in-memory HAL (tests/support/fake_hal.c)
+TESTS_FAKE_HAL := test_app test_calstore
 
 .PHONY: grades
 .PHONY: all test test-c test-plain test-asan test-cross test-python codec codec-check \
@@ -101,7 +104,7 @@ $(foreach t,$(TESTS_BOTH),$(BUILD)/$(1)/tests/$(t)): $(BUILD)/$(1)/tests/%: $(BU
 	@mkdir -p $$(@D)
 	$$(CC) $(2) $$^ -lcmocka -lm -o $$@
 # the application against an in-memory HAL; the Linux HAL on its own
-$(BUILD)/$(1)/tests/test_app: $(BUILD)/$(1)/f32/tests/test_app.o $(BUILD)/$(1)/f32/tests/support/fake_hal.o $$($(1)_LIBS)
+$(foreach t,$(TESTS_FAKE_HAL),$(BUILD)/$(1)/tests/$(t)): $(BUILD)/$(1)/tests/%: $(BUILD)/$(1)/f32/tests/%.o $(BUILD)/$(1)/f32/tests/support/fake_hal.o $$($(1)_LIBS)
 	@mkdir -p $$(@D)
 	$$(CC) $(2) $$^ -lcmocka -lm -o $$@
 $(BUILD)/$(1)/tests/test_hal_linux: $(BUILD)/$(1)/f32/tests/test_hal_linux.o $(BUILD)/$(1)/libhal_linux.a
@@ -109,7 +112,7 @@ $(BUILD)/$(1)/tests/test_hal_linux: $(BUILD)/$(1)/f32/tests/test_hal_linux.o $(B
 	$$(CC) $(2) $$^ -lcmocka -lm -o $$@
 
 $(1)_TEST_BINS := $(foreach t,$(TESTS_VARIANT),$(BUILD)/$(1)/tests/$(t)_f32 $(BUILD)/$(1)/tests/$(t)_f64) \
-                  $(foreach t,$(TESTS_F32) $(TESTS_BOTH) test_app test_hal_linux,$(BUILD)/$(1)/tests/$(t))
+                  $(foreach t,$(TESTS_F32) $(TESTS_BOTH) $(TESTS_FAKE_HAL) test_hal_linux,$(BUILD)/$(1)/tests/$(t))
 endef
 
 $(eval $(call FLAVOUR,host,))
@@ -219,6 +222,17 @@ sim: deps venv $(BUILD)/host/navecu
 # free-inertial error by IMU grade beside seed 003's Table 2 (about 6 minutes)
 grades: deps venv $(BUILD)/host/navecu
 	$(PY) -m tools.sim.grades
+
+# ---- the recorded Kingston 2008 drive (tools/kingston, docs/kingston.md): CSVs -> CAN log
+# -> firmware -> report against the SPAN reference. MODE=dr: no GNSS frames, out/kingston-dr/;
+# MODE=full (default): GNSS with OUTAGES ("a-b,c-d" s, every:P:L, none; default: 60 s every
+# 240 s, from 240 s on), out/kingston/
+.PHONY: kingston
+MODE ?= full
+OUTAGES ?= default
+kingston: deps venv $(BUILD)/host/navecu
+	$(PY) -m tools.kingston.run --mode $(MODE) --outages "$(OUTAGES)" \
+	  --out $(if $(filter dr,$(MODE)),out/kingston-dr,out/kingston)
 
 clean:
 	rm -rf $(BUILD)

@@ -48,11 +48,35 @@ uint32_t hal_can_rx_malformed(const hal_t *hal);
  * that and does not depend on it: its time base is the IMU sample counter). */
 uint64_t hal_time_us(const hal_t *hal);
 
-/* Non-volatile storage: one region of hal_nvm_size() bytes. Reads of erased bytes give
- * 0xFF. Writes may need a prior erase on real flash; callers erase, then write. */
+/*
+ * Non-volatile storage: one region of hal_nvm_size() bytes made of
+ * hal_nvm_size() / hal_nvm_sector_size() equal sectors (at least 2); sector k holds bytes
+ * [k * S, (k + 1) * S) with S = hal_nvm_sector_size(). The region behaves like NOR flash,
+ * and the host and test HALs model it so that a caller which works there works on flash:
+ * - erased bytes read 0xFF; only whole sectors can be erased;
+ * - a write only clears bits: each byte becomes (old AND new). The write returns 0 when
+ *   every byte then reads back as written; if some bit would have to go from 0 to 1 (a
+ *   write over programmed bytes without an erase) it returns HAL_EIO and the bytes hold
+ *   old AND new (a program-verify failure). Portable callers program each byte at most
+ *   once between erases; any offset and length are allowed (no alignment rule);
+ * - a reset or power loss during a write leaves each byte of the range anywhere between
+ *   its old value and old AND new, in any order; during an erase, the sector's contents
+ *   are unspecified. Only what was written before the interrupted call is certain
+ *   (firmware/app/calstore.h builds its power-safe record on this).
+ * - erase and write block until the flash is done: on a single-bank flash (STM32F405)
+ *   a sector erase takes several hundred milliseconds, during which code fetches from
+ *   flash stall (docs/porting.md). hal_nvm_read never blocks for long.
+ * read, write and the erases return 0, HAL_EINVAL (a range past the end, a NULL buffer
+ * with len > 0, a sector number >= the sector count, a NULL hal) or HAL_EIO (a flash or
+ * file error).
+ */
 size_t hal_nvm_size(const hal_t *hal);
+size_t hal_nvm_sector_size(const hal_t *hal);
 int hal_nvm_read(hal_t *hal, size_t offset, void *buf, size_t len);
 int hal_nvm_write(hal_t *hal, size_t offset, const void *buf, size_t len);
+/* Erase one sector (every byte 0xFF). */
+int hal_nvm_erase_sector(hal_t *hal, size_t sector);
+/* Erase the whole region, sector by sector. */
 int hal_nvm_erase(hal_t *hal);
 
 /* Kick the watchdog. Must be called at least every 100 ms by the main loop. */

@@ -53,6 +53,13 @@ static void usage(FILE *out)
             "  --nvm FILE           file backing the non-volatile memory (default: none, in\n"
             "                       memory only)\n"
             "  --iface NAME         interface name written in OUT.log (default can0)\n"
+            "  --odo-axle AXLE      wheels measuring the distance: rear (default) or front\n"
+            "                       (docs/odometry.md)\n"
+            "  --cal-min-base-m X   refuse a one-point calibration closer than X m to its\n"
+            "                       base (default 2000)\n"
+            "  --gyro-arw-dpsh X    gyro angle random walk, deg/sqrt(h) (default 0.003)\n"
+            "  --gyro-bias-dph X    gyro turn-on bias, 1 sigma, deg/h (default 0.015); both\n"
+            "                       weigh the gyro bias estimate at standstill\n"
             "  --help               this text\n"
             "\n"
             "Exit status: 0 when the whole log was processed (or the live run was stopped\n"
@@ -73,6 +80,21 @@ static int parse_u16(const char *s, unsigned lo, unsigned hi, uint16_t *out)
     *out = (uint16_t)v;
     return 0;
 }
+
+/* parse a finite decimal in [lo, hi]; 0 on success */
+static int parse_real(const char *s, double lo, double hi, double *out)
+{
+    char *end = NULL;
+    errno = 0;
+    const double v = strtod(s, &end);
+    if (errno != 0 || end == s || *end != '\0' || !(v >= lo && v <= hi)) {
+        return -1;
+    }
+    *out = v;
+    return 0;
+}
+
+#define RAD_PER_DEG (3.14159265358979323846 / 180.0)
 
 int main(int argc, char **argv)
 {
@@ -111,6 +133,21 @@ int main(int argc, char **argv)
             bad = parse_u16(v, 1, 400, &cfg.status_rate_hz);
         } else if (strcmp(a, "--level-s") == 0) {
             bad = parse_u16(v, 1, 600, &cfg.level_s);
+        } else if (strcmp(a, "--odo-axle") == 0) {
+            bad = strcmp(v, "rear") != 0 && strcmp(v, "front") != 0;
+            cfg.odo_axle = strcmp(v, "front") == 0 ? ODO_AXLE_FRONT : ODO_AXLE_REAR;
+        } else if (strcmp(a, "--cal-min-base-m") == 0) {
+            double x = 0.0;
+            bad = parse_real(v, 0.0, 1e5, &x);
+            cfg.cal_min_base_m = (nav_real_t)x;
+        } else if (strcmp(a, "--gyro-arw-dpsh") == 0) {
+            double x = 0.0;
+            bad = parse_real(v, 1e-6, 100.0, &x);
+            cfg.gyro_arw_rad_rts = (nav_real_t)(x * RAD_PER_DEG / 60.0);
+        } else if (strcmp(a, "--gyro-bias-dph") == 0) {
+            double x = 0.0;
+            bad = parse_real(v, 1e-6, 1e4, &x);
+            cfg.gyro_bias_rps = (nav_real_t)(x * RAD_PER_DEG / 3600.0);
         } else {
             fprintf(stderr, "navecu: unknown option '%s'\n", a);
             usage(stderr);
@@ -157,6 +194,7 @@ int main(int argc, char **argv)
     if (iface != NULL) {
         hal_linux_set_iface(&hal, iface);
     }
+    app_boot(&app, &hal);
 
     unsigned long frames_in = 0;
     int rc;
@@ -202,6 +240,9 @@ int main(int argc, char **argv)
     const app_health_t *h = &app.health;
     static const char *const mode_names[] = {"waiting for initial state", "levelling",
                                              "navigating", "fault"};
+    static const char *const cal_names[] = {"none", "loaded from NVM", "one-point",
+                                            "refused (too close)", "refused (not ready)",
+                                            "NVM corrupt, defaults"};
     fprintf(stderr,
             "navecu: %lu frames in, %lu malformed lines skipped, %lu frames out, %llu IMU "
             "samples (%.1f s), mode: %s\n",
@@ -217,6 +258,13 @@ int main(int argc, char **argv)
             (unsigned long)h->imu_lost, (unsigned long)h->bad_value,
             (unsigned long)h->gnss_rejected, (unsigned long)h->cmd_rejected,
             (unsigned long)h->nav_rejected, (unsigned long)h->time_jumps);
+    fprintf(stderr,
+            "navecu: calibration: %s, %u one-point, dH %.4f deg, mu %.5f, stored %u; "
+            "gyro z bias at standstill %.4f deg/h from %.0f s\n",
+            app.cal_status < 6u ? cal_names[app.cal_status] : "?", (unsigned)app.cal_count,
+            (double)app.cal_dh_rad / RAD_PER_DEG, (double)app.cal_mu, (unsigned)app.cal_stored,
+            (double)app.gyro_bias_z_rps / RAD_PER_DEG * 3600.0,
+            (double)app.gz_n / (double)cfg.imu_rate_hz);
     if (live_if != NULL) {
         fprintf(stderr, "navecu: CAN error frames %lu, socket errors %lu, send errors %lu\n",
                 can_err, can_io, (unsigned long)app.send_errors);

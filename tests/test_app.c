@@ -721,6 +721,312 @@ static void test_initial_attitude_skips_levelling(void **state)
     assert_near(att.pitch * 0.01, -1.0, 0.01);
 }
 
+/* ---- odometer, dead reckoning, standstill, calibration (docs/odometry.md) ---- */
+
+static uint8_t wheel_counter;
+
+static void send_wheels(double v_mps)
+{
+    uint8_t d[8];
+    struct navecu_can_wheel_speeds_t w;
+    memset(&w, 0, sizeof w);
+    const int16_t raw = (int16_t)lround(v_mps / 0.02);
+    w.wheel_speed_fl = w.wheel_speed_fr = w.wheel_speed_rl = w.wheel_speed_rr = raw;
+    w.wheel_counter = wheel_counter;
+    wheel_counter = e2e_counter_next(wheel_counter);
+    navecu_can_wheel_speeds_pack(d, &w, 8u);
+    e2e_protect(NAVECU_CAN_WHEEL_SPEEDS_FRAME_ID, d);
+    const hal_can_frame_t f = frame(NAVECU_CAN_WHEEL_SPEEDS_FRAME_ID, d);
+    feed(&f);
+}
+
+/* n IMU samples of the still source plus a gyro z bias (LSB per sample, exact), with
+ * WheelSpeeds at v_mps every second sample (50 Hz); the capture buffer is emptied as it
+ * goes, keeping the latest frames */
+static void run_wheels(int samples, double v_mps, int32_t gz_bias_lsb)
+{
+    for (int k = 0; k < samples; k++) {
+        int32_t w[3], v[3];
+        imu_src_next(w, v);
+        w[2] += gz_bias_lsb;
+        hal.t_us += 1000000u / RATE_HZ;
+        if (hal.tx_n > FAKE_TX_MAX - 64u) {
+            hal.tx_n = 0u;
+        }
+        if (k % 2 == 0) {
+            send_wheels(v_mps);
+        }
+        send_imu_pair(w, v, src.counter);
+        src.counter = e2e_counter_next(src.counter);
+    }
+}
+
+static void start_perfect(void)
+{
+    wheel_counter = 0u;
+    att_counter = 0u;
+    send_init_commands(30.0);
+    send_initial_attitude(STILL.roll, STILL.pitch);
+    assert_int_equal(app.mode, APP_MODE_NAVIGATING);
+}
+
+static void last_position(double *lat_deg, double *lon_deg)
+{
+    struct navecu_can_nav_position_t pos;
+    navecu_can_nav_position_unpack(&pos, last_tx(NAVECU_CAN_NAV_POSITION_FRAME_ID)->data, 8u);
+    *lat_deg = pos.latitude * 1e-7;
+    *lon_deg = pos.longitude * 1e-7;
+}
+
+/* metres east and north of (lat, lon) from the start, flat Earth at 45 N (WGS-84 radii:
+ * M = 6367381.8 m, N = 6388838.3 m; 1e-6 relative over a few hundred metres) */
+#define RM_45 6367381.8
+#define RN_45 6388838.3
+static void local_en(double lat_deg, double lon_deg, double *e, double *n)
+{
+    *n = (lat_deg - LAT0_DEG) * DEG * RM_45;
+    *e = (lon_deg - LON0_DEG) * DEG * RN_45 * cos(LAT0_DEG * DEG);
+}
+
+static struct navecu_can_nav_calibration_t last_cal(void)
+{
+    struct navecu_can_nav_calibration_t c;
+    navecu_can_nav_calibration_unpack(&c, last_tx(NAVECU_CAN_NAV_CALIBRATION_FRAME_ID)->data, 8u);
+    return c;
+}
+
+static uint8_t last_mode(void)
+{
+    for (uint32_t i = hal.tx_n; i > 0u; i--) {
+        const hal_can_frame_t *f = &hal.tx[i - 1u];
+        if (f->id == NAVECU_CAN_NAV_STATUS_FRAME_ID && (f->data[0] & 0x0Fu) == 0u) {
+            struct navecu_can_nav_status_t st;
+            navecu_can_nav_status_unpack(&st, f->data, 8u);
+            return st.mode;
+        }
+    }
+    return 0xFFu;
+}
+
+/*
+ * GIVEN a perfect start (heading 30 deg, pitch -1 deg) and wheels at 10.00 m/s for 20 s
+ * THEN the output is the dead-reckoned solution (mode 4): 200 m x cos(1 deg) along 30 deg
+ *      (seed 000 eqs 1-4; 0.2 m for the first wheel frame's timing and 1e-7 deg output
+ *      rounding), the height 200 m x sin(-1 deg) lower, velocity 10 m/s along 30 deg.
+ */
+static void test_dead_reckoning_output(void **state)
+{
+    (void)state;
+    start_perfect();
+    run_wheels(20 * RATE_HZ, 10.0, 0);
+    assert_int_equal(last_mode(), NAVECU_CAN_NAV_STATUS_MODE_DEAD_RECKONING_CHOICE);
+    double lat, lon, e, n;
+    last_position(&lat, &lon);
+    local_en(lat, lon, &e, &n);
+    const double d = 200.0 * cos(1.0 * DEG);
+    assert_near(hypot(e, n), d, 0.2);
+    assert_near(atan2(e, n) / DEG, 30.0, 0.01);
+    struct navecu_can_nav_height_t h;
+    navecu_can_nav_height_unpack(&h, last_tx(NAVECU_CAN_NAV_HEIGHT_FRAME_ID)->data, 8u);
+    assert_near(h.height * 0.01, H0_M - 200.0 * sin(1.0 * DEG), 0.05);
+    struct navecu_can_nav_velocity_t v;
+    navecu_can_nav_velocity_unpack(&v, last_tx(NAVECU_CAN_NAV_VELOCITY_FRAME_ID)->data, 8u);
+    assert_near(v.vel_east * 0.01, 10.0 * cos(1.0 * DEG) * sin(30.0 * DEG), 0.011);
+    assert_near(v.vel_north * 0.01, 10.0 * cos(1.0 * DEG) * cos(30.0 * DEG), 0.011);
+    /* wheels silent for longer than the odometer timeout: inertial only (mode 2) */
+    for (int k = 0; k < 2 * RATE_HZ; k++) {
+        int32_t w[3], a[3];
+        imu_src_next(w, a);
+        send_imu_pair(w, a, src.counter);
+        src.counter = e2e_counter_next(src.counter);
+    }
+    assert_int_equal(last_mode(), NAVECU_CAN_NAV_STATUS_MODE_INERTIAL_CHOICE);
+}
+
+/*
+ * GIVEN a gyro z bias of 10 deg/h (exactly 1 LSB of 2^-21 rad per 10 ms sample = 9.83
+ *       deg/h) and the wheels at zero for 120 s, the bias prior widened to 100 deg/h
+ * THEN the heading is held (0.01 deg; unheld it would drift 0.33 deg), the position holds,
+ *      and the bias estimate is 9.83 deg/h x n / (n + n0) with n0 = ARW^2/(dt sigma_b^2)
+ *      (default ARW): within 2 % of that.
+ */
+static void test_standstill_holds_and_estimates_bias(void **state)
+{
+    (void)state;
+    app_config_t cfg = app_default_config();
+    cfg.gyro_bias_rps = (nav_real_t)(100.0 * DEG / 3600.0);
+    assert_int_equal(app_init(&app, &cfg), NAV_OK);
+    start_perfect();
+    run_wheels(120 * RATE_HZ, 0.0, 1);
+    assert_int_equal(last_mode(), NAVECU_CAN_NAV_STATUS_MODE_DEAD_RECKONING_CHOICE);
+    struct navecu_can_nav_attitude_t att;
+    navecu_can_nav_attitude_unpack(&att, last_tx(NAVECU_CAN_NAV_ATTITUDE_FRAME_ID)->data, 8u);
+    assert_near(att.heading * 0.01, 30.0, 0.01);
+    double lat, lon, e, n;
+    last_position(&lat, &lon);
+    local_en(lat, lon, &e, &n);
+    assert_near(hypot(e, n), 0.0, 0.02);
+    const double bias_dph = ldexp(1.0, -21) * RATE_HZ / DEG * 3600.0;
+    const double arw = (double)cfg.gyro_arw_rad_rts, sb = (double)cfg.gyro_bias_rps;
+    const double n0 = arw * arw / (0.01 * sb * sb);
+    const double nst = (double)app.gz_n;
+    assert_true(nst > 119.0 * RATE_HZ - 60 && nst <= 120.0 * RATE_HZ); /* 0.5 s to declare */
+    assert_near((double)app.gyro_bias_z_rps / DEG * 3600.0, bias_dph * nst / (nst + n0),
+                0.02 * bias_dph);
+}
+
+/* a point at bearing (from the start) of the last output + dbearing, at distance / scale */
+static void known_point(double dbearing_deg, double scale, int32_t *lat_e7, int32_t *lon_e7)
+{
+    double lat, lon, e, n;
+    last_position(&lat, &lon);
+    local_en(lat, lon, &e, &n);
+    const double d = hypot(e, n) / scale, b = atan2(e, n) + dbearing_deg * DEG;
+    *lat_e7 = (int32_t)lround((LAT0_DEG + d * cos(b) / RM_45 / DEG) * 1e7);
+    *lon_e7 = (int32_t)lround((LON0_DEG + d * sin(b) / (RN_45 * cos(LAT0_DEG * DEG)) / DEG) * 1e7);
+}
+
+static void send_known_position(int32_t lat_e7, int32_t lon_e7)
+{
+    uint8_t d[8];
+    struct navecu_can_cmd_known_position_t k = {lat_e7, lon_e7};
+    navecu_can_cmd_known_position_pack(d, &k, 8u);
+    const hal_can_frame_t f = frame(NAVECU_CAN_CMD_KNOWN_POSITION_FRAME_ID, d);
+    feed(&f);
+}
+
+static void send_command(uint8_t command)
+{
+    uint8_t d[8];
+    struct navecu_can_cmd_control_t c;
+    memset(&c, 0, sizeof c);
+    c.command = command;
+    c.cmd_counter = cmd_counter;
+    cmd_counter = e2e_counter_next(cmd_counter);
+    navecu_can_cmd_control_pack(d, &c, 8u);
+    e2e_protect(NAVECU_CAN_CMD_CONTROL_FRAME_ID, d);
+    const hal_can_frame_t f = frame(NAVECU_CAN_CMD_CONTROL_FRAME_ID, d);
+    feed(&f);
+}
+
+/*
+ * GIVEN 30 s of dead reckoning at 10 m/s (300 m) and the minimum base set to 250 m
+ * WHEN CalibrateHere at a point whose bearing from the start is 0.5 deg less than the
+ *      dead-reckoned one's, at 1/1.02 of its distance (the heading reads 0.5 deg too far
+ *      clockwise and the odometer 2 % long: dH = +0.5 deg, mu = 0.02)
+ * THEN NAV_Calibration carries dH +0.5 deg (0.005: the point's 1 cm rounding over 300 m)
+ *      and mu 0.02 (1e-4), CalStatus OnePoint from KnownPosition, stored; the position is
+ *      reset to the point; a reboot loads them from NVM; EraseCalibration clears them,
+ *      and after a reboot nothing is loaded. A point closer than the base is refused with
+ *      its reason, and CalibrateHere without a new CMD_KnownPosition is refused.
+ */
+static void test_one_point_calibration_and_nvm(void **state)
+{
+    (void)state;
+    app_config_t cfg = app_default_config();
+    cfg.cal_min_base_m = NAV_C(250.0);
+    assert_int_equal(app_init(&app, &cfg), NAV_OK);
+    app_boot(&app, &hal);
+    start_perfect();
+    run_wheels(20 * RATE_HZ, 10.0, 0);
+    int32_t lat_e7, lon_e7;
+    known_point(0.0, 1.0, &lat_e7, &lon_e7);
+    send_known_position(lat_e7, lon_e7);
+    send_command(NAVECU_CAN_CMD_CONTROL_COMMAND_CALIBRATE_HERE_CHOICE);
+    run_wheels(RATE_HZ, 10.0, 0);
+    assert_int_equal(last_cal().cal_status,
+                     NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_REFUSED_TOO_CLOSE_CHOICE);
+    assert_int_equal(last_cal().cal_valid, 0);
+    run_wheels(9 * RATE_HZ, 10.0, 0);
+    known_point(-0.5, 1.02, &lat_e7, &lon_e7); /* true bearing 0.5 deg less: dH = +0.5 */
+    send_known_position(lat_e7, lon_e7);
+    send_command(NAVECU_CAN_CMD_CONTROL_COMMAND_CALIBRATE_HERE_CHOICE);
+    send_command(NAVECU_CAN_CMD_CONTROL_COMMAND_CALIBRATE_HERE_CHOICE); /* point used */
+    assert_int_equal(app.health.cmd_rejected, 2);
+    run_wheels(2, 10.0, 0);
+    double lat, lon;
+    last_position(&lat, &lon);
+    /* reset to the point, plus the 0.2 m driven in the two samples since */
+    assert_near(lat, lat_e7 * 1e-7, 2.5e-6);
+    assert_near(lon, lon_e7 * 1e-7, 2.5e-6);
+    run_wheels(RATE_HZ, 10.0, 0);
+    struct navecu_can_nav_calibration_t c = last_cal();
+    /* CalStatus tells the last request's outcome (the repeated one was refused); the
+     * values in use stay those of the calibration */
+    assert_int_equal(c.cal_status, NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_REFUSED_NOT_READY_CHOICE);
+    assert_int_equal(c.cal_source, NAVECU_CAN_NAV_CALIBRATION_CAL_SOURCE_KNOWN_POSITION_CHOICE);
+    assert_int_equal(c.cal_valid, 1);
+    assert_int_equal(c.cal_stored, 1);
+    assert_int_equal(c.cal_count, 1);
+    assert_near(c.heading_correction * 0.001, 0.5, 0.005);
+    assert_near(c.odo_scale_error * 1e-5, 0.02, 1e-4);
+    /* from here on the track runs along 30 - 0.5 deg at 1/1.02 of the wheel distance */
+    double lat2, lon2, e1, n1, e2, n2;
+    last_position(&lat, &lon);
+    local_en(lat, lon, &e1, &n1);
+    run_wheels(10 * RATE_HZ, 10.0, 0);
+    last_position(&lat2, &lon2);
+    local_en(lat2, lon2, &e2, &n2);
+    assert_near(atan2(e2 - e1, n2 - n1) / DEG, 29.5, 0.01);
+    assert_near(hypot(e2 - e1, n2 - n1), 100.0 * cos(1.0 * DEG) / 1.02, 0.05);
+
+    /* reboot: the stored values come back */
+    const nav_real_t dh = app.cal_dh_rad, mu = app.cal_mu;
+    assert_int_equal(app_init(&app, &cfg), NAV_OK);
+    app_boot(&app, &hal);
+    assert_int_equal(app.cal_status, NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_FROM_NVM_CHOICE);
+    assert_near(app.cal_dh_rad, dh, 0.0);
+    assert_near(app.cal_mu, mu, 0.0);
+    /* erase, reboot: nothing */
+    cmd_counter = 0u;
+    send_command(NAVECU_CAN_CMD_CONTROL_COMMAND_ERASE_CALIBRATION_CHOICE);
+    assert_near(app.cal_dh_rad, 0.0, 0.0);
+    assert_int_equal(app_init(&app, &cfg), NAV_OK);
+    app_boot(&app, &hal);
+    assert_int_equal(app.cal_status, NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_NONE_CHOICE);
+    assert_near(app.cal_mu, 0.0, 0.0);
+}
+
+/* Both NVM slots corrupt at boot: defaults, CalStatus NvmCorrupt, the NVM flag raised. */
+static void test_corrupt_nvm_at_boot(void **state)
+{
+    (void)state;
+    memset(hal.nvm, 0x5A, sizeof hal.nvm);
+    app_boot(&app, &hal);
+    assert_int_equal(app.cal_status, NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_NVM_CORRUPT_CHOICE);
+    assert_near(app.cal_dh_rad, 0.0, 0.0);
+    start_perfect();
+    run_wheels(RATE_HZ, 0.0, 0);
+    struct navecu_can_nav_status_t st;
+    navecu_can_nav_status_unpack(&st, hal.tx[0].data, 8u);
+    for (uint32_t i = hal.tx_n; i > 0u; i--) {
+        if (hal.tx[i - 1u].id == NAVECU_CAN_NAV_STATUS_FRAME_ID && (hal.tx[i - 1u].data[0] & 15u) == 0u) {
+            navecu_can_nav_status_unpack(&st, hal.tx[i - 1u].data, 8u);
+            break;
+        }
+    }
+    assert_true(st.health_flags & APP_FLAG_NVM_ERROR);
+    assert_int_equal(last_cal().cal_status, NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_NVM_CORRUPT_CHOICE);
+}
+
+/* CalibrateAtGnss waits for the next accepted fix; that fix (the start point here) is too
+ * close, and the refusal says so. Before navigating the command is refused at once. */
+static void test_calibrate_at_gnss(void **state)
+{
+    (void)state;
+    send_command(NAVECU_CAN_CMD_CONTROL_COMMAND_CALIBRATE_AT_GNSS_CHOICE);
+    assert_int_equal(app.health.cmd_rejected, 1);
+    start_perfect();
+    run_wheels(RATE_HZ, 5.0, 0);
+    send_command(NAVECU_CAN_CMD_CONTROL_COMMAND_CALIBRATE_AT_GNSS_CHOICE);
+    /* still the first refusal's reason: nothing happens before the fix */
+    assert_int_equal(app.cal_status, NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_REFUSED_NOT_READY_CHOICE);
+    assert_int_equal(app.cal_at_gnss, 1);
+    send_gnss_epoch(0u, 0u, 5.0);
+    assert_int_equal(app.cal_status, NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_REFUSED_TOO_CLOSE_CHOICE);
+    assert_int_equal(app.cal_at_gnss, 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -735,6 +1041,11 @@ int main(void)
         cmocka_unit_test_setup(test_stale_imu_status, setup),
         cmocka_unit_test_setup(test_gnss_init_and_epochs, setup),
         cmocka_unit_test_setup(test_initial_attitude_skips_levelling, setup),
+        cmocka_unit_test_setup(test_dead_reckoning_output, setup),
+        cmocka_unit_test_setup(test_standstill_holds_and_estimates_bias, setup),
+        cmocka_unit_test_setup(test_one_point_calibration_and_nvm, setup),
+        cmocka_unit_test_setup(test_corrupt_nvm_at_boot, setup),
+        cmocka_unit_test_setup(test_calibrate_at_gnss, setup),
     };
     return cmocka_run_group_tests_name("app", tests, NULL, NULL);
 }

@@ -1,7 +1,8 @@
 /*
  * test_hal_linux.c - the Linux host HAL: candump log replay (every valid form, every
- * malformed kind, exact timestamps, end of file), the TX log byte for byte, NVM bounds and
- * persistence, the watchdog counter, and a seeded garbage replay that must not crash.
+ * malformed kind, exact timestamps, end of file), the TX log byte for byte, NVM bounds,
+ * persistence and flash semantics, the watchdog counter, and a seeded garbage replay that
+ * must not crash.
  *
  * Every file lives in a directory made by mkdtemp in the group setup and removed in the
  * group teardown.
@@ -660,6 +661,64 @@ static void test_nvm_persistence(void **state)
     hal_linux_close(&hal);
 }
 
+/*
+ * Flash semantics (hal.h): 2 sectors of 2048 bytes; a write stores old AND new and reports
+ * HAL_EIO when a bit would have to go from 0 to 1; one sector erases alone; the file
+ * follows.
+ */
+static void test_nvm_flash_semantics(void **state)
+{
+    (void)state;
+    static hal_t hal;
+    static char image[HAL_LINUX_NVM_SIZE + 16];
+    char nvm[PATH_LEN];
+    uint8_t b[4];
+    tmp_path(nvm, "nvm_flash.bin");
+    (void)unlink(nvm);
+    assert_int_equal(hal_linux_open(&hal, NULL, NULL, nvm), 0);
+    assert_int_equal(hal_nvm_sector_size(&hal), 2048);
+    assert_int_equal(hal_nvm_size(&hal) / hal_nvm_sector_size(&hal), 2);
+
+    static const uint8_t first[] = {0xF0, 0x0F, 0xAA, 0x00};
+    static const uint8_t clear_more[] = {0x30, 0x0F, 0x00, 0x00}; /* only clears bits */
+    static const uint8_t set_bits[] = {0xFF, 0x3C, 0x55, 0x01};   /* needs 0 -> 1 */
+    assert_int_equal(hal_nvm_write(&hal, 10, first, 4), 0);
+    assert_int_equal(hal_nvm_write(&hal, 10, clear_more, 4), 0);
+    assert_int_equal(hal_nvm_read(&hal, 10, b, 4), 0);
+    assert_memory_equal(b, clear_more, 4);
+    assert_int_equal(hal_nvm_write(&hal, 10, set_bits, 4), HAL_EIO);
+    static const uint8_t anded[] = {0x30, 0x0C, 0x00, 0x00};
+    assert_int_equal(hal_nvm_read(&hal, 10, b, 4), 0);
+    assert_memory_equal(b, anded, 4);
+    assert_int_equal(read_file(nvm, image, sizeof image), HAL_LINUX_NVM_SIZE);
+    assert_memory_equal(image + 10, anded, 4);
+
+    /* sector 1 erases alone; sector 0 keeps its bytes, in memory and in the file */
+    assert_int_equal(hal_nvm_write(&hal, 2048, first, 4), 0);
+    assert_int_equal(hal_nvm_write(&hal, 4095, first, 1), 0);
+    assert_int_equal(hal_nvm_erase_sector(&hal, 1), 0);
+    assert_int_equal(hal_nvm_erase_sector(&hal, 2), HAL_EINVAL);
+    assert_int_equal(hal_nvm_erase_sector(&hal, SIZE_MAX), HAL_EINVAL);
+    assert_int_equal(hal_nvm_erase_sector(NULL, 0), HAL_EINVAL);
+    assert_int_equal(hal_nvm_read(&hal, 10, b, 4), 0);
+    assert_memory_equal(b, anded, 4);
+    hal_linux_close(&hal);
+    assert_int_equal(read_file(nvm, image, sizeof image), HAL_LINUX_NVM_SIZE);
+    assert_memory_equal(image + 10, anded, 4);
+    for (size_t k = 2048; k < HAL_LINUX_NVM_SIZE; k++) {
+        assert_int_equal((uint8_t)image[k], 0xFF);
+    }
+
+    /* after reopening, the flash rule still holds against the file's contents */
+    assert_int_equal(hal_linux_open(&hal, NULL, NULL, nvm), 0);
+    assert_int_equal(hal_nvm_write(&hal, 10, first, 1), HAL_EIO); /* 0x30 -> 0xF0 */
+    assert_int_equal(hal_nvm_erase_sector(&hal, 0), 0);
+    assert_int_equal(hal_nvm_write(&hal, 10, first, 4), 0);
+    assert_int_equal(hal_nvm_read(&hal, 10, b, 4), 0);
+    assert_memory_equal(b, first, 4);
+    hal_linux_close(&hal);
+}
+
 /* ---- watchdog ---- */
 
 static void test_watchdog_counts(void **state)
@@ -827,6 +886,7 @@ int main(void)
         cmocka_unit_test(test_nvm_memory),
         cmocka_unit_test(test_nvm_bounds),
         cmocka_unit_test(test_nvm_persistence),
+        cmocka_unit_test(test_nvm_flash_semantics),
         cmocka_unit_test(test_watchdog_counts),
         cmocka_unit_test(test_rx_fuzz),
     };

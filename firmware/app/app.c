@@ -24,6 +24,14 @@ app_config_t app_default_config(void)
     cfg.nav_rate_hz = 50u;
     cfg.status_rate_hz = 10u;
     cfg.level_s = 30u; /* docs/can.md: levelling error ~ LSB / level time */
+    cfg.odo_axle = ODO_AXLE_REAR;
+    /* A calibration point's position error e gives errors of about e / base in dH (rad)
+     * and in mu: a 3 m point 2 km away, 0.09 deg and 0.15 % (docs/odometry.md). */
+    cfg.cal_min_base_m = NAV_C(2000.0);
+    /* the mid-grade IMU of seed 000 (tools/sim/sensors.py "mid-grade"): ARW 0.003 deg/sqrt(h),
+     * turn-on bias 0.015 deg/h */
+    cfg.gyro_arw_rad_rts = NAV_C(8.73e-7);
+    cfg.gyro_bias_rps = NAV_C(7.27e-8);
     return cfg;
 }
 
@@ -65,19 +73,61 @@ static void reset_navigation(app_t *a)
     a->last_rx_t_us = keep.last_rx_t_us;
     a->last_status_t_us = keep.last_status_t_us;
     a->flags_sticky = (uint16_t)(keep.flags_sticky & (APP_FLAG_NVM_ERROR | APP_FLAG_IMU_FAULT));
+    /* the calibration and the gyro bias belong to the car and the IMU, not to this run */
+    a->calstore = keep.calstore;
+    a->cal_dh_rad = keep.cal_dh_rad;
+    a->cal_mu = keep.cal_mu;
+    a->cal_status = keep.cal_status;
+    a->cal_source = keep.cal_source;
+    a->cal_count = keep.cal_count;
+    a->cal_stored = keep.cal_stored;
+    a->cal_base_m = keep.cal_base_m;
+    a->gz_sum = keep.gz_sum;
+    a->gz_sum_lo = keep.gz_sum_lo;
+    a->gz_n = keep.gz_n;
+    a->gyro_bias_z_rps = keep.gyro_bias_z_rps;
+    a->odo = keep.odo;
     a->mode = APP_MODE_WAIT_INIT;
 }
 
 int app_init(app_t *app, const app_config_t *cfg)
 {
     if (cfg->imu_rate_hz < 10u || cfg->imu_rate_hz > 400u || cfg->nav_rate_hz == 0u ||
-        cfg->status_rate_hz == 0u || cfg->level_s == 0u || cfg->level_s > 600u) {
+        cfg->status_rate_hz == 0u || cfg->level_s == 0u || cfg->level_s > 600u ||
+        !(cfg->cal_min_base_m >= NAV_C(0.0)) || !(cfg->cal_min_base_m < NAV_C(1e6)) ||
+        !(cfg->gyro_arw_rad_rts > NAV_C(0.0)) || !(cfg->gyro_arw_rad_rts < NAV_C(1.0)) ||
+        !(cfg->gyro_bias_rps > NAV_C(0.0)) || !(cfg->gyro_bias_rps < NAV_C(1.0))) {
         return NAV_EINVAL;
     }
+    odo_config_t ocfg = odo_default_config();
+    ocfg.axle = cfg->odo_axle;
     memset(app, 0, sizeof *app);
+    if (odo_init(&app->odo, &ocfg) != NAV_OK) {
+        return NAV_EINVAL;
+    }
     app->cfg = *cfg;
     app->mode = APP_MODE_WAIT_INIT;
+    app->calstore.slot = -1;
     return NAV_OK;
+}
+
+void app_boot(app_t *a, hal_t *hal)
+{
+    cal_record_t rec;
+    const int rc = calstore_load(hal, &a->calstore, &rec);
+    if (rc == CALSTORE_OK) {
+        a->cal_dh_rad = (nav_real_t)rec.dh_rad;
+        a->cal_mu = (nav_real_t)rec.odo_scale_err;
+        a->cal_base_m = (nav_real_t)rec.base_m;
+        a->cal_source = rec.source;
+        a->cal_status = NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_FROM_NVM_CHOICE;
+        a->cal_stored = 1u;
+    } else if (rc == CALSTORE_CORRUPT) {
+        a->cal_status = NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_NVM_CORRUPT_CHOICE;
+        a->flags_sticky |= APP_FLAG_NVM_ERROR;
+    } else if (rc < 0) {
+        a->flags_sticky |= APP_FLAG_NVM_ERROR;
+    }
 }
 
 /* ---------------------------------------------------------------- output ---- */
@@ -206,7 +256,9 @@ static void emit_status(app_t *a, hal_t *hal)
     struct navecu_can_nav_status_t st;
     memset(&st, 0, sizeof st);
     st.status_page = 0u;
-    st.mode = (uint8_t)a->mode;
+    st.mode = (a->mode == APP_MODE_NAVIGATING && a->output_dr)
+                  ? (uint8_t)APP_MODE_DEAD_RECKONING
+                  : (uint8_t)a->mode;
     st.health_flags = health_flags(a, hal);
     st.horiz_accuracy = UINT16_MAX; /* no error model before the Kalman filter: "unknown" */
     st.nav_counter = next_tx_counter(a, TX_STATUS);
@@ -246,8 +298,15 @@ static void emit_calibration(app_t *a, hal_t *hal)
     uint8_t d[8];
     struct navecu_can_nav_calibration_t c;
     memset(&c, 0, sizeof c);
-    c.cal_valid = 0u; /* one-point calibration arrives with its own issue */
-    c.cal_stored = 0u;
+    c.heading_correction = navecu_can_nav_calibration_heading_correction_encode(
+        clampr(a->cal_dh_rad * DEG_PER_RAD, NAV_C(-32.7), NAV_C(32.7)));
+    c.odo_scale_error = navecu_can_nav_calibration_odo_scale_error_encode(
+        clampr(a->cal_mu, NAV_C(-0.327), NAV_C(0.327)));
+    c.cal_valid = a->cal_source != NAVECU_CAN_NAV_CALIBRATION_CAL_SOURCE_NONE_CHOICE ? 1u : 0u;
+    c.cal_stored = a->cal_stored;
+    c.cal_status = a->cal_status;
+    c.cal_source = a->cal_source;
+    c.cal_count = a->cal_count;
     c.nav_counter = next_tx_counter(a, TX_CAL);
     navecu_can_nav_calibration_pack(d, &c, sizeof d);
     e2e_protect(NAVECU_CAN_NAV_CALIBRATION_FRAME_ID, d);
@@ -320,7 +379,78 @@ static void start_navigation_at(app_t *a, nav_real_t roll, nav_real_t pitch)
     }
     /* Hold the vertical channel at the initial height until GNSS heights arrive. */
     sins_set_height_ref(&a->nav, (nav_real_t)a->init_h_cm * NAV_C(0.01));
+    if (dr_init(&a->dr, &pos, a->cal_dh_rad, a->cal_mu) != NAV_OK) {
+        reject(a, &a->health.bad_value);
+        a->mode = APP_MODE_FAULT;
+        return;
+    }
+    a->output_dr = 0u;
+    a->holding = 0u;
     a->mode = APP_MODE_NAVIGATING;
+}
+
+/* ------------------------------------------------- odometer and standstill ---- */
+
+/* Standstill (odo.h: every wheel at zero, the body not turning): the car neither moves nor
+ * turns, whatever the sensors' errors say (seed 000: stillness keeps the SINS from
+ * drifting). Velocity is set to zero, the heading is held where it was when the car
+ * stopped, and the z gyro's reading minus the Earth's rate is a measurement of its bias.
+ * The bias estimate is the posterior mean of a constant with prior N(0, sigma_b^2) from
+ * samples of variance ARW^2 / dt:  b = sum(r_k) / (n + n0),  n0 = ARW^2 / (dt sigma_b^2);
+ * it is subtracted from every later sample. */
+static void standstill_step(app_t *a, const nav_real_t dtheta_raw_b[3], nav_real_t dt)
+{
+    static const nav_real_t zero_v[3] = {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)};
+    nav_real_t roll, pitch, heading;
+    sins_euler(&a->nav, &roll, &pitch, &heading);
+    if (!a->holding) {
+        a->holding = 1u;
+        a->hold_heading_rad = heading;
+    }
+    nav_real_t dh = a->hold_heading_rad - heading;
+    if (dh > PI_F) {
+        dh -= NAV_C(2.0) * PI_F;
+    } else if (dh < -PI_F) {
+        dh += NAV_C(2.0) * PI_F;
+    }
+    (void)sins_turn_heading(&a->nav, dh);
+    (void)sins_set_velocity(&a->nav, zero_v);
+    /* Earth rate seen by the body z axis: C_bn^T w_ie_n, third component */
+    mat3_t C_bn;
+    quat_to_dcm(a->nav.q_bn, &C_bn);
+    earth_t e;
+    earth_eval(geo_lat_rad(&a->nav.pos), geo_h_m(&a->nav.pos), &e);
+    nav_real_t w_ie_b[3];
+    mat3t_mul_vec(&C_bn, e.w_ie_n_rps, w_ie_b);
+    nav_acc_add(&a->gz_sum, &a->gz_sum_lo, dtheta_raw_b[2] / dt - w_ie_b[2]);
+    if (a->gz_n < UINT32_MAX) {
+        a->gz_n++;
+    }
+    const nav_real_t arw = a->cfg.gyro_arw_rad_rts;
+    const nav_real_t sb = a->cfg.gyro_bias_rps;
+    const nav_real_t n0 = arw * arw / (dt * sb * sb);
+    a->gyro_bias_z_rps = (a->gz_sum + a->gz_sum_lo) / ((nav_real_t)a->gz_n + n0);
+}
+
+/* Moving with a valid odometer: dead reckoning (seed 000 eqs 1-4, 11-12) is the output;
+ * the SINS takes the odometer's velocity along the compensated heading (seed 000: the
+ * odometer velocity damps the SINS velocity errors) and the dead-reckoned position, so
+ * that it stays a good attitude and heading reference whatever the drive's length. */
+static void odometer_step(app_t *a, nav_real_t dt)
+{
+    nav_real_t roll, pitch, heading;
+    sins_euler(&a->nav, &roll, &pitch, &heading);
+    const nav_real_t ds = a->odo.speed_mps * dt;
+    if (dr_step(&a->dr, ds, heading, pitch) != NAV_OK) {
+        reject(a, &a->health.nav_rejected);
+        return;
+    }
+    const nav_real_t v = a->odo.speed_mps / (NAV_C(1.0) + a->dr.mu) * nav_cos(pitch);
+    const nav_real_t hc = heading - a->dr.dh_rad;
+    const nav_real_t v_n[3] = {v * nav_sin(hc), v * nav_cos(hc), a->nav.v_n_mps[2]};
+    (void)sins_set_velocity(&a->nav, v_n);
+    a->nav.pos = a->dr.pos;
+    sins_set_height_ref(&a->nav, geo_h_m(&a->dr.pos));
 }
 
 /* ------------------------------------------------------------------ IMU ---- */
@@ -353,8 +483,27 @@ static void process_sample(app_t *a, hal_t *hal, const int32_t w_raw[3], const i
         inc.dv_b_mps[1] = navecu_can_imu_accel_vel_inc_y_decode(v_raw[1]);
         inc.dv_b_mps[2] = navecu_can_imu_accel_vel_inc_z_decode(v_raw[2]);
         inc.dt_s = NAV_C(1.0) / (nav_real_t)a->cfg.imu_rate_hz;
+        const nav_real_t raw_z = inc.dtheta_b_rad[2];
+        inc.dtheta_b_rad[2] -= a->gyro_bias_z_rps * inc.dt_s;
+        a->yaw_rate_rps = inc.dtheta_b_rad[2] / inc.dt_s;
         if (sins_step(&a->nav, &inc) != NAV_OK) {
             reject(a, &a->health.nav_rejected);
+        }
+        odo_tick(&a->odo, inc.dt_s, a->yaw_rate_rps);
+        if (a->odo.standing) {
+            const nav_real_t raw[3] = {inc.dtheta_b_rad[0], inc.dtheta_b_rad[1], raw_z};
+            standstill_step(a, raw, inc.dt_s);
+            a->output_dr = 1u;
+        } else {
+            a->holding = 0u;
+            if (a->odo.valid) {
+                odometer_step(a, inc.dt_s);
+                a->output_dr = 1u;
+            } else {
+                /* no odometer: the free SINS carries on, dead reckoning follows it */
+                dr_set_position(&a->dr, &a->nav.pos);
+                a->output_dr = 0u;
+            }
         }
     }
     emit_due(a, hal);
@@ -443,6 +592,83 @@ static void on_imu_accel(app_t *a, hal_t *hal, const hal_can_frame_t *f)
     process_sample(a, hal, a->rate_raw, v_raw);
 }
 
+/* ------------------------------------------------------------- odometer ---- */
+
+static void on_wheel_speeds(app_t *a, const hal_can_frame_t *f)
+{
+    struct navecu_can_wheel_speeds_t m;
+    navecu_can_wheel_speeds_unpack(&m, f->data, 8u);
+    if (e2e_counter_step(&a->rx_wheel, m.wheel_counter) <= 0) {
+        reject(a, &a->health.bad_counter);
+        return;
+    }
+    const nav_real_t w[4] = {navecu_can_wheel_speeds_wheel_speed_fl_decode(m.wheel_speed_fl),
+                             navecu_can_wheel_speeds_wheel_speed_fr_decode(m.wheel_speed_fr),
+                             navecu_can_wheel_speeds_wheel_speed_rl_decode(m.wheel_speed_rl),
+                             navecu_can_wheel_speeds_wheel_speed_rr_decode(m.wheel_speed_rr)};
+    if (odo_wheels(&a->odo, w, a->yaw_rate_rps) != NAV_OK) {
+        reject(a, &a->health.bad_value); /* a locked or spinning wheel, or out of range */
+        return;
+    }
+    /* levelling assumes the vehicle is still: rolling wheels restart it */
+    if (a->mode == APP_MODE_LEVELLING && !a->odo.zero) {
+        restart_levelling(a);
+    }
+}
+
+/* ---------------------------------------------------------- calibration ---- */
+
+static void store_calibration(app_t *a, hal_t *hal)
+{
+    cal_record_t rec;
+    rec.dh_rad = (float)a->cal_dh_rad;
+    rec.odo_scale_err = (float)a->cal_mu;
+    rec.base_m = (float)a->cal_base_m;
+    rec.source = a->cal_source;
+    if (calstore_save(hal, &a->calstore, &rec) == 0) {
+        a->cal_stored = 1u;
+        a->flags_sticky &= (uint16_t)~APP_FLAG_NVM_ERROR;
+    } else {
+        a->cal_stored = 0u;
+        a->flags_sticky |= APP_FLAG_NVM_ERROR;
+    }
+}
+
+/* One-point calibration (seed 000 eqs 7-12) at the true position lat/lon (1e-7 deg):
+ * refused with a reason in CalStatus when not navigating on the odometer or too close to
+ * the base; otherwise the new estimates are used from the next step on, the position is
+ * reset to the point, and the result is stored. */
+static void calibrate_at(app_t *a, hal_t *hal, int32_t lat_e7, int32_t lon_e7, uint8_t source)
+{
+    if (a->mode != APP_MODE_NAVIGATING || !a->output_dr) {
+        a->cal_status = NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_REFUSED_NOT_READY_CHOICE;
+        reject(a, &a->health.cmd_rejected);
+        return;
+    }
+    geo_pos_t p = a->dr.pos;
+    p.lat = (int64_t)lat_e7 * LSB_PER_E7;
+    p.lon = (int64_t)lon_e7 * LSB_PER_E7;
+    dr_cal_t res;
+    const int rc = dr_calibrate(&a->dr, &p, a->cfg.cal_min_base_m, &res);
+    if (rc != NAV_OK) {
+        a->cal_status = rc == NAV_ERANGE
+                            ? NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_REFUSED_TOO_CLOSE_CHOICE
+                            : NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_REFUSED_NOT_READY_CHOICE;
+        reject(a, &a->health.cmd_rejected);
+        return;
+    }
+    a->cal_dh_rad = a->dr.dh_rad;
+    a->cal_mu = a->dr.mu;
+    a->cal_base_m = res.base_m;
+    a->cal_source = source;
+    a->cal_status = NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_ONE_POINT_CHOICE;
+    if (a->cal_count < UINT8_MAX) {
+        a->cal_count++;
+    }
+    a->nav.pos = a->dr.pos;
+    store_calibration(a, hal);
+}
+
 /* ----------------------------------------------------------------- GNSS ---- */
 
 static int lat_lon_ok(int32_t lat_e7, int32_t lon_e7)
@@ -453,7 +679,7 @@ static int lat_lon_ok(int32_t lat_e7, int32_t lon_e7)
 
 /* A GNSS_Status closes the epoch: the position, velocity and height received since the
  * previous one belong to it if their epoch numbers match (docs/can.md, GNSS epochs). */
-static void on_gnss_status(app_t *a, const hal_can_frame_t *f)
+static void on_gnss_status(app_t *a, hal_t *hal, const hal_can_frame_t *f)
 {
     struct navecu_can_gnss_status_t m;
     navecu_can_gnss_status_unpack(&m, f->data, 8u);
@@ -495,6 +721,11 @@ static void on_gnss_status(app_t *a, const hal_can_frame_t *f)
     }
     a->have_gnss = 1u;
     a->last_gnss_sample = a->n_samples;
+    if (a->cal_at_gnss) {
+        a->cal_at_gnss = 0u;
+        calibrate_at(a, hal, a->gnss_lat_e7, a->gnss_lon_e7,
+                     NAVECU_CAN_NAV_CALIBRATION_CAL_SOURCE_GNSS_CHOICE);
+    }
     if (have_h && a->mode == APP_MODE_NAVIGATING) {
         sins_set_height_ref(&a->nav, (nav_real_t)a->gnss_h_cm * NAV_C(0.01));
     }
@@ -565,15 +796,45 @@ static void on_cmd_control(app_t *a, hal_t *hal, const hal_can_frame_t *f)
         a->init_heading_rad = (nav_real_t)m.heading * NAV_C(0.01) / DEG_PER_RAD;
         start_levelling_if_ready(a);
         break;
-    case 3u: /* StoreCalibration: nothing to store before the calibration exists */
-        reject(a, &a->health.cmd_rejected);
-        break;
-    case 4u: /* EraseCalibration */
-        if (hal_nvm_erase(hal) != 0) {
-            a->flags_sticky |= APP_FLAG_NVM_ERROR;
-        } else {
-            a->flags_sticky &= (uint16_t)~APP_FLAG_NVM_ERROR;
+    case 3u: /* StoreCalibration: the values in use */
+        if (a->cal_source == NAVECU_CAN_NAV_CALIBRATION_CAL_SOURCE_NONE_CHOICE) {
+            reject(a, &a->health.cmd_rejected); /* nothing calibrated to store */
+            break;
         }
+        store_calibration(a, hal);
+        break;
+    case 4u: /* EraseCalibration: the store and the values in use */
+        if (calstore_erase(hal, &a->calstore) != 0) {
+            a->flags_sticky |= APP_FLAG_NVM_ERROR;
+            break;
+        }
+        a->flags_sticky &= (uint16_t)~APP_FLAG_NVM_ERROR;
+        a->cal_dh_rad = NAV_C(0.0);
+        a->cal_mu = NAV_C(0.0);
+        a->cal_base_m = NAV_C(0.0);
+        a->cal_source = NAVECU_CAN_NAV_CALIBRATION_CAL_SOURCE_NONE_CHOICE;
+        a->cal_status = NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_NONE_CHOICE;
+        a->cal_stored = 0u;
+        a->dr.dh_rad = NAV_C(0.0);
+        a->dr.mu = NAV_C(0.0);
+        break;
+    case 5u: /* CalibrateHere: the last CMD_KnownPosition is where the car is */
+        if (!a->known_pos_valid) {
+            a->cal_status = NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_REFUSED_NOT_READY_CHOICE;
+            reject(a, &a->health.cmd_rejected);
+            break;
+        }
+        a->known_pos_valid = 0u; /* a point is used once: the next needs its own */
+        calibrate_at(a, hal, a->known_lat_e7, a->known_lon_e7,
+                     NAVECU_CAN_NAV_CALIBRATION_CAL_SOURCE_KNOWN_POSITION_CHOICE);
+        break;
+    case 6u: /* CalibrateAtGnss: at the next accepted fix */
+        if (a->mode != APP_MODE_NAVIGATING) {
+            a->cal_status = NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_REFUSED_NOT_READY_CHOICE;
+            reject(a, &a->health.cmd_rejected);
+            break;
+        }
+        a->cal_at_gnss = 1u;
         break;
     default:
         reject(a, &a->health.cmd_rejected);
@@ -664,15 +925,9 @@ void app_handle_frame(app_t *a, hal_t *hal, const hal_can_frame_t *f)
     case NAVECU_CAN_IMU_ACCEL_FRAME_ID:
         on_imu_accel(a, hal, f);
         break;
-    case NAVECU_CAN_WHEEL_SPEEDS_FRAME_ID: {
-        /* Validated now; the odometer that uses it arrives with its own issue. */
-        struct navecu_can_wheel_speeds_t m;
-        navecu_can_wheel_speeds_unpack(&m, f->data, 8u);
-        if (e2e_counter_step(&a->rx_wheel, m.wheel_counter) <= 0) {
-            reject(a, &a->health.bad_counter);
-        }
+    case NAVECU_CAN_WHEEL_SPEEDS_FRAME_ID:
+        on_wheel_speeds(a, f);
         break;
-    }
     case NAVECU_CAN_GNSS_POSITION_FRAME_ID: {
         struct navecu_can_gnss_position_t m;
         navecu_can_gnss_position_unpack(&m, f->data, 8u);
@@ -714,7 +969,7 @@ void app_handle_frame(app_t *a, hal_t *hal, const hal_can_frame_t *f)
         break;
     }
     case NAVECU_CAN_GNSS_STATUS_FRAME_ID:
-        on_gnss_status(a, f);
+        on_gnss_status(a, hal, f);
         break;
     case NAVECU_CAN_CMD_KNOWN_POSITION_FRAME_ID: {
         struct navecu_can_cmd_known_position_t m;

@@ -18,8 +18,11 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "calstore.h"
+#include "dr.h"
 #include "e2e.h"
 #include "hal.h"
+#include "odo.h"
 #include "sins.h"
 
 typedef struct {
@@ -27,6 +30,12 @@ typedef struct {
     uint16_t nav_rate_hz;    /* NAV_Position/Height/Velocity/Attitude rate, <= imu_rate_hz */
     uint16_t status_rate_hz; /* NAV_Status rate, <= imu_rate_hz */
     uint16_t level_s;        /* accelerometer levelling time before navigation starts */
+    odo_axle_t odo_axle;     /* wheels that measure the distance (odo.h) */
+    nav_real_t cal_min_base_m;    /* one-point calibration refused closer than this to its base */
+    /* the gyro's noise and bias, for the bias estimate at standstill (a scalar Kalman
+     * filter of a constant with a zero-mean prior): */
+    nav_real_t gyro_arw_rad_rts;  /* angle random walk, rad/sqrt(s) */
+    nav_real_t gyro_bias_rps;     /* 1-sigma of the turn-on bias, rad/s */
 } app_config_t;
 
 /* Counters of everything the application refused; saturating at UINT32_MAX. */
@@ -48,8 +57,9 @@ typedef struct {
 typedef enum {
     APP_MODE_WAIT_INIT = 0,  /* waiting for an initial position (command or GNSS) */
     APP_MODE_LEVELLING = 1,  /* standing still, averaging the accelerometers */
-    APP_MODE_NAVIGATING = 2,
+    APP_MODE_NAVIGATING = 2, /* inertial only: the free SINS is the output */
     APP_MODE_FAULT = 3,
+    APP_MODE_DEAD_RECKONING = 4, /* odometer along the SINS heading is the output */
 } app_mode_t;
 
 /* HealthFlags bits of NAV_Status page 0 */
@@ -112,6 +122,27 @@ typedef struct {
     uint64_t last_gnss_sample;
     uint8_t have_gnss;
 
+    /* odometer, dead reckoning, standstill (docs/odometry.md) */
+    odo_t odo;
+    dr_t dr;
+    uint8_t output_dr;          /* the dead-reckoned solution is the output (mode 4) */
+    uint8_t holding;            /* standstill: heading held at hold_heading_rad */
+    nav_real_t hold_heading_rad;
+    nav_real_t yaw_rate_rps;    /* body z rate of the last IMU sample */
+    nav_real_t gz_sum, gz_sum_lo; /* sum of (gyro z - Earth rate) at standstill, rad/s */
+    uint32_t gz_n;              /* samples in gz_sum */
+    nav_real_t gyro_bias_z_rps; /* estimate applied to every sample */
+
+    /* calibration (seed 000 eqs 7-12) and its storage */
+    calstore_t calstore;
+    nav_real_t cal_dh_rad, cal_mu; /* in use (also the DR's) */
+    uint8_t cal_status;         /* NAV_Calibration CalStatus */
+    uint8_t cal_source;         /* CalSource */
+    uint8_t cal_count;          /* one-point calibrations since boot */
+    uint8_t cal_stored;         /* the values in use are in NVM */
+    uint8_t cal_at_gnss;        /* calibrate at the next accepted GNSS fix */
+    nav_real_t cal_base_m;
+
     /* output */
     uint8_t tx_counter[6];      /* alive counters of the E2E-protected outputs */
     uint8_t status_page;        /* next counter page of NAV_Status (1..3) */
@@ -124,6 +155,11 @@ app_config_t app_default_config(void);
 
 /* Start in APP_MODE_WAIT_INIT. Returns NAV_OK, or NAV_EINVAL for a config out of range. */
 int app_init(app_t *app, const app_config_t *cfg);
+
+/* Once after app_init: load the stored calibration from NVM (calstore.h) as the starting
+ * values. A corrupt store leaves the defaults (0, 0) with CalStatus NvmCorrupt; an NVM
+ * read error also sets the NVM_ERROR flag. */
+void app_boot(app_t *app, hal_t *hal);
 
 /* Process one received frame; may send frames through hal. Never fails: whatever is
  * wrong with the frame is counted in app->health. */

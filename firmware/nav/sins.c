@@ -82,6 +82,39 @@ void sins_euler(const sins_t *s, nav_real_t *roll_rad, nav_real_t *pitch_rad,
     dcm_to_euler(&C_bn, roll_rad, pitch_rad, heading_rad);
 }
 
+int sins_set_velocity(sins_t *s, const nav_real_t v_n_mps[3])
+{
+    for (int i = 0; i < 3; i++) {
+        if (!nav_isfinite(v_n_mps[i]) || nav_fabs(v_n_mps[i]) > NAV_C(1000.0)) {
+            return NAV_EINVAL;
+        }
+    }
+    for (int i = 0; i < 3; i++) {
+        s->v_n_mps[i] = v_n_mps[i];
+        s->v_n_lo_mps[i] = NAV_C(0.0);
+        s->v_n_prev_mps[i] = v_n_mps[i];
+    }
+    return NAV_OK;
+}
+
+int sins_turn_heading(sins_t *s, nav_real_t dheading_rad)
+{
+    if (!nav_isfinite(dheading_rad) || nav_fabs(dheading_rad) > NAV_C(3.14159265358979)) {
+        return NAV_EINVAL;
+    }
+    /* a turn of the body by alpha about ENU up (counter-clockwise) is a heading change
+     * of -alpha: q_bn <- q_z(alpha) (x) q_bn with alpha = -dheading */
+    const nav_real_t half = NAV_C(-0.5) * dheading_rad;
+    const nav_real_t qz[4] = {nav_cos(half), NAV_C(0.0), NAV_C(0.0), nav_sin(half)};
+    nav_real_t q[4];
+    quat_mul(qz, s->q_bn, q);
+    for (int i = 0; i < 4; i++) {
+        s->q_bn[i] = q[i];
+        s->q_bn_lo[i] = NAV_C(0.0);
+    }
+    return NAV_OK;
+}
+
 /* Attitude increment dq_bn such that q(k) = q(k-1) + dq_bn is q(-zeta) (x) q(k-1) (x) q(phi)
  * (Savage's attitude update: the body turned by phi, the ENU frame by zeta, over the
  * interval). Only the difference is formed, so float32 rounding is relative to the small

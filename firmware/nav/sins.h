@@ -56,6 +56,8 @@ typedef struct {
 #define sins_step NAV_SYM(sins_step)
 #define sins_set_height_ref NAV_SYM(sins_set_height_ref)
 #define sins_euler NAV_SYM(sins_euler)
+#define sins_set_velocity NAV_SYM(sins_set_velocity)
+#define sins_turn_heading NAV_SYM(sins_turn_heading)
 
 /* coning/sculling on, max_dt 0.2 s (IMUs of 10-400 Hz with a dropped sample or two),
  * vertical damping time constant 100 s. */
@@ -93,5 +95,21 @@ void sins_set_height_ref(sins_t *s, nav_real_t h_ref_m);
 /* roll, pitch, heading (rad) of the current attitude, conventions of nav_math.h */
 void sins_euler(const sins_t *s, nav_real_t *roll_rad, nav_real_t *pitch_rad,
                 nav_real_t *heading_rad);
+
+/*
+ * Replace the Earth-relative velocity (ENU, m/s) by one from another source: the odometer
+ * while driving, zero at a standstill (seed 000: "odometer velocity, used to damp the
+ * oscillating SINS velocity errors"). Returns NAV_OK, or NAV_EINVAL (s unchanged) for a
+ * non-finite value or |v| > 1000 m/s.
+ */
+int sins_set_velocity(sins_t *s, const nav_real_t v_n_mps[3]);
+
+/*
+ * Turn the attitude about the local vertical so that the heading changes by dheading_rad
+ * (clockwise from north positive); roll and pitch are kept. Used to hold the heading while
+ * the wheels say the car stands. Returns NAV_OK, or NAV_EINVAL for |dheading| > pi or a
+ * non-finite value.
+ */
+int sins_turn_heading(sins_t *s, nav_real_t dheading_rad);
 
 #endif /* NAVECU_SINS_H */

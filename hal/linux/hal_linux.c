@@ -348,6 +348,12 @@ size_t hal_nvm_size(const hal_t *hal)
     return HAL_LINUX_NVM_SIZE;
 }
 
+size_t hal_nvm_sector_size(const hal_t *hal)
+{
+    (void)hal;
+    return HAL_LINUX_NVM_SECTOR_SIZE;
+}
+
 static int nvm_range_ok(size_t offset, size_t len)
 {
     /* written so that offset + len cannot overflow */
@@ -381,34 +387,60 @@ int hal_nvm_read(hal_t *hal, size_t offset, void *buf, size_t len)
 
 int hal_nvm_write(hal_t *hal, size_t offset, const void *buf, size_t len)
 {
+    uint8_t programmed[HAL_LINUX_NVM_SIZE];
+
     if (hal == NULL || (buf == NULL && len > 0u) || !nvm_range_ok(offset, len)) {
         return HAL_EINVAL;
     }
     if (len == 0u) {
         return 0;
     }
+    /* flash programming only clears bits: what a write over programmed bytes leaves */
+    const uint8_t *src = buf;
+    int verify_failed = 0;
+    for (size_t k = 0u; k < len; k++) {
+        programmed[k] = (uint8_t)(hal->nvm[offset + k] & src[k]);
+        if (programmed[k] != src[k]) {
+            verify_failed = 1;
+        }
+    }
     /* file first: the mirror only changes once the data is stored */
-    const int rc = nvm_file_write(hal, offset, buf, len);
+    const int rc = nvm_file_write(hal, offset, programmed, len);
     if (rc != 0) {
         return rc;
     }
-    memcpy(hal->nvm + offset, buf, len);
+    memcpy(hal->nvm + offset, programmed, len);
+    return verify_failed ? HAL_EIO : 0;
+}
+
+int hal_nvm_erase_sector(hal_t *hal, size_t sector)
+{
+    uint8_t erased[HAL_LINUX_NVM_SECTOR_SIZE];
+
+    if (hal == NULL || sector >= HAL_LINUX_NVM_SIZE / HAL_LINUX_NVM_SECTOR_SIZE) {
+        return HAL_EINVAL;
+    }
+    memset(erased, 0xFF, sizeof erased);
+    const size_t offset = sector * HAL_LINUX_NVM_SECTOR_SIZE;
+    const int rc = nvm_file_write(hal, offset, erased, sizeof erased);
+    if (rc != 0) {
+        return rc;
+    }
+    memcpy(hal->nvm + offset, erased, sizeof erased);
     return 0;
 }
 
 int hal_nvm_erase(hal_t *hal)
 {
-    uint8_t erased[HAL_LINUX_NVM_SIZE];
-
     if (hal == NULL) {
         return HAL_EINVAL;
     }
-    memset(erased, 0xFF, sizeof erased);
-    const int rc = nvm_file_write(hal, 0u, erased, sizeof erased);
-    if (rc != 0) {
-        return rc;
+    for (size_t k = 0u; k < HAL_LINUX_NVM_SIZE / HAL_LINUX_NVM_SECTOR_SIZE; k++) {
+        const int rc = hal_nvm_erase_sector(hal, k);
+        if (rc != 0) {
+            return rc;
+        }
     }
-    memcpy(hal->nvm, erased, sizeof erased);
     return 0;
 }
 

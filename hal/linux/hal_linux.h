@@ -34,6 +34,7 @@
 #include "hal.h"
 
 #define HAL_LINUX_NVM_SIZE 4096u /* bytes in the NVM region */
+#define HAL_LINUX_NVM_SECTOR_SIZE 2048u /* bytes per NVM sector: 2 sectors */
 #define HAL_LINUX_LINE_MAX 128u  /* longest RX log line, characters before the newline */
 #define HAL_LINUX_IFACE_MAX 15u  /* longest interface name (IFNAMSIZ - 1) */
 
@@ -109,10 +110,12 @@ uint32_t hal_linux_tx_frames(const hal_t *hal);
  *   uppercase hex pairs. HAL_EINVAL if dlc > 8, extended is not 0 or 1, or the ID does not
  *   fit 11 (standard) or 29 (extended) bits; HAL_EIO on a write error (including one
  *   from an earlier buffered write); never HAL_ENOSPC.
- * - NVM: HAL_LINUX_NVM_SIZE bytes; HAL_EINVAL if offset + len > size or buf is NULL with
- *   len > 0; writes overwrite (flash's only-clear-bits rule is not modelled) and go
- *   through to the file, HAL_EIO on a file error (the range's contents are then
- *   unspecified).
+ * - NVM: HAL_LINUX_NVM_SIZE bytes in sectors of HAL_LINUX_NVM_SECTOR_SIZE; HAL_EINVAL if
+ *   offset + len > size, buf is NULL with len > 0, or the sector does not exist. Flash
+ *   semantics as hal.h states them: a write stores old AND new and returns HAL_EIO when
+ *   that differs from new (a write over programmed bytes is caught as on flash). Writes
+ *   and erases go through to the file; HAL_EIO on a file error (the range's contents are
+ *   then unspecified). A power loss is not modelled (tests/support/fake_hal.h does).
  */
 
 #endif /* NAVECU_HAL_LINUX_H */

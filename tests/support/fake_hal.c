@@ -47,36 +47,118 @@ size_t hal_nvm_size(const hal_t *hal)
     return FAKE_NVM_SIZE;
 }
 
+size_t hal_nvm_sector_size(const hal_t *hal)
+{
+    (void)hal;
+    return FAKE_NVM_SECTOR_SIZE;
+}
+
+void fake_hal_nvm_cut_after(hal_t *hal, uint32_t n_units, uint8_t torn)
+{
+    hal->nvm_cut_armed = 1;
+    hal->nvm_cut_left = n_units;
+    hal->nvm_cut_torn = torn;
+}
+
+void fake_hal_nvm_power_on(hal_t *hal)
+{
+    hal->nvm_cut_armed = 0;
+    hal->nvm_power_off = 0;
+}
+
+void fake_hal_nvm_corrupt(hal_t *hal, size_t offset, uint8_t xor_mask)
+{
+    if (offset < FAKE_NVM_SIZE) {
+        hal->nvm[offset] ^= xor_mask;
+    }
+}
+
+/* 1 if the next unit is the one the power is cut on (the power is then off) */
+static int nvm_unit_cut(hal_t *hal)
+{
+    if (hal->nvm_cut_armed) {
+        if (hal->nvm_cut_left == 0u) {
+            hal->nvm_cut_armed = 0;
+            hal->nvm_power_off = 1;
+            return 1;
+        }
+        hal->nvm_cut_left--;
+    }
+    hal->nvm_units++;
+    return 0;
+}
+
+static int nvm_range_ok(size_t offset, size_t len)
+{
+    return offset <= FAKE_NVM_SIZE && len <= FAKE_NVM_SIZE - offset;
+}
+
 int hal_nvm_read(hal_t *hal, size_t offset, void *buf, size_t len)
 {
-    if (hal->nvm_fail) {
+    if (hal->nvm_fail || hal->nvm_power_off) {
         return HAL_EIO;
     }
-    if (offset > FAKE_NVM_SIZE || len > FAKE_NVM_SIZE - offset) {
+    if ((buf == NULL && len > 0u) || !nvm_range_ok(offset, len)) {
         return HAL_EINVAL;
     }
-    memcpy(buf, hal->nvm + offset, len);
+    if (len > 0u) {
+        memcpy(buf, hal->nvm + offset, len);
+    }
     return 0;
 }
 
 int hal_nvm_write(hal_t *hal, size_t offset, const void *buf, size_t len)
 {
-    if (hal->nvm_fail) {
+    if (hal->nvm_fail || hal->nvm_power_off) {
         return HAL_EIO;
     }
-    if (offset > FAKE_NVM_SIZE || len > FAKE_NVM_SIZE - offset) {
+    if ((buf == NULL && len > 0u) || !nvm_range_ok(offset, len)) {
         return HAL_EINVAL;
     }
-    memcpy(hal->nvm + offset, buf, len);
+    const uint8_t *src = buf;
+    int verify_failed = 0;
+    for (size_t n = 0u; n < len; n++) {
+        const size_t k = hal->nvm_program_backwards ? len - 1u - n : n;
+        uint8_t *cell = &hal->nvm[offset + k];
+        if (nvm_unit_cut(hal)) {
+            *cell = (uint8_t)(*cell & (src[k] | (uint8_t)~hal->nvm_cut_torn));
+            return HAL_EIO;
+        }
+        *cell = (uint8_t)(*cell & src[k]);
+        if (*cell != src[k]) {
+            verify_failed = 1;
+        }
+    }
+    return verify_failed ? HAL_EIO : 0;
+}
+
+int hal_nvm_erase_sector(hal_t *hal, size_t sector)
+{
+    if (hal->nvm_fail || hal->nvm_power_off) {
+        return HAL_EIO;
+    }
+    if (sector >= FAKE_NVM_SECTORS) {
+        return HAL_EINVAL;
+    }
+    uint8_t *base = &hal->nvm[sector * FAKE_NVM_SECTOR_SIZE];
+    if (nvm_unit_cut(hal)) {
+        for (size_t k = 0u; k < FAKE_NVM_SECTOR_SIZE; k += 2u) {
+            base[k] = 0xFFu;
+        }
+        return HAL_EIO;
+    }
+    memset(base, 0xFF, FAKE_NVM_SECTOR_SIZE);
     return 0;
 }
 
 int hal_nvm_erase(hal_t *hal)
 {
-    if (hal->nvm_fail) {
-        return HAL_EIO;
+    for (size_t k = 0u; k < FAKE_NVM_SECTORS; k++) {
+        const int rc = hal_nvm_erase_sector(hal, k);
+        if (rc != 0) {
+            return rc;
+        }
     }
-    memset(hal->nvm, 0xFF, sizeof hal->nvm);
     return 0;
 }
 

@@ -1,0 +1,129 @@
+/*
+ * calstore.h - the heading/odometer calibration in non-volatile memory, safe against a
+ * power loss at any moment of a save: the last record whose save completed stays
+ * readable, and a half-written record is never taken for a good one.
+ *
+ * Two slots, slot k at the start of NVM sector k (k = 0, 1; the rest of each sector stays
+ * erased; sectors >= 2 of the region are not touched). A save erases the slot that does
+ * not hold the newest valid record, writes the new record there with seq + 1, reads it
+ * back, and only then writes the commit marker in a second, separate write. Load takes
+ * the valid record with the highest seq (modulo 2^32). So at every instant of a save the
+ * other slot still holds the previous record, untouched.
+ *
+ * Slot layout, format version 1 (36 bytes; multi-byte fields little-endian; floats as
+ * their IEEE 754 binary32 bit patterns, serialised byte by byte, independent of the
+ * compiler's struct layout and of the CPU's byte order):
+ *
+ *   offset size field
+ *    0     4   magic: the bytes 'N' 'C' 'A' 'L' (0x4C41434E as a little-endian uint32)
+ *    4     1   format version: CALSTORE_VERSION (1)
+ *    5     1   source: CAL_SRC_KNOWN_POSITION 1, CAL_SRC_GNSS 2, CAL_SRC_FILTER 3
+ *    6     2   body length: CALSTORE_BODY_BYTES (24), the bytes the CRC covers
+ *    8     4   seq: save counter, +1 per save, wraps from 0xFFFFFFFF to 0
+ *   12     4   dh_rad        (float bits)
+ *   16     4   odo_scale_err (float bits)
+ *   20     4   base_m        (float bits)
+ *   24     4   CRC-32 of bytes 0..23
+ *   28     4   never written: must read 0xFF
+ *   32     4   commit marker: the bytes 'D' 'O' 'N' 'E', written last, on its own
+ *
+ * CRC-32: the IEEE 802.3 / zlib CRC (polynomial 0x04C11DB7, reflected as 0xEDB88320,
+ * initial value 0xFFFFFFFF, final XOR 0xFFFFFFFF; "123456789" gives 0xCBF43926),
+ * computed a nibble at a time with a 16-entry table.
+ *
+ * The commit marker sits in its own 32-byte-aligned block, so it stays a separate program
+ * operation even on flashes that program 8- or 32-byte words with ECC.
+ *
+ * A slot is valid when every byte above is exactly as a save writes it: commit marker,
+ * magic, version, body length, the 0xFF gap, the CRC, and a payload that passes the
+ * range check below. Anything else (a torn write, a bit flip anywhere in the 36 bytes, a
+ * half-erased sector) makes it invalid, and load falls back to the other slot.
+ *
+ * Payload range (reject non-finite or absurd values, on save and on load):
+ *   |dh_rad| <= CALSTORE_DH_MAX_RAD, |odo_scale_err| <= CALSTORE_MU_MAX,
+ *   0 <= base_m, all three finite; source in 1..3.
+ *
+ * Blocking: a save erases one sector and a calstore_erase two; on a single-bank flash
+ * such as the STM32F405's the CPU stalls for the erase time (hundreds of ms per 16 KiB
+ * sector): save when the vehicle is stopped or the IMU steps may wait (docs/porting.md).
+ *
+ * No allocation, no recursion, no OS header; one calstore_t per NVM region, owned by the
+ * caller; not reentrant.
+ */
+#ifndef NAVECU_CALSTORE_H
+#define NAVECU_CALSTORE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "hal.h"
+
+#define CAL_SRC_NONE 0u           /* defaults, nothing calibrated (never stored) */
+#define CAL_SRC_KNOWN_POSITION 1u /* one-point calibration at a CMD_KnownPosition */
+#define CAL_SRC_GNSS 2u           /* one-point calibration at a GNSS fix */
+#define CAL_SRC_FILTER 3u         /* estimated by the Kalman filter */
+
+#define CALSTORE_VERSION 1u
+#define CALSTORE_BODY_BYTES 24u    /* bytes 0..23, covered by the CRC */
+#define CALSTORE_CRC_OFFSET 24u
+#define CALSTORE_COMMIT_OFFSET 32u
+#define CALSTORE_SLOT_BYTES 36u    /* bytes of a slot that are read and checked */
+#define CALSTORE_DH_MAX_RAD 0.5f   /* largest |dh_rad| accepted */
+#define CALSTORE_MU_MAX 0.2f       /* largest |odo_scale_err| accepted */
+
+typedef struct {
+    float dh_rad;         /* heading correction dH, seed 000 eq 9 (rad) */
+    float odo_scale_err;  /* odometer scale error mu, seed 000 eq 10 (dimensionless) */
+    float base_m;         /* distance from the start to the calibration point (m): quality */
+    uint8_t source;       /* CAL_SRC_KNOWN_POSITION 1, CAL_SRC_GNSS 2, CAL_SRC_FILTER 3 */
+} cal_record_t;
+
+/* What the caller knows of the store: seq and slot of the newest valid record.
+ * slot -1: none valid (seq is then 0 after a load or an erase). */
+typedef struct {
+    uint32_t seq;
+    int8_t slot;
+} calstore_t;
+
+typedef enum { CALSTORE_OK = 0, CALSTORE_EMPTY = 1, CALSTORE_CORRUPT = 2 } calstore_status_t;
+
+/*
+ * Read both slots and return the newest valid record.
+ *   hal: its NVM region must have >= 2 sectors of >= CALSTORE_SLOT_BYTES bytes.
+ *   cs:  out: seq and slot of the record returned, or {0, -1}.
+ *   rec: out: the newest valid record, or the defaults {0, 0, 0, CAL_SRC_NONE}.
+ * Returns CALSTORE_OK (*rec = newest valid record); CALSTORE_EMPTY (the 36 bytes of both
+ * slots are erased: defaults, not an error); CALSTORE_CORRUPT (no valid record, but some
+ * slot is not erased: defaults; the caller flags it. An interrupted first save ends here
+ * too: its slot is neither valid nor erased); HAL_EINVAL (a NULL argument), HAL_ENOSPC
+ * (the region is too small), or the HAL's error from hal_nvm_read (defaults).
+ * *cs and *rec are written on every return except HAL_EINVAL.
+ */
+int calstore_load(hal_t *hal, calstore_t *cs, cal_record_t *rec);
+
+/*
+ * Store *rec as the new newest record, power-safe (see above).
+ *   cs: in: from calstore_load, calstore_save or calstore_erase. Save does not trust it
+ *       to choose the slot: it reads both slots again, so a stale cs (an hal_nvm_erase
+ *       behind its back, a save without a load) can never overwrite the newest record.
+ *       Its seq is used only when no slot is valid: the record gets cs->seq + 1.
+ *       out: the seq and slot of the record written, on success only.
+ * Returns 0; HAL_EINVAL (a NULL argument, or *rec outside the payload range: nothing is
+ * written); HAL_ENOSPC (the region is too small); HAL_EIO if the record does not read
+ * back as written (it is then not committed); or the HAL's error from an NVM call. On any
+ * error the previous newest record is still the one calstore_load returns.
+ */
+int calstore_save(hal_t *hal, calstore_t *cs, const cal_record_t *rec);
+
+/*
+ * Erase both slots: calstore_load then returns CALSTORE_EMPTY. The slot that does not
+ * hold the newest record is erased first, so a power loss in between leaves the newest
+ * record, as if the erase had not been asked for. cs becomes {0, -1} on success.
+ * Returns 0, HAL_EINVAL (a NULL argument), HAL_ENOSPC, or the HAL's error.
+ */
+int calstore_erase(hal_t *hal, calstore_t *cs);
+
+/* The CRC-32 above of data[0..len) (exposed for tests and tools). */
+uint32_t calstore_crc32(const uint8_t *data, size_t len);
+
+#endif /* NAVECU_CALSTORE_H */

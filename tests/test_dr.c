@@ -1,0 +1,354 @@
+/*
+ * test_dr.c - odometer, dead reckoning and one-point calibration (seed 000 eqs 1-4, 7-12).
+ * Built for both numeric variants.
+ *
+ * Hand-computed case: a true displacement t = (3000, 4000) m (east, north; |t| = 5 km)
+ * with mu = 0.01 and dH = 0.002 rad gives, by eqs 5-6, dE = mu t_E + t_N dH = 30 + 8 = 38 m
+ * and dN = mu t_N - t_E dH = 40 - 6 = 34 m; eqs 9-10 must return exactly (0.002, 0.01).
+ *
+ * Drive tests: a polyline of legs (heading, length) is dead-reckoned twice through
+ * dr_step: once true, once with an odometer reading (1 + mu) x the distance and a heading
+ * offset by dH (seed 000's error model). Calibrating at the end of the erroneous run must
+ * find (dH, mu); the same drive rotated by any angle, or mirrored east-west, must give the
+ * same estimates (they may not depend on where north is). Float32 tolerance: positions are
+ * fixed point; the local metres of eqs 7-8 are float32 (ulp 0.5 mm at 5 km, i.e. 1e-7
+ * relative), and a few hundred steps of sin/cos rounding add a random walk of order
+ * sqrt(n) x 1e-7 x step: 2e-5 rad and 2e-5 in mu bound both with a margin of ten. The
+ * flat local frame of eqs 7-8 adds order (D/R)^2 = 1.6e-6 at 8 km in both variants.
+ */
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include "dr.h"
+#include "odo.h"
+#include "test_util.h"
+
+#define PI 3.14159265358979323846
+#define DEG (PI / 180.0)
+
+#if defined(NAV_REAL_DOUBLE)
+/* the flat local frame of eqs 7-8 (dr_local_m) differs from the curvilinear integration
+ * by order (D/R)^2 = (8 km / 6371 km)^2 = 1.6e-6 */
+#define TOL_EST 2e-6
+#define TOL_POS_M 0.02
+#else
+#define TOL_EST 2e-5
+#define TOL_POS_M 0.05
+#endif
+
+/* second-order terms dropped by eqs 9-10 for |dH| ~ 3e-3 rad, |mu| ~ 1e-2: mu dH + dH^2 */
+#define TOL_LINEAR 6e-5
+
+static geo_pos_t start_pos(void)
+{
+    const geo_pos_t p = {450000000LL * GEO_LSB_PER_DEG_E7, 100000000LL * GEO_LSB_PER_DEG_E7,
+                         100000LL * GEO_LSB_PER_MM}; /* 45 N, 10 E, 100 m */
+    return p;
+}
+
+/* ---------------------------------------------------------------- eqs 9-10 ---- */
+
+static void test_linear_hand_case(void **state)
+{
+    (void)state;
+    nav_real_t dh, mu;
+    assert_int_equal(onepoint_linear(NAV_C(3000.0), NAV_C(4000.0), NAV_C(38.0), NAV_C(34.0),
+                                     &dh, &mu), NAV_OK);
+    assert_near(dh, 0.002, 1e-7);
+    assert_near(mu, 0.01, 1e-7);
+    assert_int_equal(onepoint_linear(NAV_C(0.0), NAV_C(0.0), NAV_C(1.0), NAV_C(1.0), &dh, &mu),
+                     NAV_EINVAL);
+}
+
+/* d = (1 + mu) R(dH) t, R turning a bearing clockwise by dH */
+static void make_d(double te, double tn, double dh, double mu, nav_real_t *de, nav_real_t *dn)
+{
+    *de = (nav_real_t)((1.0 + mu) * (te * cos(dh) + tn * sin(dh)));
+    *dn = (nav_real_t)((1.0 + mu) * (-te * sin(dh) + tn * cos(dh)));
+}
+
+static void test_exact_every_bearing(void **state)
+{
+    (void)state;
+    const double dh_true = -0.177 * DEG, mu_true = 0.012;
+    for (int b = 0; b < 360; b += 15) {
+        const double te = 5000.0 * sin(b * DEG), tn = 5000.0 * cos(b * DEG);
+        nav_real_t de, dn, dh, mu, dhl, mul;
+        make_d(te, tn, dh_true, mu_true, &de, &dn);
+        assert_int_equal(onepoint_exact(de, dn, (nav_real_t)te, (nav_real_t)tn, &dh, &mu),
+                         NAV_OK);
+        assert_near(dh, dh_true, 1e-6);
+        assert_near(mu, mu_true, 1e-6);
+        /* eqs 9-10 agree to second order */
+        assert_int_equal(onepoint_linear((nav_real_t)te, (nav_real_t)tn,
+                                         de - (nav_real_t)te, dn - (nav_real_t)tn, &dhl, &mul),
+                         NAV_OK);
+        assert_near(dhl, dh_true, TOL_LINEAR);
+        assert_near(mul, mu_true, TOL_LINEAR);
+    }
+    nav_real_t dh, mu;
+    assert_int_equal(onepoint_exact(NAV_C(0.0), NAV_C(0.0), NAV_C(1.0), NAV_C(0.0), &dh, &mu),
+                     NAV_EINVAL);
+}
+
+/* ------------------------------------------------------------ drive tests ---- */
+
+typedef struct {
+    double heading_deg, length_m;
+} leg_t;
+
+static const leg_t DRIVE[] = {{30, 800}, {120, 600}, {75, 1500}, {10, 900}, {350, 700},
+                              {60, 1200}, {95, 500}, {170, 300}, {80, 1000}};
+#define N_LEGS (sizeof DRIVE / sizeof DRIVE[0])
+#define STEP_M 10.0
+
+/* Drive the legs (heading rotated by rot and optionally mirrored) through two dead
+ * reckoners, the second with the seed-000 errors; returns both. */
+static void drive(dr_t *truth, dr_t *dr, double rot_deg, int mirror, double dh, double mu,
+                  int n_legs)
+{
+    for (int i = 0; i < n_legs; i++) {
+        double hd = DRIVE[i].heading_deg;
+        hd = (mirror ? -hd : hd) + rot_deg;
+        const int n = (int)(DRIVE[i].length_m / STEP_M);
+        for (int k = 0; k < n; k++) {
+            assert_int_equal(dr_step(truth, (nav_real_t)STEP_M, (nav_real_t)(hd * DEG),
+                                     NAV_C(0.0)), NAV_OK);
+            assert_int_equal(dr_step(dr, (nav_real_t)(STEP_M * (1.0 + mu)),
+                                     (nav_real_t)(hd * DEG + dh), NAV_C(0.0)), NAV_OK);
+        }
+    }
+}
+
+static void calibrated_drive(double rot_deg, int mirror, nav_real_t *dh, nav_real_t *mu)
+{
+    const geo_pos_t p0 = start_pos();
+    dr_t truth, dr;
+    assert_int_equal(dr_init(&truth, &p0, NAV_C(0.0), NAV_C(0.0)), NAV_OK);
+    assert_int_equal(dr_init(&dr, &p0, NAV_C(0.0), NAV_C(0.0)), NAV_OK);
+    drive(&truth, &dr, rot_deg, mirror, -0.177 * DEG, 0.012, (int)N_LEGS);
+    dr_cal_t cal;
+    assert_int_equal(dr_calibrate(&dr, &truth.pos, NAV_C(2000.0), &cal), NAV_OK);
+    *dh = dr.dh_rad;
+    *mu = dr.mu;
+    /* reset to the true point (eqs 7-12: "the position error is reset") */
+    assert_true(dr.pos.lat == truth.pos.lat && dr.pos.lon == truth.pos.lon);
+    assert_near(dr.dist_m, 0.0, 0.0);
+}
+
+static void test_calibration_finds_the_errors(void **state)
+{
+    (void)state;
+    nav_real_t dh, mu;
+    calibrated_drive(0.0, 0, &dh, &mu);
+    assert_near(dh, -0.177 * DEG, TOL_EST);
+    assert_near(mu, 0.012, TOL_EST);
+}
+
+static void test_rotated_and_mirrored(void **state)
+{
+    (void)state;
+    nav_real_t dh0, mu0;
+    calibrated_drive(0.0, 0, &dh0, &mu0);
+    for (int rot = 30; rot < 360; rot += 47) {
+        for (int mirror = 0; mirror < 2; mirror++) {
+            nav_real_t dh, mu;
+            calibrated_drive((double)rot, mirror, &dh, &mu);
+            assert_near(dh, dh0, TOL_EST);
+            assert_near(mu, mu0, TOL_EST);
+        }
+    }
+    nav_real_t dh, mu;
+    calibrated_drive(0.0, 1, &dh, &mu);
+    assert_near(dh, dh0, TOL_EST);
+}
+
+/* After a calibration the compensated increments (eqs 11-12) follow the truth. */
+static void test_compensation_after_calibration(void **state)
+{
+    (void)state;
+    const double dh_t = 0.5 * DEG, mu_t = -0.03;
+    const geo_pos_t p0 = start_pos();
+    dr_t truth, dr;
+    assert_int_equal(dr_init(&truth, &p0, NAV_C(0.0), NAV_C(0.0)), NAV_OK);
+    assert_int_equal(dr_init(&dr, &p0, NAV_C(0.0), NAV_C(0.0)), NAV_OK);
+    drive(&truth, &dr, 0.0, 0, dh_t, mu_t, (int)N_LEGS);
+    assert_int_equal(dr_calibrate(&dr, &truth.pos, NAV_C(2000.0), NULL), NAV_OK);
+    drive(&truth, &dr, 200.0, 0, dh_t, mu_t, (int)N_LEGS); /* 7.5 km more */
+    nav_real_t e, n;
+    dr_local_m(&truth.pos, &dr.pos, &e, &n);
+    assert_near(e, 0.0, TOL_POS_M);
+    assert_near(n, 0.0, TOL_POS_M);
+    /* uncompensated, the same errors leave ~0.5 deg x 7.5 km + 3 % x 7.5 km: >100 m */
+}
+
+/* A second calibration composes with the first: a heading error that changed between
+ * them is found as a residual, and the totals are the current errors. */
+static void test_recalibration(void **state)
+{
+    (void)state;
+    const geo_pos_t p0 = start_pos();
+    dr_t truth, dr;
+    assert_int_equal(dr_init(&truth, &p0, NAV_C(0.0), NAV_C(0.0)), NAV_OK);
+    assert_int_equal(dr_init(&dr, &p0, NAV_C(0.0), NAV_C(0.0)), NAV_OK);
+    drive(&truth, &dr, 0.0, 0, 0.2 * DEG, 0.012, (int)N_LEGS);
+    dr_cal_t c1, c2;
+    assert_int_equal(dr_calibrate(&dr, &truth.pos, NAV_C(2000.0), &c1), NAV_OK);
+    drive(&truth, &dr, 90.0, 0, 0.3 * DEG, 0.015, (int)N_LEGS);
+    assert_int_equal(dr_calibrate(&dr, &truth.pos, NAV_C(2000.0), &c2), NAV_OK);
+    assert_near(c2.dh_rad, 0.1 * DEG, TOL_EST);
+    assert_near(c2.mu, 1.015 / 1.012 - 1.0, TOL_EST);
+    assert_near(dr.dh_rad, 0.3 * DEG, TOL_EST);
+    assert_near(dr.mu, 0.015, TOL_EST);
+}
+
+/* Degenerate points: too close to the base, back at the base (a loop), no motion. */
+static void test_degenerate_points(void **state)
+{
+    (void)state;
+    const geo_pos_t p0 = start_pos();
+    dr_t truth, dr;
+    assert_int_equal(dr_init(&truth, &p0, NAV_C(0.0), NAV_C(0.0)), NAV_OK);
+    assert_int_equal(dr_init(&dr, &p0, NAV_C(0.0), NAV_C(0.0)), NAV_OK);
+    /* no motion at all: t = 0 */
+    assert_int_equal(dr_calibrate(&dr, &p0, NAV_C(0.0), NULL), NAV_EINVAL);
+    drive(&truth, &dr, 0.0, 0, 0.01, 0.01, 1); /* 800 m */
+    const dr_t before = dr;
+    assert_int_equal(dr_calibrate(&dr, &truth.pos, NAV_C(2000.0), NULL), NAV_ERANGE);
+    assert_true(dr.pos.lat == before.pos.lat && dr.pos.lon == before.pos.lon);
+    assert_near(dr.dh_rad, 0.0, 0.0);
+    /* a closed loop: 4 legs back to the start, 2 km driven, base distance ~0 */
+    dr_t t2, d2;
+    assert_int_equal(dr_init(&t2, &p0, NAV_C(0.0), NAV_C(0.0)), NAV_OK);
+    assert_int_equal(dr_init(&d2, &p0, NAV_C(0.0), NAV_C(0.0)), NAV_OK);
+    for (int leg = 0; leg < 4; leg++) {
+        for (int k = 0; k < 50; k++) {
+            assert_int_equal(dr_step(&t2, NAV_C(10.0), (nav_real_t)(leg * 90 * DEG), NAV_C(0.0)),
+                             NAV_OK);
+            assert_int_equal(dr_step(&d2, NAV_C(10.1), (nav_real_t)(leg * 90 * DEG + 0.01),
+                                     NAV_C(0.0)), NAV_OK);
+        }
+    }
+    assert_int_equal(dr_calibrate(&d2, &t2.pos, NAV_C(2000.0), NULL), NAV_ERANGE);
+    /* bad inputs */
+    assert_int_equal(dr_step(&d2, (nav_real_t)NAN, NAV_C(0.0), NAV_C(0.0)), NAV_EINVAL);
+    assert_int_equal(dr_step(&d2, NAV_C(500.0), NAV_C(0.0), NAV_C(0.0)), NAV_EINVAL);
+    assert_int_equal(dr_init(&d2, &p0, NAV_C(1.0), NAV_C(0.0)), NAV_EINVAL);
+}
+
+/* On a 5 % slope the horizontal distance is ds cos(p) and the climb ds sin(p). */
+static void test_slope(void **state)
+{
+    (void)state;
+    const geo_pos_t p0 = start_pos();
+    dr_t dr;
+    assert_int_equal(dr_init(&dr, &p0, NAV_C(0.0), NAV_C(0.0)), NAV_OK);
+    const double p = atan(0.05);
+    for (int k = 0; k < 100; k++) {
+        assert_int_equal(dr_step(&dr, NAV_C(10.0), NAV_C(0.0), (nav_real_t)p), NAV_OK);
+    }
+    nav_real_t e, n;
+    dr_local_m(&p0, &dr.pos, &e, &n);
+    assert_near(n, 1000.0 * cos(p), 100 * TOL_POS_M);
+    assert_near(e, 0.0, TOL_POS_M);
+    assert_near((double)(dr.pos.h - p0.h) / (double)GEO_LSB_PER_MM / 1000.0, 1000.0 * sin(p),
+                100 * TOL_POS_M);
+}
+
+/* ------------------------------------------------------------- odometer ---- */
+
+static void test_odo_axles(void **state)
+{
+    (void)state;
+    odo_t o;
+    odo_config_t c = odo_default_config();
+    assert_int_equal(odo_init(&o, &c), NAV_OK);
+    /* a left turn at 10 m/s, yaw rate 0.2 rad/s: rear wheels 10 -+ 0.2 x 0.8 */
+    const nav_real_t r = NAV_C(0.2);
+    const nav_real_t rear_l = NAV_C(10.0) - r * NAV_C(0.8), rear_r = NAV_C(10.0) + r * NAV_C(0.8);
+    const nav_real_t lat = r * NAV_C(2.7);
+    const nav_real_t fl = nav_sqrt(rear_l * rear_l + lat * lat);
+    const nav_real_t fr = nav_sqrt(rear_r * rear_r + lat * lat);
+    const nav_real_t w[4] = {fl, fr, rear_l, rear_r};
+    assert_int_equal(odo_wheels(&o, w, r), NAV_OK);
+    assert_near(o.speed_mps, 10.0, 1e-5);
+    c.axle = ODO_AXLE_FRONT;
+    assert_int_equal(odo_init(&o, &c), NAV_OK);
+    assert_int_equal(odo_wheels(&o, w, r), NAV_OK);
+    /* the front mean is 10.0146; the steering correction brings it to within the
+     * second-order difference of the two wheels' circles (< 1 mm/s here) */
+    assert_near(o.speed_mps, 10.0, 2e-3);
+    /* reverse */
+    const nav_real_t back[4] = {NAV_C(-2.0), NAV_C(-2.0), NAV_C(-2.0), NAV_C(-2.0)};
+    assert_int_equal(odo_wheels(&o, back, NAV_C(0.0)), NAV_OK);
+    assert_near(o.speed_mps, -2.0, 1e-5);
+}
+
+static void test_odo_refusals_and_timeout(void **state)
+{
+    (void)state;
+    odo_t o;
+    const odo_config_t c = odo_default_config();
+    assert_int_equal(odo_init(&o, &c), NAV_OK);
+    const nav_real_t ok[4] = {NAV_C(5.0), NAV_C(5.0), NAV_C(5.0), NAV_C(5.0)};
+    assert_int_equal(odo_wheels(&o, ok, NAV_C(0.0)), NAV_OK);
+    const nav_real_t locked[4] = {NAV_C(5.0), NAV_C(5.0), NAV_C(0.0), NAV_C(5.0)};
+    assert_int_equal(odo_wheels(&o, locked, NAV_C(0.0)), NAV_EINVAL);
+    const nav_real_t nan_w[4] = {NAV_C(5.0), (nav_real_t)NAN, NAV_C(5.0), NAV_C(5.0)};
+    assert_int_equal(odo_wheels(&o, nan_w, NAV_C(0.0)), NAV_EINVAL);
+    assert_int_equal(o.n_refused, 2);
+    assert_near(o.speed_mps, 5.0, 0.0); /* the last good speed stands */
+    for (int k = 0; k < 149; k++) {
+        odo_tick(&o, NAV_C(0.01), NAV_C(0.0));
+    }
+    assert_true(o.valid);
+    odo_tick(&o, NAV_C(0.02), NAV_C(0.0));
+    assert_false(o.valid); /* older than 1.5 s */
+}
+
+static void test_odo_standstill(void **state)
+{
+    (void)state;
+    odo_t o;
+    const odo_config_t c = odo_default_config();
+    assert_int_equal(odo_init(&o, &c), NAV_OK);
+    const nav_real_t zero[4] = {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)};
+    assert_int_equal(odo_wheels(&o, zero, NAV_C(0.0)), NAV_OK);
+    for (int k = 0; k < 49; k++) {
+        odo_tick(&o, NAV_C(0.01), NAV_C(0.0));
+    }
+    assert_false(o.standing);
+    odo_tick(&o, NAV_C(0.01), NAV_C(0.0));
+    odo_tick(&o, NAV_C(0.01), NAV_C(0.0));
+    assert_true(o.standing); /* 0.5 s of zero speed, to one sample (float32 sum of 0.01) */
+    odo_tick(&o, NAV_C(0.01), NAV_C(0.05)); /* the body turns: not standing */
+    assert_false(o.standing);
+    const nav_real_t creep[4] = {NAV_C(0.0), NAV_C(0.0), NAV_C(0.02), NAV_C(0.0)};
+    assert_int_equal(odo_wheels(&o, creep, NAV_C(0.0)), NAV_OK);
+    for (int k = 0; k < 100; k++) {
+        odo_tick(&o, NAV_C(0.01), NAV_C(0.0));
+    }
+    assert_false(o.standing); /* one wheel moves: not standing */
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_linear_hand_case),
+        cmocka_unit_test(test_exact_every_bearing),
+        cmocka_unit_test(test_calibration_finds_the_errors),
+        cmocka_unit_test(test_rotated_and_mirrored),
+        cmocka_unit_test(test_compensation_after_calibration),
+        cmocka_unit_test(test_recalibration),
+        cmocka_unit_test(test_degenerate_points),
+        cmocka_unit_test(test_slope),
+        cmocka_unit_test(test_odo_axles),
+        cmocka_unit_test(test_odo_refusals_and_timeout),
+        cmocka_unit_test(test_odo_standstill),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
