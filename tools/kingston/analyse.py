@@ -1,0 +1,321 @@
+"""Facts about the Kingston 2008 data that the conversion and the firmware depend on.
+
+    python -m tools.kingston.analyse [--data DIR] [--json out/kingston/analysis.json]
+
+- IMU time stamps: spacing, duplicates, gaps, phase against the GPS second.
+- Standstills by the odometer (OBD speed exactly 0 on consecutive 1 Hz rows): their
+  number and durations, the mean gyro z per stop (IMU samples from the first to the last
+  zero row of the stop) and its spread, against the Earth rate's vertical component
+  U sin(lat) that a level z-up gyro measures at rest: bias = mean wz - U sin(lat).
+- Odometer against the reference: integrated OBD speed (trapezoid over the 1 Hz rows in the
+  reference's time span) / the reference's travelled distance (polyline of its 1 Hz
+  positions; also its integrated horizontal speed); median speed ratio above 3 m/s; the lag
+  that best aligns the two speeds.
+- The initial attitude: reference.csv's first row, and roll and pitch levelled from this
+  IMU's own accelerometers over the initial standstill (docs/frames.md:
+  roll = atan2(-fx, fz), pitch = atan2(fy, hypot(fx, fz))).
+- Gyro z against the reference heading: the 1 s heading increments of the reference against
+  -integral(wz) over the same second shifted by a lag tau, least squares over the seconds
+  with turning (|d azimuth| > 2 deg/s): the lag and the scale factor (1 + s), for both
+  increment rules (rect, trapezoid); and the integrated gyro heading (Earth rate removed)
+  against the reference heading at some times.
+- Gyro noise and means during the first (529 s) standstill, against the Earth rate a level
+  IMU with the reference's heading measures on each axis.
+- GNSS fixes against the reference, horizontal.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from tools.kingston import convert
+
+EARTH_RATE = 7.292115e-5  # rad/s
+DEG_PER_H = 180.0 / math.pi * 3600.0
+
+
+def imu_timing(drive) -> dict:
+    t = drive.imu["time_s"]
+    dt = np.diff(t)
+    frac = np.round((t % 1.0) * 1000.0).astype(int) % 100
+    tim = convert.imu_increments(drive.imu, drive.t0_gps).timing
+    return {"rows": int(t.size), "first_gps_s": float(t[0]), "last_gps_s": float(t[-1]),
+            "span_s": float(t[-1] - t[0]), "interval_min_s": float(dt.min()),
+            "interval_max_s": float(dt.max()), "interval_mean_s": float(dt.mean()),
+            "interval_max_dev_from_0.1_s": float(np.abs(dt - 0.1).max()),
+            "duplicates": tim["duplicates_identical"] + tim["duplicates_conflicting"],
+            "gaps": len(tim["gaps"]), "missing_samples": tim["missing_samples"],
+            "phase_ms_after_gps_second_mod_100": sorted(set((frac).tolist()))}
+
+
+def stops(drive, min_s: float = 10.0) -> dict:
+    """Odometer standstills and the gyro z mean in each."""
+    o = drive.odo
+    z = (o["speed_mps"] == 0.0).astype(int)
+    d = np.diff(np.concatenate(([0], z, [0])))
+    starts, ends = np.flatnonzero(d == 1), np.flatnonzero(d == -1) - 1
+    t_imu = drive.imu["time_s"]
+    wz = drive.imu["wz_radps"]
+    lat = math.radians(float(np.mean(drive.ref["lat_deg"])))
+    earth_up = EARTH_RATE * math.sin(lat) * DEG_PER_H
+    rows = []
+    for a, b in zip(starts, ends):
+        ta, tb = float(o["time_s"][a]), float(o["time_s"][b])
+        sel = (t_imu >= ta) & (t_imu <= tb)
+        w = wz[sel] * DEG_PER_H
+        rows.append({"start_s": round(ta - drive.t0_gps, 2), "duration_s": tb - ta + 1.0,
+                     "zero_rows": int(b - a + 1), "imu_samples": int(sel.sum()),
+                     "mean_wz_deg_h": float(w.mean()) if w.size else None,
+                     "sd_wz_deg_h": float(w.std(ddof=1)) if w.size > 1 else None,
+                     "sem_wz_deg_h": float(w.std(ddof=1) / math.sqrt(w.size)) if w.size > 1
+                     else None})
+    long_ = [r for r in rows if r["duration_s"] >= min_s and r["imu_samples"] > 1]
+    means = np.array([r["mean_wz_deg_h"] for r in long_])
+    n = np.array([r["imu_samples"] for r in long_])
+    dur = np.array([r["duration_s"] for r in rows])
+    all_means = np.array([r["mean_wz_deg_h"] for r in rows if r["mean_wz_deg_h"] is not None])
+    return {
+        "definition": "runs of consecutive odometer rows with speed exactly 0; IMU samples "
+                      "from the first to the last zero row",
+        "count": len(rows), "total_s": float(dur.sum()),
+        "duration_s": {"min": float(dur.min()), "median": float(np.median(dur)),
+                       "max": float(dur.max())},
+        "durations_s": [r["duration_s"] for r in rows],
+        "earth_rate_up_deg_h": earth_up,
+        "all_stops": {"n": len(rows), "mean_of_means_deg_h": float(all_means.mean()),
+                      "sd_of_means_deg_h": float(all_means.std(ddof=1)),
+                      "median_deg_h": float(np.median(all_means))},
+        f"stops_ge_{min_s:g}s": {
+            "n": len(long_), "mean_of_means_deg_h": float(means.mean()),
+            "sd_of_means_deg_h": float(means.std(ddof=1)),
+            "median_deg_h": float(np.median(means)),
+            "min_deg_h": float(means.min()), "max_deg_h": float(means.max()),
+            "sample_weighted_mean_deg_h": float(np.sum(means * n) / n.sum()),
+            "bias_deg_h": float(np.sum(means * n) / n.sum() - earth_up),
+            "bias_excluding_first_stop_deg_h": float(
+                np.sum(means[1:] * n[1:]) / n[1:].sum() - earth_up) if len(long_) > 1 else None,
+            "typical_sem_deg_h": float(np.median([r["sem_wz_deg_h"] for r in long_]))},
+        "stops": rows,
+    }
+
+
+def odometer_vs_reference(drive) -> dict:
+    ref = convert.reference_track(drive)
+    r, o = drive.ref, drive.odo
+    sel = (o["time_s"] >= r["time_s"][0]) & (o["time_s"] <= r["time_s"][-1])
+    odo_m = float(np.trapezoid(o["speed_mps"][sel], o["time_s"][sel]))
+    ref_speed = np.hypot(r["ve_mps"], r["vn_mps"])
+    ref_speed_m = float(np.trapezoid(ref_speed, r["time_s"]))
+    poly_m = float(ref["dist_m"][-1])
+    rs = np.interp(o["time_s"], r["time_s"], ref_speed)
+    m = sel & (rs > 3.0)
+    lags = {}
+    for lag in (-2, -1, 0, 1, 2):
+        rr = np.interp(o["time_s"][sel] + lag, r["time_s"], ref_speed)
+        lags[lag] = float(np.sqrt(np.mean((o["speed_mps"][sel] - rr) ** 2)))
+    # distance the reference "travels" while the odometer says 0 (position noise at rest)
+    still = np.interp(r["time_s"], o["time_s"], o["speed_mps"]) == 0.0
+    jitter = float(np.sum(np.diff(ref["dist_m"])[still[1:] & still[:-1]]))
+    return {"odometer_distance_m": odo_m, "reference_polyline_m": poly_m,
+            "reference_speed_integral_m": ref_speed_m,
+            "ratio_to_polyline": odo_m / poly_m, "ratio_to_speed_integral": odo_m / ref_speed_m,
+            "median_speed_ratio_above_3mps": float(np.median(o["speed_mps"][m] / rs[m])),
+            "rms_speed_difference_by_lag_s": lags,
+            "reference_polyline_while_odometer_0_m": jitter}
+
+
+def initial_attitude(drive, still_s: float = 500.0) -> dict:
+    r0 = drive.ref[0]
+    t = drive.imu["time_s"]
+    s = t < t[0] + still_s
+    fx, fy, fz = (float(drive.imu[c][s].mean()) for c in ("fx_mps2", "fy_mps2", "fz_mps2"))
+    roll = math.degrees(math.atan2(-fx, fz))
+    pitch = math.degrees(math.atan2(fy, math.hypot(fx, fz)))
+    rs = drive.ref["time_s"] < drive.ref["time_s"][0] + still_s
+    return {"reference_first_row": {"gps_s": float(r0["time_s"]),
+                                    "heading_deg": float(r0["azimuth_deg"]),
+                                    "roll_deg": float(r0["roll_deg"]),
+                                    "pitch_deg": float(r0["pitch_deg"]),
+                                    "lat_deg": float(r0["lat_deg"]),
+                                    "lon_deg": float(r0["lon_deg"]),
+                                    "height_m": float(r0["height_m"])},
+            f"reference_mean_first_{still_s:g}s": {
+                "roll_deg": float(drive.ref["roll_deg"][rs].mean()),
+                "pitch_deg": float(drive.ref["pitch_deg"][rs].mean()),
+                "heading_min_deg": float(drive.ref["azimuth_deg"][rs].min()),
+                "heading_max_deg": float(drive.ref["azimuth_deg"][rs].max())},
+            f"imu_accel_levelled_first_{still_s:g}s": {
+                "roll_deg": roll, "pitch_deg": pitch, "fz_mps2": fz}}
+
+
+def gyro_z_timing(drive) -> dict:
+    """Lag and scale of -wz against the reference's 1 s heading increments, for the
+    increments of both rules of tools/kingston/convert.py."""
+    return {rule: _gyro_z_timing(drive, rule) for rule in convert.IMU_RULES}
+
+
+def _gyro_z_timing(drive, rule) -> dict:
+    t = drive.imu["time_s"]
+    wz = drive.imu["wz_radps"]
+    inc = wz[1:] if rule == "rect" else 0.5 * (wz[1:] + wz[:-1])
+    psi = np.concatenate(([0.0], np.cumsum(inc * np.diff(t))))
+    r = drive.ref
+    az = np.unwrap(np.radians(r["azimuth_deg"]))
+    daz = np.diff(az)
+    turning = np.abs(np.degrees(daz)) > 2.0
+    best = None
+    table = {}
+    for tau_ms in range(-300, 301, 10):
+        tau = tau_ms / 1000.0
+        p = np.interp(r["time_s"] + tau, t, psi)
+        dpsi = -np.diff(p)
+        x, y = dpsi[turning], daz[turning]
+        k = float(np.dot(x, y) / np.dot(x, x))
+        res = float(np.sqrt(np.mean((y - k * x) ** 2)))
+        table[tau_ms] = res
+        if best is None or res < best[1]:
+            best = (tau_ms, res, k)
+    return {"turning_seconds": int(turning.sum()), "best_lag_ms": best[0],
+            "scale_at_best": best[2], "rms_residual_deg_at_best": math.degrees(best[1]),
+            "rms_residual_deg_at_0": math.degrees(table[0]),
+            "meaning": "reference heading at t matches the IMU's integrated -wz at t + lag"}
+
+
+def gyro_heading_vs_reference(drive, times=(520, 560, 800, 1195, 1500, 2000, 2500, 3000,
+                                              3500)) -> dict:
+    """The reference's azimuth against its first value minus the integrated gyro z, Earth
+    rate removed (rule rect, no bias correction), at some times (s from the first IMU
+    sample): where the two disagree, one of them moved."""
+    t = drive.imu["time_s"] - drive.t0_gps
+    lat = math.radians(float(drive.ref["lat_deg"][0]))
+    wz = drive.imu["wz_radps"] - EARTH_RATE * math.sin(lat)
+    psi = np.concatenate(([0.0], np.cumsum(wz[1:] * np.diff(t))))
+    tr = drive.ref["time_s"] - drive.t0_gps
+    az = np.unwrap(np.radians(drive.ref["azimuth_deg"]))
+    err = np.degrees(az[0] - np.interp(tr, t, psi) - az)
+    return {"definition": "gyro heading - reference heading, deg (no gyro bias removed)",
+            "at_s": {str(T): float(err[int(np.argmin(np.abs(tr - T)))]) for T in times}}
+
+
+def gyro_noise_at_first_stop(drive) -> dict:
+    """Per-axis standard deviation of the 10 Hz rates during the initial standstill and the
+    angle random walk it implies for interval-mean samples: sd * sqrt(dt)."""
+    st = stops(drive)["stops"][0]
+    t = drive.imu["time_s"] - drive.t0_gps
+    sel = (t >= st["start_s"]) & (t <= st["start_s"] + st["duration_s"] - 1.0)
+    out = {"stop_s": [st["start_s"], st["duration_s"]]}
+    # the Earth rate a level IMU with this heading measures: north part on x (right) and y
+    lat = math.radians(float(drive.ref["lat_deg"][0]))
+    hdg = math.radians(float(drive.ref["azimuth_deg"][0]))
+    north = EARTH_RATE * math.cos(lat) * DEG_PER_H
+    earth = {"x": -math.sin(hdg) * north, "y": math.cos(hdg) * north,
+             "z": EARTH_RATE * math.sin(lat) * DEG_PER_H}
+    for ax in ("x", "y", "z"):
+        w = drive.imu[f"w{ax}_radps"][sel] * DEG_PER_H
+        sd = float(w.std(ddof=1))
+        out[ax] = {"mean_deg_h": float(w.mean()), "earth_rate_deg_h": earth[ax],
+                   "bias_deg_h": float(w.mean()) - earth[ax], "sd_deg_h": sd,
+                   "arw_deg_sqrt_h": sd * math.sqrt(0.1) / 60.0}
+    return out
+
+
+def gnss_vs_reference(drive) -> dict:
+    g, r = drive.gnss, drive.ref
+    common, gi, ri = np.intersect1d(np.rint(g["time_s"]), np.rint(r["time_s"]),
+                                    return_indices=True)
+    e = convert.horizontal_distance_m(r["lat_deg"][ri], r["lon_deg"][ri],
+                                      g["lat_deg"][gi], g["lon_deg"][gi])
+    dh = g["height_m"][gi] - r["height_m"][ri]
+    return {"n": int(e.size), "rms_m": float(np.sqrt(np.mean(e ** 2))),
+            "median_m": float(np.median(e)), "p95_m": float(np.percentile(e, 95)),
+            "max_m": float(e.max()), "height_minus_reference_median_m": float(np.median(dh))}
+
+
+def analyse(drive) -> dict:
+    return {"imu_timing": imu_timing(drive), "stops": stops(drive),
+            "odometer": odometer_vs_reference(drive), "initial_attitude": initial_attitude(drive),
+            "gyro_z_vs_reference_heading": gyro_z_timing(drive),
+            "gyro_heading_vs_reference": gyro_heading_vs_reference(drive),
+            "gyro_noise_at_first_stop": gyro_noise_at_first_stop(drive),
+            "gnss_vs_reference": gnss_vs_reference(drive)}
+
+
+def text(a: dict) -> str:
+    it, st, od, ia = a["imu_timing"], a["stops"], a["odometer"], a["initial_attitude"]
+    lg = st["stops_ge_10s"]
+    r0 = ia["reference_first_row"]
+    lev = ia["imu_accel_levelled_first_500s"]
+    gz = a["gyro_z_vs_reference_heading"]
+    g = a["gnss_vs_reference"]
+    lines = [
+        f"IMU: {it['rows']} rows over {it['span_s']:.1f} s, interval {it['interval_min_s']:.6f}.."
+        f"{it['interval_max_s']:.6f} s (max deviation from 0.1 s "
+        f"{it['interval_max_dev_from_0.1_s']:.1e}),"
+        f" {it['duplicates']} duplicates, {it['gaps']} gaps; samples at GPS second + "
+        f"{it['phase_ms_after_gps_second_mod_100']} ms (mod 100)",
+        f"stops (odometer 0): {st['count']}, {st['total_s']:.0f} s in all, durations "
+        f"{st['duration_s']['min']:.0f}..{st['duration_s']['max']:.0f} s (median "
+        f"{st['duration_s']['median']:.0f} s)",
+        f"  gyro z at stops >= 10 s ({lg['n']}): mean of means {lg['mean_of_means_deg_h']:.2f} "
+        f"deg/h, sd {lg['sd_of_means_deg_h']:.2f}, "
+        f"range {lg['min_deg_h']:.2f}..{lg['max_deg_h']:.2f}, "
+        f"sample-weighted {lg['sample_weighted_mean_deg_h']:.2f} deg/h; Earth rate up "
+        f"{st['earth_rate_up_deg_h']:.2f} deg/h -> bias {lg['bias_deg_h']:.2f} deg/h "
+        f"(without the first stop {lg['bias_excluding_first_stop_deg_h']:.2f}); typical "
+        f"standard error per stop {lg['typical_sem_deg_h']:.1f} deg/h",
+        f"  all {st['all_stops']['n']} stops: mean of means "
+        f"{st['all_stops']['mean_of_means_deg_h']:.2f}"
+        f" deg/h, sd {st['all_stops']['sd_of_means_deg_h']:.2f}, median "
+        f"{st['all_stops']['median_deg_h']:.2f}",
+        f"odometer: {od['odometer_distance_m']:.0f} m vs reference polyline "
+        f"{od['reference_polyline_m']:.0f} m (ratio {od['ratio_to_polyline']:.4f}), reference "
+        f"speed integral {od['reference_speed_integral_m']:.0f} m (ratio "
+        f"{od['ratio_to_speed_integral']:.4f}); median speed ratio > 3 m/s "
+        f"{od['median_speed_ratio_above_3mps']:.4f}; RMS speed difference by lag "
+        + ", ".join(f"{k:+d} s {v:.2f}" for k, v in od["rms_speed_difference_by_lag_s"].items()),
+        f"initial attitude (reference first row, GPS {r0['gps_s']:.0f}): heading "
+        f"{r0['heading_deg']:.4f} deg, roll {r0['roll_deg']:.4f} deg, "
+        f"pitch {r0['pitch_deg']:.4f} deg;"
+        f" this IMU's accelerometers over the first 500 s: roll {lev['roll_deg']:.4f}, pitch "
+        f"{lev['pitch_deg']:.4f} deg",
+        f"gyro z vs reference heading ({gz['rect']['turning_seconds']} turning seconds): "
+        + "; ".join(f"rule {r}: best lag {v['best_lag_ms']} ms, scale {v['scale_at_best']:.4f}, "
+                    f"residual {v['rms_residual_deg_at_best']:.3f} deg/s (at lag 0: "
+                    f"{v['rms_residual_deg_at_0']:.3f})" for r, v in gz.items()),
+        "gyro heading - reference heading (deg) at t = " + ", ".join(
+            f"{k} s {v:+.2f}" for k, v in a["gyro_heading_vs_reference"]["at_s"].items()),
+        "gyro at the first stop: " + ", ".join(
+            f"{ax} mean {a['gyro_noise_at_first_stop'][ax]['mean_deg_h']:+.2f} deg/h (Earth "
+            f"{a['gyro_noise_at_first_stop'][ax]['earth_rate_deg_h']:+.2f}: bias "
+            f"{a['gyro_noise_at_first_stop'][ax]['bias_deg_h']:+.2f}), sd "
+            f"{a['gyro_noise_at_first_stop'][ax]['sd_deg_h']:.1f} deg/h (ARW "
+            f"{a['gyro_noise_at_first_stop'][ax]['arw_deg_sqrt_h']:.3f} deg/sqrt(h))"
+            for ax in ("x", "y", "z")),
+        f"GNSS vs reference: {g['n']} epochs, rms {g['rms_m']:.2f} m, "
+        f"median {g['median_m']:.2f} m, "
+        f"p95 {g['p95_m']:.2f} m, max {g['max_m']:.1f} m; height - reference median "
+        f"{g['height_minus_reference_median_m']:.2f} m",
+    ]
+    return "\n".join(lines)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--data", default=None)
+    ap.add_argument("--json", default=None, help="also write the numbers here")
+    a = ap.parse_args(argv)
+    res = analyse(convert.load(a.data))
+    print(text(res))
+    if a.json:
+        Path(a.json).parent.mkdir(parents=True, exist_ok=True)
+        Path(a.json).write_text(json.dumps(res, indent=2))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,470 @@
+"""The recorded Kingston 2008 drive through the firmware, against the SPAN reference.
+
+    python -m tools.kingston.run --mode dr|full [--outages SPEC] [--calibrate-at-km 5|none]
+                                 [--out out/kingston-dr] [--navecu build/host/navecu]
+
+Stages: the CSVs converted to a candump log (tools/kingston/convert.py; `dr` sends no GNSS
+frame at all, `full` sends GNSS with the outages, default "60 s every 240 s"); the host
+firmware run over it (build/host/navecu --can-log, IMU, NAV and status at 10 Hz); the
+report: report.json and PNG plots in the output folder, a summary on stdout.
+
+The NAV outputs are read with tools/sim/report.py read_nav_log: their time is NAV_Height's
+TimeOfValidity, the firmware's IMU time, i.e. seconds since the first IMU sample, the log's
+time base. The reference (1 Hz) is interpolated linearly to those times; only NAV sets
+within the reference's time span are compared. Horizontal errors use the local WGS-84
+radii; heights are not compared (the GNSS and reference heights differ by a datum).
+Travelled distances are the polyline of the reference positions.
+
+report.json: horizontal_error_m {rms, p95, max, final}, distance_km, heading_error_deg,
+outages (per outage: distance, max error, error at its end), calibration (the one-point
+calibration at --calibrate-at-km: dH_deg and mu decoded from the firmware's
+NAV_Calibration frames after the command, or performed = false with what the firmware
+said; error_before_pct = horizontal error at the calibration point / distance travelled
+until then, error_after_pct = max horizontal error after it / distance travelled since,
+in %), gnss_only_horizontal_error_m (the receiver's fixes against the reference).
+"""
+from __future__ import annotations
+
+import argparse
+import hashlib
+import json
+import math
+import shlex
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import can
+import numpy as np
+
+from tools import navecu_can as nc
+from tools.kingston import convert
+from tools.sim import report
+
+ROOT = Path(__file__).resolve().parents[2]
+RATES = ["--imu-rate-hz", "10", "--nav-rate-hz", "10", "--status-rate-hz", "10"]
+
+
+class Stages:
+    def __init__(self, n):
+        self.n, self.k, self.t0 = n, 0, None
+
+    def start(self, what):
+        self.k += 1
+        self.t0 = time.monotonic()
+        print(f"[{self.k}/{self.n}] {what} ...", end="", flush=True)
+
+    def done(self, extra=""):
+        print(f" {time.monotonic() - self.t0:.1f} s{(' - ' + extra) if extra else ''}",
+              flush=True)
+
+
+def stats(x) -> dict:
+    x = np.asarray(x, dtype=float)
+    if x.size == 0:
+        return {"rms": None, "p95": None, "max": None, "final": None}
+    return {"rms": float(np.sqrt(np.mean(x ** 2))), "p95": float(np.percentile(x, 95)),
+            "max": float(np.max(x)), "final": float(x[-1])}
+
+
+def read_calibration_log(path) -> dict:
+    """NAV_Calibration frames of a navecu output log, with the firmware's time (that of the
+    last NAV_Height, TimeOfValidity unwrapped, as read_nav_log does; the log timestamp
+    before any NAV_Height)."""
+    db = nc.load_db()
+    cal_id = db.get_message_by_name("NAV_Calibration").frame_id
+    h_id = db.get_message_by_name("NAV_Height").frame_id
+    rows, t_now, last_ms, wraps = [], None, None, 0
+    with can.LogReader(str(path)) as reader:
+        for msg in reader:
+            if msg.arbitration_id == h_id:
+                ms = int.from_bytes(bytes(msg.data[4:6]), "little")  # TimeOfValidity, bits 32..47
+                if last_ms is not None and ms < last_ms:
+                    wraps += 1
+                last_ms = ms
+                t_now = (wraps * 65536 + ms) / 1000.0
+            elif msg.arbitration_id == cal_id:
+                sig = db.decode_message(cal_id, bytes(msg.data), decode_choices=False)
+                sig["t_s"] = t_now if t_now is not None else float(msg.timestamp)
+                rows.append(sig)
+    if not rows:
+        return {}
+    return {k: np.array([r[k] for r in rows], dtype=float) for k in rows[0]}
+
+
+def _choice(db, message, signal, value) -> str:
+    choices = db.get_message_by_name(message).get_signal_by_name(signal).choices or {}
+    v = int(value)
+    return str(choices.get(v, v))
+
+
+def calibration_block(cal_meta, cal_log, status, t, herr, dist_at) -> dict:
+    """The report's calibration entry (module docstring)."""
+    if not cal_meta:
+        return {"requested": False, "performed": False, "time_s": None, "dH_deg": None,
+                "mu": None, "error_before_pct": None, "error_after_pct": None}
+    db = nc.DEFAULT_DB
+    t_cal = cal_meta["time_s"]
+    out = {"requested": True, "time_s": t_cal, "at_km": cal_meta["at_km"],
+           "lat_deg": cal_meta["lat_deg"], "lon_deg": cal_meta["lon_deg"],
+           "performed": False, "dH_deg": None, "mu": None}
+    # errors around the point, whatever the firmware made of the command
+    before = t <= t_cal + 1e-9
+    after = t > t_cal + 1e-9
+    if before.any() and after.any():
+        d_before = float(np.interp(t_cal, t, dist_at) - dist_at[0])
+        d_after = float(dist_at[-1] - np.interp(t_cal, t, dist_at))
+        e_cal = float(herr[before][-1])
+        e_after = float(herr[after].max())
+        out.update({"distance_before_m": d_before, "distance_after_m": d_after,
+                    "error_at_point_m": e_cal, "max_error_after_m": e_after,
+                    "error_before_pct": 100.0 * e_cal / d_before if d_before > 0 else None,
+                    "error_after_pct": 100.0 * e_after / d_after if d_after > 0 else None})
+    else:
+        out.update({"error_before_pct": None, "error_after_pct": None})
+    if not cal_log:
+        out["status"] = "not performed: the firmware sent no NAV_Calibration frame"
+        return out
+    ct = cal_log["t_s"]
+    prior = ct <= t_cal + 1e-9
+    count_before = int(cal_log["CalCount"][prior][-1]) if prior.any() else 0
+    later = np.flatnonzero(~prior)
+    if not later.size:
+        out["status"] = "not performed: no NAV_Calibration frame after the command"
+        return out
+    done = [i for i in later if int(cal_log["CalCount"][i]) > count_before]
+    # what the command counter page says right after the command
+    rej = None
+    if status is not None and "CntCmdRejected" in status:
+        st_t, st_c = status["t_s"], status["CntCmdRejected"]
+        ok = ~np.isnan(st_c)
+        b = ok & (st_t <= t_cal + 1e-9)
+        a = ok & (st_t > t_cal + 1e-9) & (st_t <= t_cal + 2.0)
+        if b.any() and a.any():
+            rej = int(st_c[a][-1] - st_c[b][-1])
+    out["commands_rejected_within_2s"] = rej
+    if done:
+        i = done[0]
+        out.update({"performed": True, "reported_at_s": float(ct[i]),
+                    "dH_deg": float(cal_log["HeadingCorrection"][i]),
+                    "mu": float(cal_log["OdoScaleError"][i]),
+                    "cal_count": int(cal_log["CalCount"][i]),
+                    "cal_status": _choice(db, "NAV_Calibration", "CalStatus",
+                                          cal_log["CalStatus"][i]),
+                    "cal_source": _choice(db, "NAV_Calibration", "CalSource",
+                                          cal_log["CalSource"][i]),
+                    "status": "performed"})
+    else:
+        i = later[0]
+        st = _choice(db, "NAV_Calibration", "CalStatus", cal_log["CalStatus"][i])
+        why = f"CalCount stayed {count_before}, CalStatus {st}"
+        if rej:
+            why += f", CntCmdRejected +{rej} (the firmware refused the command)"
+        out["status"] = f"not performed: {why}"
+        out["cal_status"] = st
+    return out
+
+
+def gnss_errors(drive, sent_times=None) -> dict:
+    """The receiver's fixes against the reference at the epochs both have (heights ignored).
+    sent_times: only the epochs at these GPS times (the ones the log carries)."""
+    g = drive.gnss
+    common, gi, ri = np.intersect1d(np.rint(g["time_s"]), np.rint(drive.ref["time_s"]),
+                                    return_indices=True)
+    if sent_times is not None:
+        keep = np.isin(common, np.rint(sent_times))
+        gi, ri = gi[keep], ri[keep]
+    e = convert.horizontal_distance_m(drive.ref["lat_deg"][ri], drive.ref["lon_deg"][ri],
+                                      g["lat_deg"][gi], g["lon_deg"][gi])
+    if not e.size:
+        return {"n": 0, "rms": None, "p95": None, "median": None, "max": None}
+    return {"n": int(e.size), "rms": float(np.sqrt(np.mean(e ** 2))),
+            "p95": float(np.percentile(e, 95)), "median": float(np.median(e)),
+            "max": float(e.max())}
+
+
+def sent_gnss_times(can_log) -> np.ndarray:
+    """GPS times of the GNSS epochs in the log that close with >= 4 satellites (the ones
+    the firmware accepts), from their GNSS_Status TimeOfWeek."""
+    db = nc.DEFAULT_DB
+    sid = db.get_message_by_name("GNSS_Status").frame_id
+    out = []
+    with can.LogReader(str(can_log)) as reader:
+        for msg in reader:
+            if msg.arbitration_id == sid:
+                s = db.decode_message(sid, bytes(msg.data), decode_choices=False)
+                if s["NumSatellites"] >= 4 and s["FixType"] >= 3:
+                    out.append(float(s["TimeOfWeek"]))
+    return np.array(out)
+
+
+def compute(drive, meta, nav, cal_log) -> tuple:
+    """report.json content and the plot series."""
+    ref = convert.reference_track(drive)
+    rep = {"data": str(drive.data_dir), "t0_gps_s": drive.t0_gps,
+           "duration_s": float(ref["t_s"][-1] - ref["t_s"][0]),
+           "reference_distance_km": float(ref["dist_m"][-1] / 1000.0)}
+    pos = nav.get("NAV_Position")
+    if pos is None:
+        rep.update({"navigating": False, "horizontal_error_m": stats([]), "distance_km": 0.0,
+                    "calibration": calibration_block(meta["calibration"], cal_log, None,
+                                                     np.array([]), np.array([]),
+                                                     np.array([]))})
+        return rep, {}
+    t_all = pos["t_s"]
+    sel = (t_all >= ref["t_s"][0]) & (t_all <= ref["t_s"][-1])
+    t = t_all[sel]
+    lat_e, lon_e = pos["Latitude"][sel], pos["Longitude"][sel]
+    lat_r = np.interp(t, ref["t_s"], ref["lat_deg"])
+    lon_r = np.interp(t, ref["t_s"], ref["lon_deg"])
+    herr = convert.horizontal_distance_m(lat_r, lon_r, lat_e, lon_e)
+    dist_at = np.interp(t, ref["t_s"], ref["dist_m"])
+    dist = float(dist_at[-1] - dist_at[0])
+    rep.update({"navigating": True, "navigation_start_s": float(t_all[0]),
+                "compared_s": [float(t[0]), float(t[-1])], "nav_sets_compared": int(t.size),
+                "horizontal_error_m": stats(herr), "distance_km": dist / 1000.0,
+                "final_error_pct_of_distance": 100.0 * float(herr[-1]) / dist if dist else None})
+    series = {"t": t, "herr": herr, "lat_e": lat_e, "lon_e": lon_e}
+    att = nav.get("NAV_Attitude")
+    if att is not None:
+        ta = att["t_s"]
+        s2 = (ta >= ref["t_s"][0]) & (ta <= ref["t_s"][-1])
+        hr = np.interp(ta[s2], ref["t_s"], np.unwrap(np.radians(ref["heading_deg"])))
+        dh = np.degrees((np.radians(att["Heading"][s2]) - hr + math.pi) % (2 * math.pi) - math.pi)
+        rep["heading_error_deg"] = {"rms": float(np.sqrt(np.mean(dh ** 2))),
+                                    "max": float(np.max(np.abs(dh))), "final": float(dh[-1])}
+        series["heading"] = (ta[s2], dh)
+    st = nav.get("NAV_Status")
+    if st is not None and "Mode" in st:
+        modes = st["Mode"][~np.isnan(st["Mode"])].astype(int)
+        names = nc.DEFAULT_DB.get_message_by_name("NAV_Status").get_signal_by_name("Mode").choices
+        rep["modes_seen"] = {str(names.get(m, m)): int(np.sum(modes == m))
+                             for m in np.unique(modes)}
+    rep["outages"] = []
+    for o in (meta["gnss"]["outages"] if meta["gnss"]["enabled"] else []):
+        a, b = o["start_s"], o["end_s"]
+        s3 = (t >= a) & (t <= b)
+        d0, d1 = np.interp([a, b], ref["t_s"], ref["dist_m"])
+        rep["outages"].append({"start_s": a, "end_s": b, "distance_m": float(d1 - d0),
+                               "max_error_m": float(herr[s3].max()) if s3.any() else None,
+                               "end_error_m": float(herr[s3][-1]) if s3.any() else None})
+    rep["calibration"] = calibration_block(meta["calibration"], cal_log, st, t, herr, dist_at)
+    return rep, series
+
+
+def plot(drive, meta, series, rep, out: Path, title: str) -> list:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    ref = convert.reference_track(drive)
+    lat0, lon0 = math.radians(ref["lat_deg"][0]), ref["lon_deg"][0]
+    rm, rn = convert.radii_m(lat0)
+
+    def en(lat_deg, lon_deg):
+        return (np.radians(np.asarray(lon_deg) - lon0) * rn * math.cos(lat0),
+                np.radians(np.asarray(lat_deg) - ref["lat_deg"][0]) * rm)
+
+    outages = [(o["start_s"], o["end_s"]) for o in meta["gnss"]["outages"]] \
+        if meta["gnss"]["enabled"] else []
+    cal = meta["calibration"]
+    paths = []
+    re_, rn_ = en(ref["lat_deg"], ref["lon_deg"])
+    for name, zoom in (("track.png", True), ("track_full.png", False)):
+        fig, ax = plt.subplots(figsize=(8, 8))
+        ax.plot(re_, rn_, color="0.2", lw=2.0, label="reference (SPAN)")
+        for k, (a, b) in enumerate(outages):
+            s = (ref["t_s"] >= a) & (ref["t_s"] < b)
+            ax.plot(re_[s], rn_[s], color="tab:red", lw=5, alpha=0.4,
+                    label="GNSS outage" if k == 0 else None)
+        if meta["gnss"]["enabled"]:
+            ge, gn = en(drive.gnss["lat_deg"], drive.gnss["lon_deg"])
+            ax.plot(ge, gn, ".", ms=2, color="tab:green", alpha=0.5, label="GNSS fixes (all)")
+        if "t" in series:
+            ne, nn = en(series["lat_e"], series["lon_e"])
+            ax.plot(ne, nn, color="tab:blue", lw=1.2, label="navecu")
+        ax.plot(re_[0], rn_[0], "k^", ms=9, label="start")
+        if cal:
+            ce, cn = en(cal["lat_deg"], cal["lon_deg"])
+            ax.plot(ce, cn, "*", color="tab:orange", ms=16, mec="k",
+                    label=f"calibration point ({cal['at_km']:g} km)")
+        if zoom:
+            pad = 0.15 * max(np.ptp(re_), np.ptp(rn_))
+            ax.set_xlim(re_.min() - pad, re_.max() + pad)
+            ax.set_ylim(rn_.min() - pad, rn_.max() + pad)
+            ax.set_aspect("equal", adjustable="box")
+        else:
+            ax.set_aspect("equal", adjustable="datalim")
+        ax.set_xlabel("east (m)")
+        ax.set_ylabel("north (m)")
+        ax.grid(alpha=0.3)
+        ax.legend(loc="best", fontsize=8)
+        ax.set_title(f"{title}: track{'' if zoom else ' (whole navecu track)'}")
+        p = out / name
+        fig.savefig(p, dpi=110, bbox_inches="tight")
+        plt.close(fig)
+        paths.append(p)
+
+    for key, ylabel, fname in (("herr", "horizontal error (m)", "horizontal_error.png"),
+                               ("heading", "heading error (deg)", "heading_error.png")):
+        fig, ax = plt.subplots(figsize=(10, 4))
+        if key == "herr" and "t" in series:
+            ax.plot(series["t"] / 60.0, series["herr"], color="tab:blue")
+            if series["herr"].max() > 1000.0:
+                ax.set_yscale("log")
+        elif key == "heading" and "heading" in series:
+            ax.plot(series["heading"][0] / 60.0, series["heading"][1], color="tab:blue")
+        for k, (a, b) in enumerate(outages):
+            ax.axvspan(a / 60.0, b / 60.0, color="tab:red", alpha=0.15,
+                       label="GNSS outage" if k == 0 else None)
+        if cal:
+            ax.axvline(cal["time_s"] / 60.0, color="tab:orange", lw=1.5,
+                       label=f"CalibrateHere ({cal['at_km']:g} km)")
+        ax.set_xlabel("time since the first IMU sample (min)")
+        ax.set_ylabel(ylabel)
+        ax.grid(alpha=0.3)
+        ax.legend(loc="upper left", fontsize=8)
+        ax.set_title(f"{title}: {ylabel}")
+        p = out / fname
+        fig.savefig(p, dpi=110, bbox_inches="tight")
+        plt.close(fig)
+        paths.append(p)
+    return paths
+
+
+def binary_info(path) -> dict:
+    """Which firmware build produced the result: the binary's SHA-256 and modification time
+    (the firmware changes under active development)."""
+    p = Path(path)
+    return {"path": str(p), "sha256": hashlib.sha256(p.read_bytes()).hexdigest(),
+            "modified_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime(p.stat().st_mtime))}
+
+
+def summary(rep: dict) -> str:
+    def f(x, unit="m", nd=2):
+        return "n/a" if x is None else f"{x:.{nd}f} {unit}"
+
+    lines = [f"drive: {rep['duration_s'] / 60:.1f} min, "
+             f"reference {rep['reference_distance_km']:.2f} km"]
+    if not rep.get("navigating"):
+        lines.append("navecu never started navigating (see its NAV_Status)")
+        return "\n".join(lines)
+    h = rep["horizontal_error_m"]
+    lines.append(f"horizontal error: rms {f(h['rms'])}, p95 {f(h['p95'])}, max {f(h['max'])}, "
+                 f"final {f(h['final'])} ({f(rep['final_error_pct_of_distance'], '%')} of "
+                 f"{rep['distance_km']:.2f} km)")
+    if "heading_error_deg" in rep:
+        he = rep["heading_error_deg"]
+        lines.append(f"heading error:    rms {f(he['rms'], 'deg')}, max {f(he['max'], 'deg')}, "
+                     f"final {f(he['final'], 'deg')}")
+    if rep.get("outages"):
+        worst = max(rep["outages"], key=lambda o: o["max_error_m"] or 0.0)
+        lines.append(f"GNSS outages: {len(rep['outages'])}, worst {worst['start_s']:.0f}-"
+                     f"{worst['end_s']:.0f} s ({worst['distance_m']:.0f} m): max error "
+                     f"{f(worst['max_error_m'])}")
+    c = rep["calibration"]
+    if c.get("requested"):
+        lines.append(f"calibration at {c['at_km']:g} km (t = {c['time_s']:.1f} s): {c['status']}"
+                     + (f", dH {c['dH_deg']:.3f} deg, mu {c['mu']:.5f}" if c["performed"] else ""))
+        lines.append(f"  error at the point {f(c.get('error_at_point_m'))} = "
+                     f"{f(c['error_before_pct'], '%', 3)} of the distance before; max after "
+                     f"{f(c.get('max_error_after_m'))} = {f(c['error_after_pct'], '%', 3)} of "
+                     "the distance since")
+    g = rep["gnss_only_horizontal_error_m"]
+    lines.append(f"GNSS fixes alone vs reference: rms {f(g['rms'])}, p95 {f(g['p95'])} "
+                 f"({g['n']} epochs)")
+    return "\n".join(lines)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--mode", choices=("dr", "full"), default="full",
+                    help="dr: no GNSS frames (dead reckoning); full: GNSS with outages")
+    ap.add_argument("--outages", default="default",
+                    help="full mode: 'a-b,c-d' s from the start, every:P:L, default "
+                         f"({convert.DEFAULT_OUTAGES}), none")
+    ap.add_argument("--calibrate-at-km", default=str(convert.DEFAULT_CAL_KM),
+                    type=convert.parse_km, help="CalibrateHere at this distance (km), or none")
+    ap.add_argument("--imu-rule", choices=convert.IMU_RULES, default="rect",
+                    help="IMU increment rule (tools/kingston/convert.py; default rect)")
+    ap.add_argument("--level", action="store_true",
+                    help="no CMD_InitialAttitude: the firmware levels on its own (30 s)")
+    ap.add_argument("--no-odometer", action="store_true",
+                    help="omit the WheelSpeeds frames (with --mode dr: free inertial)")
+    ap.add_argument("--data", default=None, help=f"data folder (default {convert.DATA_DIR})")
+    ap.add_argument("--out", default=None,
+                    help="output folder (default out/kingston-dr or out/kingston)")
+    ap.add_argument("--navecu", default=str(ROOT / "build" / "host" / "navecu"))
+    ap.add_argument("--navecu-args", default="",
+                    help="more navecu options, one string (e.g. \"--gyro-bias-dph 3\")")
+    a = ap.parse_args(argv)
+    out = Path(a.out) if a.out else ROOT / "out" / ("kingston-dr" if a.mode == "dr" else "kingston")
+    out.mkdir(parents=True, exist_ok=True)
+    st = Stages(4)
+
+    st.start("convert the Kingston CSVs to CAN")
+    drive = convert.load(a.data)
+    t_end = float(drive.imu["time_s"][-1] - drive.t0_gps)
+    gnss = a.mode == "full"
+    try:
+        outages = convert.parse_outages(a.outages, t_end) if gnss else []
+    except ValueError as e:
+        ap.error(str(e))
+    can_in = out / "can_in.log"
+    frames, meta = convert.build(drive, gnss=gnss, outages=outages,
+                                 calibrate_at_km=a.calibrate_at_km, imu_rule=a.imu_rule,
+                                 initial_attitude=not a.level, odometer=not a.no_odometer)
+    nc.write_candump(can_in, (m for _, _, m in frames))
+    meta["log"] = str(can_in)
+    meta["mode"] = a.mode
+    if not gnss and a.outages not in ("default", "none", ""):
+        meta["note"] = f"--outages {a.outages} ignored: mode dr sends no GNSS"
+    convert.sidecar_path(can_in).write_text(json.dumps(meta, indent=2))
+    st.done(f"{meta['frames']} frames -> {can_in}")
+    print(convert.summary(meta))
+
+    st.start("firmware (build/host/navecu --can-log, 10 Hz)")
+    nav_log = out / "nav.log"
+    cmd = [a.navecu, "--can-log", str(can_in), "--out", str(nav_log)] + RATES + \
+        shlex.split(a.navecu_args)
+    res = subprocess.run(cmd, capture_output=True, text=True)
+    (out / "navecu.txt").write_text(" ".join(cmd) + "\n" + res.stderr)
+    if res.returncode != 0:
+        print()
+        print(res.stderr, file=sys.stderr)
+        return 1
+    st.done(res.stderr.strip().splitlines()[0].replace("navecu: ", ""))
+
+    st.start("read NAV outputs")
+    nav = report.read_nav_log(nav_log)
+    cal_log = read_calibration_log(nav_log)
+    st.done()
+
+    st.start("report")
+    rep, series = compute(drive, meta, nav, cal_log)
+    rep["gnss_only_horizontal_error_m"] = gnss_errors(drive)
+    rep["gnss_only_horizontal_error_m"]["epochs"] = "every gnss.csv fix at a reference epoch"
+    if gnss:
+        sent = gnss_errors(drive, sent_gnss_times(can_in))
+        sent["epochs"] = "the fixes sent in this log with >= 4 satellites"
+        rep["gnss_sent_horizontal_error_m"] = sent
+    rep.update({"mode": a.mode, "outages_spec": a.outages if gnss else None,
+                "odometer": not a.no_odometer,
+                "imu_rule": a.imu_rule, "initial_attitude": "levelled by the firmware" if a.level
+                else "CMD_InitialAttitude from the reference's first row",
+                "navecu_command": cmd, "navecu_summary": res.stderr.strip().splitlines(),
+                "navecu_binary": binary_info(a.navecu),
+                "conversion": str(convert.sidecar_path(can_in))})
+    (out / "report.json").write_text(json.dumps(rep, indent=2))
+    what = "dead reckoning (no GNSS)" if a.mode == "dr" else "GNSS with outages"
+    pngs = plot(drive, meta, series, rep, out, f"Kingston 2008, {what}")
+    st.done(f"{out / 'report.json'} and {len(pngs)} plots")
+    print()
+    print(summary(rep))
+    print(f"plots: {', '.join(str(p) for p in pngs)}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
