@@ -400,6 +400,15 @@ def test_gnss_perfect_equals_truth_and_latency_shifts():
                                rtol=0, atol=1e-15)
 
 
+def test_gnss_none_preset_has_no_epochs():
+    tr = moving_truth(60.0, 10.0)
+    ep = S.gnss_epochs(tr, S.GNSS_PRESETS["none"], 5)
+    full = S.gnss_epochs(tr, S.GNSS_PRESETS["perfect"], 5)
+    assert set(ep) == set(full)
+    for k, v in ep.items():
+        assert len(v) == 0 and v.shape[1:] == full[k].shape[1:] and v.dtype == full[k].dtype, k
+
+
 @pytest.fixture(scope="module")
 def static_gnss_truth():
     return static_truth(12 * 3600.0, 1.0)  # position and velocity constant: 1 Hz truth is exact

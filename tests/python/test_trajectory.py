@@ -290,3 +290,31 @@ def test_figure8_returns_to_start():
     assert math.hypot(dn, de) < 5.0
     assert t.speed_mps[-1] == 0.0
     assert len(np.unique(np.round(t.speed_mps[np.abs(t.yaw_rate_rps) > 0.1], 6))) >= 4
+
+
+def test_seed000_scenario():
+    """Seed 000's drive: long enough for 20 minutes after the calibration at 3431 s,
+    moving there, standing still for the levelling and at stops along the way."""
+    sc = tr.load_scenario(SCEN / "seed000.toml")
+    traj = tr.Trajectory(sc)
+    cal = sc["calibration"]
+    assert cal["at_s"] == 3431.0 and cal["source"] in ("known_position", "gnss")
+    assert traj.duration_s >= cal["at_s"] + 20 * 60
+    assert sc["sim"] == {"imu": "mid-grade", "gnss": "none"}
+    assert sc["odometer"]["mu"] == 0.012
+    ini, mnt = sc["initialization"], sc["imu_mounting"]
+    assert ini["heading_reference"] == "imu"
+    assert mnt["yaw_deg"] + ini["heading_error_deg"] == pytest.approx(-0.177, abs=1e-12)
+    # the commanded heading (start + yaw + error) falls on the DBC's 0.01 deg grid
+    cmd = sc["start"]["heading_deg"] + mnt["yaw_deg"] + ini["heading_error_deg"]
+    assert cmd * 100 == pytest.approx(round(cmd * 100), abs=1e-6)
+    t = np.arange(0.0, traj.duration_s, 0.1)
+    k = traj.kinematics(t)
+    s = k["s"]
+    assert np.all(s[t <= 40.0] == 0.0)
+    assert abs(traj.kinematics(np.array([cal["at_s"]]))["s"][0]) > 10.0
+    stops = [(a, b) for a, b, kind in traj.segment_times if kind == "stop"]
+    assert len(stops) >= 12 and all(b - a >= 20.0 for a, b in stops)
+    assert len([a for a, b in stops if a > cal["at_s"]]) >= 3
+    assert 15.0 < s.max() < 32.0 and np.all(s >= 0.0)
+    assert k["dist"][-1] > 50e3

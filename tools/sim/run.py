@@ -11,11 +11,16 @@ report.json and PNG plots in the output folder, a summary on stdout.
 
 Initialization as a driver would do it: at t = 0 the vehicle stands still and receives
 CMD_KnownPosition and CMD_Control SetInitialPosition (true position, height and heading);
-the firmware levels for 30 s and navigates from then on.
+the firmware levels for 30 s and navigates from then on. The heading sent is the car's, or
+with the scenario's [initialization] that of the IMU's axes and/or with an error
+(heading_command_deg). A scenario's [calibration] adds the one-point calibration request of
+seed 000 at its at_s: CMD_KnownPosition with the true position and CMD_Control CalibrateHere,
+or CalibrateAtGnss and the next GNSS epoch (calibration_frames).
 """
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import subprocess
@@ -60,14 +65,91 @@ def scenario_path(name: str) -> Path:
     return p
 
 
-def frames(truth, dtheta, dv, wheels, gnss, db, initial_attitude=False):
+def heading_command_deg(heading0_rad: float, scen: dict | None = None) -> float:
+    """The Heading of CMD_Control SetInitialPosition (deg, on the DBC's 0.01 deg grid): the
+    car's true heading at t = 0, plus the IMU's mounting yaw if the scenario's
+    [initialization] heading_reference is "imu", plus its heading_error_deg.
+
+    The firmware takes the IMU's axes for the car's: it is told that its forward axis
+    points along this heading and reports it as the car's. The error of the car's heading
+    as the firmware sees it is dH = command - true car heading (seed 000's sign: dH =
+    H_sins - H_true), its initial attitude error about the IMU's own axes command - (true
+    car heading + mounting yaw)."""
+    h = math.degrees(heading0_rad)
+    if scen is not None:
+        ini = scen.get("initialization", trajectory.INITIALIZATION_DEFAULTS)
+        if ini.get("heading_reference", "car") == "imu":
+            h += float(scen.get("imu_mounting", {}).get("yaw_deg", 0.0))
+        h += float(ini.get("heading_error_deg", 0.0))
+    return (round(h % 360.0 * 100.0) % 36000) / 100.0
+
+
+def _one_epoch(gnss: dict, i: int) -> dict:
+    return {k: np.asarray(v)[i:i + 1] for k, v in gnss.items()}
+
+
+def _merge_epochs(a: dict, b: dict) -> dict:
+    """GNSS epoch dicts a and b as one, in time order."""
+    if len(a.get("t_s", ())) == 0:
+        return b
+    order = np.argsort(np.concatenate([a["t_s"], b["t_s"]]), kind="stable")
+    return {k: np.concatenate([np.asarray(a[k]), np.asarray(b[k])])[order] for k in b}
+
+
+def calibration_epoch(truth, cal: dict, gnss: dict, seed: int) -> dict | None:
+    """For a [calibration] with source "gnss" and a scenario without GNSS (no epoch after
+    at_s): the one epoch of the calibration's own GNSS preset (cal["gnss"]) that follows
+    the command, i.e. the first on its grid after at_s. None otherwise."""
+    if cal is None or cal["source"] != "gnss":
+        return None
+    if np.any(np.asarray(gnss.get("t_s", ())) > cal["at_s"]):
+        return None
+    name = cal.get("gnss", "standalone")
+    if name not in sensors.GNSS_PRESETS or not sensors.GNSS_PRESETS[name].enabled:
+        raise SystemExit(f"[calibration] gnss: no GNSS preset '{name}' that has epochs")
+    ep = sensors.gnss_epochs(truth, sensors.GNSS_PRESETS[name], seed)
+    after = np.nonzero(ep["t_s"] > cal["at_s"])[0]
+    if len(after) == 0:
+        raise SystemExit(f"[calibration] at {cal['at_s']} s: no GNSS epoch after it")
+    return _one_epoch(ep, int(after[0]))
+
+
+def calibration_frames(sender, truth, cal: dict) -> list:
+    """The one-point calibration request of a scenario's [calibration] as (t, order, msg):
+    at at_s (after that instant's IMU sample and wheel speeds) CMD_KnownPosition with the
+    true position at at_s, then CMD_Control CalibrateHere (5); or for source "gnss"
+    CMD_Control CalibrateAtGnss (6) alone (the next GNSS epoch is the point)."""
+    t = float(cal["at_s"])
+    if not 0.0 < t <= float(truth.t_s[-1]):
+        raise ValueError(f"[calibration] at_s {t} outside the drive (0, {truth.t_s[-1]:.1f}] s")
+    lat = math.degrees(float(np.interp(t, truth.t_s, truth.lat_rad)))
+    lon = math.degrees(float(np.interp(t, truth.t_s, np.unwrap(truth.lon_rad))))
+    lon = (lon + 180.0) % 360.0 - 180.0
+    h = float(np.interp(t, truth.t_s, truth.h_m))
+    out = []
+    if cal["source"] == "known_position":
+        out.append((t, 9, sender.encode("CMD_KnownPosition", {"Latitude": lat, "Longitude": lon},
+                                        t)))
+        command = 5
+    else:
+        command = 6
+    out.append((t, 10, sender.encode("CMD_Control", {"Command": command, "HeadingValid": 0,
+                                                     "Heading": 0.0, "Height": h}, t)))
+    return out
+
+
+def frames(truth, dtheta, dv, wheels, gnss, db, initial_attitude=False, heading_deg=None,
+           calibration=None):
     """Every input frame of the drive as (t_s, order, can.Message), unsorted. With
     initial_attitude, a CMD_InitialAttitude with the true roll and pitch follows the
-    initialization commands: a perfect start, no levelling."""
+    initialization commands: a perfect start, no levelling. heading_deg: the Heading of
+    SetInitialPosition (default: the car's true heading; see heading_command_deg).
+    calibration: a scenario's [calibration] table (calibration_frames), with an optional
+    "gnss_epoch" (calibration_epoch) sent among the GNSS epochs."""
     sender = nc.E2ESender(db)
     out = []
     lat0, lon0 = math.degrees(truth.lat_rad[0]), math.degrees(truth.lon_rad[0])
-    hdg0 = (round(math.degrees(truth.heading_rad[0]) % 360.0 * 100.0) % 36000) / 100.0
+    hdg0 = heading_command_deg(truth.heading_rad[0]) if heading_deg is None else heading_deg
     out.append((0.0, 0, sender.encode("CMD_KnownPosition",
                                       {"Latitude": lat0, "Longitude": lon0}, 0.0)))
     out.append((0.0, 1, sender.encode("CMD_Control", {"Command": 2, "HeadingValid": 1,
@@ -83,6 +165,10 @@ def frames(truth, dtheta, dv, wheels, gnss, db, initial_attitude=False):
         r, a = sender.encode_imu_pair(rate, accel, t)
         out.append((t, 2, r))
         out.append((t, 3, a))
+    if calibration is not None:
+        out.extend(calibration_frames(sender, truth, calibration))
+        if calibration.get("gnss_epoch") is not None:
+            gnss = _merge_epochs(gnss, calibration["gnss_epoch"])
     w_t, w_v = wheels
     for t, v in zip(w_t, np.clip(w_v, -81.9, 81.9)):
         out.append((float(t), 4, sender.encode("WheelSpeeds", {
@@ -106,6 +192,41 @@ def frames(truth, dtheta, dv, wheels, gnss, db, initial_attitude=False):
             "VertAccuracy": float(min(gnss["vacc_m"][i], 102.3)), "GnssEpoch": epoch,
             "TimeOfWeek": round((GPS_TOW0_S + float(gnss["t_meas_s"][i])) % 604800.0, 3)}, t)))
     return out
+
+
+def sensor_specs(scen: dict, imu_name: str, vehicle: dict):
+    """(ImuSpec, OdoSpec) of a scenario: the IMU preset with the scenario's [imu_mounting]
+    (the car's installation, whatever the IMU grade), the odometer with the [vehicle]'s
+    track and wheelbase and the [odometer] table's fields (e.g. mu)."""
+    m = dict(trajectory.MOUNTING_DEFAULTS)
+    m.update(scen.get("imu_mounting", {}))
+    imu = dataclasses.replace(sensors.PRESETS[imu_name], mounting_roll_deg=float(m["roll_deg"]),
+                              mounting_pitch_deg=float(m["pitch_deg"]),
+                              mounting_yaw_deg=float(m["yaw_deg"]))
+    odo = sensors.OdoSpec(track_m=vehicle["track_m"], wheelbase_m=vehicle["wheelbase_m"],
+                          **scen.get("odometer", {}))
+    return imu, odo
+
+
+def scenario_truths(scen: dict, heading0_rad: float, imu: "sensors.ImuSpec",
+                    odo: "sensors.OdoSpec", heading_deg: float) -> dict:
+    """What the scenario makes true, for report.json: the IMU's mounting, the odometer's
+    scale error, the initial heading command, and the heading errors they give (seed 000:
+    dH = H_sins - H_true; constant through the drive but for the gyros' drift)."""
+    ini = dict(trajectory.INITIALIZATION_DEFAULTS)
+    ini.update(scen.get("initialization", {}))
+    h0 = math.degrees(heading0_rad) % 360.0
+    dh = (heading_deg - h0 + 180.0) % 360.0 - 180.0
+    return {"imu_mounting_deg": {"roll": imu.mounting_roll_deg, "pitch": imu.mounting_pitch_deg,
+                                 "yaw": imu.mounting_yaw_deg},
+            "odometer_mu": odo.mu,
+            "initial_heading": {"reference": ini["heading_reference"],
+                                "error_deg": float(ini["heading_error_deg"]),
+                                "car_true_deg": h0, "commanded_deg": heading_deg},
+            # the car's heading as the firmware sees it minus the true one
+            "dH_deg": dh,
+            # the firmware's initial attitude error about the IMU's own axes
+            "imu_heading_error_deg": dh - imu.mounting_yaw_deg}
 
 
 def save_truth(truth, out: Path):
@@ -134,6 +255,8 @@ def main(argv=None) -> int:
     gnss_name = a.gnss or sim_cfg.get("gnss", "standalone")
     if imu_name not in sensors.PRESETS:
         raise SystemExit(f"no IMU preset '{imu_name}' (known: {', '.join(sensors.PRESETS)})")
+    if gnss_name not in sensors.GNSS_PRESETS:
+        raise SystemExit(f"no GNSS preset '{gnss_name}' (known: {', '.join(sensors.GNSS_PRESETS)})")
     out = Path(a.out) if a.out else ROOT / "out" / "sim" / name
     out.mkdir(parents=True, exist_ok=True)
     st = Stages(5)
@@ -144,16 +267,20 @@ def main(argv=None) -> int:
 
     st.start(f"sensors: IMU {imu_name}, GNSS {gnss_name}, odometer")
     # one seed per model, distinct across --seed values
-    dtheta, dv = sensors.apply_imu(truth, sensors.PRESETS[imu_name], 3 * a.seed)
-    odo = sensors.OdoSpec(track_m=truth.vehicle["track_m"],
-                          wheelbase_m=truth.vehicle["wheelbase_m"])
+    imu_spec, odo = sensor_specs(scen, imu_name, truth.vehicle)
+    dtheta, dv = sensors.apply_imu(truth, imu_spec, 3 * a.seed)
     wheels = sensors.wheel_speeds(truth, odo, 3 * a.seed + 1)
     gnss = sensors.gnss_epochs(truth, sensors.GNSS_PRESETS[gnss_name], 3 * a.seed + 2)
-    st.done(f"{len(gnss['t_s'])} GNSS epochs")
+    cal = scen.get("calibration")
+    if cal is not None:
+        cal = dict(cal, gnss_epoch=calibration_epoch(truth, cal, gnss, 3 * a.seed + 2))
+    st.done(f"{len(gnss['t_s'])} GNSS epochs"
+            + (f", calibration at {cal['at_s']:g} s ({cal['source']})" if cal else ""))
 
     st.start("CAN encoding")
     db = nc.load_db()
-    fr = frames(truth, dtheta, dv, wheels, gnss, db)
+    hdg_cmd = heading_command_deg(truth.heading_rad[0], scen)
+    fr = frames(truth, dtheta, dv, wheels, gnss, db, heading_deg=hdg_cmd, calibration=cal)
     fr.sort(key=lambda x: (x[0], x[1]))
     can_in = out / "can_in.log"
     n = nc.write_candump(can_in, (m for _, _, m in fr))
@@ -173,19 +300,25 @@ def main(argv=None) -> int:
 
     st.start("report")
     nav = report.read_nav_log(nav_log)
-    rep, series = report.compute(
-        {"t_s": truth.t_s, "lat_rad": truth.lat_rad, "lon_rad": truth.lon_rad,
-         "heading_rad": truth.heading_rad, "dist_m": truth.dist_m}, nav, truth.outages)
+    truth_r = {"t_s": truth.t_s, "lat_rad": truth.lat_rad, "lon_rad": truth.lon_rad,
+               "heading_rad": truth.heading_rad, "dist_m": truth.dist_m}
+    rep, series = report.compute(truth_r, nav, truth.outages)
     rep.update({"scenario": name, "imu": imu_name, "gnss": gnss_name, "seed": a.seed,
                 "imu_rate_hz": a.imu_rate_hz, "navecu_summary": res.stderr.strip().splitlines()})
+    rep["truth"] = scenario_truths(scen, truth.heading_rad[0], imu_spec, odo, hdg_cmd)
+    rep["calibration"] = (report.calibration_report(truth_r, series,
+                                                    report.read_calibration_log(nav_log),
+                                                    cal, rep["truth"])
+                          if cal is not None else None)
     (out / "report.json").write_text(json.dumps(rep, indent=2))
     truth_d = {"t_s": truth.t_s, "lat_rad": truth.lat_rad, "lon_rad": truth.lon_rad}
-    pngs = report.plot(truth_d, series, gnss, truth.outages, out, f"{name} ({imu_name} IMU)")
+    pngs = report.plot(truth_d, series, gnss, truth.outages, out, f"{name} ({imu_name} IMU)",
+                       marks=report.calibration_marks(rep["calibration"]))
     st.done(f"{out / 'report.json'} and {len(pngs)} plots")
     print()
     print(report.summary_table(rep))
-    print("note: the firmware navigates free-inertially after initialization; GNSS and odometer")
-    print("      fusion arrive with the odometer and Kalman-filter issues (#6, #7).")
+    print("note: the firmware dead-reckons with the odometer along its SINS heading and does")
+    print("      the one-point calibration; GNSS fusion arrives with the Kalman filter (#7).")
     print(f"plots: {', '.join(str(p) for p in pngs)}")
     return 0
 

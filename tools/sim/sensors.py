@@ -152,6 +152,7 @@ white. Reported accuracies are consistent with the modelled (outlier-free) error
 1.5152 σ per axis), ``vacc_m`` = σ_U, ``sacc_mps`` = 68.27 % radius of the horizontal
 velocity error. Multipath outliers are not in hacc (receivers under-report them).
 The first ``reacquire_s`` after an outage are produced with fix_type 0 and valid False.
+Preset ``none`` (``enabled=False``): no receiver, no epoch at all.
 """
 from __future__ import annotations
 
@@ -525,6 +526,7 @@ class GnssSpec:
     fix_type: int = 3                     # DBC FixType of a good epoch
     reacquire_s: float = 0.0              # no fix this long after an outage
     no_fix_acc_m: float = 99.9            # hacc/vacc reported without a fix
+    enabled: bool = True                  # False: no receiver, no epoch at all
 
     @property
     def pos_sigma_h_m(self) -> float:
@@ -582,6 +584,8 @@ GNSS_PRESETS: dict[str, GnssSpec] = {
         outlier_v_m=5.0, num_sats_mean=10.0, fix_type=4, reacquire_s=2.0),
     # No error, no latency: positions are the truth at the epoch times.
     "perfect": GnssSpec(rate_hz=5.0, latency_s=0.0, num_sats_mean=12.0, fix_type=4),
+    # No receiver (seed 000's drive: the start and one known point only): no GNSS frames.
+    "none": GnssSpec(enabled=False),
 }
 
 
@@ -598,7 +602,15 @@ def gnss_epochs(truth, spec: GnssSpec, seed: int) -> dict:
 
     t_s (report time), t_meas_s (= t_s - latency, the truth instant), lat_rad, lon_rad,
     h_m, v_enu_mps (M, 3), hacc_m, vacc_m, sacc_mps, num_sats (int), fix_type (int),
-    valid (bool), err_enu_m (M, 3) the position error put in, outlier (bool)."""
+    valid (bool), err_enu_m (M, 3) the position error put in, outlier (bool).
+    A spec with enabled False gives every key with no rows."""
+    if not spec.enabled:
+        return {"t_s": np.zeros(0), "t_meas_s": np.zeros(0), "lat_rad": np.zeros(0),
+                "lon_rad": np.zeros(0), "h_m": np.zeros(0), "v_enu_mps": np.zeros((0, 3)),
+                "hacc_m": np.zeros(0), "vacc_m": np.zeros(0), "sacc_mps": np.zeros(0),
+                "num_sats": np.zeros(0, dtype=int), "fix_type": np.zeros(0, dtype=int),
+                "valid": np.zeros(0, dtype=bool), "err_enu_m": np.zeros((0, 3)),
+                "outlier": np.zeros(0, dtype=bool)}
     if not (1.0 <= spec.rate_hz <= 10.0):
         raise ValueError(f"GNSS rate {spec.rate_hz} Hz outside 1..10 Hz")
     t = np.asarray(truth.t_s, dtype=float)

@@ -63,6 +63,33 @@ Scenario file (TOML, read by :func:`load_scenario`)
     end_s = 360
     label = "tunnel"
 
+    # --- optional tables for the sensors and the commands (tools/sim/run.py); defaults shown
+    [sim]
+    imu = "mid-grade"             # IMU preset (tools/sim/sensors.py PRESETS); --imu overrides
+    gnss = "standalone"           # GNSS preset (GNSS_PRESETS; "none": no GNSS frames at all)
+
+    [imu_mounting]                # the IMU on the car: sensor axes = body axes rotated by
+    roll_deg = 0.0                # these (3-1-2, like the attitude; yaw clockwise positive),
+    pitch_deg = 0.0               # with any IMU preset: the sensor's forward axis points
+    yaw_deg = 0.0                 # along heading + yaw_deg
+
+    [odometer]                    # OdoSpec fields (tools/sim/sensors.py), e.g.
+    mu = 0.012                    # scale error: wheel speeds read (1 + mu) x true
+
+    [initialization]              # CMD_Control SetInitialPosition at t = 0
+    heading_reference = "car"     # "car": the commanded heading is the car's true heading;
+                                  # "imu": that of the IMU's forward axis (car + mounting
+                                  # yaw), as a SINS's own alignment would find it
+    heading_error_deg = 0.0       # added to it (then rounded to the DBC's 0.01 deg)
+
+    [calibration]                 # one-point calibration (seed 000), absent: none
+    at_s = 3431                   # when; the true position at this instant is the point
+    source = "known_position"     # CMD_KnownPosition (true position) + CMD_Control 5
+                                  # CalibrateHere; or "gnss": CMD_Control 6 CalibrateAtGnss
+                                  # and the next GNSS epoch
+    gnss = "standalone"           # source "gnss" with [sim] gnss = "none": the preset of the
+                                  # one epoch sent after the command
+
 Motion model
 ------------
 * speed ``s(t)`` (signed, along the path; negative when reversing): piecewise constant,
@@ -275,6 +302,19 @@ _SEG_KEYS = {
 }
 
 
+MOUNTING_DEFAULTS = {"roll_deg": 0.0, "pitch_deg": 0.0, "yaw_deg": 0.0}
+INITIALIZATION_DEFAULTS = {"heading_reference": "car", "heading_error_deg": 0.0}
+_OPTIONAL_TABLES = {
+    "sim": {"imu", "gnss"},
+    "imu_mounting": set(MOUNTING_DEFAULTS),
+    # the OdoSpec fields a scenario may set (track and wheelbase come from [vehicle])
+    "odometer": {"mu", "wheel_mu_sigma", "rate_hz", "latency_s", "noise_mps", "slip_frac",
+                 "slip_accel_threshold_mps2", "driven_axle"},
+    "initialization": set(INITIALIZATION_DEFAULTS),
+    "calibration": {"at_s", "source", "gnss"},
+}
+
+
 def load_scenario(path) -> dict:
     """Read and validate a scenario TOML file (format in the module docstring)."""
     path = Path(path)
@@ -309,6 +349,29 @@ def load_scenario(path) -> dict:
             raise ValueError(f"{path}: outage {o} ends before it starts")
         outs.append({"start_s": s0, "end_s": s1, "label": str(o.get("label", "outage"))})
     sc["outage"] = outs
+    for table, known in _OPTIONAL_TABLES.items():
+        unknown = set(sc.get(table, {})) - known
+        if unknown:
+            raise ValueError(f"{path}: unknown [{table}] keys {sorted(unknown)}")
+    mnt = dict(MOUNTING_DEFAULTS)
+    mnt.update({k: float(v) for k, v in sc.get("imu_mounting", {}).items()})
+    sc["imu_mounting"] = mnt
+    sc["odometer"] = dict(sc.get("odometer", {}))
+    ini = dict(INITIALIZATION_DEFAULTS)
+    ini.update(sc.get("initialization", {}))
+    if ini["heading_reference"] not in ("car", "imu"):
+        raise ValueError(f"{path}: [initialization] heading_reference must be 'car' or 'imu'")
+    ini["heading_error_deg"] = float(ini["heading_error_deg"])
+    sc["initialization"] = ini
+    if "calibration" in sc:
+        cal = {"source": "known_position", "gnss": "standalone"}
+        cal.update(sc["calibration"])
+        if "at_s" not in cal or not float(cal["at_s"]) > 0.0:
+            raise ValueError(f"{path}: [calibration] needs at_s > 0")
+        cal["at_s"] = float(cal["at_s"])
+        if cal["source"] not in ("known_position", "gnss"):
+            raise ValueError(f"{path}: [calibration] source must be 'known_position' or 'gnss'")
+        sc["calibration"] = cal
     return sc
 
 
