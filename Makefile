@@ -30,7 +30,7 @@ HAL_LINUX_SRC := hal/linux/hal_linux.c hal/linux/hal_socketcan.c
 SUPPORT_SRC_F64 := tests/support/truth.c tests/support/motions.c
 SUPPORT_SRC_BOTH := tests/support/nav_run.c
 # tests built once per numeric variant (f32 firmware, f64 reference)
-TESTS_VARIANT := test_nav_math test_earth test_sins test_dr
+TESTS_VARIANT := test_nav_math test_earth test_sins test_dr test_ekf
 # tests of the float32 firmware only (application, codec, HAL)
 TESTS_F32 := test_e2e test_codec
 # tests that link both variants themselves

@@ -1,0 +1,342 @@
+/*
+ * ekf.c - 18-state error-state Kalman filter (ekf.h, docs/kalman.md).
+ */
+#include "ekf.h"
+
+#include <stddef.h>
+
+#define DEG_RAD NAV_C(0.017453292519943295)
+
+ekf_config_t ekf_default_config(void)
+{
+    ekf_config_t c;
+    c.pos_m = NAV_C(5.0);
+    c.vel_mps = NAV_C(0.5);
+    c.tilt_rad = NAV_C(0.5) * DEG_RAD;
+    c.heading_rad = NAV_C(5.0) * DEG_RAD;
+    c.bg_rps = NAV_C(0.015) * DEG_RAD / NAV_C(3600.0);
+    c.ba_mps2 = NAV_C(1e-3);
+    c.k = NAV_C(0.02);
+    c.mount_rad = NAV_C(1.0) * DEG_RAD;
+    c.arw_rad_rts = NAV_C(8.73e-7);   /* 0.003 deg/sqrt(h) */
+    c.vrw_mps_rts = NAV_C(1e-4);
+    c.bg_rw_rps_rts = NAV_C(1e-9);
+    c.ba_rw_mps2_rts = NAV_C(1e-6);
+    c.k_rw_rts = NAV_C(1e-6);
+    c.mount_rw_rad_rts = NAV_C(1e-7);
+    c.var_floor = NAV_C(1e-18);
+    return c;
+}
+
+static int cfg_ok(const ekf_config_t *c)
+{
+    const nav_real_t v[] = {c->pos_m, c->vel_mps, c->tilt_rad, c->heading_rad, c->bg_rps,
+                            c->ba_mps2, c->k, c->mount_rad, c->arw_rad_rts, c->vrw_mps_rts,
+                            c->bg_rw_rps_rts, c->ba_rw_mps2_rts, c->k_rw_rts,
+                            c->mount_rw_rad_rts, c->var_floor};
+    for (size_t i = 0u; i < sizeof v / sizeof v[0]; i++) {
+        if (!(v[i] > NAV_C(0.0)) || !nav_isfinite(v[i])) {
+            return 0;
+        }
+    }
+    return 1;
+}
+
+static void reset_cov(ekf_t *k, nav_real_t heading_sigma_rad)
+{
+    const ekf_config_t *c = &k->cfg;
+    for (int i = 0; i < EKF_N; i++) {
+        for (int j = 0; j < EKF_N; j++) {
+            k->P[i][j] = NAV_C(0.0);
+        }
+    }
+    const nav_real_t sd[EKF_N] = {c->pos_m,    c->pos_m,    c->pos_m,    c->vel_mps,
+                                  c->vel_mps,  c->vel_mps,  c->tilt_rad, c->tilt_rad,
+                                  heading_sigma_rad, c->bg_rps, c->bg_rps, c->bg_rps,
+                                  c->ba_mps2,  c->ba_mps2,  c->ba_mps2,  c->k,
+                                  c->mount_rad, c->mount_rad};
+    for (int i = 0; i < EKF_N; i++) {
+        k->P[i][i] = sd[i] * sd[i];
+    }
+}
+
+int ekf_init(ekf_t *k, const ekf_config_t *cfg, nav_real_t heading_sigma_rad)
+{
+    if (k == NULL || cfg == NULL || !cfg_ok(cfg)) {
+        return NAV_EINVAL;
+    }
+    k->cfg = *cfg;
+    for (int i = 0; i < EKF_N; i++) {
+        k->x[i] = NAV_C(0.0);
+    }
+    for (int i = 0; i < 3; i++) {
+        k->bg_rps[i] = NAV_C(0.0);
+        k->ba_mps2[i] = NAV_C(0.0);
+    }
+    k->k = NAV_C(0.0);
+    k->mount_pitch_rad = NAV_C(0.0);
+    k->mount_yaw_rad = NAV_C(0.0);
+    k->n_updates = 0u;
+    k->n_gated = 0u;
+    k->n_health_fixes = 0u;
+    reset_cov(k, heading_sigma_rad > NAV_C(0.0) ? heading_sigma_rad : cfg->heading_rad);
+    return NAV_OK;
+}
+
+/* ------------------------------------------------------------- prediction ---- */
+
+typedef struct {
+    uint8_t r, c;
+    nav_real_t v;
+} f_entry_t;
+
+#define F_MAX 48
+
+static int add_entry(f_entry_t *f, int n, int r, int c, nav_real_t v)
+{
+    if (n < F_MAX) {
+        f[n].r = (uint8_t)r;
+        f[n].c = (uint8_t)c;
+        f[n].v = v;
+        n++;
+    }
+    return n;
+}
+
+/* the non-zero entries of skew(w) = [w x] at (r0, c0), scaled by sign */
+static int add_skew(f_entry_t *f, int n, int r0, int c0, const nav_real_t w[3], nav_real_t sign)
+{
+    n = add_entry(f, n, r0 + 0, c0 + 1, -sign * w[2]);
+    n = add_entry(f, n, r0 + 0, c0 + 2, sign * w[1]);
+    n = add_entry(f, n, r0 + 1, c0 + 0, sign * w[2]);
+    n = add_entry(f, n, r0 + 1, c0 + 2, -sign * w[0]);
+    n = add_entry(f, n, r0 + 2, c0 + 0, -sign * w[1]);
+    n = add_entry(f, n, r0 + 2, c0 + 1, sign * w[0]);
+    return n;
+}
+
+static int add_mat(f_entry_t *f, int n, int r0, int c0, const mat3_t *M, nav_real_t sign)
+{
+    for (int i = 0; i < 3; i++) {
+        for (int j = 0; j < 3; j++) {
+            n = add_entry(f, n, r0 + i, c0 + j, sign * M->m[i][j]);
+        }
+    }
+    return n;
+}
+
+/* scratch for F P; static: it is too large for an ECU's stack and never live twice */
+static nav_real_t fp[EKF_N][EKF_N];
+
+void ekf_predict(ekf_t *k, const sins_t *s, const nav_real_t f_n_mps2[3], nav_real_t dt_s)
+{
+    mat3_t C;
+    quat_to_dcm(s->q_bn, &C);
+    const nav_real_t lat = geo_lat_rad(&s->pos);
+    const nav_real_t h = geo_h_m(&s->pos);
+    earth_t e;
+    earth_eval(lat, h, &e);
+    nav_real_t w_en[3];
+    earth_transport_rate(&e, h, s->v_n_mps, w_en);
+    nav_real_t w_in[3], w_c[3];
+    for (int i = 0; i < 3; i++) {
+        w_in[i] = e.w_ie_n_rps[i] + w_en[i];
+        w_c[i] = NAV_C(2.0) * e.w_ie_n_rps[i] + w_en[i];
+    }
+    f_entry_t F[F_MAX];
+    int n = 0;
+    for (int i = 0; i < 3; i++) {
+        n = add_entry(F, n, EKF_DR + i, EKF_DV + i, NAV_C(1.0));
+    }
+    n = add_skew(F, n, EKF_DV, EKF_PSI, f_n_mps2, NAV_C(1.0));  /* [f_n x] psi */
+    n = add_mat(F, n, EKF_DV, EKF_BA, &C, NAV_C(1.0));          /* C_bn ba */
+    n = add_skew(F, n, EKF_DV, EKF_DV, w_c, NAV_C(-1.0));       /* -(2 w_ie + w_en) x dv */
+    n = add_entry(F, n, EKF_DV + 2, EKF_DR + 2,
+                  NAV_C(2.0) * e.g_mps2 / nav_sqrt(e.R_M_m * e.R_N_m)); /* gravity vs height */
+    n = add_skew(F, n, EKF_PSI, EKF_PSI, w_in, NAV_C(-1.0));    /* -w_in x psi */
+    n = add_mat(F, n, EKF_PSI, EKF_BG, &C, NAV_C(-1.0));        /* -C_bn bg */
+
+    /* P <- (I + F dt) P (I + F dt)^T = P + dt (FP + (FP)^T) + dt^2 F (FP)^T */
+    for (int i = 0; i < EKF_N; i++) {
+        for (int j = 0; j < EKF_N; j++) {
+            fp[i][j] = NAV_C(0.0);
+        }
+    }
+    for (int q = 0; q < n; q++) {
+        for (int j = 0; j < EKF_N; j++) {
+            fp[F[q].r][j] += F[q].v * k->P[F[q].c][j];
+        }
+    }
+    for (int i = 0; i < EKF_N; i++) {
+        for (int j = 0; j < EKF_N; j++) {
+            k->P[i][j] += dt_s * (fp[i][j] + fp[j][i]);
+        }
+    }
+    const nav_real_t dt2 = dt_s * dt_s;
+    for (int q = 0; q < n; q++) {
+        for (int j = 0; j < EKF_N; j++) {
+            k->P[F[q].r][j] += dt2 * F[q].v * fp[j][F[q].c];
+        }
+    }
+    const ekf_config_t *c = &k->cfg;
+    for (int i = 0; i < 3; i++) {
+        k->P[EKF_DV + i][EKF_DV + i] += c->vrw_mps_rts * c->vrw_mps_rts * dt_s;
+        k->P[EKF_PSI + i][EKF_PSI + i] += c->arw_rad_rts * c->arw_rad_rts * dt_s;
+        k->P[EKF_BG + i][EKF_BG + i] += c->bg_rw_rps_rts * c->bg_rw_rps_rts * dt_s;
+        k->P[EKF_BA + i][EKF_BA + i] += c->ba_rw_mps2_rts * c->ba_rw_mps2_rts * dt_s;
+    }
+    k->P[EKF_K][EKF_K] += c->k_rw_rts * c->k_rw_rts * dt_s;
+    k->P[EKF_MP][EKF_MP] += c->mount_rw_rad_rts * c->mount_rw_rad_rts * dt_s;
+    k->P[EKF_MY][EKF_MY] += c->mount_rw_rad_rts * c->mount_rw_rad_rts * dt_s;
+    (void)ekf_health(k);
+}
+
+/* ----------------------------------------------------------------- update ---- */
+
+int ekf_update(ekf_t *k, const nav_real_t h[EKF_N], nav_real_t z, nav_real_t r,
+               nav_real_t gate_sigma)
+{
+    if (!nav_isfinite(z) || !(r > NAV_C(0.0)) || !nav_isfinite(r)) {
+        return -1;
+    }
+    nav_real_t u[EKF_N];
+    nav_real_t hx = NAV_C(0.0);
+    for (int i = 0; i < EKF_N; i++) {
+        nav_real_t acc = NAV_C(0.0);
+        for (int j = 0; j < EKF_N; j++) {
+            acc += k->P[i][j] * h[j];
+        }
+        u[i] = acc;
+        hx += h[i] * k->x[i];
+    }
+    nav_real_t S = r;
+    for (int i = 0; i < EKF_N; i++) {
+        S += h[i] * u[i];
+    }
+    if (!(S > NAV_C(0.0)) || !nav_isfinite(S)) {
+        return -1;
+    }
+    const nav_real_t innov = z - hx;
+    if (gate_sigma > NAV_C(0.0) && innov * innov > gate_sigma * gate_sigma * S) {
+        k->n_gated++;
+        return 0;
+    }
+    nav_real_t K[EKF_N];
+    for (int i = 0; i < EKF_N; i++) {
+        K[i] = u[i] / S;
+        k->x[i] += K[i] * innov;
+    }
+    /* Joseph form (I - K h) P (I - K h)^T + K r K^T, expanded for a scalar measurement:
+     * P - K u^T - u K^T + S K K^T, evaluated term by term and kept symmetric */
+    for (int i = 0; i < EKF_N; i++) {
+        for (int j = i; j < EKF_N; j++) {
+            const nav_real_t v = k->P[i][j] - K[i] * u[j] - u[i] * K[j] + S * K[i] * K[j];
+            k->P[i][j] = v;
+            k->P[j][i] = v;
+        }
+    }
+    k->n_updates++;
+    return 1;
+}
+
+uint32_t ekf_health(ekf_t *k)
+{
+    uint32_t fixes = 0u;
+    int finite = 1;
+    for (int i = 0; i < EKF_N && finite; i++) {
+        for (int j = 0; j < EKF_N; j++) {
+            if (!nav_isfinite(k->P[i][j])) {
+                finite = 0;
+                break;
+            }
+        }
+    }
+    if (!finite) {
+        reset_cov(k, k->cfg.heading_rad);
+        for (int i = 0; i < EKF_N; i++) {
+            k->x[i] = NAV_C(0.0);
+        }
+        fixes++;
+    }
+    for (int i = 0; i < EKF_N; i++) {
+        if (!(k->P[i][i] >= k->cfg.var_floor)) {
+            k->P[i][i] = k->cfg.var_floor;
+            fixes++;
+        }
+        for (int j = i + 1; j < EKF_N; j++) {
+            const nav_real_t m = NAV_C(0.5) * (k->P[i][j] + k->P[j][i]);
+            /* a correlation beyond 1 is impossible in a valid covariance: clip it */
+            const nav_real_t lim = nav_sqrt(k->P[i][i] * k->P[j][j]);
+            nav_real_t v = m;
+            if (m > lim) {
+                v = lim;
+                fixes++;
+            } else if (m < -lim) {
+                v = -lim;
+                fixes++;
+            }
+            k->P[i][j] = v;
+            k->P[j][i] = v;
+        }
+    }
+    k->n_health_fixes += fixes;
+    return fixes;
+}
+
+/* --------------------------------------------------------------- feedback ---- */
+
+int ekf_feedback(ekf_t *k, sins_t *s)
+{
+    const nav_real_t *x = k->x;
+    for (int i = 0; i < EKF_N; i++) {
+        if (!nav_isfinite(x[i])) {
+            for (int j = 0; j < EKF_N; j++) {
+                k->x[j] = NAV_C(0.0);
+            }
+            return NAV_EINVAL;
+        }
+    }
+    const nav_real_t lat = geo_lat_rad(&s->pos);
+    const nav_real_t h = geo_h_m(&s->pos);
+    nav_real_t R_M, R_N;
+    earth_radii(nav_sin(lat), &R_M, &R_N);
+    int rc = geo_pos_add(&s->pos, -x[EKF_DR + 1] / (R_M + h),
+                         -x[EKF_DR + 0] / ((R_N + h) * nav_cos(lat)), -x[EKF_DR + 2]);
+    nav_real_t v[3];
+    for (int i = 0; i < 3; i++) {
+        v[i] = s->v_n_mps[i] - x[EKF_DV + i];
+    }
+    if (rc == NAV_OK) {
+        rc = sins_set_velocity(s, v);
+    }
+    /* C_true = (I + [psi x]) C_computed: q <- q(psi) (x) q */
+    nav_real_t dq[4];
+    if (rc == NAV_OK && rotvec_to_dquat(&x[EKF_PSI], dq) == NAV_OK) {
+        nav_real_t qpsi[4] = {NAV_C(1.0) + dq[0], dq[1], dq[2], dq[3]};
+        nav_real_t q[4];
+        quat_mul(qpsi, s->q_bn, q);
+        const nav_real_t nq = nav_sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+        for (int i = 0; i < 4; i++) {
+            s->q_bn[i] = q[i] / nq;
+            s->q_bn_lo[i] = NAV_C(0.0);
+        }
+    }
+    /* residual sensor errors are absorbed into the estimates; k and the mounting states
+     * are estimate minus truth */
+    for (int i = 0; i < 3; i++) {
+        k->bg_rps[i] += x[EKF_BG + i];
+        k->ba_mps2[i] += x[EKF_BA + i];
+    }
+    k->k -= x[EKF_K];
+    k->mount_pitch_rad -= x[EKF_MP];
+    k->mount_yaw_rad -= x[EKF_MY];
+    for (int i = 0; i < EKF_N; i++) {
+        k->x[i] = NAV_C(0.0);
+    }
+    return rc;
+}
+
+nav_real_t ekf_sigma_h_m(const ekf_t *k)
+{
+    return nav_sqrt(k->P[EKF_DR][EKF_DR] + k->P[EKF_DR + 1][EKF_DR + 1]);
+}

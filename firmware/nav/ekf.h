@@ -1,0 +1,144 @@
+/*
+ * ekf.h - the compact error-state Kalman filter: 18 states, float32, fixed-size storage,
+ * closed loop (seed 001: "the INS solution is reconciled with the GNSS solution by a Kalman
+ * filter with 18 parameters"; docs/kalman.md).
+ *
+ * Error state x, all "computed minus true":
+ *   0..2   dr    position error, ENU metres at the IMU
+ *   3..5   dv    velocity error, ENU m/s
+ *   6..8   psi   attitude error, rad: C_bn(computed) = (I - [psi x]) C_bn(true), so the
+ *                heading error is +psi_U (Titterton & Weston, "Strapdown Inertial
+ *                Navigation Technology", 2nd ed., sec. 12.3: the psi-angle form)
+ *   9..11  bg    residual gyro bias, body, rad/s
+ *   12..14 ba    residual accelerometer bias, body, m/s^2
+ *   15     k     odometer scale error (reading = (1 + k) x true; seed 000's mu)
+ *   16     mp    IMU-to-car mounting pitch (IMU nose up of the car's), rad
+ *   17     my    IMU-to-car mounting yaw (IMU forward axis clockwise of the car's), rad
+ * Dynamics (Titterton & Weston eqs 12.6, 12.8, 12.10, small terms of order v/R dropped):
+ *   d(dr)/dt = dv
+ *   d(dv)/dt = [f_n x] psi + C_bn ba - [(2 w_ie + w_en) x] dv + (0, 0, 2 g / R) dr_U
+ *   d(psi)/dt = -[w_in x] psi - C_bn bg
+ *   biases, k, mounting: random walks.
+ * Prediction uses Phi = I + F dt over an interval of several IMU samples with the mean
+ * specific force, and P = Phi P Phi^T + Q computed through F's ~40 non-zero entries
+ * (ekf_predict). Updates are scalar and sequential (no matrix inverse), in the symmetric
+ * expansion of the Joseph form, each gated by its normalised innovation (chi-square).
+ */
+#ifndef NAVECU_EKF_H
+#define NAVECU_EKF_H
+
+#include "sins.h"
+
+#define EKF_N 18
+enum {
+    EKF_DR = 0,
+    EKF_DV = 3,
+    EKF_PSI = 6,
+    EKF_BG = 9,
+    EKF_BA = 12,
+    EKF_K = 15,
+    EKF_MP = 16,
+    EKF_MY = 17,
+};
+
+typedef struct {
+    /* initial 1-sigma */
+    nav_real_t pos_m, vel_mps, tilt_rad, heading_rad, bg_rps, ba_mps2, k, mount_rad;
+    /* noise densities */
+    nav_real_t arw_rad_rts;      /* gyro angle random walk, rad/sqrt(s) */
+    nav_real_t vrw_mps_rts;      /* accelerometer velocity random walk, m/s/sqrt(s) */
+    nav_real_t bg_rw_rps_rts;    /* gyro bias random walk, rad/s/sqrt(s) */
+    nav_real_t ba_rw_mps2_rts;   /* accelerometer bias random walk */
+    nav_real_t k_rw_rts;         /* odometer scale random walk (tyre wear, pressure), 1/sqrt(s) */
+    nav_real_t mount_rw_rad_rts; /* mounting random walk (load, suspension) */
+    nav_real_t var_floor;        /* smallest variance allowed on the diagonal */
+} ekf_config_t;
+
+typedef struct {
+    ekf_config_t cfg;
+    nav_real_t x[EKF_N];
+    nav_real_t P[EKF_N][EKF_N];
+    /* estimates fed back (closed loop): the application subtracts the biases from the
+     * IMU increments and uses k and the mounting for the odometer */
+    nav_real_t bg_rps[3], ba_mps2[3], k, mount_pitch_rad, mount_yaw_rad;
+    uint32_t n_updates;          /* accepted scalar updates */
+    uint32_t n_gated;            /* measurements rejected by their innovation gate */
+    uint32_t n_health_fixes;     /* last-resort covariance corrections */
+} ekf_t;
+
+#define ekf_default_config NAV_SYM(ekf_default_config)
+#define ekf_init NAV_SYM(ekf_init)
+#define ekf_predict NAV_SYM(ekf_predict)
+#define ekf_update NAV_SYM(ekf_update)
+#define ekf_feedback NAV_SYM(ekf_feedback)
+#define ekf_health NAV_SYM(ekf_health)
+#define ekf_sigma_h_m NAV_SYM(ekf_sigma_h_m)
+
+/* initial sigmas and noise of a mid-grade IMU in a car (docs/kalman.md) */
+ekf_config_t ekf_default_config(void);
+
+/* Start with zero error state and the configured initial covariance (heading_sigma_rad
+ * overrides cfg.heading_rad when > 0). NAV_EINVAL for a non-positive sigma. */
+int ekf_init(ekf_t *k, const ekf_config_t *cfg, nav_real_t heading_sigma_rad);
+
+/* Propagate over dt_s with the navigator's state and the mean specific force over the
+ * interval in ENU (m/s^2). */
+void ekf_predict(ekf_t *k, const sins_t *s, const nav_real_t f_n_mps2[3], nav_real_t dt_s);
+
+/*
+ * One scalar measurement z = h x + noise of variance r, with innovation z (measured
+ * minus predicted from the current state: z = computed - measured for this filter's
+ * sign) and the row h (EKF_N entries). Rejected without change when z^2 > gate^2 (h P h^T
+ * + r) (gate in sigmas; <= 0: no gate). Returns 1 if applied, 0 if gated, -1 if invalid.
+ */
+int ekf_update(ekf_t *k, const nav_real_t h[EKF_N], nav_real_t z, nav_real_t r,
+               nav_real_t gate_sigma);
+
+/* Apply the error estimate to the navigator and the estimates, zero x (closed loop). */
+int ekf_feedback(ekf_t *k, sins_t *s);
+
+/* Symmetrise P, hold its diagonal at or above the floor, reset it if not finite; each
+ * correction counted in n_health_fixes. Returns the number of corrections made. */
+uint32_t ekf_health(ekf_t *k);
+
+/* 1-sigma horizontal position error (m): sqrt(P_EE + P_NN). */
+nav_real_t ekf_sigma_h_m(const ekf_t *k);
+
+/* ---------------------------------------------------------------- measurements ----
+ * Each builds its rows h and innovations (computed minus measured) and applies them in
+ * sequence. A vector measurement is gated as a whole: if any component's normalised
+ * innovation exceeds gate_sigma (with P before the update), nothing is applied and
+ * n_gated counts it once. Return: number of scalar updates applied (0 when gated), or -1
+ * for invalid input. */
+#define ekf_gnss_position NAV_SYM(ekf_gnss_position)
+#define ekf_gnss_velocity NAV_SYM(ekf_gnss_velocity)
+#define ekf_odometer NAV_SYM(ekf_odometer)
+#define ekf_zero_velocity NAV_SYM(ekf_zero_velocity)
+#define ekf_zero_rate NAV_SYM(ekf_zero_rate)
+
+/* GNSS antenna position meas (lat/lon/height) for the navigator at pos_then (its position
+ * at the fix's time of validity), antenna at lever_b (body, m) from the IMU; 1-sigma
+ * horizontal and vertical noise (m). */
+int ekf_gnss_position(ekf_t *k, const sins_t *s, const geo_pos_t *pos_then,
+                      const geo_pos_t *meas, const nav_real_t lever_b[3], nav_real_t sigma_h_m,
+                      nav_real_t sigma_v_m, nav_real_t gate_sigma);
+
+/* GNSS velocity (ENU m/s) against the navigator's velocity at the fix's time v_then. */
+int ekf_gnss_velocity(ekf_t *k, const nav_real_t v_then_mps[3], const nav_real_t meas_mps[3],
+                      nav_real_t sigma_h_mps, nav_real_t sigma_v_mps, nav_real_t gate_sigma);
+
+/* Odometer speed of the car's reference point (m/s, as read: (1 + k) x true) along the
+ * car's forward axis, and the non-holonomic constraints (no lateral, no vertical velocity
+ * of the car): three scalar updates. The car's axes are the IMU's turned by the mounting
+ * estimates. */
+int ekf_odometer(ekf_t *k, const sins_t *s, nav_real_t speed_mps, nav_real_t sigma_fwd_mps,
+                 nav_real_t sigma_nhc_mps, nav_real_t gate_sigma);
+
+/* Standstill: zero velocity (ENU) with 1-sigma sigma_mps. */
+int ekf_zero_velocity(ekf_t *k, const sins_t *s, nav_real_t sigma_mps);
+
+/* Standstill: the bias-compensated z gyro rate minus the Earth's rate seen by the body z
+ * axis (rad/s) measures the residual z gyro bias; 1-sigma sigma_rps. */
+int ekf_zero_rate(ekf_t *k, nav_real_t residual_rate_z_rps, nav_real_t sigma_rps);
+
+#endif /* NAVECU_EKF_H */

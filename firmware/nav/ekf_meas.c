@@ -1,0 +1,161 @@
+/*
+ * ekf_meas.c - the measurements of the 18-state filter (ekf.h, docs/kalman.md).
+ */
+#include "dr.h"
+#include "ekf.h"
+
+#include <stddef.h>
+
+#define MAX_ROWS 3
+
+static void zero_row(nav_real_t h[EKF_N])
+{
+    for (int i = 0; i < EKF_N; i++) {
+        h[i] = NAV_C(0.0);
+    }
+}
+
+/* z^2 / (h P h^T + r) for one row, with the current P */
+static nav_real_t nis(const ekf_t *k, const nav_real_t h[EKF_N], nav_real_t z, nav_real_t r)
+{
+    nav_real_t s = r;
+    for (int i = 0; i < EKF_N; i++) {
+        nav_real_t acc = NAV_C(0.0);
+        for (int j = 0; j < EKF_N; j++) {
+            acc += k->P[i][j] * h[j];
+        }
+        s += h[i] * acc;
+    }
+    return z * z / s;
+}
+
+/* gate the rows as one measurement, then apply them in sequence */
+static int apply_rows(ekf_t *k, nav_real_t H[][EKF_N], const nav_real_t *z, const nav_real_t *r,
+                      int n, nav_real_t gate_sigma)
+{
+    for (int m = 0; m < n; m++) {
+        if (!nav_isfinite(z[m]) || !(r[m] > NAV_C(0.0))) {
+            return -1;
+        }
+        if (gate_sigma > NAV_C(0.0) && nis(k, H[m], z[m], r[m]) > gate_sigma * gate_sigma) {
+            k->n_gated++;
+            return 0;
+        }
+    }
+    int applied = 0;
+    for (int m = 0; m < n; m++) {
+        if (ekf_update(k, H[m], z[m], r[m], NAV_C(0.0)) == 1) {
+            applied++;
+        }
+    }
+    return applied;
+}
+
+int ekf_gnss_position(ekf_t *k, const sins_t *s, const geo_pos_t *pos_then,
+                      const geo_pos_t *meas, const nav_real_t lever_b[3], nav_real_t sigma_h_m,
+                      nav_real_t sigma_v_m, nav_real_t gate_sigma)
+{
+    mat3_t C;
+    quat_to_dcm(s->q_bn, &C);
+    nav_real_t l_n[3];
+    mat3_mul_vec(&C, lever_b, l_n);
+    nav_real_t e, n;
+    dr_local_m(meas, pos_then, &e, &n); /* navigator minus measurement, metres */
+    const nav_real_t u = (nav_real_t)(pos_then->h - meas->h) / (nav_real_t)GEO_LSB_PER_MM *
+                         NAV_C(0.001);
+    const nav_real_t z[3] = {e + l_n[0], n + l_n[1], u + l_n[2]};
+    const nav_real_t r[3] = {sigma_h_m * sigma_h_m, sigma_h_m * sigma_h_m,
+                             sigma_v_m * sigma_v_m};
+    nav_real_t H[MAX_ROWS][EKF_N];
+    for (int m = 0; m < 3; m++) {
+        zero_row(H[m]);
+        H[m][EKF_DR + m] = NAV_C(1.0);
+    }
+    /* d(C l) = [(C l) x] psi */
+    H[0][EKF_PSI + 1] = -l_n[2];
+    H[0][EKF_PSI + 2] = l_n[1];
+    H[1][EKF_PSI + 0] = l_n[2];
+    H[1][EKF_PSI + 2] = -l_n[0];
+    H[2][EKF_PSI + 0] = -l_n[1];
+    H[2][EKF_PSI + 1] = l_n[0];
+    return apply_rows(k, H, z, r, 3, gate_sigma);
+}
+
+int ekf_gnss_velocity(ekf_t *k, const nav_real_t v_then_mps[3], const nav_real_t meas_mps[3],
+                      nav_real_t sigma_h_mps, nav_real_t sigma_v_mps, nav_real_t gate_sigma)
+{
+    nav_real_t H[MAX_ROWS][EKF_N];
+    nav_real_t z[3], r[3];
+    for (int m = 0; m < 3; m++) {
+        zero_row(H[m]);
+        H[m][EKF_DV + m] = NAV_C(1.0);
+        z[m] = v_then_mps[m] - meas_mps[m];
+        r[m] = m < 2 ? sigma_h_mps * sigma_h_mps : sigma_v_mps * sigma_v_mps;
+    }
+    return apply_rows(k, H, z, r, 3, gate_sigma);
+}
+
+int ekf_odometer(ekf_t *k, const sins_t *s, nav_real_t speed_mps, nav_real_t sigma_fwd_mps,
+                 nav_real_t sigma_nhc_mps, nav_real_t gate_sigma)
+{
+    mat3_t C;
+    quat_to_dcm(s->q_bn, &C);
+    nav_real_t v_b[3];
+    mat3t_mul_vec(&C, s->v_n_mps, v_b); /* body velocity, IMU axes */
+    /* d(v_b) = C^T dv - C^T [v_n x] psi: rows of M = C^T and N = -C^T [v_n x] */
+    const nav_real_t *v = s->v_n_mps;
+    nav_real_t N[3][3];
+    for (int i = 0; i < 3; i++) {
+        /* row i of C^T is column i of C; times [v x] */
+        const nav_real_t c0 = C.m[0][i], c1 = C.m[1][i], c2 = C.m[2][i];
+        N[i][0] = -(c1 * v[2] - c2 * v[1]);
+        N[i][1] = -(c2 * v[0] - c0 * v[2]);
+        N[i][2] = -(c0 * v[1] - c1 * v[0]);
+    }
+    const nav_real_t my = k->mount_yaw_rad, mp = k->mount_pitch_rad;
+    const nav_real_t scale = NAV_C(1.0) + k->k;
+    nav_real_t H[MAX_ROWS][EKF_N], z[3], r[3];
+    /* car frame: lateral v_b,x + my v_b,y = 0; vertical v_b,z + mp v_b,y = 0;
+     * forward (1 + k) v_b,y = speed read */
+    const int axis[3] = {0, 2, 1};
+    for (int m = 0; m < 3; m++) {
+        const int i = axis[m];
+        const nav_real_t g = m == 2 ? scale : NAV_C(1.0);
+        zero_row(H[m]);
+        for (int j = 0; j < 3; j++) {
+            H[m][EKF_DV + j] = g * C.m[j][i];
+            H[m][EKF_PSI + j] = g * N[i][j];
+        }
+    }
+    H[0][EKF_MY] = v_b[1];
+    H[1][EKF_MP] = v_b[1];
+    H[2][EKF_K] = v_b[1];
+    z[0] = v_b[0] + my * v_b[1];
+    z[1] = v_b[2] + mp * v_b[1];
+    z[2] = scale * v_b[1] - speed_mps;
+    r[0] = r[1] = sigma_nhc_mps * sigma_nhc_mps;
+    r[2] = sigma_fwd_mps * sigma_fwd_mps;
+    return apply_rows(k, H, z, r, 3, gate_sigma);
+}
+
+int ekf_zero_velocity(ekf_t *k, const sins_t *s, nav_real_t sigma_mps)
+{
+    nav_real_t H[MAX_ROWS][EKF_N], z[3], r[3];
+    for (int m = 0; m < 3; m++) {
+        zero_row(H[m]);
+        H[m][EKF_DV + m] = NAV_C(1.0);
+        z[m] = s->v_n_mps[m];
+        r[m] = sigma_mps * sigma_mps;
+    }
+    return apply_rows(k, H, z, r, 3, NAV_C(0.0));
+}
+
+int ekf_zero_rate(ekf_t *k, nav_real_t residual_rate_z_rps, nav_real_t sigma_rps)
+{
+    nav_real_t H[MAX_ROWS][EKF_N];
+    zero_row(H[0]);
+    H[0][EKF_BG + 2] = NAV_C(1.0);
+    const nav_real_t z[1] = {residual_rate_z_rps};
+    const nav_real_t r[1] = {sigma_rps * sigma_rps};
+    return apply_rows(k, H, z, r, 1, NAV_C(0.0));
+}

@@ -1,0 +1,388 @@
+/*
+ * test_ekf.c - the 18-state error-state filter against the strapdown core it models.
+ * Built for both numeric variants.
+ *
+ * 1. Propagation: the error model F (ekf.h) is checked against the navigator itself. Two
+ *    SINS run the same exact IMU data of a stop-and-go circle drive (tests/support): one
+ *    clean, one with residual gyro and accelerometer biases and initial position, velocity
+ *    and attitude errors. The filter propagates a rank-one covariance P0 = a a^T with a the
+ *    initial error vector and no process noise, so P(T) = (Phi a)(Phi a)^T and the
+ *    predicted error is P(T)[:, j] / a_j for a state j that stays constant (a bias). It
+ *    must match the two SINS's actual difference: to 5 % of each component's size (the
+ *    model drops terms of order v/R and second-order products of the errors, which over
+ *    60 s of these errors stay below 1 %) plus a small absolute floor.
+ * 2. Measurements: each update, applied to a navigator with a known error, must move the
+ *    estimate toward the truth: the sign and the geometry of each row (lever arm, odometer
+ *    scale, non-holonomic constraints with a mounting yaw, zero velocity, zero rate).
+ */
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <string.h>
+#include <cmocka.h>
+
+#include "dr.h"
+#include "ekf.h"
+#include "motions.h"
+#include "test_util.h"
+
+#define PI 3.14159265358979323846
+#define DEG (PI / 180.0)
+#define LAT0 (45.0 * DEG)
+#define LON0 (10.0 * DEG)
+#define H0 100.0
+
+static geo_pos_t geo(double lat, double lon, double h)
+{
+    const double lsb_per_rad = 1.8e9 * (double)GEO_LSB_PER_DEG_E7 / PI;
+    const geo_pos_t p = {(int64_t)llround(lat * lsb_per_rad), (int64_t)llround(lon * lsb_per_rad),
+                         (int64_t)llround(h * 1000.0 * (double)GEO_LSB_PER_MM)};
+    return p;
+}
+
+static void q_of(double roll, double pitch, double heading, nav_real_t q[4])
+{
+    double qd[4];
+    truth_q_from_euler(roll, pitch, heading, qd);
+    for (int i = 0; i < 4; i++) {
+        q[i] = (nav_real_t)qd[i];
+    }
+}
+
+/* psi with C_comp = (I - [psi x]) C_true */
+static void psi_of(const sins_t *comp, const sins_t *truth, double psi[3])
+{
+    mat3_t Cc, Ct;
+    quat_to_dcm(comp->q_bn, &Cc);
+    quat_to_dcm(truth->q_bn, &Ct);
+    double M[3][3];
+    for (int i = 0; i < 3; i++) {
+        for (int j = 0; j < 3; j++) {
+            double acc = 0.0;
+            for (int l = 0; l < 3; l++) {
+                acc += (double)Cc.m[i][l] * (double)Ct.m[j][l];
+            }
+            M[i][j] = acc;
+        }
+    }
+    psi[0] = 0.5 * (M[1][2] - M[2][1]);
+    psi[1] = 0.5 * (M[2][0] - M[0][2]);
+    psi[2] = 0.5 * (M[0][1] - M[1][0]);
+}
+
+static ekf_config_t quiet_config(void)
+{
+    ekf_config_t c = ekf_default_config();
+    c.arw_rad_rts = c.vrw_mps_rts = c.bg_rw_rps_rts = c.ba_rw_mps2_rts = NAV_C(1e-15);
+    c.k_rw_rts = c.mount_rw_rad_rts = NAV_C(1e-15);
+    c.var_floor = NAV_C(1e-30);
+    return c;
+}
+
+static void test_propagation_matches_sins(void **state)
+{
+    (void)state;
+    const circle_t circ = {8.0, 40.0, 150.0, 30.0 * DEG};
+    truth_gen_t g;
+    truth_init(&g, kin_circle, &circ, LAT0, LON0, H0);
+    kin_t k0;
+    kin_circle(&circ, 0.0, &k0);
+    const sins_config_t scfg = sins_default_config();
+    sins_config_t cfg = scfg;
+    cfg.vdamp_tau_s = NAV_C(0.0);
+    const geo_pos_t p0 = geo(LAT0, LON0, H0);
+    nav_real_t q0[4], v0[3];
+    for (int i = 0; i < 4; i++) {
+        q0[i] = (nav_real_t)k0.q_bn[i];
+    }
+    for (int i = 0; i < 3; i++) {
+        v0[i] = (nav_real_t)k0.v_n_mps[i];
+    }
+    sins_t truth, comp;
+    assert_int_equal(sins_init(&truth, &cfg, &p0, v0, q0), NAV_OK);
+    /* initial errors a (computed minus true) */
+    const double a_r[3] = {2.0, -1.5, 0.0}, a_v[3] = {0.05, -0.03, 0.0};
+    const double a_psi[3] = {4e-4, -3e-4, 2e-3};
+    const double a_bg[3] = {2e-6, -3e-6, 5e-6}, a_ba[3] = {2e-3, -1.5e-3, 0.0};
+    double R_M, R_N;
+    truth_radii(LAT0, &R_M, &R_N);
+    const geo_pos_t pc = geo(LAT0 + a_r[1] / (R_M + H0),
+                             LON0 + a_r[0] / ((R_N + H0) * cos(LAT0)), H0 + a_r[2]);
+    nav_real_t vc[3];
+    for (int i = 0; i < 3; i++) {
+        vc[i] = v0[i] + (nav_real_t)a_v[i];
+    }
+    /* C_comp = (I - [a_psi x]) C_true: q_comp = q(-a_psi) (x) q_true */
+    const nav_real_t mpsi[3] = {(nav_real_t)-a_psi[0], (nav_real_t)-a_psi[1],
+                                (nav_real_t)-a_psi[2]};
+    nav_real_t dq[4], qm[4], qc[4];
+    assert_int_equal(rotvec_to_dquat(mpsi, dq), NAV_OK);
+    qm[0] = NAV_C(1.0) + dq[0];
+    qm[1] = dq[1];
+    qm[2] = dq[2];
+    qm[3] = dq[3];
+    quat_mul(qm, q0, qc);
+    assert_int_equal(sins_init(&comp, &cfg, &pc, vc, qc), NAV_OK);
+
+    ekf_t f;
+    assert_int_equal(ekf_init(&f, &(ekf_config_t){0}, NAV_C(0.0)), NAV_EINVAL);
+    const ekf_config_t qc_cfg = quiet_config();
+    assert_int_equal(ekf_init(&f, &qc_cfg, NAV_C(0.0)), NAV_OK);
+    double a[EKF_N] = {0};
+    for (int i = 0; i < 3; i++) {
+        a[EKF_DR + i] = a_r[i];
+        a[EKF_DV + i] = a_v[i];
+        a[EKF_PSI + i] = a_psi[i];
+        a[EKF_BG + i] = a_bg[i];
+        a[EKF_BA + i] = a_ba[i];
+    }
+    for (int i = 0; i < EKF_N; i++) {
+        for (int j = 0; j < EKF_N; j++) {
+            f.P[i][j] = (nav_real_t)(a[i] * a[j]);
+        }
+    }
+    const double dt = 0.01;
+    const int n_pred = 10; /* predict at 10 Hz with the mean specific force */
+    nav_real_t f_sum[3] = {0};
+    for (int k = 1; k <= 6000; k++) {
+        double dth[3], dvb[3];
+        truth_step(&g, dt, dth, dvb);
+        imu_inc_t it, ic;
+        it.dt_s = ic.dt_s = (nav_real_t)dt;
+        for (int i = 0; i < 3; i++) {
+            it.dtheta_b_rad[i] = (nav_real_t)dth[i];
+            it.dv_b_mps[i] = (nav_real_t)dvb[i];
+            ic.dtheta_b_rad[i] = (nav_real_t)(dth[i] + a_bg[i] * dt);
+            ic.dv_b_mps[i] = (nav_real_t)(dvb[i] + a_ba[i] * dt);
+        }
+        assert_int_equal(sins_step(&truth, &it), NAV_OK);
+        assert_int_equal(sins_step(&comp, &ic), NAV_OK);
+        mat3_t C;
+        quat_to_dcm(comp.q_bn, &C);
+        nav_real_t fn[3];
+        mat3_mul_vec(&C, it.dv_b_mps, fn);
+        for (int i = 0; i < 3; i++) {
+            f_sum[i] += fn[i] / (nav_real_t)dt;
+        }
+        if (k % n_pred == 0) {
+            for (int i = 0; i < 3; i++) {
+                f_sum[i] /= (nav_real_t)n_pred;
+            }
+            ekf_predict(&f, &comp, f_sum, (nav_real_t)(dt * n_pred));
+            f_sum[0] = f_sum[1] = f_sum[2] = NAV_C(0.0);
+        }
+    }
+    /* predicted error vector from the column of a constant state */
+    double pred[EKF_N];
+    for (int i = 0; i < EKF_N; i++) {
+        pred[i] = (double)f.P[i][EKF_BG + 2] / a_bg[2];
+    }
+    /* actual errors */
+    nav_real_t e_m, n_m;
+    dr_local_m(&truth.pos, &comp.pos, &e_m, &n_m);
+    const double act_r[3] = {(double)e_m, (double)n_m,
+                             (double)(comp.pos.h - truth.pos.h) / (double)GEO_LSB_PER_MM / 1000.0};
+    double act_psi[3];
+    psi_of(&comp, &truth, act_psi);
+    for (int i = 0; i < 2; i++) { /* horizontal: the vertical channel is unstable, undamped */
+        print_message("dr[%d] predicted %.4f m, actual %.4f m\n", i, pred[EKF_DR + i], act_r[i]);
+        assert_near(pred[EKF_DR + i], act_r[i], 0.05 * fabs(act_r[i]) + 0.05);
+        const double act_v = (double)(comp.v_n_mps[i] - truth.v_n_mps[i]);
+        print_message("dv[%d] predicted %.5f m/s, actual %.5f m/s\n", i, pred[EKF_DV + i], act_v);
+        assert_near(pred[EKF_DV + i], act_v, 0.05 * fabs(act_v) + 2e-3);
+    }
+    for (int i = 0; i < 3; i++) {
+        print_message("psi[%d] predicted %.3e rad, actual %.3e rad\n", i, pred[EKF_PSI + i],
+                      act_psi[i]);
+        assert_near(pred[EKF_PSI + i], act_psi[i], 0.05 * fabs(act_psi[i]) + 2e-5);
+    }
+}
+
+/* ------------------------------------------------------------ measurements ---- */
+
+/* a navigator at 45 N, attitude (roll, pitch, heading), velocity v_n */
+static void nav_at(sins_t *s, double roll, double pitch, double heading, const double v[3])
+{
+    nav_real_t q[4], vn[3];
+    q_of(roll, pitch, heading, q);
+    for (int i = 0; i < 3; i++) {
+        vn[i] = (nav_real_t)v[i];
+    }
+    const geo_pos_t p = geo(LAT0, LON0, H0);
+    const sins_config_t cfg = sins_default_config();
+    assert_int_equal(sins_init(s, &cfg, &p, vn, q), NAV_OK);
+}
+
+static void filter_with(ekf_t *f, const double sd[EKF_N])
+{
+    const ekf_config_t c = quiet_config();
+    assert_int_equal(ekf_init(f, &c, NAV_C(0.0)), NAV_OK);
+    for (int i = 0; i < EKF_N; i++) {
+        f->P[i][i] = (nav_real_t)(sd[i] * sd[i]);
+    }
+}
+
+/* GNSS position with a lever arm: the navigator 3 m east, 2 m south, 1 m high of the
+ * truth; the antenna 1.5 m above and 1 m ahead of the IMU. One update with a 10 m prior
+ * and a 0.1 m fix removes the error to 1 %. */
+static void test_gnss_position_update(void **state)
+{
+    (void)state;
+    const double v[3] = {0, 0, 0};
+    sins_t s;
+    nav_at(&s, 0.0, 0.0, 40.0 * DEG, v);
+    const geo_pos_t truth = s.pos;
+    assert_int_equal(geo_pos_add(&s.pos, (nav_real_t)(-2.0 / 6367000.0),
+                                 (nav_real_t)(3.0 / (6389000.0 * cos(LAT0))), NAV_C(1.0)),
+                     NAV_OK);
+    const nav_real_t lever[3] = {NAV_C(0.0), NAV_C(1.0), NAV_C(1.5)};
+    /* the antenna: 1 m along heading 40 deg, 1.5 m up */
+    geo_pos_t ant = truth;
+    assert_int_equal(geo_pos_add(&ant, (nav_real_t)(cos(40 * DEG) / 6367380.0),
+                                 (nav_real_t)(sin(40 * DEG) / (6388838.0 * cos(LAT0))),
+                                 NAV_C(1.5)),
+                     NAV_OK);
+    ekf_t f;
+    double sd[EKF_N];
+    for (int i = 0; i < EKF_N; i++) {
+        sd[i] = 1e-9;
+    }
+    sd[0] = sd[1] = sd[2] = 10.0;
+    filter_with(&f, sd);
+    assert_int_equal(ekf_gnss_position(&f, &s, &s.pos, &ant, lever, NAV_C(0.1), NAV_C(0.1),
+                                       NAV_C(5.0)), 3);
+    assert_near(f.x[EKF_DR + 0], 3.0, 0.03);
+    assert_near(f.x[EKF_DR + 1], -2.0, 0.03);
+    assert_near(f.x[EKF_DR + 2], 1.0, 0.03);
+    assert_int_equal(ekf_feedback(&f, &s), NAV_OK);
+    nav_real_t e, n;
+    dr_local_m(&truth, &s.pos, &e, &n);
+    assert_near(e, 0.0, 0.05);
+    assert_near(n, 0.0, 0.05);
+    /* a 100 m jump is gated, nothing changes */
+    geo_pos_t far = ant;
+    assert_int_equal(geo_pos_add(&far, NAV_C(100.0) / NAV_C(6367380.0), NAV_C(0.0), NAV_C(0.0)),
+                     NAV_OK);
+    const uint32_t gated = f.n_gated;
+    assert_int_equal(ekf_gnss_position(&f, &s, &s.pos, &far, lever, NAV_C(0.1), NAV_C(0.1),
+                                       NAV_C(5.0)), 0);
+    assert_int_equal(f.n_gated, gated + 1u);
+}
+
+/* The heading error shows in the lever arm: an antenna 2 m ahead, the heading 2 deg off,
+ * the position exact: the update (attitude prior 5 deg, position prior tiny) finds the
+ * heading error from the 7 cm antenna offset. */
+static void test_lever_arm_observes_heading(void **state)
+{
+    (void)state;
+    const double v[3] = {0, 0, 0};
+    sins_t s;
+    nav_at(&s, 0.0, 0.0, 42.0 * DEG, v); /* true heading 40: error +2 deg = +psi_U */
+    geo_pos_t ant = s.pos;
+    assert_int_equal(geo_pos_add(&ant, (nav_real_t)(2.0 * cos(40 * DEG) / 6367380.0),
+                                 (nav_real_t)(2.0 * sin(40 * DEG) / (6388838.0 * cos(LAT0))),
+                                 NAV_C(0.0)),
+                     NAV_OK);
+    ekf_t f;
+    double sd[EKF_N];
+    for (int i = 0; i < EKF_N; i++) {
+        sd[i] = 1e-9;
+    }
+    sd[EKF_PSI + 2] = 5.0 * DEG;
+    filter_with(&f, sd);
+    const nav_real_t lever[3] = {NAV_C(0.0), NAV_C(2.0), NAV_C(0.0)};
+    assert_true(ekf_gnss_position(&f, &s, &s.pos, &ant, lever, NAV_C(0.001), NAV_C(0.001),
+                                  NAV_C(0.0)) == 3);
+    assert_near(f.x[EKF_PSI + 2], 2.0 * DEG, 0.05 * DEG);
+}
+
+/* Odometer and non-holonomic constraints. The car drives at 10 m/s along heading 40 deg;
+ * the IMU is mounted 1 deg clockwise of the car's axis (its heading reads 41 deg), the
+ * odometer reads 2 % long. From priors on k and the mounting yaw only, one update finds
+ * both; a navigator velocity error along the car's lateral axis is removed by the NHC. */
+static void test_odometer_scale_and_mounting(void **state)
+{
+    (void)state;
+    const double v[3] = {10.0 * sin(40 * DEG), 10.0 * cos(40 * DEG), 0.0};
+    sins_t s;
+    nav_at(&s, 0.0, 0.0, 41.0 * DEG, v);
+    ekf_t f;
+    double sd[EKF_N];
+    for (int i = 0; i < EKF_N; i++) {
+        sd[i] = 1e-9;
+    }
+    sd[EKF_K] = 0.05;
+    sd[EKF_MY] = 3.0 * DEG;
+    filter_with(&f, sd);
+    assert_int_equal(ekf_odometer(&f, &s, NAV_C(10.2), NAV_C(0.001), NAV_C(0.001), NAV_C(0.0)), 3);
+    assert_int_equal(ekf_feedback(&f, &s), NAV_OK);
+    assert_near(f.k, 0.02, 2e-4);
+    assert_near(f.mount_yaw_rad, 1.0 * DEG, 0.02 * DEG);
+    /* lateral velocity error: the car's right-hand axis at heading 130 deg */
+    const double vl[3] = {v[0] + 0.3 * sin(130 * DEG), v[1] + 0.3 * cos(130 * DEG), 0.0};
+    nav_at(&s, 0.0, 0.0, 40.0 * DEG, vl);
+    for (int i = 0; i < EKF_N; i++) {
+        sd[i] = 1e-9;
+    }
+    sd[EKF_DV] = sd[EKF_DV + 1] = sd[EKF_DV + 2] = 1.0;
+    filter_with(&f, sd);
+    assert_int_equal(ekf_odometer(&f, &s, NAV_C(10.0), NAV_C(0.01), NAV_C(0.01), NAV_C(0.0)), 3);
+    assert_int_equal(ekf_feedback(&f, &s), NAV_OK);
+    assert_near(s.v_n_mps[0], v[0], 0.01);
+    assert_near(s.v_n_mps[1], v[1], 0.01);
+}
+
+/* Standstill: zero velocity removes a velocity error; zero rate finds the z gyro bias. */
+static void test_standstill_updates(void **state)
+{
+    (void)state;
+    const double v[3] = {0.2, -0.1, 0.05};
+    sins_t s;
+    nav_at(&s, 0.0, 0.0, 0.0, v);
+    ekf_t f;
+    double sd[EKF_N];
+    for (int i = 0; i < EKF_N; i++) {
+        sd[i] = 1e-9;
+    }
+    sd[EKF_DV] = sd[EKF_DV + 1] = sd[EKF_DV + 2] = 1.0;
+    sd[EKF_BG + 2] = 1e-4;
+    filter_with(&f, sd);
+    assert_int_equal(ekf_zero_velocity(&f, &s, NAV_C(0.001)), 3);
+    assert_int_equal(ekf_zero_rate(&f, NAV_C(5e-5), NAV_C(1e-7)), 1);
+    assert_int_equal(ekf_feedback(&f, &s), NAV_OK);
+    assert_near(s.v_n_mps[0], 0.0, 1e-3);
+    assert_near(s.v_n_mps[2], 0.0, 1e-3);
+    assert_near(f.bg_rps[2], 5e-5, 1e-7);
+}
+
+/* Covariance health: a NaN is reset and counted; a negative variance is floored. */
+static void test_covariance_health(void **state)
+{
+    (void)state;
+    ekf_t f;
+    const ekf_config_t c = ekf_default_config();
+    assert_int_equal(ekf_init(&f, &c, NAV_C(0.0)), NAV_OK);
+    f.P[3][3] = NAV_C(-1.0);
+    assert_true(ekf_health(&f) >= 1u);
+    assert_true(f.P[3][3] >= c.var_floor);
+    f.P[2][5] = (nav_real_t)NAN;
+    assert_true(ekf_health(&f) >= 1u);
+    assert_near(f.P[0][0], (double)(c.pos_m * c.pos_m), 1e-6);
+    const nav_real_t h[EKF_N] = {0};
+    assert_int_equal(ekf_update(&f, h, (nav_real_t)NAN, NAV_C(1.0), NAV_C(0.0)), -1);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_propagation_matches_sins),
+        cmocka_unit_test(test_gnss_position_update),
+        cmocka_unit_test(test_lever_arm_observes_heading),
+        cmocka_unit_test(test_odometer_scale_and_mounting),
+        cmocka_unit_test(test_standstill_updates),
+        cmocka_unit_test(test_covariance_health),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
