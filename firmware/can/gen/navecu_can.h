@@ -131,6 +131,7 @@ extern "C" {
 #define NAVECU_CAN_NAV_STATUS_MODE_INERTIAL_CHOICE (2u)
 #define NAVECU_CAN_NAV_STATUS_MODE_FAULT_CHOICE (3u)
 #define NAVECU_CAN_NAV_STATUS_MODE_DEAD_RECKONING_CHOICE (4u)
+#define NAVECU_CAN_NAV_STATUS_MODE_GNSS_INS_CHOICE (5u)
 
 #define NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_NONE_CHOICE (0u)
 #define NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_FROM_NVM_CHOICE (1u)
@@ -809,7 +810,7 @@ struct navecu_can_nav_status_t {
     uint8_t status_page;
 
     /**
-     * 0 waiting for initial state, 1 levelling, 2 inertial only (free SINS is the output), 3 fault, 4 dead reckoning (odometer distance along the SINS heading is the output).
+     * 0 waiting for initial state, 1 levelling, 2 inertial only (free SINS is the output), 3 fault, 4 dead reckoning (odometer and SINS, no GNSS: the seed 000 solution before any GNSS fix, the Kalman filter with odometer aiding in a GNSS outage), 5 GNSS+INS (the Kalman filter with a GNSS fix in the last 2 s).
      *
      * Range: 0..15 (0..15 -)
      * Scale: 1
