@@ -13,6 +13,7 @@
  * the same summary.
  */
 #include <errno.h>
+#include <math.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -60,6 +61,10 @@ static void usage(FILE *out)
             "  --gyro-arw-dpsh X    gyro angle random walk, deg/sqrt(h) (default 0.003)\n"
             "  --gyro-bias-dph X    gyro turn-on bias, 1 sigma, deg/h (default 0.015); both\n"
             "                       weigh the gyro bias estimate at standstill\n"
+            "  --accel-bias-mg X    accelerometer bias, 1 sigma, mg (default 0.1)\n"
+            "  --gnss-latency-ms N  GNSS receiver latency, 0..500 ms (default 100)\n"
+            "  --gnss-lever-m X,Y,Z GNSS antenna from the IMU, body axes (x right, y\n"
+            "                       forward, z up), m (default 0,0,0)\n"
             "  --help               this text\n"
             "\n"
             "Exit status: 0 when the whole log was processed (or the live run was stopped\n"
@@ -144,6 +149,22 @@ int main(int argc, char **argv)
             double x = 0.0;
             bad = parse_real(v, 1e-6, 100.0, &x);
             cfg.gyro_arw_rad_rts = (nav_real_t)(x * RAD_PER_DEG / 60.0);
+        } else if (strcmp(a, "--accel-bias-mg") == 0) {
+            double x = 0.0;
+            bad = parse_real(v, 1e-4, 1000.0, &x);
+            cfg.accel_bias_mps2 = (nav_real_t)(x * 9.80665e-3);
+        } else if (strcmp(a, "--gnss-latency-ms") == 0) {
+            double x = 0.0;
+            bad = parse_real(v, 0.0, 500.0, &x);
+            cfg.gnss_latency_s = (nav_real_t)(x * 1e-3);
+        } else if (strcmp(a, "--gnss-lever-m") == 0) {
+            double x = 0.0, y = 0.0, z = 0.0;
+            char tail = 0;
+            bad = sscanf(v, "%lf,%lf,%lf%c", &x, &y, &z, &tail) != 3 || !(fabs(x) <= 10.0) ||
+                  !(fabs(y) <= 10.0) || !(fabs(z) <= 10.0);
+            cfg.gnss_lever_b_m[0] = (nav_real_t)x;
+            cfg.gnss_lever_b_m[1] = (nav_real_t)y;
+            cfg.gnss_lever_b_m[2] = (nav_real_t)z;
         } else if (strcmp(a, "--gyro-bias-dph") == 0) {
             double x = 0.0;
             bad = parse_real(v, 1e-6, 1e4, &x);
@@ -258,6 +279,15 @@ int main(int argc, char **argv)
             (unsigned long)h->imu_lost, (unsigned long)h->bad_value,
             (unsigned long)h->gnss_rejected, (unsigned long)h->cmd_rejected,
             (unsigned long)h->nav_rejected, (unsigned long)h->time_jumps);
+    if (app.ekf_on) {
+        fprintf(stderr,
+                "navecu: filter: %lu updates, %lu gated, %lu covariance corrections; odometer "
+                "scale %.5f, mounting yaw %.4f deg, pitch %.4f deg\n",
+                (unsigned long)app.ekf.n_updates, (unsigned long)app.ekf.n_gated,
+                (unsigned long)app.ekf.n_health_fixes, (double)app.ekf.k,
+                (double)app.ekf.mount_yaw_rad / RAD_PER_DEG,
+                (double)app.ekf.mount_pitch_rad / RAD_PER_DEG);
+    }
     fprintf(stderr,
             "navecu: calibration: %s, %u one-point, dH %.4f deg, mu %.5f, stored %u; "
             "gyro z bias at standstill %.4f deg/h from %.0f s\n",

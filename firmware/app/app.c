@@ -16,6 +16,7 @@ enum { TX_HEIGHT = 0, TX_VEL, TX_ATT, TX_STATUS, TX_CAL };
 #define GNSS_STILL_MPS NAV_C(0.3)      /* below this GNSS speed the vehicle may be still */
 #define IMU_STALE_US 500000u
 #define CMD_MAX_DELTA 3
+#define GNSS_FIX_FRESH_S 2u      /* mode GnssIns while the last fix used is this recent */
 
 app_config_t app_default_config(void)
 {
@@ -32,6 +33,9 @@ app_config_t app_default_config(void)
      * turn-on bias 0.015 deg/h */
     cfg.gyro_arw_rad_rts = NAV_C(8.73e-7);
     cfg.gyro_bias_rps = NAV_C(7.27e-8);
+    cfg.accel_bias_mps2 = NAV_C(1e-3);
+    cfg.gnss_latency_s = NAV_C(0.1); /* u-blox-class receivers: about 0.1 s */
+    cfg.gnss_lever_b_m[0] = cfg.gnss_lever_b_m[1] = cfg.gnss_lever_b_m[2] = NAV_C(0.0);
     return cfg;
 }
 
@@ -96,7 +100,12 @@ int app_init(app_t *app, const app_config_t *cfg)
         cfg->status_rate_hz == 0u || cfg->level_s == 0u || cfg->level_s > 600u ||
         !(cfg->cal_min_base_m >= NAV_C(0.0)) || !(cfg->cal_min_base_m < NAV_C(1e6)) ||
         !(cfg->gyro_arw_rad_rts > NAV_C(0.0)) || !(cfg->gyro_arw_rad_rts < NAV_C(1.0)) ||
-        !(cfg->gyro_bias_rps > NAV_C(0.0)) || !(cfg->gyro_bias_rps < NAV_C(1.0))) {
+        !(cfg->gyro_bias_rps > NAV_C(0.0)) || !(cfg->gyro_bias_rps < NAV_C(1.0)) ||
+        !(cfg->accel_bias_mps2 > NAV_C(0.0)) || !(cfg->accel_bias_mps2 < NAV_C(10.0)) ||
+        !(cfg->gnss_latency_s >= NAV_C(0.0)) || !(cfg->gnss_latency_s <= NAV_C(0.5)) ||
+        !(nav_fabs(cfg->gnss_lever_b_m[0]) <= NAV_C(10.0)) ||
+        !(nav_fabs(cfg->gnss_lever_b_m[1]) <= NAV_C(10.0)) ||
+        !(nav_fabs(cfg->gnss_lever_b_m[2]) <= NAV_C(10.0))) {
         return NAV_EINVAL;
     }
     odo_config_t ocfg = odo_default_config();
@@ -178,7 +187,11 @@ static void emit_navigation(app_t *a, hal_t *hal)
 
     struct navecu_can_nav_height_t h;
     h.height = (int32_t)lsb_div_round(s->pos.h, 10 * GEO_LSB_PER_MM); /* 0.01 m */
-    h.vert_accuracy = 255u; /* no error model before the Kalman filter: "unknown" */
+    h.vert_accuracy = 255u; /* "unknown" without the filter */
+    if (a->ekf_on) {
+        const nav_real_t sv = nav_sqrt(a->ekf.P[EKF_DR + 2][EKF_DR + 2]) * NAV_C(10.0);
+        h.vert_accuracy = sv < NAV_C(254.0) ? (uint8_t)(sv + NAV_C(0.5)) : 254u;
+    }
     /* time of validity on the IMU time base, so that a recorder need not trust arrival
      * times: a vcan recording and a --can-log run carry the same value */
     h.time_of_validity = (uint16_t)((a->n_samples * 1000u / a->cfg.imu_rate_hz) & 0xFFFFu);
@@ -247,6 +260,24 @@ static uint16_t health_flags(const app_t *a, const hal_t *hal)
     return fl;
 }
 
+/* NAV_Status Mode: the solution being output */
+static uint32_t output_mode(const app_t *a)
+{
+    if (a->mode != APP_MODE_NAVIGATING) {
+        return (uint32_t)a->mode;
+    }
+    if (a->ekf_on) {
+        if (a->have_fix &&
+            a->n_samples - a->last_fix_sample <= GNSS_FIX_FRESH_S * a->cfg.imu_rate_hz) {
+            return NAVECU_CAN_NAV_STATUS_MODE_GNSS_INS_CHOICE;
+        }
+        return a->odo.valid ? NAVECU_CAN_NAV_STATUS_MODE_DEAD_RECKONING_CHOICE
+                            : NAVECU_CAN_NAV_STATUS_MODE_INERTIAL_CHOICE;
+    }
+    return a->output_dr ? NAVECU_CAN_NAV_STATUS_MODE_DEAD_RECKONING_CHOICE
+                        : NAVECU_CAN_NAV_STATUS_MODE_INERTIAL_CHOICE;
+}
+
 static void emit_status(app_t *a, hal_t *hal)
 {
     uint8_t d[8];
@@ -256,11 +287,13 @@ static void emit_status(app_t *a, hal_t *hal)
     struct navecu_can_nav_status_t st;
     memset(&st, 0, sizeof st);
     st.status_page = 0u;
-    st.mode = (a->mode == APP_MODE_NAVIGATING && a->output_dr)
-                  ? (uint8_t)APP_MODE_DEAD_RECKONING
-                  : (uint8_t)a->mode;
+    st.mode = (uint8_t)output_mode(a);
     st.health_flags = health_flags(a, hal);
-    st.horiz_accuracy = UINT16_MAX; /* no error model before the Kalman filter: "unknown" */
+    st.horiz_accuracy = UINT16_MAX; /* "unknown" without the filter */
+    if (a->ekf_on && a->mode == APP_MODE_NAVIGATING) {
+        const nav_real_t sh = ekf_sigma_h_m(&a->ekf) * NAV_C(100.0);
+        st.horiz_accuracy = sh < NAV_C(65534.0) ? (uint16_t)(sh + NAV_C(0.5)) : 65534u;
+    }
     st.nav_counter = next_tx_counter(a, TX_STATUS);
     navecu_can_nav_status_pack(d, &st, sizeof d);
     e2e_protect(NAVECU_CAN_NAV_STATUS_FRAME_ID, d);
@@ -455,6 +488,103 @@ static void odometer_step(app_t *a, nav_real_t dt)
 
 /* ------------------------------------------------------------------ IMU ---- */
 
+/* ------------------------------------------------------- Kalman filter ---- */
+
+#define EKF_PRED_HZ 10u          /* covariance propagation and odometer updates */
+#define ZUPT_SIGMA_MPS NAV_C(0.01)
+#define ODO_SIGMA_MPS NAV_C(0.05) /* quantisation, latency and tyre slip, plus 1 % of speed */
+#define NHC_SIGMA_MPS NAV_C(0.1)  /* side slip in turns, suspension motion */
+#define ODO_MIN_SPEED_MPS NAV_C(0.5)
+#define GATE_SIGMA NAV_C(5.0)
+
+static void store_calibration(app_t *a, hal_t *hal);
+
+static void heading_hold(app_t *a)
+{
+    nav_real_t roll, pitch, heading;
+    sins_euler(&a->nav, &roll, &pitch, &heading);
+    if (!a->holding) {
+        a->holding = 1u;
+        a->hold_heading_rad = heading;
+    }
+    nav_real_t dh = a->hold_heading_rad - heading;
+    if (dh > PI_F) {
+        dh -= NAV_C(2.0) * PI_F;
+    } else if (dh < -PI_F) {
+        dh += NAV_C(2.0) * PI_F;
+    }
+    (void)sins_turn_heading(&a->nav, dh);
+}
+
+/* z gyro rate (rad/s) the Earth alone would give the body now */
+static nav_real_t earth_rate_body_z(const sins_t *s)
+{
+    mat3_t C_bn;
+    quat_to_dcm(s->q_bn, &C_bn);
+    earth_t e;
+    earth_eval(geo_lat_rad(&s->pos), geo_h_m(&s->pos), &e);
+    nav_real_t w_ie_b[3];
+    mat3t_mul_vec(&C_bn, e.w_ie_n_rps, w_ie_b);
+    return w_ie_b[2];
+}
+
+static void start_filter(app_t *a, nav_real_t hacc_m)
+{
+    ekf_config_t c = ekf_default_config();
+    c.arw_rad_rts = a->cfg.gyro_arw_rad_rts;
+    c.bg_rps = a->cfg.gyro_bias_rps;
+    c.ba_mps2 = a->cfg.accel_bias_mps2;
+    c.pos_m = hacc_m > NAV_C(1.0) ? hacc_m : NAV_C(1.0);
+    if (ekf_init(&a->ekf, &c, NAV_C(0.0)) != NAV_OK) {
+        reject(a, &a->health.nav_rejected);
+        return;
+    }
+    /* what standstill and calibration already know */
+    a->ekf.bg_rps[2] = a->gyro_bias_z_rps;
+    a->ekf.k = a->cal_mu;
+    if (a->cal_source == NAVECU_CAN_NAV_CALIBRATION_CAL_SOURCE_FILTER_CHOICE) {
+        a->ekf.mount_yaw_rad = a->cal_dh_rad;
+    }
+    a->pred_n = 0u;
+    a->pred_t_s = NAV_C(0.0);
+    a->f_sum_n[0] = a->f_sum_n[1] = a->f_sum_n[2] = NAV_C(0.0);
+    a->wz_sum_rad = NAV_C(0.0);
+    a->odo_frames_used = a->odo.n_frames;
+    a->ekf_on = 1u;
+}
+
+/* The filter's odometer scale and mounting yaw, once converged, are the calibration in
+ * use (CalSource Filter) and stored once per trip; the dead reckoning uses them too. */
+static void filter_calibration(app_t *a, hal_t *hal)
+{
+    const nav_real_t sk = nav_sqrt(a->ekf.P[EKF_K][EKF_K]);
+    const nav_real_t sy = nav_sqrt(a->ekf.P[EKF_MY][EKF_MY]);
+    if (sk > NAV_C(0.0005) || sy > NAV_C(0.0005)) { /* 0.05 %, 0.03 deg */
+        return;
+    }
+    a->cal_mu = a->ekf.k;
+    a->cal_dh_rad = a->ekf.mount_yaw_rad;
+    a->cal_source = NAVECU_CAN_NAV_CALIBRATION_CAL_SOURCE_FILTER_CHOICE;
+    a->dr.mu = a->ekf.k;
+    a->dr.dh_rad = a->ekf.mount_yaw_rad;
+    if (!a->ekf_cal_stored) {
+        a->ekf_cal_stored = 1u;
+        a->cal_base_m = NAV_C(0.0);
+        store_calibration(a, hal);
+    }
+}
+
+static void navigate_filtered(app_t *a, imu_inc_t *inc);
+
+/* velocity history for the GNSS time of validity */
+static void record_velocity(app_t *a)
+{
+    for (int i = 0; i < 3; i++) {
+        a->vhist[a->vhist_n % APP_VHIST][i] = a->nav.v_n_mps[i];
+    }
+    a->vhist_n++;
+}
+
 static void process_sample(app_t *a, hal_t *hal, const int32_t w_raw[3], const int32_t v_raw[3])
 {
     a->n_samples++;
@@ -483,6 +613,11 @@ static void process_sample(app_t *a, hal_t *hal, const int32_t w_raw[3], const i
         inc.dv_b_mps[1] = navecu_can_imu_accel_vel_inc_y_decode(v_raw[1]);
         inc.dv_b_mps[2] = navecu_can_imu_accel_vel_inc_z_decode(v_raw[2]);
         inc.dt_s = NAV_C(1.0) / (nav_real_t)a->cfg.imu_rate_hz;
+        if (a->ekf_on) {
+            navigate_filtered(a, &inc);
+            emit_due(a, hal);
+            return;
+        }
         const nav_real_t raw_z = inc.dtheta_b_rad[2];
         inc.dtheta_b_rad[2] -= a->gyro_bias_z_rps * inc.dt_s;
         a->yaw_rate_rps = inc.dtheta_b_rad[2] / inc.dt_s;
@@ -505,8 +640,161 @@ static void process_sample(app_t *a, hal_t *hal, const int32_t w_raw[3], const i
                 a->output_dr = 0u;
             }
         }
+        record_velocity(a);
     }
     emit_due(a, hal);
+}
+
+/* One IMU sample with the filter running: compensated increments, the strapdown step,
+ * the dead reckoning alongside, and at EKF_PRED_HZ the prediction, the odometer or
+ * standstill updates and the feedback. */
+static void navigate_filtered(app_t *a, imu_inc_t *inc)
+{
+    const nav_real_t dt = inc->dt_s;
+    for (int i = 0; i < 3; i++) {
+        inc->dtheta_b_rad[i] -= a->ekf.bg_rps[i] * dt;
+        inc->dv_b_mps[i] -= a->ekf.ba_mps2[i] * dt;
+    }
+    a->yaw_rate_rps = inc->dtheta_b_rad[2] / dt;
+    if (sins_step(&a->nav, inc) != NAV_OK) {
+        reject(a, &a->health.nav_rejected);
+        return;
+    }
+    odo_tick(&a->odo, dt, a->yaw_rate_rps);
+    mat3_t C;
+    quat_to_dcm(a->nav.q_bn, &C);
+    nav_real_t dv_n[3];
+    mat3_mul_vec(&C, inc->dv_b_mps, dv_n);
+    for (int i = 0; i < 3; i++) {
+        a->f_sum_n[i] += dv_n[i];
+    }
+    record_velocity(a);
+    a->wz_sum_rad += inc->dtheta_b_rad[2];
+    a->pred_t_s += dt;
+    a->pred_n++;
+    nav_real_t roll, pitch, heading;
+    sins_euler(&a->nav, &roll, &pitch, &heading);
+    if (a->odo.valid && !a->odo.standing) {
+        (void)dr_step(&a->dr, a->odo.speed_mps * dt, heading, pitch);
+    } else if (!a->odo.valid) {
+        dr_set_position(&a->dr, &a->nav.pos);
+    }
+    if (a->odo.standing) {
+        heading_hold(a);
+    } else {
+        a->holding = 0u;
+    }
+    const uint32_t div = a->cfg.imu_rate_hz >= EKF_PRED_HZ ? a->cfg.imu_rate_hz / EKF_PRED_HZ : 1u;
+    if (a->pred_n < div) {
+        return;
+    }
+    const nav_real_t T = a->pred_t_s;
+    const nav_real_t f_mean[3] = {a->f_sum_n[0] / T, a->f_sum_n[1] / T, a->f_sum_n[2] / T};
+    ekf_predict(&a->ekf, &a->nav, f_mean, T);
+    if (a->odo.valid && a->odo.standing) {
+        (void)ekf_zero_velocity(&a->ekf, &a->nav, ZUPT_SIGMA_MPS);
+        const nav_real_t resid = a->wz_sum_rad / T - earth_rate_body_z(&a->nav);
+        (void)ekf_zero_rate(&a->ekf, resid, a->cfg.gyro_arw_rad_rts / nav_sqrt(T));
+    } else if (a->odo.valid && a->odo.n_frames != a->odo_frames_used &&
+               nav_fabs(a->odo.speed_mps) > ODO_MIN_SPEED_MPS) {
+        a->odo_frames_used = a->odo.n_frames;
+        const nav_real_t sf = ODO_SIGMA_MPS + NAV_C(0.01) * nav_fabs(a->odo.speed_mps);
+        if (ekf_odometer(&a->ekf, &a->nav, a->odo.speed_mps, sf, NHC_SIGMA_MPS, GATE_SIGMA) == 0) {
+            reject(a, &a->health.bad_value); /* the odometer disagrees beyond its gate */
+        }
+    }
+    if (ekf_feedback(&a->ekf, &a->nav) != NAV_OK) {
+        reject(a, &a->health.nav_rejected);
+    }
+    a->pred_n = 0u;
+    a->pred_t_s = NAV_C(0.0);
+    a->f_sum_n[0] = a->f_sum_n[1] = a->f_sum_n[2] = NAV_C(0.0);
+    a->wz_sum_rad = NAV_C(0.0);
+}
+
+/* A GNSS fix for the filter. Its time of validity is the arrival minus the receiver's
+ * latency; an epoch that arrives later than usual is seen in TimeOfWeek: the offset
+ * (IMU time - TimeOfWeek) of each epoch is compared with its running minimum (allowing
+ * 50 ppm of clock drift), the excess added to the latency. The navigator's position and
+ * velocity at that time come from the velocity history; beyond it the fix is refused. */
+static void gnss_update(app_t *a, hal_t *hal, uint32_t tow_ms, int have_vel)
+{
+    const int64_t t_imu_us = (int64_t)(a->n_samples * 1000000u / a->cfg.imu_rate_hz);
+    const int64_t off = t_imu_us - (int64_t)tow_ms * 1000;
+    if (!a->gnss_off_valid || off < a->gnss_off_min_us || off - a->gnss_off_min_us > 10000000) {
+        a->gnss_off_min_us = off; /* first epoch, or a time jump (week rollover, reset) */
+        a->gnss_off_valid = 1u;
+    } else {
+        a->gnss_off_min_us += 10; /* 10 us per epoch: 50 ppm at 5 Hz */
+        if (off < a->gnss_off_min_us) {
+            a->gnss_off_min_us = off;
+        }
+    }
+    const nav_real_t late_s = (nav_real_t)(off - a->gnss_off_min_us) * NAV_C(1e-6);
+    const nav_real_t tau = a->cfg.gnss_latency_s + late_s;
+    const nav_real_t dt = NAV_C(1.0) / (nav_real_t)a->cfg.imu_rate_hz;
+    const nav_real_t back = tau / dt; /* samples back */
+    const uint32_t m = (uint32_t)back;
+    if (m + 1u >= APP_VHIST || m + 1u >= a->vhist_n) {
+        reject(a, &a->health.gnss_rejected); /* older than the history */
+        return;
+    }
+    /* position then = now - integral of v over tau (latest samples first) */
+    nav_real_t d[3] = {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)};
+    for (uint32_t j = 0u; j <= m; j++) {
+        const nav_real_t w = j < m ? dt : (back - (nav_real_t)m) * dt;
+        const nav_real_t *v = a->vhist[(a->vhist_n - 1u - j) % APP_VHIST];
+        for (int i = 0; i < 3; i++) {
+            d[i] += w * v[i];
+        }
+    }
+    geo_pos_t then = a->nav.pos;
+    const nav_real_t lat = geo_lat_rad(&then);
+    const nav_real_t h = geo_h_m(&then);
+    nav_real_t R_M, R_N;
+    earth_radii(nav_sin(lat), &R_M, &R_N);
+    if (geo_pos_add(&then, -d[1] / (R_M + h), -d[0] / ((R_N + h) * nav_cos(lat)), -d[2]) !=
+        NAV_OK) {
+        reject(a, &a->health.gnss_rejected);
+        return;
+    }
+    const geo_pos_t meas = {(int64_t)a->gnss_lat_e7 * LSB_PER_E7, (int64_t)a->gnss_lon_e7 * LSB_PER_E7,
+                            (int64_t)a->gnss_h_cm * 10 * GEO_LSB_PER_MM};
+    const nav_real_t sh = clampr((nav_real_t)a->gnss_hacc_dm * NAV_C(0.1) * NAV_C(0.7071),
+                                 NAV_C(0.3), NAV_C(100.0));
+    const nav_real_t sv = clampr((nav_real_t)a->gnss_vacc_dm * NAV_C(0.1), NAV_C(0.5),
+                                 NAV_C(100.0));
+    if (!a->ekf_on) {
+        start_filter(a, sh);
+        if (!a->ekf_on) {
+            return;
+        }
+    }
+    const int rp = ekf_gnss_position(&a->ekf, &a->nav, &then, &meas, a->cfg.gnss_lever_b_m, sh,
+                                     sv, GATE_SIGMA);
+    int rv = 1;
+    if (have_vel) {
+        nav_real_t vm[3];
+        vm[0] = navecu_can_gnss_velocity_vel_east_decode(a->gnss_vel_raw[0]);
+        vm[1] = navecu_can_gnss_velocity_vel_north_decode(a->gnss_vel_raw[1]);
+        vm[2] = navecu_can_gnss_velocity_vel_up_decode(a->gnss_vel_raw[2]);
+        const nav_real_t *vthen = a->vhist[(a->vhist_n - 1u - (uint32_t)(back + NAV_C(0.5))) %
+                                           APP_VHIST];
+        const nav_real_t ss = clampr((nav_real_t)a->gnss_sacc_raw * NAV_C(0.1), NAV_C(0.05),
+                                     NAV_C(2.0));
+        rv = ekf_gnss_velocity(&a->ekf, vthen, vm, ss, NAV_C(1.5) * ss, GATE_SIGMA);
+    }
+    if (rp == 0 || rv == 0) {
+        reject(a, &a->health.gnss_rejected); /* beyond the innovation gate */
+    }
+    if (rp > 0) {
+        a->last_fix_sample = a->n_samples;
+        a->have_fix = 1u;
+    }
+    if (ekf_feedback(&a->ekf, &a->nav) != NAV_OK) {
+        reject(a, &a->health.nav_rejected);
+    }
+    filter_calibration(a, hal);
 }
 
 static void on_imu_rate(app_t *a, const hal_can_frame_t *f)
@@ -721,12 +1009,17 @@ static void on_gnss_status(app_t *a, hal_t *hal, const hal_can_frame_t *f)
     }
     a->have_gnss = 1u;
     a->last_gnss_sample = a->n_samples;
+    a->gnss_hacc_dm = m.horiz_accuracy;
+    a->gnss_vacc_dm = m.vert_accuracy;
+    if (a->mode == APP_MODE_NAVIGATING) {
+        gnss_update(a, hal, m.time_of_week, have_vel);
+    }
     if (a->cal_at_gnss) {
         a->cal_at_gnss = 0u;
         calibrate_at(a, hal, a->gnss_lat_e7, a->gnss_lon_e7,
                      NAVECU_CAN_NAV_CALIBRATION_CAL_SOURCE_GNSS_CHOICE);
     }
-    if (have_h && a->mode == APP_MODE_NAVIGATING) {
+    if (have_h && a->mode == APP_MODE_NAVIGATING && !a->ekf_on) {
         sins_set_height_ref(&a->nav, (nav_real_t)a->gnss_h_cm * NAV_C(0.01));
     }
     /* Levelling assumes the vehicle is still: GNSS motion restarts it. */
@@ -953,6 +1246,7 @@ void app_handle_frame(app_t *a, hal_t *hal, const hal_can_frame_t *f)
         a->gnss_vel_raw[0] = m.vel_east;
         a->gnss_vel_raw[1] = m.vel_north;
         a->gnss_vel_raw[2] = m.vel_up;
+        a->gnss_sacc_raw = m.speed_accuracy;
         a->gnss_vel_pending = 1u;
         break;
     }

@@ -21,6 +21,7 @@
 #include "calstore.h"
 #include "dr.h"
 #include "e2e.h"
+#include "ekf.h"
 #include "hal.h"
 #include "odo.h"
 #include "sins.h"
@@ -36,6 +37,10 @@ typedef struct {
      * filter of a constant with a zero-mean prior): */
     nav_real_t gyro_arw_rad_rts;  /* angle random walk, rad/sqrt(s) */
     nav_real_t gyro_bias_rps;     /* 1-sigma of the turn-on bias, rad/s */
+    nav_real_t accel_bias_mps2;   /* 1-sigma of the accelerometer bias, m/s^2 */
+    nav_real_t gnss_latency_s;    /* receiver output latency: fix time of validity to
+                                     arrival (more when TimeOfWeek shows a late epoch) */
+    nav_real_t gnss_lever_b_m[3]; /* GNSS antenna from the IMU, body axes, m */
 } app_config_t;
 
 /* Counters of everything the application refused; saturating at UINT32_MAX. */
@@ -132,6 +137,25 @@ typedef struct {
     nav_real_t gz_sum, gz_sum_lo; /* sum of (gyro z - Earth rate) at standstill, rad/s */
     uint32_t gz_n;              /* samples in gz_sum */
     nav_real_t gyro_bias_z_rps; /* estimate applied to every sample */
+
+    /* Kalman filter (docs/kalman.md): runs from the first GNSS fix while navigating */
+    ekf_t ekf;
+    uint8_t ekf_on;
+    uint8_t ekf_cal_stored;     /* the filter's calibration was stored this trip */
+    uint32_t pred_n;            /* samples accumulated for the next prediction */
+    nav_real_t pred_t_s;
+    nav_real_t f_sum_n[3];      /* sum of velocity increments in ENU over the interval */
+    nav_real_t wz_sum_rad;      /* sum of compensated z angle increments (zero-rate update) */
+    uint32_t odo_frames_used;   /* odo.n_frames at the last odometer update */
+#define APP_VHIST 64
+    nav_real_t vhist[APP_VHIST][3]; /* velocity of the last samples (GNSS latency) */
+    uint32_t vhist_n;           /* samples written */
+    int64_t gnss_off_min_us;    /* min over epochs of (IMU time - TimeOfWeek) */
+    uint8_t gnss_off_valid;
+    uint16_t gnss_hacc_dm, gnss_vacc_dm; /* this epoch's accuracies, 0.1 m */
+    uint8_t gnss_sacc_raw;      /* SpeedAccuracy of the epoch's velocity, 0.1 m/s */
+    uint64_t last_fix_sample;   /* sample of the last GNSS fix used by the filter */
+    uint8_t have_fix;
 
     /* calibration (seed 000 eqs 7-12) and its storage */
     calstore_t calstore;
