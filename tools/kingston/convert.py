@@ -41,8 +41,10 @@ docs/kingston.md explains every rule; in short:
   as the simulator defines it; VertAccuracy = height_std_m; both saturate at 102.3 m.
   SpeedAccuracy: the receiver's velocity log has no accuracy: a constant 0.2 m/s (the
   fixes' 68 % horizontal velocity error against the reference is 0.12 m/s). Height: the
-  receiver's value, kept; it is about 34.1 m above the reference's ellipsoidal height
-  (geoid undulation -34 m: the receiver's height is above mean sea level), see the docs.
+  receiver's is above mean sea level, about 34.1 m above the reference's ellipsoidal height
+  (the geoid undulation there is -34 m). GNSS_Height carries the WGS-84 ellipsoidal height
+  (docs/can.md), as a receiver configured for it would send: the receiver's value minus
+  GNSS_HEIGHT_ABOVE_REF_M, measured on these files (docs/kingston.md).
   TimeOfWeek: the row's GPS time of week.
 - Initialization at t = 0, from reference.csv's first row (GPS 152143.0, 0.09 s before the
   first IMU sample; the car stands still): CMD_KnownPosition, CMD_Control
@@ -80,7 +82,7 @@ IMU_RULES = ("rect", "trapezoid")
 SPEED_ACCURACY_MPS = 0.2
 HACC_PER_SIGMA = 1.5152  # 68.27 % radius of a circular Gaussian, in sigmas per axis
 ACC_MAX_M = 102.3  # GNSS_Status Horiz/VertAccuracy range
-GNSS_HEIGHT_ABOVE_REF_M = 34.1  # measured datum difference, documented, not applied
+GNSS_HEIGHT_ABOVE_REF_M = 34.1  # measured datum difference (docs/kingston.md), removed
 GPS_WEEK = 1485
 
 # frame order at equal timestamps
@@ -390,7 +392,8 @@ def build(drive: Drive, *, gnss: bool = True, outages=(), calibrate_at_km=DEFAUL
             "VelEast": float(row["ve_mps"]), "VelNorth": float(row["vn_mps"]),
             "VelUp": float(row["vu_mps"]), "SpeedAccuracy": speed_accuracy_mps}, t)))
         out.append((t, O_GHGT, sender.encode("GNSS_Height", {
-            "Height": float(row["height_m"]), "GnssEpoch": epoch}, t)))
+            "Height": float(row["height_m"]) - GNSS_HEIGHT_ABOVE_REF_M, "GnssEpoch": epoch},
+            t)))
         out.append((t, O_GSTAT, sender.encode("GNSS_Status", {
             "FixType": 3, "NumSatellites": min(nsat, 63),
             "HorizAccuracy": min(hacc, ACC_MAX_M), "VertAccuracy": min(vacc, ACC_MAX_M),
@@ -403,8 +406,8 @@ def build(drive: Drive, *, gnss: bool = True, outages=(), calibrate_at_km=DEFAUL
         epochs_below_4_satellites_sent=int(n_below4),
         horiz_accuracy_saturated=int(n_hacc_sat), vert_accuracy_saturated=int(n_vacc_sat),
         speed_accuracy_mps=speed_accuracy_mps,
-        height_note=f"receiver heights kept; about {GNSS_HEIGHT_ABOVE_REF_M} m above the "
-                    "reference's ellipsoidal heights (geoid undulation)",
+        height_note=f"receiver heights (above mean sea level) minus {GNSS_HEIGHT_ABOVE_REF_M} m: "
+                    "ellipsoidal, as the reference's (geoid undulation)",
         outages=[{"start_s": a, "end_s": b, "epochs_dropped": n}
                  for (a, b), n in zip(outages, dropped)],
         epochs_dropped_in_outages=int(sum(dropped)))
