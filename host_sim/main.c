@@ -63,6 +63,8 @@ static void usage(FILE *out)
             "                       weigh the gyro bias estimate at standstill\n"
             "  --accel-bias-mg X    accelerometer bias, 1 sigma, mg (default 0.1)\n"
             "  --gnss-latency-ms N  GNSS receiver latency, 0..500 ms (default 100)\n"
+            "  --gnss-corr-s X      correlation time of the receiver's position errors, s\n"
+            "                       (default 20; docs/kalman.md)\n"
             "  --gnss-lever-m X,Y,Z GNSS antenna from the IMU, body axes (x right, y\n"
             "                       forward, z up), m (default 0,0,0)\n"
             "  --help               this text\n"
@@ -153,6 +155,10 @@ int main(int argc, char **argv)
             double x = 0.0;
             bad = parse_real(v, 1e-4, 1000.0, &x);
             cfg.accel_bias_mps2 = (nav_real_t)(x * 9.80665e-3);
+        } else if (strcmp(a, "--gnss-corr-s") == 0) {
+            double x = 0.0;
+            bad = parse_real(v, 0.0, 600.0, &x);
+            cfg.gnss_corr_s = (nav_real_t)x;
         } else if (strcmp(a, "--gnss-latency-ms") == 0) {
             double x = 0.0;
             bad = parse_real(v, 0.0, 500.0, &x);

@@ -252,7 +252,7 @@ static void test_gnss_position_update(void **state)
     sd[0] = sd[1] = sd[2] = 10.0;
     filter_with(&f, sd);
     assert_int_equal(ekf_gnss_position(&f, &s, &s.pos, &ant, lever, NAV_C(0.1), NAV_C(0.1),
-                                       NAV_C(5.0)), 3);
+                                       NAV_C(5.0), NAV_C(1.0)), 3);
     assert_near(f.x[EKF_DR + 0], 3.0, 0.03);
     assert_near(f.x[EKF_DR + 1], -2.0, 0.03);
     assert_near(f.x[EKF_DR + 2], 1.0, 0.03);
@@ -267,7 +267,7 @@ static void test_gnss_position_update(void **state)
                      NAV_OK);
     const uint32_t gated = f.n_gated;
     assert_int_equal(ekf_gnss_position(&f, &s, &s.pos, &far, lever, NAV_C(0.1), NAV_C(0.1),
-                                       NAV_C(5.0)), 0);
+                                       NAV_C(5.0), NAV_C(1.0)), 0);
     assert_int_equal(f.n_gated, gated + 1u);
 }
 
@@ -294,7 +294,7 @@ static void test_lever_arm_observes_heading(void **state)
     filter_with(&f, sd);
     const nav_real_t lever[3] = {NAV_C(0.0), NAV_C(2.0), NAV_C(0.0)};
     assert_true(ekf_gnss_position(&f, &s, &s.pos, &ant, lever, NAV_C(0.001), NAV_C(0.001),
-                                  NAV_C(0.0)) == 3);
+                                  NAV_C(0.0), NAV_C(1.0)) == 3);
     assert_near(f.x[EKF_PSI + 2], 2.0 * DEG, 0.05 * DEG);
 }
 

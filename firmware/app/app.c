@@ -35,6 +35,7 @@ app_config_t app_default_config(void)
     cfg.gyro_bias_rps = NAV_C(7.27e-8);
     cfg.accel_bias_mps2 = NAV_C(1e-3);
     cfg.gnss_latency_s = NAV_C(0.1); /* u-blox-class receivers: about 0.1 s */
+    cfg.gnss_corr_s = NAV_C(20.0);   /* standalone code receiver: atmosphere, orbits */
     cfg.gnss_lever_b_m[0] = cfg.gnss_lever_b_m[1] = cfg.gnss_lever_b_m[2] = NAV_C(0.0);
     return cfg;
 }
@@ -103,6 +104,7 @@ int app_init(app_t *app, const app_config_t *cfg)
         !(cfg->gyro_bias_rps > NAV_C(0.0)) || !(cfg->gyro_bias_rps < NAV_C(1.0)) ||
         !(cfg->accel_bias_mps2 > NAV_C(0.0)) || !(cfg->accel_bias_mps2 < NAV_C(10.0)) ||
         !(cfg->gnss_latency_s >= NAV_C(0.0)) || !(cfg->gnss_latency_s <= NAV_C(0.5)) ||
+        !(cfg->gnss_corr_s >= NAV_C(0.0)) || !(cfg->gnss_corr_s <= NAV_C(600.0)) ||
         !(nav_fabs(cfg->gnss_lever_b_m[0]) <= NAV_C(10.0)) ||
         !(nav_fabs(cfg->gnss_lever_b_m[1]) <= NAV_C(10.0)) ||
         !(nav_fabs(cfg->gnss_lever_b_m[2]) <= NAV_C(10.0))) {
@@ -496,6 +498,20 @@ static void odometer_step(app_t *a, nav_real_t dt)
 #define NHC_SIGMA_MPS NAV_C(0.1)  /* side slip in turns, suspension motion */
 #define ODO_MIN_SPEED_MPS NAV_C(0.5)
 #define GATE_SIGMA NAV_C(5.0)
+/* GNSS innovation gate, in sigmas of the innovation (both position and velocity): 3,
+ * for receivers' multipath outliers that are far from Gaussian. Refusals in a row for
+ * longer than GNSS_REOPEN_S reopen the filter's position and velocity: measured on the
+ * Kingston drive (docs/kalman.md), a 5-sigma gate lets multipath in and a filter that
+ * trusts itself after one bad fix refuses the good ones for half a minute. */
+#ifndef GNSS_GATE_SIGMA
+#define GNSS_GATE_SIGMA NAV_C(3.0)
+#endif
+#ifndef GNSS_REOPEN_S
+#define GNSS_REOPEN_S 3u
+#endif
+#ifndef GNSS_SIGMA_FLOOR_M
+#define GNSS_SIGMA_FLOOR_M NAV_C(1.0)
+#endif
 
 static void store_calibration(app_t *a, hal_t *hal);
 
@@ -760,10 +776,22 @@ static void gnss_update(app_t *a, hal_t *hal, uint32_t tow_ms, int have_vel)
     }
     const geo_pos_t meas = {(int64_t)a->gnss_lat_e7 * LSB_PER_E7, (int64_t)a->gnss_lon_e7 * LSB_PER_E7,
                             (int64_t)a->gnss_h_cm * 10 * GEO_LSB_PER_MM};
-    const nav_real_t sh = clampr((nav_real_t)a->gnss_hacc_dm * NAV_C(0.1) * NAV_C(0.7071),
-                                 NAV_C(0.3), NAV_C(100.0));
-    const nav_real_t sv = clampr((nav_real_t)a->gnss_vacc_dm * NAV_C(0.1), NAV_C(0.5),
-                                 NAV_C(100.0));
+    nav_real_t sh = clampr((nav_real_t)a->gnss_hacc_dm * NAV_C(0.1) * NAV_C(0.7071),
+                           GNSS_SIGMA_FLOOR_M, NAV_C(100.0));
+    nav_real_t sv = clampr((nav_real_t)a->gnss_vacc_dm * NAV_C(0.1), NAV_C(0.5),
+                           NAV_C(100.0));
+    /* A receiver's position errors are correlated over tens of seconds (multipath,
+     * atmosphere, orbits), the filter's noise model is white: N fixes within the
+     * correlation time carry the information of about one. Each fix's variance is
+     * multiplied by (correlation time / fix interval), so the filter neither averages the
+     * errors away on paper nor reports a 1-sigma far below the receiver's (docs/kalman.md,
+     * honest accuracy). */
+    nav_real_t ep_s = (nav_real_t)(a->n_samples - a->gnss_prev_sample) /
+                      (nav_real_t)a->cfg.imu_rate_hz;
+    a->gnss_prev_sample = a->n_samples;
+    const nav_real_t corr_s = a->cfg.gnss_corr_s > ep_s ? a->cfg.gnss_corr_s : ep_s;
+    ep_s = clampr(ep_s, NAV_C(0.05), corr_s);
+    const nav_real_t r_scale = corr_s / ep_s;
     if (!a->ekf_on) {
         start_filter(a, sh);
         if (!a->ekf_on) {
@@ -771,7 +799,7 @@ static void gnss_update(app_t *a, hal_t *hal, uint32_t tow_ms, int have_vel)
         }
     }
     const int rp = ekf_gnss_position(&a->ekf, &a->nav, &then, &meas, a->cfg.gnss_lever_b_m, sh,
-                                     sv, GATE_SIGMA);
+                                     sv, GNSS_GATE_SIGMA, r_scale);
     int rv = 1;
     if (have_vel) {
         nav_real_t vm[3];
@@ -782,10 +810,20 @@ static void gnss_update(app_t *a, hal_t *hal, uint32_t tow_ms, int have_vel)
                                            APP_VHIST];
         const nav_real_t ss = clampr((nav_real_t)a->gnss_sacc_raw * NAV_C(0.1), NAV_C(0.05),
                                      NAV_C(2.0));
-        rv = ekf_gnss_velocity(&a->ekf, vthen, vm, ss, NAV_C(1.5) * ss, GATE_SIGMA);
+        rv = ekf_gnss_velocity(&a->ekf, vthen, vm, ss, NAV_C(1.5) * ss, GNSS_GATE_SIGMA);
     }
     if (rp == 0 || rv == 0) {
         reject(a, &a->health.gnss_rejected); /* beyond the innovation gate */
+    }
+    /* Several fixes in a row refused: after a bad fix slipped through, or a long outage,
+     * the filter may be the one that is wrong; forget its position and velocity and let
+     * the next fix in (counted: ekf.n_reopened). */
+    a->gnss_gated_run = rp == 0 ? (uint8_t)(a->gnss_gated_run < 255u ? a->gnss_gated_run + 1u : 255u)
+                                : 0u;
+    if (a->gnss_gated_run >= 2u && a->have_fix &&
+        a->n_samples - a->last_fix_sample > (uint64_t)GNSS_REOPEN_S * a->cfg.imu_rate_hz) {
+        ekf_reopen(&a->ekf, NAV_C(3.0) * sh, NAV_C(1.0));
+        a->gnss_gated_run = 0u;
     }
     if (rp > 0) {
         a->last_fix_sample = a->n_samples;

@@ -41,6 +41,7 @@ typedef struct {
     nav_real_t gnss_latency_s;    /* receiver output latency: fix time of validity to
                                      arrival (more when TimeOfWeek shows a late epoch) */
     nav_real_t gnss_lever_b_m[3]; /* GNSS antenna from the IMU, body axes, m */
+    nav_real_t gnss_corr_s;       /* correlation time of the receiver's position errors */
 } app_config_t;
 
 /* Counters of everything the application refused; saturating at UINT32_MAX. */
@@ -156,6 +157,8 @@ typedef struct {
     uint8_t gnss_sacc_raw;      /* SpeedAccuracy of the epoch's velocity, 0.1 m/s */
     uint64_t last_fix_sample;   /* sample of the last GNSS fix used by the filter */
     uint8_t have_fix;
+    uint8_t gnss_gated_run;     /* consecutive fixes refused by the gate */
+    uint64_t gnss_prev_sample;  /* sample of the previous fix offered to the filter */
 
     /* calibration (seed 000 eqs 7-12) and its storage */
     calstore_t calstore;

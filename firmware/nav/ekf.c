@@ -79,6 +79,7 @@ int ekf_init(ekf_t *k, const ekf_config_t *cfg, nav_real_t heading_sigma_rad)
     k->n_updates = 0u;
     k->n_gated = 0u;
     k->n_health_fixes = 0u;
+    k->n_reopened = 0u;
     reset_cov(k, heading_sigma_rad > NAV_C(0.0) ? heading_sigma_rad : cfg->heading_rad);
     return NAV_OK;
 }
@@ -334,6 +335,19 @@ int ekf_feedback(ekf_t *k, sins_t *s)
         k->x[i] = NAV_C(0.0);
     }
     return rc;
+}
+
+void ekf_reopen(ekf_t *k, nav_real_t pos_sigma_m, nav_real_t vel_sigma_mps)
+{
+    for (int i = EKF_DR; i < EKF_DV + 3; i++) {
+        for (int j = 0; j < EKF_N; j++) {
+            k->P[i][j] = NAV_C(0.0);
+            k->P[j][i] = NAV_C(0.0);
+        }
+        const nav_real_t sd = i < EKF_DV ? pos_sigma_m : vel_sigma_mps;
+        k->P[i][i] = sd * sd;
+    }
+    k->n_reopened++;
 }
 
 nav_real_t ekf_sigma_h_m(const ekf_t *k)

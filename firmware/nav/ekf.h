@@ -64,6 +64,7 @@ typedef struct {
     uint32_t n_updates;          /* accepted scalar updates */
     uint32_t n_gated;            /* measurements rejected by their innovation gate */
     uint32_t n_health_fixes;     /* last-resort covariance corrections */
+    uint32_t n_reopened;         /* ekf_reopen calls */
 } ekf_t;
 
 #define ekf_default_config NAV_SYM(ekf_default_config)
@@ -101,6 +102,13 @@ int ekf_feedback(ekf_t *k, sins_t *s);
  * correction counted in n_health_fixes. Returns the number of corrections made. */
 uint32_t ekf_health(ekf_t *k);
 
+/* Forget what the filter believes about position and velocity: their rows and columns
+ * of P cleared, the diagonals set to the given 1-sigma. For an innovation gate that keeps
+ * refusing consistent fixes (the filter, not the receiver, is wrong); counted in
+ * n_reopened. */
+#define ekf_reopen NAV_SYM(ekf_reopen)
+void ekf_reopen(ekf_t *k, nav_real_t pos_sigma_m, nav_real_t vel_sigma_mps);
+
 /* 1-sigma horizontal position error (m): sqrt(P_EE + P_NN). */
 nav_real_t ekf_sigma_h_m(const ekf_t *k);
 
@@ -118,10 +126,11 @@ nav_real_t ekf_sigma_h_m(const ekf_t *k);
 
 /* GNSS antenna position meas (lat/lon/height) for the navigator at pos_then (its position
  * at the fix's time of validity), antenna at lever_b (body, m) from the IMU; 1-sigma
- * horizontal and vertical noise (m). */
+ * horizontal and vertical error (m), against which the innovation is gated; the update
+ * uses the variances times r_scale (>= 1: errors correlated from fix to fix). */
 int ekf_gnss_position(ekf_t *k, const sins_t *s, const geo_pos_t *pos_then,
                       const geo_pos_t *meas, const nav_real_t lever_b[3], nav_real_t sigma_h_m,
-                      nav_real_t sigma_v_m, nav_real_t gate_sigma);
+                      nav_real_t sigma_v_m, nav_real_t gate_sigma, nav_real_t r_scale);
 
 /* GNSS velocity (ENU m/s) against the navigator's velocity at the fix's time v_then. */
 int ekf_gnss_velocity(ekf_t *k, const nav_real_t v_then_mps[3], const nav_real_t meas_mps[3],

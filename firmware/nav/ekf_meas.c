@@ -29,10 +29,15 @@ static nav_real_t nis(const ekf_t *k, const nav_real_t h[EKF_N], nav_real_t z, n
     return z * z / s;
 }
 
-/* gate the rows as one measurement, then apply them in sequence */
-static int apply_rows(ekf_t *k, nav_real_t H[][EKF_N], const nav_real_t *z, const nav_real_t *r,
-                      int n, nav_real_t gate_sigma)
+/* gate the rows as one measurement (with the variances r), then apply them in sequence
+ * with the variances r times r_scale */
+static int apply_rows_scaled(ekf_t *k, nav_real_t H[][EKF_N], const nav_real_t *z,
+                             const nav_real_t *r, int n, nav_real_t gate_sigma,
+                             nav_real_t r_scale)
 {
+    if (!(r_scale >= NAV_C(1.0)) || !nav_isfinite(r_scale)) {
+        return -1;
+    }
     for (int m = 0; m < n; m++) {
         if (!nav_isfinite(z[m]) || !(r[m] > NAV_C(0.0))) {
             return -1;
@@ -44,16 +49,22 @@ static int apply_rows(ekf_t *k, nav_real_t H[][EKF_N], const nav_real_t *z, cons
     }
     int applied = 0;
     for (int m = 0; m < n; m++) {
-        if (ekf_update(k, H[m], z[m], r[m], NAV_C(0.0)) == 1) {
+        if (ekf_update(k, H[m], z[m], r[m] * r_scale, NAV_C(0.0)) == 1) {
             applied++;
         }
     }
     return applied;
 }
 
+static int apply_rows(ekf_t *k, nav_real_t H[][EKF_N], const nav_real_t *z, const nav_real_t *r,
+                      int n, nav_real_t gate_sigma)
+{
+    return apply_rows_scaled(k, H, z, r, n, gate_sigma, NAV_C(1.0));
+}
+
 int ekf_gnss_position(ekf_t *k, const sins_t *s, const geo_pos_t *pos_then,
                       const geo_pos_t *meas, const nav_real_t lever_b[3], nav_real_t sigma_h_m,
-                      nav_real_t sigma_v_m, nav_real_t gate_sigma)
+                      nav_real_t sigma_v_m, nav_real_t gate_sigma, nav_real_t r_scale)
 {
     mat3_t C;
     quat_to_dcm(s->q_bn, &C);
@@ -78,7 +89,7 @@ int ekf_gnss_position(ekf_t *k, const sins_t *s, const geo_pos_t *pos_then,
     H[1][EKF_PSI + 2] = -l_n[0];
     H[2][EKF_PSI + 0] = -l_n[1];
     H[2][EKF_PSI + 1] = l_n[0];
-    return apply_rows(k, H, z, r, 3, gate_sigma);
+    return apply_rows_scaled(k, H, z, r, 3, gate_sigma, r_scale);
 }
 
 int ekf_gnss_velocity(ekf_t *k, const nav_real_t v_then_mps[3], const nav_real_t meas_mps[3],

@@ -16,7 +16,9 @@ radii; heights are not compared (the GNSS and reference heights differ by a datu
 Travelled distances are the polyline of the reference positions.
 
 report.json: horizontal_error_m {rms, p95, max, final}, distance_km, heading_error_deg,
-outages (per outage: distance, max error, error at its end), calibration (the one-point
+outages (per outage: start, end, distance driven in it, error at its start, its largest,
+error at its end and that as % of the distance), median_error_at_outage_end_m (over the
+outages), calibration (the one-point
 calibration at --calibrate-at-km: dH_deg and mu decoded from the firmware's
 NAV_Calibration frames after the command, or performed = false with what the firmware
 said; error_before_pct = horizontal error at the calibration point / distance travelled
@@ -44,6 +46,13 @@ from tools.sim import report
 
 ROOT = Path(__file__).resolve().parents[2]
 RATES = ["--imu-rate-hz", "10", "--nav-rate-hz", "10", "--status-rate-hz", "10"]
+# This installation's sensors, as an ECU would be configured for them (docs/kingston.md):
+# the IMU's noise and bias measured on the data at rest (tools/kingston/analyse.py: ARW
+# 0.18..0.85 deg/sqrt(h), z bias about -2.4 deg/h; accelerometer bias of a low-grade MEMS
+# unit, a few mg); the receiver's fixes are stamped with their time of validity (latency
+# 0) and their errors against the reference decorrelate in 3..5 s (measured).
+SENSORS = ["--gyro-arw-dpsh", "0.3", "--gyro-bias-dph", "5", "--accel-bias-mg", "5",
+           "--gnss-latency-ms", "0", "--gnss-corr-s", "4"]
 
 
 class Stages:
@@ -199,6 +208,32 @@ def sent_gnss_times(can_log) -> np.ndarray:
     return np.array(out)
 
 
+def outage_table(t, herr, ref_t, ref_dist, outages) -> list:
+    """One row per GNSS outage [start_s, end_s): the distance driven in it (reference
+    polyline), the horizontal error of the first and of the last NAV set inside it (its end
+    error, also as % of that distance when the car moved more than 1 m) and the largest."""
+    rows = []
+    for o in outages:
+        a, b = o["start_s"], o["end_s"]
+        s3 = (t >= a) & (t <= b)
+        d0, d1 = np.interp([a, b], ref_t, ref_dist)
+        end = float(herr[s3][-1]) if s3.any() else None
+        rows.append({"start_s": a, "end_s": b, "distance_m": float(d1 - d0),
+                     "start_error_m": float(herr[s3][0]) if s3.any() else None,
+                     "max_error_m": float(herr[s3].max()) if s3.any() else None,
+                     "end_error_m": end,
+                     "end_error_pct_of_distance": (100.0 * end / float(d1 - d0)
+                                                   if end is not None and d1 - d0 > 1.0
+                                                   else None)})
+    return rows
+
+
+def median_outage_end_error(rows) -> float | None:
+    """The median over the outages of the error at their end (None without outages)."""
+    ends = [r["end_error_m"] for r in rows if r["end_error_m"] is not None]
+    return float(np.median(ends)) if ends else None
+
+
 def compute(drive, meta, nav, cal_log) -> tuple:
     """report.json content and the plot series."""
     ref = convert.reference_track(drive)
@@ -241,14 +276,10 @@ def compute(drive, meta, nav, cal_log) -> tuple:
         names = nc.DEFAULT_DB.get_message_by_name("NAV_Status").get_signal_by_name("Mode").choices
         rep["modes_seen"] = {str(names.get(m, m)): int(np.sum(modes == m))
                              for m in np.unique(modes)}
-    rep["outages"] = []
-    for o in (meta["gnss"]["outages"] if meta["gnss"]["enabled"] else []):
-        a, b = o["start_s"], o["end_s"]
-        s3 = (t >= a) & (t <= b)
-        d0, d1 = np.interp([a, b], ref["t_s"], ref["dist_m"])
-        rep["outages"].append({"start_s": a, "end_s": b, "distance_m": float(d1 - d0),
-                               "max_error_m": float(herr[s3].max()) if s3.any() else None,
-                               "end_error_m": float(herr[s3][-1]) if s3.any() else None})
+    rep["outages"] = outage_table(t, herr, ref["t_s"], ref["dist_m"],
+                                  meta["gnss"]["outages"] if meta["gnss"]["enabled"] else [])
+    rep["median_error_at_outage_end_m"] = median_outage_end_error(rep["outages"])
+    rep["sigma_consistency"] = report.sigma_consistency(t, herr, st)
     rep["calibration"] = calibration_block(meta["calibration"], cal_log, st, t, herr, dist_at)
     return rep, series
 
@@ -362,7 +393,22 @@ def summary(rep: dict) -> str:
         worst = max(rep["outages"], key=lambda o: o["max_error_m"] or 0.0)
         lines.append(f"GNSS outages: {len(rep['outages'])}, worst {worst['start_s']:.0f}-"
                      f"{worst['end_s']:.0f} s ({worst['distance_m']:.0f} m): max error "
-                     f"{f(worst['max_error_m'])}")
+                     f"{f(worst['max_error_m'])}; median error at an outage's end "
+                     f"{f(rep.get('median_error_at_outage_end_m'))}")
+        for o in rep["outages"]:
+            pct = o.get("end_error_pct_of_distance")
+            lines.append(f"  outage {o['start_s']:7.1f}-{o['end_s']:7.1f} s "
+                         f"{o['distance_m']:7.0f} m: at its end {f(o['end_error_m'])}"
+                         + (f" ({pct:.2f} %)" if pct is not None else "")
+                         + f", max {f(o['max_error_m'])}")
+    sc = rep.get("sigma_consistency")
+    if sc:
+        lines.append("sigma consistency: " + (
+            f"{sc['frac_within_2sigma'] * 100:.1f} % within 2 sigma, median error/sigma "
+            f"{sc['median_error_over_sigma']:.2f} ({sc['epochs_used']} epochs)"
+            if sc["status"] == "ok" else
+            f"unknown (HorizAccuracy 655.35 at {sc['epochs_sigma_unknown']} of "
+            f"{sc['epochs']} epochs)"))
     c = rep["calibration"]
     if c.get("requested"):
         lines.append(f"calibration at {c['at_km']:g} km (t = {c['time_s']:.1f} s): {c['status']}"
@@ -426,7 +472,7 @@ def main(argv=None) -> int:
 
     st.start("firmware (build/host/navecu --can-log, 10 Hz)")
     nav_log = out / "nav.log"
-    cmd = [a.navecu, "--can-log", str(can_in), "--out", str(nav_log)] + RATES + \
+    cmd = [a.navecu, "--can-log", str(can_in), "--out", str(nav_log)] + RATES + SENSORS + \
         shlex.split(a.navecu_args)
     res = subprocess.run(cmd, capture_output=True, text=True)
     (out / "navecu.txt").write_text(" ".join(cmd) + "\n" + res.stderr)
