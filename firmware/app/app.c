@@ -216,6 +216,19 @@ static void emit_navigation(app_t *a, hal_t *hal)
 
     nav_real_t roll, pitch, heading;
     sins_euler(s, &roll, &pitch, &heading);
+    /* the car's heading and pitch, not the IMU's: less the mounting (the filter's
+     * estimate) or, without the filter, the one-point calibration's dH */
+    if (a->ekf_on) {
+        heading -= a->ekf.mount_yaw_rad;
+        pitch -= a->ekf.mount_pitch_rad;
+    } else {
+        heading -= a->dr.dh_rad;
+    }
+    if (heading < NAV_C(0.0)) {
+        heading += NAV_C(2.0) * PI_F;
+    } else if (heading >= NAV_C(2.0) * PI_F) {
+        heading -= NAV_C(2.0) * PI_F;
+    }
     struct navecu_can_nav_attitude_t at;
     at.roll = navecu_can_nav_attitude_roll_encode(roll * DEG_PER_RAD);
     at.pitch = navecu_can_nav_attitude_pitch_encode(pitch * DEG_PER_RAD);
