@@ -720,14 +720,25 @@ static void navigate_filtered(app_t *a, imu_inc_t *inc)
     const nav_real_t T = a->pred_t_s;
     const nav_real_t f_mean[3] = {a->f_sum_n[0] / T, a->f_sum_n[1] / T, a->f_sum_n[2] / T};
     ekf_predict(&a->ekf, &a->nav, f_mean, T);
+    /* a slow wheel-speed source is a late, averaged speed: its noise grows with the
+     * acceleration times its period, and its zero hides a car creeping below one step */
+    nav_real_t acc = NAV_C(0.0);
+    for (int i = 0; i < 2; i++) {
+        const nav_real_t d = a->nav.v_n_mps[i] - a->v_prev_pred_mps[i];
+        acc += d * d;
+        a->v_prev_pred_mps[i] = a->nav.v_n_mps[i];
+    }
+    acc = nav_sqrt(acc) / T;
+    const nav_real_t per = a->odo.period_s;
     if (a->odo.valid && a->odo.standing) {
-        (void)ekf_zero_velocity(&a->ekf, &a->nav, ZUPT_SIGMA_MPS);
+        (void)ekf_zero_velocity(&a->ekf, &a->nav, ZUPT_SIGMA_MPS + NAV_C(0.1) * per);
         const nav_real_t resid = a->wz_sum_rad / T - earth_rate_body_z(&a->nav);
         (void)ekf_zero_rate(&a->ekf, resid, a->cfg.gyro_arw_rad_rts / nav_sqrt(T));
     } else if (a->odo.valid && a->odo.n_frames != a->odo_frames_used &&
                nav_fabs(a->odo.speed_mps) > ODO_MIN_SPEED_MPS) {
         a->odo_frames_used = a->odo.n_frames;
-        const nav_real_t sf = ODO_SIGMA_MPS + NAV_C(0.01) * nav_fabs(a->odo.speed_mps);
+        const nav_real_t sf = ODO_SIGMA_MPS + NAV_C(0.01) * nav_fabs(a->odo.speed_mps) +
+                              NAV_C(0.5) * acc * per;
         if (ekf_odometer(&a->ekf, &a->nav, a->odo.speed_mps, sf, NHC_SIGMA_MPS, GATE_SIGMA) == 0) {
             reject(a, &a->health.bad_value); /* the odometer disagrees beyond its gate */
         }

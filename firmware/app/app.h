@@ -148,6 +148,7 @@ typedef struct {
     nav_real_t f_sum_n[3];      /* sum of velocity increments in ENU over the interval */
     nav_real_t wz_sum_rad;      /* sum of compensated z angle increments (zero-rate update) */
     uint32_t odo_frames_used;   /* odo.n_frames at the last odometer update */
+    nav_real_t v_prev_pred_mps[2]; /* horizontal velocity at the last prediction */
 #define APP_VHIST 64
     nav_real_t vhist[APP_VHIST][3]; /* velocity of the last samples (GNSS latency) */
     uint32_t vhist_n;           /* samples written */

@@ -40,6 +40,7 @@ int odo_init(odo_t *o, const odo_config_t *cfg)
     o->cfg = *cfg;
     o->speed_mps = NAV_C(0.0);
     o->age_s = NAV_C(0.0);
+    o->period_s = NAV_C(0.0);
     o->still_for_s = NAV_C(0.0);
     o->valid = 0u;
     o->standing = 0u;
@@ -97,6 +98,12 @@ int odo_wheels(odo_t *o, const nav_real_t wheel_mps[4], nav_real_t yaw_rate_rps)
         const nav_real_t lon2 = vf * vf - lat * lat;
         const nav_real_t lon = lon2 > NAV_C(0.0) ? nav_sqrt(lon2) : NAV_C(0.0);
         v = vf < NAV_C(0.0) ? -lon : lon;
+    }
+    if (o->valid) {
+        /* the source's rate, for the measurement noise of a slow (1 Hz OBD-II) source */
+        o->period_s = o->period_s > NAV_C(0.0)
+                          ? o->period_s + NAV_C(0.1) * (o->age_s - o->period_s)
+                          : o->age_s;
     }
     o->speed_mps = all_zero ? NAV_C(0.0) : v;
     o->zero = all_zero ? 1u : 0u;

@@ -44,6 +44,7 @@ typedef struct {
     odo_config_t cfg;
     nav_real_t speed_mps;      /* forward speed of the reference point, reverse negative */
     nav_real_t age_s;          /* time since the last accepted wheel frame */
+    nav_real_t period_s;       /* mean interval between accepted frames (slow average) */
     nav_real_t still_for_s;    /* time all wheels have read zero */
     uint8_t valid;             /* a speed was accepted and is younger than timeout_s */
     uint8_t standing;          /* standstill */
