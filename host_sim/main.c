@@ -62,6 +62,9 @@ static void usage(FILE *out)
             "  --gyro-bias-dph X    gyro turn-on bias, 1 sigma, deg/h (default 0.015); both\n"
             "                       weigh the gyro bias estimate at standstill\n"
             "  --accel-bias-mg X    accelerometer bias, 1 sigma, mg (default 0.1)\n"
+            "  --gyro-instability-dph X, --accel-instability-mg X\n"
+            "                       in-run bias instability over 300 s (defaults 0.005\n"
+            "                       deg/h, 0.01 mg): the filter's bias random walks\n"
             "  --gnss-latency-ms N  GNSS receiver latency, 0..500 ms (default 100)\n"
             "  --gnss-corr-s X      correlation time of the receiver's position errors, s\n"
             "                       (default 20; docs/kalman.md)\n"
@@ -155,6 +158,14 @@ int main(int argc, char **argv)
             double x = 0.0;
             bad = parse_real(v, 1e-4, 1000.0, &x);
             cfg.accel_bias_mps2 = (nav_real_t)(x * 9.80665e-3);
+        } else if (strcmp(a, "--gyro-instability-dph") == 0) {
+            double x = 0.0;
+            bad = parse_real(v, 1e-6, 1e4, &x);
+            cfg.gyro_bias_rw_rps_rts = (nav_real_t)(x * RAD_PER_DEG / 3600.0 * sqrt(2.0 / 300.0));
+        } else if (strcmp(a, "--accel-instability-mg") == 0) {
+            double x = 0.0;
+            bad = parse_real(v, 1e-5, 1000.0, &x);
+            cfg.accel_bias_rw_mps2_rts = (nav_real_t)(x * 9.80665e-3 * sqrt(2.0 / 300.0));
         } else if (strcmp(a, "--gnss-corr-s") == 0) {
             double x = 0.0;
             bad = parse_real(v, 0.0, 600.0, &x);

@@ -34,6 +34,10 @@ app_config_t app_default_config(void)
     cfg.gyro_arw_rad_rts = NAV_C(8.73e-7);
     cfg.gyro_bias_rps = NAV_C(7.27e-8);
     cfg.accel_bias_mps2 = NAV_C(1e-3);
+    /* in-run instability 0.005 deg/h and 1e-4 m/s^2 over a 300 s correlation time as random
+     * walks: sigma sqrt(2 / tau) */
+    cfg.gyro_bias_rw_rps_rts = NAV_C(2.0e-9);
+    cfg.accel_bias_rw_mps2_rts = NAV_C(8.2e-6);
     cfg.gnss_latency_s = NAV_C(0.1); /* u-blox-class receivers: about 0.1 s */
     cfg.gnss_corr_s = NAV_C(20.0);   /* standalone code receiver: atmosphere, orbits */
     cfg.gnss_lever_b_m[0] = cfg.gnss_lever_b_m[1] = cfg.gnss_lever_b_m[2] = NAV_C(0.0);
@@ -103,6 +107,8 @@ int app_init(app_t *app, const app_config_t *cfg)
         !(cfg->gyro_arw_rad_rts > NAV_C(0.0)) || !(cfg->gyro_arw_rad_rts < NAV_C(1.0)) ||
         !(cfg->gyro_bias_rps > NAV_C(0.0)) || !(cfg->gyro_bias_rps < NAV_C(1.0)) ||
         !(cfg->accel_bias_mps2 > NAV_C(0.0)) || !(cfg->accel_bias_mps2 < NAV_C(10.0)) ||
+        !(cfg->gyro_bias_rw_rps_rts > NAV_C(0.0)) || !(cfg->gyro_bias_rw_rps_rts < NAV_C(1.0)) ||
+        !(cfg->accel_bias_rw_mps2_rts > NAV_C(0.0)) || !(cfg->accel_bias_rw_mps2_rts < NAV_C(10.0)) ||
         !(cfg->gnss_latency_s >= NAV_C(0.0)) || !(cfg->gnss_latency_s <= NAV_C(0.5)) ||
         !(cfg->gnss_corr_s >= NAV_C(0.0)) || !(cfg->gnss_corr_s <= NAV_C(600.0)) ||
         !(nav_fabs(cfg->gnss_lever_b_m[0]) <= NAV_C(10.0)) ||
@@ -563,6 +569,8 @@ static void start_filter(app_t *a, nav_real_t hacc_m)
     c.arw_rad_rts = a->cfg.gyro_arw_rad_rts;
     c.bg_rps = a->cfg.gyro_bias_rps;
     c.ba_mps2 = a->cfg.accel_bias_mps2;
+    c.bg_rw_rps_rts = a->cfg.gyro_bias_rw_rps_rts;
+    c.ba_rw_mps2_rts = a->cfg.accel_bias_rw_mps2_rts;
     c.pos_m = hacc_m > NAV_C(1.0) ? hacc_m : NAV_C(1.0);
     if (ekf_init(&a->ekf, &c, NAV_C(0.0)) != NAV_OK) {
         reject(a, &a->health.nav_rejected);
