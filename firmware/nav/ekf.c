@@ -126,9 +126,6 @@ static int add_mat(f_entry_t *f, int n, int r0, int c0, const mat3_t *M, nav_rea
     return n;
 }
 
-/* scratch for F P; static: it is too large for an ECU's stack and never live twice */
-static nav_real_t fp[EKF_N][EKF_N];
-
 void ekf_predict(ekf_t *k, const sins_t *s, const nav_real_t f_n_mps2[3], nav_real_t dt_s)
 {
     mat3_t C;
@@ -158,6 +155,7 @@ void ekf_predict(ekf_t *k, const sins_t *s, const nav_real_t f_n_mps2[3], nav_re
     n = add_mat(F, n, EKF_PSI, EKF_BG, &C, NAV_C(-1.0));        /* -C_bn bg */
 
     /* P <- (I + F dt) P (I + F dt)^T = P + dt (FP + (FP)^T) + dt^2 F (FP)^T */
+    nav_real_t (*fp)[EKF_N] = k->fp;
     for (int i = 0; i < EKF_N; i++) {
         for (int j = 0; j < EKF_N; j++) {
             fp[i][j] = NAV_C(0.0);

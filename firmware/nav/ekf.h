@@ -65,6 +65,8 @@ typedef struct {
     uint32_t n_gated;            /* measurements rejected by their innovation gate */
     uint32_t n_health_fixes;     /* last-resort covariance corrections */
     uint32_t n_reopened;         /* ekf_reopen calls */
+    nav_real_t fp[EKF_N][EKF_N]; /* scratch for F P in ekf_predict: too large for an ECU's
+                                    stack, and the core keeps no globals */
 } ekf_t;
 
 #define ekf_default_config NAV_SYM(ekf_default_config)
