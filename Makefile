@@ -50,7 +50,11 @@ help:
 	@echo "make               build the host firmware: build/host/navecu (see --help)"
 	@echo "make test          all tests: C plain and ASan+UBSan, Python, codec, M4F build"
 	@echo "make sim           simulate a drive, run the firmware, report accuracy and plots"
-	@echo "                   (SCENARIO=name for another tools/sim/scenarios/name.toml)"
+	@echo "                   (SCENARIO=name for another tools/sim/scenarios/name.toml;"
+	@echo "                   BUS=vcan0 runs the firmware live on vcan, docs/live-can.md)"
+	@echo "make kingston      the real Kingston 2008 drive (MODE=dr|full, OUTAGES=a-b,c-d|none)"
+	@echo "make vcan          set up vcan0 on a normal Linux machine (sudo)"
+	@echo "make bench-latency IMU frame to NAV frame latency over vcan (out/bench/)"
 	@echo "make grades        free-inertial error per IMU grade vs seed 003's Table 2"
 	@echo "make codec         regenerate the CAN codec from firmware/can/navecu.dbc"
 	@echo "make cross         build the firmware for the Cortex-M4F, check: no double math"
@@ -217,7 +221,7 @@ bench-latency: venv $(BUILD)/host/navecu
 # ---- the drive simulator (tools/sim): scenario -> sensors -> CAN log -> firmware -> report
 SCENARIO ?= default
 sim: deps venv $(BUILD)/host/navecu
-	$(PY) -m tools.sim.run --scenario $(SCENARIO)
+	$(PY) -m tools.sim.run --scenario $(SCENARIO) $(if $(BUS),--bus $(BUS))
 
 # free-inertial error by IMU grade beside seed 003's Table 2 (about 6 minutes)
 grades: deps venv $(BUILD)/host/navecu

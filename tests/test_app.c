@@ -1027,6 +1027,104 @@ static void test_calibrate_at_gnss(void **state)
     assert_int_equal(app.cal_at_gnss, 0);
 }
 
+/* ---- the Kalman filter in the application (docs/kalman.md) ---- */
+
+static uint8_t fix_epoch;
+
+/* one GNSS epoch at lat/lon (1e-7 deg), height H0, zero velocity, stamped tow_ms */
+static void send_fix(int32_t lat_e7, int32_t lon_e7, uint32_t tow_ms)
+{
+    uint8_t d[8];
+    hal_can_frame_t f;
+    struct navecu_can_gnss_position_t gp = {lat_e7, lon_e7};
+    navecu_can_gnss_position_pack(d, &gp, 8u);
+    f = frame(NAVECU_CAN_GNSS_POSITION_FRAME_ID, d);
+    feed(&f);
+    struct navecu_can_gnss_velocity_t gv;
+    memset(&gv, 0, sizeof gv);
+    gv.gnss_epoch = fix_epoch;
+    gv.speed_accuracy = 1u;
+    navecu_can_gnss_velocity_pack(d, &gv, 8u);
+    e2e_protect(NAVECU_CAN_GNSS_VELOCITY_FRAME_ID, d);
+    f = frame(NAVECU_CAN_GNSS_VELOCITY_FRAME_ID, d);
+    feed(&f);
+    struct navecu_can_gnss_height_t gh = {(int32_t)lround(H0_M * 100.0), fix_epoch};
+    navecu_can_gnss_height_pack(d, &gh, 8u);
+    f = frame(NAVECU_CAN_GNSS_HEIGHT_FRAME_ID, d);
+    feed(&f);
+    struct navecu_can_gnss_status_t gs;
+    memset(&gs, 0, sizeof gs);
+    gs.fix_type = 3u;
+    gs.num_satellites = 9u;
+    gs.horiz_accuracy = 20u; /* 2.0 m */
+    gs.vert_accuracy = 30u;
+    gs.gnss_epoch = fix_epoch;
+    gs.time_of_week = tow_ms;
+    navecu_can_gnss_status_pack(d, &gs, 8u);
+    f = frame(NAVECU_CAN_GNSS_STATUS_FRAME_ID, d);
+    feed(&f);
+    fix_epoch = e2e_counter_next(fix_epoch);
+}
+
+static struct navecu_can_nav_status_t last_status_page0(void)
+{
+    struct navecu_can_nav_status_t st;
+    memset(&st, 0, sizeof st);
+    for (uint32_t i = hal.tx_n; i > 0u; i--) {
+        const hal_can_frame_t *fr = &hal.tx[i - 1u];
+        if (fr->id == NAVECU_CAN_NAV_STATUS_FRAME_ID && (fr->data[0] & 0x0Fu) == 0u) {
+            navecu_can_nav_status_unpack(&st, fr->data, 8u);
+            break;
+        }
+    }
+    return st;
+}
+
+/*
+ * GIVEN a perfect start, the car standing (wheels at zero), GNSS fixes at the true
+ *       position at 5 Hz for 20 s
+ * THEN the filter runs: NAV_Status mode 5 GnssIns, a finite 1-sigma HorizAccuracy of a
+ *      few metres at most (the receiver says 2 m), the position within 0.1 m;
+ * WHEN one fix is 100 m off
+ * THEN it is refused and counted (CntGnssRejected), and the position does not move;
+ * WHEN the fixes stop for 3 s
+ * THEN the mode is DeadReckoning (the odometer, standing, still valid).
+ */
+static void test_filter_with_gnss(void **state)
+{
+    (void)state;
+    start_perfect();
+    fix_epoch = 0u;
+    const int32_t lat0 = (int32_t)lround(LAT0_DEG * 1e7), lon0 = (int32_t)lround(LON0_DEG * 1e7);
+    uint32_t tow = 100000u;
+    for (int k = 0; k < 100; k++) {
+        run_wheels(RATE_HZ / 5, 0.0, 0);
+        tow += 200u;
+        send_fix(lat0, lon0, tow);
+    }
+    assert_true(app.ekf_on);
+    run_wheels(RATE_HZ / 5, 0.0, 0);
+    struct navecu_can_nav_status_t st = last_status_page0();
+    assert_int_equal(st.mode, NAVECU_CAN_NAV_STATUS_MODE_GNSS_INS_CHOICE);
+    assert_true(st.horiz_accuracy > 0u && st.horiz_accuracy < 300u); /* 0.01 m units */
+    double lat, lon, e, n;
+    last_position(&lat, &lon);
+    local_en(lat, lon, &e, &n);
+    assert_near(hypot(e, n), 0.0, 0.1);
+    const uint32_t rejected = app.health.gnss_rejected;
+    tow += 200u;
+    send_fix(lat0 + 9000, lon0, tow); /* 100 m north */
+    run_wheels(RATE_HZ / 5, 0.0, 0);
+    assert_int_equal(app.health.gnss_rejected, rejected + 1u);
+    last_position(&lat, &lon);
+    local_en(lat, lon, &e, &n);
+    assert_near(hypot(e, n), 0.0, 0.1);
+    run_wheels(3 * RATE_HZ, 0.0, 0);
+    st = last_status_page0();
+    assert_int_equal(st.mode, NAVECU_CAN_NAV_STATUS_MODE_DEAD_RECKONING_CHOICE);
+    assert_int_equal(app.ekf.n_health_fixes, 0u);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1046,6 +1144,7 @@ int main(void)
         cmocka_unit_test_setup(test_one_point_calibration_and_nvm, setup),
         cmocka_unit_test_setup(test_corrupt_nvm_at_boot, setup),
         cmocka_unit_test_setup(test_calibrate_at_gnss, setup),
+        cmocka_unit_test_setup(test_filter_with_gnss, setup),
     };
     return cmocka_run_group_tests_name("app", tests, NULL, NULL);
 }

@@ -254,3 +254,29 @@ def test_gaps_and_duplicates_are_counted_not_hidden():
     imu["time_s"][5] = imu["time_s"][4] - 0.05  # time going backwards
     with pytest.raises(ValueError):
         convert.imu_increments(imu, t[0])
+
+
+def test_report_outage_table():
+    """tools/kingston/run.py's outages table and median error at the outages' ends (the
+    report.json fields of `make kingston`), on synthetic errors."""
+    from tools.kingston import run as krun
+
+    t = np.arange(0.0, 100.0, 0.1)
+    herr = 0.5 * t
+    ref_t = np.arange(0.0, 101.0, 1.0)
+    ref_dist = 10.0 * ref_t
+    rows = krun.outage_table(t, herr, ref_t, ref_dist,
+                             [{"start_s": 10.0, "end_s": 20.0}, {"start_s": 40.0, "end_s": 60.0},
+                              {"start_s": 200.0, "end_s": 260.0}])
+    assert [set(r) for r in rows] == [{"start_s", "end_s", "distance_m", "start_error_m",
+                                       "max_error_m", "end_error_m",
+                                       "end_error_pct_of_distance"}] * 3
+    a, b, c = rows
+    assert a["distance_m"] == pytest.approx(100.0) and b["distance_m"] == pytest.approx(200.0)
+    assert a["end_error_m"] == pytest.approx(10.0) and a["max_error_m"] == pytest.approx(10.0)
+    assert a["start_error_m"] == pytest.approx(5.0)
+    assert a["end_error_pct_of_distance"] == pytest.approx(10.0)
+    assert b["end_error_m"] == pytest.approx(30.0)
+    assert c["end_error_m"] is None and c["end_error_pct_of_distance"] is None  # after the end
+    assert krun.median_outage_end_error(rows) == pytest.approx(20.0)
+    assert krun.median_outage_end_error([]) is None

@@ -5,8 +5,11 @@ vcan comes from tools/vcan/with_vcan.sh (the kernel's, or User-Mode Linux's on m
 without CAN). Under CI a missing vcan fails these tests; elsewhere they are skipped loudly.
 
 - Determinism across transports: the NAV_* frames recorded over vcan at real time and at
-  the fastest lossless rate equal, frame for frame, the output of --can-log on the same log.
-- No loss: 5 minutes of data at the fastest rate, every frame received by the firmware.
+  the fastest lossless rate (tools/can_replay.py --fastest: flow control on the firmware's
+  NAV_Status) equal, frame for frame, the output of --can-log on the same log.
+- No loss: 5 minutes of data with --fastest, every frame received by the firmware, none
+  lost, rejected or seen after a time jump, every output frame received by the recorder.
+- --fastest without a firmware on the bus is a clear error after its timeout, not a hang.
 - Interop: can-utils cansend commands take effect, candump shows the firmware's status.
 """
 import json
@@ -19,12 +22,14 @@ from pathlib import Path
 import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from test_vcan_harness import require_vcan  # noqa: E402
+from test_vcan_harness import no_vcan, require_vcan  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
+from tools.vcan import bus_run  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]
 NAVECU = os.environ.get("NAVECU_BIN", str(ROOT / "build" / "host" / "navecu"))
 WITH_VCAN = ROOT / "tools" / "vcan" / "with_vcan.sh"
-FAST_RATE = 3000  # frames/s: the fastest rate the test claims lossless (UML sustains ~4700)
 
 
 def gen_log(path, duration_s):
@@ -63,16 +68,28 @@ def logs(tmp_path_factory):
             "long": (long_, reference(long_, d / "long_ref.log"))}
 
 
-def test_fastest_lossless_5min_matches_log(logs):
+def test_fastest_lossless_5min_matches_log(logs, tmp_path):
     log, ref = logs["long"]
-    r = live("--log", str(log), "--max-rate", str(FAST_RATE))
-    print({k: v for k, v in r.items() if k != "frames"})
+    out = tmp_path / "nav_vcan.log"
+    r = live("--log", str(log), "--fastest", "--out", str(out))
+    rp = r["replay"]
+    print(f"--fastest: {rp['sent']} frames in {rp['seconds']:.1f} s "
+          f"({rp['sent'] / rp['seconds']:.0f} frames/s), window {rp['window']}, "
+          f"{rp['waits']} waits (longest {rp['max_wait_ms']} ms), {rp['keepalives']} keepalives, "
+          f"longest time between acknowledgements {rp['max_ack_gap_ms']} ms")
+    print(r["firmware_summary"])
     frames_in = int(re.search(r"navecu: (\d+) frames in", r["firmware_summary"]).group(1))
-    assert frames_in == r["sent"]                      # the firmware received every frame
+    assert frames_in == r["sent"] == 75002              # the firmware received every frame
     c = counters(r["firmware_summary"])
-    assert c["imu lost"] == 0 and c["imu pair broken"] == 0 and c["bad counter"] == 0
+    lost = {k: c[k] for k in ("imu lost", "imu pair broken", "bad counter", "bad crc",
+                              "bad dlc", "unknown id", "time jumps")}
+    assert all(v == 0 for v in lost.values()), lost
+    assert rp["stale_status"] == 0                      # it never waited 0.5 s for input
+    assert rp["acked"] == 30000 // rp["ack_every"]      # one status page 0 per 10 samples
     assert r["recorded"] == len(ref)                    # the recorder received every output
     assert r["frames"] == ref                           # payloads and order as --can-log
+    # --out: the same frames as a candump log
+    assert [ln.split()[2] for ln in out.read_text().splitlines()] == ref
 
 
 def test_real_time_matches_log(logs):
@@ -80,6 +97,36 @@ def test_real_time_matches_log(logs):
     r = live("--log", str(log), "--speed", "1")
     assert r["replay_s"] >= 44.0
     assert r["frames"] == ref
+
+
+def test_bus_run_as_make_sim_bus(logs, tmp_path):
+    """tools/vcan/bus_run.py, the firmware stage of `make sim BUS=vcan0`: --fastest with
+    firmware options, recorded to nav.log, equal to the --can-log run's nav_file.log."""
+    log, ref = logs["short"]
+    try:
+        r = bus_run.run(NAVECU, log, tmp_path, "vcan0", 100, ["--level-s", "20"], timeout_s=300)
+    except bus_run.BusRunError as e:
+        if e.code == 2:
+            no_vcan(str(e).splitlines()[0].removeprefix("NO VCAN: "))
+        raise
+    print("\n".join(bus_run.describe(r)))
+    assert r["identical"] and bus_run.lossless(r), r
+    assert r["frames_equal"] == r["frames_file"] > 0
+    # the option reached both runs: levelling 20 s instead of 30 changes the output
+    assert bus_run.payloads(tmp_path / "nav_file.log") != ref
+
+
+def test_fastest_without_firmware_is_an_error(logs):
+    """Nobody acknowledges: --fastest stops with a clear message after its timeout."""
+    log, _ = logs["short"]
+    env = dict(os.environ, NAVECU_VCAN_TIMEOUT="120")
+    proc = subprocess.run([str(WITH_VCAN), sys.executable, "tools/can_replay.py", str(log),
+                           "--fastest", "--timeout-s", "1"],
+                          capture_output=True, text=True, cwd=ROOT, env=env, timeout=180)
+    require_vcan(proc)
+    assert proc.returncode == 1, proc.stderr
+    assert "no acknowledgement from the firmware for 1 s" in proc.stderr, proc.stderr
+    assert "with 0 NAV_Status page 0 received" in proc.stderr, proc.stderr
 
 
 def test_cansend_candump_interop():

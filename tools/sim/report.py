@@ -4,7 +4,9 @@
         --out out/sim/default
 
 Writes report.json and three PNG plots (track map, horizontal error, heading error); with
---scenario also the scenario's truths and its one-point calibration (calibration_report). The
+--scenario also the scenario's truths, its one-point calibration (calibration_report), the
+Kalman filter's calibration (filter_calibration) and its GNSS faults (gnss_fault_report, at
+the nominal times of its [gnss_faults]). The
 statistics cover the time the firmware was navigating (NAV_Position present), from the first
 NAV_Position frame to the end of the drive. Errors are horizontal distances on the WGS-84
 ellipsoid (local radii of curvature), heading errors wrapped to [-180, 180) degrees.
@@ -226,6 +228,226 @@ def _stats(x):
             "max": float(np.max(x)), "final": float(x[-1])}
 
 
+HORIZ_ACCURACY_UNKNOWN_M = 655.35   # NAV_Status HorizAccuracy saturated: "unknown"
+SIGMA_MAX_AGE_S = 1.0               # a page-0 sigma older than this does not count
+# a consistent filter, if HorizAccuracy is sqrt(sigma_E^2 + sigma_N^2) (DRMS) of a circular
+# Gaussian error: P(r <= 2 DRMS) = 1 - exp(-4), median r = sqrt(ln 2) DRMS; if it is the
+# per-axis sigma: 1 - exp(-2) and sqrt(2 ln 2)
+SIGMA_CONSISTENT_DRMS = {"frac_within_2sigma": 1.0 - math.exp(-4.0),
+                         "median_error_over_sigma": math.sqrt(math.log(2.0))}
+SIGMA_CONSISTENT_PER_AXIS = {"frac_within_2sigma": 1.0 - math.exp(-2.0),
+                             "median_error_over_sigma": math.sqrt(2.0 * math.log(2.0))}
+
+
+def status_page(status, page: int, signal: str):
+    """(t_s, values) of one NAV_Status page's signal, rows with a time and a value only."""
+    if status is None or signal not in status or "StatusPage" not in status:
+        return np.zeros(0), np.zeros(0)
+    sel = ((status["StatusPage"] == page) & np.isfinite(status["t_s"])
+           & np.isfinite(status[signal]))
+    t, v = status["t_s"][sel], status[signal][sel]
+    order = np.argsort(t, kind="stable")
+    return t[order], v[order]
+
+
+def latest_at(t_src, v_src, t, max_age_s=math.inf):
+    """The latest v_src at or before each t (NaN where none, or older than max_age_s)."""
+    t = np.asarray(t, dtype=float)
+    k = np.searchsorted(t_src, t, side="right") - 1
+    ok = k >= 0
+    kk = np.clip(k, 0, None)
+    out = np.full(t.shape, np.nan)
+    if len(t_src):
+        ok &= (t - t_src[kk]) <= max_age_s
+        out[ok] = v_src[kk[ok]]
+    return out
+
+
+def sigma_consistency(t, herr, status) -> dict:
+    """The firmware's own accuracy claim against its error: at each NAV_Position time the
+    latest NAV_Status page-0 HorizAccuracy (the filter's 1-sigma horizontal, from its
+    covariance; at most SIGMA_MAX_AGE_S old; NAV_Status takes the time of the NAV_Height
+    before it, read_nav_log), epochs whose sigma is 655.35 ("unknown") or 0 skipped.
+    frac_within_2sigma: share of the epochs with error <= 2 sigma; median_error_over_sigma:
+    median of error / sigma. status "unknown" when no epoch has a sigma. The values a
+    consistent filter gives are beside them (if_consistent_*)."""
+    t, herr = np.asarray(t, dtype=float), np.asarray(herr, dtype=float)
+    out = {"status": "unknown", "epochs": int(t.size), "epochs_used": 0,
+           "epochs_sigma_unknown": 0, "epochs_sigma_zero": 0, "epochs_without_status": 0,
+           "frac_within_2sigma": None, "median_error_over_sigma": None,
+           "sigma_median_m": None, "error_median_m": None,
+           "source": "NAV_Status page 0 HorizAccuracy, latest at or before each NAV_Position",
+           "if_consistent_drms": SIGMA_CONSISTENT_DRMS,
+           "if_consistent_per_axis_sigma": SIGMA_CONSISTENT_PER_AXIS}
+    ts, sg = status_page(status, 0, "HorizAccuracy")
+    sig = latest_at(ts, sg, t, SIGMA_MAX_AGE_S)
+    none = ~np.isfinite(sig)
+    unknown = ~none & (sig >= HORIZ_ACCURACY_UNKNOWN_M - 0.005)
+    zero = ~none & ~unknown & (sig <= 0.0)
+    ok = ~none & ~unknown & ~zero
+    out.update({"epochs_used": int(ok.sum()), "epochs_sigma_unknown": int(unknown.sum()),
+                "epochs_sigma_zero": int(zero.sum()), "epochs_without_status": int(none.sum())})
+    if ok.any():
+        r = herr[ok] / sig[ok]
+        out.update({"status": "ok", "frac_within_2sigma": float(np.mean(r <= 2.0)),
+                    "median_error_over_sigma": float(np.median(r)),
+                    "sigma_median_m": float(np.median(sig[ok])),
+                    "error_median_m": float(np.median(herr[ok]))})
+    return out
+
+
+def modes_seen(status) -> dict:
+    """NAV_Status page-0 Mode by its DBC name (VAL_ 784): number of frames and share."""
+    _, mode = status_page(status, 0, "Mode")
+    if not mode.size:
+        return {}
+    names = nc.load_db().get_message_by_name("NAV_Status").get_signal_by_name("Mode").choices or {}
+    return {str(names.get(int(m), int(m))): {"frames": int(np.sum(mode == m)),
+                                             "share": float(np.mean(mode == m))}
+            for m in np.unique(mode)}
+
+
+FILTER_CAL_SOURCE = 3          # NAV_Calibration CalSource "Filter" (VAL_ 785)
+FILTER_CAL_GNSS_DRIVING_S = 600.0
+MOVING_MPS = 0.1
+GNSS_FRESH_S = 1.0
+
+
+def gnss_driving_reached(truth: dict, seconds: float, t_from: float = 0.0, gnss_t=None,
+                         outages=()):
+    """The drive time at which the car has driven `seconds` with GNSS since t_from, None if
+    never. Driving: truth speed (d dist/dt) above MOVING_MPS; with GNSS: a valid epoch in
+    the last GNSS_FRESH_S (gnss_t: their times), or without gnss_t outside the outages."""
+    t = np.asarray(truth["t_s"], dtype=float)
+    if t.size < 2:
+        return None
+    moving = np.gradient(np.asarray(truth["dist_m"], dtype=float), t) > MOVING_MPS
+    if gnss_t is not None:
+        gt = np.sort(np.asarray(gnss_t, dtype=float))
+        have = np.isfinite(latest_at(gt, gt, t, GNSS_FRESH_S))
+    else:
+        have = np.ones(t.size, dtype=bool)
+        for (a, b, *_l) in outages:
+            have &= ~((t >= a) & (t <= b))
+    use = (moving & have & (t >= t_from))[1:]
+    cum = np.concatenate([[0.0], np.cumsum(use * np.diff(t))])
+    k = int(np.searchsorted(cum, seconds - 1e-9))
+    return float(t[k]) if k < t.size else None
+
+
+def filter_calibration(cal_log: dict, truths: dict | None, t_gnss: float | None) -> dict:
+    """report.json's "filter_calibration": the Kalman filter's odometer scale error
+    (NAV_Calibration OdoScaleError) and IMU mounting yaw (HeadingCorrection, deg) from the
+    frames with CalSource 3 "Filter": the last one at or before t_gnss (the time the car had
+    driven FILTER_CAL_GNSS_DRIVING_S with GNSS, gnss_driving_reached) as odo_scale,
+    mount_yaw_deg, at_s, and the last of the drive as "last"; the truths beside (mu_true;
+    mount_yaw_true_deg: [imu_mounting] yaw, the IMU's forward axis clockwise of the car's,
+    the convention of firmware/nav/ekf.h's mounting state) and the differences."""
+    truths = truths or {}
+    mu = truths.get("odometer_mu")
+    yaw = (truths.get("imu_mounting_deg") or {}).get("yaw")
+    t = np.asarray(cal_log.get("t_s", ()), dtype=float)
+    src = np.asarray(cal_log.get("CalSource", np.full(t.size, np.nan)), dtype=float)
+    idx = np.nonzero((src == FILTER_CAL_SOURCE) & np.isfinite(t))[0]
+
+    def entry(i):
+        k, y = float(cal_log["OdoScaleError"][i]), float(cal_log["HeadingCorrection"][i])
+        return {"at_s": float(t[i]), "odo_scale": k, "mount_yaw_deg": y,
+                "odo_scale_error": k - mu if mu is not None else None,
+                "mount_yaw_error_deg": y - yaw if yaw is not None else None}
+
+    rep = {"at_s": None, "odo_scale": None, "mount_yaw_deg": None, "odo_scale_error": None,
+           "mount_yaw_error_deg": None, "mu_true": mu, "mount_yaw_true_deg": yaw,
+           "gnss_driving_s": FILTER_CAL_GNSS_DRIVING_S, "gnss_driving_reached_at_s": t_gnss,
+           "frames": int(idx.size), "last": None}
+    if idx.size:
+        rep["last"] = entry(int(idx[-1]))
+        if t_gnss is not None:
+            upto = idx[t[idx] <= t_gnss + 1e-9]
+            if upto.size:
+                rep.update(entry(int(upto[-1])))
+    return rep
+
+
+FAULT_WINDOW_S = 10.0      # the fault's neighbourhood: its first to last frame +- this
+FAULT_CLEAN_S = 60.0       # the clean neighbourhood: this much more on either side
+FAULT_OUTAGE_SETTLE_S = 30.0
+
+
+def fault_windows_from_table(faults: dict) -> list:
+    """Nominal fault log entries (kind, t_start_s, t_end_s, parameters) from a scenario's
+    validated [gnss_faults], for report.main (the run's own log has the epoch times)."""
+    out = [dict(f, kind="freeze", t_start_s=f["t0_s"], t_end_s=f["t1_s"])
+           for f in faults.get("freeze", [])]
+    out += [dict(f, kind="jump", t_start_s=f["t_s"], t_end_s=f["t_s"] + f["duration_s"])
+            for f in faults.get("jumps", [])]
+    out += [dict(f, kind="latency_spike", t_start_s=f["t_s"], t_end_s=f["t_s"] + f["extra_s"])
+            for f in faults.get("latency_spike", [])]
+    return out
+
+
+def gnss_fault_report(series: dict, status, fault_log: list, outages=()) -> list:
+    """report.json's "gnss_faults": per injected fault (sensors.apply_gnss_faults' log), the
+    largest horizontal error and the largest step of the error vector between consecutive
+    NAV_Positions (a jump of the solution) within FAULT_WINDOW_S of the fault's frames,
+    against the same in its clean neighbourhood (FAULT_CLEAN_S further on either side,
+    without the other faults' windows, the GNSS outages and FAULT_OUTAGE_SETTLE_S after
+    them); and NAV_Status page 3 CntGnssRejected, the last value before the fault's first
+    frame and the last within FAULT_WINDOW_S after its last."""
+    t = series.get("t", np.zeros(0))
+    herr = series.get("herr", np.zeros(0))
+    if t.size:
+        step = np.concatenate([[0.0], np.hypot(np.diff(series["de"]), np.diff(series["dn"]))])
+    else:
+        step = np.zeros(0)
+    tr, rej = status_page(status, 3, "CntGnssRejected")
+    out = []
+    fault_log = sorted(fault_log, key=lambda f: f["t_start_s"])
+    for j, f in enumerate(fault_log):
+        a, b = f["t_start_s"], f["t_end_s"]
+        win = (t >= a - FAULT_WINDOW_S) & (t <= b + FAULT_WINDOW_S)
+        clean = (t >= a - FAULT_WINDOW_S - FAULT_CLEAN_S) & (t <= b + FAULT_WINDOW_S
+                                                               + FAULT_CLEAN_S) & ~win
+        for k, g in enumerate(fault_log):
+            if k != j:
+                clean &= ~((t >= g["t_start_s"] - FAULT_WINDOW_S)
+                           & (t <= g["t_end_s"] + FAULT_WINDOW_S))
+        for (o0, o1, *_l) in outages:
+            clean &= ~((t >= o0) & (t <= o1 + FAULT_OUTAGE_SETTLE_S))
+        before = tr < a
+        after = tr <= b + FAULT_WINDOW_S
+        r0 = int(rej[before][-1]) if before.any() else None
+        r1 = int(rej[after][-1]) if after.any() else None
+        e = {k: v for k, v in f.items() if k != "epoch_t_s"}
+        e.update({
+            "window_s": [a - FAULT_WINDOW_S, b + FAULT_WINDOW_S],
+            "max_error_m": float(herr[win].max()) if win.any() else None,
+            "clean_max_error_m": float(herr[clean].max()) if clean.any() else None,
+            "clean_rms_error_m": float(np.sqrt(np.mean(herr[clean] ** 2))) if clean.any()
+            else None,
+            "max_step_m": float(step[win].max()) if win.any() else None,
+            "clean_max_step_m": float(step[clean].max()) if clean.any() else None,
+            "cnt_gnss_rejected_before": r0, "cnt_gnss_rejected_after": r1,
+            "gnss_rejected": r1 - r0 if r0 is not None and r1 is not None else None})
+        out.append(e)
+    return out
+
+
+def navecu_binary(path) -> dict:
+    """Which firmware build produced a result (it changes under active development): the
+    binary's path, SHA-256 and modification time."""
+    import hashlib
+    import time
+    p = Path(path)
+    return {"path": str(p), "sha256": hashlib.sha256(p.read_bytes()).hexdigest(),
+            "modified_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime(p.stat().st_mtime))}
+
+
+def fault_marks(fault_rep) -> list:
+    """[(t_s, label)] for the plots: each injected GNSS fault's first frame."""
+    return [(f["t_start_s"], f"GNSS {f['kind'].replace('_', ' ')}") for f in fault_rep or []]
+
+
 def compute(truth: dict, nav: dict, outages) -> tuple[dict, dict]:
     """report.json content and the series for plotting."""
     pos = nav.get("NAV_Position")
@@ -236,12 +458,14 @@ def compute(truth: dict, nav: dict, outages) -> tuple[dict, dict]:
     if pos is None:
         rep.update({"navigating": False, "horizontal_error_m": _stats([]),
                     "heading_error_deg": {"rms": None, "max": None},
-                    "final_error_pct_of_distance": None, "outages": []})
+                    "final_error_pct_of_distance": None, "outages": [],
+                    "sigma_consistency": sigma_consistency(np.zeros(0), np.zeros(0), None),
+                    "modes_seen": modes_seen(nav.get("NAV_Status"))})
         return rep, series
     t = pos["t_s"]
     lat_e, lon_e = np.radians(pos["Latitude"]), np.radians(pos["Longitude"])
     lat_t, lon_t, _ = _interp_truth(truth, t)
-    herr, _, _ = horizontal_error_m(lat_t, lon_t, lat_e, lon_e)
+    herr, de, dn = horizontal_error_m(lat_t, lon_t, lat_e, lon_e)
     dist_at = np.interp(t, truth["t_s"], truth["dist_m"])
     nav_dist = float(dist_at[-1] - dist_at[0])
     rep["navigating"] = True
@@ -263,12 +487,19 @@ def compute(truth: dict, nav: dict, outages) -> tuple[dict, dict]:
     for (t0, t1, *label) in outages:
         sel = (t >= t0) & (t <= t1)
         d0, d1 = np.interp([t0, t1], truth["t_s"], truth["dist_m"])
+        end = float(herr[sel][-1]) if sel.any() else None
         entry = {"start_s": float(t0), "end_s": float(t1), "distance_m": float(d1 - d0),
                  "label": label[0] if label else "",
+                 "start_error_m": float(herr[sel][0]) if sel.any() else None,
                  "max_error_m": float(herr[sel].max()) if sel.any() else None,
-                 "end_error_m": float(herr[sel][-1]) if sel.any() else None}
+                 "end_error_m": end,
+                 "end_error_pct_of_distance": (float(100.0 * end / (d1 - d0))
+                                               if end is not None and d1 - d0 > 1.0 else None)}
         rep["outages"].append(entry)
-    series.update({"t": t, "herr": herr, "lat_e": lat_e, "lon_e": lon_e})
+    status = nav.get("NAV_Status")
+    rep["sigma_consistency"] = sigma_consistency(t, herr, status)
+    rep["modes_seen"] = modes_seen(status)
+    series.update({"t": t, "herr": herr, "de": de, "dn": dn, "lat_e": lat_e, "lon_e": lon_e})
     return rep, series
 
 
@@ -359,9 +590,60 @@ def summary_table(rep: dict) -> str:
               f"heading error:    rms {f(rep['heading_error_deg']['rms'], 'deg')}, "
               f"max {f(rep['heading_error_deg']['max'], 'deg')}"]
     for o in rep["outages"]:
+        pct = o.get("end_error_pct_of_distance")
         lines.append(f"outage {o['label'] or ''} {o['start_s']:.0f}-{o['end_s']:.0f} s "
                      f"({o['distance_m']:.0f} m): max error {f(o['max_error_m'])}, "
-                     f"at its end {f(o['end_error_m'])}")
+                     f"at its end {f(o['end_error_m'])}"
+                     + (f" ({pct:.2f} % of the distance)" if pct is not None else ""))
+    modes = rep.get("modes_seen")
+    if modes:
+        lines.append("modes (NAV_Status): " + ", ".join(
+            f"{k} {v['share'] * 100:.1f} %" for k, v in modes.items()))
+    sc = rep.get("sigma_consistency")
+    if sc:
+        if sc["status"] == "ok":
+            lines.append(f"sigma consistency: {sc['frac_within_2sigma'] * 100:.1f} % within "
+                         f"2 sigma, median error/sigma {sc['median_error_over_sigma']:.2f} "
+                         f"(median sigma {sc['sigma_median_m']:.2f} m; {sc['epochs_used']} of "
+                         f"{sc['epochs']} epochs; a consistent sigma gives 98.2 %, 0.83 "
+                         "if it is the DRMS, 86.5 %, 1.18 if per axis)")
+        else:
+            lines.append(f"sigma consistency: unknown (HorizAccuracy 655.35 'unknown' at "
+                         f"{sc['epochs_sigma_unknown']} of {sc['epochs']} epochs, no status at "
+                         f"{sc['epochs_without_status']}, 0 at {sc['epochs_sigma_zero']})")
+    fc = rep.get("filter_calibration")
+    if fc:
+        truth = (f"true mu {fc['mu_true']:.5f}, mounting yaw {fc['mount_yaw_true_deg']:+.3f} deg"
+                 if fc["mu_true"] is not None and fc["mount_yaw_true_deg"] is not None else
+                 "truths unknown")
+        if fc["last"] is None:
+            lines.append(f"filter calibration: none (no NAV_Calibration with CalSource Filter); "
+                         f"{truth}")
+        else:
+            reached = fc["gnss_driving_reached_at_s"]
+            if fc["at_s"] is not None:
+                at600 = (f"after {fc['gnss_driving_s']:.0f} s of GNSS driving ({reached:.0f} s): "
+                         f"odo scale {fc['odo_scale']:.5f}, mounting yaw "
+                         f"{fc['mount_yaw_deg']:+.3f} deg; ")
+            else:
+                at600 = (f"none after {fc['gnss_driving_s']:.0f} s of GNSS driving "
+                         f"({'never reached' if reached is None else f'{reached:.0f} s'}); ")
+            la = fc["last"]
+            lines.append(f"filter calibration: {at600}last ({la['at_s']:.0f} s): odo scale "
+                         f"{la['odo_scale']:.5f}, mounting yaw {la['mount_yaw_deg']:+.3f} deg; "
+                         f"{truth}")
+    for g in rep.get("gnss_faults") or []:
+        n = g.get("epochs")
+        n = "" if n is None else f" ({n} epoch{'s' if n != 1 else ''})"
+        what = {"jump": lambda g: f"jump {g['metres']:g} m{n}", "freeze": lambda g: f"freeze{n}",
+                "latency_spike": lambda g: f"latency spike +{g['extra_s']:g} s"}[g["kind"]](g)
+        rej = ("n/a" if g["gnss_rejected"] is None else
+               f"{g['cnt_gnss_rejected_before']} -> {g['cnt_gnss_rejected_after']} "
+               f"(+{g['gnss_rejected']})")
+        lines.append(f"GNSS {what} at {g['t_start_s']:.1f} s: max error +-10 s "
+                     f"{f(g['max_error_m'])} (clean {f(g['clean_max_error_m'])}), max step "
+                     f"{f(g['max_step_m'])} (clean {f(g['clean_max_step_m'])}), "
+                     f"CntGnssRejected {rej}")
     c = rep.get("calibration")
     if c:
         if c["error_before_pct"] is not None:
@@ -399,20 +681,30 @@ def main(argv=None):
     nav = read_nav_log(args.nav)
     rep, series = compute(data, nav, outages)
     if args.scenario:
-        from tools.sim import run, trajectory  # run imports this module
+        from tools.sim import run, sensors, trajectory  # run imports this module
         scen = trajectory.load_scenario(run.scenario_path(args.scenario))
         imu, odo = run.sensor_specs(scen, scen.get("sim", {}).get("imu", "mid-grade"),
                                     scen["vehicle"])
         hdg = run.heading_command_deg(float(data["heading_rad"][0]), scen)
         rep["truth"] = run.scenario_truths(scen, float(data["heading_rad"][0]), imu, odo, hdg)
         cal = scen.get("calibration")
-        rep["calibration"] = (calibration_report(data, series, read_calibration_log(args.nav),
-                                                 cal, rep["truth"]) if cal else None)
+        cal_log = read_calibration_log(args.nav)
+        rep["calibration"] = (calibration_report(data, series, cal_log, cal, rep["truth"])
+                              if cal else None)
+        no_gnss = not sensors.GNSS_PRESETS[scen.get("sim", {}).get("gnss", "standalone")].enabled
+        t600 = None if no_gnss else gnss_driving_reached(
+            data, FILTER_CAL_GNSS_DRIVING_S, rep.get("navigation_start_s", 0.0),
+            outages=outages)
+        rep["filter_calibration"] = filter_calibration(cal_log, rep["truth"], t600)
+        faults = scen.get("gnss_faults")
+        rep["gnss_faults"] = (gnss_fault_report(series, nav.get("NAV_Status"),
+                                                fault_windows_from_table(faults), outages)
+                              if faults else None)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "report.json").write_text(json.dumps(rep, indent=2))
     plot(data, series, None, outages, out, Path(args.out).name,
-         marks=calibration_marks(rep.get("calibration")))
+         marks=calibration_marks(rep.get("calibration")) + fault_marks(rep.get("gnss_faults")))
     print(summary_table(rep))
 
 

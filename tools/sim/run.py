@@ -194,6 +194,25 @@ def frames(truth, dtheta, dv, wheels, gnss, db, initial_attitude=False, heading_
     return out
 
 
+def firmware_args(imu: "sensors.ImuSpec", gnss: "sensors.GnssSpec") -> list:
+    """navecu options describing this drive's sensors, as an ECU is configured for the IMU
+    and receiver it is installed with (docs/kalman.md): the IMU's noise, turn-on bias and
+    in-run instability, the receiver's latency and error correlation time. Mounting, odometer
+    scale and the errors' realisation stay unknown to the firmware."""
+    rad_dph = math.pi / 180.0 / 3600.0
+    g = sensors.G0_MPS2
+    args = ["--gyro-arw-dpsh", f"{max(imu.gyro_arw_deg_per_rth, 1e-4):.6g}",
+            "--gyro-bias-dph", f"{max(imu.gyro_bias_turnon_rps / rad_dph, 1e-3):.6g}",
+            "--accel-bias-mg", f"{max(imu.accel_bias_turnon_mps2 / g * 1e3, 1e-3):.6g}",
+            "--gyro-instability-dph", f"{max(imu.gyro_bias_instability_rps / rad_dph, 1e-4):.6g}",
+            "--accel-instability-mg",
+            f"{max(imu.accel_bias_instability_mps2 / g * 1e3, 1e-4):.6g}"]
+    if gnss.enabled:
+        args += ["--gnss-latency-ms", f"{gnss.latency_s * 1e3:.6g}",
+                 "--gnss-corr-s", f"{min(gnss.pos_gm_corr_time_s, 600.0):.6g}"]
+    return args
+
+
 def sensor_specs(scen: dict, imu_name: str, vehicle: dict):
     """(ImuSpec, OdoSpec) of a scenario: the IMU preset with the scenario's [imu_mounting]
     (the car's installation, whatever the IMU grade), the odometer with the [vehicle]'s
@@ -246,6 +265,12 @@ def main(argv=None) -> int:
     ap.add_argument("--imu-rate-hz", type=int, default=100)
     ap.add_argument("--out", default=None, help="output folder (default out/sim/NAME)")
     ap.add_argument("--navecu", default=str(ROOT / "build" / "host" / "navecu"))
+    ap.add_argument("--bus", default=None, metavar="IFACE",
+                    help="run the firmware live on this SocketCAN bus (vcan0: inside "
+                         "tools/vcan/with_vcan.sh), the log replayed with can_replay --fastest "
+                         "and its output recorded to nav.log; also runs --can-log into "
+                         "nav_file.log and checks that the two are identical "
+                         "(tools/vcan/bus_run.py)")
     a = ap.parse_args(argv)
 
     scen = trajectory.load_scenario(scenario_path(a.scenario))
@@ -271,10 +296,15 @@ def main(argv=None) -> int:
     dtheta, dv = sensors.apply_imu(truth, imu_spec, 3 * a.seed)
     wheels = sensors.wheel_speeds(truth, odo, 3 * a.seed + 1)
     gnss = sensors.gnss_epochs(truth, sensors.GNSS_PRESETS[gnss_name], 3 * a.seed + 2)
+    fw_args = firmware_args(sensors.PRESETS[imu_name], sensors.GNSS_PRESETS[gnss_name])
+    fault_log = []
+    if scen.get("gnss_faults"):
+        gnss, fault_log = sensors.apply_gnss_faults(gnss, scen["gnss_faults"])
     cal = scen.get("calibration")
     if cal is not None:
         cal = dict(cal, gnss_epoch=calibration_epoch(truth, cal, gnss, 3 * a.seed + 2))
     st.done(f"{len(gnss['t_s'])} GNSS epochs"
+            + (f", {len(fault_log)} GNSS faults" if fault_log else "")
             + (f", calibration at {cal['at_s']:g} s ({cal['source']})" if cal else ""))
 
     st.start("CAN encoding")
@@ -287,16 +317,41 @@ def main(argv=None) -> int:
     save_truth(truth, out)
     st.done(f"{n} frames -> {can_in.relative_to(ROOT) if can_in.is_relative_to(ROOT) else can_in}")
 
-    st.start("firmware (build/host/navecu --can-log)")
     nav_log = out / "nav.log"
-    res = subprocess.run([a.navecu, "--can-log", str(can_in), "--out", str(nav_log),
-                          "--imu-rate-hz", str(a.imu_rate_hz)], capture_output=True, text=True)
-    (out / "navecu.txt").write_text(res.stderr)
-    if res.returncode != 0:
-        print()
-        print(res.stderr, file=sys.stderr)
-        return 1
-    st.done(res.stderr.strip().splitlines()[0].replace("navecu: ", ""))
+    if a.bus:
+        from tools.vcan import bus_run
+        st.start(f"firmware live on {a.bus} (navecu --can, can_replay --fastest) and --can-log")
+        try:
+            b = bus_run.run(a.navecu, can_in, out, a.bus, a.imu_rate_hz, fw_args)
+        except bus_run.BusRunError as e:
+            print()
+            bar = "*" * 78
+            print(f"{bar}\nFAILED: the firmware could not run on {a.bus}: {e}\n"
+                  + ("  (no vcan possible here; Debian: apt-get install user-mode-linux kmod, "
+                     "or make vcan)\n" if e.code == 2 else "") + bar, file=sys.stderr)
+            return 1
+        (out / "navecu.txt").write_text(f"{b['firmware_summary']}\n\n--can-log run "
+                                        f"(nav_file.log):\n{b['file_summary']}\n")
+        (out / "bus_run.json").write_text(json.dumps(b, indent=2))
+        res = subprocess.CompletedProcess(a.navecu, 0, "", b["firmware_summary"])
+        st.done(b["firmware_summary"].splitlines()[0].replace("navecu: ", ""))
+        for line in bus_run.describe(b):
+            print(f"      {line}")
+        if not (b["identical"] and bus_run.lossless(b)):
+            print(f"FAILED: the run on {a.bus} is not the --can-log run "
+                  f"({out / 'bus_run.json'})", file=sys.stderr)
+            return 1
+    else:
+        st.start("firmware (build/host/navecu --can-log)")
+        res = subprocess.run([a.navecu, "--can-log", str(can_in), "--out", str(nav_log),
+                              "--imu-rate-hz", str(a.imu_rate_hz)] + fw_args,
+                             capture_output=True, text=True)
+        (out / "navecu.txt").write_text(res.stderr)
+        if res.returncode != 0:
+            print()
+            print(res.stderr, file=sys.stderr)
+            return 1
+        st.done(res.stderr.strip().splitlines()[0].replace("navecu: ", ""))
 
     st.start("report")
     nav = report.read_nav_log(nav_log)
@@ -304,21 +359,29 @@ def main(argv=None) -> int:
                "heading_rad": truth.heading_rad, "dist_m": truth.dist_m}
     rep, series = report.compute(truth_r, nav, truth.outages)
     rep.update({"scenario": name, "imu": imu_name, "gnss": gnss_name, "seed": a.seed,
-                "imu_rate_hz": a.imu_rate_hz, "navecu_summary": res.stderr.strip().splitlines()})
+                "imu_rate_hz": a.imu_rate_hz, "navecu_summary": res.stderr.strip().splitlines(),
+                "navecu_binary": report.navecu_binary(a.navecu)})
     rep["truth"] = scenario_truths(scen, truth.heading_rad[0], imu_spec, odo, hdg_cmd)
-    rep["calibration"] = (report.calibration_report(truth_r, series,
-                                                    report.read_calibration_log(nav_log),
-                                                    cal, rep["truth"])
+    cal_log = report.read_calibration_log(nav_log)
+    rep["calibration"] = (report.calibration_report(truth_r, series, cal_log, cal, rep["truth"])
                           if cal is not None else None)
+    t_gnss = report.gnss_driving_reached(truth_r, report.FILTER_CAL_GNSS_DRIVING_S,
+                                         rep.get("navigation_start_s", 0.0),
+                                         gnss_t=gnss["t_s"][gnss["valid"]])
+    rep["filter_calibration"] = report.filter_calibration(cal_log, rep["truth"], t_gnss)
+    rep["gnss_faults"] = (report.gnss_fault_report(series, nav.get("NAV_Status"), fault_log,
+                                                   truth.outages) if fault_log else None)
     (out / "report.json").write_text(json.dumps(rep, indent=2))
     truth_d = {"t_s": truth.t_s, "lat_rad": truth.lat_rad, "lon_rad": truth.lon_rad}
     pngs = report.plot(truth_d, series, gnss, truth.outages, out, f"{name} ({imu_name} IMU)",
-                       marks=report.calibration_marks(rep["calibration"]))
+                       marks=report.calibration_marks(rep["calibration"])
+                       + report.fault_marks(rep["gnss_faults"]))
     st.done(f"{out / 'report.json'} and {len(pngs)} plots")
     print()
     print(report.summary_table(rep))
-    print("note: the firmware dead-reckons with the odometer along its SINS heading and does")
-    print("      the one-point calibration; GNSS fusion arrives with the Kalman filter (#7).")
+    if "GnssIns" not in (rep.get("modes_seen") or {}):
+        print("note: the firmware never reported Mode GnssIns: no GNSS fusion in this run "
+              "(the Kalman filter, #7).")
     print(f"plots: {', '.join(str(p) for p in pngs)}")
     return 0
 

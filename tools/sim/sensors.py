@@ -153,6 +153,8 @@ white. Reported accuracies are consistent with the modelled (outlier-free) error
 velocity error. Multipath outliers are not in hacc (receivers under-report them).
 The first ``reacquire_s`` after an outage are produced with fix_type 0 and valid False.
 Preset ``none`` (``enabled=False``): no receiver, no epoch at all.
+Faults for the tests of the firmware's GNSS gate (100 m jumps, a frozen fix, a latency
+spike): :func:`apply_gnss_faults`, from a scenario's ``[gnss_faults]``.
 """
 from __future__ import annotations
 
@@ -684,7 +686,95 @@ def gnss_epochs(truth, spec: GnssSpec, seed: int) -> dict:
             "outlier": outlier}
 
 
+# ============================================================================ GNSS faults
+_EPOCH_KEYS_FROZEN = ("lat_rad", "lon_rad", "h_m", "v_enu_mps", "hacc_m", "vacc_m", "sacc_mps",
+                      "num_sats", "fix_type", "valid")
+FAULT_EPOCH_SEARCH_S = 1.0   # a jump or spike needs an epoch within this of its t_s
+
+
+def _epoch_at_or_after(t_s, t: float, what: str) -> int:
+    after = np.nonzero(t_s >= t - 1e-9)[0]
+    if len(after) == 0 or t_s[after[0]] > t + FAULT_EPOCH_SEARCH_S:
+        raise ValueError(f"[gnss_faults] {what} at {t:g} s: no GNSS epoch within "
+                         f"{FAULT_EPOCH_SEARCH_S:g} s after it (an outage, or after the drive)")
+    return int(after[0])
+
+
+def apply_gnss_faults(epochs: dict, faults: dict) -> tuple[dict, list]:
+    """Bad GNSS epochs for the gate tests (a scenario's [gnss_faults], validated by
+    trajectory.load_scenario): (a new epoch dict, one log entry per fault).
+
+    freeze [t0, t1]: every epoch with t0 <= t_s < t1 repeats the position, velocity,
+    height, accuracies, satellites, fix type and validity of the last epoch before t0; its
+    t_s and t_meas_s (the frame time and TimeOfWeek) go on advancing, as from a receiver or
+    gateway that re-sends a stale solution with fresh time tags (err_enu_m: NaN there, the
+    error depends on the motion). jumps [t_s, metres, azimuth_deg, duration_s]: the first
+    epoch at or after t_s and every epoch up to duration_s after it report their position
+    moved by metres towards azimuth_deg (clockwise from north; on the local radii);
+    velocity, height and accuracies unchanged, err_enu_m includes the jump.
+    latency_spike [t_s, extra_s]: the first epoch at or after t_s gets t_s + extra_s as
+    its frame time, t_meas_s (its TimeOfWeek) unchanged; the epochs are then in delivery
+    order (stable sort by t_s), so the E2E epoch counter follows the order on the bus.
+    Applied in that order (freeze, jumps, spikes). A jump or spike with no epoch within
+    FAULT_EPOCH_SEARCH_S after its time, a freeze with no epoch in it or none before it:
+    ValueError.
+
+    Log entries: kind, the fault's parameters, epochs (number of epochs changed),
+    epoch_t_s (their original times), t_start_s / t_end_s (first and last frame time of
+    the fault on the bus: a spike's t_end_s is its late delivery)."""
+    ep = {k: np.array(v, copy=True) for k, v in epochs.items()}
+    t = ep["t_s"]
+    log = []
+    for f in faults.get("freeze", []):
+        sel = np.nonzero((t >= f["t0_s"] - 1e-9) & (t < f["t1_s"] - 1e-9))[0]
+        before = np.nonzero(t < f["t0_s"] - 1e-9)[0]
+        if len(sel) == 0 or len(before) == 0:
+            raise ValueError(f"[gnss_faults] freeze {f['t0_s']:g}-{f['t1_s']:g} s: "
+                             + ("no GNSS epoch in it" if len(sel) == 0 else "no epoch before it"))
+        src = int(before[-1])
+        for k in _EPOCH_KEYS_FROZEN:
+            if k in ep:
+                ep[k][sel] = ep[k][src]
+        if "err_enu_m" in ep:
+            ep["err_enu_m"][sel] = np.nan
+        log.append({"kind": "freeze", "t0_s": f["t0_s"], "t1_s": f["t1_s"], "epochs": len(sel),
+                    "frozen_epoch_t_s": float(t[src]), "epoch_t_s": t[sel].tolist(),
+                    "t_start_s": float(t[sel[0]]), "t_end_s": float(t[sel[-1]])})
+    for f in faults.get("jumps", []):
+        i = _epoch_at_or_after(t, f["t_s"], "jump")
+        sel = np.nonzero((t >= t[i] - 1e-9) & (t <= t[i] + f["duration_s"] + 1e-9))[0]
+        az = math.radians(f["azimuth_deg"])
+        de, dn = f["metres"] * math.sin(az), f["metres"] * math.cos(az)
+        rm, rn = _radii(ep["lat_rad"][sel], ep["h_m"][sel])
+        lat = ep["lat_rad"][sel]
+        ep["lat_rad"][sel] = lat + dn / rm
+        ep["lon_rad"][sel] = ep["lon_rad"][sel] + de / (rn * np.cos(lat))
+        if "err_enu_m" in ep:
+            ep["err_enu_m"][sel, 0] += de
+            ep["err_enu_m"][sel, 1] += dn
+        log.append({"kind": "jump", "t_s": f["t_s"], "metres": f["metres"],
+                    "azimuth_deg": f["azimuth_deg"], "duration_s": f["duration_s"],
+                    "epochs": len(sel), "epoch_t_s": t[sel].tolist(),
+                    "t_start_s": float(t[sel[0]]), "t_end_s": float(t[sel[-1]])})
+    late = []
+    for f in faults.get("latency_spike", []):
+        i = _epoch_at_or_after(t, f["t_s"], "latency_spike")
+        late.append((i, f["extra_s"]))
+        log.append({"kind": "latency_spike", "t_s": f["t_s"], "extra_s": f["extra_s"],
+                    "epochs": 1, "epoch_t_s": [float(t[i])],
+                    "t_meas_s": float(ep["t_meas_s"][i]),
+                    "t_start_s": float(t[i]), "t_end_s": float(t[i] + f["extra_s"])})
+    if late:
+        t_new = t.copy()
+        for i, extra in late:
+            t_new[i] += extra
+        ep["t_s"] = t_new
+        order = np.argsort(t_new, kind="stable")
+        ep = {k: v[order] for k, v in ep.items()}
+    return ep, log
+
+
 __all__ = ["ImuSpec", "ImuErrors", "PRESETS", "draw_imu_errors", "apply_imu",
            "mounting_C_sb", "allan_deviation", "gm_allan_variance", "gauss_markov",
            "GM_ADEV_PEAK_FACTOR", "GM_ADEV_PEAK_TAU_PER_T", "OdoSpec", "wheel_speeds",
-           "GnssSpec", "GNSS_PRESETS", "gnss_epochs"]
+           "GnssSpec", "GNSS_PRESETS", "gnss_epochs", "apply_gnss_faults"]

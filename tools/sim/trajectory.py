@@ -90,6 +90,29 @@ Scenario file (TOML, read by :func:`load_scenario`)
     gnss = "standalone"           # source "gnss" with [sim] gnss = "none": the preset of the
                                   # one epoch sent after the command
 
+    [gnss_faults]                 # bad GNSS epochs (tools/sim/sensors.py apply_gnss_faults),
+                                  # absent: none; every time is on the drive's clock (s)
+    jumps = [[300, 100], [500, 100, 90, 1.0]]
+                                  # [t_s, metres, azimuth_deg = 0 (north), duration_s = 0]:
+                                  # the first epoch at or after t_s (and every epoch up to
+                                  # duration_s after it) reports its position moved by metres
+                                  # towards the azimuth (clockwise from north); velocity,
+                                  # height and accuracies unchanged
+    freeze = [[700, 705]]         # [t0, t1]: epochs with t0 <= t < t1 repeat the last epoch
+                                  # before t0 (position, velocity, height, accuracies,
+                                  # satellites, fix) while their time of week advances
+    latency_spike = [[900, 0.6]]  # [t_s, extra_s]: the first epoch at or after t_s is
+                                  # delivered extra_s late (frames at t + extra_s, after the
+                                  # epochs reported meanwhile) with its TimeOfWeek unchanged
+
+Inheritance: a top-level ``base = "default"`` (a scenario name in the same folder, or a
+.toml path relative to this file's folder) starts from that scenario: its tables ([start],
+[vehicle], [sim], [imu_mounting], [odometer], [initialization], [calibration],
+[gnss_faults]) are merged key by key with this file's (this file's keys win), its
+[[segment]] and [[outage]] arrays are kept unless this file gives its own (which replace
+them as a whole; ``outage = []`` drops the base's outages). name and description are never
+inherited. Bases may themselves have a base (no cycles).
+
 Motion model
 ------------
 * speed ``s(t)`` (signed, along the path; negative when reversing): piecewise constant,
@@ -312,14 +335,99 @@ _OPTIONAL_TABLES = {
                  "slip_accel_threshold_mps2", "driven_axle"},
     "initialization": set(INITIALIZATION_DEFAULTS),
     "calibration": {"at_s", "source", "gnss"},
+    "gnss_faults": {"jumps", "freeze", "latency_spike"},
 }
+GNSS_JUMP_AZIMUTH_DEG_DEFAULT = 0.0   # a jump without an azimuth moves the fix north
+
+
+def _gnss_faults(path, table: dict) -> dict:
+    """[gnss_faults] as lists of dicts (format in the module docstring), validated."""
+    def rows(key, lo, hi):
+        out = table.get(key, [])
+        if not isinstance(out, list):
+            raise ValueError(f"{path}: [gnss_faults] {key} must be a list of lists")
+        for r in out:
+            if (not isinstance(r, list) or not lo <= len(r) <= hi
+                    or not all(isinstance(x, (int, float)) for x in r)):
+                n = f"{lo}..{hi}" if lo != hi else f"{lo}"
+                raise ValueError(f"{path}: [gnss_faults] {key}: {r!r} is not a list of {n} "
+                                 "numbers")
+        return [[float(x) for x in r] for r in out]
+
+    jumps = []
+    for r in rows("jumps", 2, 4):
+        t, m = r[0], r[1]
+        az = r[2] if len(r) > 2 else GNSS_JUMP_AZIMUTH_DEG_DEFAULT
+        dur = r[3] if len(r) > 3 else 0.0
+        if not (t > 0.0 and m != 0.0 and dur >= 0.0):
+            raise ValueError(f"{path}: [gnss_faults] jump {r}: needs t_s > 0, metres != 0, "
+                             "duration_s >= 0")
+        jumps.append({"t_s": t, "metres": m, "azimuth_deg": az, "duration_s": dur})
+    freeze = []
+    for r in rows("freeze", 2, 2):
+        if not 0.0 < r[0] < r[1]:
+            raise ValueError(f"{path}: [gnss_faults] freeze {r}: needs 0 < t0 < t1")
+        freeze.append({"t0_s": r[0], "t1_s": r[1]})
+    spikes = []
+    for r in rows("latency_spike", 2, 2):
+        if not (r[0] > 0.0 and r[1] > 0.0):
+            raise ValueError(f"{path}: [gnss_faults] latency_spike {r}: needs t_s > 0, "
+                             "extra_s > 0")
+        spikes.append({"t_s": r[0], "extra_s": r[1]})
+    return {"jumps": jumps, "freeze": freeze, "latency_spike": spikes}
+
+
+# tables a scenario with `base` merges key by key over its base's (the rest: replaced)
+_MERGED_TABLES = ("start", "vehicle", "sim", "imu_mounting", "odometer", "initialization",
+                  "calibration", "gnss_faults")
+# top-level keys that belong to the file itself, never inherited
+_OWN_KEYS = ("name", "description", "base")
+
+
+def base_path(path, base: str) -> Path:
+    """The file a scenario's `base = "..."` names: a scenario name (NAME.toml next to the
+    file) or a .toml path relative to the file's folder."""
+    b = Path(base)
+    if b.suffix != ".toml":
+        b = b.with_name(b.name + ".toml")
+    return b if b.is_absolute() else Path(path).resolve().parent / b
+
+
+def read_scenario_toml(path, _chain=()) -> dict:
+    """A scenario file's TOML with its `base` resolved (not yet validated): the base's
+    content (itself resolved, recursively), then this file's over it. Tables of
+    _MERGED_TABLES are merged key by key (this file's keys win); arrays of tables
+    ([[segment]], [[outage]]) are replaced as a whole when this file has the key
+    (`outage = []` drops the base's outages); name, description and base are this file's
+    own (name defaults to the file's stem)."""
+    path = Path(path).resolve()
+    if path in _chain:
+        raise ValueError(f"{path}: base cycle: {' -> '.join(p.name for p in _chain + (path,))}")
+    with open(path, "rb") as fh:
+        own = tomllib.load(fh)
+    if "base" not in own:
+        return own
+    if not isinstance(own["base"], str) or not own["base"]:
+        raise ValueError(f"{path}: base must be a scenario name or a .toml path")
+    bp = base_path(path, own["base"])
+    if not bp.exists():
+        raise ValueError(f"{path}: base {own['base']!r}: no file {bp}")
+    sc = {k: v for k, v in read_scenario_toml(bp, _chain + (path,)).items()
+          if k not in _OWN_KEYS}
+    for k, v in own.items():
+        if k in _MERGED_TABLES and isinstance(v, dict) and isinstance(sc.get(k), dict):
+            sc[k] = {**sc[k], **v}
+        else:
+            sc[k] = v
+    sc["base"] = own["base"]
+    return sc
 
 
 def load_scenario(path) -> dict:
-    """Read and validate a scenario TOML file (format in the module docstring)."""
+    """Read and validate a scenario TOML file (format in the module docstring), with its
+    `base` scenario resolved (read_scenario_toml)."""
     path = Path(path)
-    with open(path, "rb") as fh:
-        sc = tomllib.load(fh)
+    sc = read_scenario_toml(path)
     sc.setdefault("name", path.stem)
     sc.setdefault("description", "")
     for key in ("lat_deg", "lon_deg", "h_m", "heading_deg"):
@@ -372,6 +480,8 @@ def load_scenario(path) -> dict:
         if cal["source"] not in ("known_position", "gnss"):
             raise ValueError(f"{path}: [calibration] source must be 'known_position' or 'gnss'")
         sc["calibration"] = cal
+    if "gnss_faults" in sc:
+        sc["gnss_faults"] = _gnss_faults(path, sc["gnss_faults"])
     return sc
 
 

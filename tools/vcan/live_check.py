@@ -3,10 +3,14 @@
 
 Run inside a vcan environment (tools/vcan/with_vcan.sh). Prints one JSON line:
 {"mode", "sent", "retries", "replay_s", "recorded", "firmware_summary", "frames": [...]}
-where frames are the recorded 'ID#DATA' strings in order (NAV_* output).
+where frames are the recorded 'ID#DATA' strings in order (NAV_* output); --fastest adds
+the replay's flow-control figures ("replay": tools/can_replay.py replay()), --out FILE
+writes the recorded frames as a candump log too (with their kernel receive times),
+--no-frames leaves "frames" out of the JSON line.
 
     with_vcan.sh .venv/bin/python tools/vcan/live_check.py --log IN.log --speed 1
     with_vcan.sh .venv/bin/python tools/vcan/live_check.py --log IN.log --max-rate 3000
+    with_vcan.sh .venv/bin/python tools/vcan/live_check.py --log IN.log --fastest --out NAV.log
     with_vcan.sh .venv/bin/python tools/vcan/live_check.py --interop
     with_vcan.sh .venv/bin/python tools/vcan/live_check.py --latency --log IN.log
     with_vcan.sh .venv/bin/python tools/vcan/live_check.py --robust --log IN.log
@@ -16,7 +20,10 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import shlex
 import signal
+import socket
+import struct
 import subprocess
 import sys
 import threading
@@ -30,11 +37,13 @@ sys.path.insert(0, str(ROOT))
 from tools import can_replay, navecu_can  # noqa: E402
 
 NAV_IDS = list(range(0x300, 0x304)) + [0x310, 0x311]
+FRAME_HEAD = struct.Struct("=IB")  # struct can_frame: can_id, len (data at offset 8)
+CHANNEL = "vcan0"  # --channel
 
 
 def start_firmware(extra=()):  # noqa: D103
     proc = subprocess.Popen([os.environ.get("NAVECU_BIN", str(ROOT / "build/host/navecu")),
-                             "--can", "vcan0", *extra],
+                             "--can", CHANNEL, *extra],
                             stderr=subprocess.PIPE, text=True)
     line = proc.stderr.readline()
     if "running on" not in line:
@@ -50,56 +59,117 @@ def stop_firmware(proc) -> str:
 
 class Recorder(threading.Thread):
     """Receives NAV_* frames (and extra_ids) until stopped; keeps 'ID#DATA' strings in
-    order and the kernel receive timestamps."""
+    order and the kernel receive timestamps, and counts the NAV_Status page 0 frames that
+    tools/can_replay.py --fastest takes as acknowledgements (acked), so that the replay
+    can stay within its window of this recorder too (can_replay.replay follower)."""
 
     def __init__(self, extra_ids=()):
         super().__init__(daemon=True)
         filters = [{"can_id": i, "can_mask": 0x7FF, "extended": False}
                    for i in NAV_IDS + list(extra_ids)]
-        self.bus = can.Bus(channel="vcan0", interface="socketcan", can_filters=filters,
+        self.bus = can.Bus(channel=CHANNEL, interface="socketcan", can_filters=filters,
                            receive_own_messages=False)
         # a Python reader in a UML guest can fall behind for a moment: give the socket room
         # (SO_RCVBUFFORCE = 33, root only; else the capped SO_RCVBUF)
-        import socket
         try:
             self.bus.socket.setsockopt(socket.SOL_SOCKET, 33, 8 << 20)
         except OSError:
             self.bus.socket.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 8 << 20)
-        self.frames, self.times, self.stop, self.last = [], [], False, time.monotonic()
+        self.frames, self.times, self.stop = [], [], False
+        self.acked = 0
 
     def run(self):
+        # One recvmsg per frame on the raw socket, a kernel receive timeout (SO_RCVTIMEO)
+        # to look at self.stop: no select and no clock read per frame (inside User-Mode
+        # Linux every system call costs, a clock read is one).
+        sock = self.bus.socket
+        sock.setblocking(True)
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVTIMEO, struct.pack("@ll", 0, 50000))
+        anc = socket.CMSG_SPACE(16)
+        frames, times = self.frames, self.times
         while not self.stop:
             try:
-                m = self.bus.recv(timeout=0.05)
-            except can.CanOperationError:  # the interface went down: keep listening
+                cf, ancdata, _, _ = sock.recvmsg(16, anc)
+            except BlockingIOError:         # SO_RCVTIMEO: nothing for 50 ms
+                continue
+            except OSError:                 # the interface went down: keep listening
                 time.sleep(0.05)
                 continue
-            if m is not None:
-                self.frames.append(f"{m.arbitration_id:03X}#{bytes(m.data).hex().upper()}")
-                self.times.append(m.timestamp)
-                self.last = time.monotonic()
+            can_id, dlc = FRAME_HEAD.unpack_from(cf)
+            data = cf[8:8 + dlc]
+            fid = can_id & 0x7FF
+            frames.append(f"{fid:03X}#{data.hex().upper()}")
+            times.append(_timestamp(ancdata))
+            if fid == 0x310 and dlc >= 3 and data[0] & 0x0F == 0:
+                self.acked += 1             # can_replay.is_ack
         self.bus.shutdown()
 
     def finish(self, idle_s=1.0):
-        while time.monotonic() - self.last < idle_s:
+        """Stop once no frame has arrived for idle_s."""
+        n, quiet = -1, 0.0
+        while quiet < idle_s:
             time.sleep(0.05)
+            quiet = quiet + 0.05 if len(self.frames) == n else 0.0
+            n = len(self.frames)
         self.stop = True
         self.join()
+
+    def write(self, path) -> int:
+        """The recorded frames as a candump log (tools/navecu_can.write_candump), with
+        their kernel receive times."""
+        def msgs():
+            for f, t in zip(self.frames, self.times):
+                fid, data = f.split("#")
+                yield can.Message(timestamp=t, arbitration_id=int(fid, 16),
+                                  data=bytes.fromhex(data), is_extended_id=False,
+                                  channel=CHANNEL)
+        return navecu_can.write_candump(path, msgs())
+
+
+def _timestamp(ancdata) -> float:
+    """The kernel receive time of a frame (SO_TIMESTAMPNS, which python-can enables)."""
+    for level, kind, data in ancdata:
+        if level == socket.SOL_SOCKET and len(data) >= 16:
+            sec, nsec = struct.unpack_from("@qq", data)
+            return sec + nsec * 1e-9
+    return 0.0
+
+
+def firmware_args(a) -> list:
+    return ((["--imu-rate-hz", str(a.imu_rate_hz)] if a.imu_rate_hz else [])
+            + shlex.split(a.navecu_args or ""))
 
 
 def replay_mode(a) -> dict:
     rec = Recorder()
     rec.start()
-    fw = start_firmware()
-    r = can_replay.replay(a.log, "vcan0", speed=a.speed, max_rate=a.max_rate)
+    fw = start_firmware(firmware_args(a))
+    try:
+        if a.fastest:
+            r = can_replay.replay(a.log, CHANNEL, fastest=True, ack_every=a.ack_every,
+                                  window=a.window, follower=lambda: rec.acked)
+        else:
+            r = can_replay.replay(a.log, CHANNEL, speed=a.speed, max_rate=a.max_rate)
+    except (can_replay.AckTimeout, ValueError) as e:
+        summary = stop_firmware(fw)
+        rec.finish(0.1)
+        raise SystemExit(f"live_check: {e}\n{summary}") from None
+    # stop within the firmware's 0.5 s of IMU silence: after that it reports the silence in
+    # extra NAV_Status frames (app_poll) that a --can-log run has not
     time.sleep(0.2)
-    # the firmware keeps NAV_Status going while the IMU is silent: stop it first, then
-    # let the recorder drain
     summary = stop_firmware(fw)
     rec.finish(0.5)
-    return {"mode": "speed" if a.speed else "max_rate", "sent": r["sent"],
-            "retries": r["retries"], "replay_s": r["seconds"], "recorded": len(rec.frames),
-            "firmware_summary": summary, "frames": rec.frames}
+    res = {"mode": "fastest" if a.fastest else "speed" if a.speed else "max_rate",
+           "sent": r["sent"], "retries": r["retries"], "replay_s": r["seconds"],
+           "recorded": len(rec.frames), "firmware_summary": summary}
+    if a.fastest:
+        res["replay"] = r
+    if a.out:
+        res["out"] = str(a.out)
+        res["written"] = rec.write(a.out)
+    if not a.no_frames:
+        res["frames"] = rec.frames
+    return res
 
 
 def interop_mode() -> dict:
@@ -112,14 +182,14 @@ def interop_mode() -> dict:
     dump = ROOT / "build" / "interop_candump.log"
     dump.parent.mkdir(exist_ok=True)
     fw = start_firmware()
-    cd = subprocess.Popen(["candump", "-L", "vcan0,310:7FF"], stdout=open(dump, "w"))
+    cd = subprocess.Popen(["candump", "-L", f"{CHANNEL},310:7FF"], stdout=open(dump, "w"))
     time.sleep(0.3)
     for msg in (kp, ctl):
-        subprocess.run(["cansend", "vcan0",
+        subprocess.run(["cansend", CHANNEL,
                         f"{msg.arbitration_id:03X}#{bytes(msg.data).hex().upper()}"], check=True)
     # a few IMU samples so that the firmware's status cycle runs (sample-driven)
     quant = navecu_can.ImuQuantizer()
-    with can.Bus(channel="vcan0", interface="socketcan") as bus:
+    with can.Bus(channel=CHANNEL, interface="socketcan") as bus:
         for k in range(30):
             rate, accel = quant.signals([0.0, 0.0, 0.0], [0.0, 0.0, 0.098])
             for m in sender.encode_imu_pair(rate, accel):
@@ -145,7 +215,7 @@ def latency_mode(a) -> dict:
     rec = Recorder(extra_ids=[0x101])
     rec.start()
     fw = start_firmware(["--level-s", "1"])
-    can_replay.replay(a.log, "vcan0", speed=1.0)
+    can_replay.replay(a.log, CHANNEL, speed=1.0)
     time.sleep(0.2)
     stop_firmware(fw)
     rec.finish(0.5)
@@ -172,14 +242,14 @@ def robust_mode(a) -> dict:
     rec = Recorder()
     rec.start()
     fw = start_firmware(["--level-s", "1"])
-    can_replay.replay(str(first), "vcan0", max_rate=3000)
+    can_replay.replay(str(first), CHANNEL, max_rate=3000)
     n_before = len(rec.frames)
     time.sleep(1.5)                         # the replay is gone: IMU silent
-    subprocess.run(["ip", "link", "set", "vcan0", "down"], check=True)
+    subprocess.run(["ip", "link", "set", CHANNEL, "down"], check=True)
     time.sleep(0.5)
-    subprocess.run(["ip", "link", "set", "vcan0", "up"], check=True)
+    subprocess.run(["ip", "link", "set", CHANNEL, "up"], check=True)
     alive_after_down_up = fw.poll() is None
-    can_replay.replay(str(second), "vcan0", max_rate=3000)
+    can_replay.replay(str(second), CHANNEL, max_rate=3000)
     time.sleep(0.3)
     alive = fw.poll() is None
     summary = stop_firmware(fw)
@@ -199,15 +269,33 @@ def robust_mode(a) -> dict:
 
 
 def main() -> int:
+    global CHANNEL
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--log")
+    ap.add_argument("--channel", default=CHANNEL)
     g = ap.add_mutually_exclusive_group()
     g.add_argument("--speed", type=float)
     g.add_argument("--max-rate", type=float)
+    g.add_argument("--fastest", action="store_true",
+                   help="flow-controlled replay (tools/can_replay.py --fastest)")
+    ap.add_argument("--ack-every", type=int, default=None,
+                    help="IMU samples per NAV_Status page 0 (default: IMU rate / 10 Hz)")
+    ap.add_argument("--window", type=int, default=can_replay.WINDOW)
+    ap.add_argument("--imu-rate-hz", type=int, default=None,
+                    help="passed to navecu (default: its own, 100)")
+    ap.add_argument("--navecu-args", default=None, metavar="'ARGS'",
+                    help="more navecu options, one shell-quoted string "
+                         "(--navecu-args='--level-s 1')")
+    ap.add_argument("--out", help="write the recorded frames to this candump log")
+    ap.add_argument("--no-frames", action="store_true", help="no 'frames' in the JSON line")
     ap.add_argument("--interop", action="store_true")
     ap.add_argument("--latency", action="store_true")
     ap.add_argument("--robust", action="store_true")
     a = ap.parse_args()
+    CHANNEL = a.channel
+    if a.ack_every is None:
+        # navecu's emit_due: status every imu / status_rate samples, status rate 10 Hz
+        a.ack_every = max(1, (a.imu_rate_hz or 100) // 10)
     if a.interop:
         res = interop_mode()
     elif a.latency:
