@@ -143,7 +143,7 @@ test-c: test-plain test-asan
 
 # Python tests drive the host executable (plain build) through real CAN logs.
 test-python: venv $(BUILD)/host/navecu
-	NAVECU_BIN=$(BUILD)/host/navecu $(PY) -m pytest -q tests/python
+	NAVECU_BIN=$(BUILD)/host/navecu $(PY) -m pytest -q -rs tests/python
 
 test: deps
 	./tools/check_layers.sh

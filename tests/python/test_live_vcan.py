@@ -90,6 +90,13 @@ def test_fastest_lossless_5min_matches_log(logs, tmp_path):
     assert r["frames"] == ref                           # payloads and order as --can-log
     # --out: the same frames as a candump log
     assert [ln.split()[2] for ln in out.read_text().splitlines()] == ref
+    # and a client reads it with the DBC: `cantools decode` of the recorded log
+    lines = out.read_text().splitlines(keepends=True)
+    head = "".join(lines[len(lines) // 2:len(lines) // 2 + 100])  # while navigating
+    dec = subprocess.run([sys.executable, "-m", "cantools", "decode",
+                          str(ROOT / "firmware" / "can" / "navecu.dbc")], input=head,
+                         capture_output=True, text=True, check=True)
+    assert "NAV_Position(" in dec.stdout and "NAV_Status(" in dec.stdout, dec.stdout[:500]
 
 
 def test_real_time_matches_log(logs):

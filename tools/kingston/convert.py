@@ -63,6 +63,7 @@ docs/kingston.md explains every rule; in short:
 from __future__ import annotations
 
 import argparse
+import os
 import json
 import math
 import sys
@@ -74,7 +75,22 @@ import numpy as np
 from tools import navecu_can as nc
 
 ROOT = Path(__file__).resolve().parents[2]
-DATA_DIR = ROOT.parent / "shared" / "data" / "kingston-2008"
+
+
+def _data_dir() -> Path:
+    """The recorded drive: $NAVECU_KINGSTON_DIR, else ../shared/data/kingston-2008 beside
+    the checkout, else the workplace's /work/shared copy (a clone elsewhere)."""
+    env = os.environ.get("NAVECU_KINGSTON_DIR")
+    if env:
+        return Path(env)
+    for cand in (ROOT.parent / "shared" / "data" / "kingston-2008",
+                 Path("/work/shared/data/kingston-2008")):
+        if (cand / "imu.csv").exists():
+            return cand
+    return ROOT.parent / "shared" / "data" / "kingston-2008"
+
+
+DATA_DIR = _data_dir()
 IMU_RATE_HZ = 10
 DEFAULT_OUTAGES = "every:240:60"
 DEFAULT_CAL_KM = 5.0
