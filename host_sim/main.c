@@ -277,7 +277,7 @@ int main(int argc, char **argv)
 
     const app_health_t *h = &app.health;
     static const char *const mode_names[] = {"waiting for initial state", "levelling",
-                                             "navigating", "fault"};
+                                             "navigating", "fault", "dead reckoning"};
     static const char *const cal_names[] = {"none", "loaded from NVM", "one-point",
                                             "refused (too close)", "refused (not ready)",
                                             "NVM corrupt, defaults"};
@@ -286,7 +286,8 @@ int main(int argc, char **argv)
             "samples (%.1f s), mode: %s\n",
             frames_in, (unsigned long)h->log_line_bad, (unsigned long)app.frames_sent,
             (unsigned long long)app.n_samples,
-            (double)app.n_samples / (double)cfg.imu_rate_hz, mode_names[app.mode]);
+            (double)app.n_samples / (double)cfg.imu_rate_hz,
+            (unsigned)app.mode < 5u ? mode_names[app.mode] : "?");
     fprintf(stderr,
             "navecu: rejected: unknown id %lu, bad dlc %lu, bad crc %lu, bad counter %lu, "
             "imu pair broken %lu, imu lost %lu, bad value %lu, gnss %lu, command %lu, "

@@ -252,7 +252,7 @@ static void test_gnss_position_update(void **state)
     sd[0] = sd[1] = sd[2] = 10.0;
     filter_with(&f, sd);
     assert_int_equal(ekf_gnss_position(&f, &s, &s.pos, &ant, lever, NAV_C(0.1), NAV_C(0.1),
-                                       NAV_C(5.0), NAV_C(1.0)), 3);
+                                       NAV_C(5.0), NAV_C(1.0), 1), 3);
     assert_near(f.x[EKF_DR + 0], 3.0, 0.03);
     assert_near(f.x[EKF_DR + 1], -2.0, 0.03);
     assert_near(f.x[EKF_DR + 2], 1.0, 0.03);
@@ -266,9 +266,12 @@ static void test_gnss_position_update(void **state)
     assert_int_equal(geo_pos_add(&far, NAV_C(100.0) / NAV_C(6367380.0), NAV_C(0.0), NAV_C(0.0)),
                      NAV_OK);
     const uint32_t gated = f.n_gated;
+    /* the horizontal pair is refused; the height, right, is gated on its own and taken */
     assert_int_equal(ekf_gnss_position(&f, &s, &s.pos, &far, lever, NAV_C(0.1), NAV_C(0.1),
-                                       NAV_C(5.0), NAV_C(1.0)), 0);
+                                       NAV_C(5.0), NAV_C(1.0), 1), 1);
     assert_int_equal(f.n_gated, gated + 1u);
+    assert_near(f.x[EKF_DR + 0], 0.0, 0.01);
+    assert_near(f.x[EKF_DR + 1], 0.0, 0.01);
 }
 
 /* The heading error shows in the lever arm: an antenna 2 m ahead, the heading 2 deg off,
@@ -294,7 +297,7 @@ static void test_lever_arm_observes_heading(void **state)
     filter_with(&f, sd);
     const nav_real_t lever[3] = {NAV_C(0.0), NAV_C(2.0), NAV_C(0.0)};
     assert_true(ekf_gnss_position(&f, &s, &s.pos, &ant, lever, NAV_C(0.001), NAV_C(0.001),
-                                  NAV_C(0.0), NAV_C(1.0)) == 3);
+                                  NAV_C(0.0), NAV_C(1.0), 1) == 3);
     assert_near(f.x[EKF_PSI + 2], 2.0 * DEG, 0.05 * DEG);
 }
 

@@ -17,6 +17,7 @@ enum { TX_HEIGHT = 0, TX_VEL, TX_ATT, TX_STATUS, TX_CAL };
 #define IMU_STALE_US 500000u
 #define CMD_MAX_DELTA 3
 #define GNSS_FIX_FRESH_S 2u      /* mode GnssIns while the last fix used is this recent */
+#define STORE_MIN_S 10u          /* StoreCalibration at most this often (flash wear) */
 
 app_config_t app_default_config(void)
 {
@@ -534,23 +535,6 @@ static void odometer_step(app_t *a, nav_real_t dt)
 
 static void store_calibration(app_t *a, hal_t *hal);
 
-static void heading_hold(app_t *a)
-{
-    nav_real_t roll, pitch, heading;
-    sins_euler(&a->nav, &roll, &pitch, &heading);
-    if (!a->holding) {
-        a->holding = 1u;
-        a->hold_heading_rad = heading;
-    }
-    nav_real_t dh = a->hold_heading_rad - heading;
-    if (dh > PI_F) {
-        dh -= NAV_C(2.0) * PI_F;
-    } else if (dh < -PI_F) {
-        dh += NAV_C(2.0) * PI_F;
-    }
-    (void)sins_turn_heading(&a->nav, dh);
-}
-
 /* z gyro rate (rad/s) the Earth alone would give the body now */
 static nav_real_t earth_rate_body_z(const sins_t *s)
 {
@@ -587,24 +571,41 @@ static void start_filter(app_t *a, nav_real_t hacc_m)
     a->f_sum_n[0] = a->f_sum_n[1] = a->f_sum_n[2] = NAV_C(0.0);
     a->wz_sum_rad = NAV_C(0.0);
     a->odo_frames_used = a->odo.n_frames;
+    a->ekf_start_sample = a->n_samples;
+    /* the filter owns the height now: the core's damping toward a held reference is a
+     * force its model does not have */
+    a->nav.h_ref_valid = 0u;
     a->ekf_on = 1u;
 }
 
 /* The filter's odometer scale and mounting yaw, once converged, are the calibration in
- * use (CalSource Filter) and stored once per trip; the dead reckoning uses them too. */
+ * use (CalSource Filter); the dead reckoning uses them too. They are stored only at a
+ * standstill (a flash sector erase stalls the ECU's CPU for hundreds of ms: docs/porting.md),
+ * only when they differ from the stored record by more than the filter's accuracy, and at
+ * most every FILTER_SAVE_MIN_S (flash wear: two sectors of 10 k erase cycles). */
+#define FILTER_SAVE_MIN_S 600u
 static void filter_calibration(app_t *a, hal_t *hal)
 {
     const nav_real_t sk = nav_sqrt(a->ekf.P[EKF_K][EKF_K]);
     const nav_real_t sy = nav_sqrt(a->ekf.P[EKF_MY][EKF_MY]);
-    if (sk > NAV_C(0.0005) || sy > NAV_C(0.0005)) { /* 0.05 %, 0.03 deg */
-        return;
+    if (sk > NAV_C(0.0005) || sy > NAV_C(0.0005) || /* 0.05 %, 0.03 deg */
+        !(nav_fabs(a->ekf.k) <= NAV_C(0.2)) || !(nav_fabs(a->ekf.mount_yaw_rad) <= NAV_C(0.5))) {
+        return; /* not converged, or outside what the store accepts */
     }
     a->cal_mu = a->ekf.k;
     a->cal_dh_rad = a->ekf.mount_yaw_rad;
     a->cal_source = NAVECU_CAN_NAV_CALIBRATION_CAL_SOURCE_FILTER_CHOICE;
     a->dr.mu = a->ekf.k;
     a->dr.dh_rad = a->ekf.mount_yaw_rad;
-    if (!a->ekf_cal_stored) {
+    const int changed = !a->ekf_cal_stored ||
+                        nav_fabs(a->cal_mu - a->stored_mu) > NAV_C(2.0) * sk ||
+                        nav_fabs(a->cal_dh_rad - a->stored_dh_rad) > NAV_C(2.0) * sy;
+    if (changed) {
+        a->cal_stored = 0u;
+    }
+    const uint64_t min_gap = (uint64_t)FILTER_SAVE_MIN_S * a->cfg.imu_rate_hz;
+    if (changed && a->odo.standing &&
+        (!a->ekf_cal_stored || a->n_samples - a->last_save_sample >= min_gap)) {
         a->ekf_cal_stored = 1u;
         a->cal_base_m = NAV_C(0.0);
         store_calibration(a, hal);
@@ -613,9 +614,19 @@ static void filter_calibration(app_t *a, hal_t *hal)
 
 static void navigate_filtered(app_t *a, imu_inc_t *inc);
 
+/* IMU samples per velocity-history entry: entries at most 10 ms apart whatever the IMU
+ * rate, so APP_VHIST entries cover 0.64 s (the latency allowed plus lateness) */
+static uint32_t vhist_div(const app_t *a)
+{
+    return (a->cfg.imu_rate_hz + 99u) / 100u;
+}
+
 /* velocity history for the GNSS time of validity */
 static void record_velocity(app_t *a)
 {
+    if (a->n_samples % vhist_div(a) != 0u) {
+        return;
+    }
     for (int i = 0; i < 3; i++) {
         a->vhist[a->vhist_n % APP_VHIST][i] = a->nav.v_n_mps[i];
     }
@@ -716,11 +727,9 @@ static void navigate_filtered(app_t *a, imu_inc_t *inc)
     } else if (!a->odo.valid) {
         dr_set_position(&a->dr, &a->nav.pos);
     }
-    if (a->odo.standing) {
-        heading_hold(a);
-    } else {
-        a->holding = 0u;
-    }
+    /* no heading hold with the filter: it would undo the filter's heading corrections
+     * while their variance is spent; the zero-rate update does the job */
+    a->holding = 0u;
     const uint32_t div = a->cfg.imu_rate_hz >= EKF_PRED_HZ ? a->cfg.imu_rate_hz / EKF_PRED_HZ : 1u;
     if (a->pred_n < div) {
         return;
@@ -765,7 +774,7 @@ static void navigate_filtered(app_t *a, imu_inc_t *inc)
  * (IMU time - TimeOfWeek) of each epoch is compared with its running minimum (allowing
  * 50 ppm of clock drift), the excess added to the latency. The navigator's position and
  * velocity at that time come from the velocity history; beyond it the fix is refused. */
-static void gnss_update(app_t *a, hal_t *hal, uint32_t tow_ms, int have_vel)
+static void gnss_update(app_t *a, hal_t *hal, uint32_t tow_ms, int have_vel, int have_h)
 {
     const int64_t t_imu_us = (int64_t)(a->n_samples * 1000000u / a->cfg.imu_rate_hz);
     const int64_t off = t_imu_us - (int64_t)tow_ms * 1000;
@@ -773,15 +782,17 @@ static void gnss_update(app_t *a, hal_t *hal, uint32_t tow_ms, int have_vel)
         a->gnss_off_min_us = off; /* first epoch, or a time jump (week rollover, reset) */
         a->gnss_off_valid = 1u;
     } else {
-        a->gnss_off_min_us += 10; /* 10 us per epoch: 50 ppm at 5 Hz */
+        /* the minimum may creep up by 50 ppm of the IMU time elapsed (clock drift) */
+        a->gnss_off_min_us += (t_imu_us - a->gnss_prev_t_us) / 20000;
         if (off < a->gnss_off_min_us) {
             a->gnss_off_min_us = off;
         }
     }
+    a->gnss_prev_t_us = t_imu_us;
     const nav_real_t late_s = (nav_real_t)(off - a->gnss_off_min_us) * NAV_C(1e-6);
     const nav_real_t tau = a->cfg.gnss_latency_s + late_s;
-    const nav_real_t dt = NAV_C(1.0) / (nav_real_t)a->cfg.imu_rate_hz;
-    const nav_real_t back = tau / dt; /* samples back */
+    const nav_real_t dt = (nav_real_t)vhist_div(a) / (nav_real_t)a->cfg.imu_rate_hz;
+    const nav_real_t back = tau / dt; /* history entries back */
     const uint32_t m = (uint32_t)back;
     if (m + 1u >= APP_VHIST || m + 1u >= a->vhist_n) {
         reject(a, &a->health.gnss_rejected); /* older than the history */
@@ -825,13 +836,33 @@ static void gnss_update(app_t *a, hal_t *hal, uint32_t tow_ms, int have_vel)
     ep_s = clampr(ep_s, NAV_C(0.05), corr_s);
     const nav_real_t r_scale = corr_s / ep_s;
     if (!a->ekf_on) {
+        /* The navigator may have drifted far more than the receiver's error before the
+         * filter: it starts at the fix (moved on by the motion since its time of validity,
+         * less the antenna lever arm), and the filter's position sigma is the receiver's. */
+        mat3_t C;
+        quat_to_dcm(a->nav.q_bn, &C);
+        nav_real_t l_n[3];
+        mat3_mul_vec(&C, a->cfg.gnss_lever_b_m, l_n);
+        geo_pos_t p = meas;
+        if (!have_h) {
+            p.h = a->nav.pos.h;
+        }
+        const nav_real_t dh_m = have_h ? d[2] - l_n[2] : d[2];
+        if (geo_pos_add(&p, (d[1] - l_n[1]) / (R_M + h), (d[0] - l_n[0]) / ((R_N + h) * nav_cos(lat)),
+                        dh_m) != NAV_OK) {
+            reject(a, &a->health.gnss_rejected);
+            return;
+        }
+        a->nav.pos = p;
+        then = p;
+        (void)geo_pos_add(&then, -d[1] / (R_M + h), -d[0] / ((R_N + h) * nav_cos(lat)), -d[2]);
         start_filter(a, sh);
         if (!a->ekf_on) {
             return;
         }
     }
     const int rp = ekf_gnss_position(&a->ekf, &a->nav, &then, &meas, a->cfg.gnss_lever_b_m, sh,
-                                     sv, GNSS_GATE_SIGMA, r_scale);
+                                     sv, GNSS_GATE_SIGMA, r_scale, have_h);
     int rv = 1;
     if (have_vel) {
         nav_real_t vm[3];
@@ -844,20 +875,22 @@ static void gnss_update(app_t *a, hal_t *hal, uint32_t tow_ms, int have_vel)
                                      NAV_C(2.0));
         rv = ekf_gnss_velocity(&a->ekf, vthen, vm, ss, NAV_C(1.5) * ss, GNSS_GATE_SIGMA);
     }
-    if (rp == 0 || rv == 0) {
+    if (rp < 2 || rv == 0) {
         reject(a, &a->health.gnss_rejected); /* beyond the innovation gate */
     }
     /* Several fixes in a row refused: after a bad fix slipped through, or a long outage,
      * the filter may be the one that is wrong; forget its position and velocity and let
      * the next fix in (counted: ekf.n_reopened). */
-    a->gnss_gated_run = rp == 0 ? (uint8_t)(a->gnss_gated_run < 255u ? a->gnss_gated_run + 1u : 255u)
-                                : 0u;
-    if (a->gnss_gated_run >= 2u && a->have_fix &&
-        a->n_samples - a->last_fix_sample > (uint64_t)GNSS_REOPEN_S * a->cfg.imu_rate_hz) {
+    const int taken = rp >= 2; /* the horizontal fix was taken */
+    a->gnss_gated_run = !taken ? (uint8_t)(a->gnss_gated_run < 255u ? a->gnss_gated_run + 1u : 255u)
+                               : 0u;
+    const uint64_t since = a->have_fix ? a->last_fix_sample : a->ekf_start_sample;
+    if (a->gnss_gated_run >= 2u &&
+        a->n_samples - since > (uint64_t)GNSS_REOPEN_S * a->cfg.imu_rate_hz) {
         ekf_reopen(&a->ekf, NAV_C(3.0) * sh, NAV_C(1.0));
         a->gnss_gated_run = 0u;
     }
-    if (rp > 0) {
+    if (taken) {
         a->last_fix_sample = a->n_samples;
         a->have_fix = 1u;
     }
@@ -983,8 +1016,11 @@ static void store_calibration(app_t *a, hal_t *hal)
     rec.odo_scale_err = (float)a->cal_mu;
     rec.base_m = (float)a->cal_base_m;
     rec.source = a->cal_source;
+    a->last_save_sample = a->n_samples;
     if (calstore_save(hal, &a->calstore, &rec) == 0) {
         a->cal_stored = 1u;
+        a->stored_mu = a->cal_mu;
+        a->stored_dh_rad = a->cal_dh_rad;
         a->flags_sticky &= (uint16_t)~APP_FLAG_NVM_ERROR;
     } else {
         a->cal_stored = 0u;
@@ -998,7 +1034,9 @@ static void store_calibration(app_t *a, hal_t *hal)
  * reset to the point, and the result is stored. */
 static void calibrate_at(app_t *a, hal_t *hal, int32_t lat_e7, int32_t lon_e7, uint8_t source)
 {
-    if (a->mode != APP_MODE_NAVIGATING || !a->output_dr) {
+    /* with the filter running, GNSS calibrates the odometer and the mounting: the
+     * one-point calibration is for GNSS-denied driving */
+    if (a->mode != APP_MODE_NAVIGATING || !a->output_dr || a->ekf_on) {
         a->cal_status = NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_REFUSED_NOT_READY_CHOICE;
         reject(a, &a->health.cmd_rejected);
         return;
@@ -1081,13 +1119,16 @@ static void on_gnss_status(app_t *a, hal_t *hal, const hal_can_frame_t *f)
     a->last_gnss_sample = a->n_samples;
     a->gnss_hacc_dm = m.horiz_accuracy;
     a->gnss_vacc_dm = m.vert_accuracy;
-    if (a->mode == APP_MODE_NAVIGATING) {
-        gnss_update(a, hal, m.time_of_week, have_vel);
-    }
     if (a->cal_at_gnss) {
+        /* the fix marked as the calibration point is that and nothing else: it neither
+         * starts the filter nor feeds it */
         a->cal_at_gnss = 0u;
         calibrate_at(a, hal, a->gnss_lat_e7, a->gnss_lon_e7,
                      NAVECU_CAN_NAV_CALIBRATION_CAL_SOURCE_GNSS_CHOICE);
+        return;
+    }
+    if (a->mode == APP_MODE_NAVIGATING) {
+        gnss_update(a, hal, m.time_of_week, have_vel, have_h);
     }
     if (have_h && a->mode == APP_MODE_NAVIGATING && !a->ekf_on) {
         sins_set_height_ref(&a->nav, (nav_real_t)a->gnss_h_cm * NAV_C(0.01));
@@ -1160,8 +1201,11 @@ static void on_cmd_control(app_t *a, hal_t *hal, const hal_can_frame_t *f)
         start_levelling_if_ready(a);
         break;
     case 3u: /* StoreCalibration: the values in use */
-        if (a->cal_source == NAVECU_CAN_NAV_CALIBRATION_CAL_SOURCE_NONE_CHOICE) {
-            reject(a, &a->health.cmd_rejected); /* nothing calibrated to store */
+        if (a->cal_source == NAVECU_CAN_NAV_CALIBRATION_CAL_SOURCE_NONE_CHOICE ||
+            (a->last_save_sample != 0u &&
+             a->n_samples - a->last_save_sample < (uint64_t)STORE_MIN_S * a->cfg.imu_rate_hz)) {
+            /* nothing calibrated to store, or asked again within STORE_MIN_S (flash wear) */
+            reject(a, &a->health.cmd_rejected);
             break;
         }
         store_calibration(a, hal);

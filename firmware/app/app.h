@@ -162,6 +162,8 @@ typedef struct {
     uint8_t have_fix;
     uint8_t gnss_gated_run;     /* consecutive fixes refused by the gate */
     uint64_t gnss_prev_sample;  /* sample of the previous fix offered to the filter */
+    int64_t gnss_prev_t_us;     /* IMU time of the previous epoch (clock-drift allowance) */
+    uint64_t ekf_start_sample;  /* sample at which the filter started */
 
     /* calibration (seed 000 eqs 7-12) and its storage */
     calstore_t calstore;
@@ -171,6 +173,8 @@ typedef struct {
     uint8_t cal_count;          /* one-point calibrations since boot */
     uint8_t cal_stored;         /* the values in use are in NVM */
     uint8_t cal_at_gnss;        /* calibrate at the next accepted GNSS fix */
+    nav_real_t stored_mu, stored_dh_rad; /* the values last written to NVM */
+    uint64_t last_save_sample;  /* sample of the last NVM save (0: none since boot) */
     nav_real_t cal_base_m;
 
     /* output */

@@ -129,10 +129,13 @@ nav_real_t ekf_sigma_h_m(const ekf_t *k);
 /* GNSS antenna position meas (lat/lon/height) for the navigator at pos_then (its position
  * at the fix's time of validity), antenna at lever_b (body, m) from the IMU; 1-sigma
  * horizontal and vertical error (m), against which the innovation is gated; the update
- * uses the variances times r_scale (>= 1: errors correlated from fix to fix). */
+ * uses the variances times r_scale (>= 1: errors correlated from fix to fix). The
+ * horizontal pair and the height are gated apart (the height only if use_height): the
+ * return counts the rows applied, 2 or 3 when the horizontal fix was taken. */
 int ekf_gnss_position(ekf_t *k, const sins_t *s, const geo_pos_t *pos_then,
                       const geo_pos_t *meas, const nav_real_t lever_b[3], nav_real_t sigma_h_m,
-                      nav_real_t sigma_v_m, nav_real_t gate_sigma, nav_real_t r_scale);
+                      nav_real_t sigma_v_m, nav_real_t gate_sigma, nav_real_t r_scale,
+                      int use_height);
 
 /* GNSS velocity (ENU m/s) against the navigator's velocity at the fix's time v_then. */
 int ekf_gnss_velocity(ekf_t *k, const nav_real_t v_then_mps[3], const nav_real_t meas_mps[3],

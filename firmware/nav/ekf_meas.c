@@ -64,7 +64,8 @@ static int apply_rows(ekf_t *k, nav_real_t H[][EKF_N], const nav_real_t *z, cons
 
 int ekf_gnss_position(ekf_t *k, const sins_t *s, const geo_pos_t *pos_then,
                       const geo_pos_t *meas, const nav_real_t lever_b[3], nav_real_t sigma_h_m,
-                      nav_real_t sigma_v_m, nav_real_t gate_sigma, nav_real_t r_scale)
+                      nav_real_t sigma_v_m, nav_real_t gate_sigma, nav_real_t r_scale,
+                      int use_height)
 {
     mat3_t C;
     quat_to_dcm(s->q_bn, &C);
@@ -89,7 +90,14 @@ int ekf_gnss_position(ekf_t *k, const sins_t *s, const geo_pos_t *pos_then,
     H[1][EKF_PSI + 2] = -l_n[0];
     H[2][EKF_PSI + 0] = -l_n[1];
     H[2][EKF_PSI + 1] = l_n[0];
-    return apply_rows_scaled(k, H, z, r, 3, gate_sigma, r_scale);
+    /* horizontal and vertical gated apart: a height offset (datum, a receiver without
+     * heights) must not lock out the horizontal fix */
+    const int nh = apply_rows_scaled(k, H, z, r, 2, gate_sigma, r_scale);
+    if (nh < 0 || !use_height) {
+        return nh;
+    }
+    const int nv = apply_rows_scaled(k, &H[2], &z[2], &r[2], 1, gate_sigma, r_scale);
+    return nv < 0 ? nv : nh + nv;
 }
 
 int ekf_gnss_velocity(ekf_t *k, const nav_real_t v_then_mps[3], const nav_real_t meas_mps[3],
