@@ -628,23 +628,35 @@ static void test_stale_imu_status(void **state)
     assert_true(st.health_flags & APP_FLAG_IMU_STALE);
 }
 
-static void send_gnss_epoch(uint8_t vel_epoch, uint8_t status_epoch, double speed_north)
+/* the four frames of one GNSS epoch: position, velocity (north only) and height carrying
+ * vel_epoch, the status closing epoch status_epoch with its accuracies and TimeOfWeek */
+typedef struct {
+    int32_t lat_e7, lon_e7;
+    double speed_north_mps, height_m;
+    uint8_t vel_epoch, status_epoch;
+    uint16_t hacc_dm, vacc_dm;
+    uint8_t sacc_raw;
+    uint32_t tow_ms;
+} gnss_epoch_t;
+
+static void send_gnss(const gnss_epoch_t *g)
 {
     uint8_t d[8];
     hal_can_frame_t f;
-    struct navecu_can_gnss_position_t gp = {450000000, 100000000};
+    struct navecu_can_gnss_position_t gp = {g->lat_e7, g->lon_e7};
     navecu_can_gnss_position_pack(d, &gp, 8u);
     f = frame(NAVECU_CAN_GNSS_POSITION_FRAME_ID, d);
     feed(&f);
     struct navecu_can_gnss_velocity_t gv;
     memset(&gv, 0, sizeof gv);
-    gv.vel_north = (int16_t)lround(speed_north * 100.0);
-    gv.gnss_epoch = vel_epoch;
+    gv.vel_north = (int16_t)lround(g->speed_north_mps * 100.0);
+    gv.gnss_epoch = g->vel_epoch;
+    gv.speed_accuracy = g->sacc_raw;
     navecu_can_gnss_velocity_pack(d, &gv, 8u);
     e2e_protect(NAVECU_CAN_GNSS_VELOCITY_FRAME_ID, d);
     f = frame(NAVECU_CAN_GNSS_VELOCITY_FRAME_ID, d);
     feed(&f);
-    struct navecu_can_gnss_height_t gh = {10000, vel_epoch};
+    struct navecu_can_gnss_height_t gh = {(int32_t)lround(g->height_m * 100.0), g->vel_epoch};
     navecu_can_gnss_height_pack(d, &gh, 8u);
     f = frame(NAVECU_CAN_GNSS_HEIGHT_FRAME_ID, d);
     feed(&f);
@@ -652,10 +664,20 @@ static void send_gnss_epoch(uint8_t vel_epoch, uint8_t status_epoch, double spee
     memset(&gs, 0, sizeof gs);
     gs.fix_type = 3u;
     gs.num_satellites = 9u;
-    gs.gnss_epoch = status_epoch;
+    gs.horiz_accuracy = g->hacc_dm;
+    gs.vert_accuracy = g->vacc_dm;
+    gs.gnss_epoch = g->status_epoch;
+    gs.time_of_week = g->tow_ms;
     navecu_can_gnss_status_pack(d, &gs, 8u);
     f = frame(NAVECU_CAN_GNSS_STATUS_FRAME_ID, d);
     feed(&f);
+}
+
+static void send_gnss_epoch(uint8_t vel_epoch, uint8_t status_epoch, double speed_north)
+{
+    const gnss_epoch_t g = {450000000, 100000000, speed_north, 100.0, vel_epoch, status_epoch,
+                            0u, 0u, 0u, 0u};
+    send_gnss(&g);
 }
 
 /*
@@ -1031,38 +1053,11 @@ static void test_calibrate_at_gnss(void **state)
 
 static uint8_t fix_epoch;
 
-/* one GNSS epoch at lat/lon (1e-7 deg), height H0, zero velocity, stamped tow_ms */
+/* one GNSS epoch at lat/lon (1e-7 deg), height H0, zero velocity, 2 m accuracy, tow_ms */
 static void send_fix(int32_t lat_e7, int32_t lon_e7, uint32_t tow_ms)
 {
-    uint8_t d[8];
-    hal_can_frame_t f;
-    struct navecu_can_gnss_position_t gp = {lat_e7, lon_e7};
-    navecu_can_gnss_position_pack(d, &gp, 8u);
-    f = frame(NAVECU_CAN_GNSS_POSITION_FRAME_ID, d);
-    feed(&f);
-    struct navecu_can_gnss_velocity_t gv;
-    memset(&gv, 0, sizeof gv);
-    gv.gnss_epoch = fix_epoch;
-    gv.speed_accuracy = 1u;
-    navecu_can_gnss_velocity_pack(d, &gv, 8u);
-    e2e_protect(NAVECU_CAN_GNSS_VELOCITY_FRAME_ID, d);
-    f = frame(NAVECU_CAN_GNSS_VELOCITY_FRAME_ID, d);
-    feed(&f);
-    struct navecu_can_gnss_height_t gh = {(int32_t)lround(H0_M * 100.0), fix_epoch};
-    navecu_can_gnss_height_pack(d, &gh, 8u);
-    f = frame(NAVECU_CAN_GNSS_HEIGHT_FRAME_ID, d);
-    feed(&f);
-    struct navecu_can_gnss_status_t gs;
-    memset(&gs, 0, sizeof gs);
-    gs.fix_type = 3u;
-    gs.num_satellites = 9u;
-    gs.horiz_accuracy = 20u; /* 2.0 m */
-    gs.vert_accuracy = 30u;
-    gs.gnss_epoch = fix_epoch;
-    gs.time_of_week = tow_ms;
-    navecu_can_gnss_status_pack(d, &gs, 8u);
-    f = frame(NAVECU_CAN_GNSS_STATUS_FRAME_ID, d);
-    feed(&f);
+    const gnss_epoch_t g = {lat_e7, lon_e7, 0.0, H0_M, fix_epoch, fix_epoch, 20u, 30u, 1u, tow_ms};
+    send_gnss(&g);
     fix_epoch = e2e_counter_next(fix_epoch);
 }
 

@@ -43,6 +43,7 @@ import numpy as np
 from tools import navecu_can as nc
 from tools.kingston import convert
 from tools.sim import report
+from tools.sim.run import Stages
 
 ROOT = Path(__file__).resolve().parents[2]
 RATES = ["--imu-rate-hz", "10", "--nav-rate-hz", "10", "--status-rate-hz", "10"]
@@ -53,20 +54,6 @@ RATES = ["--imu-rate-hz", "10", "--nav-rate-hz", "10", "--status-rate-hz", "10"]
 # 0) and their errors against the reference decorrelate in 3..5 s (measured).
 SENSORS = ["--gyro-arw-dpsh", "0.3", "--gyro-bias-dph", "5", "--accel-bias-mg", "5",
            "--gnss-latency-ms", "0", "--gnss-corr-s", "4"]
-
-
-class Stages:
-    def __init__(self, n):
-        self.n, self.k, self.t0 = n, 0, None
-
-    def start(self, what):
-        self.k += 1
-        self.t0 = time.monotonic()
-        print(f"[{self.k}/{self.n}] {what} ...", end="", flush=True)
-
-    def done(self, extra=""):
-        print(f" {time.monotonic() - self.t0:.1f} s{(' - ' + extra) if extra else ''}",
-              flush=True)
 
 
 def stats(x) -> dict:
