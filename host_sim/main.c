@@ -70,6 +70,8 @@ static void usage(FILE *out)
             "                       (default 20; docs/kalman.md)\n"
             "  --gnss-lever-m X,Y,Z GNSS antenna from the IMU, body axes (x right, y\n"
             "                       forward, z up), m (default 0,0,0)\n"
+            "  --odo-lever-m X,Y,Z  the odometer's reference point (middle of the measuring\n"
+            "                       axle) from the IMU, body axes, m (default 0,0,0)\n"
             "  --help               this text\n"
             "\n"
             "Exit status: 0 when the whole log was processed (or the live run was stopped\n"
@@ -105,6 +107,21 @@ static int parse_real(const char *s, double lo, double hi, double *out)
 }
 
 #define RAD_PER_DEG (3.14159265358979323846 / 180.0)
+
+/* parse "X,Y,Z" metres, each within 10 m; 0 on success */
+static int parse_lever(const char *s, nav_real_t out[3])
+{
+    double x = 0.0, y = 0.0, z = 0.0;
+    char tail = 0;
+    if (sscanf(s, "%lf,%lf,%lf%c", &x, &y, &z, &tail) != 3 || !(fabs(x) <= 10.0) ||
+        !(fabs(y) <= 10.0) || !(fabs(z) <= 10.0)) {
+        return -1;
+    }
+    out[0] = (nav_real_t)x;
+    out[1] = (nav_real_t)y;
+    out[2] = (nav_real_t)z;
+    return 0;
+}
 
 int main(int argc, char **argv)
 {
@@ -175,13 +192,9 @@ int main(int argc, char **argv)
             bad = parse_real(v, 0.0, 500.0, &x);
             cfg.gnss_latency_s = (nav_real_t)(x * 1e-3);
         } else if (strcmp(a, "--gnss-lever-m") == 0) {
-            double x = 0.0, y = 0.0, z = 0.0;
-            char tail = 0;
-            bad = sscanf(v, "%lf,%lf,%lf%c", &x, &y, &z, &tail) != 3 || !(fabs(x) <= 10.0) ||
-                  !(fabs(y) <= 10.0) || !(fabs(z) <= 10.0);
-            cfg.gnss_lever_b_m[0] = (nav_real_t)x;
-            cfg.gnss_lever_b_m[1] = (nav_real_t)y;
-            cfg.gnss_lever_b_m[2] = (nav_real_t)z;
+            bad = parse_lever(v, cfg.gnss_lever_b_m);
+        } else if (strcmp(a, "--odo-lever-m") == 0) {
+            bad = parse_lever(v, cfg.odo_lever_b_m);
         } else if (strcmp(a, "--gyro-bias-dph") == 0) {
             double x = 0.0;
             bad = parse_real(v, 1e-6, 1e4, &x);

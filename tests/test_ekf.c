@@ -319,7 +319,9 @@ static void test_odometer_scale_and_mounting(void **state)
     sd[EKF_K] = 0.05;
     sd[EKF_MY] = 3.0 * DEG;
     filter_with(&f, sd);
-    assert_int_equal(ekf_odometer(&f, &s, NAV_C(10.2), NAV_C(0.001), NAV_C(0.001), NAV_C(0.0)), 3);
+    const nav_real_t w0[3] = {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)};
+    assert_int_equal(ekf_odometer(&f, &s, w0, w0, NAV_C(10.2), NAV_C(0.001), NAV_C(0.001),
+                                  NAV_C(0.0)), 3);
     assert_int_equal(ekf_feedback(&f, &s), NAV_OK);
     assert_near(f.k, 0.02, 2e-4);
     assert_near(f.mount_yaw_rad, 1.0 * DEG, 0.02 * DEG);
@@ -331,13 +333,50 @@ static void test_odometer_scale_and_mounting(void **state)
     }
     sd[EKF_DV] = sd[EKF_DV + 1] = sd[EKF_DV + 2] = 1.0;
     filter_with(&f, sd);
-    assert_int_equal(ekf_odometer(&f, &s, NAV_C(10.0), NAV_C(0.01), NAV_C(0.01), NAV_C(0.0)), 3);
+    assert_int_equal(ekf_odometer(&f, &s, w0, w0, NAV_C(10.0), NAV_C(0.01), NAV_C(0.01),
+                                  NAV_C(0.0)), 3);
     assert_int_equal(ekf_feedback(&f, &s), NAV_OK);
     assert_near(s.v_n_mps[0], v[0], 0.01);
     assert_near(s.v_n_mps[1], v[1], 0.01);
 }
 
 /* Standstill: zero velocity removes a velocity error; zero rate finds the z gyro bias. */
+/* The odometer's reference point behind the IMU: the IMU 1.5 m ahead of the rear axle, a
+ * left turn of 15 m radius at 6 m/s (yaw rate 0.4 rad/s). The IMU slides 0.6 m/s to the
+ * left while the rear axle runs straight along the car: with the lever arm the NHC sees
+ * no lateral velocity and leaves the mounting yaw alone; without it, the same data would
+ * read as a 0.1 rad mounting error. */
+static void test_odometer_lever_arm_in_a_turn(void **state)
+{
+    (void)state;
+    const double hd = 40.0 * DEG, r = 0.4, arm = 1.5, speed = 6.0;
+    /* IMU velocity, body axes: (-r arm, speed, 0); to ENU with heading hd */
+    const double vx = -r * arm, vy = speed;
+    const double v[3] = {vx * cos(hd) + vy * sin(hd), -vx * sin(hd) + vy * cos(hd), 0.0};
+    const nav_real_t w[3] = {NAV_C(0.0), NAV_C(0.0), (nav_real_t)r};
+    const nav_real_t lever[3] = {NAV_C(0.0), (nav_real_t)-arm, NAV_C(0.0)};
+    const nav_real_t none[3] = {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)};
+    double sd[EKF_N];
+    for (int i = 0; i < EKF_N; i++) {
+        sd[i] = 1e-9;
+    }
+    sd[EKF_MY] = 3.0 * DEG;
+    for (int with_lever = 1; with_lever >= 0; with_lever--) {
+        sins_t s;
+        nav_at(&s, 0.0, 0.0, hd, v);
+        ekf_t f;
+        filter_with(&f, sd);
+        assert_int_equal(ekf_odometer(&f, &s, w, with_lever ? lever : none, (nav_real_t)speed,
+                                      NAV_C(0.01), NAV_C(0.01), NAV_C(0.0)), 3);
+        assert_int_equal(ekf_feedback(&f, &s), NAV_OK);
+        if (with_lever) {
+            assert_near(f.mount_yaw_rad, 0.0, 1e-5);
+        } else {
+            assert_true(fabs((double)f.mount_yaw_rad) > 0.02);
+        }
+    }
+}
+
 static void test_standstill_updates(void **state)
 {
     (void)state;
@@ -384,6 +423,7 @@ int main(void)
         cmocka_unit_test(test_gnss_position_update),
         cmocka_unit_test(test_lever_arm_observes_heading),
         cmocka_unit_test(test_odometer_scale_and_mounting),
+        cmocka_unit_test(test_odometer_lever_arm_in_a_turn),
         cmocka_unit_test(test_standstill_updates),
         cmocka_unit_test(test_covariance_health),
     };

@@ -42,6 +42,7 @@ app_config_t app_default_config(void)
     cfg.gnss_latency_s = NAV_C(0.1); /* u-blox-class receivers: about 0.1 s */
     cfg.gnss_corr_s = NAV_C(20.0);   /* standalone code receiver: atmosphere, orbits */
     cfg.gnss_lever_b_m[0] = cfg.gnss_lever_b_m[1] = cfg.gnss_lever_b_m[2] = NAV_C(0.0);
+    cfg.odo_lever_b_m[0] = cfg.odo_lever_b_m[1] = cfg.odo_lever_b_m[2] = NAV_C(0.0);
     return cfg;
 }
 
@@ -114,7 +115,10 @@ int app_init(app_t *app, const app_config_t *cfg)
         !(cfg->gnss_corr_s >= NAV_C(0.0)) || !(cfg->gnss_corr_s <= NAV_C(600.0)) ||
         !(nav_fabs(cfg->gnss_lever_b_m[0]) <= NAV_C(10.0)) ||
         !(nav_fabs(cfg->gnss_lever_b_m[1]) <= NAV_C(10.0)) ||
-        !(nav_fabs(cfg->gnss_lever_b_m[2]) <= NAV_C(10.0))) {
+        !(nav_fabs(cfg->gnss_lever_b_m[2]) <= NAV_C(10.0)) ||
+        !(nav_fabs(cfg->odo_lever_b_m[0]) <= NAV_C(10.0)) ||
+        !(nav_fabs(cfg->odo_lever_b_m[1]) <= NAV_C(10.0)) ||
+        !(nav_fabs(cfg->odo_lever_b_m[2]) <= NAV_C(10.0))) {
         return NAV_EINVAL;
     }
     odo_config_t ocfg = odo_default_config();
@@ -569,7 +573,7 @@ static void start_filter(app_t *a, nav_real_t hacc_m)
     a->pred_n = 0u;
     a->pred_t_s = NAV_C(0.0);
     a->f_sum_n[0] = a->f_sum_n[1] = a->f_sum_n[2] = NAV_C(0.0);
-    a->wz_sum_rad = NAV_C(0.0);
+    a->w_sum_rad[0] = a->w_sum_rad[1] = a->w_sum_rad[2] = NAV_C(0.0);
     a->odo_frames_used = a->odo.n_frames;
     a->ekf_start_sample = a->n_samples;
     /* the filter owns the height now: the core's damping toward a held reference is a
@@ -717,7 +721,9 @@ static void navigate_filtered(app_t *a, imu_inc_t *inc)
         a->f_sum_n[i] += dv_n[i];
     }
     record_velocity(a);
-    a->wz_sum_rad += inc->dtheta_b_rad[2];
+    for (int i = 0; i < 3; i++) {
+        a->w_sum_rad[i] += inc->dtheta_b_rad[i];
+    }
     a->pred_t_s += dt;
     a->pred_n++;
     nav_real_t roll, pitch, heading;
@@ -749,14 +755,17 @@ static void navigate_filtered(app_t *a, imu_inc_t *inc)
     const nav_real_t per = a->odo.period_s;
     if (a->odo.valid && a->odo.standing) {
         (void)ekf_zero_velocity(&a->ekf, &a->nav, ZUPT_SIGMA_MPS + NAV_C(0.1) * per);
-        const nav_real_t resid = a->wz_sum_rad / T - earth_rate_body_z(&a->nav);
+        const nav_real_t resid = a->w_sum_rad[2] / T - earth_rate_body_z(&a->nav);
         (void)ekf_zero_rate(&a->ekf, resid, a->cfg.gyro_arw_rad_rts / nav_sqrt(T));
     } else if (a->odo.valid && a->odo.n_frames != a->odo_frames_used &&
                nav_fabs(a->odo.speed_mps) > ODO_MIN_SPEED_MPS) {
         a->odo_frames_used = a->odo.n_frames;
         const nav_real_t sf = ODO_SIGMA_MPS + NAV_C(0.01) * nav_fabs(a->odo.speed_mps) +
                               NAV_C(0.5) * acc * per;
-        if (ekf_odometer(&a->ekf, &a->nav, a->odo.speed_mps, sf, NHC_SIGMA_MPS, GATE_SIGMA) == 0) {
+        const nav_real_t w_b[3] = {a->w_sum_rad[0] / T, a->w_sum_rad[1] / T,
+                                   a->w_sum_rad[2] / T};
+        if (ekf_odometer(&a->ekf, &a->nav, w_b, a->cfg.odo_lever_b_m, a->odo.speed_mps, sf,
+                         NHC_SIGMA_MPS, GATE_SIGMA) == 0) {
             reject(a, &a->health.bad_value); /* the odometer disagrees beyond its gate */
         }
     }
@@ -766,7 +775,7 @@ static void navigate_filtered(app_t *a, imu_inc_t *inc)
     a->pred_n = 0u;
     a->pred_t_s = NAV_C(0.0);
     a->f_sum_n[0] = a->f_sum_n[1] = a->f_sum_n[2] = NAV_C(0.0);
-    a->wz_sum_rad = NAV_C(0.0);
+    a->w_sum_rad[0] = a->w_sum_rad[1] = a->w_sum_rad[2] = NAV_C(0.0);
 }
 
 /* A GNSS fix for the filter. Its time of validity is the arrival minus the receiver's

@@ -44,6 +44,8 @@ typedef struct {
                                      arrival (more when TimeOfWeek shows a late epoch) */
     nav_real_t gnss_lever_b_m[3]; /* GNSS antenna from the IMU, body axes, m */
     nav_real_t gnss_corr_s;       /* correlation time of the receiver's position errors */
+    nav_real_t odo_lever_b_m[3];  /* the odometer's reference point (rear axle middle) from
+                                     the IMU, body axes, m */
 } app_config_t;
 
 /* Counters of everything the application refused; saturating at UINT32_MAX. */
@@ -148,7 +150,7 @@ typedef struct {
     uint32_t pred_n;            /* samples accumulated for the next prediction */
     nav_real_t pred_t_s;
     nav_real_t f_sum_n[3];      /* sum of velocity increments in ENU over the interval */
-    nav_real_t wz_sum_rad;      /* sum of compensated z angle increments (zero-rate update) */
+    nav_real_t w_sum_rad[3];    /* sum of compensated angle increments over the interval */
     uint32_t odo_frames_used;   /* odo.n_frames at the last odometer update */
     nav_real_t v_prev_pred_mps[2]; /* horizontal velocity at the last prediction */
 #define APP_VHIST 64

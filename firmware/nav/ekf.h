@@ -144,8 +144,11 @@ int ekf_gnss_velocity(ekf_t *k, const nav_real_t v_then_mps[3], const nav_real_t
 /* Odometer speed of the car's reference point (m/s, as read: (1 + k) x true) along the
  * car's forward axis, and the non-holonomic constraints (no lateral, no vertical velocity
  * of the car): three scalar updates. The car's axes are the IMU's turned by the mounting
- * estimates. */
-int ekf_odometer(ekf_t *k, const sins_t *s, nav_real_t speed_mps, nav_real_t sigma_fwd_mps,
+ * estimates. The reference point (the rear axle's middle) is at lever_b (body axes, m)
+ * from the IMU; its velocity is the IMU's plus w_b x lever_b with the body rate w_b
+ * (rad/s): in a turn a point ahead of the rear axle slides sideways. */
+int ekf_odometer(ekf_t *k, const sins_t *s, const nav_real_t w_b_rps[3],
+                 const nav_real_t lever_b_m[3], nav_real_t speed_mps, nav_real_t sigma_fwd_mps,
                  nav_real_t sigma_nhc_mps, nav_real_t gate_sigma);
 
 /* Standstill: zero velocity (ENU) with 1-sigma sigma_mps. */

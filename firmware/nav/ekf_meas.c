@@ -114,13 +114,19 @@ int ekf_gnss_velocity(ekf_t *k, const nav_real_t v_then_mps[3], const nav_real_t
     return apply_rows(k, H, z, r, 3, gate_sigma);
 }
 
-int ekf_odometer(ekf_t *k, const sins_t *s, nav_real_t speed_mps, nav_real_t sigma_fwd_mps,
+int ekf_odometer(ekf_t *k, const sins_t *s, const nav_real_t w_b_rps[3],
+                 const nav_real_t lever_b_m[3], nav_real_t speed_mps, nav_real_t sigma_fwd_mps,
                  nav_real_t sigma_nhc_mps, nav_real_t gate_sigma)
 {
     mat3_t C;
     quat_to_dcm(s->q_bn, &C);
-    nav_real_t v_b[3];
-    mat3t_mul_vec(&C, s->v_n_mps, v_b); /* body velocity, IMU axes */
+    nav_real_t v_b[3], wxl[3];
+    mat3t_mul_vec(&C, s->v_n_mps, v_b); /* IMU velocity, IMU axes */
+    vec3_cross(w_b_rps, lever_b_m, wxl);
+    for (int i = 0; i < 3; i++) {
+        v_b[i] += wxl[i];               /* the reference point's (the rotation is known:
+                                           its error, from the gyro bias, is neglected) */
+    }
     /* d(v_b) = C^T dv - C^T [v_n x] psi: rows of M = C^T and N = -C^T [v_n x] */
     const nav_real_t *v = s->v_n_mps;
     nav_real_t N[3][3];
