@@ -20,13 +20,16 @@ SAN_FLAGS := -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-fr
 
 # firmware/ sees only its own folders and the HAL interface (docs/architecture.md)
 FW_INC := -Ifirmware/nav -Ifirmware/can -Ifirmware/can/gen -Ifirmware/app -Ihal
-HOST_INC := $(FW_INC) -Ihal/linux -Itests/support
+HOST_INC := $(FW_INC) -Ihal/linux -Ihal/cortex_m4f -Itests/support
 
 CORE_SRC := $(wildcard firmware/nav/*.c)
 CODEC_GEN := firmware/can/gen/navecu_can.c firmware/can/gen/navecu_can.h
 APP_SRC := firmware/can/e2e.c firmware/can/gen/navecu_can.c firmware/app/app.c \
            firmware/app/calstore.c
 HAL_LINUX_SRC := hal/linux/hal_linux.c hal/linux/hal_socketcan.c
+# the Cortex-M4F HAL's register-level drivers: cross-built, and host-tested against
+# simulated register blocks
+HAL_M4_SRC := hal/cortex_m4f/bxcan.c
 SUPPORT_SRC_F64 := tests/support/truth.c tests/support/motions.c
 SUPPORT_SRC_BOTH := tests/support/nav_run.c
 # tests built once per numeric variant (f32 firmware, f64 reference)
@@ -37,6 +40,9 @@ TESTS_F32 := test_e2e test_codec
 TESTS_BOTH := test_drive
 # tests of application modules against the in-memory HAL (tests/support/fake_hal.c)
 TESTS_FAKE_HAL := test_app test_calstore
+# tests of a Cortex-M4F driver against a register block in RAM (tests/test_<driver>.c
+# links hal/cortex_m4f/<driver>.c)
+TESTS_M4_HAL := test_bxcan
 
 .PHONY: grades
 .PHONY: all test test-c test-plain test-asan test-cross test-python codec codec-check \
@@ -114,9 +120,12 @@ $(foreach t,$(TESTS_FAKE_HAL),$(BUILD)/$(1)/tests/$(t)): $(BUILD)/$(1)/tests/%: 
 $(BUILD)/$(1)/tests/test_hal_linux: $(BUILD)/$(1)/f32/tests/test_hal_linux.o $(BUILD)/$(1)/libhal_linux.a
 	@mkdir -p $$(@D)
 	$$(CC) $(2) $$^ -lcmocka -lm -o $$@
+$(foreach t,$(TESTS_M4_HAL),$(BUILD)/$(1)/tests/$(t)): $(BUILD)/$(1)/tests/test_%: $(BUILD)/$(1)/f32/tests/test_%.o $(BUILD)/$(1)/f32/hal/cortex_m4f/%.o
+	@mkdir -p $$(@D)
+	$$(CC) $(2) $$^ -lcmocka -lm -o $$@
 
 $(1)_TEST_BINS := $(foreach t,$(TESTS_VARIANT),$(BUILD)/$(1)/tests/$(t)_f32 $(BUILD)/$(1)/tests/$(t)_f64) \
-                  $(foreach t,$(TESTS_F32) $(TESTS_BOTH) $(TESTS_FAKE_HAL) test_hal_linux,$(BUILD)/$(1)/tests/$(t))
+                  $(foreach t,$(TESTS_F32) $(TESTS_BOTH) $(TESTS_FAKE_HAL) $(TESTS_M4_HAL) test_hal_linux,$(BUILD)/$(1)/tests/$(t))
 endef
 
 $(eval $(call FLAVOUR,host,))
@@ -179,10 +188,12 @@ doc-check: venv
 	$(PY) tools/gen_can_doc.py --check
 
 # ---- Cortex-M4F: the same firmware sources, single-precision FPU, hard float ABI ----
+# (hal/cortex_m4f/ drivers find their own header beside them; the include path stays
+# firmware/ and hal/hal.h, docs/architecture.md)
 ARM_CC := arm-none-eabi-gcc
 ARM_NM := arm-none-eabi-nm
 M4_FLAGS := -mcpu=cortex-m4 -mfpu=fpv4-sp-d16 -mfloat-abi=hard -mthumb
-M4_SRC := $(CORE_SRC) $(APP_SRC)
+M4_SRC := $(CORE_SRC) $(APP_SRC) $(HAL_M4_SRC)
 $(BUILD)/m4/%.o: %.c
 	@mkdir -p $(@D)
 	$(ARM_CC) $(CFLAGS_BASE) $(M4_FLAGS) $(FW_INC) -MMD -MP -c $< -o $@
@@ -194,7 +205,7 @@ $(BUILD)/m4/libnavecu.a: $(M4_SRC:%.c=$(BUILD)/m4/%.o)
 cross test-cross: $(BUILD)/m4/libnavecu.a
 	@if $(ARM_NM) $< | grep -E ' U (__aeabi_(d|f2d|l2d|ul2d|i2d|ui2d)|(sin|cos|tan|sqrt|atan2|asin|acos|atan|fabs|exp|log|pow|floor|ceil|round)$$)'; then \
 	  echo "cross: the Cortex-M4F firmware uses double-precision arithmetic (above)"; exit 1; fi
-	@echo "cross: firmware (core, codec, application) built for Cortex-M4F, no double-precision arithmetic"
+	@echo "cross: firmware (core, codec, application) and the bxCAN driver built for Cortex-M4F, no double-precision arithmetic"
 	@arm-none-eabi-size -t $(M4_SRC:%.c=$(BUILD)/m4/%.o) | tail -1 | \
 	  awk '{print "cross: firmware code size " $$1 " bytes text, " $$3 " bytes bss"}'
 
