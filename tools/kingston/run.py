@@ -324,30 +324,9 @@ def plot(drive, meta, series, rep, out: Path, title: str) -> list:
         plt.close(fig)
         paths.append(p)
 
-    for key, ylabel, fname in (("herr", "horizontal error (m)", "horizontal_error.png"),
-                               ("heading", "heading error (deg)", "heading_error.png")):
-        fig, ax = plt.subplots(figsize=(10, 4))
-        if key == "herr" and "t" in series:
-            ax.plot(series["t"] / 60.0, series["herr"], color="tab:blue")
-            if series["herr"].max() > 1000.0:
-                ax.set_yscale("log")
-        elif key == "heading" and "heading" in series:
-            ax.plot(series["heading"][0] / 60.0, series["heading"][1], color="tab:blue")
-        for k, (a, b) in enumerate(outages):
-            ax.axvspan(a / 60.0, b / 60.0, color="tab:red", alpha=0.15,
-                       label="GNSS outage" if k == 0 else None)
-        if cal:
-            ax.axvline(cal["time_s"] / 60.0, color="tab:orange", lw=1.5,
-                       label=f"CalibrateHere ({cal['at_km']:g} km)")
-        ax.set_xlabel("time since the first IMU sample (min)")
-        ax.set_ylabel(ylabel)
-        ax.grid(alpha=0.3)
-        ax.legend(loc="upper left", fontsize=8)
-        ax.set_title(f"{title}: {ylabel}")
-        p = out / fname
-        fig.savefig(p, dpi=110, bbox_inches="tight")
-        plt.close(fig)
-        paths.append(p)
+    marks = [(cal["time_s"], f"CalibrateHere ({cal['at_km']:g} km)")] if cal else []
+    paths += report.plot_error_series(series, outages, marks, title, out,
+                                      "time since the first IMU sample (min)", log_above_m=1000.0)
     return paths
 
 

@@ -549,25 +549,41 @@ def plot(truth: dict, series: dict, gnss, outages, out_dir: Path, title: str,
     plt.close(fig)
     paths.append(p)
 
+    paths += plot_error_series(series, outages, marks, title, out_dir, "time (min)")
+    return paths
+
+
+def plot_error_series(series, outages, marks, title, out_dir, xlabel,
+                      log_above_m=None) -> list:
+    """horizontal_error.png and heading_error.png against time: series as compute() gives
+    it ("t", "herr", "heading"), outages as (t0, t1, ...) spans, marks as (t, label) lines;
+    a log scale when the error exceeds log_above_m. Shared by the simulator's and the
+    Kingston drive's reports."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    paths = []
     for key, ylabel, fname in (("herr", "horizontal error (m)", "horizontal_error.png"),
                                ("heading", "heading error (deg)", "heading_error.png")):
         fig, ax = plt.subplots(figsize=(10, 4))
         if key == "herr" and "t" in series:
             ax.plot(series["t"] / 60.0, series["herr"], color="tab:blue")
+            if log_above_m is not None and series["herr"].max() > log_above_m:
+                ax.set_yscale("log")
         elif key == "heading" and "heading" in series:
             ax.plot(series["heading"][0] / 60.0, series["heading"][1], color="tab:blue")
-        for k, (t0, t1, *label) in enumerate(outages):
+        for k, (t0, t1, *_) in enumerate(outages):
             ax.axvspan(t0 / 60.0, t1 / 60.0, color="tab:red", alpha=0.15,
                        label="GNSS outage" if k == 0 else None)
         for t_m, label in marks:
             ax.axvline(t_m / 60.0, color="tab:purple", ls="--", lw=1.2, label=label)
-        ax.set_xlabel("time (min)")
+        ax.set_xlabel(xlabel)
         ax.set_ylabel(ylabel)
         ax.grid(alpha=0.3)
         if outages or marks:
-            ax.legend(loc="upper left")
+            ax.legend(loc="upper left", fontsize=8)
         ax.set_title(f"{title}: {ylabel}")
-        p = out_dir / fname
+        p = Path(out_dir) / fname
         fig.savefig(p, dpi=110, bbox_inches="tight")
         plt.close(fig)
         paths.append(p)
