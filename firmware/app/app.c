@@ -54,6 +54,13 @@ static void count(uint32_t *c)
 }
 
 /* count a rejection and remember when, for the REJECTED flag */
+/* the default profiling hook: nothing (app.h; a board may define its own) */
+__attribute__((weak)) void app_trace(uint32_t point, uint32_t end)
+{
+    (void)point;
+    (void)end;
+}
+
 static void reject(app_t *a, uint32_t *c)
 {
     count(c);
@@ -61,43 +68,94 @@ static void reject(app_t *a, uint32_t *c)
     a->rejected_recently = 1u;
 }
 
+/* What reset_navigation keeps of app_t. Saved and restored field by field: a copy of the
+ * whole app_t (4.4 KB) on the stack would be twice the stack budget (docs/target.md). */
+typedef struct {
+    app_config_t cfg;
+    app_health_t health;
+    e2e_counter_t rx_imu, rx_wheel, rx_cmd, rx_gnss_vel, rx_att;
+    uint8_t tx_counter[6];
+    uint8_t status_page;
+    uint8_t have_sample;
+    uint16_t flags_sticky;
+    uint32_t frames_sent, send_errors;
+    uint64_t n_samples, last_imu_t_us, last_rx_t_us, last_status_t_us;
+    calstore_t calstore;
+    nav_real_t cal_dh_rad, cal_mu, cal_base_m;
+    uint8_t cal_status, cal_source, cal_count, cal_stored;
+    nav_real_t gz_sum, gz_sum_lo, gyro_bias_z_rps;
+    uint32_t gz_n;
+    odo_t odo;
+} app_kept_t;
+
 static void reset_navigation(app_t *a)
 {
     /* Everything but configuration, health, E2E receive and transmit state, the time base
      * and the NVM fault: a reset restarts navigation, not the ECU. */
-    const app_t keep = *a;
+    app_kept_t k;
+    k.cfg = a->cfg;
+    k.health = a->health;
+    k.rx_imu = a->rx_imu;
+    k.rx_wheel = a->rx_wheel;
+    k.rx_cmd = a->rx_cmd;
+    k.rx_gnss_vel = a->rx_gnss_vel;
+    k.rx_att = a->rx_att;
+    memcpy(k.tx_counter, a->tx_counter, sizeof k.tx_counter);
+    k.status_page = a->status_page;
+    k.frames_sent = a->frames_sent;
+    k.send_errors = a->send_errors;
+    k.n_samples = a->n_samples;
+    k.have_sample = a->have_sample;
+    k.last_imu_t_us = a->last_imu_t_us;
+    k.last_rx_t_us = a->last_rx_t_us;
+    k.last_status_t_us = a->last_status_t_us;
+    k.flags_sticky = a->flags_sticky;
+    k.calstore = a->calstore;
+    k.cal_dh_rad = a->cal_dh_rad;
+    k.cal_mu = a->cal_mu;
+    k.cal_status = a->cal_status;
+    k.cal_source = a->cal_source;
+    k.cal_count = a->cal_count;
+    k.cal_stored = a->cal_stored;
+    k.cal_base_m = a->cal_base_m;
+    k.gz_sum = a->gz_sum;
+    k.gz_sum_lo = a->gz_sum_lo;
+    k.gz_n = a->gz_n;
+    k.gyro_bias_z_rps = a->gyro_bias_z_rps;
+    k.odo = a->odo;
+
     memset(a, 0, sizeof *a);
-    a->cfg = keep.cfg;
-    a->health = keep.health;
-    a->rx_imu = keep.rx_imu;
-    a->rx_wheel = keep.rx_wheel;
-    a->rx_cmd = keep.rx_cmd;
-    a->rx_gnss_vel = keep.rx_gnss_vel;
-    a->rx_att = keep.rx_att;
-    memcpy(a->tx_counter, keep.tx_counter, sizeof a->tx_counter);
-    a->status_page = keep.status_page;
-    a->frames_sent = keep.frames_sent;
-    a->send_errors = keep.send_errors;
-    a->n_samples = keep.n_samples; /* time runs on through a reset */
-    a->have_sample = keep.have_sample;
-    a->last_imu_t_us = keep.last_imu_t_us;
-    a->last_rx_t_us = keep.last_rx_t_us;
-    a->last_status_t_us = keep.last_status_t_us;
-    a->flags_sticky = (uint16_t)(keep.flags_sticky & (APP_FLAG_NVM_ERROR | APP_FLAG_IMU_FAULT));
+    a->cfg = k.cfg;
+    a->health = k.health;
+    a->rx_imu = k.rx_imu;
+    a->rx_wheel = k.rx_wheel;
+    a->rx_cmd = k.rx_cmd;
+    a->rx_gnss_vel = k.rx_gnss_vel;
+    a->rx_att = k.rx_att;
+    memcpy(a->tx_counter, k.tx_counter, sizeof a->tx_counter);
+    a->status_page = k.status_page;
+    a->frames_sent = k.frames_sent;
+    a->send_errors = k.send_errors;
+    a->n_samples = k.n_samples; /* time runs on through a reset */
+    a->have_sample = k.have_sample;
+    a->last_imu_t_us = k.last_imu_t_us;
+    a->last_rx_t_us = k.last_rx_t_us;
+    a->last_status_t_us = k.last_status_t_us;
+    a->flags_sticky = (uint16_t)(k.flags_sticky & (APP_FLAG_NVM_ERROR | APP_FLAG_IMU_FAULT));
     /* the calibration and the gyro bias belong to the car and the IMU, not to this run */
-    a->calstore = keep.calstore;
-    a->cal_dh_rad = keep.cal_dh_rad;
-    a->cal_mu = keep.cal_mu;
-    a->cal_status = keep.cal_status;
-    a->cal_source = keep.cal_source;
-    a->cal_count = keep.cal_count;
-    a->cal_stored = keep.cal_stored;
-    a->cal_base_m = keep.cal_base_m;
-    a->gz_sum = keep.gz_sum;
-    a->gz_sum_lo = keep.gz_sum_lo;
-    a->gz_n = keep.gz_n;
-    a->gyro_bias_z_rps = keep.gyro_bias_z_rps;
-    a->odo = keep.odo;
+    a->calstore = k.calstore;
+    a->cal_dh_rad = k.cal_dh_rad;
+    a->cal_mu = k.cal_mu;
+    a->cal_status = k.cal_status;
+    a->cal_source = k.cal_source;
+    a->cal_count = k.cal_count;
+    a->cal_stored = k.cal_stored;
+    a->cal_base_m = k.cal_base_m;
+    a->gz_sum = k.gz_sum;
+    a->gz_sum_lo = k.gz_sum_lo;
+    a->gz_n = k.gz_n;
+    a->gyro_bias_z_rps = k.gyro_bias_z_rps;
+    a->odo = k.odo;
     a->mode = APP_MODE_WAIT_INIT;
 }
 
@@ -708,7 +766,10 @@ static void navigate_filtered(app_t *a, imu_inc_t *inc)
         inc->dv_b_mps[i] -= a->ekf.ba_mps2[i] * dt;
     }
     a->yaw_rate_rps = inc->dtheta_b_rad[2] / dt;
-    if (sins_step(&a->nav, inc) != NAV_OK) {
+    app_trace(APP_TRACE_MECHANIZATION, 0u);
+    const int mech_rc = sins_step(&a->nav, inc);
+    app_trace(APP_TRACE_MECHANIZATION, 1u);
+    if (mech_rc != NAV_OK) {
         reject(a, &a->health.nav_rejected);
         return;
     }
@@ -742,7 +803,9 @@ static void navigate_filtered(app_t *a, imu_inc_t *inc)
     }
     const nav_real_t T = a->pred_t_s;
     const nav_real_t f_mean[3] = {a->f_sum_n[0] / T, a->f_sum_n[1] / T, a->f_sum_n[2] / T};
+    app_trace(APP_TRACE_PREDICTION, 0u);
     ekf_predict(&a->ekf, &a->nav, f_mean, T);
+    app_trace(APP_TRACE_PREDICTION, 1u);
     /* a slow wheel-speed source is a late, averaged speed: its noise grows with the
      * acceleration times its period, and its zero hides a car creeping below one step */
     nav_real_t acc = NAV_C(0.0);
@@ -764,8 +827,11 @@ static void navigate_filtered(app_t *a, imu_inc_t *inc)
                               NAV_C(0.5) * acc * per;
         const nav_real_t w_b[3] = {a->w_sum_rad[0] / T, a->w_sum_rad[1] / T,
                                    a->w_sum_rad[2] / T};
-        if (ekf_odometer(&a->ekf, &a->nav, w_b, a->cfg.odo_lever_b_m, a->odo.speed_mps, sf,
-                         NHC_SIGMA_MPS, GATE_SIGMA) == 0) {
+        app_trace(APP_TRACE_ODOMETER_UPDATE, 0u);
+        const int n_used = ekf_odometer(&a->ekf, &a->nav, w_b, a->cfg.odo_lever_b_m,
+                                        a->odo.speed_mps, sf, NHC_SIGMA_MPS, GATE_SIGMA);
+        app_trace(APP_TRACE_ODOMETER_UPDATE, 1u);
+        if (n_used == 0) {
             reject(a, &a->health.bad_value); /* the odometer disagrees beyond its gate */
         }
     }
@@ -1137,7 +1203,9 @@ static void on_gnss_status(app_t *a, hal_t *hal, const hal_can_frame_t *f)
         return;
     }
     if (a->mode == APP_MODE_NAVIGATING) {
+        app_trace(APP_TRACE_GNSS_UPDATE, 0u);
         gnss_update(a, hal, m.time_of_week, have_vel, have_h);
+        app_trace(APP_TRACE_GNSS_UPDATE, 1u);
     }
     if (have_h && a->mode == APP_MODE_NAVIGATING && !a->ekf_on) {
         sins_set_height_ref(&a->nav, (nav_real_t)a->gnss_h_cm * NAV_C(0.01));

@@ -209,4 +209,20 @@ size_t app_rx_ids(uint32_t *ids, size_t max);
  * NAV_Status goes on at its rate on the HAL clock with the IMU_STALE flag. */
 void app_poll(app_t *app, hal_t *hal);
 
+/*
+ * Profiling points: the application calls app_trace(point, 0) before and
+ * app_trace(point, 1) after each of these steps. app.c defines app_trace as a weak
+ * function that does nothing (a few instructions per call); a board may define its own to
+ * time the steps (hal/cortex_m4f/main_qemu.c, make target-bench). It must not touch the
+ * application's state, so timing never changes what is computed.
+ */
+typedef enum {
+    APP_TRACE_MECHANIZATION = 0, /* the strapdown step of one IMU sample (filter running) */
+    APP_TRACE_PREDICTION,        /* the filter's covariance prediction (10 Hz) */
+    APP_TRACE_ODOMETER_UPDATE,   /* the odometer's speed and non-holonomic updates */
+    APP_TRACE_GNSS_UPDATE,       /* one GNSS epoch: latency, gates, position and velocity */
+    APP_TRACE_N
+} app_trace_point_t;
+void app_trace(uint32_t point, uint32_t end);
+
 #endif

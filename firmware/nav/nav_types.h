@@ -31,7 +31,6 @@ typedef double nav_real_t;
 #define nav_sqrt(x) sqrt(x)
 #define nav_sin(x) sin(x)
 #define nav_cos(x) cos(x)
-#define nav_tan(x) tan(x)
 #define nav_atan2(y, x) atan2((y), (x))
 #define nav_asin(x) asin(x)
 #define nav_fabs(x) fabs(x)
@@ -40,11 +39,15 @@ typedef double nav_real_t;
 typedef float nav_real_t;
 #define NAV_SYM(name) name
 #define nav_sqrt(x) sqrtf(x)
-#define nav_sin(x) sinf(x)
-#define nav_cos(x) cosf(x)
-#define nav_tan(x) tanf(x)
-#define nav_atan2(y, x) atan2f((y), (x))
-#define nav_asin(x) asinf(x)
+/* the firmware's own trig (nav_trig.c): the same bits on the host and the Cortex-M4F */
+#define nav_sin(x) navf_sin(x)
+#define nav_cos(x) navf_cos(x)
+#define nav_atan2(y, x) navf_atan2((y), (x))
+#define nav_asin(x) navf_asin(x)
+float navf_sin(float x);
+float navf_cos(float x);
+float navf_atan2(float y, float x);
+float navf_asin(float x);
 #define nav_fabs(x) fabsf(x)
 #define nav_isfinite(x) isfinite(x)
 #endif
