@@ -12,37 +12,38 @@ CSTD   := -std=c11
 WARN   := -Wall -Wextra -Werror -Wpedantic -Wconversion -Wdouble-promotion -Wfloat-equal \
           -Wshadow -Wstrict-prototypes -Wmissing-prototypes
 # -ffp-contract=off on every build: no fused multiply-add, so float32 arithmetic rounds
-# the same on the host and the Cortex-M4F (libm trig still differs in the last bits:
-# docs/numeric-design.md).
+# the same on the host and the Cortex-M4F (with the core's own trig, nav_trig.c, the
+# output frames are identical: make target-test, docs/target.md).
 FPFLAGS := -ffp-contract=off -fno-math-errno
 CFLAGS_BASE := $(CSTD) -O2 -g $(WARN) $(FPFLAGS)
 SAN_FLAGS := -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
 
 # firmware/ sees only its own folders and the HAL interface (docs/architecture.md)
 FW_INC := -Ifirmware/nav -Ifirmware/can -Ifirmware/can/gen -Ifirmware/app -Ihal
-HOST_INC := $(FW_INC) -Ihal/linux -Ihal/cortex_m4f -Itests/support
+HOST_INC := $(FW_INC) -Ihal/common -Ihal/linux -Ihal/cortex_m4f -Itests/support
 
 CORE_SRC := $(wildcard firmware/nav/*.c)
 CODEC_GEN := firmware/can/gen/navecu_can.c firmware/can/gen/navecu_can.h
 APP_SRC := firmware/can/e2e.c firmware/can/gen/navecu_can.c firmware/app/app.c \
            firmware/app/calstore.c
-HAL_LINUX_SRC := hal/linux/hal_linux.c hal/linux/hal_socketcan.c
+HAL_LINUX_SRC := hal/linux/hal_linux.c hal/linux/hal_socketcan.c hal/common/candump.c
 # the Cortex-M4F HAL's register-level drivers: cross-built, and host-tested against
 # simulated register blocks
-HAL_M4_SRC := hal/cortex_m4f/bxcan.c
+HAL_M4_SRC := hal/cortex_m4f/bxcan.c hal/cortex_m4f/stm32_flash.c hal/cortex_m4f/stm32_iwdg.c \
+              hal/cortex_m4f/stm32_clock.c hal/cortex_m4f/stm32_timebase.c
 SUPPORT_SRC_F64 := tests/support/truth.c tests/support/motions.c
 SUPPORT_SRC_BOTH := tests/support/nav_run.c
 # tests built once per numeric variant (f32 firmware, f64 reference)
 TESTS_VARIANT := test_nav_math test_earth test_sins test_dr test_ekf
 # tests of the float32 firmware only (application, codec, HAL)
-TESTS_F32 := test_e2e test_codec
+TESTS_F32 := test_e2e test_codec test_trig
 # tests that link both variants themselves
 TESTS_BOTH := test_drive
 # tests of application modules against the in-memory HAL (tests/support/fake_hal.c)
 TESTS_FAKE_HAL := test_app test_calstore
 # tests of a Cortex-M4F driver against a register block in RAM (tests/test_<driver>.c
 # links hal/cortex_m4f/<driver>.c)
-TESTS_M4_HAL := test_bxcan
+TESTS_M4_HAL := test_bxcan test_stm32_flash test_stm32_iwdg test_stm32_clock test_stm32_timebase test_f2l
 
 .PHONY: grades
 .PHONY: all test test-c test-plain test-asan test-cross test-python codec codec-check \
@@ -54,7 +55,8 @@ all: $(BUILD)/host/navecu
 
 help:
 	@echo "make               build the host firmware: build/host/navecu (see --help)"
-	@echo "make test          all tests: C plain and ASan+UBSan, Python, codec, M4F build"
+	@echo "make test          all tests: C plain and ASan+UBSan, Python, codec, M4F build,"
+	@echo "                   the M4F image on QEMU bit-exact, the M4F budget"
 	@echo "make sim           simulate a drive, run the firmware, report accuracy and plots"
 	@echo "                   (SCENARIO=name for another tools/sim/scenarios/name.toml;"
 	@echo "                   BUS=vcan0 runs the firmware live on vcan, docs/live-can.md)"
@@ -64,6 +66,10 @@ help:
 	@echo "make grades        free-inertial error per IMU grade vs seed 003's Table 2"
 	@echo "make codec         regenerate the CAN codec from firmware/can/navecu.dbc"
 	@echo "make cross         build the firmware for the Cortex-M4F, check: no double math"
+	@echo "make target        the ECU image for an STM32F405: build/target/navecu.elf .bin .hex"
+	@echo "make target-test   the M4F image on QEMU, output frames identical to the host's"
+	@echo "make target-bench  instruction counts on QEMU -> out/target-bench.json, CPU load"
+	@echo "make target-budget flash, RAM, stack, no heap, no double -> out/target-budget.json"
 	@echo "make numerics      the float32 accuracy study (docs/numeric-design.md)"
 	@echo "make clean         remove build/"
 
@@ -161,6 +167,7 @@ test: deps
 	$(MAKE) test-asan
 	$(MAKE) test-python
 	$(MAKE) test-cross
+	$(MAKE) target-check
 
 # Install what the build needs when it is missing (CI runs as root on a fresh machine).
 deps:
@@ -205,9 +212,69 @@ $(BUILD)/m4/libnavecu.a: $(M4_SRC:%.c=$(BUILD)/m4/%.o)
 cross test-cross: $(BUILD)/m4/libnavecu.a
 	@if $(ARM_NM) $< | grep -E ' U (__aeabi_(d|f2d|l2d|ul2d|i2d|ui2d)|(sin|cos|tan|sqrt|atan2|asin|acos|atan|fabs|exp|log|pow|floor|ceil|round)$$)'; then \
 	  echo "cross: the Cortex-M4F firmware uses double-precision arithmetic (above)"; exit 1; fi
-	@echo "cross: firmware (core, codec, application) and the bxCAN driver built for Cortex-M4F, no double-precision arithmetic"
+	@echo "cross: firmware (core, codec, application) and the STM32 drivers built for Cortex-M4F, no double-precision arithmetic"
 	@arm-none-eabi-size -t $(M4_SRC:%.c=$(BUILD)/m4/%.o) | tail -1 | \
 	  awk '{print "cross: firmware code size " $$1 " bytes text, " $$3 " bytes bss"}'
+
+# ---- Cortex-M4F images (docs/target.md) ----
+# build/target/navecu.elf: the ECU image for an STM32F405 (startup, clocks, bxCAN, flash
+# NVM, watchdog: hal/cortex_m4f/); build/target/navecu-qemu.elf: the same application and
+# layout with a semihosting CAN backend, run on QEMU's netduinoplus2 (an STM32F405).
+# Objects carry -fstack-usage and -fcallgraph-info for the stack budget.
+TGT := $(BUILD)/target
+M4_LD := hal/cortex_m4f/stm32f405.ld
+M4_TGT_CFLAGS := $(CFLAGS_BASE) $(M4_FLAGS) -ffunction-sections -fdata-sections \
+                 -fstack-usage -fcallgraph-info=su
+M4_TGT_INC := $(FW_INC) -Ihal/common -Ihal/cortex_m4f
+M4_LDFLAGS := $(M4_FLAGS) -nostartfiles --specs=nano.specs -T $(M4_LD) -Wl,--gc-sections
+M4_BOARD_SRC := hal/cortex_m4f/startup.c hal/cortex_m4f/f2l.c hal/common/candump.c
+ECU_SRC := $(M4_SRC) $(M4_BOARD_SRC) hal/cortex_m4f/hal_stm32.c hal/cortex_m4f/main_stm32.c
+QEMU_SRC := $(CORE_SRC) $(APP_SRC) $(M4_BOARD_SRC) hal/cortex_m4f/semihost.c hal/cortex_m4f/hal_semihost.c \
+            hal/cortex_m4f/main_qemu.c
+$(TGT)/obj/%.o: %.c
+	@mkdir -p $(@D)
+	$(ARM_CC) $(M4_TGT_CFLAGS) $(M4_TGT_INC) -MMD -MP -c $< -o $@
+$(TGT)/navecu.elf: $(ECU_SRC:%.c=$(TGT)/obj/%.o) $(M4_LD)
+	$(ARM_CC) $(M4_LDFLAGS) -Wl,-Map=$(TGT)/navecu.map $(filter %.o,$^) -lm -o $@
+$(TGT)/navecu-qemu.elf: $(QEMU_SRC:%.c=$(TGT)/obj/%.o) $(M4_LD)
+	$(ARM_CC) $(M4_LDFLAGS) -Wl,-Map=$(TGT)/navecu-qemu.map $(filter %.o,$^) -lm -o $@
+$(TGT)/%.bin: $(TGT)/%.elf
+	arm-none-eabi-objcopy -O binary $< $@
+$(TGT)/%.hex: $(TGT)/%.elf
+	arm-none-eabi-objcopy -O ihex $< $@
+
+.PHONY: target target-qemu target-test target-bench target-budget target-check
+target: deps $(TGT)/navecu.elf $(TGT)/navecu.bin $(TGT)/navecu.hex
+	@arm-none-eabi-size -A $(TGT)/navecu.elf > $(TGT)/navecu.size
+	@arm-none-eabi-size $(TGT)/navecu.elf
+	@echo "target: $(TGT)/navecu.elf .bin .hex, map $(TGT)/navecu.map, sizes $(TGT)/navecu.size"
+target-qemu: deps $(TGT)/navecu-qemu.elf
+
+# the QEMU image against the host float32 build on a 10-minute drive, byte for byte
+target-test: deps venv target-qemu $(BUILD)/host/navecu
+	$(PY) -m tools.target.qemu_run --check
+
+# what make test runs of the target: the budget, and one QEMU run that is both the
+# bit-exactness test and the instruction-count benchmark (fails over 5 % CPU)
+target-check: target-budget target-qemu $(BUILD)/host/navecu
+	$(PY) -m tools.target.qemu_run --check --bench --json out/target-bench.json
+
+# flash, static RAM, worst-case stack, no heap, no double: fails when a limit is exceeded.
+# The drivers' only indirect calls are their wait hooks; the board passes one function
+# (hal_stm32.c: watchdog_hook) or none.
+M4_WAIT_HOOK := hal/cortex_m4f/hal_stm32.c:watchdog_hook
+M4_WAIT_HOOK_CALLERS := bxcan_init hal/cortex_m4f/stm32_clock.c:fail stm32_clock_init \
+  stm32_flash_erase_sector stm32_flash_unlock stm32_flash_write stm32_iwdg_init \
+  stm32_iwdg_set_timeout
+target-budget: deps venv target
+	$(PY) -m tools.target.budget --elf $(TGT)/navecu.elf --objs $(ECU_SRC:%.c=$(TGT)/obj/%.o) \
+	  --entry Reset_Handler --isr CAN1_RX0_IRQHandler --isr CAN1_SCE_IRQHandler \
+	  --isr SysTick_Handler $(foreach f,$(M4_WAIT_HOOK_CALLERS),--indirect $(f)=$(M4_WAIT_HOOK)) \
+	  --json out/target-budget.json
+
+# instruction counts per IMU step and per measurement update -> out/target-bench.json
+target-bench: deps venv target-qemu $(BUILD)/host/navecu
+	$(PY) -m tools.target.qemu_run --bench --json out/target-bench.json
 
 # ---- numerics study: compensated vs plain float32 accumulation ----
 numerics: $(BUILD)/host/tests/study_numerics $(BUILD)/plainacc/tests/study_numerics

@@ -2,7 +2,8 @@
 # The layering rules of docs/architecture.md, checked on the include lines:
 # firmware/ includes no OS header and nothing of a HAL implementation; firmware/nav/
 # (the core) includes nothing of the application, the CAN layer or the HAL at all;
-# the Cortex-M4F drivers (hal/cortex_m4f/) include no OS header either.
+# the Cortex-M4F drivers (hal/cortex_m4f/) and the shared HAL modules (hal/common/)
+# include no OS header either.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 fail=0
@@ -10,14 +11,14 @@ os_headers='stdio\.h|stdlib\.h|unistd\.h|fcntl\.h|pthread\.h|time\.h|signal\.h|s
 if grep -nE "#include <($os_headers)" firmware/nav/*.[ch] firmware/app/*.[ch] firmware/can/*.[ch]; then
     echo "layers: firmware/ includes an OS header (above)"; fail=1
 fi
-if grep -nE "#include <($os_headers)" hal/cortex_m4f/*.[ch]; then
-    echo "layers: a Cortex-M4F driver includes an OS header (above)"; fail=1
+if grep -nE "#include <($os_headers)" hal/cortex_m4f/*.[ch] hal/common/*.[ch]; then
+    echo "layers: a Cortex-M4F driver or a shared HAL module includes an OS header (above)"; fail=1
 fi
-if grep -nE '#include "(hal_linux|fake_hal)\.h"' -r firmware/; then
+if grep -nE '#include "(hal_linux|fake_hal|hal_stm32|hal_semihost|candump|bxcan|stm32_[a-z]+)\.h"' -r firmware/; then
     echo "layers: firmware/ includes a HAL implementation (above)"; fail=1
 fi
 if grep -nE '#include "(hal|app|e2e|navecu_can)\.h"' firmware/nav/*.[ch]; then
     echo "layers: the navigation core includes a layer above it (above)"; fail=1
 fi
-[ $fail -eq 0 ] && echo "layers: firmware/ and hal/cortex_m4f/ respect docs/architecture.md"
+[ $fail -eq 0 ] && echo "layers: firmware/, hal/common/ and hal/cortex_m4f/ respect docs/architecture.md"
 exit $fail

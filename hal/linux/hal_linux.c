@@ -6,6 +6,7 @@
  * on the locale.
  */
 #include "hal_linux.h"
+#include "candump.h"
 #include "hal_socketcan.h"
 
 #include <errno.h>
@@ -15,217 +16,18 @@
 #define US_PER_S UINT64_C(1000000)
 #define STD_ID_MAX UINT32_C(0x7FF)
 #define EXT_ID_MAX UINT32_C(0x1FFFFFFF)
-#define FRAC_DIGITS_MAX 9u
-
-/* longest TX line: "(" 20 digits "." 6 digits ") " iface " " 8 digits "#" 16 digits "\n" */
-#define TX_LINE_MAX (1u + 20u + 1u + 6u + 2u + HAL_LINUX_IFACE_MAX + 1u + 8u + 1u + 16u + 1u)
 
 static const char default_iface[] = "can0";
-
-enum line_kind { LINE_FRAME, LINE_BLANK, LINE_MALFORMED };
 
 static uint32_t sat_inc_u32(uint32_t n)
 {
     return n == UINT32_MAX ? n : n + 1u;
 }
 
-static int is_blank(char c)
-{
-    return c == ' ' || c == '\t' || c == '\r';
-}
-
 /* printable ASCII other than space: what an interface name may hold */
 static int is_graph_ascii(char c)
 {
     return c > ' ' && c <= '~';
-}
-
-static int is_digit(char c)
-{
-    return c >= '0' && c <= '9';
-}
-
-/* value of hex digit c, or -1 */
-static int hex_value(char c)
-{
-    if (c >= '0' && c <= '9') {
-        return c - '0';
-    }
-    if (c >= 'a' && c <= 'f') {
-        return c - 'a' + 10;
-    }
-    if (c >= 'A' && c <= 'F') {
-        return c - 'A' + 10;
-    }
-    return -1;
-}
-
-static size_t skip_blanks(const char *s, size_t i, size_t n)
-{
-    while (i < n && is_blank(s[i])) {
-        i++;
-    }
-    return i;
-}
-
-/*
- * Parse "(seconds.fraction)" at s[*i..n) into *t_us; advance *i past ")". Returns 0, or
- * -1 if malformed or out of the uint64_t microsecond range.
- */
-static int parse_timestamp(const char *s, size_t *i, size_t n, uint64_t *t_us)
-{
-    size_t k = *i;
-    uint64_t sec = 0u;
-    uint64_t frac_us = 0u;
-    unsigned n_sec = 0u;
-    unsigned n_frac = 0u;
-
-    if (k >= n || s[k] != '(') {
-        return -1;
-    }
-    k++;
-    while (k < n && is_digit(s[k])) {
-        const uint64_t d = (uint64_t)(s[k] - '0');
-        if (sec > (UINT64_MAX - d) / 10u) {
-            return -1;
-        }
-        sec = sec * 10u + d;
-        n_sec++;
-        k++;
-    }
-    if (n_sec == 0u || k >= n || s[k] != '.') {
-        return -1;
-    }
-    k++;
-    while (k < n && is_digit(s[k])) {
-        if (n_frac >= FRAC_DIGITS_MAX) {
-            return -1;
-        }
-        /* the first six digits are microseconds; later ones are below 1 us: truncated */
-        if (n_frac < 6u) {
-            frac_us = frac_us * 10u + (uint64_t)(s[k] - '0');
-        }
-        n_frac++;
-        k++;
-    }
-    if (n_frac == 0u || k >= n || s[k] != ')') {
-        return -1;
-    }
-    k++;
-    for (unsigned j = n_frac; j < 6u; j++) {
-        frac_us *= 10u;
-    }
-    if (sec > (UINT64_MAX - frac_us) / US_PER_S) {
-        return -1;
-    }
-    *t_us = sec * US_PER_S + frac_us;
-    *i = k;
-    return 0;
-}
-
-/*
- * Parse "ID#DATA" occupying exactly s[i..n) into *f (id, extended, dlc, data). Returns 0,
- * or -1 if malformed, remote, CAN FD, or an error frame.
- */
-static int parse_frame(const char *s, size_t i, size_t n, hal_can_frame_t *f)
-{
-    uint32_t id = 0u;
-    size_t n_id = 0u;
-
-    while (i < n && s[i] != '#') {
-        const int v = hex_value(s[i]);
-        if (v < 0 || n_id >= 8u) {
-            return -1;
-        }
-        id = (id << 4) | (uint32_t)v;
-        n_id++;
-        i++;
-    }
-    if (i >= n) {
-        return -1; /* no '#' */
-    }
-    if (n_id == 3u) {
-        if (id > STD_ID_MAX) {
-            return -1;
-        }
-        f->extended = 0u;
-    } else if (n_id == 8u) {
-        /* also rejects error frames and anything else with flag bits above bit 28 */
-        if (id > EXT_ID_MAX) {
-            return -1;
-        }
-        f->extended = 1u;
-    } else {
-        return -1;
-    }
-    f->id = id;
-    i++; /* '#'; a following '#' (CAN FD) or 'R' (remote) fails the hex test below */
-
-    const size_t n_hex = n - i;
-    if (n_hex % 2u != 0u || n_hex > 16u) {
-        return -1;
-    }
-    for (size_t b = 0u; b < n_hex / 2u; b++) {
-        const int hi = hex_value(s[i + 2u * b]);
-        const int lo = hex_value(s[i + 2u * b + 1u]);
-        if (hi < 0 || lo < 0) {
-            return -1;
-        }
-        f->data[b] = (uint8_t)((hi << 4) | lo);
-    }
-    f->dlc = (uint8_t)(n_hex / 2u);
-    return 0;
-}
-
-/* Classify one RX line s[0..n) (newline removed); on LINE_FRAME fill *f completely. */
-static enum line_kind parse_line(const char *s, size_t n, hal_can_frame_t *f)
-{
-    hal_can_frame_t g;
-    size_t i = skip_blanks(s, 0u, n);
-
-    if (i == n) {
-        return LINE_BLANK;
-    }
-    memset(&g, 0, sizeof g);
-    if (parse_timestamp(s, &i, n, &g.t_us) != 0) {
-        return LINE_MALFORMED;
-    }
-
-    /* interface */
-    size_t start = skip_blanks(s, i, n);
-    if (start == i) {
-        return LINE_MALFORMED; /* no blank after ")" */
-    }
-    i = start;
-    while (i < n && is_graph_ascii(s[i])) {
-        i++;
-    }
-    if (i == start || i - start > HAL_LINUX_IFACE_MAX || i == n || !is_blank(s[i])) {
-        return LINE_MALFORMED;
-    }
-
-    /* frame, then an optional direction token ("R" or "T", as python-can and newer
-     * candump write it), then nothing but blanks */
-    start = skip_blanks(s, i, n);
-    i = start;
-    while (i < n && !is_blank(s[i])) {
-        i++;
-    }
-    if (i == start) {
-        return LINE_MALFORMED;
-    }
-    size_t rest = skip_blanks(s, i, n);
-    if (rest < n && rest > i && (s[rest] == 'R' || s[rest] == 'T')) {
-        rest = skip_blanks(s, rest + 1u, n);
-    }
-    if (rest != n) {
-        return LINE_MALFORMED;
-    }
-    if (parse_frame(s, start, i, &g) != 0) {
-        return LINE_MALFORMED;
-    }
-    *f = g;
-    return LINE_FRAME;
 }
 
 int hal_can_receive(hal_t *hal, hal_can_frame_t *f)
@@ -266,15 +68,15 @@ int hal_can_receive(hal_t *hal, hal_can_frame_t *f)
             hal->rx_malformed = sat_inc_u32(hal->rx_malformed);
             continue;
         }
-        switch (parse_line(hal->line, n, f)) {
-        case LINE_FRAME:
+        switch (candump_parse_line(hal->line, n, f)) {
+        case CANDUMP_FRAME:
             hal->t_us = f->t_us;
             hal->rx_frames = sat_inc_u32(hal->rx_frames);
             return 0;
-        case LINE_MALFORMED:
+        case CANDUMP_MALFORMED:
             hal->rx_malformed = sat_inc_u32(hal->rx_malformed);
             break;
-        case LINE_BLANK:
+        case CANDUMP_BLANK:
         default:
             break;
         }
@@ -291,20 +93,9 @@ uint64_t hal_time_us(const hal_t *hal)
     return hal->can_fd >= 0 ? hal_socketcan_time_us() : hal->t_us;
 }
 
-/* write v as `digits` uppercase hex digits at p; returns p + digits */
-static char *put_hex(char *p, uint32_t v, unsigned digits)
-{
-    static const char hex[] = "0123456789ABCDEF";
-    for (unsigned d = digits; d > 0u; d--) {
-        p[d - 1u] = hex[v & 0xFu];
-        v >>= 4;
-    }
-    return p + digits;
-}
-
 int hal_can_send(hal_t *hal, const hal_can_frame_t *f)
 {
-    char line[TX_LINE_MAX + 1u]; /* + NUL from snprintf */
+    char line[CANDUMP_FORMAT_MAX];
 
     if (hal == NULL || f == NULL || f->dlc > 8u || f->extended > 1u ||
         f->id > (f->extended != 0u ? EXT_ID_MAX : STD_ID_MAX)) {
@@ -320,20 +111,10 @@ int hal_can_send(hal_t *hal, const hal_can_frame_t *f)
         hal->tx_frames = sat_inc_u32(hal->tx_frames);
         return 0;
     }
-    const uint64_t now_us = hal_time_us(hal);
-    const int head = snprintf(line, sizeof line, "(%010" PRIu64 ".%06" PRIu64 ") %s ",
-                              now_us / US_PER_S, now_us % US_PER_S, hal->iface);
-    if (head < 0 || (size_t)head >= sizeof line) {
-        return HAL_EIO; /* cannot happen: the buffer holds the longest line */
+    const size_t len = candump_format_line(line, sizeof line, hal_time_us(hal), hal->iface, f);
+    if (len == 0u) {
+        return HAL_EIO; /* cannot happen: the frame and the name were checked */
     }
-    char *p = line + head;
-    p = put_hex(p, f->id, f->extended != 0u ? 8u : 3u);
-    *p++ = '#';
-    for (unsigned b = 0u; b < f->dlc; b++) {
-        p = put_hex(p, f->data[b], 2u);
-    }
-    *p++ = '\n';
-    const size_t len = (size_t)(p - line);
     /* ferror also reports a failed flush of earlier, buffered lines */
     if (fwrite(line, 1u, len, hal->tx) != len || ferror(hal->tx)) {
         return HAL_EIO;

@@ -6,24 +6,12 @@
  * The caller owns the struct hal (on the stack or static); nothing is allocated. One
  * instance per replay; the functions are not thread-safe.
  *
- * Log format (can-utils `candump -l`), one frame per line:
- *     (1436509052.249713) vcan0 123#DEADBEEF
- * - timestamp: "(" seconds "." 1..9 fraction digits ")", decimal; converted to integer
- *   microseconds exactly (digits past the sixth are truncated, never rounded); it must fit
- *   a uint64_t in microseconds;
- * - interface: 1..HAL_LINUX_IFACE_MAX printable non-blank ASCII characters; any name is
- *   accepted on receive (no filtering by interface);
- * - frame: 3 hex digits (standard ID <= 0x7FF) or 8 hex digits (extended ID < 2^29), "#",
- *   then 0..8 data bytes as pairs of hex digits; upper or lower case.
- * Fields are separated by runs of spaces or tabs; blanks (space, tab, CR) before the first
- * and after the last field are ignored, so CRLF logs replay. A line of only blanks is
- * skipped without counting. Everything else is counted in hal_can_rx_malformed() and
- * skipped: garbage, unbalanced parentheses, a missing field or an extra one, bad hex, an
- * odd number of data digits, more than 8 data bytes, an ID out of range for its digit
- * count or with another digit count, remote frames ("123#R"), CAN FD frames ("123##..."),
- * error frames (the CAN_ERR_FLAG makes an 8-digit ID >= 0x20000000), and a line longer
- * than HAL_LINUX_LINE_MAX characters before its newline (the rest of it is read and
- * dropped; counted once). A last line without a newline is parsed like any other.
+ * Log format: the candump line of hal/common/candump.h (parsed and written there). Any
+ * interface name is accepted on receive (no filtering by interface). A line of only
+ * blanks is skipped without counting. A malformed line is counted in
+ * hal_can_rx_malformed() and skipped, and so is a line longer than HAL_LINUX_LINE_MAX
+ * characters before its newline (the rest of it is read and dropped; counted once). A
+ * last line without a newline is parsed like any other.
  */
 #ifndef NAVECU_HAL_LINUX_H
 #define NAVECU_HAL_LINUX_H
@@ -31,12 +19,13 @@
 #include <stdint.h>
 #include <stdio.h>
 
+#include "candump.h"
 #include "hal.h"
 
 #define HAL_LINUX_NVM_SIZE 4096u /* bytes in the NVM region */
 #define HAL_LINUX_NVM_SECTOR_SIZE 2048u /* bytes per NVM sector: 2 sectors */
 #define HAL_LINUX_LINE_MAX 128u  /* longest RX log line, characters before the newline */
-#define HAL_LINUX_IFACE_MAX 15u  /* longest interface name (IFNAMSIZ - 1) */
+#define HAL_LINUX_IFACE_MAX CANDUMP_IFACE_MAX /* longest interface name (IFNAMSIZ - 1) */
 
 /* One Linux host HAL. Fields are private to hal_linux.c; tests read them through the
  * accessor functions below. */
