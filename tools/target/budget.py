@@ -1,0 +1,159 @@
+"""The ECU image's resource budget (`make target-budget`, docs/target.md).
+
+    python -m tools.target.budget --elf build/target/navecu.elf --objs OBJ.o ... \
+        [--entry Reset_Handler] [--isr CAN1_RX0_IRQHandler ...] [--indirect CALLER=C1,C2 ...]
+        [--json out/target-budget.json]
+
+Checks, each against the limit of issue #8 (exit status 1 if any is exceeded, 2 if a
+check cannot be made):
+* flash: the bytes programmed into flash (every loaded section: vectors, code, constants,
+  the .data image) <= 64 KiB (aim 48 KiB);
+* static RAM: .data + .bss <= 16 KiB (aim 12 KiB);
+* stack: the worst case over the call graph from -fstack-usage/-fcallgraph-info
+  (tools/target/stack_usage.py) from the reset handler plus every interrupt handler
+  nested, with their exception frames <= 2 KiB;
+* no heap: none of malloc, calloc, realloc, free, _sbrk (or their reentrant _r forms) in
+  the linked image;
+* no double-precision software floating point: no __aeabi_d*, __aeabi_f2d, __aeabi_*2d
+  or the GCC soft-float double helpers anywhere in the image (a stronger check than
+  "not on the per-sample path": nothing can reach what is not linked).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+
+LIMITS = {"flash_bytes": (64 * 1024, 48 * 1024), "ram_bytes": (16 * 1024, 12 * 1024),
+          "stack_bytes": (2 * 1024, None)}
+HEAP_SYMBOLS = re.compile(r"^_?(malloc|calloc|realloc|free|_sbrk|sbrk)(_r)?$|^_(malloc|free|"
+                          r"calloc|realloc)_r$")
+DOUBLE_SYMBOLS = re.compile(r"^__aeabi_(d[a-z0-9]+|f2d|i2d|ui2d|l2d|ul2d)$|^__(add|sub|mul|div|"
+                            r"neg)df3$|^__(extendsfdf2|truncdfsf2|fix(uns)?dfsi|float(un)?sidf|"
+                            r"(eq|ne|lt|le|gt|ge|un)df2)$")
+
+
+def sections(elf: Path) -> dict:
+    """{name: (size, vma)} of the allocated sections (arm-none-eabi-size -A)."""
+    out = subprocess.run(["arm-none-eabi-size", "-A", str(elf)], check=True,
+                         capture_output=True, text=True).stdout
+    res = {}
+    for line in out.splitlines():
+        p = line.split()
+        if len(p) == 3 and p[0].startswith(".") and p[1].isdigit():
+            res[p[0]] = (int(p[1]), int(p[2]))
+    return res
+
+
+def symbols(elf: Path) -> set:
+    out = subprocess.run(["arm-none-eabi-nm", str(elf)], check=True, capture_output=True,
+                         text=True).stdout
+    return {line.split()[-1] for line in out.splitlines() if line.strip()}
+
+
+def memory_use(sec: dict) -> tuple[int, int, dict]:
+    flash_start, flash_end = 0x08000000, 0x08100000
+    ram_start, ram_end = 0x20000000, 0x20020000
+    flash = 0
+    ram = 0
+    detail = {}
+    for name, (size, vma) in sec.items():
+        if size == 0:
+            continue
+        if flash_start <= vma < flash_end:
+            flash += size
+            detail[name] = {"bytes": size, "in": "flash"}
+        elif ram_start <= vma < ram_end:
+            ram += size
+            detail[name] = {"bytes": size, "in": "RAM"}
+            if name == ".data":
+                flash += size  # its initial values are copied from flash
+                detail[name]["in"] = "RAM (image in flash)"
+    return flash, ram, detail
+
+
+def stack(objs: list, entries: list, isrs: list, indirect: list) -> dict:
+    """Run stack_usage.py over the .ci files of these objects only (not the QEMU image's)."""
+    with tempfile.TemporaryDirectory() as d:
+        for k, o in enumerate(objs):
+            ci = Path(o).with_suffix(".ci")
+            if not ci.exists():
+                raise SystemExit(f"budget: {ci} missing (objects need -fcallgraph-info=su)")
+            (Path(d) / f"{k:03d}_{ci.name}").write_text(ci.read_text())
+        js = Path(d) / "stack.json"
+        cmd = [sys.executable, str(ROOT / "tools" / "target" / "stack_usage.py"), "--ci-dir", d,
+               "--limit-bytes", str(LIMITS["stack_bytes"][0]), "--json", str(js)]
+        for e in entries:
+            cmd += ["--entry", e]
+        for i in isrs:
+            cmd += ["--isr", i]
+        for i in indirect:
+            cmd += ["--indirect", i]
+        r = subprocess.run(cmd, capture_output=True, text=True)
+        print(r.stdout.rstrip())
+        if r.returncode == 2 or not js.exists():
+            print(r.stderr, file=sys.stderr)
+            raise SystemExit(2)
+        return json.loads(js.read_text())
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--elf", type=Path, required=True)
+    ap.add_argument("--objs", nargs="+", required=True)
+    ap.add_argument("--entry", action="append", default=None)
+    ap.add_argument("--isr", action="append", default=None)
+    ap.add_argument("--indirect", action="append", default=[], metavar="CALLER=C1,C2",
+                    help="callees of CALLER's calls through function pointers (stack_usage.py)")
+    ap.add_argument("--json", type=Path, default=None)
+    a = ap.parse_args(argv)
+    entries = a.entry or ["Reset_Handler"]
+    isrs = a.isr or []
+
+    sec = sections(a.elf)
+    flash, ram, detail = memory_use(sec)
+    syms = symbols(a.elf)
+    heap = sorted(s for s in syms if HEAP_SYMBOLS.match(s))
+    dbl = sorted(s for s in syms if DOUBLE_SYMBOLS.match(s))
+    st = stack(a.objs, entries, isrs, a.indirect)
+    stack_bytes = int(st["total_bytes"])
+
+    rows = [("flash", flash, *LIMITS["flash_bytes"]), ("static RAM", ram, *LIMITS["ram_bytes"]),
+            ("worst-case stack", stack_bytes, *LIMITS["stack_bytes"])]
+    failed = []
+    print(f"budget of {a.elf}:")
+    for name, used, limit, aim in rows:
+        ok = used <= limit
+        aim_txt = f", aim {aim} ({'met' if used <= aim else 'not met'})" if aim else ""
+        print(f"  {name:17s} {used:7d} bytes  limit {limit}{aim_txt}  {'ok' if ok else 'EXCEEDED'}")
+        if not ok:
+            failed.append(name)
+    print(f"  heap              {'none linked' if not heap else 'LINKED: ' + ', '.join(heap)}")
+    print(f"  double precision  {'none linked' if not dbl else 'LINKED: ' + ', '.join(dbl)}")
+    if heap:
+        failed.append("heap")
+    if dbl:
+        failed.append("double")
+    res = {"elf": str(a.elf), "flash_bytes": flash, "ram_bytes": ram, "stack_bytes": stack_bytes,
+           "limits": {k: v[0] for k, v in LIMITS.items()},
+           "aims": {k: v[1] for k, v in LIMITS.items() if v[1]},
+           "sections": detail, "heap_symbols": heap, "double_symbols": dbl,
+           "stack": st, "command": "make target-budget", "ok": not failed}
+    if a.json:
+        a.json.parent.mkdir(parents=True, exist_ok=True)
+        a.json.write_text(json.dumps(res, indent=2) + "\n")
+    if failed:
+        print(f"target-budget: FAIL ({', '.join(failed)})", file=sys.stderr)
+        return 1
+    print("target-budget: every limit met")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
