@@ -1,0 +1,69 @@
+"""The arithmetic of the M4F tools on inputs with known answers: the instruction counts of
+tools/target/qemu_run.py from a trace, the memory accounting of tools/target/budget.py."""
+from pathlib import Path
+
+import pytest
+
+from tools.target import budget, qemu_run
+
+
+def write_trace(path: Path, n_steps: int, insn_per_tick: int = 6) -> None:
+    lines = [f"calibration {2000 * insn_per_tick} 2000"]
+    for k in range(n_steps):
+        lines.append("100 10 0")                                  # IMU_Rate: 10 ticks
+        lines.append(f"101 {100 if k % 10 else 1000} {1 if k % 10 == 0 else 0}")
+        if k % 100 == 0:
+            lines.append("120 50 0")
+            lines.append("121 70 5")                              # the GNSS update
+    lines += ["point mechanization 100 3000 31", "point prediction 10 8000 801",
+              "point odometer_update 10 5000 500", "point gnss_update 1 60 60"]
+    path.write_text("\n".join(lines) + "\n")
+
+
+def test_bench_turns_ticks_into_instructions(tmp_path):
+    trace = tmp_path / "trace.txt"
+    write_trace(trace, 100)
+    r = qemu_run.bench(trace, duration_s=1.0, imu_rate_hz=100.0)
+    # steps: 90 of (10 + 100) ticks, 10 of (10 + 1000) ticks, 6 instructions a tick
+    assert r["insn_per_tick_calibrated"] == 6.0
+    assert r["insn_per_imu_step_mean"] == pytest.approx(6 * (90 * 110 + 10 * 1010) / 100)
+    assert r["insn_per_imu_step_max"] == pytest.approx(6 * 1010)
+    assert r["insn_per_bare_imu_step"] == pytest.approx(6 * 110)
+    assert r["insn_per_prediction_mean"] == pytest.approx(6 * 800)
+    assert r["insn_per_prediction_max"] == pytest.approx(6 * 801)
+    assert r["insn_per_odo_update"] == pytest.approx(6 * 500)
+    assert r["insn_per_gnss_update"] == pytest.approx(6 * 60)
+    total = 6 * (90 * 110 + 10 * 1010 + 120)
+    assert r["insn_per_s_measured"] == pytest.approx(total)
+    # 200 Hz: 100 more bare steps a second; load = insn/s x CPI / 168 MHz
+    assert r["insn_per_s_200hz"] == pytest.approx(total + 100 * 6 * 110)
+    assert r["cpu_load_pct_200hz_168mhz"] == pytest.approx(
+        100 * (total + 100 * 660) * qemu_run.CPI_ASSUMED / 168e6, abs=1e-3)
+
+
+def test_first_difference_names_the_line(tmp_path):
+    a, b = tmp_path / "host.log", tmp_path / "qemu.log"
+    a.write_text("x\ny\nz\n")
+    b.write_text("x\nY\nz\n")
+    d = qemu_run.first_difference(a, b)
+    assert "line 2" in d and "host.log: y" in d and "qemu.log: Y" in d
+
+
+def test_memory_counts_data_in_flash_and_ram_once_each():
+    sec = {".isr_vector": (392, 0x08000000), ".text": (30000, 0x0800C000),
+           ".ARM.exidx": (8, 0x08013530), ".data": (12, 0x20000000), ".bss": (6000, 0x2000000C),
+           ".comment": (50, 0), ".debug_info": (9999, 0)}
+    flash, ram, detail = budget.memory_use(sec)
+    assert flash == 392 + 30000 + 8 + 12
+    assert ram == 12 + 6000
+    assert ".debug_info" not in detail and detail[".data"]["in"].startswith("RAM")
+
+
+def test_double_and_heap_symbols_are_recognised():
+    for name in ("__aeabi_dmul", "__aeabi_f2d", "__aeabi_ul2d", "__muldf3", "__extendsfdf2"):
+        assert budget.DOUBLE_SYMBOLS.match(name), name
+    for name in ("__aeabi_fmul", "__aeabi_f2lz", "__aeabi_ul2f", "__aeabi_uldivmod", "roundf"):
+        assert not budget.DOUBLE_SYMBOLS.match(name), name
+    for name in ("malloc", "_malloc_r", "free", "_sbrk", "_sbrk_r", "realloc"):
+        assert budget.HEAP_SYMBOLS.match(name), name
+    assert not budget.HEAP_SYMBOLS.match("memset")
