@@ -59,6 +59,9 @@ static void usage(FILE *out)
             "  --cal-min-base-m X   refuse a one-point calibration closer than X m to its\n"
             "                       base (default 2000)\n"
             "  --gyro-arw-dpsh X    gyro angle random walk, deg/sqrt(h) (default 0.003)\n"
+            "  --test-stall-poll-s S  test only: stop calling app_poll S seconds of bus time\n"
+            "                       after the first frame (a stuck task: the watchdog expires,\n"
+            "                       exit status 3)\n"
             "  --gyro-bias-dph X    gyro turn-on bias, 1 sigma, deg/h (default 0.015); both\n"
             "                       weigh the gyro bias estimate at standstill\n"
             "  --accel-bias-mg X    accelerometer bias, 1 sigma, mg (default 0.1)\n"
@@ -123,12 +126,44 @@ static int parse_lever(const char *s, nav_real_t out[3])
     return 0;
 }
 
+/* The main loop's watchdog duty: kick only when every task ran in time (app_tasks_ok);
+ * a withheld kick that leaves the watchdog expired ends the run, as the ECU's watchdog
+ * would reset the MCU. Returns 0 on expiry. */
+static int supervise(app_t *app, hal_t *hal)
+{
+    if (app_tasks_ok(app, hal_time_us(hal))) {
+        hal_watchdog_kick(hal);
+        return 1;
+    }
+    if (hal_linux_watchdog_expired(hal)) {
+        fprintf(stderr,
+                "navecu: WATCHDOG EXPIRED at %.3f s: no kick for more than %u ms, a task was "
+                "late (%lu late passes)\n",
+                (double)hal_time_us(hal) * 1e-6, HAL_LINUX_WATCHDOG_TIMEOUT_US / 1000u,
+                (unsigned long)app->health.tasks_late);
+        return 0;
+    }
+    return 1;
+}
+
+/* --test-stall-poll-s: 1 once the stall is due (app_poll is then never called again) */
+static int stalled(const hal_t *hal, int enabled, uint64_t after_us, uint64_t *t_first)
+{
+    const uint64_t now = hal_time_us(hal);
+    if (*t_first == UINT64_MAX) {
+        *t_first = now;
+    }
+    return enabled && now >= *t_first && now - *t_first >= after_us;
+}
+
 int main(int argc, char **argv)
 {
     const char *in_path = NULL, *out_path = NULL, *nvm_path = NULL, *iface = NULL;
     const char *live_if = NULL;
     app_config_t cfg = app_default_config();
     int nav_rate_given = 0;
+    int stall_poll = 0;         /* test: stop calling app_poll (a stuck task) */
+    uint64_t stall_poll_us = 0; /* ... this long after the first frame */
 
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
@@ -195,6 +230,11 @@ int main(int argc, char **argv)
             bad = parse_lever(v, cfg.gnss_lever_b_m);
         } else if (strcmp(a, "--odo-lever-m") == 0) {
             bad = parse_lever(v, cfg.odo_lever_b_m);
+        } else if (strcmp(a, "--test-stall-poll-s") == 0) {
+            double x = 0.0;
+            bad = parse_real(v, 0.0, 1e6, &x);
+            stall_poll_us = (uint64_t)(x * 1e6);
+            stall_poll = 1;
         } else if (strcmp(a, "--gyro-bias-dph") == 0) {
             double x = 0.0;
             bad = parse_real(v, 1e-6, 1e4, &x);
@@ -248,6 +288,8 @@ int main(int argc, char **argv)
     app_boot(&app, &hal);
 
     unsigned long frames_in = 0;
+    int watchdog_expired = 0;
+    uint64_t t_first = UINT64_MAX; /* HAL time of the first pass (--test-stall-poll-s) */
     int rc;
     hal_can_frame_t f;
     if (live_if != NULL) {
@@ -266,21 +308,31 @@ int main(int argc, char **argv)
                 frames_in++;
                 app_handle_frame(&app, &hal, &f);
             }
-            app_poll(&app, &hal);
-            hal_watchdog_kick(&hal);
+            if (!stalled(&hal, stall_poll, stall_poll_us, &t_first)) {
+                app_poll(&app, &hal);
+            }
+            if (!supervise(&app, &hal)) {
+                watchdog_expired = 1;
+                break;
+            }
         }
     } else {
         while ((rc = hal_can_receive(&hal, &f)) != HAL_ENODATA) {
             if (rc == 0) {
                 frames_in++;
                 app_handle_frame(&app, &hal, &f);
-                app_poll(&app, &hal);
+                if (!stalled(&hal, stall_poll, stall_poll_us, &t_first)) {
+                    app_poll(&app, &hal);
+                }
             } else if (rc != HAL_EAGAIN) {
                 fprintf(stderr, "navecu: read error on '%s'\n", in_path);
                 hal_linux_close(&hal);
                 return 1;
             }
-            hal_watchdog_kick(&hal);
+            if (!supervise(&app, &hal)) {
+                watchdog_expired = 1;
+                break;
+            }
         }
     }
     app.health.log_line_bad = hal_can_rx_malformed(&hal); /* lines after the last frame */
@@ -326,6 +378,14 @@ int main(int argc, char **argv)
             (double)app.cal_dh_rad / RAD_PER_DEG, (double)app.cal_mu, (unsigned)app.cal_stored,
             (double)app.gyro_bias_z_rps / RAD_PER_DEG * 3600.0,
             (double)app.gz_n / (double)cfg.imu_rate_hz);
+    fprintf(stderr, "navecu: supervision: %lu filter resets, %lu late task passes, %llu "
+                    "watchdog kicks%s\n",
+            (unsigned long)h->filter_resets, (unsigned long)h->tasks_late,
+            (unsigned long long)hal_linux_watchdog_kicks(&hal),
+            watchdog_expired ? ", WATCHDOG EXPIRED" : "");
+    if (watchdog_expired) {
+        return 3;
+    }
     if (live_if != NULL) {
         fprintf(stderr, "navecu: CAN error frames %lu, socket errors %lu, send errors %lu\n",
                 can_err, can_io, (unsigned long)app.send_errors);

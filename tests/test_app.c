@@ -1120,6 +1120,113 @@ static void test_filter_with_gnss(void **state)
     assert_int_equal(app.ekf.n_health_fixes, 0u);
 }
 
+
+/* the filter running on fixes at the start point, car standing: returns the next tow */
+static uint32_t run_filter_on_fixes(int n_fixes, uint32_t tow)
+{
+    const int32_t lat0 = (int32_t)lround(LAT0_DEG * 1e7), lon0 = (int32_t)lround(LON0_DEG * 1e7);
+    for (int k = 0; k < n_fixes; k++) {
+        run_wheels(RATE_HZ / 5, 0.0, 0);
+        tow += 200u;
+        send_fix(lat0, lon0, tow);
+    }
+    return tow;
+}
+
+static int all_nav_outputs_finite(void)
+{
+    const hal_can_frame_t *fp = last_tx(NAVECU_CAN_NAV_VELOCITY_FRAME_ID);
+    const hal_can_frame_t *fa = last_tx(NAVECU_CAN_NAV_ATTITUDE_FRAME_ID);
+    if (fp == NULL || fa == NULL) {
+        return 0;
+    }
+    struct navecu_can_nav_velocity_t v;
+    struct navecu_can_nav_attitude_t at;
+    navecu_can_nav_velocity_unpack(&v, fp->data, 8u);
+    navecu_can_nav_attitude_unpack(&at, fa->data, 8u);
+    return isfinite(navecu_can_nav_velocity_vel_east_decode(v.vel_east)) &&
+           isfinite(navecu_can_nav_attitude_heading_decode(at.heading)) &&
+           fabs(navecu_can_nav_velocity_vel_east_decode(v.vel_east)) < 0.5;
+}
+
+/*
+ * GIVEN the filter running on GNSS fixes (car standing)
+ * WHEN its covariance becomes non-finite (a NaN in P, as a numerical blow-up leaves it)
+ * THEN at the next prediction it is found diverged and reset: CntFilterResets 1 on
+ *      NAV_Status page 5, HealthFlags bit 7 set, the outputs stay finite and in place
+ *      (the navigator goes on as the land navigation system), and at the next GNSS fix
+ *      the filter restarts (mode GnssIns again);
+ * WHEN instead the navigator itself becomes non-finite
+ * THEN navigation restarts from the initial state (mode WaitInit), counted again.
+ */
+static void test_diverged_filter_is_reset(void **state)
+{
+    (void)state;
+    start_perfect();
+    fix_epoch = 0u;
+    uint32_t tow = run_filter_on_fixes(50, 100000u);
+    assert_true(app.ekf_on);
+    assert_int_equal(app.health.filter_resets, 0u);
+    app.ekf.P[3][3] = NAN;
+    run_wheels(RATE_HZ / 5, 0.0, 0);
+    assert_int_equal(app.health.filter_resets, 1u);
+    assert_false(app.ekf_on);
+    assert_int_equal(app.mode, APP_MODE_NAVIGATING);
+    struct navecu_can_nav_status_t st = last_status_page0();
+    assert_true((st.health_flags & APP_FLAG_FILTER_RESET) != 0u);
+    assert_true(all_nav_outputs_finite());
+    run_wheels(RATE_HZ, 0.0, 0); /* every page goes round within 1 s */
+    int seen_page5 = 0;
+    for (uint32_t i = 0u; i < hal.tx_n; i++) {
+        const hal_can_frame_t *fr = &hal.tx[i];
+        if (fr->id == NAVECU_CAN_NAV_STATUS_FRAME_ID && (fr->data[0] & 0x0Fu) == 5u) {
+            struct navecu_can_nav_status_t p5;
+            navecu_can_nav_status_unpack(&p5, fr->data, 8u);
+            seen_page5 = p5.cnt_filter_resets == 1u;
+        }
+    }
+    assert_true(seen_page5);
+    tow += 1200u; /* the receiver's clock went on meanwhile (1.2 s without fixes) */
+    tow = run_filter_on_fixes(2, tow);
+    assert_true(app.ekf_on); /* restarted at the next fix */
+    run_wheels(RATE_HZ / 5, 0.0, 0);
+    st = last_status_page0();
+    assert_int_equal(st.mode, NAVECU_CAN_NAV_STATUS_MODE_GNSS_INS_CHOICE);
+
+    app.nav.v_n_mps[0] = INFINITY;
+    run_wheels(RATE_HZ / 5, 0.0, 0);
+    assert_int_equal(app.health.filter_resets, 2u);
+    assert_int_equal(app.mode, APP_MODE_WAIT_INIT);
+    (void)tow;
+}
+
+/*
+ * GIVEN a running application whose main loop calls app_poll every pass
+ * THEN app_tasks_ok says 1 every pass (the watchdog is kicked), across a 10 s silence
+ *      of the bus too (missing input is not a late task);
+ * WHEN app_poll stops being called (a stuck task) while time goes on
+ * THEN app_tasks_ok says 0 once three status periods have passed, and counts it.
+ */
+static void test_task_supervision(void **state)
+{
+    (void)state;
+    start_perfect();
+    for (int k = 0; k < RATE_HZ; k++) {
+        run_wheels(1, 0.0, 0);
+        app_poll(&app, &hal);
+        assert_true(app_tasks_ok(&app, hal.t_us));
+    }
+    hal.t_us += 10000000u; /* the bus silent for 10 s, then the loop runs again */
+    app_poll(&app, &hal);
+    assert_true(app_tasks_ok(&app, hal.t_us));
+    assert_int_equal(app.health.tasks_late, 0u);
+    hal.t_us += 250000u; /* within 3 status periods (300 ms): still fine */
+    assert_true(app_tasks_ok(&app, hal.t_us));
+    hal.t_us += 100000u;
+    assert_false(app_tasks_ok(&app, hal.t_us));
+    assert_int_equal(app.health.tasks_late, 1u);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1138,6 +1245,8 @@ int main(void)
         cmocka_unit_test_setup(test_standstill_holds_and_estimates_bias, setup),
         cmocka_unit_test_setup(test_one_point_calibration_and_nvm, setup),
         cmocka_unit_test_setup(test_corrupt_nvm_at_boot, setup),
+        cmocka_unit_test_setup(test_diverged_filter_is_reset, setup),
+        cmocka_unit_test_setup(test_task_supervision, setup),
         cmocka_unit_test_setup(test_calibrate_at_gnss, setup),
         cmocka_unit_test_setup(test_filter_with_gnss, setup),
     };

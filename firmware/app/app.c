@@ -15,6 +15,8 @@ enum { TX_HEIGHT = 0, TX_VEL, TX_ATT, TX_STATUS, TX_CAL };
 #define GNSS_COURSE_MIN_MPS NAV_C(5.0) /* GNSS course is a heading only when moving */
 #define GNSS_STILL_MPS NAV_C(0.3)      /* below this GNSS speed the vehicle may be still */
 #define IMU_STALE_US 500000u
+#define FILTER_RESET_FLAG_S 10u /* NAV_Status flags a filter reset this long */
+#define FILTER_REOPEN_LIMIT 3u  /* covariance reopens without a fix taken: diverged */
 #define CMD_MAX_DELTA 3
 #define GNSS_FIX_FRESH_S 2u      /* mode GnssIns while the last fix used is this recent */
 #define STORE_MIN_S 10u          /* StoreCalibration at most this often (flash wear) */
@@ -79,7 +81,9 @@ typedef struct {
     uint8_t have_sample;
     uint16_t flags_sticky;
     uint32_t frames_sent, send_errors;
-    uint64_t n_samples, last_imu_t_us, last_rx_t_us, last_status_t_us;
+    uint64_t n_samples, last_imu_t_us, last_rx_t_us, last_status_t_us, last_poll_us;
+    uint64_t last_filter_reset_sample;
+    uint8_t have_poll, had_filter_reset;
     calstore_t calstore;
     nav_real_t cal_dh_rad, cal_mu, cal_base_m;
     uint8_t cal_status, cal_source, cal_count, cal_stored;
@@ -109,6 +113,10 @@ static void reset_navigation(app_t *a)
     k.last_imu_t_us = a->last_imu_t_us;
     k.last_rx_t_us = a->last_rx_t_us;
     k.last_status_t_us = a->last_status_t_us;
+    k.last_poll_us = a->last_poll_us;
+    k.have_poll = a->have_poll;
+    k.last_filter_reset_sample = a->last_filter_reset_sample;
+    k.had_filter_reset = a->had_filter_reset;
     k.flags_sticky = a->flags_sticky;
     k.calstore = a->calstore;
     k.cal_dh_rad = a->cal_dh_rad;
@@ -141,6 +149,10 @@ static void reset_navigation(app_t *a)
     a->last_imu_t_us = k.last_imu_t_us;
     a->last_rx_t_us = k.last_rx_t_us;
     a->last_status_t_us = k.last_status_t_us;
+    a->last_poll_us = k.last_poll_us;
+    a->have_poll = k.have_poll;
+    a->last_filter_reset_sample = k.last_filter_reset_sample; /* the flag outlives the reset */
+    a->had_filter_reset = k.had_filter_reset;
     a->flags_sticky = (uint16_t)(k.flags_sticky & (APP_FLAG_NVM_ERROR | APP_FLAG_IMU_FAULT));
     /* the calibration and the gyro bias belong to the car and the IMU, not to this run */
     a->calstore = k.calstore;
@@ -341,6 +353,10 @@ static uint16_t health_flags(const app_t *a, const hal_t *hal)
     if (a->mode != APP_MODE_NAVIGATING && a->init_pos_valid && !a->init_heading_valid) {
         fl |= APP_FLAG_NO_HEADING;
     }
+    if (a->had_filter_reset &&
+        a->n_samples - a->last_filter_reset_sample <= FILTER_RESET_FLAG_S * a->cfg.imu_rate_hz) {
+        fl |= APP_FLAG_FILTER_RESET;
+    }
     return fl;
 }
 
@@ -398,12 +414,15 @@ static void emit_status(app_t *a, hal_t *hal)
         st.cnt_bad_value = sat16(h->bad_value);
         st.cnt_gnss_rejected = sat16(h->gnss_rejected);
         st.cnt_log_line_bad = sat8(h->log_line_bad);
-    } else {
+    } else if (st.status_page == 4u) {
         st.cnt_cmd_rejected = sat16(h->cmd_rejected);
         st.cnt_core_rejected = sat16(h->nav_rejected);
         st.cnt_time_jumps = sat8(h->time_jumps);
+    } else {
+        st.cnt_filter_resets = sat16(h->filter_resets);
+        st.cnt_tasks_late = sat16(h->tasks_late);
     }
-    a->status_page = (uint8_t)(st.status_page >= 4u ? 1u : st.status_page + 1u);
+    a->status_page = (uint8_t)(st.status_page >= 5u ? 1u : st.status_page + 1u);
     st.nav_counter = next_tx_counter(a, TX_STATUS);
     navecu_can_nav_status_pack(d, &st, sizeof d);
     e2e_protect(NAVECU_CAN_NAV_STATUS_FRAME_ID, d);
@@ -634,6 +653,8 @@ static void start_filter(app_t *a, nav_real_t hacc_m)
     a->w_sum_rad[0] = a->w_sum_rad[1] = a->w_sum_rad[2] = NAV_C(0.0);
     a->odo_frames_used = a->odo.n_frames;
     a->ekf_start_sample = a->n_samples;
+    a->ekf_nonfinite_seen = a->ekf.n_nonfinite; /* the supervision's reference: a new filter */
+    a->ekf_negative_seen = a->ekf.n_negative_var;
     /* the filter owns the height now: the core's damping toward a held reference is a
      * force its model does not have */
     a->nav.h_ref_valid = 0u;
@@ -758,6 +779,78 @@ static void process_sample(app_t *a, hal_t *hal, const int32_t w_raw[3], const i
 /* One IMU sample with the filter running: compensated increments, the strapdown step,
  * the dead reckoning alongside, and at EKF_PRED_HZ the prediction, the odometer or
  * standstill updates and the feedback. */
+/* ---- filter supervision (docs/reliability.md) ----
+ * The filter has diverged when its state, its covariance or the navigator it corrects is
+ * no longer finite, when a variance went negative (ekf_health repairs the covariance and
+ * counts it), or when GNSS fixes stay beyond the innovation gate through
+ * FILTER_REOPEN_LIMIT covariance reopens in a row (the filter, not the receiver, is then
+ * wrong). A diverged filter is stopped: navigation goes on as the land navigation system
+ * (SINS with the odometer, mode 4 or 2) and the filter restarts at the next GNSS fix, as it
+ * did at the first; if the navigator itself is not finite, navigation restarts from the
+ * initial state. Counted in health.filter_resets, flagged for FILTER_RESET_FLAG_S. */
+static int all_finite(const nav_real_t *v, int n)
+{
+    for (int i = 0; i < n; i++) {
+        if (!nav_isfinite(v[i])) {
+            return 0;
+        }
+    }
+    return 1;
+}
+
+static int navigator_finite(const sins_t *s)
+{
+    return all_finite(s->v_n_mps, 3) && all_finite(s->q_bn, 4);
+}
+
+static int filter_diverged(app_t *a)
+{
+    const ekf_t *k = &a->ekf;
+    int diverged = k->n_nonfinite != a->ekf_nonfinite_seen ||
+                   k->n_negative_var != a->ekf_negative_seen ||
+                   a->gnss_reopen_run >= FILTER_REOPEN_LIMIT;
+    a->ekf_nonfinite_seen = k->n_nonfinite;
+    a->ekf_negative_seen = k->n_negative_var;
+    const nav_real_t scalars[4] = {k->k, k->mount_yaw_rad, k->mount_pitch_rad, NAV_C(0.0)};
+    if (!all_finite(k->x, EKF_N) || !all_finite(k->bg_rps, 3) || !all_finite(k->ba_mps2, 3) ||
+        !all_finite(scalars, 4) || !navigator_finite(&a->nav)) {
+        diverged = 1;
+    }
+    for (int i = 0; i < EKF_N && !diverged; i++) {
+        if (!(k->P[i][i] >= NAV_C(0.0)) || !nav_isfinite(k->P[i][i])) {
+            diverged = 1;
+        }
+    }
+    return diverged;
+}
+
+static void filter_reset(app_t *a)
+{
+    count(&a->health.filter_resets);
+    a->had_filter_reset = 1u;
+    a->last_filter_reset_sample = a->n_samples;
+    a->ekf_on = 0u;
+    a->gnss_gated_run = 0u;
+    a->gnss_reopen_run = 0u;
+    a->have_fix = 0u;
+    if (!navigator_finite(&a->nav)) {
+        reset_navigation(a);
+        return;
+    }
+    /* without the filter the height needs the core's damping again (start_filter took it) */
+    sins_set_height_ref(&a->nav, geo_h_m(&a->nav.pos));
+}
+
+/* After each filter step: reset it if it diverged. Returns 1 if it was reset. */
+static int supervise_filter(app_t *a)
+{
+    if (!a->ekf_on || !filter_diverged(a)) {
+        return 0;
+    }
+    filter_reset(a);
+    return 1;
+}
+
 static void navigate_filtered(app_t *a, imu_inc_t *inc)
 {
     const nav_real_t dt = inc->dt_s;
@@ -771,6 +864,9 @@ static void navigate_filtered(app_t *a, imu_inc_t *inc)
     app_trace(APP_TRACE_MECHANIZATION, 1u);
     if (mech_rc != NAV_OK) {
         reject(a, &a->health.nav_rejected);
+        if (!navigator_finite(&a->nav)) {
+            filter_reset(a); /* every later sample would be refused too */
+        }
         return;
     }
     odo_tick(&a->odo, dt, a->yaw_rate_rps);
@@ -838,6 +934,7 @@ static void navigate_filtered(app_t *a, imu_inc_t *inc)
     if (ekf_feedback(&a->ekf, &a->nav) != NAV_OK) {
         reject(a, &a->health.nav_rejected);
     }
+    (void)supervise_filter(a);
     a->pred_n = 0u;
     a->pred_t_s = NAV_C(0.0);
     a->f_sum_n[0] = a->f_sum_n[1] = a->f_sum_n[2] = NAV_C(0.0);
@@ -964,13 +1061,18 @@ static void gnss_update(app_t *a, hal_t *hal, uint32_t tow_ms, int have_vel, int
         a->n_samples - since > (uint64_t)GNSS_REOPEN_S * a->cfg.imu_rate_hz) {
         ekf_reopen(&a->ekf, NAV_C(3.0) * sh, NAV_C(1.0));
         a->gnss_gated_run = 0u;
+        a->gnss_reopen_run = (uint8_t)(a->gnss_reopen_run < 255u ? a->gnss_reopen_run + 1u : 255u);
     }
     if (taken) {
         a->last_fix_sample = a->n_samples;
         a->have_fix = 1u;
+        a->gnss_reopen_run = 0u;
     }
     if (ekf_feedback(&a->ekf, &a->nav) != NAV_OK) {
         reject(a, &a->health.nav_rejected);
+    }
+    if (supervise_filter(a)) {
+        return;
     }
     filter_calibration(a, hal);
 }
@@ -1480,12 +1582,33 @@ void app_handle_frame(app_t *a, hal_t *hal, const hal_can_frame_t *f)
 void app_poll(app_t *a, hal_t *hal)
 {
     const uint64_t now = hal_time_us(hal);
+    a->last_poll_us = now;
+    a->have_poll = 1u;
     const uint64_t stale_since = a->last_imu_t_us + IMU_STALE_US;
     const uint64_t period_us = 1000000u / a->cfg.status_rate_hz;
     if (a->have_sample && now > stale_since && now > a->last_status_t_us &&
         now - a->last_status_t_us >= period_us) {
         emit_status(a, hal);
     }
+}
+
+int app_tasks_ok(app_t *a, uint64_t now_us)
+{
+    int ok = 1;
+    const uint64_t poll_deadline_us =
+        (uint64_t)APP_STATUS_DEADLINE_PERIODS * 1000000u / a->cfg.status_rate_hz;
+    if (!a->have_poll || (now_us > a->last_poll_us && now_us - a->last_poll_us > poll_deadline_us)) {
+        ok = 0; /* app_poll, which keeps NAV_Status going, did not run */
+    }
+    const uint32_t div = a->cfg.imu_rate_hz >= EKF_PRED_HZ ? a->cfg.imu_rate_hz / EKF_PRED_HZ : 1u;
+    if (a->ekf_on && a->mode == APP_MODE_NAVIGATING &&
+        a->pred_n > APP_PREDICT_DEADLINE_PERIODS * div) {
+        ok = 0; /* IMU samples went by without the filter's prediction */
+    }
+    if (!ok) {
+        count(&a->health.tasks_late);
+    }
+    return ok;
 }
 
 size_t app_rx_ids(uint32_t *ids, size_t max)

@@ -62,6 +62,8 @@ typedef struct {
     uint32_t cmd_rejected;     /* commands refused (missing known position, bad state) */
     uint32_t nav_rejected;     /* IMU samples the strapdown core refused */
     uint32_t time_jumps;       /* receive time going backwards; IMU gaps seen only in time */
+    uint32_t filter_resets;    /* Kalman filter found diverged and reset (app_t supervision) */
+    uint32_t tasks_late;       /* app_tasks_ok found a task late: watchdog kick withheld */
 } app_health_t;
 
 typedef enum {
@@ -80,6 +82,7 @@ typedef enum {
 #define APP_FLAG_NVM_ERROR 0x0010u    /* the last NVM operation failed */
 #define APP_FLAG_NO_HEADING 0x0020u   /* waiting for a heading (command or GNSS course) */
 #define APP_FLAG_IMU_GAP 0x0040u      /* IMU samples were lost and bridged in the last second */
+#define APP_FLAG_FILTER_RESET 0x0080u /* the Kalman filter diverged and was reset in the last 10 s */
 
 /* IMU gaps up to this many seconds are bridged by repeating the next sample; a longer gap
  * ends navigation (APP_MODE_FAULT) until the next SetInitialPosition. */
@@ -97,6 +100,8 @@ typedef struct {
     e2e_counter_t rx_imu, rx_wheel, rx_cmd, rx_gnss_vel, rx_att;
     uint64_t last_rx_t_us;      /* latest receive time seen (time jumps) */
     uint64_t last_status_t_us;  /* receive time of the last NAV_Status (app_poll) */
+    uint64_t last_poll_us;      /* HAL time of the last app_poll (task supervision) */
+    uint8_t have_poll;
     uint64_t last_gap_sample;   /* sample count at the last IMU gap */
     uint8_t had_gap;
     /* IMU pair assembly */
@@ -166,6 +171,10 @@ typedef struct {
     uint64_t gnss_prev_sample;  /* sample of the previous fix offered to the filter */
     int64_t gnss_prev_t_us;     /* IMU time of the previous epoch (clock-drift allowance) */
     uint64_t ekf_start_sample;  /* sample at which the filter started */
+    uint8_t gnss_reopen_run;    /* covariance reopens since the last fix taken */
+    uint32_t ekf_nonfinite_seen, ekf_negative_seen; /* ekf counters at the last check */
+    uint64_t last_filter_reset_sample; /* sample of the last filter reset */
+    uint8_t had_filter_reset;
 
     /* calibration (seed 000 eqs 7-12) and its storage */
     calstore_t calstore;
@@ -208,6 +217,22 @@ size_t app_rx_ids(uint32_t *ids, size_t max);
 /* Call from the main loop (after each frame, or on a timer): while no IMU data arrives,
  * NAV_Status goes on at its rate on the HAL clock with the IMU_STALE flag. */
 void app_poll(app_t *app, hal_t *hal);
+
+/*
+ * Task supervision: did every task of the application run in time? The main loop calls
+ * it once per pass, after app_poll, with the HAL clock, and kicks the watchdog only when
+ * it returns 1 (so a stuck loop or task ends in a watchdog reset, not in a silent ECU):
+ *  - NAV_Status, which app_poll keeps going even without input, went out within
+ *    APP_STATUS_DEADLINE_PERIODS status periods of now (the loop and app_poll run);
+ *  - while navigating with the Kalman filter, its prediction ran within
+ *    APP_PREDICT_DEADLINE_PERIODS prediction periods of IMU time (the filter task runs;
+ *    IMU time stops when the IMU does, so missing input is not a late task).
+ * A late task is counted in health.tasks_late. Input faults (a silent IMU, rejected
+ * frames) are not task failures: they are flagged in NAV_Status and navigation goes on.
+ */
+#define APP_STATUS_DEADLINE_PERIODS 3u
+#define APP_PREDICT_DEADLINE_PERIODS 3u
+int app_tasks_ok(app_t *app, uint64_t now_us);
 
 /*
  * Profiling points: the application calls app_trace(point, 0) before and

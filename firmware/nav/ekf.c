@@ -79,6 +79,8 @@ int ekf_init(ekf_t *k, const ekf_config_t *cfg, nav_real_t heading_sigma_rad)
     k->n_updates = 0u;
     k->n_gated = 0u;
     k->n_health_fixes = 0u;
+    k->n_nonfinite = 0u;
+    k->n_negative_var = 0u;
     k->n_reopened = 0u;
     reset_cov(k, heading_sigma_rad > NAV_C(0.0) ? heading_sigma_rad : cfg->heading_rad);
     return NAV_OK;
@@ -256,8 +258,12 @@ uint32_t ekf_health(ekf_t *k)
             k->x[i] = NAV_C(0.0);
         }
         fixes++;
+        k->n_nonfinite++;
     }
     for (int i = 0; i < EKF_N; i++) {
+        if (k->P[i][i] < NAV_C(0.0)) {
+            k->n_negative_var++; /* not rounding below the floor: the filter has diverged */
+        }
         if (!(k->P[i][i] >= k->cfg.var_floor)) {
             k->P[i][i] = k->cfg.var_floor;
             fixes++;

@@ -64,6 +64,8 @@ typedef struct {
     uint32_t n_updates;          /* accepted scalar updates */
     uint32_t n_gated;            /* measurements rejected by their innovation gate */
     uint32_t n_health_fixes;     /* last-resort covariance corrections */
+    uint32_t n_nonfinite;        /* of which: a non-finite covariance, reset (divergence) */
+    uint32_t n_negative_var;     /* of which: a negative variance (divergence) */
     uint32_t n_reopened;         /* ekf_reopen calls */
     nav_real_t fp[EKF_N][EKF_N]; /* scratch for F P in ekf_predict: too large for an ECU's
                                     stack, and the core keeps no globals */
@@ -101,7 +103,10 @@ int ekf_update(ekf_t *k, const nav_real_t h[EKF_N], nav_real_t z, nav_real_t r,
 int ekf_feedback(ekf_t *k, sins_t *s);
 
 /* Symmetrise P, hold its diagonal at or above the floor, reset it if not finite; each
- * correction counted in n_health_fixes. Returns the number of corrections made. */
+ * correction counted in n_health_fixes, a non-finite P also in n_nonfinite and a negative
+ * variance (not just rounding below the floor) in n_negative_var: the signs of a diverged
+ * filter, which the application resets (app.c, filter supervision). Returns the number of
+ * corrections made. */
 uint32_t ekf_health(ekf_t *k);
 
 /* Forget what the filter believes about position and velocity: their rows and columns

@@ -236,7 +236,9 @@ void board_main(void)
             (void)hal_semihost_close(&hal);
             semihost_exit(1u);
         }
-        hal_watchdog_kick(&hal);
+        if (app_tasks_ok(&app, hal_time_us(&hal))) { /* as host_sim/main.c */
+            hal_watchdog_kick(&hal);
+        }
     }
     app.health.log_line_bad = hal_can_rx_malformed(&hal);
     const int close_rc = hal_semihost_close(&hal);

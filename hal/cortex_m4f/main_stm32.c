@@ -2,8 +2,8 @@
  * main_stm32.c - the navecu ECU: board bring-up, then the application's main loop.
  *
  * The loop drains the CAN receive ring into the application, lets it emit what is due
- * (app_poll: NAV_Status with IMU_STALE while no IMU data arrives), kicks the watchdog and
- * sleeps until the next interrupt (a received frame, or the 100 Hz SysTick that keeps
+ * (app_poll: NAV_Status with IMU_STALE while no IMU data arrives), kicks the watchdog if
+ * every task ran in time (app_tasks_ok) and sleeps until the next interrupt (a received frame, or the 100 Hz SysTick that keeps
  * app_poll and the time base running on a silent bus). Each pass does bounded work:
  * at most BATCH_MAX frames, so a flooded bus cannot starve the watchdog kick.
  */
@@ -50,7 +50,11 @@ void board_main(void)
             app_handle_frame(&app, hal, &f);
         }
         app_poll(&app, hal);
-        hal_watchdog_kick(hal);
+        /* kicked only when every task ran in time: a stuck or starved task ends in a
+         * watchdog reset (136..376 ms), not in an ECU that answers with stale data */
+        if (app_tasks_ok(&app, hal_time_us(hal))) {
+            hal_watchdog_kick(hal);
+        }
         __asm__ volatile("wfi");
     }
 }

@@ -228,6 +228,7 @@ int hal_nvm_erase(hal_t *hal)
 void hal_watchdog_kick(hal_t *hal)
 {
     hal->watchdog_kicks++;
+    hal->last_kick_us = hal_time_us(hal);
 }
 
 /* Open or create the NVM file and load it into hal->nvm. 0 or HAL_EIO. */
@@ -319,6 +320,15 @@ void hal_linux_set_iface(hal_t *hal, const char *name)
         n++;
     }
     hal->iface[n] = '\0';
+}
+
+int hal_linux_watchdog_expired(const hal_t *hal)
+{
+    if (hal->watchdog_kicks == 0u) {
+        return 0; /* armed by the first kick, as the main loop starts it */
+    }
+    const uint64_t now = hal_time_us(hal);
+    return now > hal->last_kick_us && now - hal->last_kick_us > HAL_LINUX_WATCHDOG_TIMEOUT_US;
 }
 
 uint64_t hal_linux_watchdog_kicks(const hal_t *hal)

@@ -1,7 +1,7 @@
 /*
  * hal_linux.h - the HAL of hal.h on a Linux host: CAN from a candump log replay, CAN
  * transmission appended to a candump log, NVM in memory or backed by a file, and a
- * watchdog that only counts kicks.
+ * watchdog emulation on the HAL clock (hal_linux_watchdog_expired).
  *
  * The caller owns the struct hal (on the stack or static); nothing is allocated. One
  * instance per replay; the functions are not thread-safe.
@@ -35,6 +35,7 @@ struct hal {
     FILE *nvm_file;           /* file behind the NVM region; NULL: in memory only */
     uint64_t t_us;            /* timestamp of the last frame received, 0 before any */
     uint64_t watchdog_kicks;  /* hal_watchdog_kick calls since open */
+    uint64_t last_kick_us;    /* HAL time of the last kick */
     uint32_t rx_malformed;    /* malformed RX lines skipped (saturates at UINT32_MAX) */
     uint32_t rx_frames;       /* frames returned by hal_can_receive (saturates) */
     uint32_t tx_frames;       /* frames accepted by hal_can_send (saturates) */
@@ -81,6 +82,17 @@ void hal_linux_set_iface(hal_t *hal, const char *name);
 
 /* hal_watchdog_kick calls since hal_linux_open. */
 uint64_t hal_linux_watchdog_kicks(const hal_t *hal);
+
+/*
+ * The host's watchdog, emulated on the HAL clock (the log's time in a replay): 1 when the
+ * last kick is more than HAL_LINUX_WATCHDOG_TIMEOUT_US behind hal_time_us, else 0 (also
+ * before the first kick, which arms it). The ECU's independent watchdog resets the MCU in that case
+ * (docs/target.md: 136..376 ms); the host executable reports it and exits non-zero. A
+ * replay has no idle loop between frames, so the main loop asks only when it withholds a
+ * kick (a late task); a gap in the log followed by a kick is not an expiry.
+ */
+#define HAL_LINUX_WATCHDOG_TIMEOUT_US 200000u
+int hal_linux_watchdog_expired(const hal_t *hal);
 
 /* Frames returned by hal_can_receive / accepted by hal_can_send since hal_linux_open
  * (saturating at UINT32_MAX). */

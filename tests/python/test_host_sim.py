@@ -157,3 +157,30 @@ def test_usage_errors():
     res = subprocess.run([str(NAVECU), "--can-log", "/nonexistent", "--out", "/tmp/x.log"],
                          capture_output=True, text=True)
     assert res.returncode == 1
+
+
+def test_supervision_quiet_on_a_clean_log(stationary):
+    """Every pass of the loop kicked the watchdog: no late task, no filter reset."""
+    _, outs = stationary
+    m = re.search(r"supervision: (\d+) filter resets, (\d+) late task passes, (\d+) watchdog "
+                  r"kicks", outs[0][1])
+    assert m, outs[0][1]
+    n_frames = int(re.search(r"(\d+) frames in", outs[0][1]).group(1))
+    assert (int(m.group(1)), int(m.group(2)), int(m.group(3))) == (0, 0, n_frames)
+    assert "WATCHDOG" not in outs[0][1]
+
+
+def test_watchdog_expiry_exits_nonzero(stationary, tmp_path):
+    """A stuck task (app_poll no longer called after 60 s of bus time, --test-stall-poll-s)
+    makes app_tasks_ok withhold the kick; 200 ms later the host's watchdog expires: the run
+    ends there with exit status 3 and says so, as the ECU would reset."""
+    log, _ = stationary
+    r = subprocess.run([str(NAVECU), "--can-log", str(log), "--out", str(tmp_path / "o.log"),
+                        "--test-stall-poll-s", "60"], capture_output=True, text=True)
+    assert r.returncode == 3, r.stderr
+    m = re.search(r"WATCHDOG EXPIRED at ([0-9.]+) s", r.stderr)
+    assert m, r.stderr
+    # the first frame's time + 60 s of stall + 300 ms until app_poll is late + 200 ms of
+    # watchdog timeout, within a frame period or two
+    t_first = float(log.read_text().split(")", 1)[0].lstrip("("))
+    assert float(m.group(1)) - t_first == pytest.approx(60.5, abs=0.03)

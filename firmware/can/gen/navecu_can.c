@@ -2435,6 +2435,13 @@ int navecu_can_nav_status_pack(
         dst_p[5] |= pack_left_shift_u8(src_p->cnt_time_jumps, 0u, 0xffu);
         break;
 
+    case 5:
+        dst_p[1] |= pack_left_shift_u16(src_p->cnt_filter_resets, 0u, 0xffu);
+        dst_p[2] |= pack_right_shift_u16(src_p->cnt_filter_resets, 8u, 0xffu);
+        dst_p[3] |= pack_left_shift_u16(src_p->cnt_tasks_late, 0u, 0xffu);
+        dst_p[4] |= pack_right_shift_u16(src_p->cnt_tasks_late, 8u, 0xffu);
+        break;
+
     default:
         break;
     }
@@ -2495,6 +2502,13 @@ int navecu_can_nav_status_unpack(
         dst_p->cnt_core_rejected = unpack_right_shift_u16(src_p[3], 0u, 0xffu);
         dst_p->cnt_core_rejected |= unpack_left_shift_u16(src_p[4], 8u, 0xffu);
         dst_p->cnt_time_jumps = unpack_right_shift_u8(src_p[5], 0u, 0xffu);
+        break;
+
+    case 5:
+        dst_p->cnt_filter_resets = unpack_right_shift_u16(src_p[1], 0u, 0xffu);
+        dst_p->cnt_filter_resets |= unpack_left_shift_u16(src_p[2], 8u, 0xffu);
+        dst_p->cnt_tasks_late = unpack_right_shift_u16(src_p[3], 0u, 0xffu);
+        dst_p->cnt_tasks_late |= unpack_left_shift_u16(src_p[4], 8u, 0xffu);
         break;
 
     default:
@@ -2663,6 +2677,28 @@ bool navecu_can_nav_status_cnt_cmd_rejected_is_in_phys_range(float value)
     return ((value >= 0.0f) && (value <= 65535.0f));
 }
 
+uint16_t navecu_can_nav_status_cnt_filter_resets_encode(float value)
+{
+    return (uint16_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_nav_status_cnt_filter_resets_decode(uint16_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_nav_status_cnt_filter_resets_is_in_range(uint16_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_nav_status_cnt_filter_resets_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 65535.0f));
+}
+
 uint16_t navecu_can_nav_status_horiz_accuracy_encode(float value)
 {
     return (uint16_t)(cantools_unsigned_from_double(roundf(value / 0.01f)));
@@ -2769,6 +2805,28 @@ bool navecu_can_nav_status_cnt_core_rejected_is_in_range(uint16_t value)
 }
 
 bool navecu_can_nav_status_cnt_core_rejected_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 65535.0f));
+}
+
+uint16_t navecu_can_nav_status_cnt_tasks_late_encode(float value)
+{
+    return (uint16_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_nav_status_cnt_tasks_late_decode(uint16_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_nav_status_cnt_tasks_late_is_in_range(uint16_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_nav_status_cnt_tasks_late_is_in_phys_range(float value)
 {
     return ((value >= 0.0f) && (value <= 65535.0f));
 }

@@ -232,11 +232,13 @@ extern "C" {
 #define NAVECU_CAN_NAV_STATUS_CNT_BAD_COUNTER_NAME "CntBadCounter"
 #define NAVECU_CAN_NAV_STATUS_CNT_BAD_VALUE_NAME "CntBadValue"
 #define NAVECU_CAN_NAV_STATUS_CNT_CMD_REJECTED_NAME "CntCmdRejected"
+#define NAVECU_CAN_NAV_STATUS_CNT_FILTER_RESETS_NAME "CntFilterResets"
 #define NAVECU_CAN_NAV_STATUS_HORIZ_ACCURACY_NAME "HorizAccuracy"
 #define NAVECU_CAN_NAV_STATUS_CNT_BAD_DLC_NAME "CntBadDlc"
 #define NAVECU_CAN_NAV_STATUS_CNT_IMU_PAIR_BROKEN_NAME "CntImuPairBroken"
 #define NAVECU_CAN_NAV_STATUS_CNT_GNSS_REJECTED_NAME "CntGnssRejected"
 #define NAVECU_CAN_NAV_STATUS_CNT_CORE_REJECTED_NAME "CntCoreRejected"
+#define NAVECU_CAN_NAV_STATUS_CNT_TASKS_LATE_NAME "CntTasksLate"
 #define NAVECU_CAN_NAV_STATUS_CNT_BAD_CRC_NAME "CntBadCrc"
 #define NAVECU_CAN_NAV_STATUS_CNT_IMU_LOST_NAME "CntImuLost"
 #define NAVECU_CAN_NAV_STATUS_CNT_LOG_LINE_BAD_NAME "CntLogLineBad"
@@ -797,7 +799,7 @@ struct navecu_can_nav_attitude_t {
 /**
  * Signals in message NAV_Status.
  *
- * Multiplexed: every 100 ms two frames, page 0 and one of the counter pages 1..4 in rotation (counters saturate), hence a 50 ms mean cycle.
+ * Multiplexed: every 100 ms two frames, page 0 and one of the counter pages 1..5 in rotation (counters saturate), hence a 50 ms mean cycle.
  *
  * All signal values are as on the CAN bus.
  */
@@ -819,7 +821,7 @@ struct navecu_can_nav_status_t {
     uint8_t mode;
 
     /**
-     * bit 0 IMU data stale (none for 0.5 s), bit 1 IMU fault reported, bit 2 no usable GNSS epoch for 2 s, bit 3 input rejected in the last second, bit 4 NVM error, bit 5 waiting for a heading, bit 6 IMU samples were lost and bridged in the last second.
+     * bit 0 IMU data stale (none for 0.5 s), bit 1 IMU fault reported, bit 2 no usable GNSS epoch for 2 s, bit 3 input rejected in the last second, bit 4 NVM error, bit 5 waiting for a heading, bit 6 IMU samples were lost and bridged in the last second, bit 7 the Kalman filter diverged and was reset in the last 10 s.
      *
      * Range: 0..65535 (0..65535 -)
      * Scale: 1
@@ -856,6 +858,15 @@ struct navecu_can_nav_status_t {
     uint16_t cnt_cmd_rejected;
 
     /**
+     * Kalman filter resets: its state, covariance or navigator not finite, a negative variance, or GNSS fixes beyond the gate through 3 covariance reopens in a row (docs/reliability.md).
+     *
+     * Range: 0..65535 (0..65535 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint16_t cnt_filter_resets;
+
+    /**
      * Range: 0..65535 (0..655.35 m)
      * Scale: 0.01
      * Offset: 0
@@ -889,6 +900,15 @@ struct navecu_can_nav_status_t {
      * Offset: 0
      */
     uint16_t cnt_core_rejected;
+
+    /**
+     * Main-loop passes in which a task of the application was late (app_tasks_ok): the watchdog was not kicked.
+     *
+     * Range: 0..65535 (0..65535 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint16_t cnt_tasks_late;
 
     /**
      * Range: 0..255 (0..255 -)
@@ -4291,6 +4311,46 @@ bool navecu_can_nav_status_cnt_cmd_rejected_is_in_phys_range(float value);
  *
  * @return Encoded signal.
  */
+uint16_t navecu_can_nav_status_cnt_filter_resets_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_status_cnt_filter_resets_decode(uint16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_status_cnt_filter_resets_is_in_range(uint16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_status_cnt_filter_resets_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
 uint16_t navecu_can_nav_status_horiz_accuracy_encode(float value);
 
 /**
@@ -4483,6 +4543,46 @@ bool navecu_can_nav_status_cnt_core_rejected_is_in_range(uint16_t value);
  * @return true if in range, false otherwise.
  */
 bool navecu_can_nav_status_cnt_core_rejected_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint16_t navecu_can_nav_status_cnt_tasks_late_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_status_cnt_tasks_late_decode(uint16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_status_cnt_tasks_late_is_in_range(uint16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_status_cnt_tasks_late_is_in_phys_range(float value);
 
 /**
  * Encode given signal by applying scaling and offset.
