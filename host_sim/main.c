@@ -59,6 +59,9 @@ static void usage(FILE *out)
             "  --cal-min-base-m X   refuse a one-point calibration closer than X m to its\n"
             "                       base (default 2000)\n"
             "  --gyro-arw-dpsh X    gyro angle random walk, deg/sqrt(h) (default 0.003)\n"
+            "  --gyro-range-dps X   the IMU's gyro range, deg/s (default 300): a rate at it is\n"
+            "                       saturated (counted, flagged in NAV_Status)\n"
+            "  --accel-range-mps2 X the IMU's accelerometer range, m/s^2 (default 78.45, 8 g)\n"
             "  --test-stall-poll-s S  test only: stop calling app_poll S seconds of bus time\n"
             "                       after the first frame (a stuck task: the watchdog expires,\n"
             "                       exit status 3)\n"
@@ -230,6 +233,14 @@ int main(int argc, char **argv)
             bad = parse_lever(v, cfg.gnss_lever_b_m);
         } else if (strcmp(a, "--odo-lever-m") == 0) {
             bad = parse_lever(v, cfg.odo_lever_b_m);
+        } else if (strcmp(a, "--gyro-range-dps") == 0) {
+            double x = 0.0;
+            bad = parse_real(v, 1.0, 5000.0, &x);
+            cfg.gyro_range_rps = (nav_real_t)(x * RAD_PER_DEG);
+        } else if (strcmp(a, "--accel-range-mps2") == 0) {
+            double x = 0.0;
+            bad = parse_real(v, 1.0, 2000.0, &x);
+            cfg.accel_range_mps2 = (nav_real_t)x;
         } else if (strcmp(a, "--test-stall-poll-s") == 0) {
             double x = 0.0;
             bad = parse_real(v, 0.0, 1e6, &x);
@@ -383,6 +394,10 @@ int main(int argc, char **argv)
             (unsigned long)h->filter_resets, (unsigned long)h->tasks_late,
             (unsigned long long)hal_linux_watchdog_kicks(&hal),
             watchdog_expired ? ", WATCHDOG EXPIRED" : "");
+    fprintf(stderr, "navecu: sensors: %lu IMU samples saturated, %lu IMU axes stuck, %lu "
+                    "odometer updates refused; non-finite outputs %lu\n",
+            (unsigned long)h->imu_saturated, (unsigned long)h->imu_stuck,
+            (unsigned long)h->odo_rejected, (unsigned long)h->nonfinite_out);
     if (watchdog_expired) {
         return 3;
     }

@@ -564,6 +564,20 @@ static void test_replayed_command_rejected(void **state)
 }
 
 /* skip n IMU samples: the truth moves on, nothing is sent */
+/* HealthFlags of the latest NAV_Status page 0 that carries them, after one more status */
+static uint16_t health_flags_now(void)
+{
+    for (uint32_t i = hal.tx_n; i > 0u; i--) {
+        const hal_can_frame_t *fr = &hal.tx[i - 1u];
+        if (fr->id == NAVECU_CAN_NAV_STATUS_FRAME_ID && (fr->data[0] & 0x0Fu) == 0u) {
+            struct navecu_can_nav_status_t st;
+            navecu_can_nav_status_unpack(&st, fr->data, 8u);
+            return st.health_flags;
+        }
+    }
+    return 0u;
+}
+
 static void skip_samples(int n)
 {
     for (int k = 0; k < n; k++) {
@@ -604,6 +618,48 @@ static void test_imu_gaps(void **state)
     navecu_can_nav_status_unpack(&st, hal.tx[0].data, 8u);
     assert_int_equal(st.mode, APP_MODE_FAULT);
     assert_true(st.health_flags & APP_FLAG_IMU_GAP);
+    assert_true(st.health_flags & APP_FLAG_REACQUIRE);
+}
+
+/* an IMU sample of explicit raw increments (counter and timestamp advanced) */
+static void feed_raw_sample(const int32_t w[3], const int32_t v[3])
+{
+    hal.t_us += 1000000u / RATE_HZ;
+    send_imu_pair(w, v, src.counter);
+    src.counter = e2e_counter_next(src.counter);
+}
+
+/*
+ * IMU plausibility. A z gyro whose raw increment repeats for 2 s while the x gyro swings
+ * by several deg/s is stuck: counted once, flagged (bit 8); a vehicle standing with an
+ * ideal IMU, every axis repeating, is not. A rate at the configured range is saturated:
+ * counted per sample and flagged (bit 9) for a second.
+ */
+static void test_imu_stuck_and_saturated(void **state)
+{
+    (void)state;
+    send_init_commands(30.0);
+    run_still(31); /* an ideal IMU standing: every axis repeats, nothing flagged */
+    assert_int_equal(app.health.imu_stuck, 0u);
+    const int32_t v[3] = {0, 0, 2048};
+    for (int k = 0; k < 3 * RATE_HZ; k++) {
+        /* x gyro: +-5 deg/s square wave (0.05 deg per sample = 416 LSB of 2^-21 rad) */
+        const int32_t w[3] = {(k / 25) % 2 ? 416 : -416, 0, 1234};
+        feed_raw_sample(w, v);
+    }
+    assert_int_equal(app.health.imu_stuck, 2u); /* the z gyro and the constant y gyro */
+    assert_true(health_flags_now() & APP_FLAG_IMU_SUSPECT);
+    /* saturation: 300 deg/s = 5.236 rad/s, 0.05236 rad per sample = 109 805 LSB */
+    const uint32_t sat0 = app.health.imu_saturated;
+    const int32_t w_sat[3] = {0, 0, 109805};
+    feed_raw_sample(w_sat, v);
+    assert_int_equal(app.health.imu_saturated, sat0 + 1u);
+    const int32_t w_ok[3] = {0, 0, 100000};
+    for (int k = 0; k < RATE_HZ / 10; k++) { /* until the next NAV_Status */
+        feed_raw_sample(w_ok, v);
+    }
+    assert_int_equal(app.health.imu_saturated, sat0 + 1u);
+    assert_true(health_flags_now() & APP_FLAG_IMU_SATURATED);
 }
 
 /* While the IMU is silent, app_poll keeps NAV_Status going with the stale flag. */
@@ -702,6 +758,38 @@ static void test_gnss_init_and_epochs(void **state)
 }
 
 static uint8_t att_counter;
+
+
+/*
+ * GIVEN navigation interrupted by an IMU gap of 2 s (beyond bridging): mode Fault,
+ *       HealthFlags REACQUIRE
+ * WHEN a GNSS epoch at 2 m/s arrives (its course is no heading yet)
+ * THEN it still waits;
+ * WHEN a GNSS epoch of the car standing arrives
+ * THEN navigation resumes there with the attitude from before the gap (heading 30 deg)
+ *      and nothing is refused afterwards.
+ */
+static void test_reacquire_after_long_gap(void **state)
+{
+    (void)state;
+    send_init_commands(30.0);
+    run_still(31);
+    skip_samples(200);
+    run_still(1);
+    assert_int_equal(app.mode, APP_MODE_FAULT);
+    assert_true(app.reacquire);
+    send_gnss_epoch(0u, 0u, 2.0);
+    assert_int_equal(app.mode, APP_MODE_FAULT);
+    send_gnss_epoch(1u, 1u, 0.0);
+    assert_int_equal(app.mode, APP_MODE_NAVIGATING);
+    assert_false(app.reacquire);
+    run_still(1);
+    nav_real_t roll, pitch, heading;
+    sins_euler(&app.nav, &roll, &pitch, &heading);
+    assert_true(fabs((double)heading / DEG - 30.0) < 0.05);
+    assert_int_equal(app.health.nav_rejected, 0u);
+    assert_false(health_flags_now() & APP_FLAG_REACQUIRE);
+}
 
 static void send_initial_attitude(double roll_rad, double pitch_rad)
 {
@@ -1238,6 +1326,8 @@ int main(void)
         cmocka_unit_test_setup(test_rejected_frames_change_nothing, setup),
         cmocka_unit_test_setup(test_replayed_command_rejected, setup),
         cmocka_unit_test_setup(test_imu_gaps, setup),
+        cmocka_unit_test_setup(test_imu_stuck_and_saturated, setup),
+        cmocka_unit_test_setup(test_reacquire_after_long_gap, setup),
         cmocka_unit_test_setup(test_stale_imu_status, setup),
         cmocka_unit_test_setup(test_gnss_init_and_epochs, setup),
         cmocka_unit_test_setup(test_initial_attitude_skips_levelling, setup),

@@ -391,12 +391,24 @@ static void test_standstill_updates(void **state)
     sd[EKF_DV] = sd[EKF_DV + 1] = sd[EKF_DV + 2] = 1.0;
     sd[EKF_BG + 2] = 1e-4;
     filter_with(&f, sd);
-    assert_int_equal(ekf_zero_velocity(&f, &s, NAV_C(0.001)), 3);
+    assert_int_equal(ekf_zero_velocity(&f, &s, NAV_C(0.001), NAV_C(0.0)), 3);
     assert_int_equal(ekf_zero_rate(&f, NAV_C(5e-5), NAV_C(1e-7)), 1);
     assert_int_equal(ekf_feedback(&f, &s), NAV_OK);
     assert_near(s.v_n_mps[0], 0.0, 1e-3);
     assert_near(s.v_n_mps[2], 0.0, 1e-3);
     assert_near(f.bg_rps[2], 5e-5, 1e-7);
+
+    /* a locked wheel says "standing" while the car runs at 8 m/s north with the filter's
+     * velocity known to 0.1 m/s: the north row is 80 sigma off, so at a 5-sigma gate the
+     * measurement is refused as a whole; the velocity is left alone */
+    const double v8[3] = {0.0, 8.0, 0.0};
+    nav_at(&s, 0.0, 0.0, 0.0, v8);
+    sd[EKF_DV] = sd[EKF_DV + 1] = sd[EKF_DV + 2] = 0.1;
+    filter_with(&f, sd);
+    assert_int_equal(ekf_zero_velocity(&f, &s, NAV_C(0.02), NAV_C(5.0)), 0);
+    assert_int_equal(f.n_gated, 1u);
+    assert_int_equal(ekf_feedback(&f, &s), NAV_OK);
+    assert_near(s.v_n_mps[1], 8.0, 1e-6);
 }
 
 /* Covariance health: a NaN is reset and counted; a negative variance is floored. */

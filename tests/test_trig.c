@@ -5,8 +5,8 @@
  * Tolerances, in units in the last place (ulp) of the float nearest the exact value:
  * sin/cos 2 ulp on |x| <= pi (the minimax kernel's 2^-24 relative error, about 1 ulp,
  * plus the final rounding and the reduction's last bit); an absolute 2^-23 on
- * |x| <= 12867 (there the reduced argument carries the rounding of x itself times n,
- * so the bound is absolute); atan2 3.5 ulp (the quotient's rounding, the kernel's 1 ulp,
+ * |x| <= 12867 (the reduction steps round at the scale of x, not of the reduced
+ * argument, so near a zero of sin or cos the error is small in absolute terms only); atan2 3.5 ulp (the quotient's rounding, the kernel's 1 ulp,
  * and the subtraction from pi/2 or pi, each about 1 ulp); asin 3 ulp (the sqrt and the
  * pi/2 - 2 s p(s) step near |x| = 1). The sweeps are repeatable (xorshift, fixed seed).
  */

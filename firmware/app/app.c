@@ -45,6 +45,9 @@ app_config_t app_default_config(void)
     cfg.gnss_corr_s = NAV_C(20.0);   /* standalone code receiver: atmosphere, orbits */
     cfg.gnss_lever_b_m[0] = cfg.gnss_lever_b_m[1] = cfg.gnss_lever_b_m[2] = NAV_C(0.0);
     cfg.odo_lever_b_m[0] = cfg.odo_lever_b_m[1] = cfg.odo_lever_b_m[2] = NAV_C(0.0);
+    /* an automotive MEMS IMU's range: 300 deg/s, 8 g */
+    cfg.gyro_range_rps = NAV_C(5.235988);
+    cfg.accel_range_mps2 = NAV_C(78.4532);
     return cfg;
 }
 
@@ -55,7 +58,6 @@ static void count(uint32_t *c)
     }
 }
 
-/* count a rejection and remember when, for the REJECTED flag */
 /* the default profiling hook: nothing (app.h; a board may define its own) */
 __attribute__((weak)) void app_trace(uint32_t point, uint32_t end)
 {
@@ -63,6 +65,7 @@ __attribute__((weak)) void app_trace(uint32_t point, uint32_t end)
     (void)end;
 }
 
+/* count a rejection and remember when, for the REJECTED flag */
 static void reject(app_t *a, uint32_t *c)
 {
     count(c);
@@ -188,7 +191,9 @@ int app_init(app_t *app, const app_config_t *cfg)
         !(nav_fabs(cfg->gnss_lever_b_m[2]) <= NAV_C(10.0)) ||
         !(nav_fabs(cfg->odo_lever_b_m[0]) <= NAV_C(10.0)) ||
         !(nav_fabs(cfg->odo_lever_b_m[1]) <= NAV_C(10.0)) ||
-        !(nav_fabs(cfg->odo_lever_b_m[2]) <= NAV_C(10.0))) {
+        !(nav_fabs(cfg->odo_lever_b_m[2]) <= NAV_C(10.0)) ||
+        !(cfg->gyro_range_rps > NAV_C(0.0)) || !(cfg->gyro_range_rps <= NAV_C(100.0)) ||
+        !(cfg->accel_range_mps2 > NAV_C(0.0)) || !(cfg->accel_range_mps2 <= NAV_C(2000.0))) {
         return NAV_EINVAL;
     }
     odo_config_t ocfg = odo_default_config();
@@ -257,10 +262,16 @@ static nav_real_t clampr(nav_real_t x, nav_real_t lo, nav_real_t hi)
     return x < lo ? lo : (x > hi ? hi : x);
 }
 
+static int navigator_finite(const sins_t *s);
+
 static void emit_navigation(app_t *a, hal_t *hal)
 {
     uint8_t d[8];
     const sins_t *s = &a->nav;
+    if (!navigator_finite(s)) {
+        count(&a->health.nonfinite_out); /* never on the bus; the supervision resets it */
+        return;
+    }
 
     struct navecu_can_nav_position_t p;
     p.latitude = (int32_t)lsb_div_round(s->pos.lat, LSB_PER_E7);
@@ -357,6 +368,19 @@ static uint16_t health_flags(const app_t *a, const hal_t *hal)
         a->n_samples - a->last_filter_reset_sample <= FILTER_RESET_FLAG_S * a->cfg.imu_rate_hz) {
         fl |= APP_FLAG_FILTER_RESET;
     }
+    if (a->had_stuck &&
+        a->n_samples - a->last_stuck_sample <= FILTER_RESET_FLAG_S * a->cfg.imu_rate_hz) {
+        fl |= APP_FLAG_IMU_SUSPECT;
+    }
+    if (a->had_sat && a->n_samples - a->last_sat_sample <= a->cfg.imu_rate_hz) {
+        fl |= APP_FLAG_IMU_SATURATED;
+    }
+    if (a->had_odo_reject && a->n_samples - a->last_odo_reject_sample <= a->cfg.imu_rate_hz) {
+        fl |= APP_FLAG_ODO_REJECTED;
+    }
+    if (a->reacquire) {
+        fl |= APP_FLAG_REACQUIRE;
+    }
     return fl;
 }
 
@@ -418,11 +442,16 @@ static void emit_status(app_t *a, hal_t *hal)
         st.cnt_cmd_rejected = sat16(h->cmd_rejected);
         st.cnt_core_rejected = sat16(h->nav_rejected);
         st.cnt_time_jumps = sat8(h->time_jumps);
-    } else {
+    } else if (st.status_page == 5u) {
         st.cnt_filter_resets = sat16(h->filter_resets);
         st.cnt_tasks_late = sat16(h->tasks_late);
+        st.cnt_non_finite = sat8(h->nonfinite_out);
+    } else {
+        st.cnt_imu_saturated = sat16(h->imu_saturated);
+        st.cnt_odo_rejected = sat16(h->odo_rejected);
+        st.cnt_imu_stuck = sat8(h->imu_stuck);
     }
-    a->status_page = (uint8_t)(st.status_page >= 5u ? 1u : st.status_page + 1u);
+    a->status_page = (uint8_t)(st.status_page >= 6u ? 1u : st.status_page + 1u);
     st.nav_counter = next_tx_counter(a, TX_STATUS);
     navecu_can_nav_status_pack(d, &st, sizeof d);
     e2e_protect(NAVECU_CAN_NAV_STATUS_FRAME_ID, d);
@@ -779,12 +808,21 @@ static void process_sample(app_t *a, hal_t *hal, const int32_t w_raw[3], const i
 /* One IMU sample with the filter running: compensated increments, the strapdown step,
  * the dead reckoning alongside, and at EKF_PRED_HZ the prediction, the odometer or
  * standstill updates and the feedback. */
+/* the wheel speeds disagree with the filter beyond its gate (lock, spin, slip) */
+static void odo_refused(app_t *a)
+{
+    reject(a, &a->health.odo_rejected);
+    a->had_odo_reject = 1u;
+    a->last_odo_reject_sample = a->n_samples;
+}
+
 /* ---- filter supervision (docs/reliability.md) ----
  * The filter has diverged when its state, its covariance or the navigator it corrects is
  * no longer finite, when a variance went negative (ekf_health repairs the covariance and
  * counts it), or when GNSS fixes stay beyond the innovation gate through
- * FILTER_REOPEN_LIMIT covariance reopens in a row (the filter, not the receiver, is then
- * wrong). A diverged filter is stopped: navigation goes on as the land navigation system
+ * FILTER_REOPEN_LIMIT covariance reopens in a row while the odometer is refused too (every
+ * aiding source disagrees: the filter, not a sensor, is then wrong; GNSS refused alone is
+ * a receiver fault, e.g. a frozen fix, which the gate is there to keep out). A diverged filter is stopped: navigation goes on as the land navigation system
  * (SINS with the odometer, mode 4 or 2) and the filter restarts at the next GNSS fix, as it
  * did at the first; if the navigator itself is not finite, navigation restarts from the
  * initial state. Counted in health.filter_resets, flagged for FILTER_RESET_FLAG_S. */
@@ -806,9 +844,14 @@ static int navigator_finite(const sins_t *s)
 static int filter_diverged(app_t *a)
 {
     const ekf_t *k = &a->ekf;
+    /* GNSS refused through reopens is a GNSS fault (a frozen or jumping receiver) as long
+     * as the wheels agree with the filter; only when the odometer is refused too does
+     * every aiding source say the filter is wrong */
+    const int aiding_disagrees =
+        a->gnss_reopen_run >= FILTER_REOPEN_LIMIT && a->had_odo_reject &&
+        a->n_samples - a->last_odo_reject_sample <= (uint64_t)GNSS_REOPEN_S * a->cfg.imu_rate_hz;
     int diverged = k->n_nonfinite != a->ekf_nonfinite_seen ||
-                   k->n_negative_var != a->ekf_negative_seen ||
-                   a->gnss_reopen_run >= FILTER_REOPEN_LIMIT;
+                   k->n_negative_var != a->ekf_negative_seen || aiding_disagrees;
     a->ekf_nonfinite_seen = k->n_nonfinite;
     a->ekf_negative_seen = k->n_negative_var;
     const nav_real_t scalars[4] = {k->k, k->mount_yaw_rad, k->mount_pitch_rad, NAV_C(0.0)};
@@ -913,7 +956,10 @@ static void navigate_filtered(app_t *a, imu_inc_t *inc)
     acc = nav_sqrt(acc) / T;
     const nav_real_t per = a->odo.period_s;
     if (a->odo.valid && a->odo.standing) {
-        (void)ekf_zero_velocity(&a->ekf, &a->nav, ZUPT_SIGMA_MPS + NAV_C(0.1) * per);
+        if (ekf_zero_velocity(&a->ekf, &a->nav, ZUPT_SIGMA_MPS + NAV_C(0.1) * per, GATE_SIGMA) ==
+            0) {
+            odo_refused(a); /* "standing" wheels while the car moves: a locked wheel */
+        }
         const nav_real_t resid = a->w_sum_rad[2] / T - earth_rate_body_z(&a->nav);
         (void)ekf_zero_rate(&a->ekf, resid, a->cfg.gyro_arw_rad_rts / nav_sqrt(T));
     } else if (a->odo.valid && a->odo.n_frames != a->odo_frames_used &&
@@ -928,7 +974,7 @@ static void navigate_filtered(app_t *a, imu_inc_t *inc)
                                         a->odo.speed_mps, sf, NHC_SIGMA_MPS, GATE_SIGMA);
         app_trace(APP_TRACE_ODOMETER_UPDATE, 1u);
         if (n_used == 0) {
-            reject(a, &a->health.bad_value); /* the odometer disagrees beyond its gate */
+            odo_refused(a); /* the odometer disagrees beyond its gate */
         }
     }
     if (ekf_feedback(&a->ekf, &a->nav) != NAV_OK) {
@@ -950,8 +996,22 @@ static void gnss_update(app_t *a, hal_t *hal, uint32_t tow_ms, int have_vel, int
 {
     const int64_t t_imu_us = (int64_t)(a->n_samples * 1000000u / a->cfg.imu_rate_hz);
     const int64_t off = t_imu_us - (int64_t)tow_ms * 1000;
-    if (!a->gnss_off_valid || off < a->gnss_off_min_us || off - a->gnss_off_min_us > 10000000) {
-        a->gnss_off_min_us = off; /* first epoch, or a time jump (week rollover, reset) */
+    /* A receiver clock that jumps (week rollover, reset) moves the offset for good; a late
+     * epoch moves it once. A step earlier by more than 1 s, later by more than 10 s, or
+     * later by more than 0.5 s three epochs in a row is a time jump: counted, and the
+     * offset starts again from it. */
+    const int64_t excess = off - a->gnss_off_min_us;
+    a->gnss_late_run = (uint8_t)(a->gnss_off_valid && excess > 500000
+                                     ? (a->gnss_late_run < 255u ? a->gnss_late_run + 1u : 255u)
+                                     : 0u);
+    const int jumped = a->gnss_off_valid &&
+                       (excess < -1000000 || excess > 10000000 || a->gnss_late_run >= 3u);
+    if (jumped) {
+        count(&a->health.time_jumps);
+        a->gnss_late_run = 0u;
+    }
+    if (!a->gnss_off_valid || off < a->gnss_off_min_us || jumped) {
+        a->gnss_off_min_us = off; /* first epoch, an earlier one, or a time jump */
         a->gnss_off_valid = 1u;
     } else {
         /* the minimum may creep up by 50 ppm of the IMU time elapsed (clock drift) */
@@ -1077,6 +1137,131 @@ static void gnss_update(app_t *a, hal_t *hal, uint32_t tow_ms, int have_vel, int
     filter_calibration(a, hal);
 }
 
+/* ---- IMU plausibility (docs/reliability.md) ----
+ * Saturation: a rate or specific force at the configured range of the IMU (the sensor
+ * clips there, so what it reports is not the motion). A stuck axis: its raw increment
+ * repeats exactly for IMU_STUCK_S while another axis of the same sensor moves (spans more
+ * than 1 deg/s or 0.5 m/s^2): a quantised quiet axis may repeat while the car stands or
+ * cruises, but not while the car turns or brakes and the others see it. Both are counted and flagged;
+ * the samples are still used, since neither says what the true value was. */
+#define IMU_STUCK_S 2u
+static void imu_plausibility(app_t *a, const int32_t w_raw[3], const int32_t v_raw[3])
+{
+    const nav_real_t dt = NAV_C(1.0) / (nav_real_t)a->cfg.imu_rate_hz;
+    const nav_real_t w_max = a->cfg.gyro_range_rps * dt * NAV_C(0.999);
+    const nav_real_t v_max = a->cfg.accel_range_mps2 * dt * NAV_C(0.999);
+    int saturated = 0;
+    int32_t raw[6];
+    for (int i = 0; i < 3; i++) {
+        raw[i] = w_raw[i];
+        raw[i + 3] = v_raw[i];
+    }
+    saturated |= nav_fabs(navecu_can_imu_rate_angle_inc_x_decode(w_raw[0])) >= w_max;
+    saturated |= nav_fabs(navecu_can_imu_rate_angle_inc_y_decode(w_raw[1])) >= w_max;
+    saturated |= nav_fabs(navecu_can_imu_rate_angle_inc_z_decode(w_raw[2])) >= w_max;
+    saturated |= nav_fabs(navecu_can_imu_accel_vel_inc_x_decode(v_raw[0])) >= v_max;
+    saturated |= nav_fabs(navecu_can_imu_accel_vel_inc_y_decode(v_raw[1])) >= v_max;
+    saturated |= nav_fabs(navecu_can_imu_accel_vel_inc_z_decode(v_raw[2])) >= v_max;
+    if (saturated) {
+        count(&a->health.imu_saturated);
+        a->had_sat = 1u;
+        a->last_sat_sample = a->n_samples;
+    }
+    const uint32_t n_stuck = IMU_STUCK_S * a->cfg.imu_rate_hz;
+    /* blocks of half the window: the last block and the one before lie within the last
+     * n_stuck samples, i.e. within the time the stuck axis has been repeating */
+    if (a->imu_blk_n == 0u || a->imu_blk_n >= n_stuck / 2u) {
+        for (int i = 0; i < 6; i++) {
+            a->imu_prev_min[i] = a->imu_blk_n == 0u ? raw[i] : a->imu_blk_min[i];
+            a->imu_prev_max[i] = a->imu_blk_n == 0u ? raw[i] : a->imu_blk_max[i];
+            a->imu_blk_min[i] = a->imu_blk_max[i] = raw[i];
+        }
+        a->imu_blk_n = 0u;
+    }
+    a->imu_blk_n++;
+    for (int i = 0; i < 6; i++) {
+        a->imu_same_n[i] = (a->have_sample && raw[i] == a->imu_last_raw[i])
+                               ? (a->imu_same_n[i] < UINT32_MAX ? a->imu_same_n[i] + 1u : UINT32_MAX)
+                               : 0u;
+        a->imu_last_raw[i] = raw[i];
+        a->imu_blk_min[i] = raw[i] < a->imu_blk_min[i] ? raw[i] : a->imu_blk_min[i];
+        a->imu_blk_max[i] = raw[i] > a->imu_blk_max[i] ? raw[i] : a->imu_blk_max[i];
+    }
+    /* "another axis moves": its increments spanned more than 1 deg/s (gyro) or 0.5 m/s^2
+     * (accelerometer) over the last one to two blocks: motion, not noise in the last bit */
+    const nav_real_t w_move = NAV_C(0.017453) * dt / navecu_can_imu_rate_angle_inc_x_decode(1);
+    const nav_real_t v_move = NAV_C(0.5) * dt / navecu_can_imu_accel_vel_inc_x_decode(1);
+    for (int i = 0; i < 6; i++) {
+        if (a->imu_same_n[i] != n_stuck) {
+            continue; /* counted once, when it reaches the window */
+        }
+        const int base = i < 3 ? 0 : 3; /* the same sensor: gyro or accelerometer */
+        const nav_real_t move = i < 3 ? w_move : v_move;
+        int other_moves = 0;
+        for (int j = base; j < base + 3; j++) {
+            const int32_t lo = a->imu_blk_min[j] < a->imu_prev_min[j] ? a->imu_blk_min[j]
+                                                                      : a->imu_prev_min[j];
+            const int32_t hi = a->imu_blk_max[j] > a->imu_prev_max[j] ? a->imu_blk_max[j]
+                                                                      : a->imu_prev_max[j];
+            other_moves |= j != i && (nav_real_t)((int64_t)hi - (int64_t)lo) > move;
+        }
+        if (other_moves) {
+            count(&a->health.imu_stuck);
+            a->had_stuck = 1u;
+            a->last_stuck_sample = a->n_samples;
+        }
+    }
+}
+
+/* ---- re-acquisition after an IMU gap too long to bridge ----
+ * The motion during the gap is unknown, so position, velocity and heading are lost; the
+ * roll and pitch are kept (a car's change little), and so is the heading when the car is
+ * found standing. The next GNSS epoch with a velocity gives the position and the velocity,
+ * and, at GNSS_COURSE_MIN_MPS or more, the heading (the course plus the mounting yaw in
+ * use); navigation resumes there, the filter restarting at the epoch after. Output mode
+ * Fault and HealthFlags REACQUIRE until then. */
+static void begin_reacquire(app_t *a)
+{
+    nav_real_t roll, pitch, heading;
+    sins_euler(&a->nav, &roll, &pitch, &heading);
+    a->reacq_roll_rad = roll;
+    a->reacq_pitch_rad = pitch;
+    a->reacq_heading_rad = heading;
+    a->reacq_mount_rad = a->ekf_on ? a->ekf.mount_yaw_rad : a->dr.dh_rad;
+    a->reacquire = 1u;
+    a->ekf_on = 0u;
+    a->have_fix = 0u;
+    a->mode = APP_MODE_FAULT;
+}
+
+/* Resume at the GNSS epoch just received (its frames decoded in a->gnss_*). */
+static void reacquire_from_gnss(app_t *a, nav_real_t speed_mps, nav_real_t course_rad)
+{
+    const nav_real_t heading = speed_mps >= GNSS_COURSE_MIN_MPS
+                                   ? course_rad + a->reacq_mount_rad
+                                   : a->reacq_heading_rad;
+    nav_real_t q[4];
+    quat_from_euler(a->reacq_roll_rad, a->reacq_pitch_rad, heading, q);
+    const geo_pos_t pos = {(int64_t)a->gnss_lat_e7 * LSB_PER_E7,
+                           (int64_t)a->gnss_lon_e7 * LSB_PER_E7,
+                           (int64_t)a->gnss_h_cm * 10 * GEO_LSB_PER_MM};
+    const nav_real_t v[3] = {navecu_can_gnss_velocity_vel_east_decode(a->gnss_vel_raw[0]),
+                             navecu_can_gnss_velocity_vel_north_decode(a->gnss_vel_raw[1]),
+                             navecu_can_gnss_velocity_vel_up_decode(a->gnss_vel_raw[2])};
+    const sins_config_t scfg = sins_default_config();
+    if (sins_init(&a->nav, &scfg, &pos, v, q) != NAV_OK ||
+        dr_init(&a->dr, &pos, a->cal_dh_rad, a->cal_mu) != NAV_OK) {
+        reject(a, &a->health.gnss_rejected);
+        return;
+    }
+    sins_set_height_ref(&a->nav, (nav_real_t)a->gnss_h_cm * NAV_C(0.01));
+    a->reacquire = 0u;
+    a->output_dr = 0u;
+    a->holding = 0u;
+    a->vhist_n = 0u; /* the velocities before the gap are not this navigator's */
+    a->mode = APP_MODE_NAVIGATING;
+}
+
 static void on_imu_rate(app_t *a, const hal_can_frame_t *f)
 {
     struct navecu_can_imu_rate_t m;
@@ -1135,6 +1320,7 @@ static void on_imu_accel(app_t *a, hal_t *hal, const hal_can_frame_t *f)
         }
     }
     const int32_t v_raw[3] = {m.vel_inc_x, m.vel_inc_y, m.vel_inc_z};
+    imu_plausibility(a, a->rate_raw, v_raw);
     a->have_sample = 1u;
     a->last_imu_t_us = f->t_us;
     if (lost > 0u) {
@@ -1146,7 +1332,9 @@ static void on_imu_accel(app_t *a, hal_t *hal, const hal_can_frame_t *f)
                                  : a->health.imu_lost + (uint32_t)lost;
         a->had_gap = 1u;
         if (lost > (uint64_t)APP_MAX_BRIDGE_S * a->cfg.imu_rate_hz) {
-            if (a->mode == APP_MODE_NAVIGATING || a->mode == APP_MODE_LEVELLING) {
+            if (a->mode == APP_MODE_NAVIGATING) {
+                begin_reacquire(a);
+            } else if (a->mode == APP_MODE_LEVELLING) {
                 a->mode = APP_MODE_FAULT;
             }
             a->n_samples += lost;
@@ -1303,6 +1491,13 @@ static void on_gnss_status(app_t *a, hal_t *hal, const hal_can_frame_t *f)
         calibrate_at(a, hal, a->gnss_lat_e7, a->gnss_lon_e7,
                      NAVECU_CAN_NAV_CALIBRATION_CAL_SOURCE_GNSS_CHOICE);
         return;
+    }
+    if (a->reacquire && a->mode == APP_MODE_FAULT) {
+        if (have_vel && have_h &&
+            (speed >= GNSS_COURSE_MIN_MPS || (speed >= NAV_C(0.0) && speed <= GNSS_STILL_MPS))) {
+            reacquire_from_gnss(a, speed, course);
+        }
+        return; /* between 0.3 and 5 m/s the course is not a heading: wait */
     }
     if (a->mode == APP_MODE_NAVIGATING) {
         app_trace(APP_TRACE_GNSS_UPDATE, 0u);

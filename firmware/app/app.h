@@ -46,6 +46,8 @@ typedef struct {
     nav_real_t gnss_corr_s;       /* correlation time of the receiver's position errors */
     nav_real_t odo_lever_b_m[3];  /* the odometer's reference point (rear axle middle) from
                                      the IMU, body axes, m */
+    nav_real_t gyro_range_rps;    /* the IMU's measurement range: a rate at or beyond it is */
+    nav_real_t accel_range_mps2;  /* saturated (counted, flagged) */
 } app_config_t;
 
 /* Counters of everything the application refused; saturating at UINT32_MAX. */
@@ -64,6 +66,13 @@ typedef struct {
     uint32_t time_jumps;       /* receive time going backwards; IMU gaps seen only in time */
     uint32_t filter_resets;    /* Kalman filter found diverged and reset (app_t supervision) */
     uint32_t tasks_late;       /* app_tasks_ok found a task late: watchdog kick withheld */
+    uint32_t nonfinite_out;    /* output values that were not finite: not sent */
+    uint32_t imu_saturated;    /* IMU samples with an axis at its configured range */
+    uint32_t imu_stuck;        /* IMU axes found stuck (a raw value repeated for 2 s while
+                                  another axis moved) */
+    uint32_t imu_timing;       /* IMU samples received more than half a period off time */
+    uint32_t odo_rejected;     /* odometer updates refused by the filter's gate (wheel
+                                  lock, spin, slip) */
 } app_health_t;
 
 typedef enum {
@@ -83,6 +92,10 @@ typedef enum {
 #define APP_FLAG_NO_HEADING 0x0020u   /* waiting for a heading (command or GNSS course) */
 #define APP_FLAG_IMU_GAP 0x0040u      /* IMU samples were lost and bridged in the last second */
 #define APP_FLAG_FILTER_RESET 0x0080u /* the Kalman filter diverged and was reset in the last 10 s */
+#define APP_FLAG_IMU_SUSPECT 0x0100u  /* an IMU axis was found stuck in the last 10 s */
+#define APP_FLAG_IMU_SATURATED 0x0200u /* an IMU axis was at its range in the last second */
+#define APP_FLAG_ODO_REJECTED 0x0400u /* the wheel speeds disagreed with the filter in the last second */
+#define APP_FLAG_REACQUIRE 0x0800u    /* after a long IMU gap: waiting for GNSS to re-acquire */
 
 /* IMU gaps up to this many seconds are bridged by repeating the next sample; a longer gap
  * ends navigation (APP_MODE_FAULT) until the next SetInitialPosition. */
@@ -163,6 +176,7 @@ typedef struct {
     uint32_t vhist_n;           /* samples written */
     int64_t gnss_off_min_us;    /* min over epochs of (IMU time - TimeOfWeek) */
     uint8_t gnss_off_valid;
+    uint8_t gnss_late_run;      /* consecutive epochs more than 0.5 s late */
     uint16_t gnss_hacc_dm, gnss_vacc_dm; /* this epoch's accuracies, 0.1 m */
     uint8_t gnss_sacc_raw;      /* SpeedAccuracy of the epoch's velocity, 0.1 m/s */
     uint64_t last_fix_sample;   /* sample of the last GNSS fix used by the filter */
@@ -175,6 +189,18 @@ typedef struct {
     uint32_t ekf_nonfinite_seen, ekf_negative_seen; /* ekf counters at the last check */
     uint64_t last_filter_reset_sample; /* sample of the last filter reset */
     uint8_t had_filter_reset;
+    /* re-acquisition after an IMU gap too long to bridge: the attitude before the gap is
+     * kept; position, velocity and (when driving) heading come from the next GNSS epoch */
+    uint8_t reacquire;
+    nav_real_t reacq_roll_rad, reacq_pitch_rad, reacq_heading_rad, reacq_mount_rad;
+    /* IMU plausibility: an axis whose raw increment repeats exactly (stuck), saturation */
+    int32_t imu_last_raw[6];
+    uint32_t imu_same_n[6];     /* consecutive samples with the same raw value, per axis */
+    int32_t imu_blk_min[6], imu_blk_max[6];   /* raw range of each axis in this block and */
+    int32_t imu_prev_min[6], imu_prev_max[6]; /* the previous one (IMU_STUCK_S / 2 each) */
+    uint32_t imu_blk_n;
+    uint64_t last_stuck_sample, last_sat_sample, last_odo_reject_sample;
+    uint8_t had_stuck, had_sat, had_odo_reject;
 
     /* calibration (seed 000 eqs 7-12) and its storage */
     calstore_t calstore;

@@ -156,8 +156,11 @@ int ekf_odometer(ekf_t *k, const sins_t *s, const nav_real_t w_b_rps[3],
                  const nav_real_t lever_b_m[3], nav_real_t speed_mps, nav_real_t sigma_fwd_mps,
                  nav_real_t sigma_nhc_mps, nav_real_t gate_sigma);
 
-/* Standstill: zero velocity (ENU) with 1-sigma sigma_mps. */
-int ekf_zero_velocity(ekf_t *k, const sins_t *s, nav_real_t sigma_mps);
+/* Standstill: zero velocity (ENU) with 1-sigma sigma_mps; refused as a whole (and counted
+ * in n_gated) when a row's innovation is beyond gate_sigma standard deviations (0: no
+ * gate): a wheel that locks while the car still moves reads "standing". Returns the rows
+ * used (0: refused). */
+int ekf_zero_velocity(ekf_t *k, const sins_t *s, nav_real_t sigma_mps, nav_real_t gate_sigma);
 
 /* Standstill: the bias-compensated z gyro rate minus the Earth's rate seen by the body z
  * axis (rad/s) measures the residual z gyro bias; 1-sigma sigma_rps. */

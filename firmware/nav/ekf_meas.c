@@ -163,7 +163,7 @@ int ekf_odometer(ekf_t *k, const sins_t *s, const nav_real_t w_b_rps[3],
     return apply_rows(k, H, z, r, 3, gate_sigma);
 }
 
-int ekf_zero_velocity(ekf_t *k, const sins_t *s, nav_real_t sigma_mps)
+int ekf_zero_velocity(ekf_t *k, const sins_t *s, nav_real_t sigma_mps, nav_real_t gate_sigma)
 {
     nav_real_t H[MAX_ROWS][EKF_N], z[3], r[3];
     for (int m = 0; m < 3; m++) {
@@ -172,7 +172,7 @@ int ekf_zero_velocity(ekf_t *k, const sins_t *s, nav_real_t sigma_mps)
         z[m] = s->v_n_mps[m];
         r[m] = sigma_mps * sigma_mps;
     }
-    return apply_rows(k, H, z, r, 3, NAV_C(0.0));
+    return apply_rows(k, H, z, r, 3, gate_sigma);
 }
 
 int ekf_zero_rate(ekf_t *k, nav_real_t residual_rate_z_rps, nav_real_t sigma_rps)

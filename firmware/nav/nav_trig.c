@@ -20,11 +20,14 @@
  *   polynomial on |u| <= tan(pi/8), then the octant.
  * - asin: a degree-11 odd polynomial for |x| <= 1/2; for 1/2 < |x| <= 1
  *   asin x = pi/2 - 2 asin(sqrt((1 - |x|) / 2)).
- * Accuracy, measured against the double libm over dense sweeps (tests/test_trig.c):
- * sin/cos within 2 ulp for |x| <= 12867, atan2 within 3 ulp, asin within 3 ulp. Beyond
- * |x| = 12867 sin/cos lose accuracy in proportion to |x| (no navigation angle gets there:
- * the core keeps angles wrapped to [-pi, pi]); beyond 2^18 rad, and for a NaN or an
- * infinite argument, they return NaN rather than a meaningless number.
+ * Accuracy against the double libm (tests/test_trig.c, whose bounds these are; measured
+ * worst in brackets): sin/cos within 2 ulp for |x| <= pi (1.55); for pi < |x| <= 12867 an
+ * absolute error below 2^-23 (9.4e-8; near the zeros at multiples of pi/2 that is many
+ * ulp of a tiny result: the reduction steps round at the scale of x, not of the result);
+ * atan2 within 3.5 ulp (2.9); asin within 3 ulp (2.4). Beyond |x| = 12867 sin/cos lose
+ * accuracy in proportion to |x| (no navigation angle gets there: the core keeps angles
+ * wrapped to [-pi, pi]); beyond 2^18 rad, and for a NaN or an infinite argument, they
+ * return NaN rather than a meaningless number.
  */
 #include "nav_types.h"
 

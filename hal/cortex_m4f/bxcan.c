@@ -300,3 +300,8 @@ int bxcan_stats(const bxcan_t *dev, bxcan_stats_t *s)
     s->bus_off_events = dev->bus_off_events;
     return 0;
 }
+
+int bxcan_rx_pending(const bxcan_t *dev)
+{
+    return dev != NULL && dev->ring_head != dev->ring_tail;
+}

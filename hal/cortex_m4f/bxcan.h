@@ -327,4 +327,8 @@ int bxcan_error_state(bxcan_t *dev, bxcan_error_t *e);
 /* The counters. Returns 0, HAL_EINVAL (NULL pointer). */
 int bxcan_stats(const bxcan_t *dev, bxcan_stats_t *s);
 
+/* 1 when the ring holds a frame for bxcan_receive (the main loop checks it with interrupts
+ * masked before it sleeps), else 0 (also for NULL). */
+int bxcan_rx_pending(const bxcan_t *dev);
+
 #endif /* NAVECU_BXCAN_H */

@@ -40,11 +40,11 @@ static void watchdog_hook(void *ctx)
     stm32_iwdg_kick((stm32_iwdg_t *)ctx);
 }
 
-/* PB8 = CAN1_RX, PB9 = CAN1_TX: alternate function 9, high speed */
+/* PB8 = CAN1_RX, PB9 = CAN1_TX: alternate function 9, fast speed */
 static void can_pins(void)
 {
     GPIOB_MODER = (GPIOB_MODER & ~(0xFu << 16)) | (0xAu << 16);      /* pins 8, 9: AF */
-    GPIOB_OSPEEDR = (GPIOB_OSPEEDR & ~(0xFu << 16)) | (0xAu << 16);  /* fast */
+    GPIOB_OSPEEDR = (GPIOB_OSPEEDR & ~(0xFu << 16)) | (0xAu << 16);  /* 0b10: fast speed */
     GPIOB_AFRH = (GPIOB_AFRH & ~0xFFu) | (GPIO_AF9_CAN1 << 0) | (GPIO_AF9_CAN1 << 4);
 }
 
@@ -54,11 +54,20 @@ hal_t *hal_stm32_init(const uint32_t *rx_ids, size_t n_ids)
     const stm32_clock_config_t clk = {(stm32_rcc_regs_t *)RCC_BASE, (stm32_pwr_regs_t *)PWR_BASE,
                                       (stm32_flash_regs_t *)FLASH_IF_BASE, 0u, CLOCK_POLLS,
                                       NULL, NULL};
-    if (stm32_clock_init(&clk, &h->clock) != 0) {
+    const int clk_rc = stm32_clock_init(&clk, &h->clock);
+    if (clk_rc == HAL_EINVAL) {
+        /* not from the reset state (a bootloader set the clocks up): take them as they are */
+        (void)stm32_clock_status(clk.rcc, &h->clock);
+        if (h->clock.pclk1_hz != 42000000u) {
+            h->init_faults |= HAL_STM32_FAULT_CLOCK; /* the CAN bit timing needs 42 MHz */
+        }
+    } else if (clk_rc != 0) {
         h->init_faults |= HAL_STM32_FAULT_CLOCK;
     }
     (void)stm32_clock_enable_peripherals(clk.rcc);
-    (void)stm32_timebase_init(&h->time, (stm32_tim_regs_t *)TIM2_BASE, h->clock.tim_apb1_hz);
+    if (stm32_timebase_init(&h->time, (stm32_tim_regs_t *)TIM2_BASE, h->clock.tim_apb1_hz) != 0) {
+        h->init_faults |= HAL_STM32_FAULT_CLOCK; /* hal_time_us then stays 0 */
+    }
 
     const stm32_iwdg_config_t wd = {(stm32_iwdg_regs_t *)IWDG_BASE,
                                     STM32_IWDG_DEFAULT_TIMEOUT_MS, IWDG_POLLS, NULL, NULL};
@@ -179,7 +188,9 @@ int hal_nvm_erase_sector(hal_t *hal, size_t sector)
     }
     /* a 16 KiB erase takes up to 500 ms, longer than the watchdog's 136 ms worst case,
      * and the CPU stalls on flash meanwhile: the timeout is raised around it */
-    (void)stm32_iwdg_set_timeout(&hal->iwdg, STM32_IWDG_ERASE_TIMEOUT_MS);
+    if (stm32_iwdg_set_timeout(&hal->iwdg, STM32_IWDG_ERASE_TIMEOUT_MS) != 0) {
+        return HAL_EIO; /* erasing under the short timeout would reset the ECU mid-erase */
+    }
     const int rc = stm32_flash_erase_sector(&hal->flash, sector);
     (void)stm32_iwdg_set_timeout(&hal->iwdg, STM32_IWDG_DEFAULT_TIMEOUT_MS);
     return rc;
@@ -194,6 +205,11 @@ int hal_nvm_erase(hal_t *hal)
         }
     }
     return 0;
+}
+
+int hal_stm32_rx_pending(const hal_t *hal)
+{
+    return bxcan_rx_pending(&hal->can);
 }
 
 void hal_watchdog_kick(hal_t *hal)

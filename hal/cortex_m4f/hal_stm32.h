@@ -50,4 +50,8 @@ struct hal {
  */
 hal_t *hal_stm32_init(const uint32_t *rx_ids, size_t n_ids);
 
+/* 1 when a received frame waits in the CAN ring (checked with interrupts masked before the
+ * main loop sleeps, so a frame that arrived after the last receive is not left waiting). */
+int hal_stm32_rx_pending(const hal_t *hal);
+
 #endif /* NAVECU_HAL_STM32_H */

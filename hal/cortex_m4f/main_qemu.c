@@ -10,7 +10,7 @@
  * so OUT.log must equal `build/host/navecu --can-log IN.log --out OUT.log` byte for byte
  * (make target-test). With a fourth argument it also writes one line per frame to TRACE:
  * "ID TICKS UPDATES" (hex ID; SysTick ticks spent in app_handle_frame + app_poll for it;
- * Kalman updates it made), which tools/target/bench.py turns into instruction counts:
+ * Kalman updates it made), which tools/target/qemu_run.py turns into instruction counts:
  * under `-icount shift=0` QEMU advances its virtual clock 1 ns per instruction, and the
  * SysTick runs from the 168 MHz core clock, so one tick is 1e9/168e6 = 5.95 instructions
  * (calibrated at start-up with a loop of known length, also written to TRACE), and at the
@@ -40,6 +40,14 @@ static size_t trace_len;
 static int32_t trace_fd = -1;
 
 void board_main(void) __attribute__((noreturn));
+void board_fault(void);
+
+/* an unexpected exception (startup.c's default_handler): fail the run, exit status 3 */
+void board_fault(void)
+{
+    semihost_puts("navecu-qemu: fault exception\n");
+    semihost_exit(3u);
+}
 
 static void put_str(const char *s)
 {

@@ -55,6 +55,13 @@ void board_main(void)
         if (app_tasks_ok(&app, hal_time_us(hal))) {
             hal_watchdog_kick(hal);
         }
-        __asm__ volatile("wfi");
+        /* sleep only if nothing arrived meanwhile: with interrupts masked, a frame that
+         * comes in after the check still ends WFI (a pending interrupt wakes it), and is
+         * handled once they are unmasked */
+        __asm__ volatile("cpsid i" ::: "memory");
+        if (!hal_stm32_rx_pending(hal)) {
+            __asm__ volatile("wfi");
+        }
+        __asm__ volatile("cpsie i" ::: "memory");
     }
 }

@@ -8,8 +8,7 @@
  * table and would pull in stdio and a heap.
  *
  * The vector table (RM0090 table 61, 82 peripheral interrupts) points every exception
- * that the board does not handle to default_handler, which stops in a loop: the
- * independent watchdog then resets the ECU. Handlers are weak aliases, so a driver
+ * that the board does not handle to default_handler, which resets the ECU (board_fault). Handlers are weak aliases, so a driver
  * overrides one by defining a function of that name.
  */
 #include <stdint.h>
@@ -25,8 +24,20 @@ void board_main(void) __attribute__((noreturn));
 void Reset_Handler(void) __attribute__((noreturn));
 void default_handler(void);
 
+/* What an unexpected exception does: the ECU resets itself (SCB AIRCR SYSRESETREQ,
+ * ARMv7-M B3.2.6), since the watchdog may not run yet this early; the QEMU image exits
+ * with a failure status instead (main_qemu.c). Weak: a board may define its own. */
+void board_fault(void);
+__attribute__((weak)) void board_fault(void)
+{
+    __asm__ volatile("dsb" ::: "memory");
+    *(volatile uint32_t *)0xE000ED0Cu = 0x05FA0004u;
+    __asm__ volatile("dsb" ::: "memory");
+}
+
 void default_handler(void)
 {
+    board_fault();
     for (;;) {
     }
 }

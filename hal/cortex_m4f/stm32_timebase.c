@@ -28,6 +28,9 @@ int stm32_timebase_init(stm32_timebase_t *tb, stm32_tim_regs_t *regs,
 
 uint64_t stm32_timebase_us(stm32_timebase_t *tb)
 {
+    if (tb == NULL || tb->regs == NULL) {
+        return 0u; /* not initialised: a constant clock (the board records the fault) */
+    }
     /* the count first, then CNT (both volatile: the compiler keeps the order), so CNT
      * is never older than the count it is paired with (the header's note) */
     uint32_t h = tb->half_periods;

@@ -78,6 +78,34 @@ def memory_use(sec: dict) -> tuple[int, int, dict]:
     return flash, ram, detail
 
 
+# STM32F405 flash sectors (RM0090 table 5): 4 x 16 KiB, 64 KiB, 7 x 128 KiB
+SECTORS = ([(0x08000000 + k * 0x4000, 0x4000) for k in range(4)] + [(0x08010000, 0x10000)]
+           + [(0x08020000 + k * 0x20000, 0x20000) for k in range(7)])
+NVM_RANGE = (0x08004000, 0x0800C000)  # sectors 1 and 2 (stm32f405.ld)
+
+
+def load_segments(elf: Path) -> list:
+    """[(flash address, bytes)] of what is programmed: every loadable segment's file image
+    (readelf -l), which also covers .data's initial values at their load address."""
+    out = subprocess.run(["arm-none-eabi-readelf", "-lW", str(elf)], check=True,
+                         capture_output=True, text=True).stdout
+    segs = []
+    for line in out.splitlines():
+        p = line.split()
+        if p and p[0] == "LOAD":
+            paddr, filesz = int(p[3], 16), int(p[4], 16)
+            if filesz > 0:
+                segs.append((paddr, filesz))
+    return segs
+
+
+def sectors_touched(segs: list) -> tuple[int, list]:
+    """Bytes of the erase sectors the image occupies, and which (index list)."""
+    touched = [k for k, (a, n) in enumerate(SECTORS)
+               if any(p < a + n and p + sz > a for p, sz in segs)]
+    return sum(SECTORS[k][1] for k in touched), touched
+
+
 def stack(objs: list, entries: list, isrs: list, indirect: list) -> dict:
     """Run stack_usage.py over the .ci files of these objects only (not the QEMU image's)."""
     with tempfile.TemporaryDirectory() as d:
@@ -87,8 +115,10 @@ def stack(objs: list, entries: list, isrs: list, indirect: list) -> dict:
                 raise SystemExit(f"budget: {ci} missing (objects need -fcallgraph-info=su)")
             (Path(d) / f"{k:03d}_{ci.name}").write_text(ci.read_text())
         js = Path(d) / "stack.json"
+        # 108: the FPU exception frame (26 words) plus the 4-byte alignment pad (STKALIGN)
         cmd = [sys.executable, str(ROOT / "tools" / "target" / "stack_usage.py"), "--ci-dir", d,
-               "--limit-bytes", str(LIMITS["stack_bytes"][0]), "--json", str(js)]
+               "--limit-bytes", str(LIMITS["stack_bytes"][0]), "--exception-frame-bytes", "108",
+               "--json", str(js)]
         for e in entries:
             cmd += ["--entry", e]
         for i in isrs:
@@ -118,6 +148,10 @@ def main(argv=None) -> int:
 
     sec = sections(a.elf)
     flash, ram, detail = memory_use(sec)
+    segs = load_segments(a.elf)
+    flash_programmed = sum(n for _, n in segs)
+    sector_bytes, sector_list = sectors_touched(segs)
+    nvm_overlap = [hex(p) for p, n in segs if p < NVM_RANGE[1] and p + n > NVM_RANGE[0]]
     syms = symbols(a.elf)
     heap = sorted(s for s in syms if HEAP_SYMBOLS.match(s))
     dbl = sorted(s for s in syms if DOUBLE_SYMBOLS.match(s))
@@ -134,8 +168,15 @@ def main(argv=None) -> int:
         print(f"  {name:17s} {used:7d} bytes  limit {limit}{aim_txt}  {'ok' if ok else 'EXCEEDED'}")
         if not ok:
             failed.append(name)
+    print(f"  flash, programmed {flash_programmed:7d} bytes in erase sectors {sector_list} "
+          f"({sector_bytes // 1024} KiB of sectors; NVM sectors 1-2 "
+          f"{'untouched' if not nvm_overlap else 'OVERLAPPED at ' + ', '.join(nvm_overlap)})")
     print(f"  heap              {'none linked' if not heap else 'LINKED: ' + ', '.join(heap)}")
     print(f"  double precision  {'none linked' if not dbl else 'LINKED: ' + ', '.join(dbl)}")
+    if flash_programmed != flash:
+        failed.append("flash accounting (sections vs segments differ)")
+    if nvm_overlap:
+        failed.append("image overlaps the NVM sectors")
     if heap:
         failed.append("heap")
     if dbl:
@@ -144,6 +185,8 @@ def main(argv=None) -> int:
            "limits": {k: v[0] for k, v in LIMITS.items()},
            "aims": {k: v[1] for k, v in LIMITS.items() if v[1]},
            "sections": detail, "heap_symbols": heap, "double_symbols": dbl,
+           "flash_programmed_bytes": flash_programmed, "flash_sectors": sector_list,
+           "flash_sector_bytes": sector_bytes,
            "stack": st, "command": "make target-budget", "ok": not failed}
     if a.json:
         a.json.parent.mkdir(parents=True, exist_ok=True)

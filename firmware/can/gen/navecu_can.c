@@ -2440,6 +2440,15 @@ int navecu_can_nav_status_pack(
         dst_p[2] |= pack_right_shift_u16(src_p->cnt_filter_resets, 8u, 0xffu);
         dst_p[3] |= pack_left_shift_u16(src_p->cnt_tasks_late, 0u, 0xffu);
         dst_p[4] |= pack_right_shift_u16(src_p->cnt_tasks_late, 8u, 0xffu);
+        dst_p[5] |= pack_left_shift_u8(src_p->cnt_non_finite, 0u, 0xffu);
+        break;
+
+    case 6:
+        dst_p[1] |= pack_left_shift_u16(src_p->cnt_imu_saturated, 0u, 0xffu);
+        dst_p[2] |= pack_right_shift_u16(src_p->cnt_imu_saturated, 8u, 0xffu);
+        dst_p[3] |= pack_left_shift_u16(src_p->cnt_odo_rejected, 0u, 0xffu);
+        dst_p[4] |= pack_right_shift_u16(src_p->cnt_odo_rejected, 8u, 0xffu);
+        dst_p[5] |= pack_left_shift_u8(src_p->cnt_imu_stuck, 0u, 0xffu);
         break;
 
     default:
@@ -2509,6 +2518,15 @@ int navecu_can_nav_status_unpack(
         dst_p->cnt_filter_resets |= unpack_left_shift_u16(src_p[2], 8u, 0xffu);
         dst_p->cnt_tasks_late = unpack_right_shift_u16(src_p[3], 0u, 0xffu);
         dst_p->cnt_tasks_late |= unpack_left_shift_u16(src_p[4], 8u, 0xffu);
+        dst_p->cnt_non_finite = unpack_right_shift_u8(src_p[5], 0u, 0xffu);
+        break;
+
+    case 6:
+        dst_p->cnt_imu_saturated = unpack_right_shift_u16(src_p[1], 0u, 0xffu);
+        dst_p->cnt_imu_saturated |= unpack_left_shift_u16(src_p[2], 8u, 0xffu);
+        dst_p->cnt_odo_rejected = unpack_right_shift_u16(src_p[3], 0u, 0xffu);
+        dst_p->cnt_odo_rejected |= unpack_left_shift_u16(src_p[4], 8u, 0xffu);
+        dst_p->cnt_imu_stuck = unpack_right_shift_u8(src_p[5], 0u, 0xffu);
         break;
 
     default:
@@ -2699,6 +2717,28 @@ bool navecu_can_nav_status_cnt_filter_resets_is_in_phys_range(float value)
     return ((value >= 0.0f) && (value <= 65535.0f));
 }
 
+uint16_t navecu_can_nav_status_cnt_imu_saturated_encode(float value)
+{
+    return (uint16_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_nav_status_cnt_imu_saturated_decode(uint16_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_nav_status_cnt_imu_saturated_is_in_range(uint16_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_nav_status_cnt_imu_saturated_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 65535.0f));
+}
+
 uint16_t navecu_can_nav_status_horiz_accuracy_encode(float value)
 {
     return (uint16_t)(cantools_unsigned_from_double(roundf(value / 0.01f)));
@@ -2831,6 +2871,28 @@ bool navecu_can_nav_status_cnt_tasks_late_is_in_phys_range(float value)
     return ((value >= 0.0f) && (value <= 65535.0f));
 }
 
+uint16_t navecu_can_nav_status_cnt_odo_rejected_encode(float value)
+{
+    return (uint16_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_nav_status_cnt_odo_rejected_decode(uint16_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_nav_status_cnt_odo_rejected_is_in_range(uint16_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_nav_status_cnt_odo_rejected_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 65535.0f));
+}
+
 uint8_t navecu_can_nav_status_cnt_bad_crc_encode(float value)
 {
     return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
@@ -2915,6 +2977,50 @@ bool navecu_can_nav_status_cnt_time_jumps_is_in_range(uint8_t value)
 }
 
 bool navecu_can_nav_status_cnt_time_jumps_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 255.0f));
+}
+
+uint8_t navecu_can_nav_status_cnt_non_finite_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_nav_status_cnt_non_finite_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_nav_status_cnt_non_finite_is_in_range(uint8_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_nav_status_cnt_non_finite_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 255.0f));
+}
+
+uint8_t navecu_can_nav_status_cnt_imu_stuck_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_nav_status_cnt_imu_stuck_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_nav_status_cnt_imu_stuck_is_in_range(uint8_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_nav_status_cnt_imu_stuck_is_in_phys_range(float value)
 {
     return ((value >= 0.0f) && (value <= 255.0f));
 }

@@ -233,16 +233,20 @@ extern "C" {
 #define NAVECU_CAN_NAV_STATUS_CNT_BAD_VALUE_NAME "CntBadValue"
 #define NAVECU_CAN_NAV_STATUS_CNT_CMD_REJECTED_NAME "CntCmdRejected"
 #define NAVECU_CAN_NAV_STATUS_CNT_FILTER_RESETS_NAME "CntFilterResets"
+#define NAVECU_CAN_NAV_STATUS_CNT_IMU_SATURATED_NAME "CntImuSaturated"
 #define NAVECU_CAN_NAV_STATUS_HORIZ_ACCURACY_NAME "HorizAccuracy"
 #define NAVECU_CAN_NAV_STATUS_CNT_BAD_DLC_NAME "CntBadDlc"
 #define NAVECU_CAN_NAV_STATUS_CNT_IMU_PAIR_BROKEN_NAME "CntImuPairBroken"
 #define NAVECU_CAN_NAV_STATUS_CNT_GNSS_REJECTED_NAME "CntGnssRejected"
 #define NAVECU_CAN_NAV_STATUS_CNT_CORE_REJECTED_NAME "CntCoreRejected"
 #define NAVECU_CAN_NAV_STATUS_CNT_TASKS_LATE_NAME "CntTasksLate"
+#define NAVECU_CAN_NAV_STATUS_CNT_ODO_REJECTED_NAME "CntOdoRejected"
 #define NAVECU_CAN_NAV_STATUS_CNT_BAD_CRC_NAME "CntBadCrc"
 #define NAVECU_CAN_NAV_STATUS_CNT_IMU_LOST_NAME "CntImuLost"
 #define NAVECU_CAN_NAV_STATUS_CNT_LOG_LINE_BAD_NAME "CntLogLineBad"
 #define NAVECU_CAN_NAV_STATUS_CNT_TIME_JUMPS_NAME "CntTimeJumps"
+#define NAVECU_CAN_NAV_STATUS_CNT_NON_FINITE_NAME "CntNonFinite"
+#define NAVECU_CAN_NAV_STATUS_CNT_IMU_STUCK_NAME "CntImuStuck"
 #define NAVECU_CAN_NAV_STATUS_NAV_COUNTER_NAME "NavCounter"
 #define NAVECU_CAN_NAV_STATUS_NAV_CRC_NAME "NavCrc"
 #define NAVECU_CAN_NAV_CALIBRATION_HEADING_CORRECTION_NAME "HeadingCorrection"
@@ -799,7 +803,7 @@ struct navecu_can_nav_attitude_t {
 /**
  * Signals in message NAV_Status.
  *
- * Multiplexed: every 100 ms two frames, page 0 and one of the counter pages 1..5 in rotation (counters saturate), hence a 50 ms mean cycle.
+ * Multiplexed: every 100 ms two frames, page 0 and one of the counter pages 1..6 in rotation (counters saturate), hence a 50 ms mean cycle.
  *
  * All signal values are as on the CAN bus.
  */
@@ -821,7 +825,7 @@ struct navecu_can_nav_status_t {
     uint8_t mode;
 
     /**
-     * bit 0 IMU data stale (none for 0.5 s), bit 1 IMU fault reported, bit 2 no usable GNSS epoch for 2 s, bit 3 input rejected in the last second, bit 4 NVM error, bit 5 waiting for a heading, bit 6 IMU samples were lost and bridged in the last second, bit 7 the Kalman filter diverged and was reset in the last 10 s.
+     * bit 0 IMU data stale (none for 0.5 s), bit 1 IMU fault reported, bit 2 no usable GNSS epoch for 2 s, bit 3 input rejected in the last second, bit 4 NVM error, bit 5 waiting for a heading, bit 6 IMU samples were lost and bridged in the last second, bit 7 the Kalman filter diverged and was reset in the last 10 s, bit 8 an IMU axis was found stuck in the last 10 s, bit 9 an IMU axis was at its configured range (saturated) in the last second, bit 10 the wheel speeds disagreed with the filter (locked or spinning wheels) in the last second, bit 11 after an IMU gap too long to bridge: waiting for a GNSS epoch to re-acquire position, velocity and heading.
      *
      * Range: 0..65535 (0..65535 -)
      * Scale: 1
@@ -858,13 +862,22 @@ struct navecu_can_nav_status_t {
     uint16_t cnt_cmd_rejected;
 
     /**
-     * Kalman filter resets: its state, covariance or navigator not finite, a negative variance, or GNSS fixes beyond the gate through 3 covariance reopens in a row (docs/reliability.md).
+     * Kalman filter resets: its state, covariance or navigator not finite, a negative variance, or GNSS fixes beyond the gate through 3 covariance reopens in a row with the odometer refused too (docs/reliability.md).
      *
      * Range: 0..65535 (0..65535 -)
      * Scale: 1
      * Offset: 0
      */
     uint16_t cnt_filter_resets;
+
+    /**
+     * IMU samples with an axis at the configured range of the IMU.
+     *
+     * Range: 0..65535 (0..65535 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint16_t cnt_imu_saturated;
 
     /**
      * Range: 0..65535 (0..655.35 m)
@@ -911,6 +924,15 @@ struct navecu_can_nav_status_t {
     uint16_t cnt_tasks_late;
 
     /**
+     * Odometer and standstill updates refused by the filter's innovation gate: the wheel speeds disagree with the navigation (locked or spinning wheels, slip).
+     *
+     * Range: 0..65535 (0..65535 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint16_t cnt_odo_rejected;
+
+    /**
      * Range: 0..255 (0..255 -)
      * Scale: 1
      * Offset: 0
@@ -937,6 +959,24 @@ struct navecu_can_nav_status_t {
      * Offset: 0
      */
     uint8_t cnt_time_jumps;
+
+    /**
+     * Navigation outputs that were not finite and so not sent (the filter supervision then resets the navigator).
+     *
+     * Range: 0..255 (0..255 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t cnt_non_finite;
+
+    /**
+     * IMU axes found stuck: a raw increment repeated for 2 s while another axis of the same sensor moved.
+     *
+     * Range: 0..255 (0..255 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t cnt_imu_stuck;
 
     /**
      * Range: 0..14 (0..14 -)
@@ -4351,6 +4391,46 @@ bool navecu_can_nav_status_cnt_filter_resets_is_in_phys_range(float value);
  *
  * @return Encoded signal.
  */
+uint16_t navecu_can_nav_status_cnt_imu_saturated_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_status_cnt_imu_saturated_decode(uint16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_status_cnt_imu_saturated_is_in_range(uint16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_status_cnt_imu_saturated_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
 uint16_t navecu_can_nav_status_horiz_accuracy_encode(float value);
 
 /**
@@ -4591,6 +4671,46 @@ bool navecu_can_nav_status_cnt_tasks_late_is_in_phys_range(float value);
  *
  * @return Encoded signal.
  */
+uint16_t navecu_can_nav_status_cnt_odo_rejected_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_status_cnt_odo_rejected_decode(uint16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_status_cnt_odo_rejected_is_in_range(uint16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_status_cnt_odo_rejected_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
 uint8_t navecu_can_nav_status_cnt_bad_crc_encode(float value);
 
 /**
@@ -4743,6 +4863,86 @@ bool navecu_can_nav_status_cnt_time_jumps_is_in_range(uint8_t value);
  * @return true if in range, false otherwise.
  */
 bool navecu_can_nav_status_cnt_time_jumps_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_nav_status_cnt_non_finite_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_status_cnt_non_finite_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_status_cnt_non_finite_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_status_cnt_non_finite_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_nav_status_cnt_imu_stuck_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_status_cnt_imu_stuck_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_status_cnt_imu_stuck_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_status_cnt_imu_stuck_is_in_phys_range(float value);
 
 /**
  * Encode given signal by applying scaling and offset.
