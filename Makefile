@@ -56,7 +56,8 @@ all: $(BUILD)/host/navecu
 help:
 	@echo "make               build the host firmware: build/host/navecu (see --help)"
 	@echo "make test          all tests: C plain and ASan+UBSan, Python, codec, M4F build,"
-	@echo "                   the M4F image on QEMU bit-exact, the M4F budget"
+	@echo "                   the M4F image on QEMU bit-exact, the M4F budget, fuzz"
+	@echo "                   regressions, static analysis (make lint)"
 	@echo "make sim           simulate a drive, run the firmware, report accuracy and plots"
 	@echo "                   (SCENARIO=name for another tools/sim/scenarios/name.toml;"
 	@echo "                   BUS=vcan0 runs the firmware live on vcan, docs/live-can.md)"
@@ -66,10 +67,13 @@ help:
 	@echo "make grades        free-inertial error per IMU grade vs seed 003's Table 2"
 	@echo "make codec         regenerate the CAN codec from firmware/can/navecu.dbc"
 	@echo "make cross         build the firmware for the Cortex-M4F, check: no double math"
-	@echo "make target        the ECU image for an STM32F405: build/target/navecu.elf .bin .hex"
+	@echo "make target        the ECU image for an STM32F405: build/target/navecu.elf .hex .bin"
 	@echo "make target-test   the M4F image on QEMU, output frames identical to the host's"
 	@echo "make target-bench  instruction counts on QEMU -> out/target-bench.json, CPU load"
 	@echo "make target-budget flash, RAM, stack, no heap, no double -> out/target-budget.json"
+	@echo "make lint          cppcheck MISRA C:2012, clang-tidy, gcc -fanalyzer (docs/misra.md)"
+	@echo "make fuzz          every libFuzzer harness FUZZ_SECONDS (60) -> out/fuzz.json"
+	@echo "make faults        the default drive with each fault injected -> docs/reliability.md"
 	@echo "make numerics      the float32 accuracy study (docs/numeric-design.md)"
 	@echo "make clean         remove build/"
 
@@ -102,7 +106,7 @@ $(BUILD)/$(1)/libtestsupport.a: $(SUPPORT_SRC_F64:%.c=$(BUILD)/$(1)/f64/%.o) \
 $(1)_LIBS := $(BUILD)/$(1)/libtestsupport.a $(BUILD)/$(1)/libnavapp.a \
              $(BUILD)/$(1)/libnavcore_f32.a $(BUILD)/$(1)/libnavcore_f64.a
 
-$(BUILD)/$(1)/navecu: $(BUILD)/$(1)/f32/host_sim/main.o $(BUILD)/$(1)/libnavapp.a \
+$(BUILD)/$(1)/navecu: $(BUILD)/$(1)/f32/host_sim/main.o $(BUILD)/$(1)/f32/host_sim/options.o $(BUILD)/$(1)/libnavapp.a \
 		$(BUILD)/$(1)/libhal_linux.a $(BUILD)/$(1)/libnavcore_f32.a
 	@mkdir -p $$(@D)
 	$$(CC) $(2) $$^ -lm -o $$@
@@ -166,8 +170,10 @@ test: deps
 	$(MAKE) test-plain
 	$(MAKE) test-asan
 	$(MAKE) test-python
+	$(MAKE) test-fuzz-regressions
 	$(MAKE) test-cross
 	$(MAKE) target-check
+	$(MAKE) lint
 
 # Install what the build needs when it is missing (CI runs as root on a fresh machine).
 deps:
@@ -238,20 +244,25 @@ $(TGT)/navecu.elf: $(ECU_SRC:%.c=$(TGT)/obj/%.o) $(M4_LD)
 	$(ARM_CC) $(M4_LDFLAGS) -Wl,-Map=$(TGT)/navecu.map $(filter %.o,$^) -lm -o $@
 $(TGT)/navecu-qemu.elf: $(QEMU_SRC:%.c=$(TGT)/obj/%.o) $(M4_LD)
 	$(ARM_CC) $(M4_LDFLAGS) -Wl,-Map=$(TGT)/navecu-qemu.map $(filter %.o,$^) -lm -o $@
-$(TGT)/%.bin: $(TGT)/%.elf
-	arm-none-eabi-objcopy -O binary $< $@
+# Raw binaries: one per flash area, since a single .bin would fill the gap over the NVM
+# sectors with zeros and erase the calibration when flashed. navecu-vectors.bin goes to
+# 0x08000000 (sector 0), navecu.bin to 0x0800C000; the .hex carries its addresses.
+$(TGT)/navecu-vectors.bin: $(TGT)/navecu.elf
+	arm-none-eabi-objcopy -O binary -j .isr_vector $< $@
+$(TGT)/navecu.bin: $(TGT)/navecu.elf
+	arm-none-eabi-objcopy -O binary -R .isr_vector $< $@
 $(TGT)/%.hex: $(TGT)/%.elf
 	arm-none-eabi-objcopy -O ihex $< $@
 
 .PHONY: target target-qemu target-test target-bench target-budget target-check
-target: deps $(TGT)/navecu.elf $(TGT)/navecu.bin $(TGT)/navecu.hex
+target: deps $(TGT)/navecu.elf $(TGT)/navecu.bin $(TGT)/navecu-vectors.bin $(TGT)/navecu.hex
 	@arm-none-eabi-size -A $(TGT)/navecu.elf > $(TGT)/navecu.size
 	@arm-none-eabi-size $(TGT)/navecu.elf
-	@echo "target: $(TGT)/navecu.elf .bin .hex, map $(TGT)/navecu.map, sizes $(TGT)/navecu.size"
+	@echo "target: $(TGT)/navecu.elf, .hex, navecu-vectors.bin (at 0x08000000) + navecu.bin (at 0x0800C000), map $(TGT)/navecu.map, sizes $(TGT)/navecu.size"
 target-qemu: deps $(TGT)/navecu-qemu.elf
 
 # the QEMU image against the host float32 build on a 10-minute drive, byte for byte
-target-test: deps venv target-qemu $(BUILD)/host/navecu
+target-test: deps venv target-qemu target $(BUILD)/host/navecu
 	$(PY) -m tools.target.qemu_run --check
 
 # what make test runs of the target: the budget, and one QEMU run that is both the
@@ -315,6 +326,104 @@ OUTAGES ?= default
 kingston: deps venv $(BUILD)/host/navecu
 	$(PY) -m tools.kingston.run --mode $(MODE) --outages "$(OUTAGES)" \
 	  --out $(if $(filter dr,$(MODE)),out/kingston-dr,out/kingston)
+
+# ---- fuzzing: libFuzzer harnesses of tests/fuzz/ (tests/fuzz/README.md) ----
+# make fuzz-build: every harness into build/fuzz/; make fuzz: each runs FUZZ_SECONDS
+# (default 60) on a copy of its seed corpus tests/fuzz/corpus/<name>/ in
+# build/fuzz/corpus/<name>/, prints one summary line per harness (exec/s, coverage) and
+# writes out/fuzz.json; fails if a harness crashed, naming the crash file. Not part of
+# make test (CI runs it after make test: .ci/run).
+FUZZ_CC := clang
+FUZZ_SECONDS ?= 60
+FUZZ := $(BUILD)/fuzz
+FUZZ_NAMES := fuzz_codec fuzz_app fuzz_calstore fuzz_candump fuzz_options fuzz_cmdline
+FUZZ_SAN := -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
+FUZZ_CFLAGS := $(CSTD) -O2 -g $(WARN) $(FPFLAGS) -D_DEFAULT_SOURCE $(FUZZ_SAN)
+FUZZ_INC := $(HOST_INC) -Ihost_sim -Itests/fuzz -I$(FUZZ)/gen
+FUZZ_COMMON := tests/fuzz/fuzz_fail.c tests/fuzz/codec_check.c
+FUZZ_APP_SRC := tests/fuzz/fuzz_app_common.c $(FUZZ_COMMON) $(APP_SRC) $(CORE_SRC) \
+                tests/support/fake_hal.c
+fuzz_codec_SRC := tests/fuzz/fuzz_codec.c $(FUZZ_COMMON) firmware/can/e2e.c \
+                  firmware/can/gen/navecu_can.c
+fuzz_app_SRC := tests/fuzz/fuzz_app.c $(FUZZ_APP_SRC)
+fuzz_options_SRC := tests/fuzz/fuzz_options.c $(FUZZ_APP_SRC)
+fuzz_calstore_SRC := tests/fuzz/fuzz_calstore.c tests/fuzz/fuzz_fail.c firmware/app/calstore.c \
+                     tests/support/fake_hal.c
+fuzz_candump_SRC := tests/fuzz/fuzz_candump.c tests/fuzz/fuzz_fail.c $(HAL_LINUX_SRC)
+fuzz_cmdline_SRC := tests/fuzz/fuzz_cmdline.c tests/fuzz/fuzz_fail.c host_sim/options.c $(APP_SRC) \
+                    tests/support/fake_hal.c \
+                    $(CORE_SRC)
+
+# every object instrumented for coverage (fuzzer-no-link); the harness links libFuzzer
+$(FUZZ)/obj/%.o: %.c
+	@mkdir -p $(@D)
+	$(FUZZ_CC) $(FUZZ_CFLAGS) $(FUZZ_EXTRA) -fsanitize=fuzzer-no-link $(FUZZ_INC) -MMD -MP -c $< -o $@
+# the generated codec passes floats to a double parameter (cantools_unsigned_from_double),
+# which clang's -Wdouble-promotion reports and gcc's does not
+$(FUZZ)/obj/firmware/can/gen/navecu_can.o: FUZZ_EXTRA := -Wno-double-promotion
+# no comparison tracing in the numeric core and the CRC loops: it would cost most of the
+# run time (every float loop, CRC bit and output check) and guides nothing there; edge
+# coverage stays
+$(patsubst %.c,$(FUZZ)/obj/%.o,$(CORE_SRC) firmware/can/e2e.c tests/fuzz/codec_check.c): \
+  FUZZ_EXTRA := -fno-sanitize-coverage=trace-cmp
+# the codec checks are generated from the codec header, so they follow the DBC
+$(FUZZ)/gen/codec_checks.inc: firmware/can/gen/navecu_can.h tests/fuzz/gen_codec_checks.py
+	@mkdir -p $(@D)
+	python3 tests/fuzz/gen_codec_checks.py $< $@
+$(FUZZ)/obj/tests/fuzz/codec_check.o: $(FUZZ)/gen/codec_checks.inc
+
+define FUZZ_HARNESS
+$(FUZZ)/$(1): $$($(1)_SRC:%.c=$(FUZZ)/obj/%.o)
+	$(FUZZ_CC) $(FUZZ_SAN) -fsanitize=fuzzer $$^ -lm -o $$@
+endef
+$(foreach h,$(FUZZ_NAMES),$(eval $(call FUZZ_HARNESS,$(h))))
+
+.PHONY: fuzz fuzz-build test-fuzz-regressions
+fuzz-build: deps $(FUZZ_NAMES:%=$(FUZZ)/%)
+fuzz: fuzz-build
+	python3 tests/fuzz/run_fuzz.py --build $(FUZZ) --corpus tests/fuzz/corpus \
+	  --seconds $(FUZZ_SECONDS) --json out/fuzz.json $(FUZZ_NAMES)
+
+# The inputs the harnesses found violating an invariant (tests/fuzz/crashes/<harness>/),
+# replayed through the same harness code by a cmocka test built with gcc, plain and under
+# ASan+UBSan; part of make test.
+TESTS_FUZZ_REGRESSION := test_fuzz_regressions
+$(foreach f,host asan,$(BUILD)/$(f)/f32/tests/test_fuzz_regressions.o): \
+  HOST_INC += -Itests/fuzz -I$(FUZZ)/gen
+$(foreach f,host asan,$(BUILD)/$(f)/f32/tests/test_fuzz_regressions.o): $(FUZZ)/gen/codec_checks.inc
+$(BUILD)/host/tests/test_fuzz_regressions: $(BUILD)/host/f32/tests/test_fuzz_regressions.o \
+		$(BUILD)/host/f32/tests/support/fake_hal.o $(host_LIBS)
+	@mkdir -p $(@D)
+	$(CC) $^ -lcmocka -lm -o $@
+$(BUILD)/asan/tests/test_fuzz_regressions: $(BUILD)/asan/f32/tests/test_fuzz_regressions.o \
+		$(BUILD)/asan/f32/tests/support/fake_hal.o $(asan_LIBS)
+	@mkdir -p $(@D)
+	$(CC) $(SAN_FLAGS) $^ -lcmocka -lm -o $@
+test-fuzz-regressions: $(foreach f,host asan,$(BUILD)/$(f)/tests/test_fuzz_regressions)
+	$(call RUN_TESTS,$^,fuzz regressions)
+
+# ---- static analysis (docs/misra.md): cppcheck 2.10 with the MISRA C:2012 addon,
+# clang-tidy 14 (host and arm-none-eabi), gcc -fanalyzer (host gcc, arm-none-eabi-gcc for
+# hal/cortex_m4f/), over firmware/ (not the generated firmware/can/gen/) and hal/. Fails on
+# any finding that is neither fixed nor a documented deviation or accepted finding
+# (tools/lint/: cppcheck-suppressions.txt, *-accepted.txt, each explained in
+# docs/misra.md). About a minute on two cores; not part of make test.
+# `tools/lint/run_lint.py --counts` prints the per-rule counts, `--list` every finding.
+LINT_HOST_M4 := $(TESTS_M4_HAL:test_%=hal/cortex_m4f/%.c)
+.PHONY: lint
+lint: deps
+	python3 tools/lint/run_lint.py --cflags "$(CFLAGS_BASE)" --fw-inc "$(FW_INC)" \
+	  --m4-flags "$(M4_FLAGS)" --host-m4 "$(LINT_HOST_M4)" --build-dir $(BUILD)/lint
+
+# ---- fault drives (issue #9, docs/reliability.md): the default drive clean and with one
+# fault per row (frame loss, duplicates, reordering, bad CRCs and counters, a stuck and
+# saturating gyro, a saturating accelerometer, GNSS position and time jumps, locked and
+# spinning wheels, a silent and jittering IMU, a corrupt NVM), navecu on each; the table
+# into docs/reliability.md, the detail in out/faults/ (faults.json). About 5 minutes on two
+# cores; fails on a crash, a non-finite output, or 1 %/5 % frame loss beyond 1.5x the RMS.
+.PHONY: faults
+faults: deps venv $(BUILD)/host/navecu
+	$(PY) -m tools.sim.faults --doc docs/reliability.md
 
 clean:
 	rm -rf $(BUILD)

@@ -22,6 +22,7 @@
 #include "app.h"
 #include "hal_linux.h"
 #include "hal_socketcan.h"
+#include "options.h"
 
 static volatile sig_atomic_t stop_requested;
 
@@ -81,53 +82,13 @@ static void usage(FILE *out)
             "  --help               this text\n"
             "\n"
             "Exit status: 0 when the whole log was processed (or the live run was stopped\n"
-            "by a signal), 1 on an I/O error or a missing interface, 2 on a usage error.\n"
+            "by a signal), 1 on an I/O error or a missing interface, 2 on a usage error,\n"
+            "3 when the watchdog expired (a task of the application was late).\n"
             "Rejected input is never fatal: it is counted in NAV_Status and in the summary\n"
             "printed to stderr.\n");
 }
 
-/* parse an unsigned decimal in [lo, hi]; 0 on success */
-static int parse_u16(const char *s, unsigned lo, unsigned hi, uint16_t *out)
-{
-    char *end = NULL;
-    errno = 0;
-    const unsigned long v = strtoul(s, &end, 10);
-    if (errno != 0 || end == s || *end != '\0' || v < lo || v > hi) {
-        return -1;
-    }
-    *out = (uint16_t)v;
-    return 0;
-}
-
-/* parse a finite decimal in [lo, hi]; 0 on success */
-static int parse_real(const char *s, double lo, double hi, double *out)
-{
-    char *end = NULL;
-    errno = 0;
-    const double v = strtod(s, &end);
-    if (errno != 0 || end == s || *end != '\0' || !(v >= lo && v <= hi)) {
-        return -1;
-    }
-    *out = v;
-    return 0;
-}
-
 #define RAD_PER_DEG (3.14159265358979323846 / 180.0)
-
-/* parse "X,Y,Z" metres, each within 10 m; 0 on success */
-static int parse_lever(const char *s, nav_real_t out[3])
-{
-    double x = 0.0, y = 0.0, z = 0.0;
-    char tail = 0;
-    if (sscanf(s, "%lf,%lf,%lf%c", &x, &y, &z, &tail) != 3 || !(fabs(x) <= 10.0) ||
-        !(fabs(y) <= 10.0) || !(fabs(z) <= 10.0)) {
-        return -1;
-    }
-    out[0] = (nav_real_t)x;
-    out[1] = (nav_real_t)y;
-    out[2] = (nav_real_t)z;
-    return 0;
-}
 
 /* The main loop's watchdog duty: kick only when every task ran in time (app_tasks_ok);
  * a withheld kick that leaves the watchdog expired ends the run, as the ECU's watchdog
@@ -161,118 +122,24 @@ static int stalled(const hal_t *hal, int enabled, uint64_t after_us, uint64_t *t
 
 int main(int argc, char **argv)
 {
-    const char *in_path = NULL, *out_path = NULL, *nvm_path = NULL, *iface = NULL;
-    const char *live_if = NULL;
-    app_config_t cfg = app_default_config();
-    int nav_rate_given = 0;
-    int stall_poll = 0;         /* test: stop calling app_poll (a stuck task) */
-    uint64_t stall_poll_us = 0; /* ... this long after the first frame */
-
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        const char *v = i + 1 < argc ? argv[i + 1] : NULL;
-        int bad = 0;
-        if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0) {
-            usage(stdout);
-            return 0;
-        } else if (v == NULL) {
-            bad = 1;
-        } else if (strcmp(a, "--can-log") == 0) {
-            in_path = v;
-        } else if (strcmp(a, "--can") == 0) {
-            live_if = v;
-            bad = strlen(v) == 0 || strlen(v) > 15;
-        } else if (strcmp(a, "--out") == 0) {
-            out_path = v;
-        } else if (strcmp(a, "--nvm") == 0) {
-            nvm_path = v;
-        } else if (strcmp(a, "--iface") == 0) {
-            iface = v;
-            bad = strlen(v) == 0 || strlen(v) > 15;
-        } else if (strcmp(a, "--imu-rate-hz") == 0) {
-            bad = parse_u16(v, 10, 400, &cfg.imu_rate_hz);
-        } else if (strcmp(a, "--nav-rate-hz") == 0) {
-            bad = parse_u16(v, 1, 400, &cfg.nav_rate_hz);
-            nav_rate_given = 1;
-        } else if (strcmp(a, "--status-rate-hz") == 0) {
-            bad = parse_u16(v, 1, 400, &cfg.status_rate_hz);
-        } else if (strcmp(a, "--level-s") == 0) {
-            bad = parse_u16(v, 1, 600, &cfg.level_s);
-        } else if (strcmp(a, "--odo-axle") == 0) {
-            bad = strcmp(v, "rear") != 0 && strcmp(v, "front") != 0;
-            cfg.odo_axle = strcmp(v, "front") == 0 ? ODO_AXLE_FRONT : ODO_AXLE_REAR;
-        } else if (strcmp(a, "--cal-min-base-m") == 0) {
-            double x = 0.0;
-            bad = parse_real(v, 0.0, 1e5, &x);
-            cfg.cal_min_base_m = (nav_real_t)x;
-        } else if (strcmp(a, "--gyro-arw-dpsh") == 0) {
-            double x = 0.0;
-            bad = parse_real(v, 1e-6, 100.0, &x);
-            cfg.gyro_arw_rad_rts = (nav_real_t)(x * RAD_PER_DEG / 60.0);
-        } else if (strcmp(a, "--accel-bias-mg") == 0) {
-            double x = 0.0;
-            bad = parse_real(v, 1e-4, 1000.0, &x);
-            cfg.accel_bias_mps2 = (nav_real_t)(x * 9.80665e-3);
-        } else if (strcmp(a, "--gyro-instability-dph") == 0) {
-            double x = 0.0;
-            bad = parse_real(v, 1e-6, 1e4, &x);
-            cfg.gyro_bias_rw_rps_rts = (nav_real_t)(x * RAD_PER_DEG / 3600.0 * sqrt(2.0 / 300.0));
-        } else if (strcmp(a, "--accel-instability-mg") == 0) {
-            double x = 0.0;
-            bad = parse_real(v, 1e-5, 1000.0, &x);
-            cfg.accel_bias_rw_mps2_rts = (nav_real_t)(x * 9.80665e-3 * sqrt(2.0 / 300.0));
-        } else if (strcmp(a, "--gnss-corr-s") == 0) {
-            double x = 0.0;
-            bad = parse_real(v, 0.0, 600.0, &x);
-            cfg.gnss_corr_s = (nav_real_t)x;
-        } else if (strcmp(a, "--gnss-latency-ms") == 0) {
-            double x = 0.0;
-            bad = parse_real(v, 0.0, 500.0, &x);
-            cfg.gnss_latency_s = (nav_real_t)(x * 1e-3);
-        } else if (strcmp(a, "--gnss-lever-m") == 0) {
-            bad = parse_lever(v, cfg.gnss_lever_b_m);
-        } else if (strcmp(a, "--odo-lever-m") == 0) {
-            bad = parse_lever(v, cfg.odo_lever_b_m);
-        } else if (strcmp(a, "--gyro-range-dps") == 0) {
-            double x = 0.0;
-            bad = parse_real(v, 1.0, 5000.0, &x);
-            cfg.gyro_range_rps = (nav_real_t)(x * RAD_PER_DEG);
-        } else if (strcmp(a, "--accel-range-mps2") == 0) {
-            double x = 0.0;
-            bad = parse_real(v, 1.0, 2000.0, &x);
-            cfg.accel_range_mps2 = (nav_real_t)x;
-        } else if (strcmp(a, "--test-stall-poll-s") == 0) {
-            double x = 0.0;
-            bad = parse_real(v, 0.0, 1e6, &x);
-            stall_poll_us = (uint64_t)(x * 1e6);
-            stall_poll = 1;
-        } else if (strcmp(a, "--gyro-bias-dph") == 0) {
-            double x = 0.0;
-            bad = parse_real(v, 1e-6, 1e4, &x);
-            cfg.gyro_bias_rps = (nav_real_t)(x * RAD_PER_DEG / 3600.0);
-        } else {
-            fprintf(stderr, "navecu: unknown option '%s'\n", a);
+    host_options_t opt;
+    char err[160];
+    if (host_options_parse(argc, argv, &opt, err, sizeof err) != 0) {
+        fprintf(stderr, "navecu: %s\n", err);
+        if (strncmp(err, "unknown option", 14) == 0) {
             usage(stderr);
-            return 2;
         }
-        if (bad) {
-            fprintf(stderr, "navecu: bad or missing value for %s\n", a);
-            return 2;
-        }
-        i++;
-    }
-    if ((in_path == NULL) == (live_if == NULL) || (in_path != NULL && out_path == NULL)) {
-        fprintf(stderr, "navecu: give either --can-log IN --out OUT, or --can IFACE "
-                        "(see --help)\n");
         return 2;
     }
-    if (!nav_rate_given && cfg.nav_rate_hz > cfg.imu_rate_hz) {
-        cfg.nav_rate_hz = cfg.imu_rate_hz;
+    if (opt.help) {
+        usage(stdout);
+        return 0;
     }
-    if (cfg.nav_rate_hz > cfg.imu_rate_hz || cfg.status_rate_hz > cfg.imu_rate_hz) {
-        fprintf(stderr, "navecu: output rates cannot exceed the IMU rate\n");
-        return 2;
-    }
+    const char *in_path = opt.in_path, *out_path = opt.out_path, *nvm_path = opt.nvm_path;
+    const char *iface = opt.iface, *live_if = opt.live_if;
+    const app_config_t cfg = opt.cfg;
+    const int stall_poll = opt.stall_poll;
+    const uint64_t stall_poll_us = opt.stall_poll_us;
 
     static hal_t hal;
     static app_t app;

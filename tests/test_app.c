@@ -590,9 +590,9 @@ static void skip_samples(int n)
 
 /*
  * GIVEN navigation at 100 Hz
- * WHEN 30 samples are lost (twice the counter's cycle: the counter alone sees nothing)
- * THEN the receive time reveals them: 30 counted lost, bridged, time base right, flagged;
- * AND WHEN 2 s are lost (beyond the 1 s that is bridged)
+ * WHEN 15 samples (150 ms) are lost (the counter's cycle: the counter alone sees nothing)
+ * THEN the receive time reveals them: 15 counted lost, bridged, time base right, flagged;
+ * AND WHEN 2 s are lost (beyond the 200 ms that are bridged)
  * THEN navigation stops (Fault) instead of going on with an untrustworthy solution.
  */
 static void test_imu_gaps(void **state)
@@ -601,16 +601,18 @@ static void test_imu_gaps(void **state)
     send_init_commands(30.0);
     run_still(31);
     const uint64_t n0 = app.n_samples;
-    skip_samples(30);
+    skip_samples(15);
     run_still(1);
-    assert_int_equal(app.health.imu_lost, 30);
+    assert_int_equal(app.health.imu_lost, 15);
     assert_int_equal(app.health.time_jumps, 1);
-    assert_int_equal(app.n_samples, n0 + 30u + 100u);
+    assert_int_equal(app.n_samples, n0 + 15u + 100u);
     assert_int_equal(app.mode, APP_MODE_NAVIGATING);
     hal.tx_n = 0u;
     skip_samples(200);
     run_still(1);
-    assert_int_equal(app.health.imu_lost, 230);
+    /* 200 lost, and the first sample after them: its counter step (201 mod 15 = 6) is a
+     * wrong sequence until the next sample confirms the gap */
+    assert_int_equal(app.health.imu_lost, 216);
     assert_int_equal(app.mode, APP_MODE_FAULT);
     assert_int_equal(tx_count(NAVECU_CAN_NAV_POSITION_FRAME_ID), 0);
     struct navecu_can_nav_status_t st;
@@ -619,6 +621,43 @@ static void test_imu_gaps(void **state)
     assert_int_equal(st.mode, APP_MODE_FAULT);
     assert_true(st.health_flags & APP_FLAG_IMU_GAP);
     assert_true(st.health_flags & APP_FLAG_REACQUIRE);
+}
+
+
+/*
+ * A sample whose alive counter is wrong but whose CRC is right (a sender fault: E2E
+ * "wrong sequence") must not be taken for a gap: a jump of 9 is held, the next sample
+ * follows the last good one, so the held one is dropped (CntBadCounter) and one sample
+ * bridged; time does not run ahead. A real gap of 9 samples is confirmed by the sample
+ * after it and bridged whole.
+ */
+static void test_corrupt_imu_counter_is_not_a_gap(void **state)
+{
+    (void)state;
+    send_init_commands(30.0);
+    run_still(31);
+    const uint64_t n0 = app.n_samples;
+    const uint32_t bad0 = app.health.bad_counter;
+    int32_t w[3], v[3];
+    imu_src_next(w, v);
+    hal.t_us += 1000000u / RATE_HZ;
+    uint8_t wrong = src.counter;
+    for (int k = 0; k < 9; k++) {
+        wrong = e2e_counter_next(wrong);
+    }
+    send_imu_pair(w, v, wrong); /* the right data, a counter 9 ahead */
+    src.counter = e2e_counter_next(src.counter);
+    run_still(1);
+    assert_int_equal(app.health.bad_counter, bad0 + 1u);
+    assert_int_equal(app.health.imu_lost, 1u);
+    assert_int_equal(app.n_samples, n0 + 1u + 100u); /* time as it was, not 9 ahead */
+    /* a real gap of 9 samples */
+    skip_samples(9);
+    run_still(1);
+    assert_int_equal(app.health.bad_counter, bad0 + 2u); /* the first after it, held */
+    assert_int_equal(app.health.imu_lost, 1u + 10u);
+    assert_int_equal(app.n_samples, n0 + 1u + 100u + 9u + 100u);
+    assert_int_equal(app.mode, APP_MODE_NAVIGATING);
 }
 
 /* an IMU sample of explicit raw increments (counter and timestamp advanced) */
@@ -641,13 +680,15 @@ static void test_imu_stuck_and_saturated(void **state)
     send_init_commands(30.0);
     run_still(31); /* an ideal IMU standing: every axis repeats, nothing flagged */
     assert_int_equal(app.health.imu_stuck, 0u);
-    const int32_t v[3] = {0, 0, 2048};
     for (int k = 0; k < 3 * RATE_HZ; k++) {
-        /* x gyro: +-5 deg/s square wave (0.05 deg per sample = 416 LSB of 2^-21 rad) */
+        /* x gyro: +-5 deg/s square wave (0.05 deg per sample = 416 LSB of 2^-21 rad); the
+         * accelerometer noisy in its last bits; y and z gyro frozen */
         const int32_t w[3] = {(k / 25) % 2 ? 416 : -416, 0, 1234};
-        feed_raw_sample(w, v);
+        const int32_t vk[3] = {k % 2, -(k % 3), 2048 + k % 2};
+        feed_raw_sample(w, vk);
     }
-    assert_int_equal(app.health.imu_stuck, 2u); /* the z gyro and the constant y gyro */
+    assert_int_equal(app.health.imu_stuck, 2u); /* the z gyro and the frozen y gyro */
+    const int32_t v[3] = {0, 1, 2048};
     assert_true(health_flags_now() & APP_FLAG_IMU_SUSPECT);
     /* saturation: 300 deg/s = 5.236 rad/s, 0.05236 rad per sample = 109 805 LSB */
     const uint32_t sat0 = app.health.imu_saturated;
@@ -1241,9 +1282,9 @@ static int all_nav_outputs_finite(void)
  * GIVEN the filter running on GNSS fixes (car standing)
  * WHEN its covariance becomes non-finite (a NaN in P, as a numerical blow-up leaves it)
  * THEN at the next prediction it is found diverged and reset: CntFilterResets 1 on
- *      NAV_Status page 5, HealthFlags bit 7 set, the outputs stay finite and in place
- *      (the navigator goes on as the land navigation system), and at the next GNSS fix
- *      the filter restarts (mode GnssIns again);
+ *      NAV_Status page 5, HealthFlags bit 7 set, no non-finite output ever sent; with
+ *      GNSS around, navigation re-acquires (mode Fault, bit 11) at the next fix and the
+ *      filter restarts at the one after (mode GnssIns again);
  * WHEN instead the navigator itself becomes non-finite
  * THEN navigation restarts from the initial state (mode WaitInit), counted again.
  */
@@ -1259,10 +1300,11 @@ static void test_diverged_filter_is_reset(void **state)
     run_wheels(RATE_HZ / 5, 0.0, 0);
     assert_int_equal(app.health.filter_resets, 1u);
     assert_false(app.ekf_on);
-    assert_int_equal(app.mode, APP_MODE_NAVIGATING);
+    assert_int_equal(app.mode, APP_MODE_FAULT); /* re-acquiring from GNSS */
     struct navecu_can_nav_status_t st = last_status_page0();
     assert_true((st.health_flags & APP_FLAG_FILTER_RESET) != 0u);
-    assert_true(all_nav_outputs_finite());
+    assert_true((st.health_flags & APP_FLAG_REACQUIRE) != 0u);
+    assert_true(all_nav_outputs_finite()); /* the last ones sent, from before the reset */
     run_wheels(RATE_HZ, 0.0, 0); /* every page goes round within 1 s */
     int seen_page5 = 0;
     for (uint32_t i = 0u; i < hal.tx_n; i++) {
@@ -1275,8 +1317,10 @@ static void test_diverged_filter_is_reset(void **state)
     }
     assert_true(seen_page5);
     tow += 1200u; /* the receiver's clock went on meanwhile (1.2 s without fixes) */
-    tow = run_filter_on_fixes(2, tow);
-    assert_true(app.ekf_on); /* restarted at the next fix */
+    tow = run_filter_on_fixes(1, tow);
+    assert_int_equal(app.mode, APP_MODE_NAVIGATING); /* re-acquired */
+    tow = run_filter_on_fixes(1, tow);
+    assert_true(app.ekf_on); /* restarted at the fix after */
     run_wheels(RATE_HZ / 5, 0.0, 0);
     st = last_status_page0();
     assert_int_equal(st.mode, NAVECU_CAN_NAV_STATUS_MODE_GNSS_INS_CHOICE);
@@ -1326,6 +1370,7 @@ int main(void)
         cmocka_unit_test_setup(test_rejected_frames_change_nothing, setup),
         cmocka_unit_test_setup(test_replayed_command_rejected, setup),
         cmocka_unit_test_setup(test_imu_gaps, setup),
+        cmocka_unit_test_setup(test_corrupt_imu_counter_is_not_a_gap, setup),
         cmocka_unit_test_setup(test_imu_stuck_and_saturated, setup),
         cmocka_unit_test_setup(test_reacquire_after_long_gap, setup),
         cmocka_unit_test_setup(test_stale_imu_status, setup),

@@ -15,6 +15,12 @@ command -v qemu-system-arm >/dev/null 2>&1 || need+=(qemu-system-arm)
 command -v linux.uml >/dev/null 2>&1 || [ -x /usr/bin/linux ] || need+=(user-mode-linux)
 command -v insmod >/dev/null 2>&1 || need+=(kmod)
 command -v cansend >/dev/null 2>&1 || need+=(can-utils)
+# static analysis (make lint, docs/misra.md): cppcheck with its MISRA C:2012 addon, clang-tidy
+command -v cppcheck >/dev/null 2>&1 || need+=(cppcheck)
+command -v clang-tidy >/dev/null 2>&1 || need+=(clang-tidy)
+# libFuzzer harnesses (make fuzz, tests/fuzz/): clang and its fuzzer runtime
+command -v clang >/dev/null 2>&1 || need+=(clang)
+compgen -G '/usr/lib/llvm-14/lib/clang/14*/lib/linux/libclang_rt.fuzzer-x86_64.a' >/dev/null || need+=(libclang-rt-14-dev)
 
 if [ ${#need[@]} -eq 0 ]; then
     exit 0

@@ -16,6 +16,8 @@ enum { TX_HEIGHT = 0, TX_VEL, TX_ATT, TX_STATUS, TX_CAL };
 #define GNSS_STILL_MPS NAV_C(0.3)      /* below this GNSS speed the vehicle may be still */
 #define IMU_STALE_US 500000u
 #define FILTER_RESET_FLAG_S 10u /* NAV_Status flags a filter reset this long */
+#define IMU_MAX_DELTA 4          /* IMU counter steps above this wait for confirmation */
+#define COURSE_MISMATCH_RAD NAV_C(0.17453) /* 10 deg: GNSS course vs the filter's heading */
 #define FILTER_REOPEN_LIMIT 3u  /* covariance reopens without a fix taken: diverged */
 #define CMD_MAX_DELTA 3
 #define GNSS_FIX_FRESH_S 2u      /* mode GnssIns while the last fix used is this recent */
@@ -177,7 +179,8 @@ static void reset_navigation(app_t *a)
 int app_init(app_t *app, const app_config_t *cfg)
 {
     if (cfg->imu_rate_hz < 10u || cfg->imu_rate_hz > 400u || cfg->nav_rate_hz == 0u ||
-        cfg->status_rate_hz == 0u || cfg->level_s == 0u || cfg->level_s > 600u ||
+        cfg->status_rate_hz == 0u || cfg->nav_rate_hz > cfg->imu_rate_hz ||
+        cfg->status_rate_hz > cfg->imu_rate_hz || cfg->level_s == 0u || cfg->level_s > 600u ||
         !(cfg->cal_min_base_m >= NAV_C(0.0)) || !(cfg->cal_min_base_m < NAV_C(1e6)) ||
         !(cfg->gyro_arw_rad_rts > NAV_C(0.0)) || !(cfg->gyro_arw_rad_rts < NAV_C(1.0)) ||
         !(cfg->gyro_bias_rps > NAV_C(0.0)) || !(cfg->gyro_bias_rps < NAV_C(1.0)) ||
@@ -321,6 +324,9 @@ static void emit_navigation(app_t *a, hal_t *hal)
     } else if (heading >= NAV_C(2.0) * PI_F) {
         heading -= NAV_C(2.0) * PI_F;
     }
+    /* the car's pitch within the DBC's +-90 deg: the IMU at 89.7 deg less a mounting pitch
+     * of -1 deg would otherwise be sent as 90.7 (found by tests/fuzz/fuzz_options.c) */
+    pitch = clampr(pitch, -NAV_C(0.5) * PI_F, NAV_C(0.5) * PI_F);
     struct navecu_can_nav_attitude_t at;
     at.roll = navecu_can_nav_attitude_roll_encode(roll * DEG_PER_RAD);
     at.pitch = navecu_can_nav_attitude_pitch_encode(pitch * DEG_PER_RAD);
@@ -808,6 +814,8 @@ static void process_sample(app_t *a, hal_t *hal, const int32_t w_raw[3], const i
 /* One IMU sample with the filter running: compensated increments, the strapdown step,
  * the dead reckoning alongside, and at EKF_PRED_HZ the prediction, the odometer or
  * standstill updates and the feedback. */
+static void begin_reacquire(app_t *a);
+
 /* the wheel speeds disagree with the filter beyond its gate (lock, spin, slip) */
 static void odo_refused(app_t *a)
 {
@@ -820,12 +828,28 @@ static void odo_refused(app_t *a)
  * The filter has diverged when its state, its covariance or the navigator it corrects is
  * no longer finite, when a variance went negative (ekf_health repairs the covariance and
  * counts it), or when GNSS fixes stay beyond the innovation gate through
- * FILTER_REOPEN_LIMIT covariance reopens in a row while the odometer is refused too (every
- * aiding source disagrees: the filter, not a sensor, is then wrong; GNSS refused alone is
- * a receiver fault, e.g. a frozen fix, which the gate is there to keep out). A diverged filter is stopped: navigation goes on as the land navigation system
- * (SINS with the odometer, mode 4 or 2) and the filter restarts at the next GNSS fix, as it
- * did at the first; if the navigator itself is not finite, navigation restarts from the
- * initial state. Counted in health.filter_resets, flagged for FILTER_RESET_FLAG_S. */
+ * FILTER_REOPEN_LIMIT covariance reopens in a row while the odometer is refused too or the
+ * GNSS course disagrees with the filter's heading (every source then says the filter is
+ * wrong; GNSS refused alone is a receiver fault, e.g. a frozen fix, which the gate is
+ * there to keep out). A diverged filter is stopped. With GNSS, navigation re-acquires
+ * from the next GNSS epoch (position, velocity, and the course as heading, as after a long
+ * IMU gap) and the filter restarts at the epoch after; without GNSS it goes on as the land
+ * navigation system (SINS with the odometer); if the navigator itself is not finite,
+ * navigation restarts from the initial state. Counted in health.filter_resets, flagged
+ * for FILTER_RESET_FLAG_S. */
+/* 1 when the angle x (rad), wrapped to [-pi, pi], exceeds tol in magnitude; also for a
+ * non-finite or huge x (beyond 64 rad, where no angle of the navigator should be). No
+ * loop: a wrap by repeated subtraction never ends on an infinite or very large float. */
+static int angle_exceeds(nav_real_t x, nav_real_t tol)
+{
+    if (!(nav_fabs(x) <= NAV_C(64.0))) {
+        return 1;
+    }
+    const nav_real_t turns = x / (NAV_C(2.0) * PI_F);
+    const int32_t n = (int32_t)(turns >= NAV_C(0.0) ? turns + NAV_C(0.5) : turns - NAV_C(0.5));
+    return nav_fabs(x - (nav_real_t)n * NAV_C(2.0) * PI_F) > tol;
+}
+
 static int all_finite(const nav_real_t *v, int n)
 {
     for (int i = 0; i < n; i++) {
@@ -845,11 +869,20 @@ static int filter_diverged(app_t *a)
 {
     const ekf_t *k = &a->ekf;
     /* GNSS refused through reopens is a GNSS fault (a frozen or jumping receiver) as long
-     * as the wheels agree with the filter; only when the odometer is refused too does
-     * every aiding source say the filter is wrong */
-    const int aiding_disagrees =
-        a->gnss_reopen_run >= FILTER_REOPEN_LIMIT && a->had_odo_reject &&
+     * as the rest agrees with the filter; it is the filter that is wrong when the odometer
+     * is refused too, or when the GNSS course, driving, differs from the filter's heading
+     * by more than COURSE_MISMATCH_RAD (a heading lost to a stuck or saturated gyro, which
+     * the odometer's speed cannot see) */
+    nav_real_t roll, pitch, heading;
+    sins_euler(&a->nav, &roll, &pitch, &heading);
+    const nav_real_t course_err = a->gnss_course_rad - (heading - k->mount_yaw_rad);
+    const int odo_disagrees =
+        a->had_odo_reject &&
         a->n_samples - a->last_odo_reject_sample <= (uint64_t)GNSS_REOPEN_S * a->cfg.imu_rate_hz;
+    const int course_disagrees = a->gnss_speed_mps >= GNSS_COURSE_MIN_MPS &&
+                                 angle_exceeds(course_err, COURSE_MISMATCH_RAD);
+    const int aiding_disagrees =
+        a->gnss_reopen_run >= FILTER_REOPEN_LIMIT && (odo_disagrees || course_disagrees);
     int diverged = k->n_nonfinite != a->ekf_nonfinite_seen ||
                    k->n_negative_var != a->ekf_negative_seen || aiding_disagrees;
     a->ekf_nonfinite_seen = k->n_nonfinite;
@@ -878,6 +911,12 @@ static void filter_reset(app_t *a)
     a->have_fix = 0u;
     if (!navigator_finite(&a->nav)) {
         reset_navigation(a);
+        return;
+    }
+    if (a->have_gnss) {
+        /* the navigator the filter corrected is suspect too: GNSS gives position,
+         * velocity and heading again at its next epoch, as after a long IMU gap */
+        begin_reacquire(a);
         return;
     }
     /* without the filter the height needs the core's damping again (start_filter took it) */
@@ -1140,9 +1179,8 @@ static void gnss_update(app_t *a, hal_t *hal, uint32_t tow_ms, int have_vel, int
 /* ---- IMU plausibility (docs/reliability.md) ----
  * Saturation: a rate or specific force at the configured range of the IMU (the sensor
  * clips there, so what it reports is not the motion). A stuck axis: its raw increment
- * repeats exactly for IMU_STUCK_S while another axis of the same sensor moves (spans more
- * than 1 deg/s or 0.5 m/s^2): a quantised quiet axis may repeat while the car stands or
- * cruises, but not while the car turns or brakes and the others see it. Both are counted and flagged;
+ * repeats exactly for IMU_STUCK_S or longer while the vehicle moves (another axis spans
+ * more than 1 deg/s or 0.5 m/s^2): counted once per episode, flagged while it lasts. Both are counted and flagged;
  * the samples are still used, since neither says what the true value was. */
 #define IMU_STUCK_S 2u
 static void imu_plausibility(app_t *a, const int32_t w_raw[3], const int32_t v_raw[3])
@@ -1187,26 +1225,33 @@ static void imu_plausibility(app_t *a, const int32_t w_raw[3], const int32_t v_r
         a->imu_blk_min[i] = raw[i] < a->imu_blk_min[i] ? raw[i] : a->imu_blk_min[i];
         a->imu_blk_max[i] = raw[i] > a->imu_blk_max[i] ? raw[i] : a->imu_blk_max[i];
     }
-    /* "another axis moves": its increments spanned more than 1 deg/s (gyro) or 0.5 m/s^2
-     * (accelerometer) over the last one to two blocks: motion, not noise in the last bit */
+    /* the vehicle moves: a gyro axis spans more than 1 deg/s, or a horizontal
+     * accelerometer axis more than 0.5 m/s^2, over the last one to two blocks (turning,
+     * braking, accelerating), while an axis repeats: a working sensor's noise would have
+     * moved its last bits (the gyro's 2^-21 rad LSB is far below a MEMS gyro's noise per
+     * sample). An ideal, noiseless simulated IMU can repeat while the car accelerates in a
+     * straight line and is then flagged too: the flag only informs. */
     const nav_real_t w_move = NAV_C(0.017453) * dt / navecu_can_imu_rate_angle_inc_x_decode(1);
     const nav_real_t v_move = NAV_C(0.5) * dt / navecu_can_imu_accel_vel_inc_x_decode(1);
+    int moving = 0;
+    for (int j = 0; j < 5; j++) { /* the three gyro axes, accelerometer x and y */
+        const int32_t lo = a->imu_blk_min[j] < a->imu_prev_min[j] ? a->imu_blk_min[j]
+                                                                  : a->imu_prev_min[j];
+        const int32_t hi = a->imu_blk_max[j] > a->imu_prev_max[j] ? a->imu_blk_max[j]
+                                                                  : a->imu_prev_max[j];
+        moving |= (nav_real_t)((int64_t)hi - (int64_t)lo) > (j < 3 ? w_move : v_move) &&
+                  a->imu_same_n[j] < n_stuck;
+    }
     for (int i = 0; i < 6; i++) {
-        if (a->imu_same_n[i] != n_stuck) {
-            continue; /* counted once, when it reaches the window */
+        if (a->imu_same_n[i] < n_stuck) {
+            a->imu_stuck_seen &= (uint8_t)~(1u << i); /* it moved: a new episode may come */
+            continue;
         }
-        const int base = i < 3 ? 0 : 3; /* the same sensor: gyro or accelerometer */
-        const nav_real_t move = i < 3 ? w_move : v_move;
-        int other_moves = 0;
-        for (int j = base; j < base + 3; j++) {
-            const int32_t lo = a->imu_blk_min[j] < a->imu_prev_min[j] ? a->imu_blk_min[j]
-                                                                      : a->imu_prev_min[j];
-            const int32_t hi = a->imu_blk_max[j] > a->imu_prev_max[j] ? a->imu_blk_max[j]
-                                                                      : a->imu_prev_max[j];
-            other_moves |= j != i && (nav_real_t)((int64_t)hi - (int64_t)lo) > move;
-        }
-        if (other_moves) {
+        if (moving && (a->imu_stuck_seen & (1u << i)) == 0u) {
+            a->imu_stuck_seen |= (uint8_t)(1u << i); /* counted once per episode */
             count(&a->health.imu_stuck);
+        }
+        if (moving) {
             a->had_stuck = 1u;
             a->last_stuck_sample = a->n_samples;
         }
@@ -1262,6 +1307,16 @@ static void reacquire_from_gnss(app_t *a, nav_real_t speed_mps, nav_real_t cours
     a->mode = APP_MODE_NAVIGATING;
 }
 
+/* from + (to - from) * num / den, rounded to nearest (0 < num < den) */
+static int32_t interpolate_raw(int32_t from, int32_t to, uint64_t num, uint64_t den)
+{
+    const int64_t d = (int64_t)to - (int64_t)from;
+    const int64_t scaled = d * (int64_t)num;
+    const int64_t half = (int64_t)den / 2;
+    const int64_t q = scaled >= 0 ? (scaled + half) / (int64_t)den : -((-scaled + half) / (int64_t)den);
+    return (int32_t)((int64_t)from + q);
+}
+
 static void on_imu_rate(app_t *a, const hal_can_frame_t *f)
 {
     struct navecu_can_imu_rate_t m;
@@ -1296,11 +1351,29 @@ static void on_imu_accel(app_t *a, hal_t *hal, const hal_can_frame_t *f)
         reject(a, &a->health.bad_crc);
         return;
     }
-    const int step = e2e_counter_step(&a->rx_imu, m.imu_counter);
+    e2e_counter_t probe = a->rx_imu;
+    const int step = e2e_counter_step(&probe, m.imu_counter);
     if (step <= 0) {
         reject(a, &a->health.bad_counter); /* repeated sample or invalid counter */
         return;
     }
+    if (step > IMU_MAX_DELTA) {
+        /* E2E "wrong sequence": a corrupted counter, or a real gap of IMU_MAX_DELTA samples
+         * or more. The next sample decides: if it follows this one, the gap was real and
+         * is bridged then (this sample counted among the lost); if it follows the last
+         * good one, this counter was wrong and only this sample is lost. Counter-only, so
+         * the same at any replay speed. */
+        const int confirmed =
+            a->imu_resync_valid && m.imu_counter == e2e_counter_next(a->imu_resync_counter);
+        if (!confirmed) {
+            a->imu_resync_valid = 1u;
+            a->imu_resync_counter = m.imu_counter;
+            reject(a, &a->health.bad_counter);
+            return;
+        }
+    }
+    a->imu_resync_valid = 0u;
+    a->rx_imu = probe;
     if (m.imu_fault) {
         a->flags_sticky |= APP_FLAG_IMU_FAULT;
     } else {
@@ -1320,18 +1393,23 @@ static void on_imu_accel(app_t *a, hal_t *hal, const hal_can_frame_t *f)
         }
     }
     const int32_t v_raw[3] = {m.vel_inc_x, m.vel_inc_y, m.vel_inc_z};
+    int32_t prev_raw[6]; /* the last sample before a gap (the start of the bridge) */
+    for (int i = 0; i < 6; i++) {
+        prev_raw[i] = a->have_sample ? a->imu_last_raw[i] : (i < 3 ? a->rate_raw[i] : v_raw[i - 3]);
+    }
     imu_plausibility(a, a->rate_raw, v_raw);
     a->have_sample = 1u;
     a->last_imu_t_us = f->t_us;
     if (lost > 0u) {
-        /* Lost samples are bridged with this sample's increments: the motion in the gap is
-         * unknown, and repeating the nearest sample keeps time and the Earth-rate and
-         * gravity terms right. Beyond APP_MAX_BRIDGE_S the solution cannot be trusted. */
+        /* Lost samples are bridged by interpolating between the samples around the gap:
+         * the motion in the gap is unknown, the straight line between its ends keeps time,
+         * the Earth-rate and gravity terms and smooth motion right. Beyond APP_MAX_BRIDGE_MS the solution cannot be trusted:
+         * it re-acquires from GNSS (begin_reacquire). */
         a->health.imu_lost = lost > UINT32_MAX - a->health.imu_lost
                                  ? UINT32_MAX
                                  : a->health.imu_lost + (uint32_t)lost;
         a->had_gap = 1u;
-        if (lost > (uint64_t)APP_MAX_BRIDGE_S * a->cfg.imu_rate_hz) {
+        if (lost > (uint64_t)APP_MAX_BRIDGE_MS * a->cfg.imu_rate_hz / 1000u) {
             if (a->mode == APP_MODE_NAVIGATING) {
                 begin_reacquire(a);
             } else if (a->mode == APP_MODE_LEVELLING) {
@@ -1339,8 +1417,16 @@ static void on_imu_accel(app_t *a, hal_t *hal, const hal_can_frame_t *f)
             }
             a->n_samples += lost;
         } else {
+            /* the lost samples, interpolated linearly between the last sample before the
+             * gap and this one (integer arithmetic: the same on every target) */
             for (uint64_t k = 0u; k < lost; k++) {
-                process_sample(a, hal, a->rate_raw, v_raw);
+                int32_t wi[3];
+                int32_t vi[3];
+                for (int i = 0; i < 3; i++) {
+                    wi[i] = interpolate_raw(prev_raw[i], a->rate_raw[i], k + 1u, lost + 1u);
+                    vi[i] = interpolate_raw(prev_raw[i + 3], v_raw[i], k + 1u, lost + 1u);
+                }
+                process_sample(a, hal, wi, vi);
             }
         }
         a->last_gap_sample = a->n_samples; /* the flag holds for a second after the gap */
@@ -1470,6 +1556,8 @@ static void on_gnss_status(app_t *a, hal_t *hal, const hal_can_frame_t *f)
         if (course < NAV_C(0.0)) {
             course += NAV_C(2.0) * PI_F;
         }
+        a->gnss_course_rad = course;
+        a->gnss_speed_mps = speed;
     }
     if (m.fix_type < GNSS_MIN_FIX || m.num_satellites < GNSS_MIN_SATS) {
         return; /* no usable fix: not an error, the receiver says so */

@@ -95,11 +95,14 @@ typedef enum {
 #define APP_FLAG_IMU_SUSPECT 0x0100u  /* an IMU axis was found stuck in the last 10 s */
 #define APP_FLAG_IMU_SATURATED 0x0200u /* an IMU axis was at its range in the last second */
 #define APP_FLAG_ODO_REJECTED 0x0400u /* the wheel speeds disagreed with the filter in the last second */
-#define APP_FLAG_REACQUIRE 0x0800u    /* after a long IMU gap: waiting for GNSS to re-acquire */
+#define APP_FLAG_REACQUIRE 0x0800u    /* after a long IMU gap or a filter reset: waiting for
+                                         GNSS to re-acquire */
 
-/* IMU gaps up to this many seconds are bridged by repeating the next sample; a longer gap
- * ends navigation (APP_MODE_FAULT) until the next SetInitialPosition. */
-#define APP_MAX_BRIDGE_S 1u
+/* IMU gaps up to this many milliseconds are bridged by repeating the next sample; a longer
+ * gap stops navigation (output mode Fault, HealthFlags REACQUIRE) until a GNSS epoch gives
+ * position, velocity and heading again (app.c, re-acquisition), or, without GNSS, until the
+ * next SetInitialPosition. */
+#define APP_MAX_BRIDGE_MS 200u
 
 typedef struct {
     app_config_t cfg;
@@ -192,6 +195,9 @@ typedef struct {
     /* re-acquisition after an IMU gap too long to bridge: the attitude before the gap is
      * kept; position, velocity and (when driving) heading come from the next GNSS epoch */
     uint8_t reacquire;
+    uint8_t imu_resync_valid;   /* a sample with a counter jump waits for confirmation */
+    uint8_t imu_resync_counter;
+    nav_real_t gnss_course_rad, gnss_speed_mps; /* of the latest epoch with a velocity */
     nav_real_t reacq_roll_rad, reacq_pitch_rad, reacq_heading_rad, reacq_mount_rad;
     /* IMU plausibility: an axis whose raw increment repeats exactly (stuck), saturation */
     int32_t imu_last_raw[6];
@@ -199,6 +205,7 @@ typedef struct {
     int32_t imu_blk_min[6], imu_blk_max[6];   /* raw range of each axis in this block and */
     int32_t imu_prev_min[6], imu_prev_max[6]; /* the previous one (IMU_STUCK_S / 2 each) */
     uint32_t imu_blk_n;
+    uint8_t imu_stuck_seen;     /* axes whose current stuck episode was counted (bits) */
     uint64_t last_stuck_sample, last_sat_sample, last_odo_reject_sample;
     uint8_t had_stuck, had_sat, had_odo_reject;
 

@@ -116,6 +116,7 @@ uint32_t ekf_health(ekf_t *k);
 #define ekf_reopen NAV_SYM(ekf_reopen)
 void ekf_reopen(ekf_t *k, nav_real_t pos_sigma_m, nav_real_t vel_sigma_mps);
 
+
 /* 1-sigma horizontal position error (m): sqrt(P_EE + P_NN). */
 nav_real_t ekf_sigma_h_m(const ekf_t *k);
 

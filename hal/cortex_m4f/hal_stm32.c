@@ -157,12 +157,12 @@ uint64_t hal_time_us(const hal_t *hal)
 
 size_t hal_nvm_size(const hal_t *hal)
 {
-    return stm32_flash_size(&hal->flash);
+    return hal == NULL ? 0u : stm32_flash_size(&hal->flash);
 }
 
 size_t hal_nvm_sector_size(const hal_t *hal)
 {
-    return stm32_flash_sector_size(&hal->flash);
+    return hal == NULL ? 0u : stm32_flash_sector_size(&hal->flash);
 }
 
 int hal_nvm_read(hal_t *hal, size_t offset, void *buf, size_t len)
@@ -198,7 +198,14 @@ int hal_nvm_erase_sector(hal_t *hal, size_t sector)
 
 int hal_nvm_erase(hal_t *hal)
 {
-    for (size_t s = 0u; s < hal_nvm_size(hal) / hal_nvm_sector_size(hal); s++) {
+    if (hal == NULL) {
+        return HAL_EINVAL;
+    }
+    const size_t sector_bytes = hal_nvm_sector_size(hal);
+    if (sector_bytes == 0u) {
+        return HAL_EIO; /* the flash driver did not initialise (HAL_STM32_FAULT_NVM) */
+    }
+    for (size_t s = 0u; s < hal_nvm_size(hal) / sector_bytes; s++) {
         const int rc = hal_nvm_erase_sector(hal, s);
         if (rc != 0) {
             return rc;

@@ -21,8 +21,10 @@ static uint32_t sat_inc(uint32_t n)
 uint64_t hal_socketcan_time_us(void)
 {
     /* the same clock as SO_TIMESTAMP, so frame and poll times compare */
-    struct timespec ts;
-    clock_gettime(CLOCK_REALTIME, &ts);
+    struct timespec ts = {0, 0};
+    if (clock_gettime(CLOCK_REALTIME, &ts) != 0 || ts.tv_sec < 0) {
+        return 0u; /* no clock: never an indeterminate value */
+    }
     return (uint64_t)ts.tv_sec * 1000000u + (uint64_t)ts.tv_nsec / 1000u;
 }
 
@@ -129,7 +131,8 @@ int hal_socketcan_receive(hal_t *hal, hal_can_frame_t *f)
         }
         uint64_t t = hal_socketcan_time_us();
         for (struct cmsghdr *c = CMSG_FIRSTHDR(&msg); c != NULL; c = CMSG_NXTHDR(&msg, c)) {
-            if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SCM_TIMESTAMP) {
+            if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SCM_TIMESTAMP &&
+                c->cmsg_len >= CMSG_LEN(sizeof(struct timeval))) {
                 struct timeval tv;
                 memcpy(&tv, CMSG_DATA(c), sizeof tv);
                 t = (uint64_t)tv.tv_sec * 1000000u + (uint64_t)tv.tv_usec;
@@ -157,7 +160,8 @@ int hal_socketcan_send(hal_t *hal, const hal_can_frame_t *f)
     const ssize_t n = write(hal->can_fd, &cf, sizeof cf);
     if (n != (ssize_t)sizeof cf) {
         hal->can_io_errors = sat_inc(hal->can_io_errors);
-        return (errno == ENOBUFS || errno == EAGAIN) ? HAL_ENOSPC : HAL_EIO;
+        /* errno only means something when write failed (a short write leaves it stale) */
+        return (n < 0 && (errno == ENOBUFS || errno == EAGAIN)) ? HAL_ENOSPC : HAL_EIO;
     }
     return 0;
 }
