@@ -658,6 +658,18 @@ static void test_corrupt_imu_counter_is_not_a_gap(void **state)
     assert_int_equal(app.health.imu_lost, 1u + 10u);
     assert_int_equal(app.n_samples, n0 + 1u + 100u + 9u + 100u);
     assert_int_equal(app.mode, APP_MODE_NAVIGATING);
+    /* a counter corrupted 2 ahead looks like one lost sample and is bridged; the real
+     * samples after it are then behind the counter held and dropped until it catches up:
+     * time ends where it should, not 2 samples ahead */
+    const uint64_t n1 = app.n_samples;
+    imu_src_next(w, v);
+    hal.t_us += 1000000u / RATE_HZ;
+    wrong = e2e_counter_next(e2e_counter_next(src.counter));
+    send_imu_pair(w, v, wrong);
+    src.counter = e2e_counter_next(src.counter);
+    run_still(1);
+    assert_int_equal(app.n_samples, n1 + 1u + 100u);
+    assert_int_equal(app.mode, APP_MODE_NAVIGATING);
 }
 
 /* an IMU sample of explicit raw increments (counter and timestamp advanced) */

@@ -1186,20 +1186,23 @@ static void gnss_update(app_t *a, hal_t *hal, uint32_t tow_ms, int have_vel, int
 static void imu_plausibility(app_t *a, const int32_t w_raw[3], const int32_t v_raw[3])
 {
     const nav_real_t dt = NAV_C(1.0) / (nav_real_t)a->cfg.imu_rate_hz;
-    const nav_real_t w_max = a->cfg.gyro_range_rps * dt * NAV_C(0.999);
-    const nav_real_t v_max = a->cfg.accel_range_mps2 * dt * NAV_C(0.999);
-    int saturated = 0;
     int32_t raw[6];
     for (int i = 0; i < 3; i++) {
         raw[i] = w_raw[i];
         raw[i + 3] = v_raw[i];
     }
-    saturated |= nav_fabs(navecu_can_imu_rate_angle_inc_x_decode(w_raw[0])) >= w_max;
-    saturated |= nav_fabs(navecu_can_imu_rate_angle_inc_y_decode(w_raw[1])) >= w_max;
-    saturated |= nav_fabs(navecu_can_imu_rate_angle_inc_z_decode(w_raw[2])) >= w_max;
-    saturated |= nav_fabs(navecu_can_imu_accel_vel_inc_x_decode(v_raw[0])) >= v_max;
-    saturated |= nav_fabs(navecu_can_imu_accel_vel_inc_y_decode(v_raw[1])) >= v_max;
-    saturated |= nav_fabs(navecu_can_imu_accel_vel_inc_z_decode(v_raw[2])) >= v_max;
+    /* the ranges in raw units (once: integer compares per sample) */
+    if (a->imu_sat_raw[0] == 0) {
+        a->imu_sat_raw[0] = (int32_t)(a->cfg.gyro_range_rps * dt * NAV_C(0.999) /
+                                      navecu_can_imu_rate_angle_inc_x_decode(1));
+        a->imu_sat_raw[1] = (int32_t)(a->cfg.accel_range_mps2 * dt * NAV_C(0.999) /
+                                      navecu_can_imu_accel_vel_inc_x_decode(1));
+    }
+    int saturated = 0;
+    for (int i = 0; i < 6; i++) {
+        const int32_t lim = a->imu_sat_raw[i < 3 ? 0 : 1];
+        saturated |= raw[i] >= lim || raw[i] <= -lim;
+    }
     if (saturated) {
         count(&a->health.imu_saturated);
         a->had_sat = 1u;
@@ -1231,6 +1234,16 @@ static void imu_plausibility(app_t *a, const int32_t w_raw[3], const int32_t v_r
      * moved its last bits (the gyro's 2^-21 rad LSB is far below a MEMS gyro's noise per
      * sample). An ideal, noiseless simulated IMU can repeat while the car accelerates in a
      * straight line and is then flagged too: the flag only informs. */
+    int repeating = 0;
+    for (int i = 0; i < 6; i++) {
+        repeating |= a->imu_same_n[i] >= n_stuck;
+        if (a->imu_same_n[i] < n_stuck) {
+            a->imu_stuck_seen &= (uint8_t)~(1u << i); /* it moved: a new episode may come */
+        }
+    }
+    if (!repeating) {
+        return; /* the usual case: nothing more to look at */
+    }
     const nav_real_t w_move = NAV_C(0.017453) * dt / navecu_can_imu_rate_angle_inc_x_decode(1);
     const nav_real_t v_move = NAV_C(0.5) * dt / navecu_can_imu_accel_vel_inc_x_decode(1);
     int moving = 0;
@@ -1244,7 +1257,6 @@ static void imu_plausibility(app_t *a, const int32_t w_raw[3], const int32_t v_r
     }
     for (int i = 0; i < 6; i++) {
         if (a->imu_same_n[i] < n_stuck) {
-            a->imu_stuck_seen &= (uint8_t)~(1u << i); /* it moved: a new episode may come */
             continue;
         }
         if (moving && (a->imu_stuck_seen & (1u << i)) == 0u) {
@@ -1357,20 +1369,27 @@ static void on_imu_accel(app_t *a, hal_t *hal, const hal_can_frame_t *f)
         reject(a, &a->health.bad_counter); /* repeated sample or invalid counter */
         return;
     }
-    if (step > IMU_MAX_DELTA) {
+    /* a sample held for a counter jump is confirmed by one of its next few successors
+     * (1..IMU_MAX_DELTA after it, as lost frames may take the very next): the gap was real */
+    const int after_held = ((int)m.imu_counter - (int)a->imu_resync_counter + 15) % 15;
+    const int confirmed = a->imu_resync_valid && after_held >= 1 && after_held <= IMU_MAX_DELTA;
+    if (!confirmed && step >= 15 - IMU_MAX_DELTA) {
+        /* 1..4 behind the counter held: old data (or the counter held was itself a
+         * corrupt one ahead of time): dropped until the counter catches up, so a wrong
+         * counter never moves time ahead for good. */
+        reject(a, &a->health.bad_counter);
+        return;
+    }
+    if (!confirmed && step > IMU_MAX_DELTA) {
         /* E2E "wrong sequence": a corrupted counter, or a real gap of IMU_MAX_DELTA samples
-         * or more. The next sample decides: if it follows this one, the gap was real and
-         * is bridged then (this sample counted among the lost); if it follows the last
-         * good one, this counter was wrong and only this sample is lost. Counter-only, so
-         * the same at any replay speed. */
-        const int confirmed =
-            a->imu_resync_valid && m.imu_counter == e2e_counter_next(a->imu_resync_counter);
-        if (!confirmed) {
-            a->imu_resync_valid = 1u;
-            a->imu_resync_counter = m.imu_counter;
-            reject(a, &a->health.bad_counter);
-            return;
-        }
+         * or more. The next samples decide: if one follows this one closely, the gap was
+         * real and is bridged then (this sample counted among the lost); if they follow the
+         * last good one, this counter was wrong and only this sample is lost.
+         * Counter-only, so the same at any replay speed. */
+        a->imu_resync_valid = 1u;
+        a->imu_resync_counter = m.imu_counter;
+        reject(a, &a->health.bad_counter);
+        return;
     }
     a->imu_resync_valid = 0u;
     a->rx_imu = probe;

@@ -206,6 +206,7 @@ typedef struct {
     int32_t imu_prev_min[6], imu_prev_max[6]; /* the previous one (IMU_STUCK_S / 2 each) */
     uint32_t imu_blk_n;
     uint8_t imu_stuck_seen;     /* axes whose current stuck episode was counted (bits) */
+    int32_t imu_sat_raw[2];     /* gyro and accelerometer range in raw LSB (0: not yet) */
     uint64_t last_stuck_sample, last_sat_sample, last_odo_reject_sample;
     uint8_t had_stuck, had_sat, had_odo_reject;
 

@@ -95,7 +95,7 @@ def _value_sets(sig):
 
 
 def _pages(msg):
-    """Signal-name sets to encode: one per multiplexer page (NAV_Status 0..4), else all."""
+    """Signal-name sets to encode: one per multiplexer page (NAV_Status 0..6), else all."""
     mux = [s for s in msg.signals if s.is_multiplexer]
     if not mux:
         return [(None, [s.name for s in msg.signals])]
@@ -109,7 +109,7 @@ def test_every_message_round_trips(db):
     for msg in db.messages:
         pages = _pages(msg)
         if msg.name == "NAV_Status":
-            assert [p for p, _ in pages] == [0, 1, 2, 3, 4]
+            assert [p for p, _ in pages] == [0, 1, 2, 3, 4, 5, 6]
         for page, names in pages:
             for case in ("min", "max", "zero", "middle"):
                 values = {}
@@ -128,7 +128,7 @@ def test_every_message_round_trips(db):
                     assert back[name] == pytest.approx(value, abs=scale * 1e-6), \
                         (msg.name, page, case, name)
                 n_checked += 1
-    assert n_checked == 4 * (len(db.messages) - 1 + 5)
+    assert n_checked == 4 * (len(db.messages) - 1 + 7)  # NAV_Status: 7 pages
 
 
 def test_encode_rounds_to_nearest(db):

@@ -610,11 +610,11 @@ def faults(drive: Drive) -> list:
                                              th[np.argmax(sel), 2]) / dt)}
     rows.append(Fault("stuck gyro axis", w_stuck, stuck))
 
-    # A gyro of +-15 deg/s and an accelerometer of +-1.05 g on every axis (an IMU with too
+    # A gyro of +-15 deg/s and an accelerometer of +-1.01 g on every axis (an IMU with too
     # small a range for the car): the gyro clips in turns, the accelerometer's z axis,
     # which carries gravity, clips on every crest and bump that pushes up by more than
-    # 0.5 m/s^2. The firmware is told the ranges, as an ECU is configured for its IMU.
-    gyro_dps, acc_mps2 = 15.0, 10.3
+    # 0.1 m/s^2. The firmware is told the ranges, as an ECU is configured for its IMU.
+    gyro_dps, acc_mps2 = 15.0, 9.9
     peak_w = float(np.degrees(np.max(np.abs(d.dtheta[1:]))) / dt)
     peak_a = float(np.max(np.abs(d.dv[1:])) / dt)
     if not (peak_w > gyro_dps and peak_a > acc_mps2):
