@@ -1193,10 +1193,13 @@ static void imu_plausibility(app_t *a, const int32_t w_raw[3], const int32_t v_r
     }
     /* the ranges in raw units (once: integer compares per sample) */
     if (a->imu_sat_raw[0] == 0) {
-        a->imu_sat_raw[0] = (int32_t)(a->cfg.gyro_range_rps * dt * NAV_C(0.999) /
-                                      navecu_can_imu_rate_angle_inc_x_decode(1));
-        a->imu_sat_raw[1] = (int32_t)(a->cfg.accel_range_mps2 * dt * NAV_C(0.999) /
-                                      navecu_can_imu_accel_vel_inc_x_decode(1));
+        /* at most 100 rad/s and 2000 m/s^2 (app_init) over 0.1 s: within int32 */
+        const nav_real_t w_lim = a->cfg.gyro_range_rps * dt * NAV_C(0.999) /
+                                 navecu_can_imu_rate_angle_inc_x_decode(1);
+        const nav_real_t v_lim = a->cfg.accel_range_mps2 * dt * NAV_C(0.999) /
+                                 navecu_can_imu_accel_vel_inc_x_decode(1);
+        a->imu_sat_raw[0] = (int32_t)w_lim;
+        a->imu_sat_raw[1] = (int32_t)v_lim;
     }
     int saturated = 0;
     for (int i = 0; i < 6; i++) {
