@@ -233,9 +233,10 @@ M4_TGT_CFLAGS := $(CFLAGS_BASE) $(M4_FLAGS) -ffunction-sections -fdata-sections 
                  -fstack-usage -fcallgraph-info=su
 M4_TGT_INC := $(FW_INC) -Ihal/common -Ihal/cortex_m4f
 M4_LDFLAGS := $(M4_FLAGS) -nostartfiles --specs=nano.specs -T $(M4_LD) -Wl,--gc-sections
-M4_BOARD_SRC := hal/cortex_m4f/startup.c hal/cortex_m4f/f2l.c hal/common/candump.c
+M4_BOARD_SRC := hal/cortex_m4f/startup.c hal/cortex_m4f/f2l.c
 ECU_SRC := $(M4_SRC) $(M4_BOARD_SRC) hal/cortex_m4f/hal_stm32.c hal/cortex_m4f/main_stm32.c
-QEMU_SRC := $(CORE_SRC) $(APP_SRC) $(M4_BOARD_SRC) hal/cortex_m4f/semihost.c hal/cortex_m4f/hal_semihost.c \
+QEMU_SRC := $(CORE_SRC) $(APP_SRC) $(M4_BOARD_SRC) hal/common/candump.c hal/cortex_m4f/semihost.c \
+            hal/cortex_m4f/hal_semihost.c \
             hal/cortex_m4f/main_qemu.c
 $(TGT)/obj/%.o: %.c
 	@mkdir -p $(@D)

@@ -283,3 +283,38 @@ size_t candump_format_line(char *buf, size_t cap, uint64_t t_us, const char *ifa
     }
     return len;
 }
+
+int candump_read(candump_next_byte_t next, void *ctx, char *line, size_t cap,
+                 hal_can_frame_t *f, uint32_t *malformed)
+{
+    for (;;) {
+        size_t n = 0u;
+        int overlong = 0;
+        int c;
+        while ((c = next(ctx)) >= 0 && c != (int)'\n') {
+            if (n < cap) {
+                line[n] = (char)c;
+                n++;
+            } else {
+                overlong = 1;
+            }
+        }
+        if (c == CANDUMP_SRC_ERROR) {
+            return HAL_EIO;
+        }
+        if (c == CANDUMP_SRC_END && n == 0u && !overlong) {
+            return HAL_ENODATA;
+        }
+        /* else a whole line, or a last line without newline (the next call ends) */
+        candump_line_t kind = CANDUMP_MALFORMED;
+        if (!overlong) {
+            kind = candump_parse_line(line, n, f);
+        }
+        if (kind == CANDUMP_FRAME) {
+            return 0;
+        }
+        if (kind == CANDUMP_MALFORMED && *malformed != UINT32_MAX) {
+            (*malformed)++;
+        }
+    }
+}

@@ -71,16 +71,17 @@ int hal_semihost_close(hal_t *hal)
     return rc;
 }
 
-/* next byte of the RX log: 0..255, -1 at its end, -2 on a read error */
-static int rx_byte(hal_t *hal)
+/* next byte of the RX log (candump_read's byte source) */
+static int rx_byte(void *ctx)
 {
+    hal_t *hal = ctx;
     if (hal->rx_pos == hal->rx_len) {
         const int32_t n = semihost_read(hal->rx, hal->rx_buf, sizeof hal->rx_buf);
         if (n < 0) {
-            return -2;
+            return CANDUMP_SRC_ERROR;
         }
         if (n == 0) {
-            return -1;
+            return CANDUMP_SRC_END;
         }
         hal->rx_pos = 0u;
         hal->rx_len = (size_t)n;
@@ -96,42 +97,17 @@ int hal_can_receive(hal_t *hal, hal_can_frame_t *f)
     if (hal->rx < 0 || hal->rx_eof != 0u) {
         return HAL_ENODATA;
     }
-    for (;;) {
-        size_t n = 0u;
-        int overlong = 0;
-        int c;
-        /* one line: keep the first HAL_SEMIHOST_LINE_MAX characters, drop the rest */
-        while ((c = rx_byte(hal)) >= 0 && c != '\n') {
-            if (n < HAL_SEMIHOST_LINE_MAX) {
-                hal->line[n++] = (char)c;
-            } else {
-                overlong = 1;
-            }
-        }
-        if (c == -2) {
-            return HAL_EIO;
-        }
-        if (c == -1 && n == 0u && !overlong) {
-            hal->rx_eof = 1u;
-            return HAL_ENODATA;
-        }
-        if (overlong) {
-            hal->rx_malformed = sat_inc_u32(hal->rx_malformed);
-            continue;
-        }
-        switch (candump_parse_line(hal->line, n, f)) {
-        case CANDUMP_FRAME:
-            hal->t_us = f->t_us;
-            hal->rx_frames = sat_inc_u32(hal->rx_frames);
-            return 0;
-        case CANDUMP_MALFORMED:
-            hal->rx_malformed = sat_inc_u32(hal->rx_malformed);
-            break;
-        case CANDUMP_BLANK:
-        default:
-            break;
-        }
+    const int rc = candump_read(rx_byte, hal, hal->line, HAL_SEMIHOST_LINE_MAX, f,
+                                &hal->rx_malformed);
+    if (rc == HAL_ENODATA) {
+        hal->rx_eof = 1u;
+    } else if (rc == 0) {
+        hal->t_us = f->t_us;
+        hal->rx_frames = sat_inc_u32(hal->rx_frames);
+    } else {
+        /* HAL_EIO: returned as it is */
     }
+    return rc;
 }
 
 uint32_t hal_can_rx_malformed(const hal_t *hal)

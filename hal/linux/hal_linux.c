@@ -30,6 +30,17 @@ static int is_graph_ascii(char c)
     return c > ' ' && c <= '~';
 }
 
+/* candump_read's byte source: a stdio stream */
+static int file_next_byte(void *ctx)
+{
+    FILE *fp = ctx;
+    const int c = getc(fp);
+    if (c != EOF) {
+        return c;
+    }
+    return ferror(fp) ? CANDUMP_SRC_ERROR : CANDUMP_SRC_END;
+}
+
 int hal_can_receive(hal_t *hal, hal_can_frame_t *f)
 {
     if (hal == NULL || f == NULL) {
@@ -41,46 +52,17 @@ int hal_can_receive(hal_t *hal, hal_can_frame_t *f)
     if (hal->rx == NULL || hal->rx_eof != 0u) {
         return HAL_ENODATA;
     }
-    for (;;) {
-        size_t n = 0u;
-        int overlong = 0;
-        int c;
-
-        /* one line: keep the first HAL_LINUX_LINE_MAX characters, drop the rest */
-        while ((c = getc(hal->rx)) != EOF && c != '\n') {
-            if (n < HAL_LINUX_LINE_MAX) {
-                hal->line[n++] = (char)c;
-            } else {
-                overlong = 1;
-            }
-        }
-        if (c == EOF) {
-            if (ferror(hal->rx)) {
-                return HAL_EIO;
-            }
-            if (n == 0u && !overlong) {
-                hal->rx_eof = 1u;
-                return HAL_ENODATA;
-            }
-            /* a last line without newline: parse it; the next call sees EOF again */
-        }
-        if (overlong) {
-            hal->rx_malformed = sat_inc_u32(hal->rx_malformed);
-            continue;
-        }
-        switch (candump_parse_line(hal->line, n, f)) {
-        case CANDUMP_FRAME:
-            hal->t_us = f->t_us;
-            hal->rx_frames = sat_inc_u32(hal->rx_frames);
-            return 0;
-        case CANDUMP_MALFORMED:
-            hal->rx_malformed = sat_inc_u32(hal->rx_malformed);
-            break;
-        case CANDUMP_BLANK:
-        default:
-            break;
-        }
+    const int rc = candump_read(file_next_byte, hal->rx, hal->line, HAL_LINUX_LINE_MAX, f,
+                                &hal->rx_malformed);
+    if (rc == HAL_ENODATA) {
+        hal->rx_eof = 1u;
+    } else if (rc == 0) {
+        hal->t_us = f->t_us;
+        hal->rx_frames = sat_inc_u32(hal->rx_frames);
+    } else {
+        /* HAL_EIO: returned as it is */
     }
+    return rc;
 }
 
 uint32_t hal_can_rx_malformed(const hal_t *hal)
