@@ -879,10 +879,13 @@ static int filter_diverged(app_t *a)
     const int odo_disagrees =
         a->had_odo_reject &&
         a->n_samples - a->last_odo_reject_sample <= (uint64_t)GNSS_REOPEN_S * a->cfg.imu_rate_hz;
-    const int course_disagrees = a->gnss_speed_mps >= GNSS_COURSE_MIN_MPS &&
+    /* only with GNSS at hand: in a tunnel the last course and the count of reopens are
+     * old news, and a reset there would leave nothing to re-acquire from */
+    const int gnss_fresh = a->have_gnss && a->n_samples - a->last_gnss_sample <= a->cfg.imu_rate_hz;
+    const int course_disagrees = gnss_fresh && a->gnss_speed_mps >= GNSS_COURSE_MIN_MPS &&
                                  angle_exceeds(course_err, COURSE_MISMATCH_RAD);
-    const int aiding_disagrees =
-        a->gnss_reopen_run >= FILTER_REOPEN_LIMIT && (odo_disagrees || course_disagrees);
+    const int aiding_disagrees = gnss_fresh && a->gnss_reopen_run >= FILTER_REOPEN_LIMIT &&
+                                 (odo_disagrees || course_disagrees);
     int diverged = k->n_nonfinite != a->ekf_nonfinite_seen ||
                    k->n_negative_var != a->ekf_negative_seen || aiding_disagrees;
     a->ekf_nonfinite_seen = k->n_nonfinite;
