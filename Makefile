@@ -26,7 +26,8 @@ CORE_SRC := $(wildcard firmware/nav/*.c)
 CODEC_GEN := firmware/can/gen/navecu_can.c firmware/can/gen/navecu_can.h
 APP_SRC := firmware/can/e2e.c firmware/can/gen/navecu_can.c firmware/app/app.c \
            firmware/app/calstore.c
-HAL_LINUX_SRC := hal/linux/hal_linux.c hal/linux/hal_socketcan.c hal/common/candump.c
+HAL_LINUX_SRC := hal/linux/hal_linux.c hal/linux/hal_socketcan.c hal/common/candump.c \
+                 hal/common/nvm_flash.c
 # the Cortex-M4F HAL's register-level drivers: cross-built, and host-tested against
 # simulated register blocks
 HAL_M4_SRC := hal/cortex_m4f/bxcan.c hal/cortex_m4f/stm32_flash.c hal/cortex_m4f/stm32_iwdg.c \
@@ -235,7 +236,8 @@ M4_TGT_INC := $(FW_INC) -Ihal/common -Ihal/cortex_m4f
 M4_LDFLAGS := $(M4_FLAGS) -nostartfiles --specs=nano.specs -T $(M4_LD) -Wl,--gc-sections
 M4_BOARD_SRC := hal/cortex_m4f/startup.c hal/cortex_m4f/f2l.c
 ECU_SRC := $(M4_SRC) $(M4_BOARD_SRC) hal/cortex_m4f/hal_stm32.c hal/cortex_m4f/main_stm32.c
-QEMU_SRC := $(CORE_SRC) $(APP_SRC) $(M4_BOARD_SRC) hal/common/candump.c hal/cortex_m4f/semihost.c \
+QEMU_SRC := $(CORE_SRC) $(APP_SRC) $(M4_BOARD_SRC) hal/common/candump.c hal/common/nvm_flash.c \
+            hal/cortex_m4f/semihost.c \
             hal/cortex_m4f/hal_semihost.c \
             hal/cortex_m4f/main_qemu.c
 $(TGT)/obj/%.o: %.c

@@ -3,6 +3,7 @@
  */
 #include "hal_semihost.h"
 
+#include "nvm_flash.h"
 #include "semihost.h"
 
 static uint32_t sat_inc_u32(uint32_t n)
@@ -157,14 +158,9 @@ size_t hal_nvm_sector_size(const hal_t *hal)
     return HAL_SEMIHOST_NVM_SECTOR_SIZE;
 }
 
-static int nvm_range_ok(size_t offset, size_t len)
-{
-    return offset <= HAL_SEMIHOST_NVM_SIZE && len <= HAL_SEMIHOST_NVM_SIZE - offset;
-}
-
 int hal_nvm_read(hal_t *hal, size_t offset, void *buf, size_t len)
 {
-    if (hal == NULL || (buf == NULL && len > 0u) || !nvm_range_ok(offset, len)) {
+    if (hal == NULL || !nvm_flash_args_ok(HAL_SEMIHOST_NVM_SIZE, offset, buf, len)) {
         return HAL_EINVAL;
     }
     uint8_t *dst = buf;
@@ -176,16 +172,11 @@ int hal_nvm_read(hal_t *hal, size_t offset, void *buf, size_t len)
 
 int hal_nvm_write(hal_t *hal, size_t offset, const void *buf, size_t len)
 {
-    if (hal == NULL || (buf == NULL && len > 0u) || !nvm_range_ok(offset, len)) {
+    if (hal == NULL || !nvm_flash_args_ok(HAL_SEMIHOST_NVM_SIZE, offset, buf, len)) {
         return HAL_EINVAL;
     }
-    const uint8_t *src = buf;
-    int verify_failed = 0;
-    for (size_t k = 0u; k < len; k++) {
-        /* flash programming only clears bits */
-        hal->nvm[offset + k] = (uint8_t)(hal->nvm[offset + k] & src[k]);
-        verify_failed |= hal->nvm[offset + k] != src[k];
-    }
+    /* flash programming only clears bits */
+    const int verify_failed = nvm_flash_program(&hal->nvm[offset], &hal->nvm[offset], buf, len);
     return verify_failed ? HAL_EIO : 0;
 }
 

@@ -7,6 +7,7 @@
  */
 #include "hal_linux.h"
 #include "candump.h"
+#include "nvm_flash.h"
 #include "hal_socketcan.h"
 
 #include <errno.h>
@@ -117,12 +118,6 @@ size_t hal_nvm_sector_size(const hal_t *hal)
     return HAL_LINUX_NVM_SECTOR_SIZE;
 }
 
-static int nvm_range_ok(size_t offset, size_t len)
-{
-    /* written so that offset + len cannot overflow */
-    return offset <= HAL_LINUX_NVM_SIZE && len <= HAL_LINUX_NVM_SIZE - offset;
-}
-
 /* write src[0..len) to the NVM file at offset, if there is a file; 0 or HAL_EIO */
 static int nvm_file_write(hal_t *hal, size_t offset, const void *src, size_t len)
 {
@@ -139,7 +134,7 @@ static int nvm_file_write(hal_t *hal, size_t offset, const void *src, size_t len
 
 int hal_nvm_read(hal_t *hal, size_t offset, void *buf, size_t len)
 {
-    if (hal == NULL || (buf == NULL && len > 0u) || !nvm_range_ok(offset, len)) {
+    if (hal == NULL || !nvm_flash_args_ok(HAL_LINUX_NVM_SIZE, offset, buf, len)) {
         return HAL_EINVAL;
     }
     if (len > 0u) {
@@ -152,21 +147,14 @@ int hal_nvm_write(hal_t *hal, size_t offset, const void *buf, size_t len)
 {
     uint8_t programmed[HAL_LINUX_NVM_SIZE];
 
-    if (hal == NULL || (buf == NULL && len > 0u) || !nvm_range_ok(offset, len)) {
+    if (hal == NULL || !nvm_flash_args_ok(HAL_LINUX_NVM_SIZE, offset, buf, len)) {
         return HAL_EINVAL;
     }
     if (len == 0u) {
         return 0;
     }
     /* flash programming only clears bits: what a write over programmed bytes leaves */
-    const uint8_t *src = buf;
-    int verify_failed = 0;
-    for (size_t k = 0u; k < len; k++) {
-        programmed[k] = (uint8_t)(hal->nvm[offset + k] & src[k]);
-        if (programmed[k] != src[k]) {
-            verify_failed = 1;
-        }
-    }
+    const int verify_failed = nvm_flash_program(programmed, &hal->nvm[offset], buf, len);
     /* file first: the mirror only changes once the data is stored */
     const int rc = nvm_file_write(hal, offset, programmed, len);
     if (rc != 0) {
