@@ -20,12 +20,13 @@ SAN_FLAGS := -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-fr
 
 # firmware/ sees only its own folders and the HAL interface (docs/architecture.md)
 FW_INC := -Ifirmware/nav -Ifirmware/can -Ifirmware/can/gen -Ifirmware/app -Ihal
-HOST_INC := $(FW_INC) -Ihal/common -Ihal/linux -Ihal/cortex_m4f -Itests/support
+HOST_INC := $(FW_INC) -Ihal/common -Ihal/linux -Ihal/cortex_m4f -Ihost_sim -Itests/support
 
 CORE_SRC := $(wildcard firmware/nav/*.c)
 CODEC_GEN := firmware/can/gen/navecu_can.c firmware/can/gen/navecu_can.h
-APP_SRC := firmware/can/e2e.c firmware/can/gen/navecu_can.c firmware/app/app.c \
-           firmware/app/calstore.c
+APP_SRC := firmware/can/e2e.c firmware/can/gen/navecu_can.c $(sort $(wildcard firmware/app/*.c))
+# the host executable: its board files (host_sim/)
+HOST_SIM_SRC := host_sim/main.c host_sim/options.c host_sim/report.c host_sim/host_board.c
 HAL_LINUX_SRC := hal/linux/hal_linux.c hal/linux/hal_socketcan.c hal/common/candump.c \
                  hal/common/nvm_flash.c
 # the Cortex-M4F HAL's register-level drivers: cross-built, and host-tested against
@@ -107,7 +108,7 @@ $(BUILD)/$(1)/libtestsupport.a: $(SUPPORT_SRC_F64:%.c=$(BUILD)/$(1)/f64/%.o) \
 $(1)_LIBS := $(BUILD)/$(1)/libtestsupport.a $(BUILD)/$(1)/libnavapp.a \
              $(BUILD)/$(1)/libnavcore_f32.a $(BUILD)/$(1)/libnavcore_f64.a
 
-$(BUILD)/$(1)/navecu: $(BUILD)/$(1)/f32/host_sim/main.o $(BUILD)/$(1)/f32/host_sim/options.o $(BUILD)/$(1)/libnavapp.a \
+$(BUILD)/$(1)/navecu: $(HOST_SIM_SRC:%.c=$(BUILD)/$(1)/f32/%.o) $(BUILD)/$(1)/libnavapp.a \
 		$(BUILD)/$(1)/libhal_linux.a $(BUILD)/$(1)/libnavcore_f32.a
 	@mkdir -p $$(@D)
 	$$(CC) $(2) $$^ -lm -o $$@
@@ -229,17 +230,19 @@ cross test-cross: $(BUILD)/m4/libnavecu.a
 # layout with a semihosting CAN backend, run on QEMU's netduinoplus2 (an STM32F405).
 # Objects carry -fstack-usage and -fcallgraph-info for the stack budget.
 TGT := $(BUILD)/target
-M4_LD := hal/cortex_m4f/stm32f405.ld
+M4_LD := boards/stm32f405/stm32f405.ld
 M4_TGT_CFLAGS := $(CFLAGS_BASE) $(M4_FLAGS) -ffunction-sections -fdata-sections \
                  -fstack-usage -fcallgraph-info=su
-M4_TGT_INC := $(FW_INC) -Ihal/common -Ihal/cortex_m4f
+M4_TGT_INC := $(FW_INC) -Ihal/common -Ihal/cortex_m4f -Iboards/qemu
 M4_LDFLAGS := $(M4_FLAGS) -nostartfiles --specs=nano.specs -T $(M4_LD) -Wl,--gc-sections
-M4_BOARD_SRC := hal/cortex_m4f/startup.c hal/cortex_m4f/f2l.c
-ECU_SRC := $(M4_SRC) $(M4_BOARD_SRC) hal/cortex_m4f/hal_stm32.c hal/cortex_m4f/main_stm32.c
+# boards/: the entry points and startup of the two Cortex-M4F images (the QEMU machine is
+# an STM32F405 too: the same startup and linker script)
+M4_BOARD_SRC := boards/stm32f405/startup.c hal/cortex_m4f/f2l.c
+ECU_SRC := $(M4_SRC) $(M4_BOARD_SRC) hal/cortex_m4f/hal_stm32.c boards/stm32f405/main.c
 QEMU_SRC := $(CORE_SRC) $(APP_SRC) $(M4_BOARD_SRC) hal/common/candump.c hal/common/nvm_flash.c \
             hal/cortex_m4f/semihost.c \
             hal/cortex_m4f/hal_semihost.c \
-            hal/cortex_m4f/main_qemu.c
+            boards/qemu/main.c boards/qemu/bench_trace.c
 $(TGT)/obj/%.o: %.c
 	@mkdir -p $(@D)
 	$(ARM_CC) $(M4_TGT_CFLAGS) $(M4_TGT_INC) -MMD -MP -c $< -o $@

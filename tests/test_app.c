@@ -12,6 +12,7 @@
 #include <cmocka.h>
 
 #include "app.h"
+#include "navecu_protocol.h"
 #include "e2e.h"
 #include "fake_hal.h"
 #include "motions.h"
@@ -176,9 +177,9 @@ static void test_stationary_navigation(void **state)
 {
     (void)state;
     send_init_commands(30.0);
-    assert_int_equal(app.mode, APP_MODE_LEVELLING);
+    assert_int_equal(app.run.mode, APP_MODE_LEVELLING);
     run_still(60);
-    assert_int_equal(app.mode, APP_MODE_NAVIGATING);
+    assert_int_equal(app.run.mode, APP_MODE_NAVIGATING);
 
     assert_int_equal(hal.tx_dropped, 0); /* the capture holds every frame sent */
     const hal_can_frame_t *p = last_tx(NAVECU_CAN_NAV_POSITION_FRAME_ID);
@@ -197,7 +198,7 @@ static void test_stationary_navigation(void **state)
     assert_near(att.heading * 0.01, 30.0, 0.01);
 
     const app_health_t zero = {0};
-    assert_memory_equal(&app.health, &zero, sizeof zero);
+    assert_memory_equal(&app.keep.health, &zero, sizeof zero);
 }
 
 /* the NavCounter of an E2E-protected output frame, through the generated codec */
@@ -294,7 +295,7 @@ static void test_bad_input_counted(void **state)
     (void)state;
     send_init_commands(30.0);
     run_still(32);
-    assert_int_equal(app.mode, APP_MODE_NAVIGATING);
+    assert_int_equal(app.run.mode, APP_MODE_NAVIGATING);
     uint8_t d[8] = {0};
     hal_can_frame_t f, fr, fa;
     int32_t w[3], v[3];
@@ -305,7 +306,7 @@ static void test_bad_input_counted(void **state)
     f.extended = 1u;
     f.id = 0x18FEF100u;
     feed(&f);
-    assert_int_equal(app.health.unknown_id, 2);
+    assert_int_equal(app.keep.health.unknown_id, 2);
 
     /* wrong DLC of a known message */
     imu_src_next(w, v);
@@ -313,21 +314,21 @@ static void test_bad_input_counted(void **state)
     f = fr;
     f.dlc = 6u;
     feed(&f);
-    assert_int_equal(app.health.bad_dlc, 1);
+    assert_int_equal(app.keep.health.bad_dlc, 1);
 
     /* corrupted IMU_Rate payload: the pair CRC in IMU_Accel catches it */
     f = fr;
     f.data[2] ^= 0x10u;
     feed(&f);
     feed(&fa);
-    assert_int_equal(app.health.bad_crc, 1);
+    assert_int_equal(app.keep.health.bad_crc, 1);
 
     /* a repeated sample (same counter twice) is dropped */
     send_imu_pair(w, v, src.counter);
-    const uint64_t n_before = app.n_samples;
+    const uint64_t n_before = app.keep.n_samples;
     send_imu_pair(w, v, src.counter);
-    assert_int_equal(app.health.bad_counter, 1);
-    assert_int_equal(app.n_samples, n_before);
+    assert_int_equal(app.keep.health.bad_counter, 1);
+    assert_int_equal(app.keep.n_samples, n_before);
     src.counter = e2e_counter_next(src.counter);
 
     /* two samples lost: bridged, counted, time advances by three samples */
@@ -337,23 +338,23 @@ static void test_bad_input_counted(void **state)
     src.counter = e2e_counter_next(e2e_counter_next(src.counter));
     send_imu_pair(w, v, src.counter);
     src.counter = e2e_counter_next(src.counter);
-    assert_int_equal(app.health.imu_lost, 2);
-    assert_int_equal(app.n_samples, n_before + 3u);
+    assert_int_equal(app.keep.health.imu_lost, 2);
+    assert_int_equal(app.keep.n_samples, n_before + 3u);
 
     /* half pairs: IMU_Rate twice, then IMU_Accel with a foreign counter */
     imu_src_next(w, v);
     make_imu_pair(w, v, src.counter, &fr, &fa);
     feed(&fr);
     feed(&fr);
-    assert_int_equal(app.health.imu_pair_broken, 1);
+    assert_int_equal(app.keep.health.imu_pair_broken, 1);
     make_imu_pair(w, v, e2e_counter_next(src.counter), &fr, &fa);
     feed(&fa);
-    assert_int_equal(app.health.imu_pair_broken, 2);
+    assert_int_equal(app.keep.health.imu_pair_broken, 2);
 
     /* the invalid alive counter 15 */
     make_imu_pair(w, v, 15u, &fr, &fa);
     feed(&fr);
-    assert_int_equal(app.health.bad_counter, 2);
+    assert_int_equal(app.keep.health.bad_counter, 2);
 
     /* a GNSS fix at an impossible position, a known position off the globe, a GNSS height
      * outside its range */
@@ -361,7 +362,7 @@ static void test_bad_input_counted(void **state)
     navecu_can_gnss_position_pack(d, &gp, 8u);
     f = frame(NAVECU_CAN_GNSS_POSITION_FRAME_ID, d);
     feed(&f);
-    assert_int_equal(app.health.gnss_rejected, 1);
+    assert_int_equal(app.keep.health.gnss_rejected, 1);
     struct navecu_can_cmd_known_position_t kp = {0, -1800000001};
     navecu_can_cmd_known_position_pack(d, &kp, 8u);
     f = frame(NAVECU_CAN_CMD_KNOWN_POSITION_FRAME_ID, d);
@@ -370,7 +371,7 @@ static void test_bad_input_counted(void **state)
     navecu_can_gnss_height_pack(d, &gh, 8u);
     f = frame(NAVECU_CAN_GNSS_HEIGHT_FRAME_ID, d);
     feed(&f);
-    assert_int_equal(app.health.bad_value, 2);
+    assert_int_equal(app.keep.health.bad_value, 2);
 
     /* an unknown command */
     struct navecu_can_cmd_control_t c;
@@ -381,10 +382,10 @@ static void test_bad_input_counted(void **state)
     e2e_protect(NAVECU_CAN_CMD_CONTROL_FRAME_ID, d);
     f = frame(NAVECU_CAN_CMD_CONTROL_FRAME_ID, d);
     feed(&f);
-    assert_int_equal(app.health.cmd_rejected, 1);
+    assert_int_equal(app.keep.health.cmd_rejected, 1);
 
     /* navigation went on through all of it and reports what it rejected */
-    assert_int_equal(app.mode, APP_MODE_NAVIGATING);
+    assert_int_equal(app.run.mode, APP_MODE_NAVIGATING);
     hal.tx_n = 0u;
     run_still(1);
     struct navecu_can_nav_status_t st;
@@ -397,7 +398,7 @@ static void test_bad_input_counted(void **state)
         navecu_can_nav_status_unpack(&st, hal.tx[i].data, 8u);
         if (st.status_page == 0u) {
             assert_int_equal(st.mode, APP_MODE_NAVIGATING);
-            assert_true(st.health_flags & APP_FLAG_REJECTED);
+            assert_true(st.health_flags & NAVECU_HEALTH_REJECTED);
         } else if (st.status_page == 1u) {
             assert_int_equal(st.cnt_unknown_id, 2);
             assert_int_equal(st.cnt_bad_dlc, 1);
@@ -439,8 +440,8 @@ static void test_init_needs_known_position(void **state)
     e2e_protect(NAVECU_CAN_CMD_CONTROL_FRAME_ID, d);
     hal_can_frame_t f = frame(NAVECU_CAN_CMD_CONTROL_FRAME_ID, d);
     feed(&f);
-    assert_int_equal(app.health.cmd_rejected, 1);
-    assert_int_equal(app.mode, APP_MODE_WAIT_INIT);
+    assert_int_equal(app.keep.health.cmd_rejected, 1);
+    assert_int_equal(app.run.mode, APP_MODE_WAIT_INIT);
     run_still(1);
     assert_null(last_tx(NAVECU_CAN_NAV_POSITION_FRAME_ID)); /* nothing to report yet */
     assert_non_null(last_tx(NAVECU_CAN_NAV_STATUS_FRAME_ID));
@@ -531,7 +532,7 @@ static void test_rejected_frames_change_nothing(void **state)
     }
     const uint32_t n_dirty = collect_nav(dirty, FAKE_TX_MAX);
     assert_int_equal(hal.tx_dropped, 0);
-    const app_health_t *h = &app.health;
+    const app_health_t *h = &app.keep.health;
     assert_int_equal(h->unknown_id, 2 * 4000 / 7 + 1);
     assert_int_equal(h->unknown_id + h->bad_dlc + h->bad_crc + h->gnss_rejected +
                          h->bad_value + h->bad_counter,
@@ -557,10 +558,10 @@ static void test_replayed_command_rejected(void **state)
     feed(&reset);
     send_init_commands(30.0);
     run_still(31);
-    assert_int_equal(app.mode, APP_MODE_NAVIGATING);
+    assert_int_equal(app.run.mode, APP_MODE_NAVIGATING);
     feed(&reset); /* the old Reset again */
-    assert_int_equal(app.mode, APP_MODE_NAVIGATING);
-    assert_int_equal(app.health.bad_counter, 1);
+    assert_int_equal(app.run.mode, APP_MODE_NAVIGATING);
+    assert_int_equal(app.keep.health.bad_counter, 1);
 }
 
 /* skip n IMU samples: the truth moves on, nothing is sent */
@@ -600,27 +601,27 @@ static void test_imu_gaps(void **state)
     (void)state;
     send_init_commands(30.0);
     run_still(31);
-    const uint64_t n0 = app.n_samples;
+    const uint64_t n0 = app.keep.n_samples;
     skip_samples(15);
     run_still(1);
-    assert_int_equal(app.health.imu_lost, 15);
-    assert_int_equal(app.health.time_jumps, 1);
-    assert_int_equal(app.n_samples, n0 + 15u + 100u);
-    assert_int_equal(app.mode, APP_MODE_NAVIGATING);
+    assert_int_equal(app.keep.health.imu_lost, 15);
+    assert_int_equal(app.keep.health.time_jumps, 1);
+    assert_int_equal(app.keep.n_samples, n0 + 15u + 100u);
+    assert_int_equal(app.run.mode, APP_MODE_NAVIGATING);
     hal.tx_n = 0u;
     skip_samples(200);
     run_still(1);
     /* 200 lost, and the first sample after them: its counter step (201 mod 15 = 6) is a
      * wrong sequence until the next sample confirms the gap */
-    assert_int_equal(app.health.imu_lost, 216);
-    assert_int_equal(app.mode, APP_MODE_FAULT);
+    assert_int_equal(app.keep.health.imu_lost, 216);
+    assert_int_equal(app.run.mode, APP_MODE_FAULT);
     assert_int_equal(tx_count(NAVECU_CAN_NAV_POSITION_FRAME_ID), 0);
     struct navecu_can_nav_status_t st;
     memset(&st, 0, sizeof st);
     navecu_can_nav_status_unpack(&st, hal.tx[0].data, 8u);
     assert_int_equal(st.mode, APP_MODE_FAULT);
-    assert_true(st.health_flags & APP_FLAG_IMU_GAP);
-    assert_true(st.health_flags & APP_FLAG_REACQUIRE);
+    assert_true(st.health_flags & NAVECU_HEALTH_IMU_GAP);
+    assert_true(st.health_flags & NAVECU_HEALTH_REACQUIRE);
 }
 
 
@@ -636,8 +637,8 @@ static void test_corrupt_imu_counter_is_not_a_gap(void **state)
     (void)state;
     send_init_commands(30.0);
     run_still(31);
-    const uint64_t n0 = app.n_samples;
-    const uint32_t bad0 = app.health.bad_counter;
+    const uint64_t n0 = app.keep.n_samples;
+    const uint32_t bad0 = app.keep.health.bad_counter;
     int32_t w[3], v[3];
     imu_src_next(w, v);
     hal.t_us += 1000000u / RATE_HZ;
@@ -648,28 +649,28 @@ static void test_corrupt_imu_counter_is_not_a_gap(void **state)
     send_imu_pair(w, v, wrong); /* the right data, a counter 9 ahead */
     src.counter = e2e_counter_next(src.counter);
     run_still(1);
-    assert_int_equal(app.health.bad_counter, bad0 + 1u);
-    assert_int_equal(app.health.imu_lost, 1u);
-    assert_int_equal(app.n_samples, n0 + 1u + 100u); /* time as it was, not 9 ahead */
+    assert_int_equal(app.keep.health.bad_counter, bad0 + 1u);
+    assert_int_equal(app.keep.health.imu_lost, 1u);
+    assert_int_equal(app.keep.n_samples, n0 + 1u + 100u); /* time as it was, not 9 ahead */
     /* a real gap of 9 samples */
     skip_samples(9);
     run_still(1);
-    assert_int_equal(app.health.bad_counter, bad0 + 2u); /* the first after it, held */
-    assert_int_equal(app.health.imu_lost, 1u + 10u);
-    assert_int_equal(app.n_samples, n0 + 1u + 100u + 9u + 100u);
-    assert_int_equal(app.mode, APP_MODE_NAVIGATING);
+    assert_int_equal(app.keep.health.bad_counter, bad0 + 2u); /* the first after it, held */
+    assert_int_equal(app.keep.health.imu_lost, 1u + 10u);
+    assert_int_equal(app.keep.n_samples, n0 + 1u + 100u + 9u + 100u);
+    assert_int_equal(app.run.mode, APP_MODE_NAVIGATING);
     /* a counter corrupted 2 ahead looks like one lost sample and is bridged; the real
      * samples after it are then behind the counter held and dropped until it catches up:
      * time ends where it should, not 2 samples ahead */
-    const uint64_t n1 = app.n_samples;
+    const uint64_t n1 = app.keep.n_samples;
     imu_src_next(w, v);
     hal.t_us += 1000000u / RATE_HZ;
     wrong = e2e_counter_next(e2e_counter_next(src.counter));
     send_imu_pair(w, v, wrong);
     src.counter = e2e_counter_next(src.counter);
     run_still(1);
-    assert_int_equal(app.n_samples, n1 + 1u + 100u);
-    assert_int_equal(app.mode, APP_MODE_NAVIGATING);
+    assert_int_equal(app.keep.n_samples, n1 + 1u + 100u);
+    assert_int_equal(app.run.mode, APP_MODE_NAVIGATING);
 }
 
 /* an IMU sample of explicit raw increments (counter and timestamp advanced) */
@@ -691,7 +692,7 @@ static void test_imu_stuck_and_saturated(void **state)
     (void)state;
     send_init_commands(30.0);
     run_still(31); /* an ideal IMU standing: every axis repeats, nothing flagged */
-    assert_int_equal(app.health.imu_stuck, 0u);
+    assert_int_equal(app.keep.health.imu_stuck, 0u);
     for (int k = 0; k < 3 * RATE_HZ; k++) {
         /* x gyro: +-5 deg/s square wave (0.05 deg per sample = 416 LSB of 2^-21 rad); the
          * accelerometer noisy in its last bits; y and z gyro frozen */
@@ -699,20 +700,20 @@ static void test_imu_stuck_and_saturated(void **state)
         const int32_t vk[3] = {k % 2, -(k % 3), 2048 + k % 2};
         feed_raw_sample(w, vk);
     }
-    assert_int_equal(app.health.imu_stuck, 2u); /* the z gyro and the frozen y gyro */
+    assert_int_equal(app.keep.health.imu_stuck, 2u); /* the z gyro and the frozen y gyro */
     const int32_t v[3] = {0, 1, 2048};
-    assert_true(health_flags_now() & APP_FLAG_IMU_SUSPECT);
+    assert_true(health_flags_now() & NAVECU_HEALTH_IMU_SUSPECT);
     /* saturation: 300 deg/s = 5.236 rad/s, 0.05236 rad per sample = 109 805 LSB */
-    const uint32_t sat0 = app.health.imu_saturated;
+    const uint32_t sat0 = app.keep.health.imu_saturated;
     const int32_t w_sat[3] = {0, 0, 109805};
     feed_raw_sample(w_sat, v);
-    assert_int_equal(app.health.imu_saturated, sat0 + 1u);
+    assert_int_equal(app.keep.health.imu_saturated, sat0 + 1u);
     const int32_t w_ok[3] = {0, 0, 100000};
     for (int k = 0; k < RATE_HZ / 10; k++) { /* until the next NAV_Status */
         feed_raw_sample(w_ok, v);
     }
-    assert_int_equal(app.health.imu_saturated, sat0 + 1u);
-    assert_true(health_flags_now() & APP_FLAG_IMU_SATURATED);
+    assert_int_equal(app.keep.health.imu_saturated, sat0 + 1u);
+    assert_true(health_flags_now() & NAVECU_HEALTH_IMU_SATURATED);
 }
 
 /* While the IMU is silent, app_poll keeps NAV_Status going with the stale flag. */
@@ -734,7 +735,7 @@ static void test_stale_imu_status(void **state)
     hal_can_frame_t page0 = hal.tx[hal.tx_n - 2u];
     navecu_can_nav_status_unpack(&st, page0.data, 8u);
     assert_int_equal(st.status_page, 0);
-    assert_true(st.health_flags & APP_FLAG_IMU_STALE);
+    assert_true(st.health_flags & NAVECU_HEALTH_IMU_STALE);
 }
 
 /* the four frames of one GNSS epoch: position, velocity (north only) and height carrying
@@ -798,16 +799,16 @@ static void test_gnss_init_and_epochs(void **state)
 {
     (void)state;
     send_gnss_epoch(0u, 0u, 10.0);
-    assert_int_equal(app.mode, APP_MODE_WAIT_INIT);
+    assert_int_equal(app.run.mode, APP_MODE_WAIT_INIT);
     send_gnss_epoch(1u, 2u, 0.0); /* mismatched: velocity and height dropped */
-    assert_int_equal(app.health.gnss_rejected, 1);
-    assert_int_equal(app.mode, APP_MODE_WAIT_INIT);
+    assert_int_equal(app.keep.health.gnss_rejected, 1);
+    assert_int_equal(app.run.mode, APP_MODE_WAIT_INIT);
     send_gnss_epoch(2u, 2u, 0.0); /* repeated velocity counter 2 after 1: fine, step 1 */
-    assert_int_equal(app.mode, APP_MODE_LEVELLING);
-    assert_near(app.init_heading_rad, 0.0, 1e-6);
-    assert_int_equal(app.init_h_cm, 10000);
+    assert_int_equal(app.run.mode, APP_MODE_LEVELLING);
+    assert_near(app.run.align.heading_rad, 0.0, 1e-6);
+    assert_int_equal(app.run.align.h_cm, 10000);
     send_gnss_epoch(2u, 2u, 0.0); /* the same velocity epoch again: a repeat */
-    assert_int_equal(app.health.bad_counter, 1);
+    assert_int_equal(app.keep.health.bad_counter, 1);
 }
 
 static uint8_t att_counter;
@@ -829,19 +830,19 @@ static void test_reacquire_after_long_gap(void **state)
     run_still(31);
     skip_samples(200);
     run_still(1);
-    assert_int_equal(app.mode, APP_MODE_FAULT);
-    assert_true(app.reacquire);
+    assert_int_equal(app.run.mode, APP_MODE_FAULT);
+    assert_true(app.run.align.reacquire);
     send_gnss_epoch(0u, 0u, 2.0);
-    assert_int_equal(app.mode, APP_MODE_FAULT);
+    assert_int_equal(app.run.mode, APP_MODE_FAULT);
     send_gnss_epoch(1u, 1u, 0.0);
-    assert_int_equal(app.mode, APP_MODE_NAVIGATING);
-    assert_false(app.reacquire);
+    assert_int_equal(app.run.mode, APP_MODE_NAVIGATING);
+    assert_false(app.run.align.reacquire);
     run_still(1);
     nav_real_t roll, pitch, heading;
-    sins_euler(&app.nav, &roll, &pitch, &heading);
+    sins_euler(&app.run.nav, &roll, &pitch, &heading);
     assert_true(fabs((double)heading / DEG - 30.0) < 0.05);
-    assert_int_equal(app.health.nav_rejected, 0u);
-    assert_false(health_flags_now() & APP_FLAG_REACQUIRE);
+    assert_int_equal(app.keep.health.nav_rejected, 0u);
+    assert_false(health_flags_now() & NAVECU_HEALTH_REACQUIRE);
 }
 
 static void send_initial_attitude(double roll_rad, double pitch_rad)
@@ -869,10 +870,10 @@ static void test_initial_attitude_skips_levelling(void **state)
     (void)state;
     att_counter = 0u;
     send_initial_attitude(STILL.roll, STILL.pitch); /* before any position: refused */
-    assert_int_equal(app.health.cmd_rejected, 1);
+    assert_int_equal(app.keep.health.cmd_rejected, 1);
     send_init_commands(30.0);
     send_initial_attitude(STILL.roll, STILL.pitch);
-    assert_int_equal(app.mode, APP_MODE_NAVIGATING);
+    assert_int_equal(app.run.mode, APP_MODE_NAVIGATING);
     run_still(30);
     struct navecu_can_nav_position_t pos;
     navecu_can_nav_position_unpack(&pos, last_tx(NAVECU_CAN_NAV_POSITION_FRAME_ID)->data, 8u);
@@ -930,7 +931,7 @@ static void start_perfect(void)
     att_counter = 0u;
     send_init_commands(30.0);
     send_initial_attitude(STILL.roll, STILL.pitch);
-    assert_int_equal(app.mode, APP_MODE_NAVIGATING);
+    assert_int_equal(app.run.mode, APP_MODE_NAVIGATING);
 }
 
 static void last_position(double *lat_deg, double *lon_deg)
@@ -1032,9 +1033,9 @@ static void test_standstill_holds_and_estimates_bias(void **state)
     const double bias_dph = ldexp(1.0, -21) * RATE_HZ / DEG * 3600.0;
     const double arw = (double)cfg.gyro_arw_rad_rts, sb = (double)cfg.gyro_bias_rps;
     const double n0 = arw * arw / (0.01 * sb * sb);
-    const double nst = (double)app.gz_n;
+    const double nst = (double)app.keep.zbias.n;
     assert_true(nst > 119.0 * RATE_HZ - 60 && nst <= 120.0 * RATE_HZ); /* 0.5 s to declare */
-    assert_near((double)app.gyro_bias_z_rps / DEG * 3600.0, bias_dph * nst / (nst + n0),
+    assert_near((double)app.keep.zbias.bias_rps / DEG * 3600.0, bias_dph * nst / (nst + n0),
                 0.02 * bias_dph);
 }
 
@@ -1105,7 +1106,7 @@ static void test_one_point_calibration_and_nvm(void **state)
     send_known_position(lat_e7, lon_e7);
     send_command(NAVECU_CAN_CMD_CONTROL_COMMAND_CALIBRATE_HERE_CHOICE);
     send_command(NAVECU_CAN_CMD_CONTROL_COMMAND_CALIBRATE_HERE_CHOICE); /* point used */
-    assert_int_equal(app.health.cmd_rejected, 2);
+    assert_int_equal(app.keep.health.cmd_rejected, 2);
     run_wheels(2, 10.0, 0);
     double lat, lon;
     last_position(&lat, &lon);
@@ -1134,20 +1135,20 @@ static void test_one_point_calibration_and_nvm(void **state)
     assert_near(hypot(e2 - e1, n2 - n1), 100.0 * cos(1.0 * DEG) / 1.02, 0.05);
 
     /* reboot: the stored values come back */
-    const nav_real_t dh = app.cal_dh_rad, mu = app.cal_mu;
+    const nav_real_t dh = app.keep.cal.dh_rad, mu = app.keep.cal.mu;
     assert_int_equal(app_init(&app, &cfg), NAV_OK);
     app_boot(&app, &hal);
-    assert_int_equal(app.cal_status, NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_FROM_NVM_CHOICE);
-    assert_near(app.cal_dh_rad, dh, 0.0);
-    assert_near(app.cal_mu, mu, 0.0);
+    assert_int_equal(app.keep.cal.status, NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_FROM_NVM_CHOICE);
+    assert_near(app.keep.cal.dh_rad, dh, 0.0);
+    assert_near(app.keep.cal.mu, mu, 0.0);
     /* erase, reboot: nothing */
     cmd_counter = 0u;
     send_command(NAVECU_CAN_CMD_CONTROL_COMMAND_ERASE_CALIBRATION_CHOICE);
-    assert_near(app.cal_dh_rad, 0.0, 0.0);
+    assert_near(app.keep.cal.dh_rad, 0.0, 0.0);
     assert_int_equal(app_init(&app, &cfg), NAV_OK);
     app_boot(&app, &hal);
-    assert_int_equal(app.cal_status, NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_NONE_CHOICE);
-    assert_near(app.cal_mu, 0.0, 0.0);
+    assert_int_equal(app.keep.cal.status, NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_NONE_CHOICE);
+    assert_near(app.keep.cal.mu, 0.0, 0.0);
 }
 
 /* Both NVM slots corrupt at boot: defaults, CalStatus NvmCorrupt, the NVM flag raised. */
@@ -1156,8 +1157,8 @@ static void test_corrupt_nvm_at_boot(void **state)
     (void)state;
     memset(hal.nvm, 0x5A, sizeof hal.nvm);
     app_boot(&app, &hal);
-    assert_int_equal(app.cal_status, NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_NVM_CORRUPT_CHOICE);
-    assert_near(app.cal_dh_rad, 0.0, 0.0);
+    assert_int_equal(app.keep.cal.status, NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_NVM_CORRUPT_CHOICE);
+    assert_near(app.keep.cal.dh_rad, 0.0, 0.0);
     start_perfect();
     run_wheels(RATE_HZ, 0.0, 0);
     struct navecu_can_nav_status_t st;
@@ -1168,7 +1169,7 @@ static void test_corrupt_nvm_at_boot(void **state)
             break;
         }
     }
-    assert_true(st.health_flags & APP_FLAG_NVM_ERROR);
+    assert_true(st.health_flags & NAVECU_HEALTH_NVM_ERROR);
     assert_int_equal(last_cal().cal_status, NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_NVM_CORRUPT_CHOICE);
 }
 
@@ -1178,16 +1179,16 @@ static void test_calibrate_at_gnss(void **state)
 {
     (void)state;
     send_command(NAVECU_CAN_CMD_CONTROL_COMMAND_CALIBRATE_AT_GNSS_CHOICE);
-    assert_int_equal(app.health.cmd_rejected, 1);
+    assert_int_equal(app.keep.health.cmd_rejected, 1);
     start_perfect();
     run_wheels(RATE_HZ, 5.0, 0);
     send_command(NAVECU_CAN_CMD_CONTROL_COMMAND_CALIBRATE_AT_GNSS_CHOICE);
     /* still the first refusal's reason: nothing happens before the fix */
-    assert_int_equal(app.cal_status, NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_REFUSED_NOT_READY_CHOICE);
-    assert_int_equal(app.cal_at_gnss, 1);
+    assert_int_equal(app.keep.cal.status, NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_REFUSED_NOT_READY_CHOICE);
+    assert_int_equal(app.run.cal.at_gnss, 1);
     send_gnss_epoch(0u, 0u, 5.0);
-    assert_int_equal(app.cal_status, NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_REFUSED_TOO_CLOSE_CHOICE);
-    assert_int_equal(app.cal_at_gnss, 0);
+    assert_int_equal(app.keep.cal.status, NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_REFUSED_TOO_CLOSE_CHOICE);
+    assert_int_equal(app.run.cal.at_gnss, 0);
 }
 
 /* ---- the Kalman filter in the application (docs/kalman.md) ---- */
@@ -1238,7 +1239,7 @@ static void test_filter_with_gnss(void **state)
         tow += 200u;
         send_fix(lat0, lon0, tow);
     }
-    assert_true(app.ekf_on);
+    assert_true(app.run.fusion.on);
     run_wheels(RATE_HZ / 5, 0.0, 0);
     struct navecu_can_nav_status_t st = last_status_page0();
     assert_int_equal(st.mode, NAVECU_CAN_NAV_STATUS_MODE_GNSS_INS_CHOICE);
@@ -1247,18 +1248,18 @@ static void test_filter_with_gnss(void **state)
     last_position(&lat, &lon);
     local_en(lat, lon, &e, &n);
     assert_near(hypot(e, n), 0.0, 0.1);
-    const uint32_t rejected = app.health.gnss_rejected;
+    const uint32_t rejected = app.keep.health.gnss_rejected;
     tow += 200u;
     send_fix(lat0 + 9000, lon0, tow); /* 100 m north */
     run_wheels(RATE_HZ / 5, 0.0, 0);
-    assert_int_equal(app.health.gnss_rejected, rejected + 1u);
+    assert_int_equal(app.keep.health.gnss_rejected, rejected + 1u);
     last_position(&lat, &lon);
     local_en(lat, lon, &e, &n);
     assert_near(hypot(e, n), 0.0, 0.1);
     run_wheels(3 * RATE_HZ, 0.0, 0);
     st = last_status_page0();
     assert_int_equal(st.mode, NAVECU_CAN_NAV_STATUS_MODE_DEAD_RECKONING_CHOICE);
-    assert_int_equal(app.ekf.n_health_fixes, 0u);
+    assert_int_equal(app.run.fusion.ekf.n_health_fixes, 0u);
 }
 
 
@@ -1306,16 +1307,16 @@ static void test_diverged_filter_is_reset(void **state)
     start_perfect();
     fix_epoch = 0u;
     uint32_t tow = run_filter_on_fixes(50, 100000u);
-    assert_true(app.ekf_on);
-    assert_int_equal(app.health.filter_resets, 0u);
-    app.ekf.P[3][3] = NAN;
+    assert_true(app.run.fusion.on);
+    assert_int_equal(app.keep.health.filter_resets, 0u);
+    app.run.fusion.ekf.P[3][3] = NAN;
     run_wheels(RATE_HZ / 5, 0.0, 0);
-    assert_int_equal(app.health.filter_resets, 1u);
-    assert_false(app.ekf_on);
-    assert_int_equal(app.mode, APP_MODE_FAULT); /* re-acquiring from GNSS */
+    assert_int_equal(app.keep.health.filter_resets, 1u);
+    assert_false(app.run.fusion.on);
+    assert_int_equal(app.run.mode, APP_MODE_FAULT); /* re-acquiring from GNSS */
     struct navecu_can_nav_status_t st = last_status_page0();
-    assert_true((st.health_flags & APP_FLAG_FILTER_RESET) != 0u);
-    assert_true((st.health_flags & APP_FLAG_REACQUIRE) != 0u);
+    assert_true((st.health_flags & NAVECU_HEALTH_FILTER_RESET) != 0u);
+    assert_true((st.health_flags & NAVECU_HEALTH_REACQUIRE) != 0u);
     assert_true(all_nav_outputs_finite()); /* the last ones sent, from before the reset */
     run_wheels(RATE_HZ, 0.0, 0); /* every page goes round within 1 s */
     int seen_page5 = 0;
@@ -1330,17 +1331,17 @@ static void test_diverged_filter_is_reset(void **state)
     assert_true(seen_page5);
     tow += 1200u; /* the receiver's clock went on meanwhile (1.2 s without fixes) */
     tow = run_filter_on_fixes(1, tow);
-    assert_int_equal(app.mode, APP_MODE_NAVIGATING); /* re-acquired */
+    assert_int_equal(app.run.mode, APP_MODE_NAVIGATING); /* re-acquired */
     tow = run_filter_on_fixes(1, tow);
-    assert_true(app.ekf_on); /* restarted at the fix after */
+    assert_true(app.run.fusion.on); /* restarted at the fix after */
     run_wheels(RATE_HZ / 5, 0.0, 0);
     st = last_status_page0();
     assert_int_equal(st.mode, NAVECU_CAN_NAV_STATUS_MODE_GNSS_INS_CHOICE);
 
-    app.nav.v_n_mps[0] = INFINITY;
+    app.run.nav.v_n_mps[0] = INFINITY;
     run_wheels(RATE_HZ / 5, 0.0, 0);
-    assert_int_equal(app.health.filter_resets, 2u);
-    assert_int_equal(app.mode, APP_MODE_WAIT_INIT);
+    assert_int_equal(app.keep.health.filter_resets, 2u);
+    assert_int_equal(app.run.mode, APP_MODE_WAIT_INIT);
     (void)tow;
 }
 
@@ -1363,12 +1364,12 @@ static void test_task_supervision(void **state)
     hal.t_us += 10000000u; /* the bus silent for 10 s, then the loop runs again */
     app_poll(&app, &hal);
     assert_true(app_tasks_ok(&app, hal.t_us));
-    assert_int_equal(app.health.tasks_late, 0u);
+    assert_int_equal(app.keep.health.tasks_late, 0u);
     hal.t_us += 250000u; /* within 3 status periods (300 ms): still fine */
     assert_true(app_tasks_ok(&app, hal.t_us));
     hal.t_us += 100000u;
     assert_false(app_tasks_ok(&app, hal.t_us));
-    assert_int_equal(app.health.tasks_late, 1u);
+    assert_int_equal(app.keep.health.tasks_late, 1u);
 }
 
 int main(void)

@@ -3,7 +3,9 @@
 # firmware/ includes no OS header and nothing of a HAL implementation; firmware/nav/
 # (the core) includes nothing of the application, the CAN layer or the HAL at all;
 # the Cortex-M4F drivers (hal/cortex_m4f/) and the shared HAL modules (hal/common/)
-# include no OS header either.
+# include no OS header either; hal/ includes nothing of the application, the core or the
+# CAN layer (it is the interface and its drivers: the board entry points that tie the
+# application to a HAL live in boards/ and host_sim/).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 fail=0
@@ -20,5 +22,12 @@ fi
 if grep -nE '#include "(hal|app|e2e|navecu_can)\.h"' firmware/nav/*.[ch]; then
     echo "layers: the navigation core includes a layer above it (above)"; fail=1
 fi
-[ $fail -eq 0 ] && echo "layers: firmware/, hal/common/ and hal/cortex_m4f/ respect docs/architecture.md"
+app_headers=$(cd firmware && ls app/*.h nav/*.h can/*.h can/gen/*.h | xargs -n1 basename | sed 's/\./\\./' | paste -sd'|')
+if grep -rnE "#include \"($app_headers)\"" hal/; then
+    echo "layers: hal/ includes an application, core or CAN header (above): board code belongs in boards/"; fail=1
+fi
+if grep -nE '#include <($os_headers)' boards/*/*.[ch]; then
+    echo "layers: a board of boards/ includes an OS header (above)"; fail=1
+fi
+[ $fail -eq 0 ] && echo "layers: firmware/, hal/ and boards/ respect docs/architecture.md"
 exit $fail

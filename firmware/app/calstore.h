@@ -56,20 +56,23 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "dr.h"
 #include "hal.h"
+#include "navecu_can.h"
 
-#define CAL_SRC_NONE 0u           /* defaults, nothing calibrated (never stored) */
-#define CAL_SRC_KNOWN_POSITION 1u /* one-point calibration at a CMD_KnownPosition */
-#define CAL_SRC_GNSS 2u           /* one-point calibration at a GNSS fix */
-#define CAL_SRC_FILTER 3u         /* estimated by the Kalman filter */
+/* the stored source is NAV_Calibration's CalSource (the DBC's value table) */
+#define CAL_SRC_NONE NAVECU_CAN_NAV_CALIBRATION_CAL_SOURCE_NONE_CHOICE /* never stored */
+#define CAL_SRC_KNOWN_POSITION NAVECU_CAN_NAV_CALIBRATION_CAL_SOURCE_KNOWN_POSITION_CHOICE
+#define CAL_SRC_GNSS NAVECU_CAN_NAV_CALIBRATION_CAL_SOURCE_GNSS_CHOICE
+#define CAL_SRC_FILTER NAVECU_CAN_NAV_CALIBRATION_CAL_SOURCE_FILTER_CHOICE
 
 #define CALSTORE_VERSION 1u
 #define CALSTORE_BODY_BYTES 24u    /* bytes 0..23, covered by the CRC */
 #define CALSTORE_CRC_OFFSET 24u
 #define CALSTORE_COMMIT_OFFSET 32u
 #define CALSTORE_SLOT_BYTES 36u    /* bytes of a slot that are read and checked */
-#define CALSTORE_DH_MAX_RAD 0.5f   /* largest |dh_rad| accepted */
-#define CALSTORE_MU_MAX 0.2f       /* largest |odo_scale_err| accepted */
+#define CALSTORE_DH_MAX_RAD DR_DH_MAX_RAD /* largest |dh_rad| accepted (dr.h) */
+#define CALSTORE_MU_MAX DR_MU_MAX         /* largest |odo_scale_err| accepted */
 
 typedef struct {
     float dh_rad;         /* heading correction dH, seed 000 eq 9 (rad) */

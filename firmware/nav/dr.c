@@ -7,13 +7,11 @@
 
 /* radians per fixed-point angle LSB: pi / 180 / 1e7 / 2^24 */
 #define RAD_PER_LSB NAV_C(3.14159265358979323846 / (1.8e9 * (double)GEO_LSB_PER_DEG_E7))
-#define DH_MAX_RAD NAV_C(0.5)
-#define MU_MAX NAV_C(0.2)
 
 static int comp_ok(nav_real_t dh_rad, nav_real_t mu)
 {
-    return nav_isfinite(dh_rad) && nav_isfinite(mu) && nav_fabs(dh_rad) <= DH_MAX_RAD &&
-           nav_fabs(mu) <= MU_MAX;
+    return nav_isfinite(dh_rad) && nav_isfinite(mu) && nav_fabs(dh_rad) <= DR_DH_MAX_RAD &&
+           nav_fabs(mu) <= DR_MU_MAX;
 }
 
 int dr_init(dr_t *d, const geo_pos_t *pos, nav_real_t dh_rad, nav_real_t mu)
@@ -53,6 +51,16 @@ int dr_step(dr_t *d, nav_real_t ds_m, nav_real_t heading_rad, nav_real_t pitch_r
     }
     d->dist_m += nav_fabs(ds_c);
     d->dist_total_m += nav_fabs(ds_c);
+    return NAV_OK;
+}
+
+int dr_set_compensation(dr_t *d, nav_real_t dh_rad, nav_real_t mu)
+{
+    if (!comp_ok(dh_rad, mu)) {
+        return NAV_EINVAL;
+    }
+    d->dh_rad = dh_rad;
+    d->mu = mu;
     return NAV_OK;
 }
 

@@ -28,6 +28,12 @@
 
 #include "earth.h"
 
+/* The compensation's range: a heading correction or an odometer scale error beyond these
+ * is not a calibration but a fault (the one place they are defined; calstore.h and the
+ * application use them too). */
+#define DR_DH_MAX_RAD NAV_C(0.5)
+#define DR_MU_MAX NAV_C(0.2)
+
 typedef struct {
     geo_pos_t pos;          /* dead-reckoned position */
     geo_pos_t base;         /* start, or the last calibration point (eqs 7-8) */
@@ -49,6 +55,7 @@ typedef struct {
 #define dr_init NAV_SYM(dr_init)
 #define dr_step NAV_SYM(dr_step)
 #define dr_set_position NAV_SYM(dr_set_position)
+#define dr_set_compensation NAV_SYM(dr_set_compensation)
 #define dr_local_m NAV_SYM(dr_local_m)
 #define dr_calibrate NAV_SYM(dr_calibrate)
 #define onepoint_exact NAV_SYM(onepoint_exact)
@@ -65,6 +72,10 @@ int dr_step(dr_t *d, nav_real_t ds_m, nav_real_t heading_rad, nav_real_t pitch_r
 /* Move the dead-reckoned position (and not the base): while the odometer is unusable the
  * application follows another source. */
 void dr_set_position(dr_t *d, const geo_pos_t *pos);
+
+/* Replace the compensation in use (dH rad, mu) by one from another source (the filter,
+ * an erase). NAV_OK, or NAV_EINVAL (d unchanged) under dr_init's conditions. */
+int dr_set_compensation(dr_t *d, nav_real_t dh_rad, nav_real_t mu);
 
 /* East and north metres of p relative to ref (radii at ref's latitude and height, mid-
  * latitude for the east scale): the local frame of eqs 7-8. */

@@ -3,6 +3,8 @@
  */
 #include "ekf.h"
 
+#include "dr.h"
+
 #include <stddef.h>
 
 #define DEG_RAD NAV_C(0.017453292519943295)
@@ -357,4 +359,61 @@ void ekf_reopen(ekf_t *k, nav_real_t pos_sigma_m, nav_real_t vel_sigma_mps)
 nav_real_t ekf_sigma_h_m(const ekf_t *k)
 {
     return nav_sqrt(k->P[EKF_DR][EKF_DR] + k->P[EKF_DR + 1][EKF_DR + 1]);
+}
+
+nav_real_t ekf_state_sigma(const ekf_t *k, int i)
+{
+    return nav_sqrt(k->P[i][i]);
+}
+
+static int finite_n(const nav_real_t *v, int n)
+{
+    for (int i = 0; i < n; i++) {
+        if (!nav_isfinite(v[i])) {
+            return 0;
+        }
+    }
+    return 1;
+}
+
+int ekf_state_ok(const ekf_t *k)
+{
+    const nav_real_t scalars[3] = {k->k, k->mount_yaw_rad, k->mount_pitch_rad};
+    if (!finite_n(k->x, EKF_N) || !finite_n(k->bg_rps, 3) || !finite_n(k->ba_mps2, 3) ||
+        !finite_n(scalars, 3)) {
+        return 0;
+    }
+    for (int i = 0; i < EKF_N; i++) {
+        if (!(k->P[i][i] >= NAV_C(0.0)) || !nav_isfinite(k->P[i][i])) {
+            return 0;
+        }
+    }
+    return 1;
+}
+
+int ekf_set_gyro_bias(ekf_t *k, int axis, nav_real_t b_rps)
+{
+    if (axis < 0 || axis > 2 || !(nav_fabs(b_rps) < NAV_C(1.0))) {
+        return NAV_EINVAL;
+    }
+    k->bg_rps[axis] = b_rps;
+    return NAV_OK;
+}
+
+int ekf_set_odo_scale(ekf_t *k, nav_real_t odo_scale)
+{
+    if (!(nav_fabs(odo_scale) <= DR_MU_MAX)) {
+        return NAV_EINVAL;
+    }
+    k->k = odo_scale;
+    return NAV_OK;
+}
+
+int ekf_set_mount_yaw(ekf_t *k, nav_real_t yaw_rad)
+{
+    if (!(nav_fabs(yaw_rad) <= DR_DH_MAX_RAD)) {
+        return NAV_EINVAL;
+    }
+    k->mount_yaw_rad = yaw_rad;
+    return NAV_OK;
 }

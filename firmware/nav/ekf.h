@@ -167,4 +167,31 @@ int ekf_zero_velocity(ekf_t *k, const sins_t *s, nav_real_t sigma_mps, nav_real_
  * axis (rad/s) measures the residual z gyro bias; 1-sigma sigma_rps. */
 int ekf_zero_rate(ekf_t *k, nav_real_t residual_rate_z_rps, nav_real_t sigma_rps);
 
+/* ---------------------------------------------------------------- access ----
+ * The application reads the filter through these and changes its estimates only through
+ * the setters, which refuse (NAV_EINVAL, k unchanged) a non-finite value or one outside
+ * the stated range. */
+#define ekf_state_sigma NAV_SYM(ekf_state_sigma)
+#define ekf_state_ok NAV_SYM(ekf_state_ok)
+#define ekf_set_gyro_bias NAV_SYM(ekf_set_gyro_bias)
+#define ekf_set_odo_scale NAV_SYM(ekf_set_odo_scale)
+#define ekf_set_mount_yaw NAV_SYM(ekf_set_mount_yaw)
+
+/* 1-sigma of error state i (0 <= i < EKF_N): sqrt(P_ii), in that state's unit. */
+nav_real_t ekf_state_sigma(const ekf_t *k, int i);
+
+/* 1 if the error state, the fed-back estimates and the covariance's diagonal are finite
+ * and no variance is negative; 0 is a diverged filter (app: fusion supervision). */
+int ekf_state_ok(const ekf_t *k);
+
+/* The gyro bias estimate on body axis `axis` (0..2), rad/s, |b| < 1 rad/s: what the
+ * standstill estimate already knows. */
+int ekf_set_gyro_bias(ekf_t *k, int axis, nav_real_t b_rps);
+
+/* The odometer scale error estimate (seed 000's mu), |k| <= DR_MU_MAX. */
+int ekf_set_odo_scale(ekf_t *k, nav_real_t odo_scale);
+
+/* The mounting yaw estimate (rad), |yaw| <= DR_DH_MAX_RAD. */
+int ekf_set_mount_yaw(ekf_t *k, nav_real_t yaw_rad);
+
 #endif /* NAVECU_EKF_H */

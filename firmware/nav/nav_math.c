@@ -191,3 +191,8 @@ void nav_acc_add(nav_real_t *hi, nav_real_t *lo, nav_real_t inc)
     *lo = (*hi - hv) + (y - yv);
     *hi = s;
 }
+
+nav_real_t nav_clamp(nav_real_t x, nav_real_t lo, nav_real_t hi)
+{
+    return x < lo ? lo : (x > hi ? hi : x);
+}

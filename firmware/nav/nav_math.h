@@ -34,6 +34,7 @@ typedef struct {
 #define dcm_to_euler NAV_SYM(dcm_to_euler)
 #define rotvec_to_dquat NAV_SYM(rotvec_to_dquat)
 #define nav_acc_add NAV_SYM(nav_acc_add)
+#define nav_clamp NAV_SYM(nav_clamp)
 
 /* out = a x b. out may not alias a or b. */
 void vec3_cross(const nav_real_t a[3], const nav_real_t b[3], nav_real_t out[3]);
@@ -76,5 +77,8 @@ int rotvec_to_dquat(const nav_real_t phi_rad[3], nav_real_t dq[4]);
  * Needs strict IEEE evaluation: the build forbids -ffast-math and uses -ffp-contract=off.
  */
 void nav_acc_add(nav_real_t *hi, nav_real_t *lo, nav_real_t inc);
+
+/* x limited to [lo, hi] (lo <= hi); a NaN x is returned as it is. */
+nav_real_t nav_clamp(nav_real_t x, nav_real_t lo, nav_real_t hi);
 
 #endif /* NAVECU_NAV_MATH_H */

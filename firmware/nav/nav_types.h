@@ -25,6 +25,9 @@
  * so no double arithmetic reaches the float32 build. */
 #define NAV_C(x) ((nav_real_t)(x))
 
+#define NAV_PI NAV_C(3.14159265358979323846)
+#define NAV_DEG_PER_RAD NAV_C(57.29577951308232)
+
 #if defined(NAV_REAL_DOUBLE)
 typedef double nav_real_t;
 #define NAV_SYM(name) name##_f64      /* symbol of the reference variant */

@@ -18,6 +18,13 @@ static int finite3(const nav_real_t v[3])
     return nav_isfinite(v[0]) && nav_isfinite(v[1]) && nav_isfinite(v[2]);
 }
 
+/* the region where the ENU mechanization is valid: |lat| <= 89 deg, height in [-1, 20] km */
+static int pos_ok(const geo_pos_t *pos)
+{
+    return pos->lat <= MAX_LAT_LSB && pos->lat >= -MAX_LAT_LSB && pos->lon <= GEO_LSB_180DEG &&
+           pos->lon > -GEO_LSB_180DEG && pos->h <= GEO_H_MAX_LSB && pos->h >= GEO_H_MIN_LSB;
+}
+
 static void copy3(const nav_real_t in[3], nav_real_t out[3])
 {
     out[0] = in[0];
@@ -33,8 +40,7 @@ int sins_init(sins_t *s, const sins_config_t *cfg, const geo_pos_t *pos,
         !nav_isfinite(tau) || (tau > NAV_C(0.0) && tau < NAV_C(10.0) * cfg->max_dt_s)) {
         return NAV_EINVAL;
     }
-    if (pos->lat > MAX_LAT_LSB || pos->lat < -MAX_LAT_LSB || pos->lon > GEO_LSB_180DEG ||
-        pos->lon <= -GEO_LSB_180DEG || pos->h > GEO_H_MAX_LSB || pos->h < GEO_H_MIN_LSB) {
+    if (!pos_ok(pos)) {
         return NAV_EINVAL;
     }
     if (!finite3(v_n_mps) || !(vec3_norm(v_n_mps) <= MAX_SPEED_MPS)) {
@@ -72,6 +78,39 @@ void sins_set_height_ref(sins_t *s, nav_real_t h_ref_m)
 {
     s->h_ref_valid = (uint8_t)(nav_isfinite(h_ref_m) && s->cfg.vdamp_tau_s > NAV_C(0.0));
     s->h_ref_m = s->h_ref_valid ? h_ref_m : NAV_C(0.0);
+}
+
+void sins_clear_height_ref(sins_t *s)
+{
+    s->h_ref_valid = 0u;
+}
+
+int sins_set_position(sins_t *s, const geo_pos_t *pos)
+{
+    if (!pos_ok(pos)) {
+        return NAV_EINVAL;
+    }
+    s->pos = *pos;
+    return NAV_OK;
+}
+
+void sins_earth_rate_b(const sins_t *s, nav_real_t w_ie_b_rps[3])
+{
+    mat3_t C_bn;
+    quat_to_dcm(s->q_bn, &C_bn);
+    earth_t e;
+    earth_eval(geo_lat_rad(&s->pos), geo_h_m(&s->pos), &e);
+    mat3t_mul_vec(&C_bn, e.w_ie_n_rps, w_ie_b_rps);
+}
+
+int sins_finite(const sins_t *s)
+{
+    for (int i = 0; i < 4; i++) {
+        if (!nav_isfinite(s->q_bn[i]) || (i < 3 && !nav_isfinite(s->v_n_mps[i]))) {
+            return 0;
+        }
+    }
+    return 1;
 }
 
 void sins_euler(const sins_t *s, nav_real_t *roll_rad, nav_real_t *pitch_rad,

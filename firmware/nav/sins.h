@@ -58,6 +58,10 @@ typedef struct {
 #define sins_euler NAV_SYM(sins_euler)
 #define sins_set_velocity NAV_SYM(sins_set_velocity)
 #define sins_turn_heading NAV_SYM(sins_turn_heading)
+#define sins_clear_height_ref NAV_SYM(sins_clear_height_ref)
+#define sins_set_position NAV_SYM(sins_set_position)
+#define sins_earth_rate_b NAV_SYM(sins_earth_rate_b)
+#define sins_finite NAV_SYM(sins_finite)
 
 /* coning/sculling on, max_dt 0.2 s (IMUs of 10-400 Hz with a dropped sample or two),
  * vertical damping time constant 100 s. */
@@ -91,6 +95,22 @@ int sins_step(sins_t *s, const imu_inc_t *inc);
  * A non-finite h_ref_m, or vdamp_tau_s = 0, turns damping off.
  */
 void sins_set_height_ref(sins_t *s, nav_real_t h_ref_m);
+
+/* Stop damping the vertical channel (another source, e.g. the Kalman filter, owns the
+ * height now). */
+void sins_clear_height_ref(sins_t *s);
+
+/* Replace the position by one from another source (dead reckoning, a GNSS fix, a known
+ * point). NAV_OK, or NAV_EINVAL (s unchanged) outside sins_init's region. */
+int sins_set_position(sins_t *s, const geo_pos_t *pos);
+
+/* The Earth's rotation rate seen by the body axes now: w_ie_b = C_bn^T w_ie_n (rad/s),
+ * what a perfect gyro reads at rest. */
+void sins_earth_rate_b(const sins_t *s, nav_real_t w_ie_b_rps[3]);
+
+/* 1 if the attitude and the velocity are finite (a navigator that can still be output and
+ * corrected), else 0. */
+int sins_finite(const sins_t *s);
 
 /* roll, pitch, heading (rad) of the current attitude, conventions of nav_math.h */
 void sins_euler(const sins_t *s, nav_real_t *roll_rad, nav_real_t *pitch_rad,

@@ -46,7 +46,7 @@ void fz_begin(fz_app_t *z, app_t *app, hal_t *hal)
     z->lat_e7 = LAT0_E7;
     z->lon_e7 = LON0_E7;
     z->tow_ms = 100000u;
-    memcpy(z->health, &app->health, sizeof z->health);
+    memcpy(z->health, &app->keep.health, sizeof z->health);
     hal->tx_n = 0u;
 }
 
@@ -69,18 +69,17 @@ void fz_check(fz_app_t *z)
 {
     const app_t *a = z->app;
     hal_t *hal = z->hal;
-    switch (a->mode) {
+    switch (a->run.mode) {
     case APP_MODE_WAIT_INIT:
     case APP_MODE_LEVELLING:
     case APP_MODE_NAVIGATING:
     case APP_MODE_FAULT:
-    case APP_MODE_DEAD_RECKONING:
         break;
     default:
-        fuzz_fail("app: mode %d is not an app_mode_t (frame %u)", (int)a->mode, z->frames);
+        fuzz_fail("app: mode %d is not an app_mode_t (frame %u)", (int)a->run.mode, z->frames);
     }
     uint32_t h[FZ_HEALTH_N];
-    memcpy(h, &a->health, sizeof h);
+    memcpy(h, &a->keep.health, sizeof h);
     for (size_t k = 0u; k < FZ_HEALTH_N; k++) {
         if (h[k] < z->health[k]) {
             fuzz_fail("app: health counter #%zu decreased from %u to %u (frame %u)", k,

@@ -3,7 +3,7 @@
 run_lint.py - the static analysis behind `make lint` (docs/misra.md).
 
 Runs three analysers over the firmware's C sources (firmware/ without the generated codec
-firmware/can/gen/, and hal/; never tests/):
+firmware/can/gen/, hal/ and boards/; never tests/):
 
   cppcheck   2.10 with its MISRA C:2012 addon, for the ECU's configuration: the float32
              variant (NAV_REAL_DOUBLE undefined), __ARM_EABI__, the Cortex-M4F platform
@@ -98,7 +98,7 @@ class Finding:
 
 def find_sources():
     out = []
-    for top in ("firmware", "hal"):
+    for top in ("firmware", "hal", "boards"):
         for dirpath, dirnames, filenames in os.walk(os.path.join(ROOT, top)):
             dirnames.sort()
             rel = os.path.relpath(dirpath, ROOT)
@@ -282,7 +282,8 @@ def cppcheck_cmd(files, cfg):
              "--cppcheck-build-dir=" + build_dir,
              "-j", str(cfg.jobs),
              "--template=" + tmpl]
-            + shlex.split(cfg.fw_inc) + ["-Ihal/common", "-Ihal/cortex_m4f"] + files)
+            + shlex.split(cfg.fw_inc) + ["-Ihal/common", "-Ihal/cortex_m4f", "-Iboards/qemu"]
+            + files)
 
 
 def parse_cppcheck(out):
@@ -526,7 +527,7 @@ def main():
     ap.add_argument("--list", action="store_true", help="print every finding with its status")
     ap.add_argument("--update", action="store_true", help="rewrite the accepted lists to the current findings")
     ap.add_argument("--strict", action="store_true", help="stale baseline entries fail too")
-    ap.add_argument("files", nargs="*", help="sources (default: firmware/ and hal/ without firmware/can/gen/)")
+    ap.add_argument("files", nargs="*", help="sources (default: firmware/, hal/ and boards/ without firmware/can/gen/)")
     cfg = ap.parse_args()
     os.chdir(ROOT)
     tools = [t.strip() for t in cfg.tools.split(",") if t.strip()]
@@ -543,13 +544,14 @@ def main():
         return 2
 
     files = [relpath(f) for f in cfg.files] if cfg.files else find_sources()
-    m4 = [f for f in files if f.startswith("hal/cortex_m4f/")]
+    m4_only = ("hal/cortex_m4f/", "boards/")
+    m4 = [f for f in files if f.startswith(m4_only)]
     host_m4 = set(shlex.split(cfg.host_m4))
-    host = [f for f in files if not f.startswith("hal/cortex_m4f/") or f in host_m4]
+    host = [f for f in files if not f.startswith(m4_only) or f in host_m4]
 
     cflags = [x for x in shlex.split(cfg.cflags) if x != "-Werror"]
     fw_inc = shlex.split(cfg.fw_inc)
-    inc = fw_inc + ["-Ihal/common", "-Ihal/cortex_m4f"]
+    inc = fw_inc + ["-Ihal/common", "-Ihal/cortex_m4f", "-Iboards/qemu"]
     host_flags = cflags + ["-D_DEFAULT_SOURCE"] + inc + ["-Ihal/linux"]
     arm_flags = cflags + shlex.split(cfg.m4_flags) + inc
     # clang-tidy: the same, without GCC's warning options (the build enforces those) and

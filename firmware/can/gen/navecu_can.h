@@ -825,7 +825,7 @@ struct navecu_can_nav_status_t {
     uint8_t mode;
 
     /**
-     * bit 0 IMU data stale (none for 0.5 s), bit 1 IMU fault reported, bit 2 no usable GNSS epoch for 2 s, bit 3 input rejected in the last second, bit 4 NVM error, bit 5 waiting for a heading, bit 6 IMU samples were lost and bridged in the last second, bit 7 the Kalman filter diverged and was reset in the last 10 s, bit 8 an IMU axis was found stuck in the last 10 s, bit 9 an IMU axis was at its configured range (saturated) in the last second, bit 10 the wheel speeds disagreed with the filter (locked or spinning wheels) in the last second, bit 11 after an IMU gap too long to bridge: waiting for a GNSS epoch to re-acquire position, velocity and heading.
+     * Bit field: bit k set means the condition of value 2^k in the value table HealthFlagBits (docs/can.md lists them).
      *
      * Range: 0..65535 (0..65535 -)
      * Scale: 1

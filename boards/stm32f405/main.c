@@ -1,15 +1,13 @@
 /*
- * main_stm32.c - the navecu ECU: board bring-up, then the application's main loop.
- *
- * The loop drains the CAN receive ring into the application, lets it emit what is due
- * (app_poll: NAV_Status with IMU_STALE while no IMU data arrives), kicks the watchdog if
- * every task ran in time (app_tasks_ok) and sleeps until the next interrupt (a received frame, or the 100 Hz SysTick that keeps
- * app_poll and the time base running on a silent bus). Each pass does bounded work:
- * at most BATCH_MAX frames, so a flooded bus cannot starve the watchdog kick.
+ * boards/stm32f405/main.c - the navecu ECU: board bring-up, then the application's main
+ * loop pass (app_loop.h, the same as every other board's) and a sleep until the next
+ * interrupt (a received frame, or the 100 Hz SysTick that keeps app_poll and the time
+ * base running on a silent bus).
  */
 #include <stdint.h>
 
 #include "app.h"
+#include "app_loop.h"
 #include "hal_stm32.h"
 
 #define SYST_CSR (*(volatile uint32_t *)0xE000E010u)
@@ -44,17 +42,11 @@ void board_main(void)
     SYST_CVR = 0u;
     SYST_CSR = 0x7u; /* core clock, interrupt, enable */
 
+    const app_pass_cfg_t pass = {BATCH_MAX, 1u};
     for (;;) {
-        hal_can_frame_t f;
-        for (uint32_t n = 0u; n < BATCH_MAX && hal_can_receive(hal, &f) == 0; n++) {
-            app_handle_frame(&app, hal, &f);
-        }
-        app_poll(&app, hal);
-        /* kicked only when every task ran in time: a stuck or starved task ends in a
-         * watchdog reset (136..376 ms), not in an ECU that answers with stale data */
-        if (app_tasks_ok(&app, hal_time_us(hal))) {
-            hal_watchdog_kick(hal);
-        }
+        /* the watchdog is kicked inside only when every task ran in time: a stuck or
+         * starved task ends in a watchdog reset (136..376 ms), not in a stale ECU */
+        (void)app_pass(&app, hal, &pass);
         /* sleep only if nothing arrived meanwhile: with interrupts masked, a frame that
          * comes in after the check still ends WFI (a pending interrupt wakes it), and is
          * handled once they are unmasked */

@@ -1,0 +1,123 @@
+/* align.c - initialisation, levelling, start and re-acquisition; see align.h. */
+#include "align.h"
+
+#include "app_tuning.h"
+
+void align_set_initial(align_t *al, const geo_pos_t *pos, int32_t h_cm, int heading_valid,
+                       nav_real_t heading_rad)
+{
+    al->pos_valid = 1u;
+    al->pos = *pos;
+    al->pos.h = (int64_t)h_cm * 10 * GEO_LSB_PER_MM;
+    al->h_cm = h_cm;
+    al->heading_valid = heading_valid ? 1u : 0u;
+    al->heading_rad = heading_rad;
+}
+
+int align_ready(const align_t *al)
+{
+    return al->pos_valid && al->heading_valid;
+}
+
+void align_level_restart(align_t *al)
+{
+    al->level_n = 0u;
+    for (int i = 0; i < 3; i++) {
+        al->level_wsum[i] = NAV_C(0.0);
+        al->level_wsum_lo[i] = NAV_C(0.0);
+    }
+}
+
+int align_level_sample(align_t *al, const int32_t v_raw[3], uint32_t n_total)
+{
+    al->level_n++;
+    const nav_real_t k = (nav_real_t)al->level_n;
+    const nav_real_t w = k * ((nav_real_t)n_total - k);
+    for (int i = 0; i < 3; i++) {
+        nav_acc_add(&al->level_wsum[i], &al->level_wsum_lo[i], w * (nav_real_t)v_raw[i]);
+    }
+    return al->level_n >= n_total;
+}
+
+void align_level_attitude(const align_t *al, nav_real_t *roll_rad, nav_real_t *pitch_rad)
+{
+    const nav_real_t fx = al->level_wsum[0];
+    const nav_real_t fy = al->level_wsum[1];
+    const nav_real_t fz = al->level_wsum[2];
+    *roll_rad = nav_atan2(-fx, fz);
+    *pitch_rad = nav_atan2(fy, nav_sqrt(fx * fx + fz * fz));
+}
+
+geo_pos_t align_pos_of(int32_t lat_e7, int32_t lon_e7, int32_t h_cm)
+{
+    const geo_pos_t p = {(int64_t)lat_e7 * GEO_LSB_PER_DEG_E7, (int64_t)lon_e7 * GEO_LSB_PER_DEG_E7,
+                         (int64_t)h_cm * 10 * GEO_LSB_PER_MM};
+    return p;
+}
+
+int align_start(const align_t *al, nav_real_t roll_rad, nav_real_t pitch_rad, sins_t *nav,
+                dr_t *dr, const calib_t *cal)
+{
+    nav_real_t q[4];
+    quat_from_euler(roll_rad, pitch_rad, al->heading_rad, q);
+    const geo_pos_t pos = al->pos;
+    const nav_real_t v0[3] = {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)};
+    const sins_config_t scfg = sins_default_config();
+    int rc = sins_init(nav, &scfg, &pos, v0, q);
+    if (rc != NAV_OK) {
+        return rc;
+    }
+    sins_set_height_ref(nav, (nav_real_t)al->h_cm * NAV_C(0.01));
+    rc = calib_start_dr(cal, dr, &pos);
+    return rc;
+}
+
+int align_gnss(align_t *al, const gnss_fix_t *fix)
+{
+    if (fix->speed_mps >= APP_GNSS_COURSE_MIN_MPS) {
+        al->course_rad = fix->course_rad;
+        al->course_valid = 1u;
+    }
+    if (al->course_valid && fix->has_h && fix->speed_mps >= NAV_C(0.0) &&
+        fix->speed_mps <= APP_GNSS_STILL_MPS) {
+        align_set_initial(al, &fix->pos, fix->h_cm, 1, al->course_rad);
+        return 1;
+    }
+    return 0;
+}
+
+void align_reacquire_begin(align_t *al, const sins_t *nav, nav_real_t mount_yaw_rad)
+{
+    nav_real_t roll, pitch, heading;
+    sins_euler(nav, &roll, &pitch, &heading);
+    al->reacq_roll_rad = roll;
+    al->reacq_pitch_rad = pitch;
+    al->reacq_heading_rad = heading;
+    al->reacq_mount_rad = mount_yaw_rad;
+    al->reacquire = 1u;
+}
+
+int align_reacquire_ready(const gnss_fix_t *fix)
+{
+    return fix->has_vel && fix->has_h &&
+           (fix->speed_mps >= APP_GNSS_COURSE_MIN_MPS ||
+            (fix->speed_mps >= NAV_C(0.0) && fix->speed_mps <= APP_GNSS_STILL_MPS));
+}
+
+int align_reacquire(align_t *al, const gnss_fix_t *fix, sins_t *nav, dr_t *dr,
+                    const calib_t *cal)
+{
+    const nav_real_t heading = fix->speed_mps >= APP_GNSS_COURSE_MIN_MPS
+                                   ? fix->course_rad + al->reacq_mount_rad
+                                   : al->reacq_heading_rad;
+    nav_real_t q[4];
+    quat_from_euler(al->reacq_roll_rad, al->reacq_pitch_rad, heading, q);
+    const sins_config_t scfg = sins_default_config();
+    if (sins_init(nav, &scfg, &fix->pos, fix->v_enu_mps, q) != NAV_OK ||
+        calib_start_dr(cal, dr, &fix->pos) != NAV_OK) {
+        return NAV_EINVAL;
+    }
+    sins_set_height_ref(nav, (nav_real_t)fix->h_cm * NAV_C(0.01));
+    al->reacquire = 0u;
+    return NAV_OK;
+}

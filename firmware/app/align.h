@@ -1,0 +1,87 @@
+/*
+ * align.h - initialisation and alignment: the initial position and heading (commanded,
+ * or from GNSS alone), levelling at rest, the start of navigation, and re-acquisition
+ * from GNSS after an IMU gap too long to bridge or a filter reset.
+ *
+ * Levelling: the mean specific force of a vehicle at rest is C_nb (0, 0, g), whose body
+ * components are g (-cos(p) sin(r), sin(p), cos(p) cos(r)) (docs/frames.md); it is the
+ * least-squares slope of the summed velocity increments over the window, a mean with
+ * parabolic weights w_k = k (N - k): a plain mean is off by up to one LSB / window length,
+ * because the sender's quantisation carry is unknown at both ends of the window; the
+ * parabolic weights give the ends almost no weight, which cuts that error by about
+ * sqrt(N) (docs/can.md, IMU).
+ */
+#ifndef NAVECU_ALIGN_H
+#define NAVECU_ALIGN_H
+
+#include <stdint.h>
+
+#include "calib.h"
+#include "dr.h"
+#include "gnss_epoch.h"
+#include "sins.h"
+
+typedef struct {
+    /* CMD_KnownPosition: where the car is (SetInitialPosition, CalibrateHere) */
+    uint8_t known_valid;
+    int32_t known_lat_e7, known_lon_e7;
+    /* the initial state navigation starts from */
+    uint8_t pos_valid, heading_valid;
+    geo_pos_t pos;          /* position, height from h_cm */
+    int32_t h_cm;           /* height above the ellipsoid */
+    nav_real_t heading_rad;
+    /* levelling */
+    nav_real_t level_wsum[3], level_wsum_lo[3]; /* weighted velocity increments, raw LSB */
+    uint32_t level_n;                           /* samples levelled so far */
+    /* GNSS-only initialisation: a course seen while moving */
+    uint8_t course_valid;
+    nav_real_t course_rad;
+    /* re-acquisition: the attitude before the gap, the mounting yaw in use */
+    uint8_t reacquire;
+    nav_real_t reacq_roll_rad, reacq_pitch_rad, reacq_heading_rad, reacq_mount_rad;
+} align_t;
+
+/* The initial state (SetInitialPosition, or the GNSS-only start). */
+void align_set_initial(align_t *al, const geo_pos_t *pos, int32_t h_cm, int heading_valid,
+                       nav_real_t heading_rad);
+
+/* A position of the protocol's units: latitude and longitude in 1e-7 deg, height in cm. */
+geo_pos_t align_pos_of(int32_t lat_e7, int32_t lon_e7, int32_t h_cm);
+
+/* 1 when position and heading are known: levelling may start. */
+int align_ready(const align_t *al);
+
+/* (Re)start levelling. */
+void align_level_restart(align_t *al);
+
+/* One sample's velocity increments (raw LSB) of an n_total-sample window. Returns 1 when
+ * the window is complete. */
+int align_level_sample(align_t *al, const int32_t v_raw[3], uint32_t n_total);
+
+/* Roll and pitch (rad) of the levelled specific force. */
+void align_level_attitude(const align_t *al, nav_real_t *roll_rad, nav_real_t *pitch_rad);
+
+/* Navigate from the initial position and heading with roll and pitch (rad), at rest: the
+ * navigator, its height reference (held at the initial height until GNSS heights
+ * arrive), the dead reckoning with the calibration in use. NAV_OK or the core's error. */
+int align_start(const align_t *al, nav_real_t roll_rad, nav_real_t pitch_rad, sins_t *nav,
+                dr_t *dr, const calib_t *cal);
+
+/* GNSS-only initialisation, while waiting for an initial state without one: the heading
+ * is the GNSS course while driving; the position, height and levelling come at the next
+ * stop. Returns 1 when the epoch set the initial state. */
+int align_gnss(align_t *al, const gnss_fix_t *fix);
+
+/* An IMU gap too long to bridge or a filter reset: keep roll, pitch and heading and the
+ * mounting yaw (rad) in use; position, velocity and heading come from GNSS. */
+void align_reacquire_begin(align_t *al, const sins_t *nav, nav_real_t mount_yaw_rad);
+
+/* 1 if the epoch can re-acquire: velocity and height, and either driving (the course is a
+ * heading) or standing (the heading before is kept). */
+int align_reacquire_ready(const gnss_fix_t *fix);
+
+/* Resume at this epoch. NAV_OK, or the core's error (the epoch is refused). */
+int align_reacquire(align_t *al, const gnss_fix_t *fix, sins_t *nav, dr_t *dr,
+                    const calib_t *cal);
+
+#endif /* NAVECU_ALIGN_H */

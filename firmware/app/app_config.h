@@ -1,0 +1,46 @@
+/*
+ * app_config.h - what an integrator configures: the IMU, the GNSS receiver, the car's
+ * odometer and the output rates. app_default_config() gives the values the ECU runs with
+ * when nothing else is configured; app_config_valid() is the one range check every
+ * source of a configuration (the host's options, a stored record) goes through.
+ */
+#ifndef NAVECU_APP_CONFIG_H
+#define NAVECU_APP_CONFIG_H
+
+#include <stdint.h>
+
+#include "nav_types.h"
+#include "odo.h"
+
+typedef struct {
+    uint16_t imu_rate_hz;    /* IMU sample rate, 10..400 */
+    uint16_t nav_rate_hz;    /* NAV_Position/Height/Velocity/Attitude rate, <= imu_rate_hz */
+    uint16_t status_rate_hz; /* NAV_Status rate, <= imu_rate_hz */
+    uint16_t level_s;        /* accelerometer levelling time before navigation starts */
+    odo_axle_t odo_axle;     /* wheels that measure the distance (odo.h) */
+    nav_real_t cal_min_base_m;    /* one-point calibration refused closer than this to its base */
+    /* the gyro's noise and bias, for the bias estimate at standstill (a scalar Kalman
+     * filter of a constant with a zero-mean prior): */
+    nav_real_t gyro_arw_rad_rts;  /* angle random walk, rad/sqrt(s) */
+    nav_real_t gyro_bias_rps;     /* 1-sigma of the turn-on bias, rad/s */
+    nav_real_t accel_bias_mps2;   /* 1-sigma of the accelerometer bias, m/s^2 */
+    nav_real_t gyro_bias_rw_rps_rts;    /* in-run gyro bias random walk, rad/s/sqrt(s) */
+    nav_real_t accel_bias_rw_mps2_rts;  /* in-run accelerometer bias random walk */
+    nav_real_t gnss_latency_s;    /* receiver output latency: fix time of validity to
+                                     arrival (more when TimeOfWeek shows a late epoch) */
+    nav_real_t gnss_lever_b_m[3]; /* GNSS antenna from the IMU, body axes, m */
+    nav_real_t gnss_corr_s;       /* correlation time of the receiver's position errors */
+    nav_real_t odo_lever_b_m[3];  /* the odometer's reference point (rear axle middle) from
+                                     the IMU, body axes, m */
+    nav_real_t gyro_range_rps;    /* the IMU's measurement range: a rate at or beyond it is */
+    nav_real_t accel_range_mps2;  /* saturated (counted, flagged) */
+} app_config_t;
+
+/* Defaults: IMU 100 Hz, outputs 50 Hz, status 10 Hz, levelling 30 s, the mid-grade IMU of
+ * seed 000, a u-blox-class standalone receiver. */
+app_config_t app_default_config(void);
+
+/* 1 if every field is within its range (the comments above and app_config.c), else 0. */
+int app_config_valid(const app_config_t *cfg);
+
+#endif /* NAVECU_APP_CONFIG_H */

@@ -1,0 +1,31 @@
+/* app_health.c - counters and event stamps; see app_health.h. */
+#include "app_health.h"
+
+void app_count(uint32_t *c)
+{
+    if (*c < UINT32_MAX) {
+        (*c)++;
+    }
+}
+
+void app_count_n(uint32_t *c, uint64_t n)
+{
+    *c = n > UINT32_MAX - *c ? UINT32_MAX : *c + (uint32_t)n;
+}
+
+void app_stamp(app_stamp_t *s, uint64_t n)
+{
+    s->sample = n;
+    s->seen = 1u;
+}
+
+int app_stamp_within(const app_stamp_t *s, uint64_t n, uint64_t window)
+{
+    return s->seen && n - s->sample <= window;
+}
+
+void app_diag_reject(const app_diag_t *d, uint32_t *counter)
+{
+    app_count(counter);
+    app_stamp(&d->events->reject, d->n_samples);
+}

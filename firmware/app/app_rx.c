@@ -1,0 +1,260 @@
+/* app_rx.c - receive and validate one frame; see app_rx.h. */
+#include "app_rx.h"
+
+#include <string.h>
+
+#include "app_tuning.h"
+#include "navecu_can.h"
+
+static const uint32_t RX_IDS[] = {
+    NAVECU_CAN_IMU_RATE_FRAME_ID,        NAVECU_CAN_IMU_ACCEL_FRAME_ID,
+    NAVECU_CAN_WHEEL_SPEEDS_FRAME_ID,    NAVECU_CAN_GNSS_POSITION_FRAME_ID,
+    NAVECU_CAN_GNSS_VELOCITY_FRAME_ID,   NAVECU_CAN_GNSS_STATUS_FRAME_ID,
+    NAVECU_CAN_GNSS_HEIGHT_FRAME_ID,     NAVECU_CAN_CMD_KNOWN_POSITION_FRAME_ID,
+    NAVECU_CAN_CMD_CONTROL_FRAME_ID,     NAVECU_CAN_CMD_INITIAL_ATTITUDE_FRAME_ID,
+};
+
+size_t app_rx_ids(uint32_t *ids, size_t max)
+{
+    const size_t n = sizeof RX_IDS / sizeof RX_IDS[0];
+    for (size_t i = 0u; i < n && i < max; i++) {
+        ids[i] = RX_IDS[i];
+    }
+    return n;
+}
+
+static int is_input(uint32_t id)
+{
+    for (size_t i = 0u; i < sizeof RX_IDS / sizeof RX_IDS[0]; i++) {
+        if (RX_IDS[i] == id) {
+            return 1;
+        }
+    }
+    return 0;
+}
+
+static int is_own_output(uint32_t id)
+{
+    return id == NAVECU_CAN_NAV_POSITION_FRAME_ID || id == NAVECU_CAN_NAV_HEIGHT_FRAME_ID ||
+           id == NAVECU_CAN_NAV_VELOCITY_FRAME_ID || id == NAVECU_CAN_NAV_ATTITUDE_FRAME_ID ||
+           id == NAVECU_CAN_NAV_STATUS_FRAME_ID || id == NAVECU_CAN_NAV_CALIBRATION_FRAME_ID;
+}
+
+/* 1 if the message carries its own E2E CRC in byte 7 (the IMU pair is checked as a whole
+ * when IMU_Accel arrives, imu_stream.h) */
+static int is_e2e(uint32_t id)
+{
+    return id == NAVECU_CAN_WHEEL_SPEEDS_FRAME_ID || id == NAVECU_CAN_GNSS_VELOCITY_FRAME_ID ||
+           id == NAVECU_CAN_CMD_CONTROL_FRAME_ID || id == NAVECU_CAN_CMD_INITIAL_ATTITUDE_FRAME_ID;
+}
+
+/* GNSS and known positions: the DBC's ranges, except that longitude -180 deg is refused
+ * (the same meridian as +180) */
+static int lat_lon_ok(int32_t lat_e7, int32_t lon_e7)
+{
+    return navecu_can_gnss_position_latitude_is_in_range(lat_e7) && lon_e7 > -1800000000 &&
+           navecu_can_gnss_position_longitude_is_in_range(lon_e7);
+}
+
+/* A command's alive counter: APP_CMD_MAX_DELTA - 1 lost frames are tolerated; a larger
+ * step is an old or foreign frame (E2E "wrong sequence"): dropped, and the counter
+ * resynchronizes on it. */
+static int command_counter_ok(e2e_counter_t *c, uint8_t counter)
+{
+    const int step = e2e_counter_step(c, counter);
+    return step > 0 && step <= APP_CMD_MAX_DELTA;
+}
+
+static rx_command_t command_of(uint8_t raw)
+{
+    return raw < (uint8_t)RX_CMD_UNKNOWN ? (rx_command_t)raw : RX_CMD_UNKNOWN;
+}
+
+static rx_verdict_t decode_imu(uint32_t id, const uint8_t d[8], rx_input_t *in)
+{
+    if (id == NAVECU_CAN_IMU_RATE_FRAME_ID) {
+        struct navecu_can_imu_rate_t m;
+        navecu_can_imu_rate_unpack(&m, d, 8u);
+        if (m.imu_counter > E2E_COUNTER_MAX) {
+            return RX_BAD_COUNTER;
+        }
+        in->kind = RX_IMU_RATE;
+        in->u.imu_rate.counter = m.imu_counter;
+        in->u.imu_rate.raw[0] = m.angle_inc_x;
+        in->u.imu_rate.raw[1] = m.angle_inc_y;
+        in->u.imu_rate.raw[2] = m.angle_inc_z;
+        memcpy(in->u.imu_rate.data, d, 8u);
+        return RX_OK;
+    }
+    struct navecu_can_imu_accel_t m;
+    navecu_can_imu_accel_unpack(&m, d, 8u);
+    in->kind = RX_IMU_ACCEL;
+    in->u.imu_accel.counter = m.imu_counter;
+    in->u.imu_accel.fault = m.imu_fault;
+    in->u.imu_accel.raw[0] = m.vel_inc_x;
+    in->u.imu_accel.raw[1] = m.vel_inc_y;
+    in->u.imu_accel.raw[2] = m.vel_inc_z;
+    memcpy(in->u.imu_accel.data, d, 8u);
+    return RX_OK;
+}
+
+static rx_verdict_t decode_gnss(rx_state_t *rx, uint32_t id, const uint8_t d[8],
+                                rx_input_t *in)
+{
+    if (id == NAVECU_CAN_GNSS_POSITION_FRAME_ID) {
+        struct navecu_can_gnss_position_t m;
+        navecu_can_gnss_position_unpack(&m, d, 8u);
+        in->kind = RX_GNSS_POSITION;
+        in->u.position.lat_e7 = m.latitude;
+        in->u.position.lon_e7 = m.longitude;
+        return lat_lon_ok(m.latitude, m.longitude) ? RX_OK : RX_GNSS_BAD;
+    }
+    if (id == NAVECU_CAN_GNSS_VELOCITY_FRAME_ID) {
+        struct navecu_can_gnss_velocity_t m;
+        navecu_can_gnss_velocity_unpack(&m, d, 8u);
+        if (e2e_counter_step(&rx->gnss_vel, m.gnss_epoch) <= 0) {
+            return RX_BAD_COUNTER; /* repeated epoch or the invalid 15 */
+        }
+        in->kind = RX_GNSS_VELOCITY;
+        in->u.velocity.epoch = m.gnss_epoch;
+        in->u.velocity.v_enu_mps[0] = navecu_can_gnss_velocity_vel_east_decode(m.vel_east);
+        in->u.velocity.v_enu_mps[1] = navecu_can_gnss_velocity_vel_north_decode(m.vel_north);
+        in->u.velocity.v_enu_mps[2] = navecu_can_gnss_velocity_vel_up_decode(m.vel_up);
+        in->u.velocity.sacc_mps = navecu_can_gnss_velocity_speed_accuracy_decode(m.speed_accuracy);
+        return RX_OK;
+    }
+    if (id == NAVECU_CAN_GNSS_HEIGHT_FRAME_ID) {
+        struct navecu_can_gnss_height_t m;
+        navecu_can_gnss_height_unpack(&m, d, 8u);
+        if (!navecu_can_gnss_height_height_is_in_range(m.height)) {
+            return RX_BAD_VALUE;
+        }
+        in->kind = RX_GNSS_HEIGHT;
+        in->u.height.epoch = m.gnss_epoch;
+        in->u.height.h_cm = m.height;
+        return RX_OK;
+    }
+    struct navecu_can_gnss_status_t m;
+    navecu_can_gnss_status_unpack(&m, d, 8u);
+    in->kind = RX_GNSS_STATUS;
+    in->u.status.epoch = m.gnss_epoch;
+    in->u.status.defined = m.gnss_epoch <= E2E_COUNTER_MAX &&
+                           m.fix_type <= NAVECU_CAN_GNSS_STATUS_FIX_TYPE_RTK_FIXED_CHOICE;
+    in->u.status.fix_3d = m.fix_type >= NAVECU_CAN_GNSS_STATUS_FIX_TYPE_FIX3_D_CHOICE;
+    in->u.status.n_sats = m.num_satellites;
+    in->u.status.hacc_m = navecu_can_gnss_status_horiz_accuracy_decode(m.horiz_accuracy);
+    in->u.status.vacc_m = navecu_can_gnss_status_vert_accuracy_decode(m.vert_accuracy);
+    in->u.status.tow_ms = m.time_of_week;
+    return RX_OK;
+}
+
+static rx_verdict_t decode_command(rx_state_t *rx, uint32_t id, const uint8_t d[8],
+                                   rx_input_t *in)
+{
+    if (id == NAVECU_CAN_CMD_KNOWN_POSITION_FRAME_ID) {
+        struct navecu_can_cmd_known_position_t m;
+        navecu_can_cmd_known_position_unpack(&m, d, 8u);
+        if (!lat_lon_ok(m.latitude, m.longitude)) {
+            return RX_BAD_VALUE;
+        }
+        in->kind = RX_KNOWN_POSITION;
+        in->u.position.lat_e7 = m.latitude;
+        in->u.position.lon_e7 = m.longitude;
+        return RX_OK;
+    }
+    if (id == NAVECU_CAN_CMD_INITIAL_ATTITUDE_FRAME_ID) {
+        struct navecu_can_cmd_initial_attitude_t m;
+        navecu_can_cmd_initial_attitude_unpack(&m, d, 8u);
+        if (!command_counter_ok(&rx->att, m.att_counter)) {
+            return RX_BAD_COUNTER;
+        }
+        if (!navecu_can_cmd_initial_attitude_init_roll_is_in_range(m.init_roll) ||
+            !navecu_can_cmd_initial_attitude_init_pitch_is_in_range(m.init_pitch)) {
+            return RX_BAD_VALUE;
+        }
+        in->kind = RX_INITIAL_ATTITUDE;
+        in->u.attitude.roll_rad = navecu_can_cmd_initial_attitude_init_roll_decode(m.init_roll);
+        in->u.attitude.pitch_rad = navecu_can_cmd_initial_attitude_init_pitch_decode(m.init_pitch);
+        return RX_OK;
+    }
+    struct navecu_can_cmd_control_t m;
+    navecu_can_cmd_control_unpack(&m, d, 8u);
+    if (!command_counter_ok(&rx->cmd, m.cmd_counter)) {
+        return RX_BAD_COUNTER;
+    }
+    in->kind = RX_COMMAND;
+    in->u.command.command = command_of(m.command);
+    in->u.command.heading_valid = m.heading_valid ? 1u : 0u;
+    in->u.command.heading_in_range = navecu_can_cmd_control_heading_is_in_range(m.heading);
+    in->u.command.height_in_range = navecu_can_cmd_control_height_is_in_range(m.height);
+    in->u.command.heading_rad = navecu_can_cmd_control_heading_decode(m.heading) / NAV_DEG_PER_RAD;
+    in->u.command.h_cm = m.height * 10;
+    return RX_OK;
+}
+
+rx_verdict_t app_rx_decode(rx_state_t *rx, const hal_can_frame_t *f, rx_input_t *in)
+{
+    in->kind = RX_NONE;
+    if (f->extended) {
+        return RX_UNKNOWN_ID;
+    }
+    if (is_own_output(f->id)) {
+        return RX_OK; /* our own outputs, seen on a shared bus */
+    }
+    if (!is_input(f->id)) {
+        return RX_UNKNOWN_ID;
+    }
+    if (f->dlc != 8u) {
+        return RX_BAD_DLC;
+    }
+    if (is_e2e(f->id) && !e2e_crc_ok(f->id, f->data)) {
+        return RX_BAD_CRC;
+    }
+    switch (f->id) {
+    case NAVECU_CAN_IMU_RATE_FRAME_ID:
+    case NAVECU_CAN_IMU_ACCEL_FRAME_ID:
+        return decode_imu(f->id, f->data, in);
+    case NAVECU_CAN_WHEEL_SPEEDS_FRAME_ID: {
+        struct navecu_can_wheel_speeds_t m;
+        navecu_can_wheel_speeds_unpack(&m, f->data, 8u);
+        if (e2e_counter_step(&rx->wheel, m.wheel_counter) <= 0) {
+            return RX_BAD_COUNTER;
+        }
+        in->kind = RX_WHEELS;
+        in->u.wheels.mps[0] = navecu_can_wheel_speeds_wheel_speed_fl_decode(m.wheel_speed_fl);
+        in->u.wheels.mps[1] = navecu_can_wheel_speeds_wheel_speed_fr_decode(m.wheel_speed_fr);
+        in->u.wheels.mps[2] = navecu_can_wheel_speeds_wheel_speed_rl_decode(m.wheel_speed_rl);
+        in->u.wheels.mps[3] = navecu_can_wheel_speeds_wheel_speed_rr_decode(m.wheel_speed_rr);
+        return RX_OK;
+    }
+    case NAVECU_CAN_GNSS_POSITION_FRAME_ID:
+    case NAVECU_CAN_GNSS_VELOCITY_FRAME_ID:
+    case NAVECU_CAN_GNSS_HEIGHT_FRAME_ID:
+    case NAVECU_CAN_GNSS_STATUS_FRAME_ID:
+        return decode_gnss(rx, f->id, f->data, in);
+    default: /* CMD_KnownPosition, CMD_Control, CMD_InitialAttitude */
+        return decode_command(rx, f->id, f->data, in);
+    }
+}
+
+void app_rx_imu_increment(const int32_t w_raw[3], const int32_t v_raw[3], nav_real_t dt_s,
+                          imu_inc_t *inc)
+{
+    inc->dtheta_b_rad[0] = navecu_can_imu_rate_angle_inc_x_decode(w_raw[0]);
+    inc->dtheta_b_rad[1] = navecu_can_imu_rate_angle_inc_y_decode(w_raw[1]);
+    inc->dtheta_b_rad[2] = navecu_can_imu_rate_angle_inc_z_decode(w_raw[2]);
+    inc->dv_b_mps[0] = navecu_can_imu_accel_vel_inc_x_decode(v_raw[0]);
+    inc->dv_b_mps[1] = navecu_can_imu_accel_vel_inc_y_decode(v_raw[1]);
+    inc->dv_b_mps[2] = navecu_can_imu_accel_vel_inc_z_decode(v_raw[2]);
+    inc->dt_s = dt_s;
+}
+
+nav_real_t app_rx_angle_lsb_rad(void)
+{
+    return navecu_can_imu_rate_angle_inc_x_decode(1);
+}
+
+nav_real_t app_rx_vel_lsb_mps(void)
+{
+    return navecu_can_imu_accel_vel_inc_x_decode(1);
+}

@@ -1,0 +1,135 @@
+/*
+ * app_rx.h - receive and validate: one CAN frame in, one decoded input out, or the reason
+ * it was refused. The checks of a single frame live here, in the order the protocol gives
+ * them (docs/can.md): the identifier is one of navecu's inputs, the length is 8, the E2E
+ * CRC matches, the alive counter steps forward (for the messages whose counter is per
+ * frame), and single-frame values are within the DBC's range. What needs more than one
+ * frame is checked where the frames meet: the IMU pair in imu_stream.h, the GNSS epoch in
+ * gnss_epoch.h.
+ *
+ * Decoded values are in SI units (rad, m/s, m) or, where a float would lose the protocol's
+ * exact value, in the protocol's integer unit named in the field (lat_e7: 1e-7 deg, h_cm:
+ * cm), which the core's fixed-point position takes without rounding.
+ * This is the only application module that knows the codec's message structs.
+ */
+#ifndef NAVECU_APP_RX_H
+#define NAVECU_APP_RX_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "e2e.h"
+#include "hal.h"
+#include "sins.h"
+
+typedef enum {
+    RX_NONE = 0,          /* nothing to act on: one of navecu's own outputs on the bus */
+    RX_IMU_RATE,
+    RX_IMU_ACCEL,
+    RX_WHEELS,
+    RX_GNSS_POSITION,
+    RX_GNSS_VELOCITY,
+    RX_GNSS_HEIGHT,
+    RX_GNSS_STATUS,
+    RX_KNOWN_POSITION,
+    RX_COMMAND,
+    RX_INITIAL_ATTITUDE,
+} rx_kind_t;
+
+/* Why a frame was refused (the counter of app_health_t it is counted in). */
+typedef enum {
+    RX_OK = 0,
+    RX_UNKNOWN_ID,  /* unknown_id: an extended or foreign identifier */
+    RX_BAD_DLC,     /* bad_dlc */
+    RX_BAD_CRC,     /* bad_crc */
+    RX_BAD_COUNTER, /* bad_counter: repeated, invalid or out-of-sequence alive counter */
+    RX_BAD_VALUE,   /* bad_value: outside the DBC's range */
+    RX_GNSS_BAD,    /* gnss_rejected: an impossible GNSS position */
+} rx_verdict_t;
+
+/* The commands of CMD_Control (the DBC's value table Command). */
+typedef enum {
+    RX_CMD_NONE = 0,
+    RX_CMD_RESET,
+    RX_CMD_SET_INITIAL_POSITION,
+    RX_CMD_STORE_CALIBRATION,
+    RX_CMD_ERASE_CALIBRATION,
+    RX_CMD_CALIBRATE_HERE,
+    RX_CMD_CALIBRATE_AT_GNSS,
+    RX_CMD_UNKNOWN, /* a value the protocol does not define */
+} rx_command_t;
+
+typedef struct {
+    rx_kind_t kind;
+    union {
+        struct rx_imu_rate { /* IMU_Rate */
+            uint8_t counter;
+            int32_t raw[3]; /* angle increments, x y z, in the signal's LSB */
+            uint8_t data[8];/* the payload, covered by the pair CRC in IMU_Accel */
+        } imu_rate;
+        struct rx_imu_accel { /* IMU_Accel */
+            uint8_t counter;
+            uint8_t fault;  /* the IMU reports a fault */
+            int32_t raw[3]; /* velocity increments, x y z, in the signal's LSB */
+            uint8_t data[8];
+        } imu_accel;
+        struct rx_wheels {
+            nav_real_t mps[4]; /* FL, FR, RL, RR, signed, reverse negative */
+        } wheels;
+        struct rx_position { /* GNSS_Position, CMD_KnownPosition */
+            int32_t lat_e7, lon_e7;
+        } position;
+        struct rx_velocity { /* GNSS_Velocity */
+            uint8_t epoch;
+            nav_real_t v_enu_mps[3];
+            nav_real_t sacc_mps; /* the receiver's speed accuracy */
+        } velocity;
+        struct rx_height { /* GNSS_Height */
+            uint8_t epoch;
+            int32_t h_cm;   /* above the ellipsoid */
+        } height;
+        struct rx_status { /* GNSS_Status, closing an epoch */
+            uint8_t epoch;
+            uint8_t defined;  /* epoch and fix type are values the protocol defines */
+            uint8_t fix_3d;   /* fix type 3D or better */
+            uint8_t n_sats;
+            nav_real_t hacc_m, vacc_m; /* the receiver's accuracies */
+            uint32_t tow_ms;  /* GPS time of week of the epoch */
+        } status;
+        struct rx_command_in { /* CMD_Control */
+            rx_command_t command;
+            uint8_t heading_valid;
+            uint8_t heading_in_range, height_in_range;
+            nav_real_t heading_rad; /* clockwise from north */
+            int32_t h_cm;
+        } command;
+        struct rx_attitude { /* CMD_InitialAttitude */
+            nav_real_t roll_rad, pitch_rad;
+        } attitude;
+    } u;
+} rx_input_t;
+
+/* The E2E receive state of the single-frame inputs: kept through a navigation reset, so
+ * that a replayed old frame is never taken for a first one. */
+typedef struct {
+    e2e_counter_t wheel, cmd, gnss_vel, att;
+} rx_state_t;
+
+/* Decode and check one frame. Returns RX_OK with *in filled (kind RX_NONE for navecu's
+ * own outputs), or the reason it was refused (*in then undefined, except that a refused
+ * GNSS_Position sets kind RX_GNSS_POSITION, which the epoch in assembly must know). */
+rx_verdict_t app_rx_decode(rx_state_t *rx, const hal_can_frame_t *f, rx_input_t *in);
+
+/* Raw IMU increments (the signals' LSB) to SI, over an interval of dt_s. */
+void app_rx_imu_increment(const int32_t w_raw[3], const int32_t v_raw[3], nav_real_t dt_s,
+                          imu_inc_t *inc);
+
+/* The size of one LSB of the angle (rad) and velocity (m/s) increments. */
+nav_real_t app_rx_angle_lsb_rad(void);
+nav_real_t app_rx_vel_lsb_mps(void);
+
+/* The CAN identifiers the application receives (for receive filters): writes up to max
+ * of them to ids and returns how many there are. */
+size_t app_rx_ids(uint32_t *ids, size_t max);
+
+#endif /* NAVECU_APP_RX_H */

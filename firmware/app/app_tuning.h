@@ -1,0 +1,119 @@
+/*
+ * app_tuning.h - the application's tuning constants, in one place, each with its unit and
+ * where its value comes from. Protocol facts (identifiers, signal ranges, value tables,
+ * HealthFlags bits, status pages) are not here: they come from the DBC through the
+ * generated codec (firmware/can/gen/). Configuration that an integrator sets per car or
+ * per IMU is not here either: it is app_config_t (app_config.h).
+ *
+ * A few may be overridden on the compiler's command line for experiments (#ifndef);
+ * the firmware is built and tested with the values below.
+ */
+#ifndef NAVECU_APP_TUNING_H
+#define NAVECU_APP_TUNING_H
+
+#include "nav_types.h"
+
+/* ---- time base and input supervision (docs/can.md, docs/reliability.md) ---- */
+/* NAV_Status flags IMU_STALE when no IMU sample came for this long on the HAL clock */
+#define APP_IMU_STALE_US 500000u
+/* IMU counter steps above this are held until a successor confirms them (a corrupt
+ * counter must not move time ahead): 4 = the lost frames the next sample may follow */
+#define APP_IMU_MAX_DELTA 4
+/* a command's alive counter may step by at most this (CMD_MAX_DELTA - 1 lost frames) */
+#define APP_CMD_MAX_DELTA 3
+/* IMU gaps up to this are bridged by interpolation; longer ones re-acquire (docs/can.md) */
+#define APP_MAX_BRIDGE_MS 200u
+/* a receive-time gap counts as whole lost counter cycles (15 samples) only when it
+ * exceeds the counter's step by more than this many periods: half a cycle, so a replay
+ * up to ~7x slower than real time is never taken for a gap (docs/can.md, IMU) */
+#define APP_IMU_GAP_SLACK_PERIODS 7u
+/* IMU plausibility: an axis repeating its raw value this long while the car moves is
+ * stuck; the car moves when a gyro axis spans more than 1 deg/s or a horizontal
+ * accelerometer axis more than 0.5 m/s^2 (a MEMS IMU's noise moves the 2^-21 rad LSB
+ * every sample); saturation at 99.9 % of the configured range (the sensor clips there) */
+#define APP_IMU_STUCK_S 2u
+#define APP_IMU_MOVE_RATE_RPS NAV_C(0.017453)
+#define APP_IMU_MOVE_ACCEL_MPS2 NAV_C(0.5)
+#define APP_IMU_SAT_FRACTION NAV_C(0.999)
+
+/* ---- how long NAV_Status flags an event (docs/can.md, HealthFlags) ---- */
+#define APP_FLAG_HOLD_S 1u          /* REJECTED, IMU_GAP, IMU_SATURATED, ODO_REJECTED */
+#define APP_FLAG_HOLD_LONG_S 10u    /* FILTER_RESET, IMU_SUSPECT */
+#define APP_NO_GNSS_S 2u            /* NO_GNSS: no usable epoch for this long */
+#define APP_GNSS_FIX_FRESH_S 2u     /* mode GnssIns while the last fix used is this recent */
+
+/* ---- GNSS epochs ---- */
+#define APP_GNSS_MIN_SATS 4u
+/* GNSS course is a heading only when moving this fast (course noise ~ sigma_v / v) */
+#define APP_GNSS_COURSE_MIN_MPS NAV_C(5.0)
+/* below this GNSS speed the vehicle may be still (levelling, GNSS-only initialisation) */
+#define APP_GNSS_STILL_MPS NAV_C(0.3)
+/* the receiver's horizontal accuracy is a 2-D figure: per axis 1/sqrt(2) of it */
+#define APP_GNSS_HACC_PER_AXIS NAV_C(0.7071)
+#define APP_GNSS_SIGMA_MAX_M NAV_C(100.0)  /* larger declared sigmas are clamped */
+#define APP_GNSS_SIGMA_V_MIN_M NAV_C(0.5)  /* vertical sigma floor */
+#ifndef APP_GNSS_SIGMA_FLOOR_M
+#define APP_GNSS_SIGMA_FLOOR_M NAV_C(1.0)  /* horizontal sigma floor per axis */
+#endif
+#define APP_GNSS_SACC_MIN_MPS NAV_C(0.05)  /* velocity sigma clamp */
+#define APP_GNSS_SACC_MAX_MPS NAV_C(2.0)
+#define APP_GNSS_VUP_SIGMA_RATIO NAV_C(1.5) /* vertical velocity sigma / horizontal */
+#define APP_GNSS_EPOCH_MIN_S NAV_C(0.05)    /* shortest fix interval in the correlation model */
+/* GNSS time alignment (gnss_time.h): an epoch later than the running minimum offset by
+ * more than 0.5 s three times in a row, earlier by more than 1 s or later by more than
+ * 10 s is a receiver clock jump; the minimum may creep by 50 ppm of elapsed time */
+#define APP_GNSS_LATE_US 500000
+#define APP_GNSS_LATE_RUN 3u
+#define APP_GNSS_JUMP_EARLY_US 1000000
+#define APP_GNSS_JUMP_LATE_US 10000000
+#define APP_GNSS_DRIFT_DIV 20000 /* 1 / 50 ppm */
+/* velocity history for the GNSS time of validity: entries at most 10 ms apart, so 64
+ * cover 0.64 s: the latency allowed (0.5 s) plus lateness */
+#define APP_VHIST 64u
+#define APP_VHIST_MAX_HZ 100u
+
+/* ---- Kalman filter scheduling and measurement noise (docs/kalman.md) ---- */
+#define APP_EKF_PRED_HZ 10u /* covariance propagation and odometer updates */
+#define APP_ZUPT_SIGMA_MPS NAV_C(0.01)
+/* a slow wheel-speed source: its zero hides creeping below one step for a period */
+#define APP_ZUPT_SIGMA_PER_PERIOD_MPS NAV_C(0.1)
+#define APP_ODO_SIGMA_MPS NAV_C(0.05)    /* quantisation, latency and tyre slip */
+#define APP_ODO_SIGMA_SPEED_FRAC NAV_C(0.01) /* plus 1 % of speed */
+/* a slow source's speed is late and averaged: noise grows with acceleration x period */
+#define APP_ODO_SIGMA_ACC_PERIOD NAV_C(0.5)
+#define APP_NHC_SIGMA_MPS NAV_C(0.1)     /* side slip in turns, suspension motion */
+#define APP_ODO_MIN_SPEED_MPS NAV_C(0.5) /* below this the speed rows are not used */
+#define APP_ODO_GATE_SIGMA NAV_C(5.0)    /* odometer and standstill innovation gate */
+#define APP_EKF_POS_SIGMA_MIN_M NAV_C(1.0) /* the filter's initial position sigma floor */
+/* GNSS innovation gate (position and velocity), in sigmas: 3, for receivers' multipath
+ * outliers that are far from Gaussian. Refusals in a row for longer than
+ * APP_GNSS_REOPEN_S reopen the filter's position (3 x the fix's sigma) and velocity
+ * (1 m/s): measured on the Kingston drive (docs/kalman.md), a 5-sigma gate lets
+ * multipath in and a filter that trusts itself after one bad fix refuses the good ones
+ * for half a minute. */
+#ifndef APP_GNSS_GATE_SIGMA
+#define APP_GNSS_GATE_SIGMA NAV_C(3.0)
+#endif
+#ifndef APP_GNSS_REOPEN_S
+#define APP_GNSS_REOPEN_S 3u
+#endif
+#define APP_GNSS_REOPEN_POS_SIGMAS NAV_C(3.0)
+#define APP_GNSS_REOPEN_VEL_MPS NAV_C(1.0)
+#define APP_GNSS_REOPEN_AFTER 2u /* refused fixes in a row before a reopen may happen */
+
+/* ---- filter supervision (docs/reliability.md) ---- */
+#define APP_FILTER_REOPEN_LIMIT 3u /* covariance reopens without a fix taken: diverged */
+/* GNSS course vs the filter's heading: 10 deg */
+#define APP_COURSE_MISMATCH_RAD NAV_C(0.17453)
+/* angles beyond this are not the navigator's (a non-finite or runaway value) */
+#define APP_ANGLE_SANE_RAD NAV_C(64.0)
+
+/* ---- calibration and its storage (docs/odometry.md) ---- */
+/* the filter's odometer scale and mounting yaw are adopted once their 1-sigma is below
+ * 0.05 % and 0.03 deg, and stored when they moved by more than 2 sigma */
+#define APP_CAL_ADOPT_SIGMA NAV_C(0.0005)
+#define APP_CAL_CHANGED_SIGMAS NAV_C(2.0)
+#define APP_CAL_SAVE_MIN_S 600u /* filter calibration saves: flash wear, 10 k cycles */
+#define APP_STORE_MIN_S 10u     /* StoreCalibration at most this often */
+
+#endif /* NAVECU_APP_TUNING_H */

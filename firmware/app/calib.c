@@ -1,0 +1,150 @@
+/* calib.c - the car's calibration and its NVM policy; see calib.h. */
+#include "calib.h"
+
+#include <string.h>
+
+#include "app_tuning.h"
+#include "navecu_can.h"
+
+void calib_init(calib_t *c)
+{
+    memset(c, 0, sizeof *c);
+    c->store.slot = -1;
+}
+
+void calib_boot(calib_t *c, hal_t *hal)
+{
+    cal_record_t rec;
+    const int rc = calstore_load(hal, &c->store, &rec);
+    if (rc == CALSTORE_OK) {
+        c->dh_rad = (nav_real_t)rec.dh_rad;
+        c->mu = (nav_real_t)rec.odo_scale_err;
+        c->base_m = (nav_real_t)rec.base_m;
+        c->source = rec.source;
+        c->status = NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_FROM_NVM_CHOICE;
+        c->stored = 1u;
+    } else if (rc == CALSTORE_CORRUPT) {
+        c->status = NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_NVM_CORRUPT_CHOICE;
+        c->nvm_error = 1u;
+    } else if (rc < 0) {
+        c->nvm_error = 1u;
+    }
+}
+
+void calib_store(calib_t *c, calib_trip_t *t, hal_t *hal, uint64_t n)
+{
+    cal_record_t rec;
+    rec.dh_rad = (float)c->dh_rad;
+    rec.odo_scale_err = (float)c->mu;
+    rec.base_m = (float)c->base_m;
+    rec.source = c->source;
+    t->last_save_sample = n;
+    if (calstore_save(hal, &c->store, &rec) == 0) {
+        c->stored = 1u;
+        t->stored_mu = c->mu;
+        t->stored_dh_rad = c->dh_rad;
+        c->nvm_error = 0u;
+    } else {
+        c->stored = 0u;
+        c->nvm_error = 1u;
+    }
+}
+
+int calib_store_command(calib_t *c, calib_trip_t *t, hal_t *hal, uint64_t n,
+                        uint32_t imu_rate_hz)
+{
+    if (c->source == NAVECU_CAN_NAV_CALIBRATION_CAL_SOURCE_NONE_CHOICE ||
+        (t->last_save_sample != 0u &&
+         n - t->last_save_sample < (uint64_t)APP_STORE_MIN_S * imu_rate_hz)) {
+        return -1; /* nothing calibrated to store, or asked again too soon (flash wear) */
+    }
+    calib_store(c, t, hal, n);
+    return 0;
+}
+
+void calib_erase(calib_t *c, hal_t *hal, dr_t *dr)
+{
+    if (calstore_erase(hal, &c->store) != 0) {
+        c->nvm_error = 1u;
+        return;
+    }
+    c->nvm_error = 0u;
+    c->dh_rad = NAV_C(0.0);
+    c->mu = NAV_C(0.0);
+    c->base_m = NAV_C(0.0);
+    c->source = NAVECU_CAN_NAV_CALIBRATION_CAL_SOURCE_NONE_CHOICE;
+    c->status = NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_NONE_CHOICE;
+    c->stored = 0u;
+    if (dr != NULL) {
+        (void)dr_set_compensation(dr, c->dh_rad, c->mu);
+    }
+}
+
+void calib_not_ready(calib_t *c)
+{
+    c->status = NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_REFUSED_NOT_READY_CHOICE;
+}
+
+int calib_one_point(calib_t *c, calib_trip_t *t, hal_t *hal, uint64_t n, int ready, dr_t *dr,
+                    sins_t *nav, const geo_pos_t *point, uint8_t source, nav_real_t min_base_m)
+{
+    /* with the filter running, GNSS calibrates the odometer and the mounting: the
+     * one-point calibration is for GNSS-denied driving */
+    if (!ready) {
+        calib_not_ready(c);
+        return -1;
+    }
+    geo_pos_t p = dr->pos;
+    p.lat = point->lat;
+    p.lon = point->lon;
+    dr_cal_t res;
+    const int rc = dr_calibrate(dr, &p, min_base_m, &res);
+    if (rc != NAV_OK) {
+        c->status = rc == NAV_ERANGE
+                        ? NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_REFUSED_TOO_CLOSE_CHOICE
+                        : NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_REFUSED_NOT_READY_CHOICE;
+        return -1;
+    }
+    c->dh_rad = dr->dh_rad;
+    c->mu = dr->mu;
+    c->base_m = res.base_m;
+    c->source = source;
+    c->status = NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_ONE_POINT_CHOICE;
+    if (c->count < UINT8_MAX) {
+        c->count++;
+    }
+    (void)sins_set_position(nav, &dr->pos);
+    calib_store(c, t, hal, n);
+    return 0;
+}
+
+void calib_adopt_filter(calib_t *c, calib_trip_t *t, hal_t *hal, uint64_t n,
+                        uint32_t imu_rate_hz, const ekf_t *ekf, dr_t *dr, int standing)
+{
+    const nav_real_t sk = ekf_state_sigma(ekf, EKF_K);
+    const nav_real_t sy = ekf_state_sigma(ekf, EKF_MY);
+    if (sk > APP_CAL_ADOPT_SIGMA || sy > APP_CAL_ADOPT_SIGMA ||
+        dr_set_compensation(dr, ekf->mount_yaw_rad, ekf->k) != NAV_OK) {
+        return; /* not converged, or outside what the store accepts */
+    }
+    c->mu = ekf->k;
+    c->dh_rad = ekf->mount_yaw_rad;
+    c->source = NAVECU_CAN_NAV_CALIBRATION_CAL_SOURCE_FILTER_CHOICE;
+    const int changed = !t->filter_stored ||
+                        nav_fabs(c->mu - t->stored_mu) > APP_CAL_CHANGED_SIGMAS * sk ||
+                        nav_fabs(c->dh_rad - t->stored_dh_rad) > APP_CAL_CHANGED_SIGMAS * sy;
+    if (changed) {
+        c->stored = 0u;
+    }
+    const uint64_t min_gap = (uint64_t)APP_CAL_SAVE_MIN_S * imu_rate_hz;
+    if (changed && standing && (!t->filter_stored || n - t->last_save_sample >= min_gap)) {
+        t->filter_stored = 1u;
+        c->base_m = NAV_C(0.0);
+        calib_store(c, t, hal, n);
+    }
+}
+
+int calib_start_dr(const calib_t *c, dr_t *dr, const geo_pos_t *pos)
+{
+    return dr_init(dr, pos, c->dh_rad, c->mu);
+}

@@ -1,0 +1,121 @@
+/* commands.c - what the operator's commands do; see commands.h. */
+#include "commands.h"
+
+#include "navecu_can.h"
+
+static app_diag_t diag_of(app_t *a)
+{
+    const app_diag_t d = {&a->keep.health, &a->run.events, a->keep.n_samples};
+    return d;
+}
+
+static void refuse(app_t *a)
+{
+    const app_diag_t d = diag_of(a);
+    app_diag_reject(&d, &a->keep.health.cmd_rejected);
+}
+
+void commands_start_navigation(app_t *a, nav_real_t roll_rad, nav_real_t pitch_rad)
+{
+    if (align_start(&a->run.align, roll_rad, pitch_rad, &a->run.nav, &a->run.dr,
+                    &a->keep.cal) != NAV_OK) {
+        const app_diag_t d = diag_of(a);
+        app_diag_reject(&d, &a->keep.health.bad_value);
+        a->run.mode = APP_MODE_FAULT;
+        return;
+    }
+    landnav_restart(&a->run.land);
+    a->run.mode = APP_MODE_NAVIGATING;
+}
+
+void commands_calibrate_at(app_t *a, hal_t *hal, const geo_pos_t *point, uint8_t source)
+{
+    const int ready = a->run.mode == APP_MODE_NAVIGATING && a->run.land.output_dr &&
+                      !a->run.fusion.on;
+    if (calib_one_point(&a->keep.cal, &a->run.cal, hal, a->keep.n_samples, ready, &a->run.dr,
+                        &a->run.nav, point, source, a->cfg.cal_min_base_m) != 0) {
+        refuse(a);
+    }
+}
+
+static void set_initial_position(app_t *a, const rx_input_t *in)
+{
+    const align_t *al = &a->run.align;
+    if (!al->known_valid || !in->u.command.height_in_range ||
+        (in->u.command.heading_valid && !in->u.command.heading_in_range)) {
+        refuse(a);
+        return;
+    }
+    const geo_pos_t pos = align_pos_of(al->known_lat_e7, al->known_lon_e7, in->u.command.h_cm);
+    app_reset(a);
+    align_set_initial(&a->run.align, &pos, in->u.command.h_cm, in->u.command.heading_valid,
+                      in->u.command.heading_rad);
+    if (align_ready(&a->run.align)) {
+        a->run.mode = APP_MODE_LEVELLING;
+        align_level_restart(&a->run.align);
+    }
+}
+
+static void control(app_t *a, hal_t *hal, const rx_input_t *in)
+{
+    align_t *al = &a->run.align;
+    switch (in->u.command.command) {
+    case RX_CMD_NONE:
+        break;
+    case RX_CMD_RESET:
+        app_reset(a);
+        break;
+    case RX_CMD_SET_INITIAL_POSITION:
+        set_initial_position(a, in);
+        break;
+    case RX_CMD_STORE_CALIBRATION: /* the values in use */
+        if (calib_store_command(&a->keep.cal, &a->run.cal, hal, a->keep.n_samples,
+                                a->cfg.imu_rate_hz) != 0) {
+            refuse(a);
+        }
+        break;
+    case RX_CMD_ERASE_CALIBRATION: /* the store and the values in use */
+        calib_erase(&a->keep.cal, hal, &a->run.dr);
+        break;
+    case RX_CMD_CALIBRATE_HERE: /* the last CMD_KnownPosition is where the car is */
+        if (!al->known_valid) {
+            calib_not_ready(&a->keep.cal);
+            refuse(a);
+            break;
+        }
+        al->known_valid = 0u; /* a point is used once: the next needs its own */
+        const geo_pos_t point = align_pos_of(al->known_lat_e7, al->known_lon_e7, 0);
+        commands_calibrate_at(a, hal, &point,
+                              NAVECU_CAN_NAV_CALIBRATION_CAL_SOURCE_KNOWN_POSITION_CHOICE);
+        break;
+    case RX_CMD_CALIBRATE_AT_GNSS: /* at the next accepted fix */
+        if (a->run.mode != APP_MODE_NAVIGATING) {
+            calib_not_ready(&a->keep.cal);
+            refuse(a);
+            break;
+        }
+        a->run.cal.at_gnss = 1u;
+        break;
+    default:
+        refuse(a);
+        break;
+    }
+}
+
+void commands_handle(app_t *a, hal_t *hal, const rx_input_t *in)
+{
+    if (in->kind == RX_KNOWN_POSITION) {
+        a->run.align.known_lat_e7 = in->u.position.lat_e7;
+        a->run.align.known_lon_e7 = in->u.position.lon_e7;
+        a->run.align.known_valid = 1u;
+    } else if (in->kind == RX_INITIAL_ATTITUDE) {
+        /* roll and pitch from another source end levelling at once (a perfect start) */
+        if (a->run.mode != APP_MODE_LEVELLING) {
+            refuse(a); /* only between SetInitialPosition and navigating */
+            return;
+        }
+        commands_start_navigation(a, in->u.attitude.roll_rad, in->u.attitude.pitch_rad);
+    } else {
+        control(a, hal, in);
+    }
+}

@@ -1,0 +1,363 @@
+/* fusion.c - the Kalman filter's schedule, updates and supervision; see fusion.h. */
+#include "fusion.h"
+
+#include "app.h"
+#include "app_tuning.h"
+
+uint32_t fusion_pred_div(uint32_t imu_rate_hz)
+{
+    return imu_rate_hz >= APP_EKF_PRED_HZ ? imu_rate_hz / APP_EKF_PRED_HZ : 1u;
+}
+
+void fusion_note_course(fusion_t *fu, nav_real_t speed_mps, nav_real_t course_rad)
+{
+    fu->course_rad = course_rad;
+    fu->speed_mps = speed_mps;
+}
+
+void fusion_stop(fusion_t *fu)
+{
+    fu->on = 0u;
+    fu->fix.seen = 0u;
+}
+
+static void clear_interval(fusion_t *fu)
+{
+    fu->pred_n = 0u;
+    fu->pred_t_s = NAV_C(0.0);
+    fu->f_sum_n[0] = fu->f_sum_n[1] = fu->f_sum_n[2] = NAV_C(0.0);
+    fu->w_sum_rad[0] = fu->w_sum_rad[1] = fu->w_sum_rad[2] = NAV_C(0.0);
+}
+
+/* 1 when the angle x (rad), wrapped to [-pi, pi], exceeds tol in magnitude; also for a
+ * non-finite or huge x (beyond APP_ANGLE_SANE_RAD, where no angle of the navigator should
+ * be). No loop: a wrap by repeated subtraction never ends on an infinite or very large
+ * float. */
+static int angle_exceeds(nav_real_t x, nav_real_t tol)
+{
+    if (!(nav_fabs(x) <= APP_ANGLE_SANE_RAD)) {
+        return 1;
+    }
+    const nav_real_t turns = x / (NAV_C(2.0) * NAV_PI);
+    const int32_t n = (int32_t)(turns >= NAV_C(0.0) ? turns + NAV_C(0.5) : turns - NAV_C(0.5));
+    return nav_fabs(x - (nav_real_t)n * NAV_C(2.0) * NAV_PI) > tol;
+}
+
+static int diverged(fusion_t *fu, const fusion_ctx_t *c)
+{
+    const ekf_t *k = &fu->ekf;
+    const uint64_t n = c->diag->n_samples;
+    const uint32_t rate = c->cfg->imu_rate_hz;
+    /* GNSS refused through reopens is a GNSS fault (a frozen or jumping receiver) as long
+     * as the rest agrees with the filter; it is the filter that is wrong when the odometer
+     * is refused too, or when the GNSS course, driving, differs from the filter's heading
+     * by more than APP_COURSE_MISMATCH_RAD (a heading lost to a stuck or saturated gyro,
+     * which the odometer's speed cannot see) */
+    nav_real_t roll, pitch, heading;
+    sins_euler(c->nav, &roll, &pitch, &heading);
+    const nav_real_t course_err = fu->course_rad - (heading - k->mount_yaw_rad);
+    const int odo_disagrees = app_stamp_within(&c->diag->events->odo_reject, n,
+                                               (uint64_t)APP_GNSS_REOPEN_S * rate);
+    /* only with GNSS at hand: in a tunnel the last course and the count of reopens are
+     * old news, and a reset there would leave nothing to re-acquire from */
+    const int gnss_fresh = app_stamp_within(c->gnss, n, rate);
+    const int course_disagrees = gnss_fresh && fu->speed_mps >= APP_GNSS_COURSE_MIN_MPS &&
+                                 angle_exceeds(course_err, APP_COURSE_MISMATCH_RAD);
+    const int aiding_disagrees = gnss_fresh && fu->reopen_run >= APP_FILTER_REOPEN_LIMIT &&
+                                 (odo_disagrees || course_disagrees);
+    const int bad = k->n_nonfinite != fu->nonfinite_seen ||
+                    k->n_negative_var != fu->negative_seen || aiding_disagrees;
+    fu->nonfinite_seen = k->n_nonfinite;
+    fu->negative_seen = k->n_negative_var;
+    return bad || !ekf_state_ok(k) || !sins_finite(c->nav);
+}
+
+static fusion_action_t reset(fusion_t *fu, const fusion_ctx_t *c)
+{
+    app_count(&c->diag->health->filter_resets);
+    app_stamp(c->filter_reset, c->diag->n_samples);
+    fu->on = 0u;
+    fu->gated_run = 0u;
+    fu->reopen_run = 0u;
+    fu->fix.seen = 0u;
+    if (!sins_finite(c->nav)) {
+        return FUSION_RESTART;
+    }
+    if (c->gnss->seen) {
+        /* the navigator the filter corrected is suspect too: GNSS gives position,
+         * velocity and heading again at its next epoch, as after a long IMU gap */
+        return FUSION_REACQUIRE;
+    }
+    /* without the filter the height needs the core's damping again (fusion_start took it) */
+    sins_set_height_ref(c->nav, geo_h_m(&c->nav->pos));
+    return FUSION_GO_ON;
+}
+
+/* After each filter step: reset it if it diverged. */
+static fusion_action_t supervise(fusion_t *fu, const fusion_ctx_t *c, int *was_reset)
+{
+    *was_reset = 0;
+    if (!fu->on || !diverged(fu, c)) {
+        return FUSION_GO_ON;
+    }
+    *was_reset = 1;
+    return reset(fu, c);
+}
+
+/* the wheel speeds disagree with the filter beyond its gate (lock, spin, slip) */
+static void odo_refused(const fusion_ctx_t *c)
+{
+    app_diag_reject(c->diag, &c->diag->health->odo_rejected);
+    app_stamp(&c->diag->events->odo_reject, c->diag->n_samples);
+}
+
+/* The odometer or standstill updates of one prediction interval T (s) with the mean body
+ * rate over it: a slow wheel-speed source is a late, averaged speed, its noise grows with
+ * the acceleration times its period, and its zero hides a car creeping below one step. */
+static void odometer_updates(fusion_t *fu, const fusion_ctx_t *c, nav_real_t T)
+{
+    const odo_t *odo = c->odo;
+    nav_real_t acc = NAV_C(0.0);
+    for (int i = 0; i < 2; i++) {
+        const nav_real_t d = c->nav->v_n_mps[i] - fu->v_prev_pred_mps[i];
+        acc += d * d;
+        fu->v_prev_pred_mps[i] = c->nav->v_n_mps[i];
+    }
+    acc = nav_sqrt(acc) / T;
+    const nav_real_t per = odo->period_s;
+    if (odo->valid && odo->standing) {
+        if (ekf_zero_velocity(&fu->ekf, c->nav,
+                              APP_ZUPT_SIGMA_MPS + APP_ZUPT_SIGMA_PER_PERIOD_MPS * per,
+                              APP_ODO_GATE_SIGMA) == 0) {
+            odo_refused(c); /* "standing" wheels while the car moves: a locked wheel */
+        }
+        nav_real_t w_ie_b[3];
+        sins_earth_rate_b(c->nav, w_ie_b);
+        const nav_real_t resid = fu->w_sum_rad[2] / T - w_ie_b[2];
+        (void)ekf_zero_rate(&fu->ekf, resid, c->cfg->gyro_arw_rad_rts / nav_sqrt(T));
+    } else if (odo->valid && odo->n_frames != fu->odo_frames_used &&
+               nav_fabs(odo->speed_mps) > APP_ODO_MIN_SPEED_MPS) {
+        fu->odo_frames_used = odo->n_frames;
+        const nav_real_t sf = APP_ODO_SIGMA_MPS + APP_ODO_SIGMA_SPEED_FRAC * nav_fabs(odo->speed_mps) +
+                              APP_ODO_SIGMA_ACC_PERIOD * acc * per;
+        const nav_real_t w_b[3] = {fu->w_sum_rad[0] / T, fu->w_sum_rad[1] / T,
+                                   fu->w_sum_rad[2] / T};
+        app_trace(APP_TRACE_ODOMETER_UPDATE, 0u);
+        const int n_used = ekf_odometer(&fu->ekf, c->nav, w_b, c->cfg->odo_lever_b_m,
+                                        odo->speed_mps, sf, APP_NHC_SIGMA_MPS, APP_ODO_GATE_SIGMA);
+        app_trace(APP_TRACE_ODOMETER_UPDATE, 1u);
+        if (n_used == 0) {
+            odo_refused(c); /* the odometer disagrees beyond its gate */
+        }
+    }
+}
+
+fusion_action_t fusion_imu_step(fusion_t *fu, const fusion_ctx_t *c, imu_inc_t *inc,
+                                nav_real_t *yaw_rate_rps)
+{
+    const nav_real_t dt = inc->dt_s;
+    for (int i = 0; i < 3; i++) {
+        inc->dtheta_b_rad[i] -= fu->ekf.bg_rps[i] * dt;
+        inc->dv_b_mps[i] -= fu->ekf.ba_mps2[i] * dt;
+    }
+    *yaw_rate_rps = inc->dtheta_b_rad[2] / dt;
+    app_trace(APP_TRACE_MECHANIZATION, 0u);
+    const int mech_rc = sins_step(c->nav, inc);
+    app_trace(APP_TRACE_MECHANIZATION, 1u);
+    if (mech_rc != NAV_OK) {
+        app_diag_reject(c->diag, &c->diag->health->nav_rejected);
+        /* every later sample would be refused too */
+        return sins_finite(c->nav) ? FUSION_GO_ON : reset(fu, c);
+    }
+    odo_tick(c->odo, dt, *yaw_rate_rps);
+    mat3_t C;
+    quat_to_dcm(c->nav->q_bn, &C);
+    nav_real_t dv_n[3];
+    mat3_mul_vec(&C, inc->dv_b_mps, dv_n);
+    for (int i = 0; i < 3; i++) {
+        fu->f_sum_n[i] += dv_n[i];
+    }
+    gnss_time_record(&fu->time, c->diag->n_samples, c->cfg->imu_rate_hz, c->nav->v_n_mps);
+    for (int i = 0; i < 3; i++) {
+        fu->w_sum_rad[i] += inc->dtheta_b_rad[i];
+    }
+    fu->pred_t_s += dt;
+    fu->pred_n++;
+    nav_real_t roll, pitch, heading;
+    sins_euler(c->nav, &roll, &pitch, &heading);
+    if (c->odo->valid && !c->odo->standing) {
+        (void)dr_step(c->dr, c->odo->speed_mps * dt, heading, pitch);
+    } else if (!c->odo->valid) {
+        dr_set_position(c->dr, &c->nav->pos);
+    }
+    /* no heading hold with the filter: it would undo the filter's heading corrections
+     * while their variance is spent; the zero-rate update does the job */
+    landnav_release_hold(c->land);
+    if (fu->pred_n < fusion_pred_div(c->cfg->imu_rate_hz)) {
+        return FUSION_GO_ON;
+    }
+    const nav_real_t T = fu->pred_t_s;
+    const nav_real_t f_mean[3] = {fu->f_sum_n[0] / T, fu->f_sum_n[1] / T, fu->f_sum_n[2] / T};
+    app_trace(APP_TRACE_PREDICTION, 0u);
+    ekf_predict(&fu->ekf, c->nav, f_mean, T);
+    app_trace(APP_TRACE_PREDICTION, 1u);
+    odometer_updates(fu, c, T);
+    if (ekf_feedback(&fu->ekf, c->nav) != NAV_OK) {
+        app_diag_reject(c->diag, &c->diag->health->nav_rejected);
+    }
+    int was_reset;
+    const fusion_action_t act = supervise(fu, c, &was_reset);
+    clear_interval(fu);
+    return act;
+}
+
+static int start(fusion_t *fu, const fusion_ctx_t *c, const fusion_prior_t *prior,
+                 nav_real_t hacc_m)
+{
+    const app_config_t *cfg = c->cfg;
+    ekf_config_t ec = ekf_default_config();
+    ec.arw_rad_rts = cfg->gyro_arw_rad_rts;
+    ec.bg_rps = cfg->gyro_bias_rps;
+    ec.ba_mps2 = cfg->accel_bias_mps2;
+    ec.bg_rw_rps_rts = cfg->gyro_bias_rw_rps_rts;
+    ec.ba_rw_mps2_rts = cfg->accel_bias_rw_mps2_rts;
+    ec.pos_m = hacc_m > APP_EKF_POS_SIGMA_MIN_M ? hacc_m : APP_EKF_POS_SIGMA_MIN_M;
+    if (ekf_init(&fu->ekf, &ec, NAV_C(0.0)) != NAV_OK) {
+        app_diag_reject(c->diag, &c->diag->health->nav_rejected);
+        return 0;
+    }
+    (void)ekf_set_gyro_bias(&fu->ekf, 2, prior->gyro_bias_z_rps);
+    (void)ekf_set_odo_scale(&fu->ekf, prior->odo_scale);
+    if (prior->have_mount_yaw) {
+        (void)ekf_set_mount_yaw(&fu->ekf, prior->mount_yaw_rad);
+    }
+    clear_interval(fu);
+    fu->odo_frames_used = c->odo->n_frames;
+    fu->start_sample = c->diag->n_samples;
+    fu->nonfinite_seen = fu->ekf.n_nonfinite; /* the supervision's reference: a new filter */
+    fu->negative_seen = fu->ekf.n_negative_var;
+    /* the filter owns the height now: the core's damping toward a held reference is a
+     * force its model does not have */
+    sins_clear_height_ref(c->nav);
+    fu->on = 1u;
+    return 1;
+}
+
+/* The navigator may have drifted far more than the receiver's error before the filter:
+ * it starts at the fix (moved on by the motion d (ENU, m) since its time of validity,
+ * less the antenna lever arm), and the filter's position sigma is the receiver's.
+ * lat, h, R_M, R_N: the navigator's now. Returns 0 when the fix is refused. */
+static int start_at_fix(fusion_t *fu, const fusion_ctx_t *c, const fusion_prior_t *prior,
+                        const gnss_fix_t *fix, const nav_real_t d[3], nav_real_t sh,
+                        geo_pos_t *then)
+{
+    sins_t *nav = c->nav;
+    const nav_real_t lat = geo_lat_rad(&nav->pos);
+    const nav_real_t h = geo_h_m(&nav->pos);
+    nav_real_t R_M, R_N;
+    earth_radii(nav_sin(lat), &R_M, &R_N);
+    mat3_t C;
+    quat_to_dcm(nav->q_bn, &C);
+    nav_real_t l_n[3];
+    mat3_mul_vec(&C, c->cfg->gnss_lever_b_m, l_n);
+    geo_pos_t p = fix->pos;
+    if (!fix->has_h) {
+        p.h = nav->pos.h;
+    }
+    const nav_real_t dh_m = fix->has_h ? d[2] - l_n[2] : d[2];
+    if (geo_pos_add(&p, (d[1] - l_n[1]) / (R_M + h), (d[0] - l_n[0]) / ((R_N + h) * nav_cos(lat)),
+                    dh_m) != NAV_OK ||
+        sins_set_position(nav, &p) != NAV_OK) {
+        app_diag_reject(c->diag, &c->diag->health->gnss_rejected);
+        return 0;
+    }
+    *then = p;
+    (void)geo_pos_add(then, -d[1] / (R_M + h), -d[0] / ((R_N + h) * nav_cos(lat)), -d[2]);
+    return start(fu, c, prior, sh);
+}
+
+/* Several fixes in a row refused: after a bad fix slipped through, or a long outage, the
+ * filter may be the one that is wrong; forget its position and velocity and let the next
+ * fix in (counted: ekf.n_reopened). */
+static void gate_run(fusion_t *fu, const fusion_ctx_t *c, int taken, nav_real_t sh)
+{
+    const uint64_t n = c->diag->n_samples;
+    fu->gated_run = !taken ? (uint8_t)(fu->gated_run < 255u ? fu->gated_run + 1u : 255u) : 0u;
+    const uint64_t since = fu->fix.seen ? fu->fix.sample : fu->start_sample;
+    if (fu->gated_run >= APP_GNSS_REOPEN_AFTER &&
+        n - since > (uint64_t)APP_GNSS_REOPEN_S * c->cfg->imu_rate_hz) {
+        ekf_reopen(&fu->ekf, APP_GNSS_REOPEN_POS_SIGMAS * sh, APP_GNSS_REOPEN_VEL_MPS);
+        fu->gated_run = 0u;
+        fu->reopen_run = (uint8_t)(fu->reopen_run < 255u ? fu->reopen_run + 1u : 255u);
+    }
+    if (taken) {
+        app_stamp(&fu->fix, n);
+        fu->reopen_run = 0u;
+    }
+}
+
+fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_prior_t *prior,
+                            const gnss_fix_t *fix, int *adopt)
+{
+    const app_config_t *cfg = c->cfg;
+    const uint64_t n = c->diag->n_samples;
+    *adopt = 0;
+    const gnss_when_t when = gnss_time_align(&fu->time, n, cfg->imu_rate_hz, fix->tow_ms,
+                                             cfg->gnss_latency_s);
+    if (when.jumped) {
+        app_count(&c->diag->health->time_jumps);
+    }
+    if (!when.in_history) {
+        app_diag_reject(c->diag, &c->diag->health->gnss_rejected); /* older than the history */
+        return FUSION_GO_ON;
+    }
+    nav_real_t d[3];
+    gnss_time_displacement(&fu->time, &when, d);
+    geo_pos_t then = c->nav->pos;
+    const nav_real_t lat = geo_lat_rad(&then);
+    const nav_real_t h = geo_h_m(&then);
+    nav_real_t R_M, R_N;
+    earth_radii(nav_sin(lat), &R_M, &R_N);
+    if (geo_pos_add(&then, -d[1] / (R_M + h), -d[0] / ((R_N + h) * nav_cos(lat)), -d[2]) !=
+        NAV_OK) {
+        app_diag_reject(c->diag, &c->diag->health->gnss_rejected);
+        return FUSION_GO_ON;
+    }
+    const nav_real_t sh = nav_clamp(fix->hacc_m * APP_GNSS_HACC_PER_AXIS, APP_GNSS_SIGMA_FLOOR_M,
+                                 APP_GNSS_SIGMA_MAX_M);
+    const nav_real_t sv = nav_clamp(fix->vacc_m, APP_GNSS_SIGMA_V_MIN_M, APP_GNSS_SIGMA_MAX_M);
+    /* A receiver's position errors are correlated over tens of seconds (multipath,
+     * atmosphere, orbits), the filter's noise model is white: N fixes within the
+     * correlation time carry the information of about one. Each fix's variance is
+     * multiplied by (correlation time / fix interval), so the filter neither averages the
+     * errors away on paper nor reports a 1-sigma far below the receiver's (docs/kalman.md,
+     * honest accuracy). */
+    nav_real_t ep_s = (nav_real_t)(n - fu->prev_fix_sample) / (nav_real_t)cfg->imu_rate_hz;
+    fu->prev_fix_sample = n;
+    const nav_real_t corr_s = cfg->gnss_corr_s > ep_s ? cfg->gnss_corr_s : ep_s;
+    ep_s = nav_clamp(ep_s, APP_GNSS_EPOCH_MIN_S, corr_s);
+    const nav_real_t r_scale = corr_s / ep_s;
+    if (!fu->on && !start_at_fix(fu, c, prior, fix, d, sh, &then)) {
+        return FUSION_GO_ON;
+    }
+    const int rp = ekf_gnss_position(&fu->ekf, c->nav, &then, &fix->pos, cfg->gnss_lever_b_m,
+                                     sh, sv, APP_GNSS_GATE_SIGMA, r_scale, fix->has_h);
+    int rv = 1;
+    if (fix->has_vel) {
+        const nav_real_t *vthen = gnss_time_velocity_then(&fu->time, &when);
+        const nav_real_t ss = nav_clamp(fix->sacc_mps, APP_GNSS_SACC_MIN_MPS, APP_GNSS_SACC_MAX_MPS);
+        rv = ekf_gnss_velocity(&fu->ekf, vthen, fix->v_enu_mps, ss, APP_GNSS_VUP_SIGMA_RATIO * ss,
+                               APP_GNSS_GATE_SIGMA);
+    }
+    if (rp < 2 || rv == 0) {
+        app_diag_reject(c->diag, &c->diag->health->gnss_rejected); /* beyond the gate */
+    }
+    gate_run(fu, c, rp >= 2, sh); /* rp >= 2: the horizontal fix was taken */
+    if (ekf_feedback(&fu->ekf, c->nav) != NAV_OK) {
+        app_diag_reject(c->diag, &c->diag->health->nav_rejected);
+    }
+    int was_reset;
+    const fusion_action_t act = supervise(fu, c, &was_reset);
+    *adopt = !was_reset;
+    return act;
+}

@@ -1,0 +1,105 @@
+/*
+ * fusion.h - the Kalman filter's schedule and supervision (docs/kalman.md): when it
+ * starts (the first GNSS fix while navigating), the IMU samples with its bias estimates
+ * removed, the prediction every 1/APP_EKF_PRED_HZ with the odometer or standstill
+ * updates and their noise, the GNSS update at the fix's time of validity (gnss_time.h)
+ * with the antenna lever arm, its gate and the reopening of a filter that keeps refusing
+ * fixes, and the supervision that stops a diverged filter (docs/reliability.md).
+ *
+ * It takes decoded inputs in SI units (no codec types) and reports what the application
+ * must do next through fusion_action_t; rejections go to the app_diag_t it is given.
+ *
+ * Divergence: the filter's state, covariance or the navigator it corrects is no longer
+ * finite, a variance went negative (ekf_health repairs the covariance and counts it), or
+ * GNSS fixes stay beyond the innovation gate through APP_FILTER_REOPEN_LIMIT covariance
+ * reopens in a row while the odometer is refused too or the GNSS course disagrees with
+ * the filter's heading (every source then says the filter is wrong; GNSS refused alone is
+ * a receiver fault, e.g. a frozen fix, which the gate is there to keep out). A diverged
+ * filter is stopped: with GNSS, navigation re-acquires from the next GNSS epoch (as after
+ * a long IMU gap) and the filter restarts at the epoch after; without GNSS it goes on as
+ * the land navigation system; if the navigator itself is not finite, navigation restarts
+ * from the initial state. Counted in health.filter_resets.
+ */
+#ifndef NAVECU_FUSION_H
+#define NAVECU_FUSION_H
+
+#include <stdint.h>
+
+#include "app_config.h"
+#include "app_health.h"
+#include "dr.h"
+#include "ekf.h"
+#include "gnss_epoch.h"
+#include "gnss_time.h"
+#include "landnav.h"
+#include "odo.h"
+#include "sins.h"
+
+typedef struct {
+    ekf_t ekf;
+    uint8_t on;                 /* the filter runs */
+    uint32_t pred_n;            /* samples accumulated for the next prediction */
+    nav_real_t pred_t_s;
+    nav_real_t f_sum_n[3];      /* sum of velocity increments in ENU over the interval */
+    nav_real_t w_sum_rad[3];    /* sum of compensated angle increments over the interval */
+    uint32_t odo_frames_used;   /* odo.n_frames at the last odometer update */
+    nav_real_t v_prev_pred_mps[2]; /* horizontal velocity at the last prediction */
+    uint64_t start_sample;      /* sample at which the filter started */
+    app_stamp_t fix;            /* the last GNSS fix the filter took */
+    uint8_t gated_run;          /* consecutive fixes refused by the gate */
+    uint8_t reopen_run;         /* covariance reopens since the last fix taken */
+    uint64_t prev_fix_sample;   /* sample of the previous fix offered (fix interval) */
+    uint32_t nonfinite_seen, negative_seen; /* ekf counters at the last check */
+    nav_real_t course_rad, speed_mps; /* of the latest GNSS epoch with a velocity */
+    gnss_time_t time;           /* velocity history and receiver latency */
+} fusion_t;
+
+/* What the caller does after a fusion step. */
+typedef enum {
+    FUSION_GO_ON = 0,       /* nothing */
+    FUSION_REACQUIRE,       /* the filter was reset: re-acquire from the next GNSS epoch */
+    FUSION_RESTART,         /* the navigator is not finite: restart navigation */
+} fusion_action_t;
+
+/* What a step needs besides the filter: the navigator, the dead reckoning, the odometer,
+ * the configuration, where to report, and the state of the other sources. */
+typedef struct {
+    sins_t *nav;
+    dr_t *dr;
+    odo_t *odo;
+    landnav_t *land;            /* its heading hold is released: the filter holds it */
+    const app_config_t *cfg;
+    const app_diag_t *diag;
+    app_stamp_t *filter_reset;  /* stamped at a reset (FILTER_RESET flag) */
+    const app_stamp_t *gnss;    /* the latest usable GNSS epoch */
+} fusion_ctx_t;
+
+/* The estimates the filter starts from: what standstill and calibration already know. */
+typedef struct {
+    nav_real_t gyro_bias_z_rps;
+    nav_real_t odo_scale;
+    uint8_t have_mount_yaw;     /* the calibration in use is the filter's */
+    nav_real_t mount_yaw_rad;
+} fusion_prior_t;
+
+/* One IMU sample with the filter on (SI increments, compensated here). *yaw_rate gets the
+ * compensated body z rate (rad/s). */
+fusion_action_t fusion_imu_step(fusion_t *fu, const fusion_ctx_t *c, imu_inc_t *inc,
+                                nav_real_t *yaw_rate_rps);
+
+/* A usable GNSS epoch while navigating: starts the filter (from the fix) if it is off,
+ * then the position and velocity updates. *adopt is set when the calibration may adopt
+ * the filter's estimates now (calib_adopt_filter). */
+fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_prior_t *prior,
+                            const gnss_fix_t *fix, int *adopt);
+
+/* Remember the latest GNSS course and speed (any epoch with a velocity). */
+void fusion_note_course(fusion_t *fu, nav_real_t speed_mps, nav_real_t course_rad);
+
+/* Stop the filter (re-acquisition, a reset): it restarts at a later fix. */
+void fusion_stop(fusion_t *fu);
+
+/* The number of IMU samples per prediction. */
+uint32_t fusion_pred_div(uint32_t imu_rate_hz);
+
+#endif /* NAVECU_FUSION_H */

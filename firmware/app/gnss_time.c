@@ -1,0 +1,83 @@
+/* gnss_time.c - GNSS time of validity on the IMU time base; see gnss_time.h. */
+#include "gnss_time.h"
+
+/* IMU samples per history entry: at most APP_VHIST_MAX_HZ entries per second */
+static uint32_t vhist_div(uint32_t imu_rate_hz)
+{
+    return (imu_rate_hz + APP_VHIST_MAX_HZ - 1u) / APP_VHIST_MAX_HZ;
+}
+
+void gnss_time_record(gnss_time_t *g, uint64_t n_samples, uint32_t imu_rate_hz,
+                      const nav_real_t v_n_mps[3])
+{
+    if (n_samples % vhist_div(imu_rate_hz) != 0u) {
+        return;
+    }
+    for (int i = 0; i < 3; i++) {
+        g->vhist[g->vhist_n % APP_VHIST][i] = v_n_mps[i];
+    }
+    g->vhist_n++;
+}
+
+gnss_when_t gnss_time_align(gnss_time_t *g, uint64_t n_samples, uint32_t imu_rate_hz,
+                            uint32_t tow_ms, nav_real_t latency_s)
+{
+    gnss_when_t w;
+    const int64_t t_imu_us = (int64_t)(n_samples * 1000000u / imu_rate_hz);
+    const int64_t off = t_imu_us - (int64_t)tow_ms * 1000;
+    /* A step earlier by more than 1 s, later by more than 10 s, or later by more than
+     * 0.5 s three epochs in a row is a time jump; a late epoch moves the offset once. */
+    const int64_t excess = off - g->off_min_us;
+    g->late_run = (uint8_t)(g->off_valid && excess > APP_GNSS_LATE_US
+                                ? (g->late_run < 255u ? g->late_run + 1u : 255u)
+                                : 0u);
+    const int jumped = g->off_valid && (excess < -APP_GNSS_JUMP_EARLY_US ||
+                                        excess > APP_GNSS_JUMP_LATE_US ||
+                                        g->late_run >= APP_GNSS_LATE_RUN);
+    w.jumped = jumped ? 1u : 0u;
+    if (jumped) {
+        g->late_run = 0u;
+    }
+    if (!g->off_valid || off < g->off_min_us || jumped) {
+        g->off_min_us = off; /* first epoch, an earlier one, or a time jump */
+        g->off_valid = 1u;
+    } else {
+        /* the minimum may creep up by 50 ppm of the IMU time elapsed (clock drift) */
+        g->off_min_us += (t_imu_us - g->prev_t_us) / APP_GNSS_DRIFT_DIV;
+        if (off < g->off_min_us) {
+            g->off_min_us = off;
+        }
+    }
+    g->prev_t_us = t_imu_us;
+    const nav_real_t late_s = (nav_real_t)(off - g->off_min_us) * NAV_C(1e-6);
+    const nav_real_t tau = latency_s + late_s;
+    w.entry_s = (nav_real_t)vhist_div(imu_rate_hz) / (nav_real_t)imu_rate_hz;
+    w.back = tau / w.entry_s;
+    const uint32_t m = (uint32_t)w.back;
+    w.in_history = (m + 1u < APP_VHIST && m + 1u < g->vhist_n) ? 1u : 0u;
+    return w;
+}
+
+void gnss_time_displacement(const gnss_time_t *g, const gnss_when_t *w, nav_real_t d_n_m[3])
+{
+    /* position then = now - integral of v over tau (latest samples first) */
+    const uint32_t m = (uint32_t)w->back;
+    d_n_m[0] = d_n_m[1] = d_n_m[2] = NAV_C(0.0);
+    for (uint32_t j = 0u; j <= m; j++) {
+        const nav_real_t wt = j < m ? w->entry_s : (w->back - (nav_real_t)m) * w->entry_s;
+        const nav_real_t *v = g->vhist[(g->vhist_n - 1u - j) % APP_VHIST];
+        for (int i = 0; i < 3; i++) {
+            d_n_m[i] += wt * v[i];
+        }
+    }
+}
+
+const nav_real_t *gnss_time_velocity_then(const gnss_time_t *g, const gnss_when_t *w)
+{
+    return g->vhist[(g->vhist_n - 1u - (uint32_t)(w->back + NAV_C(0.5))) % APP_VHIST];
+}
+
+void gnss_time_forget(gnss_time_t *g)
+{
+    g->vhist_n = 0u;
+}

@@ -1,0 +1,55 @@
+/*
+ * gnss_time.h - when a GNSS fix was valid, on the IMU time base. A fix arrives
+ * gnss_latency_s (configured) after its time of validity, more when the receiver is late;
+ * lateness is seen in TimeOfWeek: the offset (IMU time - TimeOfWeek) of each epoch is
+ * compared with its running minimum (which may creep by 50 ppm of elapsed time, clock
+ * drift), the excess added to the latency. A receiver clock jump (week rollover, reset)
+ * moves the offset for good: counted, and the minimum restarts from it.
+ * The navigator's velocity history (entries at most 10 ms apart) gives its position and
+ * velocity at that time. Decisions come from the data (sample count, TimeOfWeek), never
+ * from arrival times.
+ */
+#ifndef NAVECU_GNSS_TIME_H
+#define NAVECU_GNSS_TIME_H
+
+#include <stdint.h>
+
+#include "app_tuning.h"
+#include "nav_types.h"
+
+typedef struct {
+    nav_real_t vhist[APP_VHIST][3]; /* navigator velocity, ENU m/s, oldest overwritten */
+    uint32_t vhist_n;               /* entries written */
+    int64_t off_min_us;             /* min over epochs of (IMU time - TimeOfWeek) */
+    uint8_t off_valid;
+    uint8_t late_run;               /* consecutive epochs more than 0.5 s late */
+    int64_t prev_t_us;              /* IMU time of the previous epoch (drift allowance) */
+} gnss_time_t;
+
+/* How far back a fix's time of validity lies. */
+typedef struct {
+    nav_real_t back;    /* history entries back from the latest (fractional) */
+    nav_real_t entry_s; /* time between entries */
+    uint8_t jumped;     /* the receiver's clock jumped: count time_jumps */
+    uint8_t in_history; /* the velocity history reaches that far */
+} gnss_when_t;
+
+/* Record the navigator's velocity after IMU sample n (every entry_s). */
+void gnss_time_record(gnss_time_t *g, uint64_t n_samples, uint32_t imu_rate_hz,
+                      const nav_real_t v_n_mps[3]);
+
+/* The time of validity of an epoch with TimeOfWeek tow_ms, received after sample n. */
+gnss_when_t gnss_time_align(gnss_time_t *g, uint64_t n_samples, uint32_t imu_rate_hz,
+                            uint32_t tow_ms, nav_real_t latency_s);
+
+/* The navigator's displacement (ENU, m) from then to now: the integral of the velocity
+ * history over w.back entries (w.in_history must hold). */
+void gnss_time_displacement(const gnss_time_t *g, const gnss_when_t *w, nav_real_t d_n_m[3]);
+
+/* The navigator's velocity then (the nearest entry). */
+const nav_real_t *gnss_time_velocity_then(const gnss_time_t *g, const gnss_when_t *w);
+
+/* Forget the history (a new navigator: its velocities before are not this one's). */
+void gnss_time_forget(gnss_time_t *g);
+
+#endif /* NAVECU_GNSS_TIME_H */

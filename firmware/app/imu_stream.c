@@ -1,0 +1,193 @@
+/* imu_stream.c - IMU pairing, counter, gaps and plausibility; see imu_stream.h. */
+#include "imu_stream.h"
+
+#include <string.h>
+
+#include "app_tuning.h"
+#include "navecu_can.h"
+
+void imu_link_init(imu_link_t *l, uint32_t rate_hz, nav_real_t gyro_range_rps,
+                   nav_real_t accel_range_mps2)
+{
+    memset(l, 0, sizeof *l);
+    l->rate_hz = rate_hz;
+    /* at most 100 rad/s and 2000 m/s^2 (app_config_valid) over 0.1 s: within int32 */
+    const nav_real_t dt = NAV_C(1.0) / (nav_real_t)rate_hz;
+    const nav_real_t w_lim = gyro_range_rps * dt * APP_IMU_SAT_FRACTION / app_rx_angle_lsb_rad();
+    const nav_real_t v_lim = accel_range_mps2 * dt * APP_IMU_SAT_FRACTION / app_rx_vel_lsb_mps();
+    l->sat_raw[0] = (int32_t)w_lim;
+    l->sat_raw[1] = (int32_t)v_lim;
+}
+
+int imu_stream_rate(imu_stream_t *s, uint8_t counter, const int32_t raw[3],
+                    const uint8_t data[8])
+{
+    const int broken = s->rate_pending != 0u;
+    s->rate_pending = 1u;
+    s->rate_counter = counter;
+    memcpy(s->rate_data, data, 8u);
+    s->rate_raw[0] = raw[0];
+    s->rate_raw[1] = raw[1];
+    s->rate_raw[2] = raw[2];
+    return broken;
+}
+
+/* ---- plausibility (docs/reliability.md) ----
+ * Saturation: a rate or specific force at the configured range of the IMU (the sensor
+ * clips there, so what it reports is not the motion). A stuck axis: its raw increment
+ * repeats exactly for APP_IMU_STUCK_S or longer while the vehicle moves (another axis
+ * spans more than APP_IMU_MOVE_*): counted once per episode, flagged while it lasts.
+ * The samples are still used, since neither says what the true value was. */
+static void plausibility(imu_plaus_t *p, const imu_link_t *l, const int32_t raw[6],
+                         imu_sample_t *out)
+{
+    const nav_real_t dt = NAV_C(1.0) / (nav_real_t)l->rate_hz;
+    int saturated = 0;
+    for (int i = 0; i < 6; i++) {
+        const int32_t lim = l->sat_raw[i < 3 ? 0 : 1];
+        saturated |= raw[i] >= lim || raw[i] <= -lim;
+    }
+    out->saturated = saturated ? 1u : 0u;
+    const uint32_t n_stuck = APP_IMU_STUCK_S * l->rate_hz;
+    /* blocks of half the window: the last block and the one before lie within the last
+     * n_stuck samples, i.e. within the time the stuck axis has been repeating */
+    if (p->blk_n == 0u || p->blk_n >= n_stuck / 2u) {
+        for (int i = 0; i < 6; i++) {
+            p->prev_min[i] = p->blk_n == 0u ? raw[i] : p->blk_min[i];
+            p->prev_max[i] = p->blk_n == 0u ? raw[i] : p->blk_max[i];
+            p->blk_min[i] = p->blk_max[i] = raw[i];
+        }
+        p->blk_n = 0u;
+    }
+    p->blk_n++;
+    for (int i = 0; i < 6; i++) {
+        p->same_n[i] = (l->have_sample && raw[i] == p->last_raw[i])
+                           ? (p->same_n[i] < UINT32_MAX ? p->same_n[i] + 1u : UINT32_MAX)
+                           : 0u;
+        p->last_raw[i] = raw[i];
+        p->blk_min[i] = raw[i] < p->blk_min[i] ? raw[i] : p->blk_min[i];
+        p->blk_max[i] = raw[i] > p->blk_max[i] ? raw[i] : p->blk_max[i];
+    }
+    /* the vehicle moves: a gyro axis spans more than 1 deg/s, or a horizontal
+     * accelerometer axis more than 0.5 m/s^2, over the last one to two blocks (turning,
+     * braking, accelerating), while an axis repeats: a working sensor's noise would have
+     * moved its last bits (the gyro's 2^-21 rad LSB is far below a MEMS gyro's noise per
+     * sample). An ideal, noiseless simulated IMU can repeat while the car accelerates in a
+     * straight line and is then flagged too: the flag only informs. */
+    int repeating = 0;
+    for (int i = 0; i < 6; i++) {
+        repeating |= p->same_n[i] >= n_stuck;
+        if (p->same_n[i] < n_stuck) {
+            p->stuck_seen &= (uint8_t)~(1u << i); /* it moved: a new episode may come */
+        }
+    }
+    if (!repeating) {
+        return; /* the usual case: nothing more to look at */
+    }
+    const nav_real_t w_move = APP_IMU_MOVE_RATE_RPS * dt / app_rx_angle_lsb_rad();
+    const nav_real_t v_move = APP_IMU_MOVE_ACCEL_MPS2 * dt / app_rx_vel_lsb_mps();
+    int moving = 0;
+    for (int j = 0; j < 5; j++) { /* the three gyro axes, accelerometer x and y */
+        const int32_t lo = p->blk_min[j] < p->prev_min[j] ? p->blk_min[j] : p->prev_min[j];
+        const int32_t hi = p->blk_max[j] > p->prev_max[j] ? p->blk_max[j] : p->prev_max[j];
+        moving |= (nav_real_t)((int64_t)hi - (int64_t)lo) > (j < 3 ? w_move : v_move) &&
+                  p->same_n[j] < n_stuck;
+    }
+    if (!moving) {
+        return;
+    }
+    out->stuck = 1u;
+    for (int i = 0; i < 6; i++) {
+        if (p->same_n[i] >= n_stuck && (p->stuck_seen & (1u << i)) == 0u) {
+            p->stuck_seen |= (uint8_t)(1u << i); /* counted once per episode */
+            out->stuck_new++;
+        }
+    }
+}
+
+imu_verdict_t imu_stream_accel(imu_stream_t *s, imu_link_t *l, uint8_t counter, uint8_t fault,
+                               const int32_t raw[3], const uint8_t data[8], uint64_t t_us,
+                               imu_sample_t *out)
+{
+    if (!s->rate_pending || counter != s->rate_counter) {
+        s->rate_pending = 0u;
+        return IMU_REJ_PAIR;
+    }
+    s->rate_pending = 0u;
+    /* one E2E data element in two frames: the CRC covers IMU_Rate too */
+    if (data[7] != e2e_pair_crc(NAVECU_CAN_IMU_ACCEL_FRAME_ID, s->rate_data, data)) {
+        return IMU_REJ_CRC;
+    }
+    e2e_counter_t probe = l->counter;
+    const int step = e2e_counter_step(&probe, counter);
+    if (step <= 0) {
+        return IMU_REJ_COUNTER; /* repeated sample or invalid counter */
+    }
+    /* a sample held for a counter jump is confirmed by one of its next few successors
+     * (1..APP_IMU_MAX_DELTA after it, as lost frames may take the very next): the gap was
+     * real */
+    const int after_held = ((int)counter - (int)s->resync_counter + 15) % 15;
+    const int confirmed = s->resync_valid && after_held >= 1 && after_held <= APP_IMU_MAX_DELTA;
+    if (!confirmed && step >= 15 - APP_IMU_MAX_DELTA) {
+        /* 1..4 behind the counter held: old data (or the counter held was itself a
+         * corrupt one ahead of time): dropped until the counter catches up, so a wrong
+         * counter never moves time ahead for good. */
+        return IMU_REJ_COUNTER;
+    }
+    if (!confirmed && step > APP_IMU_MAX_DELTA) {
+        /* E2E "wrong sequence": a corrupted counter, or a real gap of APP_IMU_MAX_DELTA
+         * samples or more. The next samples decide: if one follows this one closely, the
+         * gap was real and is bridged then (this sample counted among the lost); if they
+         * follow the last good one, this counter was wrong and only this sample is lost.
+         * Counter-only, so the same at any replay speed. */
+        s->resync_valid = 1u;
+        s->resync_counter = counter;
+        return IMU_REJ_COUNTER;
+    }
+    s->resync_valid = 0u;
+    l->counter = probe;
+    l->fault = fault ? 1u : 0u;
+    memset(out, 0, sizeof *out);
+    /* The 4-bit counter cannot see a gap of 15 samples or more. The receive time can:
+     * when more than half a counter cycle beyond the counter's step has elapsed, add the
+     * whole cycles it missed. (Time is used only here, for gaps; a replay at any speed
+     * that keeps samples less than 7 periods apart gives the same result.) */
+    out->lost = (uint64_t)step - 1u;
+    if (l->have_sample && t_us > l->last_t_us) {
+        const uint64_t period_us = 1000000u / l->rate_hz;
+        const uint64_t by_time = (t_us - l->last_t_us + period_us / 2u) / period_us;
+        if (by_time > (uint64_t)step + APP_IMU_GAP_SLACK_PERIODS) {
+            out->lost += (by_time - (uint64_t)step + APP_IMU_GAP_SLACK_PERIODS) / 15u * 15u;
+            out->time_gap = 1u;
+        }
+    }
+    for (int i = 0; i < 3; i++) {
+        out->raw[i] = s->rate_raw[i];
+        out->raw[i + 3] = raw[i];
+    }
+    for (int i = 0; i < 6; i++) {
+        out->prev_raw[i] = l->have_sample ? s->plaus.last_raw[i] : out->raw[i];
+    }
+    plausibility(&s->plaus, l, out->raw, out);
+    l->have_sample = 1u;
+    l->last_t_us = t_us;
+    return IMU_SAMPLE;
+}
+
+/* from + (to - from) * num / den, rounded to nearest (0 < num < den) */
+static int32_t interpolate_raw(int32_t from, int32_t to, uint64_t num, uint64_t den)
+{
+    const int64_t d = (int64_t)to - (int64_t)from;
+    const int64_t scaled = d * (int64_t)num;
+    const int64_t half = (int64_t)den / 2;
+    const int64_t q = scaled >= 0 ? (scaled + half) / (int64_t)den : -((-scaled + half) / (int64_t)den);
+    return (int32_t)((int64_t)from + q);
+}
+
+void imu_stream_bridge(const imu_sample_t *smp, uint64_t k, int32_t w_raw[3], int32_t v_raw[3])
+{
+    for (int i = 0; i < 3; i++) {
+        w_raw[i] = interpolate_raw(smp->prev_raw[i], smp->raw[i], k + 1u, smp->lost + 1u);
+        v_raw[i] = interpolate_raw(smp->prev_raw[i + 3], smp->raw[i + 3], k + 1u, smp->lost + 1u);
+    }
+}

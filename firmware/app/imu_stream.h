@@ -1,0 +1,89 @@
+/*
+ * imu_stream.h - the IMU sample stream: IMU_Rate and IMU_Accel paired into one sample
+ * (one E2E data element over two frames, docs/can.md), its alive counter with
+ * resynchronisation after a corrupt counter, lost samples found by the counter (and, for
+ * gaps of a whole counter cycle, by receive time), the samples to bridge a short gap by
+ * interpolation, and plausibility: an axis at its configured range (saturated) or
+ * repeating its raw value while the car moves (stuck).
+ *
+ * Samples stay in the protocol's raw units (int32 LSB): interpolation and the checks are
+ * integer arithmetic, the same on every target. app_rx_imu_increment turns them into SI.
+ */
+#ifndef NAVECU_IMU_STREAM_H
+#define NAVECU_IMU_STREAM_H
+
+#include <stdint.h>
+
+#include "app_rx.h"
+#include "e2e.h"
+
+/* What survives a navigation reset: the counter (a replayed sample is never new), the
+ * time of the last sample (staleness), the IMU's fault bit, and the saturation limits. */
+typedef struct {
+    e2e_counter_t counter;
+    uint8_t have_sample;   /* a sample has been taken since boot */
+    uint64_t last_t_us;    /* HAL time of the last sample (staleness, time gaps) */
+    uint8_t fault;         /* the last sample's ImuFault bit */
+    int32_t sat_raw[2];    /* gyro and accelerometer range in raw LSB per sample */
+    uint32_t rate_hz;      /* the configured IMU rate */
+} imu_link_t;
+
+/* Plausibility state: per axis (angle x y z, velocity x y z) the repeats of the raw value
+ * and its range over the current and the previous half-window block. */
+typedef struct {
+    int32_t last_raw[6];
+    uint32_t same_n[6];
+    int32_t blk_min[6], blk_max[6];
+    int32_t prev_min[6], prev_max[6];
+    uint32_t blk_n;
+    uint8_t stuck_seen; /* axes whose current stuck episode was counted (bits) */
+} imu_plaus_t;
+
+/* What restarts with navigation: the pair in assembly and the checks. */
+typedef struct {
+    uint8_t rate_pending;  /* an IMU_Rate waits for its IMU_Accel */
+    uint8_t rate_counter;
+    uint8_t rate_data[8];  /* its payload, covered by the pair CRC */
+    int32_t rate_raw[3];
+    uint8_t resync_valid;  /* a sample with a counter jump waits for confirmation */
+    uint8_t resync_counter;
+    imu_plaus_t plaus;
+} imu_stream_t;
+
+typedef enum {
+    IMU_SAMPLE = 0,     /* a sample is ready (imu_sample_t) */
+    IMU_REJ_PAIR,       /* imu_pair_broken: IMU_Accel without its IMU_Rate */
+    IMU_REJ_CRC,        /* bad_crc: the pair's CRC */
+    IMU_REJ_COUNTER,    /* bad_counter: repeated, held for confirmation, or old */
+} imu_verdict_t;
+
+typedef struct {
+    int32_t raw[6];      /* this sample: angle x y z, velocity x y z, LSB */
+    int32_t prev_raw[6]; /* the last sample before it: where a bridge starts */
+    uint64_t lost;       /* samples missing before this one */
+    uint8_t time_gap;    /* some were seen missing only in receive time */
+    uint8_t saturated;   /* an axis is at its range */
+    uint8_t stuck_new;   /* axes found stuck this sample (each counted once per episode) */
+    uint8_t stuck;       /* an axis repeats while the car moves */
+} imu_sample_t;
+
+/* Boot: the saturation limits from the configured ranges (rad/s, m/s^2) and IMU rate. */
+void imu_link_init(imu_link_t *l, uint32_t rate_hz, nav_real_t gyro_range_rps,
+                   nav_real_t accel_range_mps2);
+
+/* An IMU_Rate (its counter already checked in range): held for its IMU_Accel. Returns 1
+ * if a previous IMU_Rate was still waiting (a broken pair: count imu_pair_broken). */
+int imu_stream_rate(imu_stream_t *s, uint8_t counter, const int32_t raw[3],
+                    const uint8_t data[8]);
+
+/* An IMU_Accel received at t_us: pair, CRC, counter, gap and plausibility. On IMU_SAMPLE,
+ * *out holds the sample and l is updated. */
+imu_verdict_t imu_stream_accel(imu_stream_t *s, imu_link_t *l, uint8_t counter, uint8_t fault,
+                               const int32_t raw[3], const uint8_t data[8], uint64_t t_us,
+                               imu_sample_t *out);
+
+/* The k-th (0-based, k < out->lost) bridged sample of a gap: linear between prev_raw and
+ * raw, rounded to nearest. */
+void imu_stream_bridge(const imu_sample_t *smp, uint64_t k, int32_t w_raw[3], int32_t v_raw[3]);
+
+#endif /* NAVECU_IMU_STREAM_H */

@@ -1,0 +1,89 @@
+/* landnav.c - standstill and dead reckoning without the filter; see landnav.h. */
+#include "landnav.h"
+
+static void standstill_step(landnav_t *ln, zbias_t *zb, const zbias_prior_t *prior,
+                            sins_t *nav, nav_real_t raw_rate_z_rad, nav_real_t dt)
+{
+    static const nav_real_t zero_v[3] = {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)};
+    nav_real_t roll, pitch, heading;
+    sins_euler(nav, &roll, &pitch, &heading);
+    if (!ln->holding) {
+        ln->holding = 1u;
+        ln->hold_heading_rad = heading;
+    }
+    nav_real_t dh = ln->hold_heading_rad - heading;
+    if (dh > NAV_PI) {
+        dh -= NAV_C(2.0) * NAV_PI;
+    } else if (dh < -NAV_PI) {
+        dh += NAV_C(2.0) * NAV_PI;
+    }
+    (void)sins_turn_heading(nav, dh);
+    (void)sins_set_velocity(nav, zero_v);
+    nav_real_t w_ie_b[3];
+    sins_earth_rate_b(nav, w_ie_b);
+    nav_acc_add(&zb->sum_rps, &zb->sum_lo_rps, raw_rate_z_rad / dt - w_ie_b[2]);
+    if (zb->n < UINT32_MAX) {
+        zb->n++;
+    }
+    const nav_real_t arw = prior->gyro_arw_rad_rts;
+    const nav_real_t sb = prior->gyro_bias_rps;
+    const nav_real_t n0 = arw * arw / (dt * sb * sb);
+    zb->bias_rps = (zb->sum_rps + zb->sum_lo_rps) / ((nav_real_t)zb->n + n0);
+}
+
+/* returns 1 if the dead reckoning refused the step */
+static int odometer_step(sins_t *nav, dr_t *dr, const odo_t *odo, nav_real_t dt)
+{
+    nav_real_t roll, pitch, heading;
+    sins_euler(nav, &roll, &pitch, &heading);
+    const nav_real_t ds = odo->speed_mps * dt;
+    if (dr_step(dr, ds, heading, pitch) != NAV_OK) {
+        return 1;
+    }
+    const nav_real_t v = odo->speed_mps / (NAV_C(1.0) + dr->mu) * nav_cos(pitch);
+    const nav_real_t hc = heading - dr->dh_rad;
+    const nav_real_t v_n[3] = {v * nav_sin(hc), v * nav_cos(hc), nav->v_n_mps[2]};
+    (void)sins_set_velocity(nav, v_n);
+    (void)sins_set_position(nav, &dr->pos);
+    sins_set_height_ref(nav, geo_h_m(&dr->pos));
+    return 0;
+}
+
+int landnav_step(landnav_t *ln, zbias_t *zb, const zbias_prior_t *prior, sins_t *nav, dr_t *dr,
+                 odo_t *odo, imu_inc_t *inc, nav_real_t *yaw_rate_rps)
+{
+    int refused = 0;
+    const nav_real_t raw_z = inc->dtheta_b_rad[2];
+    inc->dtheta_b_rad[2] -= zb->bias_rps * inc->dt_s;
+    *yaw_rate_rps = inc->dtheta_b_rad[2] / inc->dt_s;
+    if (sins_step(nav, inc) != NAV_OK) {
+        refused++;
+    }
+    odo_tick(odo, inc->dt_s, *yaw_rate_rps);
+    if (odo->standing) {
+        standstill_step(ln, zb, prior, nav, raw_z, inc->dt_s);
+        ln->output_dr = 1u;
+    } else {
+        ln->holding = 0u;
+        if (odo->valid) {
+            refused += odometer_step(nav, dr, odo, inc->dt_s);
+            ln->output_dr = 1u;
+        } else {
+            /* no odometer: the free SINS carries on, dead reckoning follows it */
+            dr_set_position(dr, &nav->pos);
+            ln->output_dr = 0u;
+        }
+    }
+    return refused;
+}
+
+void landnav_restart(landnav_t *ln)
+{
+    ln->output_dr = 0u;
+    ln->holding = 0u;
+}
+
+void landnav_release_hold(landnav_t *ln)
+{
+    ln->holding = 0u;
+}

@@ -1,0 +1,63 @@
+/*
+ * landnav.h - the land navigation system without the Kalman filter (seed 000): the
+ * strapdown step with the standstill gyro bias removed, standstill (zero velocity, the
+ * heading held, the z gyro bias estimated), and dead reckoning with the odometer along
+ * the SINS heading, which is then the output.
+ *
+ * Standstill (odo.h: every wheel at zero, the body not turning): the car neither moves
+ * nor turns, whatever the sensors' errors say (seed 000: stillness keeps the SINS from
+ * drifting). Velocity is set to zero, the heading is held where it was when the car
+ * stopped, and the z gyro's reading minus the Earth's rate is a measurement of its bias.
+ * The bias estimate is the posterior mean of a constant with prior N(0, sigma_b^2) from
+ * samples of variance ARW^2 / dt:  b = sum(r_k) / (n + n0),  n0 = ARW^2 / (dt sigma_b^2);
+ * it is subtracted from every later sample.
+ *
+ * Moving with a valid odometer: dead reckoning (seed 000 eqs 1-4, 11-12) is the output;
+ * the SINS takes the odometer's velocity along the compensated heading (seed 000: the
+ * odometer velocity damps the SINS velocity errors) and the dead-reckoned position, so
+ * that it stays a good attitude and heading reference whatever the drive's length.
+ */
+#ifndef NAVECU_LANDNAV_H
+#define NAVECU_LANDNAV_H
+
+#include <stdint.h>
+
+#include "dr.h"
+#include "odo.h"
+#include "sins.h"
+
+/* The z gyro bias learnt at standstill: it belongs to the IMU, not to a trip, and
+ * survives a navigation reset. */
+typedef struct {
+    nav_real_t sum_rps, sum_lo_rps; /* sum of (gyro z - Earth rate) at standstill */
+    uint32_t n;                     /* samples in the sum */
+    nav_real_t bias_rps;            /* the estimate applied to every sample */
+} zbias_t;
+
+typedef struct {
+    uint8_t output_dr;          /* the dead-reckoned solution is the output (mode 4) */
+    uint8_t holding;            /* standstill: heading held at hold_heading_rad */
+    nav_real_t hold_heading_rad;
+} landnav_t;
+
+/* The gyro's noise for the bias estimate: ARW (rad/sqrt(s)), turn-on bias 1-sigma (rad/s). */
+typedef struct {
+    nav_real_t gyro_arw_rad_rts;
+    nav_real_t gyro_bias_rps;
+} zbias_prior_t;
+
+/* One IMU sample (SI increments; the z angle is bias-compensated here) without the
+ * filter: the strapdown step, then standstill, dead reckoning, or the free SINS. *yaw_rate
+ * gets the compensated body z rate (rad/s). Returns the number of steps the core refused
+ * (count them in nav_rejected). */
+int landnav_step(landnav_t *ln, zbias_t *zb, const zbias_prior_t *prior, sins_t *nav, dr_t *dr,
+                 odo_t *odo, imu_inc_t *inc, nav_real_t *yaw_rate_rps);
+
+/* The Kalman filter runs: no heading held at standstill (its zero-rate update holds it). */
+void landnav_release_hold(landnav_t *ln);
+
+/* A new navigator: no heading held, the free SINS is the output until the odometer says
+ * otherwise. */
+void landnav_restart(landnav_t *ln);
+
+#endif /* NAVECU_LANDNAV_H */

@@ -1,0 +1,320 @@
+/* output.c - the NAV_* frames, HealthFlags and the output mode; see output.h. */
+#include "output.h"
+
+#include <string.h>
+
+#include "app.h"
+#include "app_tuning.h"
+#include "e2e.h"
+#include "navecu_can.h"
+#include "navecu_protocol.h"
+
+enum { TX_HEIGHT = 0, TX_VEL, TX_ATT, TX_STATUS, TX_CAL };
+
+static void send(tx_state_t *tx, hal_t *hal, uint32_t id, const uint8_t data[8])
+{
+    hal_can_frame_t f;
+    memset(&f, 0, sizeof f);
+    f.id = id;
+    f.dlc = 8u;
+    memcpy(f.data, data, 8u);
+    if (hal_can_send(hal, &f) == 0) {
+        tx->frames_sent++;
+    } else {
+        app_count(&tx->send_errors);
+    }
+}
+
+/* E2E-protect and send; the alive counter of output `which` is taken and advanced */
+static uint8_t next_counter(tx_state_t *tx, int which)
+{
+    const uint8_t c = tx->counter[which];
+    tx->counter[which] = e2e_counter_next(c);
+    return c;
+}
+
+static void send_protected(tx_state_t *tx, hal_t *hal, uint32_t id, uint8_t data[8])
+{
+    e2e_protect(id, data);
+    send(tx, hal, id, data);
+}
+
+/* fixed-point LSB (GEO_LSB_PER_*) to a coarser integer unit, rounding half away from 0 */
+static int64_t lsb_div_round(int64_t x, int64_t div)
+{
+    return (x >= 0 ? x + div / 2 : x - div / 2) / div;
+}
+
+/* a 1-sigma (scaled to the signal's LSB) rounded into an accuracy signal whose largest
+ * raw value means "unknown": saturates one below it */
+static uint32_t accuracy_raw(nav_real_t sigma_lsb, uint32_t raw_max)
+{
+    const nav_real_t top = (nav_real_t)(raw_max - 1u);
+    return sigma_lsb < top ? (uint32_t)(sigma_lsb + NAV_C(0.5)) : raw_max - 1u;
+}
+
+static void emit_navigation(app_t *a, hal_t *hal)
+{
+    tx_state_t *tx = &a->keep.tx;
+    const sins_t *s = &a->run.nav;
+    const ekf_t *ekf = app_filter(a);
+    uint8_t d[8];
+    if (!sins_finite(s)) {
+        app_count(&a->keep.health.nonfinite_out); /* never on the bus; supervision resets it */
+        return;
+    }
+
+    struct navecu_can_nav_position_t p;
+    p.latitude = (int32_t)lsb_div_round(s->pos.lat, GEO_LSB_PER_DEG_E7);
+    p.longitude = (int32_t)lsb_div_round(s->pos.lon, GEO_LSB_PER_DEG_E7);
+    navecu_can_nav_position_pack(d, &p, sizeof d);
+    send(tx, hal, NAVECU_CAN_NAV_POSITION_FRAME_ID, d);
+
+    struct navecu_can_nav_height_t h;
+    h.height = (int32_t)lsb_div_round(s->pos.h, 10 * GEO_LSB_PER_MM); /* 0.01 m */
+    h.vert_accuracy = NAVECU_NAV_HEIGHT_VERT_ACCURACY_RAW_MAX; /* "unknown" without the filter */
+    if (ekf != NULL) {
+        h.vert_accuracy = (uint8_t)accuracy_raw(ekf_state_sigma(ekf, EKF_DR + 2) * NAV_C(10.0),
+                                                NAVECU_NAV_HEIGHT_VERT_ACCURACY_RAW_MAX);
+    }
+    /* time of validity on the IMU time base, so that a recorder need not trust arrival
+     * times: a vcan recording and a --can-log run carry the same value */
+    h.time_of_validity =
+        (uint16_t)((a->keep.n_samples * 1000u / a->cfg.imu_rate_hz) & 0xFFFFu);
+    h.nav_counter = next_counter(tx, TX_HEIGHT);
+    h.nav_crc = 0u;
+    navecu_can_nav_height_pack(d, &h, sizeof d);
+    send_protected(tx, hal, NAVECU_CAN_NAV_HEIGHT_FRAME_ID, d);
+
+    struct navecu_can_nav_velocity_t v;
+    v.vel_east = navecu_can_nav_velocity_vel_east_encode(nav_clamp(
+        s->v_n_mps[0], NAVECU_NAV_VELOCITY_VEL_EAST_MIN, NAVECU_NAV_VELOCITY_VEL_EAST_MAX));
+    v.vel_north = navecu_can_nav_velocity_vel_north_encode(nav_clamp(
+        s->v_n_mps[1], NAVECU_NAV_VELOCITY_VEL_NORTH_MIN, NAVECU_NAV_VELOCITY_VEL_NORTH_MAX));
+    v.vel_up = navecu_can_nav_velocity_vel_up_encode(
+        nav_clamp(s->v_n_mps[2], NAVECU_NAV_VELOCITY_VEL_UP_MIN, NAVECU_NAV_VELOCITY_VEL_UP_MAX));
+    v.nav_counter = next_counter(tx, TX_VEL);
+    v.nav_crc = 0u;
+    navecu_can_nav_velocity_pack(d, &v, sizeof d);
+    send_protected(tx, hal, NAVECU_CAN_NAV_VELOCITY_FRAME_ID, d);
+
+    nav_real_t roll, pitch, heading;
+    sins_euler(s, &roll, &pitch, &heading);
+    /* the car's heading and pitch, not the IMU's: less the mounting (the filter's
+     * estimate) or, without the filter, the one-point calibration's dH */
+    if (ekf != NULL) {
+        heading -= ekf->mount_yaw_rad;
+        pitch -= ekf->mount_pitch_rad;
+    } else {
+        heading -= a->run.dr.dh_rad;
+    }
+    if (heading < NAV_C(0.0)) {
+        heading += NAV_C(2.0) * NAV_PI;
+    } else if (heading >= NAV_C(2.0) * NAV_PI) {
+        heading -= NAV_C(2.0) * NAV_PI;
+    }
+    /* the car's pitch within the DBC's +-90 deg: the IMU at 89.7 deg less a mounting pitch
+     * of -1 deg would otherwise be sent as 90.7 (found by tests/fuzz/fuzz_options.c) */
+    pitch = nav_clamp(pitch, -NAV_C(0.5) * NAV_PI, NAV_C(0.5) * NAV_PI);
+    struct navecu_can_nav_attitude_t at;
+    at.roll = navecu_can_nav_attitude_roll_encode(roll * NAV_DEG_PER_RAD);
+    at.pitch = navecu_can_nav_attitude_pitch_encode(pitch * NAV_DEG_PER_RAD);
+    at.heading = navecu_can_nav_attitude_heading_encode(heading * NAV_DEG_PER_RAD);
+    if (at.heading > navecu_can_nav_attitude_heading_encode(NAVECU_NAV_ATTITUDE_HEADING_MAX)) {
+        at.heading = 0u; /* 359.996 deg rounds to 360.00: that is north */
+    }
+    at.nav_counter = next_counter(tx, TX_ATT);
+    at.nav_crc = 0u;
+    navecu_can_nav_attitude_pack(d, &at, sizeof d);
+    send_protected(tx, hal, NAVECU_CAN_NAV_ATTITUDE_FRAME_ID, d);
+}
+
+static uint16_t sat16(uint32_t x)
+{
+    return x > UINT16_MAX ? (uint16_t)UINT16_MAX : (uint16_t)x;
+}
+
+static uint8_t sat8(uint32_t x)
+{
+    return x > UINT8_MAX ? (uint8_t)UINT8_MAX : (uint8_t)x;
+}
+
+static uint16_t health_flags(const app_t *a, const hal_t *hal)
+{
+    const app_keep_t *k = &a->keep;
+    const app_run_t *r = &a->run;
+    const uint64_t n = k->n_samples;
+    const uint64_t second = a->cfg.imu_rate_hz;
+    uint32_t fl = 0u;
+    const uint64_t now = hal_time_us(hal);
+    if (k->imu.have_sample && now > k->imu.last_t_us && now - k->imu.last_t_us > APP_IMU_STALE_US) {
+        fl |= NAVECU_HEALTH_IMU_STALE;
+    }
+    if (k->imu.fault) {
+        fl |= NAVECU_HEALTH_IMU_FAULT;
+    }
+    if (!app_stamp_within(&r->gnss, n, APP_NO_GNSS_S * second)) {
+        fl |= NAVECU_HEALTH_NO_GNSS;
+    }
+    if (app_stamp_within(&r->events.reject, n, APP_FLAG_HOLD_S * second)) {
+        fl |= NAVECU_HEALTH_REJECTED;
+    }
+    if (k->cal.nvm_error) {
+        fl |= NAVECU_HEALTH_NVM_ERROR;
+    }
+    if (r->mode != APP_MODE_NAVIGATING && r->align.pos_valid && !r->align.heading_valid) {
+        fl |= NAVECU_HEALTH_NO_HEADING;
+    }
+    if (app_stamp_within(&r->events.gap, n, APP_FLAG_HOLD_S * second)) {
+        fl |= NAVECU_HEALTH_IMU_GAP;
+    }
+    if (app_stamp_within(&k->filter_reset, n, APP_FLAG_HOLD_LONG_S * second)) {
+        fl |= NAVECU_HEALTH_FILTER_RESET;
+    }
+    if (app_stamp_within(&r->events.stuck, n, APP_FLAG_HOLD_LONG_S * second)) {
+        fl |= NAVECU_HEALTH_IMU_SUSPECT;
+    }
+    if (app_stamp_within(&r->events.saturated, n, APP_FLAG_HOLD_S * second)) {
+        fl |= NAVECU_HEALTH_IMU_SATURATED;
+    }
+    if (app_stamp_within(&r->events.odo_reject, n, APP_FLAG_HOLD_S * second)) {
+        fl |= NAVECU_HEALTH_ODO_REJECTED;
+    }
+    if (r->align.reacquire) {
+        fl |= NAVECU_HEALTH_REACQUIRE;
+    }
+    return (uint16_t)fl;
+}
+
+/* NAV_Status Mode: the solution being output */
+static uint8_t output_mode(const app_t *a)
+{
+    switch (a->run.mode) {
+    case APP_MODE_WAIT_INIT:
+        return NAVECU_CAN_NAV_STATUS_MODE_WAIT_INIT_CHOICE;
+    case APP_MODE_LEVELLING:
+        return NAVECU_CAN_NAV_STATUS_MODE_LEVELLING_CHOICE;
+    case APP_MODE_FAULT:
+        return NAVECU_CAN_NAV_STATUS_MODE_FAULT_CHOICE;
+    default:
+        break;
+    }
+    const int dead_reckoning = app_filter(a) != NULL ? a->keep.odo.valid : a->run.land.output_dr;
+    if (app_filter(a) != NULL &&
+        app_stamp_within(&a->run.fusion.fix, a->keep.n_samples,
+                         (uint64_t)APP_GNSS_FIX_FRESH_S * a->cfg.imu_rate_hz)) {
+        return NAVECU_CAN_NAV_STATUS_MODE_GNSS_INS_CHOICE;
+    }
+    return dead_reckoning ? NAVECU_CAN_NAV_STATUS_MODE_DEAD_RECKONING_CHOICE
+                          : NAVECU_CAN_NAV_STATUS_MODE_INERTIAL_CHOICE;
+}
+
+/* one page of counters, in rotation */
+static void fill_counter_page(struct navecu_can_nav_status_t *st, const app_health_t *h)
+{
+    switch (st->status_page) {
+    case 1u:
+        st->cnt_unknown_id = sat16(h->unknown_id);
+        st->cnt_bad_dlc = sat16(h->bad_dlc);
+        st->cnt_bad_crc = sat8(h->bad_crc);
+        break;
+    case 2u:
+        st->cnt_bad_counter = sat16(h->bad_counter);
+        st->cnt_imu_pair_broken = sat16(h->imu_pair_broken);
+        st->cnt_imu_lost = sat8(h->imu_lost);
+        break;
+    case 3u:
+        st->cnt_bad_value = sat16(h->bad_value);
+        st->cnt_gnss_rejected = sat16(h->gnss_rejected);
+        st->cnt_log_line_bad = sat8(h->log_line_bad);
+        break;
+    case 4u:
+        st->cnt_cmd_rejected = sat16(h->cmd_rejected);
+        st->cnt_core_rejected = sat16(h->nav_rejected);
+        st->cnt_time_jumps = sat8(h->time_jumps);
+        break;
+    case 5u:
+        st->cnt_filter_resets = sat16(h->filter_resets);
+        st->cnt_tasks_late = sat16(h->tasks_late);
+        st->cnt_non_finite = sat8(h->nonfinite_out);
+        break;
+    default:
+        st->cnt_imu_saturated = sat16(h->imu_saturated);
+        st->cnt_odo_rejected = sat16(h->odo_rejected);
+        st->cnt_imu_stuck = sat8(h->imu_stuck);
+        break;
+    }
+}
+
+void output_status(app_t *a, hal_t *hal)
+{
+    tx_state_t *tx = &a->keep.tx;
+    const ekf_t *ekf = app_filter(a);
+    uint8_t d[8];
+    a->keep.health.log_line_bad = hal_can_rx_malformed(hal);
+    tx->last_status_t_us = hal_time_us(hal);
+    struct navecu_can_nav_status_t st;
+    memset(&st, 0, sizeof st);
+    st.status_page = NAVECU_NAV_STATUS_PAGE_STATE;
+    st.mode = output_mode(a);
+    st.health_flags = health_flags(a, hal);
+    st.horiz_accuracy = NAVECU_NAV_STATUS_HORIZ_ACCURACY_RAW_MAX; /* "unknown" w/o the filter */
+    if (ekf != NULL && a->run.mode == APP_MODE_NAVIGATING) {
+        st.horiz_accuracy = (uint16_t)accuracy_raw(ekf_sigma_h_m(ekf) * NAV_C(100.0),
+                                                   NAVECU_NAV_STATUS_HORIZ_ACCURACY_RAW_MAX);
+    }
+    st.nav_counter = next_counter(tx, TX_STATUS);
+    navecu_can_nav_status_pack(d, &st, sizeof d);
+    send_protected(tx, hal, NAVECU_CAN_NAV_STATUS_FRAME_ID, d);
+
+    memset(&st, 0, sizeof st);
+    st.status_page = tx->status_page < NAVECU_NAV_STATUS_PAGE_COUNTERS_FIRST
+                         ? (uint8_t)NAVECU_NAV_STATUS_PAGE_COUNTERS_FIRST
+                         : tx->status_page;
+    fill_counter_page(&st, &a->keep.health);
+    tx->status_page = (uint8_t)(st.status_page >= NAVECU_NAV_STATUS_PAGE_COUNTERS_LAST
+                                    ? NAVECU_NAV_STATUS_PAGE_COUNTERS_FIRST
+                                    : st.status_page + 1u);
+    st.nav_counter = next_counter(tx, TX_STATUS);
+    navecu_can_nav_status_pack(d, &st, sizeof d);
+    send_protected(tx, hal, NAVECU_CAN_NAV_STATUS_FRAME_ID, d);
+}
+
+static void emit_calibration(app_t *a, hal_t *hal)
+{
+    const calib_t *c = &a->keep.cal;
+    uint8_t d[8];
+    struct navecu_can_nav_calibration_t m;
+    memset(&m, 0, sizeof m);
+    m.heading_correction = navecu_can_nav_calibration_heading_correction_encode(
+        nav_clamp(c->dh_rad * NAV_DEG_PER_RAD, NAVECU_NAV_CALIBRATION_HEADING_CORRECTION_MIN,
+               NAVECU_NAV_CALIBRATION_HEADING_CORRECTION_MAX));
+    m.odo_scale_error = navecu_can_nav_calibration_odo_scale_error_encode(
+        nav_clamp(c->mu, NAVECU_NAV_CALIBRATION_ODO_SCALE_ERROR_MIN,
+               NAVECU_NAV_CALIBRATION_ODO_SCALE_ERROR_MAX));
+    m.cal_valid = c->source != NAVECU_CAN_NAV_CALIBRATION_CAL_SOURCE_NONE_CHOICE ? 1u : 0u;
+    m.cal_stored = c->stored;
+    m.cal_status = c->status;
+    m.cal_source = c->source;
+    m.cal_count = c->count;
+    m.nav_counter = next_counter(&a->keep.tx, TX_CAL);
+    navecu_can_nav_calibration_pack(d, &m, sizeof d);
+    send_protected(&a->keep.tx, hal, NAVECU_CAN_NAV_CALIBRATION_FRAME_ID, d);
+}
+
+void output_due(app_t *a, hal_t *hal)
+{
+    const uint64_t n = a->keep.n_samples;
+    const uint32_t imu = a->cfg.imu_rate_hz;
+    const uint32_t nav_div = a->cfg.nav_rate_hz >= imu ? 1u : imu / a->cfg.nav_rate_hz;
+    const uint32_t st_div = a->cfg.status_rate_hz >= imu ? 1u : imu / a->cfg.status_rate_hz;
+    if (a->run.mode == APP_MODE_NAVIGATING && n % nav_div == 0u) {
+        emit_navigation(a, hal);
+    }
+    if (n % st_div == 0u) {
+        output_status(a, hal);
+    }
+    if (n % imu == 0u) {
+        emit_calibration(a, hal);
+    }
+}

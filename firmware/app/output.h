@@ -1,0 +1,32 @@
+/*
+ * output.h - output encoding: the NAV_* frames from the application's state, at the
+ * configured rates on the IMU time base, with their E2E protection; the HealthFlags and
+ * the output mode of NAV_Status. The only place the outputs' codec structs are filled.
+ */
+#ifndef NAVECU_OUTPUT_H
+#define NAVECU_OUTPUT_H
+
+#include <stdint.h>
+
+#include "hal.h"
+
+/* E2E transmit state and what was sent: survives a navigation reset. */
+typedef struct {
+    uint8_t counter[5];         /* alive counters of the E2E-protected outputs */
+    uint8_t status_page;        /* next counter page of NAV_Status */
+    uint32_t frames_sent;
+    uint32_t send_errors;
+    uint64_t last_status_t_us;  /* HAL time of the last NAV_Status (app_poll) */
+} tx_state_t;
+
+typedef struct app app_t; /* app.h */
+
+/* The outputs due after the current IMU sample (the application's time base): the
+ * navigation frames at the NAV rate while navigating, NAV_Status at its rate,
+ * NAV_Calibration at 1 Hz. */
+void output_due(app_t *a, hal_t *hal);
+
+/* NAV_Status now (app_poll: the heartbeat while no IMU data arrives). */
+void output_status(app_t *a, hal_t *hal);
+
+#endif /* NAVECU_OUTPUT_H */

@@ -1,0 +1,72 @@
+/* host_board.c - the Linux host as a board; see host_board.h. */
+#include "host_board.h"
+
+#include <errno.h>
+#include <signal.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "app.h"
+#include "hal_linux.h"
+#include "hal_socketcan.h"
+
+static volatile sig_atomic_t stop_requested;
+
+static void on_signal(int sig)
+{
+    (void)sig;
+    stop_requested = 1;
+}
+
+int host_open(hal_t *hal, const host_options_t *o)
+{
+    uint32_t ids[HAL_SOCKETCAN_MAX_FILTERS];
+    const int rc = o->live_if != NULL
+                       ? hal_socketcan_open(hal, o->live_if, ids,
+                                            app_rx_ids(ids, HAL_SOCKETCAN_MAX_FILTERS),
+                                            o->out_path, o->nvm_path)
+                       : hal_linux_open(hal, o->in_path, o->out_path, o->nvm_path);
+    if (rc != 0) {
+        if (o->live_if != NULL) {
+            fprintf(stderr, "navecu: cannot open CAN interface '%s': %s\n", o->live_if,
+                    strerror(errno));
+        } else {
+            fprintf(stderr, "navecu: cannot open '%s' or '%s': %s\n", o->in_path, o->out_path,
+                    strerror(errno));
+        }
+        return 1;
+    }
+    if (o->iface != NULL) {
+        hal_linux_set_iface(hal, o->iface);
+    }
+    if (o->live_if != NULL) {
+        struct sigaction sa;
+        memset(&sa, 0, sizeof sa);
+        sa.sa_handler = on_signal;
+        sigaction(SIGINT, &sa, NULL);
+        sigaction(SIGTERM, &sa, NULL);
+        fprintf(stderr, "navecu: running on %s until SIGINT/SIGTERM\n", o->live_if);
+    }
+    return 0;
+}
+
+int host_stop_requested(void)
+{
+    return stop_requested != 0;
+}
+
+int host_wait(hal_t *hal, const host_options_t *o)
+{
+    if (hal_socketcan_wait(hal, 20) < 0) {
+        fprintf(stderr, "navecu: poll failed on %s: %s\n", o->live_if, strerror(errno));
+        return -1;
+    }
+    return 0;
+}
+
+int host_poll_allowed(const hal_t *hal, const host_options_t *o, uint64_t t_first_us)
+{
+    const uint64_t now = hal_time_us(hal);
+    return !o->stall_poll || t_first_us == UINT64_MAX || now < t_first_us ||
+           now - t_first_us < o->stall_poll_us;
+}
