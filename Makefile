@@ -410,10 +410,11 @@ test-fuzz-regressions: $(foreach f,host asan,$(BUILD)/$(f)/tests/test_fuzz_regre
 
 # ---- static analysis (docs/misra.md): cppcheck 2.10 with the MISRA C:2012 addon,
 # clang-tidy 14 (host and arm-none-eabi), gcc -fanalyzer (host gcc, arm-none-eabi-gcc for
-# hal/cortex_m4f/), over firmware/ (not the generated firmware/can/gen/) and hal/. Fails on
+# hal/cortex_m4f/ and boards/), over firmware/ (not the generated firmware/can/gen/), hal/
+# and boards/. Fails on
 # any finding that is neither fixed nor a documented deviation or accepted finding
 # (tools/lint/: cppcheck-suppressions.txt, *-accepted.txt, each explained in
-# docs/misra.md). About a minute on two cores; not part of make test.
+# docs/misra.md). About a minute on two cores; the last step of make test.
 # `tools/lint/run_lint.py --counts` prints the per-rule counts, `--list` every finding.
 LINT_HOST_M4 := $(TESTS_M4_HAL:test_%=hal/cortex_m4f/%.c)
 .PHONY: lint

@@ -1,9 +1,9 @@
 /*
  * hal_linux.c - the HAL of hal.h on a Linux host (contracts in hal_linux.h).
  *
- * The RX log is parsed by hand, not with sscanf: every malformed form must be caught
- * and counted, the timestamp converted without floating point, and nothing may depend
- * on the locale.
+ * The RX log's lines are read and parsed by hal/common/candump.c (shared with the QEMU
+ * board's semihosting HAL); here: the files, the NVM file, the clock of a replay and the
+ * emulated watchdog.
  */
 #include "hal_linux.h"
 #include "candump.h"
