@@ -368,8 +368,10 @@ typedef struct {
 } meas_t;
 
 typedef struct {
-    int n_bad;
-    char first[320];
+    /* values beyond their tolerance, and the first of them, among the row entries [0] and
+     * the innovations [1] */
+    int n_bad[2];
+    char first[2][320];
     /* entries the filter models exactly: count, max |filter - numerical| / tolerance */
     int n_exact;
     double worst_exact;
@@ -381,19 +383,21 @@ typedef struct {
     char at_model[160];
 } verdict_t;
 
-static void judge(verdict_t *v, const char *what, double filter, double ref, double tol_num,
-                  double allow)
+enum { ROW_ENTRY = 0, INNOVATION = 1 };
+
+static void judge(verdict_t *v, int kind, const char *what, double filter, double ref,
+                  double tol_num, double allow)
 {
     const double diff = fabs(filter - ref), tol = tol_num + allow;
     const double ratio = diff / tol;
     if (!(diff <= tol)) {
-        if (v->n_bad == 0) {
-            (void)snprintf(v->first, sizeof v->first,
+        if (v->n_bad[kind] == 0) {
+            (void)snprintf(v->first[kind], sizeof v->first[kind],
                            "%s: filter %.10g, numerical %.10g, |difference| %.3g > tolerance "
                            "%.3g (numerical %.3g + model %.3g)",
                            what, filter, ref, diff, tol, tol_num, allow);
         }
-        v->n_bad++;
+        v->n_bad[kind]++;
     }
     int *n = allow > 0.0 ? &v->n_model : &v->n_exact;
     double *worst = allow > 0.0 ? &v->worst_model : &v->worst_exact;
@@ -401,7 +405,7 @@ static void judge(verdict_t *v, const char *what, double filter, double ref, dou
     (*n)++;
     if (ratio > *worst || isnan(ratio)) {
         *worst = ratio;
-        (void)snprintf(at, sizeof v->at_exact, "%s", what);
+        (void)snprintf(at, sizeof v->at_exact, " at %s", what);
     }
 }
 
@@ -419,7 +423,7 @@ static verdict_t check_meas(const meas_t *m, const state_t *truth)
     for (int r = 0; r < m->n_rows; r++) {
         (void)snprintf(what, sizeof what, "%s %s innovation at the truth", m->name,
                        m->row_name[r]);
-        judge(&v, what, (double)zf[r], zr[r], 16.0 * (NAV_EPS + DBL_EPSILON) * m->scale,
+        judge(&v, INNOVATION, what, (double)zf[r], zr[r], 16.0 * (NAV_EPS + DBL_EPSILON) * m->scale,
               m->allow_z != NULL ? m->allow_z(m->ctx, truth, r) : 0.0);
     }
     for (int j = 0; j < EKF_N; j++) {
@@ -434,7 +438,7 @@ static verdict_t check_meas(const meas_t *m, const state_t *truth)
             const double J = (zp[r] - zm[r]) / (a_plus - a_minus);
             (void)snprintf(what, sizeof what, "%s row %s, column %s", m->name, m->row_name[r],
                            STATE_NAME[j]);
-            judge(&v, what, (double)H[r][j], J, tol_numeric(j, m->scale),
+            judge(&v, ROW_ENTRY, what, (double)H[r][j], J, tol_numeric(j, m->scale),
                   m->allow_h != NULL ? m->allow_h(m->ctx, truth, r, j) : 0.0);
         }
         /* the filter's innovation at the perturbed states */
@@ -446,7 +450,7 @@ static verdict_t check_meas(const meas_t *m, const state_t *truth)
             for (int r = 0; r < m->n_rows; r++) {
                 (void)snprintf(what, sizeof what, "%s %s innovation at %s %+g", m->name,
                                m->row_name[r], STATE_NAME[j], side == 0 ? d : -d);
-                judge(&v, what, (double)zs[r], zt[r], 16.0 * (NAV_EPS + DBL_EPSILON) * m->scale,
+                judge(&v, INNOVATION, what, (double)zs[r], zt[r], 16.0 * (NAV_EPS + DBL_EPSILON) * m->scale,
                       m->allow_z != NULL ? m->allow_z(m->ctx, st, r) : 0.0);
             }
         }
@@ -458,16 +462,19 @@ static void expect_rows_right(const meas_t *m, const state_t *truth)
 {
     const verdict_t v = check_meas(m, truth);
     print_message("%s (%s): %d rows x %d columns, innovations at %d states: %d values exact "
-                  "to the numerical tolerance (worst %.3f of it: %s)",
+                  "to the numerical tolerance (worst %.3f of it%s)",
                   m->name, VARIANT, m->n_rows, EKF_N, 1 + 2 * EKF_N, v.n_exact, v.worst_exact,
-                  v.at_exact);
+                  v.at_exact[0] != '\0' ? v.at_exact : ", every difference zero");
     if (v.n_model > 0) {
-        print_message("; %d within a model allowance (worst %.3f of it: %s)", v.n_model,
-                      v.worst_model, v.at_model);
+        print_message("; %d within a model allowance (worst %.3f of it%s)", v.n_model,
+                      v.worst_model, v.at_model[0] != '\0' ? v.at_model : "");
     }
     print_message("\n");
-    if (v.n_bad != 0) {
-        fail_msg("%d entries off; first: %s", v.n_bad, v.first);
+    if (v.n_bad[ROW_ENTRY] + v.n_bad[INNOVATION] != 0) {
+        fail_msg("%d row entries off%s%s; %d innovations off%s%s", v.n_bad[ROW_ENTRY],
+                 v.n_bad[ROW_ENTRY] != 0 ? ", the first " : "", v.first[ROW_ENTRY],
+                 v.n_bad[INNOVATION], v.n_bad[INNOVATION] != 0 ? ", the first " : "",
+                 v.first[INNOVATION]);
     }
 }
 
@@ -806,17 +813,18 @@ static void test_check_refuses_wrong_rows(void **state)
     static state_t truth;
     odo_ctx_t c;
     meas_t m;
-    odo_case(&truth, &c, &m, "odometer, a wrong row", MOUNT_PITCH_RAD, MOUNT_YAW_RAD);
+    odo_case(&truth, &c, &m, "odometer (made wrong)", MOUNT_PITCH_RAD, MOUNT_YAW_RAD);
     m.rows = wrong_rows;
     verdict_t v = check_meas(&m, &truth);
-    print_message("refused as it should be, the lateral row's mounting yaw entry halved: "
-                  "%d values, first %s\n", v.n_bad, v.first);
-    assert_true(v.n_bad >= 1);
+    print_message("refused as it should be, the lateral row's mounting yaw entry halved: %d "
+                  "row entries (%s)\n", v.n_bad[ROW_ENTRY], v.first[ROW_ENTRY]);
+    assert_true(v.n_bad[ROW_ENTRY] >= 1);
     m.rows = flipped_lever_rows;
     v = check_meas(&m, &truth);
-    print_message("refused as it should be, the lever arm's sign flipped: %d values, first "
-                  "%s\n", v.n_bad, v.first);
-    assert_true(v.n_bad >= 1);
+    print_message("refused as it should be, the lever arm's sign flipped: %d row entries, %d "
+                  "innovations (%s)\n", v.n_bad[ROW_ENTRY], v.n_bad[INNOVATION],
+                  v.first[ROW_ENTRY]);
+    assert_true(v.n_bad[ROW_ENTRY] >= 1 && v.n_bad[INNOVATION] >= 1);
 }
 
 /* ------------------------------------------------------------ standstill ---- */
