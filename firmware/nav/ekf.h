@@ -132,6 +132,83 @@ nav_real_t ekf_sigma_h_m(const ekf_t *k);
 #define ekf_zero_velocity NAV_SYM(ekf_zero_velocity)
 #define ekf_zero_rate NAV_SYM(ekf_zero_rate)
 
+/* ---------------------------------------------------------- measurement rows ----
+ * The row builders the updates below use, public so that tests/test_ekf_rows.c can check
+ * every row against a numerical derivative of its measurement function (docs/kalman.md,
+ * "How the measurement rows are checked"). Each fills rows h (EKF_N entries each, with the
+ * error state x of this file: z ~ h x) and innovations z = predicted - measured, in the
+ * units and frame of its name. They read the navigator and estimates and change nothing.
+ * The rows follow from the psi-angle definition C_bn(computed) = (I - [psi x]) C_bn(true)
+ * (Titterton & Weston sec. 12.3): for a body vector a and an ENU vector b,
+ *   C(computed) a = C a + [(C a) x] psi,   C(computed)^T b = C^T b - C^T [b x] psi
+ * to first order; the products of errors are dropped. */
+#define EKF_GNSS_POS_ROWS 3
+#define EKF_GNSS_VEL_ROWS 3
+#define EKF_ODO_ROWS 3
+#define EKF_ZUPT_ROWS 3
+#define EKF_ZARU_ROWS 1
+/* the odometer rows, in the order ekf_rows_odometer fills them (car frame axes) */
+enum {
+    EKF_ODO_LATERAL = 0,  /* non-holonomic: the car's lateral (x) velocity is zero */
+    EKF_ODO_VERTICAL = 1, /* non-holonomic: the car's vertical (z) velocity is zero */
+    EKF_ODO_FORWARD = 2,  /* the odometer's forward (y) speed */
+};
+#define ekf_rows_gnss_position NAV_SYM(ekf_rows_gnss_position)
+#define ekf_rows_gnss_velocity NAV_SYM(ekf_rows_gnss_velocity)
+#define ekf_rows_odometer NAV_SYM(ekf_rows_odometer)
+#define ekf_rows_zero_velocity NAV_SYM(ekf_rows_zero_velocity)
+#define ekf_rows_zero_rate NAV_SYM(ekf_rows_zero_rate)
+
+/* GNSS antenna position. In: the navigator s (attitude C = C_bn), its position pos_then at
+ * the fix's time of validity, the measured antenna position meas, the antenna at
+ * lever_b_m (body axes, m) from the IMU. Out: z_enu_m = (pos_then - meas) in ENU metres
+ * (dr_local_m, at meas) + C lever_b, and the rows (m per unit of each state)
+ *   z = dr + [(C l_b) x] psi:  h[i] = e_i on dr,  h[.][psi] = [(C l_b) x]. */
+void ekf_rows_gnss_position(const sins_t *s, const geo_pos_t *pos_then, const geo_pos_t *meas,
+                            const nav_real_t lever_b_m[3], nav_real_t h[EKF_GNSS_POS_ROWS][EKF_N],
+                            nav_real_t z_enu_m[EKF_GNSS_POS_ROWS]);
+
+/* GNSS velocity. In: the navigator's velocity at the fix's time v_then_mps and the
+ * measured velocity meas_mps (ENU, m/s). Out: z_enu_mps = v_then - meas and the rows
+ *   z = dv:  h[i] = e_i on dv. */
+void ekf_rows_gnss_velocity(const nav_real_t v_then_mps[3], const nav_real_t meas_mps[3],
+                            nav_real_t h[EKF_GNSS_VEL_ROWS][EKF_N],
+                            nav_real_t z_enu_mps[EKF_GNSS_VEL_ROWS]);
+
+/* Odometer speed and non-holonomic constraints, rows EKF_ODO_*. In: the estimates of k
+ * (k, mount_pitch_rad = mp, mount_yaw_rad = my), the navigator s (C = C_bn, v = v_n_mps,
+ * ENU m/s), the body rate w_b_rps (body, rad/s), the reference point at lever_b_m (body,
+ * m) from the IMU, the speed read speed_mps ((1 + k) x true, m/s). With the reference
+ * point's velocity in IMU axes v_b = C^T v + w_b x l_b, out z_car_mps (m/s):
+ *   lateral  = v_b,x + my v_b,y          (the car's x axis is the IMU's turned by my)
+ *   vertical = v_b,z + mp v_b,y          (its z axis, turned by mp)
+ *   forward  = (1 + k) v_b,y - speed_mps
+ * and, with M = C^T and N = -C^T [v x] (the psi identity above), the rows
+ *   lateral:  M_x dv + N_x psi + v_b,y d(my)
+ *   vertical: M_z dv + N_z psi + v_b,y d(mp)
+ *   forward:  (1 + k)(M_y dv + N_y psi) + v_b,y dk
+ * (M_x: row x of M). Neglected: the gyro bias in w_b (entries e_j x l_b on bg: |bg| |l_b|,
+ * 1e-4 m/s for a 10 deg/h bias and a 2 m arm), and the mounting angles' own part of the dv
+ * and psi entries (lateral my (M_y dv + N_y psi), vertical mp (M_y dv + N_y psi), forward
+ * -(1 + k)(my (M_x dv + N_x psi) + mp (M_z dv + N_z psi)): relative to the entries, of
+ * the size of the mounting angle in rad). */
+void ekf_rows_odometer(const ekf_t *k, const sins_t *s, const nav_real_t w_b_rps[3],
+                       const nav_real_t lever_b_m[3], nav_real_t speed_mps,
+                       nav_real_t h[EKF_ODO_ROWS][EKF_N], nav_real_t z_car_mps[EKF_ODO_ROWS]);
+
+/* Zero velocity. In: the navigator s. Out: z_enu_mps = v_n (ENU, m/s: the truth is zero)
+ * and the rows z = dv: h[i] = e_i on dv. */
+void ekf_rows_zero_velocity(const sins_t *s, nav_real_t h[EKF_ZUPT_ROWS][EKF_N],
+                            nav_real_t z_enu_mps[EKF_ZUPT_ROWS]);
+
+/* Zero rate. In: the bias-compensated z gyro rate minus the Earth's rate on the body z
+ * axis, residual_rate_z_rps (rad/s; the truth at a standstill is zero). Out: z_rps =
+ * residual and the row z = bg_z: h = e_z on bg. Neglected: the attitude and latitude
+ * errors of the Earth's rate removed, (C^T [w_ie x] psi)_z: below |w_ie| |psi|, 7e-8
+ * rad/s for a 1 mrad attitude error. */
+void ekf_rows_zero_rate(nav_real_t residual_rate_z_rps, nav_real_t h[EKF_ZARU_ROWS][EKF_N],
+                        nav_real_t z_rps[EKF_ZARU_ROWS]);
+
 /* GNSS antenna position meas (lat/lon/height) for the navigator at pos_then (its position
  * at the fix's time of validity), antenna at lever_b (body, m) from the IMU; 1-sigma
  * horizontal and vertical error (m), against which the innovation is gated; the update

@@ -1,5 +1,8 @@
 /*
- * ekf_meas.c - the measurements of the 18-state filter (ekf.h, docs/kalman.md).
+ * ekf_meas.c - the measurements of the 18-state filter (ekf.h, docs/kalman.md): for each,
+ * a row builder (ekf_rows_*: rows h and innovations z, also called by the tests that check
+ * each row against a numerical derivative, tests/test_ekf_rows.c) and the update that
+ * gates and applies them.
  */
 #include "dr.h"
 #include "ekf.h"
@@ -62,34 +65,43 @@ static int apply_rows(ekf_t *k, nav_real_t H[][EKF_N], const nav_real_t *z, cons
     return apply_rows_scaled(k, H, z, r, n, gate_sigma, NAV_C(1.0));
 }
 
+void ekf_rows_gnss_position(const sins_t *s, const geo_pos_t *pos_then, const geo_pos_t *meas,
+                            const nav_real_t lever_b_m[3], nav_real_t h[EKF_GNSS_POS_ROWS][EKF_N],
+                            nav_real_t z_enu_m[EKF_GNSS_POS_ROWS])
+{
+    mat3_t C;
+    quat_to_dcm(s->q_bn, &C);
+    nav_real_t l_n[3];
+    mat3_mul_vec(&C, lever_b_m, l_n);
+    nav_real_t e, n;
+    dr_local_m(meas, pos_then, &e, &n); /* navigator minus measurement, metres */
+    const nav_real_t u = (nav_real_t)(pos_then->h - meas->h) / (nav_real_t)GEO_LSB_PER_MM *
+                         NAV_C(0.001);
+    z_enu_m[0] = e + l_n[0];
+    z_enu_m[1] = n + l_n[1];
+    z_enu_m[2] = u + l_n[2];
+    for (int m = 0; m < 3; m++) {
+        zero_row(h[m]);
+        h[m][EKF_DR + m] = NAV_C(1.0);
+    }
+    /* d(C l) = [(C l) x] psi */
+    h[0][EKF_PSI + 1] = -l_n[2];
+    h[0][EKF_PSI + 2] = l_n[1];
+    h[1][EKF_PSI + 0] = l_n[2];
+    h[1][EKF_PSI + 2] = -l_n[0];
+    h[2][EKF_PSI + 0] = -l_n[1];
+    h[2][EKF_PSI + 1] = l_n[0];
+}
+
 int ekf_gnss_position(ekf_t *k, const sins_t *s, const geo_pos_t *pos_then,
                       const geo_pos_t *meas, const nav_real_t lever_b[3], nav_real_t sigma_h_m,
                       nav_real_t sigma_v_m, nav_real_t gate_sigma, nav_real_t r_scale,
                       int use_height)
 {
-    mat3_t C;
-    quat_to_dcm(s->q_bn, &C);
-    nav_real_t l_n[3];
-    mat3_mul_vec(&C, lever_b, l_n);
-    nav_real_t e, n;
-    dr_local_m(meas, pos_then, &e, &n); /* navigator minus measurement, metres */
-    const nav_real_t u = (nav_real_t)(pos_then->h - meas->h) / (nav_real_t)GEO_LSB_PER_MM *
-                         NAV_C(0.001);
-    const nav_real_t z[3] = {e + l_n[0], n + l_n[1], u + l_n[2]};
+    nav_real_t H[MAX_ROWS][EKF_N], z[3];
+    ekf_rows_gnss_position(s, pos_then, meas, lever_b, H, z);
     const nav_real_t r[3] = {sigma_h_m * sigma_h_m, sigma_h_m * sigma_h_m,
                              sigma_v_m * sigma_v_m};
-    nav_real_t H[MAX_ROWS][EKF_N];
-    for (int m = 0; m < 3; m++) {
-        zero_row(H[m]);
-        H[m][EKF_DR + m] = NAV_C(1.0);
-    }
-    /* d(C l) = [(C l) x] psi */
-    H[0][EKF_PSI + 1] = -l_n[2];
-    H[0][EKF_PSI + 2] = l_n[1];
-    H[1][EKF_PSI + 0] = l_n[2];
-    H[1][EKF_PSI + 2] = -l_n[0];
-    H[2][EKF_PSI + 0] = -l_n[1];
-    H[2][EKF_PSI + 1] = l_n[0];
     /* horizontal and vertical gated apart: a height offset (datum, a receiver without
      * heights) must not lock out the horizontal fix */
     const int nh = apply_rows_scaled(k, H, z, r, 2, gate_sigma, r_scale);
@@ -100,23 +112,32 @@ int ekf_gnss_position(ekf_t *k, const sins_t *s, const geo_pos_t *pos_then,
     return nv < 0 ? nv : nh + nv;
 }
 
+void ekf_rows_gnss_velocity(const nav_real_t v_then_mps[3], const nav_real_t meas_mps[3],
+                            nav_real_t h[EKF_GNSS_VEL_ROWS][EKF_N],
+                            nav_real_t z_enu_mps[EKF_GNSS_VEL_ROWS])
+{
+    for (int m = 0; m < 3; m++) {
+        zero_row(h[m]);
+        h[m][EKF_DV + m] = NAV_C(1.0);
+        z_enu_mps[m] = v_then_mps[m] - meas_mps[m];
+    }
+}
+
 int ekf_gnss_velocity(ekf_t *k, const nav_real_t v_then_mps[3], const nav_real_t meas_mps[3],
                       nav_real_t sigma_h_mps, nav_real_t sigma_v_mps, nav_real_t gate_sigma)
 {
     nav_real_t H[MAX_ROWS][EKF_N];
     nav_real_t z[3], r[3];
+    ekf_rows_gnss_velocity(v_then_mps, meas_mps, H, z);
     for (int m = 0; m < 3; m++) {
-        zero_row(H[m]);
-        H[m][EKF_DV + m] = NAV_C(1.0);
-        z[m] = v_then_mps[m] - meas_mps[m];
         r[m] = m < 2 ? sigma_h_mps * sigma_h_mps : sigma_v_mps * sigma_v_mps;
     }
     return apply_rows(k, H, z, r, 3, gate_sigma);
 }
 
-int ekf_odometer(ekf_t *k, const sins_t *s, const nav_real_t w_b_rps[3],
-                 const nav_real_t lever_b_m[3], nav_real_t speed_mps, nav_real_t sigma_fwd_mps,
-                 nav_real_t sigma_nhc_mps, nav_real_t gate_sigma)
+void ekf_rows_odometer(const ekf_t *k, const sins_t *s, const nav_real_t w_b_rps[3],
+                       const nav_real_t lever_b_m[3], nav_real_t speed_mps,
+                       nav_real_t h[EKF_ODO_ROWS][EKF_N], nav_real_t z_car_mps[EKF_ODO_ROWS])
 {
     mat3_t C;
     quat_to_dcm(s->q_bn, &C);
@@ -139,48 +160,69 @@ int ekf_odometer(ekf_t *k, const sins_t *s, const nav_real_t w_b_rps[3],
     }
     const nav_real_t my = k->mount_yaw_rad, mp = k->mount_pitch_rad;
     const nav_real_t scale = NAV_C(1.0) + k->k;
-    nav_real_t H[MAX_ROWS][EKF_N], z[3], r[3];
     /* car frame: lateral v_b,x + my v_b,y = 0; vertical v_b,z + mp v_b,y = 0;
      * forward (1 + k) v_b,y = speed read */
-    const int axis[3] = {0, 2, 1};
+    const int axis[EKF_ODO_ROWS] = {0, 2, 1}; /* lateral x, vertical z, forward y */
     for (int m = 0; m < 3; m++) {
         const int i = axis[m];
-        const nav_real_t g = m == 2 ? scale : NAV_C(1.0);
-        zero_row(H[m]);
+        const nav_real_t g = m == EKF_ODO_FORWARD ? scale : NAV_C(1.0);
+        zero_row(h[m]);
         for (int j = 0; j < 3; j++) {
-            H[m][EKF_DV + j] = g * C.m[j][i];
-            H[m][EKF_PSI + j] = g * N[i][j];
+            h[m][EKF_DV + j] = g * C.m[j][i];
+            h[m][EKF_PSI + j] = g * N[i][j];
         }
     }
-    H[0][EKF_MY] = v_b[1];
-    H[1][EKF_MP] = v_b[1];
-    H[2][EKF_K] = v_b[1];
-    z[0] = v_b[0] + my * v_b[1];
-    z[1] = v_b[2] + mp * v_b[1];
-    z[2] = scale * v_b[1] - speed_mps;
-    r[0] = r[1] = sigma_nhc_mps * sigma_nhc_mps;
-    r[2] = sigma_fwd_mps * sigma_fwd_mps;
+    h[EKF_ODO_LATERAL][EKF_MY] = v_b[1];
+    h[EKF_ODO_VERTICAL][EKF_MP] = v_b[1];
+    h[EKF_ODO_FORWARD][EKF_K] = v_b[1];
+    z_car_mps[EKF_ODO_LATERAL] = v_b[0] + my * v_b[1];
+    z_car_mps[EKF_ODO_VERTICAL] = v_b[2] + mp * v_b[1];
+    z_car_mps[EKF_ODO_FORWARD] = scale * v_b[1] - speed_mps;
+}
+
+int ekf_odometer(ekf_t *k, const sins_t *s, const nav_real_t w_b_rps[3],
+                 const nav_real_t lever_b_m[3], nav_real_t speed_mps, nav_real_t sigma_fwd_mps,
+                 nav_real_t sigma_nhc_mps, nav_real_t gate_sigma)
+{
+    nav_real_t H[MAX_ROWS][EKF_N], z[3], r[3];
+    ekf_rows_odometer(k, s, w_b_rps, lever_b_m, speed_mps, H, z);
+    r[EKF_ODO_LATERAL] = r[EKF_ODO_VERTICAL] = sigma_nhc_mps * sigma_nhc_mps;
+    r[EKF_ODO_FORWARD] = sigma_fwd_mps * sigma_fwd_mps;
     return apply_rows(k, H, z, r, 3, gate_sigma);
+}
+
+void ekf_rows_zero_velocity(const sins_t *s, nav_real_t h[EKF_ZUPT_ROWS][EKF_N],
+                            nav_real_t z_enu_mps[EKF_ZUPT_ROWS])
+{
+    for (int m = 0; m < 3; m++) {
+        zero_row(h[m]);
+        h[m][EKF_DV + m] = NAV_C(1.0);
+        z_enu_mps[m] = s->v_n_mps[m];
+    }
 }
 
 int ekf_zero_velocity(ekf_t *k, const sins_t *s, nav_real_t sigma_mps, nav_real_t gate_sigma)
 {
     nav_real_t H[MAX_ROWS][EKF_N], z[3], r[3];
+    ekf_rows_zero_velocity(s, H, z);
     for (int m = 0; m < 3; m++) {
-        zero_row(H[m]);
-        H[m][EKF_DV + m] = NAV_C(1.0);
-        z[m] = s->v_n_mps[m];
         r[m] = sigma_mps * sigma_mps;
     }
     return apply_rows(k, H, z, r, 3, gate_sigma);
 }
 
+void ekf_rows_zero_rate(nav_real_t residual_rate_z_rps, nav_real_t h[EKF_ZARU_ROWS][EKF_N],
+                        nav_real_t z_rps[EKF_ZARU_ROWS])
+{
+    zero_row(h[0]);
+    h[0][EKF_BG + 2] = NAV_C(1.0);
+    z_rps[0] = residual_rate_z_rps;
+}
+
 int ekf_zero_rate(ekf_t *k, nav_real_t residual_rate_z_rps, nav_real_t sigma_rps)
 {
-    nav_real_t H[MAX_ROWS][EKF_N];
-    zero_row(H[0]);
-    H[0][EKF_BG + 2] = NAV_C(1.0);
-    const nav_real_t z[1] = {residual_rate_z_rps};
+    nav_real_t H[MAX_ROWS][EKF_N], z[1];
+    ekf_rows_zero_rate(residual_rate_z_rps, H, z);
     const nav_real_t r[1] = {sigma_rps * sigma_rps};
     return apply_rows(k, H, z, r, 1, NAV_C(0.0));
 }
