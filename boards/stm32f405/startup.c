@@ -18,7 +18,7 @@ extern uint32_t _sidata[]; /* load address of .data in flash */
 extern uint32_t _sdata[], _edata[], _sbss[], _ebss[];
 extern uint32_t _estack[]; /* initial stack pointer: the end of RAM */
 
-/* the board's entry point (main_stm32.c or main_qemu.c) */
+/* the board's entry point (boards/stm32f405/main.c or boards/qemu/main.c) */
 void board_main(void) __attribute__((noreturn));
 
 void Reset_Handler(void) __attribute__((noreturn));
@@ -26,7 +26,7 @@ void default_handler(void);
 
 /* What an unexpected exception does: the ECU resets itself (SCB AIRCR SYSRESETREQ,
  * ARMv7-M B3.2.6), since the watchdog may not run yet this early; the QEMU image exits
- * with a failure status instead (main_qemu.c). Weak: a board may define its own. */
+ * with a failure status instead (boards/qemu/main.c). Weak: a board may define its own. */
 void board_fault(void);
 __attribute__((weak)) void board_fault(void)
 {

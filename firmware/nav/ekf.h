@@ -105,7 +105,7 @@ int ekf_feedback(ekf_t *k, sins_t *s);
 /* Symmetrise P, hold its diagonal at or above the floor, reset it if not finite; each
  * correction counted in n_health_fixes, a non-finite P also in n_nonfinite and a negative
  * variance (not just rounding below the floor) in n_negative_var: the signs of a diverged
- * filter, which the application resets (app.c, filter supervision). Returns the number of
+ * filter, which the application resets (fusion.c, filter supervision). Returns the number of
  * corrections made. */
 uint32_t ekf_health(ekf_t *k);
 
