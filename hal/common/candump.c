@@ -318,3 +318,21 @@ int candump_read(candump_next_byte_t next, void *ctx, char *line, size_t cap,
         }
     }
 }
+
+int candump_replay(candump_rx_t *rx, candump_next_byte_t next, void *ctx, char *line,
+                   size_t cap, hal_can_frame_t *f)
+{
+    if (rx->eof != 0u) {
+        return HAL_ENODATA;
+    }
+    const int rc = candump_read(next, ctx, line, cap, f, &rx->malformed);
+    if (rc == HAL_ENODATA) {
+        rx->eof = 1u;
+    } else if (rc == 0) {
+        rx->t_us = f->t_us;
+        rx->frames = rx->frames == UINT32_MAX ? rx->frames : rx->frames + 1u;
+    } else {
+        /* HAL_EIO: returned as it is */
+    }
+    return rc;
+}

@@ -74,4 +74,20 @@ typedef int (*candump_next_byte_t)(void *ctx);
 int candump_read(candump_next_byte_t next, void *ctx, char *line, size_t cap,
                  hal_can_frame_t *f, uint32_t *malformed);
 
+/* A log replayed as CAN receive: its clock (the last frame's timestamp, 0 before any),
+ * the malformed lines skipped and the frames returned (both saturating), and its end. */
+typedef struct {
+    uint64_t t_us;
+    uint32_t malformed;
+    uint32_t frames;
+    uint8_t eof;
+} candump_rx_t;
+
+/*
+ * The next frame of a replay: HAL_ENODATA once the source has ended (it is not read
+ * again), else candump_read's result; a frame sets the replay's clock and is counted.
+ */
+int candump_replay(candump_rx_t *rx, candump_next_byte_t next, void *ctx, char *line,
+                   size_t cap, hal_can_frame_t *f);
+
 #endif /* NAVECU_CANDUMP_H */

@@ -18,12 +18,12 @@ int hal_semihost_open(hal_t *hal, const char *rx_path, const char *tx_path)
     }
     hal->rx = -1;
     hal->tx = -1;
-    hal->t_us = 0u;
+    hal->rx_log.t_us = 0u;
     hal->watchdog_kicks = 0u;
-    hal->rx_malformed = 0u;
-    hal->rx_frames = 0u;
+    hal->rx_log.malformed = 0u;
+    hal->rx_log.frames = 0u;
     hal->tx_frames = 0u;
-    hal->rx_eof = 0u;
+    hal->rx_log.eof = 0u;
     hal->tx_error = 0u;
     hal->rx_pos = 0u;
     hal->rx_len = 0u;
@@ -95,30 +95,20 @@ int hal_can_receive(hal_t *hal, hal_can_frame_t *f)
     if (hal == NULL || f == NULL) {
         return HAL_EINVAL;
     }
-    if (hal->rx < 0 || hal->rx_eof != 0u) {
+    if (hal->rx < 0) {
         return HAL_ENODATA;
     }
-    const int rc = candump_read(rx_byte, hal, hal->line, HAL_SEMIHOST_LINE_MAX, f,
-                                &hal->rx_malformed);
-    if (rc == HAL_ENODATA) {
-        hal->rx_eof = 1u;
-    } else if (rc == 0) {
-        hal->t_us = f->t_us;
-        hal->rx_frames = sat_inc_u32(hal->rx_frames);
-    } else {
-        /* HAL_EIO: returned as it is */
-    }
-    return rc;
+    return candump_replay(&hal->rx_log, rx_byte, hal, hal->line, HAL_SEMIHOST_LINE_MAX, f);
 }
 
 uint32_t hal_can_rx_malformed(const hal_t *hal)
 {
-    return hal->rx_malformed;
+    return hal->rx_log.malformed;
 }
 
 uint64_t hal_time_us(const hal_t *hal)
 {
-    return hal->t_us;
+    return hal->rx_log.t_us;
 }
 
 int hal_can_send(hal_t *hal, const hal_can_frame_t *f)
@@ -135,7 +125,7 @@ int hal_can_send(hal_t *hal, const hal_can_frame_t *f)
             return HAL_EIO;
         }
         const size_t len = candump_format_line(hal->tx_buf + hal->tx_len,
-                                               HAL_SEMIHOST_TX_BUF - hal->tx_len, hal->t_us,
+                                               HAL_SEMIHOST_TX_BUF - hal->tx_len, hal->rx_log.t_us,
                                                "can0", f);
         if (len == 0u) {
             return HAL_EIO; /* cannot happen: the frame was checked, the buffer has room */

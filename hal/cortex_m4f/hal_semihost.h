@@ -30,12 +30,9 @@
 struct hal {
     int32_t rx;              /* semihosting handle of the RX log; -1: none */
     int32_t tx;              /* semihosting handle of the TX log; -1: discarded */
-    uint64_t t_us;           /* timestamp of the last frame received */
+    candump_rx_t rx_log;     /* the replay's clock, malformed lines, frames, end */
     uint64_t watchdog_kicks;
-    uint32_t rx_malformed;   /* saturating */
-    uint32_t rx_frames;
     uint32_t tx_frames;
-    uint8_t rx_eof;
     uint8_t tx_error;        /* a host write failed: every later send returns HAL_EIO */
     size_t rx_pos;           /* next unread byte of rx_buf */
     size_t rx_len;           /* bytes in rx_buf */

@@ -50,30 +50,20 @@ int hal_can_receive(hal_t *hal, hal_can_frame_t *f)
     if (hal->can_fd >= 0) {
         return hal_socketcan_receive(hal, f);
     }
-    if (hal->rx == NULL || hal->rx_eof != 0u) {
+    if (hal->rx == NULL) {
         return HAL_ENODATA;
     }
-    const int rc = candump_read(file_next_byte, hal->rx, hal->line, HAL_LINUX_LINE_MAX, f,
-                                &hal->rx_malformed);
-    if (rc == HAL_ENODATA) {
-        hal->rx_eof = 1u;
-    } else if (rc == 0) {
-        hal->t_us = f->t_us;
-        hal->rx_frames = sat_inc_u32(hal->rx_frames);
-    } else {
-        /* HAL_EIO: returned as it is */
-    }
-    return rc;
+    return candump_replay(&hal->rx_log, file_next_byte, hal->rx, hal->line, HAL_LINUX_LINE_MAX, f);
 }
 
 uint32_t hal_can_rx_malformed(const hal_t *hal)
 {
-    return hal->rx_malformed;
+    return hal->rx_log.malformed;
 }
 
 uint64_t hal_time_us(const hal_t *hal)
 {
-    return hal->can_fd >= 0 ? hal_socketcan_time_us() : hal->t_us;
+    return hal->can_fd >= 0 ? hal_socketcan_time_us() : hal->rx_log.t_us;
 }
 
 int hal_can_send(hal_t *hal, const hal_can_frame_t *f)
@@ -275,7 +265,7 @@ void hal_linux_close(hal_t *hal)
         (void)fclose(hal->nvm_file);
         hal->nvm_file = NULL;
     }
-    hal->rx_eof = 1u;
+    hal->rx_log.eof = 1u;
 }
 
 void hal_linux_set_iface(hal_t *hal, const char *name)
@@ -308,7 +298,7 @@ uint64_t hal_linux_watchdog_kicks(const hal_t *hal)
 
 uint32_t hal_linux_rx_frames(const hal_t *hal)
 {
-    return hal->rx_frames;
+    return hal->rx_log.frames;
 }
 
 uint32_t hal_linux_tx_frames(const hal_t *hal)

@@ -33,13 +33,11 @@ struct hal {
     FILE *rx;                 /* candump log replayed as CAN receive; NULL: none */
     FILE *tx;                 /* candump log transmitted frames go to; NULL: discarded */
     FILE *nvm_file;           /* file behind the NVM region; NULL: in memory only */
-    uint64_t t_us;            /* timestamp of the last frame received, 0 before any */
+    candump_rx_t rx_log;      /* the replay's clock, malformed lines, frames, end; the
+                                 live socket keeps its clock and counts here too */
     uint64_t watchdog_kicks;  /* hal_watchdog_kick calls since open */
     uint64_t last_kick_us;    /* HAL time of the last kick */
-    uint32_t rx_malformed;    /* malformed RX lines skipped (saturates at UINT32_MAX) */
-    uint32_t rx_frames;       /* frames returned by hal_can_receive (saturates) */
     uint32_t tx_frames;       /* frames accepted by hal_can_send (saturates) */
-    uint8_t rx_eof;           /* 1: the RX log is exhausted, HAL_ENODATA from now on */
     char iface[HAL_LINUX_IFACE_MAX + 1u]; /* interface name written in the TX log */
     char line[HAL_LINUX_LINE_MAX];        /* RX line buffer, not NUL-terminated */
     uint8_t nvm[HAL_LINUX_NVM_SIZE];      /* the NVM region (mirror of nvm_file) */

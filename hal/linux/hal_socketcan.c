@@ -79,7 +79,7 @@ int hal_socketcan_open(hal_t *hal, const char *ifname, const uint32_t *rx_ids, s
         return HAL_EIO;
     }
     hal->can_fd = fd;
-    hal->t_us = hal_socketcan_time_us();
+    hal->rx_log.t_us = hal_socketcan_time_us();
     return 0;
 }
 
@@ -117,16 +117,16 @@ int hal_socketcan_receive(hal_t *hal, hal_can_frame_t *f)
             return HAL_EAGAIN;
         }
         if ((size_t)n != sizeof cf) {
-            hal->rx_malformed = sat_inc(hal->rx_malformed); /* not a classic frame */
+            hal->rx_log.malformed = sat_inc(hal->rx_log.malformed); /* not a classic frame */
             continue;
         }
         if (cf.can_id & CAN_ERR_FLAG) {
             hal->can_error_frames = sat_inc(hal->can_error_frames);
-            hal->rx_malformed = sat_inc(hal->rx_malformed);
+            hal->rx_log.malformed = sat_inc(hal->rx_log.malformed);
             continue;
         }
         if ((cf.can_id & CAN_RTR_FLAG) || cf.can_dlc > 8u) {
-            hal->rx_malformed = sat_inc(hal->rx_malformed);
+            hal->rx_log.malformed = sat_inc(hal->rx_log.malformed);
             continue;
         }
         uint64_t t = hal_socketcan_time_us();
@@ -144,8 +144,8 @@ int hal_socketcan_receive(hal_t *hal, hal_can_frame_t *f)
         f->dlc = cf.can_dlc;
         memcpy(f->data, cf.data, cf.can_dlc);
         f->t_us = t;
-        hal->t_us = t;
-        hal->rx_frames = sat_inc(hal->rx_frames);
+        hal->rx_log.t_us = t;
+        hal->rx_log.frames = sat_inc(hal->rx_log.frames);
         return 0;
     }
 }
