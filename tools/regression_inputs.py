@@ -20,6 +20,9 @@ IMU, standalone GNSS, seed 1, tools/sim/run.py firmware_args):
   exceeds (saturation counted and flagged);
 - sim-watchdog: the same log with a stuck task from 100 s on (--test-stall-poll-s): the
   emulated watchdog expires, exit status 3;
+- sim-dgnss: the first 180 s of tools/sim/scenarios/regress-dgnss.toml, the drive with an automotive MEMS IMU
+  (its large gyro bias in the filter's options) and differential GNSS (fixes accurate
+  enough for the filter's GNSS sigma floor);
 - sim-faults: the drive with faults at once (FAULTS below): a stuck gyro, locked and
   spinning wheels, GNSS jumps, a frozen fix, a latency spike and a time-of-week jump, lost
   IMU samples bridged, IMU gaps too long to bridge (re-acquired from GNSS, moving and
@@ -65,6 +68,7 @@ ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "tests" / "regression"
 SCENARIO = "regress"
 KINGSTON_S = 900.0
+DGNSS_S = 180.0      # sim-dgnss to the red light: the automotive IMU's noise compresses less
 # frame order key of the commands sent mid-drive: after run.frames' (0..10) at equal times
 O_CMD = 11
 
@@ -149,8 +153,8 @@ def raw_frame(t, frame_id, data, extended=False) -> can.Message:
 
 
 # ======================================================================== the cases
-def sim_drive():
-    return faults.build_drive(SCENARIO, seed=1, imu_rate_hz=100, log=print)
+def sim_drive(scenario=SCENARIO):
+    return faults.build_drive(scenario, seed=1, imu_rate_hz=100, log=print)
 
 
 def sim_args(drive) -> list:
@@ -400,6 +404,14 @@ def main(argv=None) -> int:
                   "args": args + ["--test-stall-poll-s", "100"],
                   "what": "sim-clean's log with app_poll stopped at 100 s: the watchdog "
                           "expires, exit status 3"})
+
+    dgnss = sim_drive(SCENARIO + "-dgnss")
+    cases.append({"name": "sim-dgnss", "nvm": None, "args": sim_args(dgnss),
+                  "input": write_log("sim-dgnss", candump_text(
+                      m for m in dgnss.messages if m.timestamp <= DGNSS_S)),
+                  "what": f"the first {DGNSS_S:g} s of tools/sim/scenarios/regress-dgnss.toml "
+                          "as make sim runs it: the regress drive with an automotive IMU and "
+                          "differential GNSS"})
 
     text, info = faulty_drive(drive)
     rng = np.random.default_rng(np.random.SeedSequence([1, 4096]))
