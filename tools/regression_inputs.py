@@ -379,7 +379,9 @@ def main(argv=None) -> int:
     ap.add_argument("--navecu", default=str(ROOT / "build" / "host" / "navecu"))
     a = ap.parse_args(argv)
     out = Path(a.out)
-    inputs = out / "inputs"
+    # built beside the committed inputs, which are replaced only when all are built (the
+    # Kingston data may be missing, a case may fail)
+    inputs = out / "inputs.new"
     if inputs.exists():
         shutil.rmtree(inputs)
     inputs.mkdir(parents=True)
@@ -445,6 +447,9 @@ def main(argv=None) -> int:
                           + ", ".join(f"{o[0]:g}-{o[1]:g} s" for o in outages)})
     for c in cases:
         c["args"] = args_text(c["args"])
+    if (out / "inputs").exists():
+        shutil.rmtree(out / "inputs")
+    inputs.rename(out / "inputs")
     (out / "cases.json").write_text(regression.to_json({
         "about": "tools/regression_inputs.py wrote this and inputs/; tools/regression.py "
                  "replays them (docs/regression.md)", "cases": cases}) + "\n")
