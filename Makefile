@@ -1,7 +1,7 @@
 # navecu - top-level build. `make` builds the host firmware (build/host/navecu);
 # `make test` builds and runs every test: C unit tests plainly and under
-# AddressSanitizer + UBSan, the Python tests, the codec/doc freshness checks and the
-# Cortex-M4F cross-build. See README.md.
+# AddressSanitizer + UBSan, the Python tests, the replay regression, the codec/doc
+# freshness checks and the Cortex-M4F cross-build. See README.md.
 
 CC ?= cc
 BUILD := build
@@ -57,8 +57,8 @@ all: $(BUILD)/host/navecu
 
 help:
 	@echo "make               build the host firmware: build/host/navecu (see --help)"
-	@echo "make test          all tests: C plain and ASan+UBSan, Python, codec, M4F build,"
-	@echo "                   the M4F image on QEMU bit-exact, the M4F budget, fuzz"
+	@echo "make test          all tests: C plain and ASan+UBSan, Python, replay regression,"
+	@echo "                   codec, M4F build, the M4F image on QEMU bit-exact, the M4F budget, fuzz"
 	@echo "                   regressions, static analysis (make lint)"
 	@echo "make sim           simulate a drive, run the firmware, report accuracy and plots"
 	@echo "                   (SCENARIO=name for another tools/sim/scenarios/name.toml;"
@@ -73,6 +73,9 @@ help:
 	@echo "make target-test   the M4F image on QEMU, output frames identical to the host's"
 	@echo "make target-bench  instruction counts on QEMU -> out/target-bench.json, CPU load"
 	@echo "make target-budget flash, RAM, stack, no heap, no double -> out/target-budget.json"
+	@echo "make regression    the firmware's output on committed CAN logs vs tests/regression/"
+	@echo "                   expected.json (docs/regression.md); make regression-update after"
+	@echo "                   an intended change, committed with it"
 	@echo "make lint          cppcheck MISRA C:2012, clang-tidy, gcc -fanalyzer (docs/misra.md)"
 	@echo "make fuzz          every libFuzzer harness FUZZ_SECONDS (60) -> out/fuzz.json"
 	@echo "make faults        the default drive with each fault injected -> docs/reliability.md"
@@ -172,6 +175,7 @@ test: deps
 	$(MAKE) test-plain
 	$(MAKE) test-asan
 	$(MAKE) test-python
+	$(MAKE) regression
 	$(MAKE) test-fuzz-regressions
 	$(MAKE) test-cross
 	$(MAKE) target-check
@@ -312,6 +316,21 @@ vcan:
 .PHONY: bench-latency
 bench-latency: venv $(BUILD)/host/navecu
 	./tools/bench/latency_vcan.sh 60
+
+# ---- replay regression (docs/regression.md): navecu on the committed CAN logs of
+# tests/regression/ (cases.json), each output's SHA-256 and decoded summary against
+# expected.json; fails naming the case with the summary diff. In make test, about 3 s.
+# regression-update rewrites expected.json (each case run twice, refused if the runs
+# differ): commit it with the change that moved the output, saying why.
+# regression-inputs rebuilds the logs from the simulator and the Kingston data
+# (tools/regression_inputs.py): only to add or change a case.
+.PHONY: regression regression-update regression-inputs
+regression: venv $(BUILD)/host/navecu
+	$(PY) -m tools.regression check
+regression-update: venv $(BUILD)/host/navecu
+	$(PY) -m tools.regression update
+regression-inputs: venv $(BUILD)/host/navecu
+	$(PY) -m tools.regression_inputs
 
 # ---- the drive simulator (tools/sim): scenario -> sensors -> CAN log -> firmware -> report
 SCENARIO ?= default

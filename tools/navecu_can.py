@@ -10,7 +10,9 @@ The protocol is firmware/can/navecu.dbc; everything here is derived from it:
 - check_imu_pair(r, a, db)  checks one IMU sample, IMU_Rate + IMU_Accel, with the pair CRC;
 - E2EReceiver               checks a stream of frames, pairing the IMU frames by counter;
 - ImuQuantizer              quantises IMU increments with the remainder carried to the next sample;
-- write_candump(path, msgs) writes a candump (.log) file through python-can.
+- write_candump(path, msgs) writes a candump (.log) file through python-can;
+- health_bits, status_signals, counter_max, choices: NAV_Status and NAV_Calibration read
+  back (HealthFlags bit names, the counter pages, value tables).
 
 E2E messages are the ones with a *Crc signal in byte 7 (start bit 56, 8 bits) and one 4-bit
 alive counter (*Counter or GnssEpoch, not multiplexed) in bytes 0..6: CRC over
@@ -26,6 +28,7 @@ bus and log-file operation goes through python-can.
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 from typing import Iterable, Mapping, Optional
 
@@ -34,6 +37,8 @@ import cantools
 from crccheck.crc import Crc8SaeJ1850
 
 DBC_PATH = Path(__file__).resolve().parent.parent / "firmware" / "can" / "navecu.dbc"
+#: the firmware header that names the HealthFlags bits (APP_FLAG_*)
+APP_H = Path(__file__).resolve().parent.parent / "firmware" / "app" / "app.h"
 
 CRC_START_BIT = 56
 #: E2E alive counters run 0..14; 15 is never sent and invalid on reception.
@@ -400,3 +405,56 @@ def write_candump(path, messages: Iterable[can.Message]) -> int:
 def read_log(path) -> list:
     """All frames of a log file python-can can read (candump .log, .asc, .blf, ...)."""
     return list(can.LogReader(str(path)))
+
+
+# ---------------------------------------------------------------- NAV_Status, read back
+# HealthFlags names when the firmware header does not name a bit (issue #9's names)
+FLAG_NAMES_FALLBACK = {0: "IMU_STALE", 1: "IMU_FAULT", 2: "NO_GNSS", 3: "REJECTED",
+                       4: "NVM_ERROR", 5: "NO_HEADING", 6: "IMU_GAP", 7: "FILTER_RESET"}
+
+
+def counter_max(db) -> dict:
+    """NAV_Status: {signal: the largest value it can carry} of every Cnt* signal."""
+    msg = db.get_message_by_name("NAV_Status")
+    return {s.name: (1 << s.length) - 1 for s in msg.signals if s.name.startswith("Cnt")}
+
+
+def status_signals(db) -> dict:
+    """NAV_Status: {signal: page} of every Cnt* signal."""
+    msg = db.get_message_by_name("NAV_Status")
+    return {s.name: int(s.multiplexer_ids[0]) for s in msg.signals
+            if s.name.startswith("Cnt") and s.multiplexer_ids}
+
+
+def health_bits(db, app_h: Path = APP_H) -> dict:
+    """{bit: (name, description)} of HealthFlags from the DBC comment ("bit N text, bit M
+    text, ..."), named by the firmware's APP_FLAG_* defines where it has one."""
+    sig = db.get_message_by_name("NAV_Status").get_signal_by_name("HealthFlags")
+    text = sig.comment or ""
+    if isinstance(text, dict):
+        text = next(iter(text.values()), "")
+    found = re.findall(r"bit (\d+) (.+?)(?=,\s*bit \d+ |\.?\s*$)", text, flags=re.S)
+    names = {}
+    try:
+        for name, val in re.findall(r"#define APP_FLAG_(\w+)\s+0x([0-9A-Fa-f]+)u?",
+                                    app_h.read_text()):
+            v = int(val, 16)
+            if v and v & (v - 1) == 0:
+                names[v.bit_length() - 1] = name
+    except OSError:
+        pass
+    out = {}
+    for b, desc in found:
+        b = int(b)
+        nm = names.get(b) or FLAG_NAMES_FALLBACK.get(b) or "_".join(
+            re.sub(r"[^A-Za-z0-9 ]", "", desc).upper().split()[:3])
+        out[b] = (nm, desc.strip())
+    for b, nm in names.items():      # bits the firmware sets that the DBC does not list yet
+        out.setdefault(b, (nm, "(not in the DBC comment)"))
+    return out
+
+
+def choices(db, msg: str, sig: str) -> dict:
+    """{raw value: name} of a signal's value table in the DBC (empty without one)."""
+    return {int(k): str(v) for k, v in
+            (db.get_message_by_name(msg).get_signal_by_name(sig).choices or {}).items()}

@@ -59,21 +59,17 @@ import can
 import numpy as np
 
 from tools import navecu_can as nc
+from tools.navecu_can import counter_max, health_bits, status_signals
 from tools.sim import report, run, sensors, trajectory
 
 ROOT = Path(__file__).resolve().parents[2]
 BEGIN = "<!-- BEGIN GENERATED: make faults -->"
 END = "<!-- END GENERATED -->"
-APP_H = ROOT / "firmware" / "app" / "app.h"
 
 RECOVERY_HOLD_S = 10.0       # the error must stay in the band this long
 RECOVERY_FLOOR_M = 1.0       # band: max(floor, factor x clean error at the same instant)
 RECOVERY_FACTOR = 1.5
 LOSS_RMS_LIMIT = 1.5         # frame loss 1 % and 5 %: RMS at most this x the clean run's
-
-# HealthFlags names when the firmware header does not name a bit (issue #9's names)
-FLAG_NAMES_FALLBACK = {0: "IMU_STALE", 1: "IMU_FAULT", 2: "NO_GNSS", 3: "REJECTED",
-                       4: "NVM_ERROR", 5: "NO_HEADING", 6: "IMU_GAP", 7: "FILTER_RESET"}
 
 ORDER_WHEELS = {4}               # run.frames' order keys of each sensor's frames
 ORDER_GNSS = {5, 6, 7, 8}
@@ -714,47 +710,6 @@ def navecu_options(navecu: str) -> str:
         return ""
 
 
-def counter_max(db) -> dict:
-    """NAV_Status: {signal: the largest value it can carry} of every Cnt* signal."""
-    msg = db.get_message_by_name("NAV_Status")
-    return {s.name: (1 << s.length) - 1 for s in msg.signals if s.name.startswith("Cnt")}
-
-
-def status_signals(db) -> dict:
-    """NAV_Status: {signal: page} of every Cnt* signal."""
-    msg = db.get_message_by_name("NAV_Status")
-    return {s.name: int(s.multiplexer_ids[0]) for s in msg.signals
-            if s.name.startswith("Cnt") and s.multiplexer_ids}
-
-
-def health_bits(db, app_h: Path = APP_H) -> dict:
-    """{bit: (name, description)} of HealthFlags from the DBC comment ("bit N text, bit M
-    text, ..."), named by the firmware's APP_FLAG_* defines where it has one."""
-    sig = db.get_message_by_name("NAV_Status").get_signal_by_name("HealthFlags")
-    text = sig.comment or ""
-    if isinstance(text, dict):
-        text = next(iter(text.values()), "")
-    found = re.findall(r"bit (\d+) (.+?)(?=,\s*bit \d+ |\.?\s*$)", text, flags=re.S)
-    names = {}
-    try:
-        for name, val in re.findall(r"#define APP_FLAG_(\w+)\s+0x([0-9A-Fa-f]+)u?",
-                                    app_h.read_text()):
-            v = int(val, 16)
-            if v and v & (v - 1) == 0:
-                names[v.bit_length() - 1] = name
-    except OSError:
-        pass
-    out = {}
-    for b, desc in found:
-        b = int(b)
-        nm = names.get(b) or FLAG_NAMES_FALLBACK.get(b) or "_".join(
-            re.sub(r"[^A-Za-z0-9 ]", "", desc).upper().split()[:3])
-        out[b] = (nm, desc.strip())
-    for b, nm in names.items():      # bits the firmware sets that the DBC does not list yet
-        out.setdefault(b, (nm, "(not in the DBC comment)"))
-    return out
-
-
 def _decoded_finite(nav: dict, cnt_pages: dict) -> bool:
     for name, cols in nav.items():
         if name == "NAV_Status":
@@ -903,11 +858,6 @@ def _last_counters(status, cnt_pages: dict) -> dict:
     return out
 
 
-def _choices(db, msg: str, sig: str) -> dict:
-    return {int(k): str(v) for k, v in
-            (db.get_message_by_name(msg).get_signal_by_name(sig).choices or {}).items()}
-
-
 def detection(db, row: dict, clean: dict, t0: float, bits: dict) -> dict:
     """What the firmware showed of the fault that the clean run never showed."""
     cnt_pages = status_signals(db)
@@ -918,9 +868,9 @@ def detection(db, row: dict, clean: dict, t0: float, bits: dict) -> dict:
     counters = {k: v - c_clean.get(k, 0) for k, v in c_row.items() if v > c_clean.get(k, 0)}
     top = counter_max(db)
     saturated = [k for k in counters if c_row[k] >= top.get(k, math.inf)]
-    mode_names = _choices(db, "NAV_Status", "Mode")
+    mode_names = nc.choices(db, "NAV_Status", "Mode")
     modes = sorted(_modes_seen(row.get("status"), t0) - _modes_seen(clean.get("status"), 0.0))
-    cal_names = _choices(db, "NAV_Calibration", "CalStatus")
+    cal_names = nc.choices(db, "NAV_Calibration", "CalStatus")
 
     def cal_set(r):
         c = r.get("cal") or {}
