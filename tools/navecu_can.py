@@ -28,7 +28,6 @@ bus and log-file operation goes through python-can.
 from __future__ import annotations
 
 import math
-import re
 from pathlib import Path
 from typing import Iterable, Mapping, Optional
 
@@ -37,8 +36,6 @@ import cantools
 from crccheck.crc import Crc8SaeJ1850
 
 DBC_PATH = Path(__file__).resolve().parent.parent / "firmware" / "can" / "navecu.dbc"
-#: the firmware header that names the HealthFlags bits (APP_FLAG_*)
-APP_H = Path(__file__).resolve().parent.parent / "firmware" / "app" / "app.h"
 
 CRC_START_BIT = 56
 #: E2E alive counters run 0..14; 15 is never sent and invalid on reception.
@@ -408,11 +405,6 @@ def read_log(path) -> list:
 
 
 # ---------------------------------------------------------------- NAV_Status, read back
-# HealthFlags names when the firmware header does not name a bit (issue #9's names)
-FLAG_NAMES_FALLBACK = {0: "IMU_STALE", 1: "IMU_FAULT", 2: "NO_GNSS", 3: "REJECTED",
-                       4: "NVM_ERROR", 5: "NO_HEADING", 6: "IMU_GAP", 7: "FILTER_RESET"}
-
-
 def counter_max(db) -> dict:
     """NAV_Status: {signal: the largest value it can carry} of every Cnt* signal."""
     msg = db.get_message_by_name("NAV_Status")
@@ -426,32 +418,20 @@ def status_signals(db) -> dict:
             if s.name.startswith("Cnt") and s.multiplexer_ids}
 
 
-def health_bits(db, app_h: Path = APP_H) -> dict:
-    """{bit: (name, description)} of HealthFlags from the DBC comment ("bit N text, bit M
-    text, ..."), named by the firmware's APP_FLAG_* defines where it has one."""
-    sig = db.get_message_by_name("NAV_Status").get_signal_by_name("HealthFlags")
-    text = sig.comment or ""
-    if isinstance(text, dict):
-        text = next(iter(text.values()), "")
-    found = re.findall(r"bit (\d+) (.+?)(?=,\s*bit \d+ |\.?\s*$)", text, flags=re.S)
-    names = {}
-    try:
-        for name, val in re.findall(r"#define APP_FLAG_(\w+)\s+0x([0-9A-Fa-f]+)u?",
-                                    app_h.read_text()):
-            v = int(val, 16)
-            if v and v & (v - 1) == 0:
-                names[v.bit_length() - 1] = name
-    except OSError:
-        pass
+def health_bits(db) -> dict:
+    """{bit: (NAME, meaning)} of NAV_Status HealthFlags, from the DBC's value table
+    HealthFlagBits (value 2^bit, text "NAME: meaning"): the same table the firmware's
+    navecu_protocol.h is generated from (tools/gen_protocol.py)."""
     out = {}
-    for b, desc in found:
-        b = int(b)
-        nm = names.get(b) or FLAG_NAMES_FALLBACK.get(b) or "_".join(
-            re.sub(r"[^A-Za-z0-9 ]", "", desc).upper().split()[:3])
-        out[b] = (nm, desc.strip())
-    for b, nm in names.items():      # bits the firmware sets that the DBC does not list yet
-        out.setdefault(b, (nm, "(not in the DBC comment)"))
+    for value, text in db.dbc.value_tables["HealthFlagBits"].items():
+        name, _, meaning = str(text).partition(":")
+        out[int(value).bit_length() - 1] = (name.strip(), meaning.strip())
     return out
+
+
+def health_flag(db, name: str) -> int:
+    """The HealthFlags mask of the bit called name (e.g. "IMU_STALE")."""
+    return next(1 << b for b, (n, _) in health_bits(db).items() if n == name)
 
 
 def choices(db, msg: str, sig: str) -> dict:

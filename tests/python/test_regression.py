@@ -20,7 +20,8 @@ NAVECU = Path(os.environ.get("NAVECU_BIN", ROOT / "build" / "host" / "navecu"))
 CASES = ROOT / "tests" / "regression"
 CASE = "sim-watchdog"
 
-# A stand-in for navecu: runs the real one, then changes one hex digit of its output log:
+# A stand-in for navecu: runs the real one, then changes one hex digit of its output log
+# (the high digit of payload byte 1: a signal in every NAV_* message, never a spare bit):
 # of the first frame after the MIDDLE of the log, or of the LAST frame.
 FLIPPER = """#!{python}
 import subprocess, sys
@@ -30,7 +31,7 @@ out = argv[argv.index("--out") + 1]
 lines = open(out).read().splitlines(keepends=True)
 k = {where}
 head, data = lines[k].rsplit("#", 1)
-lines[k] = head + "#" + ("1" if data[0] != "1" else "2") + data[1:]
+lines[k] = head + "#" + data[:2] + ("1" if data[2] != "1" else "2") + data[3:]
 open(out, "w").write("".join(lines))
 sys.exit(rc)
 """
