@@ -44,8 +44,8 @@ TESTS_BOTH := test_drive
 # tests of application modules against the in-memory HAL (tests/support/fake_hal.c)
 TESTS_FAKE_HAL := test_app test_calstore test_app_rx test_imu_stream test_gnss_epoch test_gnss_time test_align test_landnav test_calib test_app_health test_app_config test_app_loop test_output test_commands test_fusion
 # what they link besides the application: the in-memory HAL, frames as the senders encode
-# them
-FAKE_HAL_SUPPORT := tests/support/fake_hal.c tests/support/can_frames.c
+# them, a fresh application
+FAKE_HAL_SUPPORT := tests/support/fake_hal.c tests/support/can_frames.c tests/support/app_fixture.c
 # tests of a Cortex-M4F driver against a register block in RAM (tests/test_<driver>.c
 # links hal/cortex_m4f/<driver>.c)
 TESTS_M4_HAL := test_bxcan test_stm32_flash test_stm32_iwdg test_stm32_clock test_stm32_timebase test_f2l

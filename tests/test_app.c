@@ -14,6 +14,7 @@
 #include "app.h"
 #include "navecu_protocol.h"
 #include "e2e.h"
+#include "app_fixture.h"
 #include "can_frames.h"
 #include "fake_hal.h"
 #include "motions.h"
@@ -122,9 +123,7 @@ static void run_still(int seconds)
 static int setup(void **state)
 {
     (void)state;
-    fake_hal_reset(&hal);
-    const app_config_t cfg = app_default_config();
-    assert_int_equal(app_init(&app, &cfg), NAV_OK);
+    assert_int_equal(fx_fresh_app(&app, &hal), NAV_OK);
     imu_src_init();
     cmd_counter = 0u;
     return 0;

@@ -13,6 +13,7 @@
 
 #include "app_loop.h"
 #include "can_frames.h"
+#include "app_fixture.h"
 #include "fake_hal.h"
 
 static hal_t hal;
@@ -21,9 +22,7 @@ static app_t app;
 static int setup(void **state)
 {
     (void)state;
-    fake_hal_reset(&hal);
-    const app_config_t cfg = app_default_config();
-    assert_int_equal(app_init(&app, &cfg), NAV_OK);
+    assert_int_equal(fx_fresh_app(&app, &hal), NAV_OK);
     return 0;
 }
 

@@ -12,6 +12,7 @@
 #include <cmocka.h>
 
 #include "commands.h"
+#include "app_fixture.h"
 #include "fake_hal.h"
 #include "navecu_can.h"
 #include "test_util.h"
@@ -26,9 +27,7 @@ static app_t app;
 static int setup(void **state)
 {
     (void)state;
-    fake_hal_reset(&hal);
-    const app_config_t cfg = app_default_config();
-    assert_int_equal(app_init(&app, &cfg), NAV_OK);
+    assert_int_equal(fx_fresh_app(&app, &hal), NAV_OK);
     return 0;
 }
 

@@ -77,6 +77,18 @@ static nav_real_t step(float rate_z, float ax)
     return yaw;
 }
 
+/* 1 s at 10 m/s (wheel frames at 50 Hz): the dead reckoning's metres east and north */
+static void drive_1s_at_10mps(nav_real_t *e, nav_real_t *n)
+{
+    for (int k = 0; k < 100; k++) {
+        if (k % 2 == 0) {
+            wheels(10.0f);
+        }
+        step(0.0f, 0.0f);
+    }
+    dr_local_m(&start, &dr.pos, e, n);
+}
+
 static double heading_of(void)
 {
     nav_real_t r, p, h;
@@ -162,14 +174,8 @@ static void test_dead_reckoning_on_odometer(void **state)
 {
     (void)state;
     start_at(0.0f, 0.02f);
-    for (int k = 0; k < 100; k++) {
-        if (k % 2 == 0) {
-            wheels(10.0f);
-        }
-        step(0.0f, 0.0f);
-    }
     nav_real_t e, n;
-    dr_local_m(&start, &dr.pos, &e, &n);
+    drive_1s_at_10mps(&e, &n);
     assert_near(n, 10.0 / 1.02, 0.01);
     assert_near(e, 0.0, 1e-3);
     assert_int_equal(ln.output_dr, 1);
@@ -184,14 +190,8 @@ static void test_dead_reckoning_heading_correction(void **state)
 {
     (void)state;
     start_at(0.1f, 0.0f);
-    for (int k = 0; k < 100; k++) {
-        if (k % 2 == 0) {
-            wheels(10.0f);
-        }
-        step(0.0f, 0.0f);
-    }
     nav_real_t e, n;
-    dr_local_m(&start, &dr.pos, &e, &n);
+    drive_1s_at_10mps(&e, &n);
     assert_near(e, -10.0 * sin(0.1), 0.01);
     assert_near(n, 10.0 * cos(0.1), 0.01);
     assert_near(nav.v_n_mps[0], -10.0 * sin(0.1), 1e-4);

@@ -17,6 +17,7 @@
 #include "app.h"
 #include "can_frames.h"
 #include "e2e.h"
+#include "app_fixture.h"
 #include "fake_hal.h"
 #include "navecu_protocol.h"
 #include "test_util.h"
@@ -30,9 +31,7 @@ static app_t app;
 static int setup(void **state)
 {
     (void)state;
-    fake_hal_reset(&hal);
-    const app_config_t cfg = app_default_config();
-    assert_int_equal(app_init(&app, &cfg), NAV_OK);
+    assert_int_equal(fx_fresh_app(&app, &hal), NAV_OK);
     return 0;
 }
 
