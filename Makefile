@@ -42,7 +42,10 @@ TESTS_F32 := test_e2e test_codec test_trig
 # tests that link both variants themselves
 TESTS_BOTH := test_drive
 # tests of application modules against the in-memory HAL (tests/support/fake_hal.c)
-TESTS_FAKE_HAL := test_app test_calstore
+TESTS_FAKE_HAL := test_app test_calstore test_app_rx test_imu_stream test_gnss_epoch test_gnss_time test_align test_landnav test_calib test_app_health test_app_config test_app_loop test_output test_commands test_fusion
+# what they link besides the application: the in-memory HAL, frames as the senders encode
+# them, a fresh application
+FAKE_HAL_SUPPORT := tests/support/fake_hal.c tests/support/can_frames.c tests/support/app_fixture.c
 # tests of a Cortex-M4F driver against a register block in RAM (tests/test_<driver>.c
 # links hal/cortex_m4f/<driver>.c)
 TESTS_M4_HAL := test_bxcan test_stm32_flash test_stm32_iwdg test_stm32_clock test_stm32_timebase test_f2l
@@ -129,7 +132,7 @@ $(foreach t,$(TESTS_BOTH),$(BUILD)/$(1)/tests/$(t)): $(BUILD)/$(1)/tests/%: $(BU
 	@mkdir -p $$(@D)
 	$$(CC) $(2) $$^ -lcmocka -lm -o $$@
 # the application against an in-memory HAL; the Linux HAL on its own
-$(foreach t,$(TESTS_FAKE_HAL),$(BUILD)/$(1)/tests/$(t)): $(BUILD)/$(1)/tests/%: $(BUILD)/$(1)/f32/tests/%.o $(BUILD)/$(1)/f32/tests/support/fake_hal.o $$($(1)_LIBS)
+$(foreach t,$(TESTS_FAKE_HAL),$(BUILD)/$(1)/tests/$(t)): $(BUILD)/$(1)/tests/%: $(BUILD)/$(1)/f32/tests/%.o $(FAKE_HAL_SUPPORT:%.c=$(BUILD)/$(1)/f32/%.o) $$($(1)_LIBS)
 	@mkdir -p $$(@D)
 	$$(CC) $(2) $$^ -lcmocka -lm -o $$@
 $(BUILD)/$(1)/tests/test_hal_linux: $(BUILD)/$(1)/f32/tests/test_hal_linux.o $(BUILD)/$(1)/libhal_linux.a

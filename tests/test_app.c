@@ -14,6 +14,8 @@
 #include "app.h"
 #include "navecu_protocol.h"
 #include "e2e.h"
+#include "app_fixture.h"
+#include "can_frames.h"
 #include "fake_hal.h"
 #include "motions.h"
 #include "navecu_can.h"
@@ -29,17 +31,11 @@
 static hal_t hal;
 static app_t app;
 
-/* ---- frame builders (the real encoding: generated codec + E2E) ---- */
+/* ---- frame builders (the real encoding: generated codec + E2E, can_frames.h) ---- */
 
 static hal_can_frame_t frame(uint32_t id, const uint8_t d[8])
 {
-    hal_can_frame_t f;
-    memset(&f, 0, sizeof f);
-    f.id = id;
-    f.dlc = 8u;
-    memcpy(f.data, d, 8u);
-    f.t_us = hal.t_us;
-    return f;
+    return cf_frame(id, d, hal.t_us);
 }
 
 static void feed(const hal_can_frame_t *f)
@@ -51,14 +47,7 @@ static void feed(const hal_can_frame_t *f)
 static void make_imu_pair(const int32_t w[3], const int32_t v[3], uint8_t counter,
                           hal_can_frame_t *rate, hal_can_frame_t *accel)
 {
-    uint8_t dr[8], da[8];
-    struct navecu_can_imu_rate_t r = {w[0], w[1], w[2], counter};
-    navecu_can_imu_rate_pack(dr, &r, 8u);
-    struct navecu_can_imu_accel_t a = {v[0], v[1], v[2], 0u, counter, 0u};
-    navecu_can_imu_accel_pack(da, &a, 8u);
-    da[7] = e2e_pair_crc(NAVECU_CAN_IMU_ACCEL_FRAME_ID, dr, da);
-    *rate = frame(NAVECU_CAN_IMU_RATE_FRAME_ID, dr);
-    *accel = frame(NAVECU_CAN_IMU_ACCEL_FRAME_ID, da);
+    cf_imu_pair(w, v, counter, 0u, hal.t_us, rate, accel);
 }
 
 static void send_imu_pair(const int32_t w[3], const int32_t v[3], uint8_t counter)
@@ -73,11 +62,8 @@ static uint8_t cmd_counter;
 
 static void send_init_commands(double heading_deg)
 {
-    uint8_t d[8];
-    struct navecu_can_cmd_known_position_t k = {(int32_t)lround(LAT0_DEG * 1e7),
-                                                 (int32_t)lround(LON0_DEG * 1e7)};
-    navecu_can_cmd_known_position_pack(d, &k, 8u);
-    hal_can_frame_t f = frame(NAVECU_CAN_CMD_KNOWN_POSITION_FRAME_ID, d);
+    hal_can_frame_t f = cf_known_position((int32_t)lround(LAT0_DEG * 1e7),
+                                          (int32_t)lround(LON0_DEG * 1e7), hal.t_us);
     feed(&f);
     struct navecu_can_cmd_control_t c;
     memset(&c, 0, sizeof c);
@@ -87,9 +73,7 @@ static void send_init_commands(double heading_deg)
     c.height = (int32_t)lround(H0_M * 10.0);
     c.cmd_counter = cmd_counter;
     cmd_counter = e2e_counter_next(cmd_counter);
-    navecu_can_cmd_control_pack(d, &c, 8u);
-    e2e_protect(NAVECU_CAN_CMD_CONTROL_FRAME_ID, d);
-    f = frame(NAVECU_CAN_CMD_CONTROL_FRAME_ID, d);
+    f = cf_control(&c, hal.t_us);
     feed(&f);
 }
 
@@ -139,9 +123,7 @@ static void run_still(int seconds)
 static int setup(void **state)
 {
     (void)state;
-    fake_hal_reset(&hal);
-    const app_config_t cfg = app_default_config();
-    assert_int_equal(app_init(&app, &cfg), NAV_OK);
+    assert_int_equal(fx_fresh_app(&app, &hal), NAV_OK);
     imu_src_init();
     cmd_counter = 0u;
     return 0;
@@ -149,21 +131,12 @@ static int setup(void **state)
 
 static const hal_can_frame_t *last_tx(uint32_t id)
 {
-    for (uint32_t i = hal.tx_n; i > 0u; i--) {
-        if (hal.tx[i - 1u].id == id) {
-            return &hal.tx[i - 1u];
-        }
-    }
-    return NULL;
+    return cf_last_tx(&hal, id);
 }
 
 static uint32_t tx_count(uint32_t id)
 {
-    uint32_t n = 0u;
-    for (uint32_t i = 0u; i < hal.tx_n; i++) {
-        n += hal.tx[i].id == id;
-    }
-    return n;
+    return cf_tx_count(&hal, id);
 }
 
 /*
@@ -568,15 +541,7 @@ static void test_replayed_command_rejected(void **state)
 /* HealthFlags of the latest NAV_Status page 0 that carries them, after one more status */
 static uint16_t health_flags_now(void)
 {
-    for (uint32_t i = hal.tx_n; i > 0u; i--) {
-        const hal_can_frame_t *fr = &hal.tx[i - 1u];
-        if (fr->id == NAVECU_CAN_NAV_STATUS_FRAME_ID && (fr->data[0] & 0x0Fu) == 0u) {
-            struct navecu_can_nav_status_t st;
-            navecu_can_nav_status_unpack(&st, fr->data, 8u);
-            return st.health_flags;
-        }
-    }
-    return 0u;
+    return cf_last_status_page0(&hal).health_flags;
 }
 
 static void skip_samples(int n)
@@ -751,24 +716,16 @@ typedef struct {
 
 static void send_gnss(const gnss_epoch_t *g)
 {
-    uint8_t d[8];
-    hal_can_frame_t f;
-    struct navecu_can_gnss_position_t gp = {g->lat_e7, g->lon_e7};
-    navecu_can_gnss_position_pack(d, &gp, 8u);
-    f = frame(NAVECU_CAN_GNSS_POSITION_FRAME_ID, d);
+    hal_can_frame_t f = cf_gnss_position(g->lat_e7, g->lon_e7, hal.t_us);
     feed(&f);
     struct navecu_can_gnss_velocity_t gv;
     memset(&gv, 0, sizeof gv);
     gv.vel_north = (int16_t)lround(g->speed_north_mps * 100.0);
     gv.gnss_epoch = g->vel_epoch;
     gv.speed_accuracy = g->sacc_raw;
-    navecu_can_gnss_velocity_pack(d, &gv, 8u);
-    e2e_protect(NAVECU_CAN_GNSS_VELOCITY_FRAME_ID, d);
-    f = frame(NAVECU_CAN_GNSS_VELOCITY_FRAME_ID, d);
+    f = cf_gnss_velocity(&gv, hal.t_us);
     feed(&f);
-    struct navecu_can_gnss_height_t gh = {(int32_t)lround(g->height_m * 100.0), g->vel_epoch};
-    navecu_can_gnss_height_pack(d, &gh, 8u);
-    f = frame(NAVECU_CAN_GNSS_HEIGHT_FRAME_ID, d);
+    f = cf_gnss_height((int32_t)lround(g->height_m * 100.0), g->vel_epoch, hal.t_us);
     feed(&f);
     struct navecu_can_gnss_status_t gs;
     memset(&gs, 0, sizeof gs);
@@ -778,8 +735,7 @@ static void send_gnss(const gnss_epoch_t *g)
     gs.vert_accuracy = g->vacc_dm;
     gs.gnss_epoch = g->status_epoch;
     gs.time_of_week = g->tow_ms;
-    navecu_can_gnss_status_pack(d, &gs, 8u);
-    f = frame(NAVECU_CAN_GNSS_STATUS_FRAME_ID, d);
+    f = cf_gnss_status(&gs, hal.t_us);
     feed(&f);
 }
 
@@ -847,16 +803,10 @@ static void test_reacquire_after_long_gap(void **state)
 
 static void send_initial_attitude(double roll_rad, double pitch_rad)
 {
-    uint8_t d[8];
-    struct navecu_can_cmd_initial_attitude_t m;
-    memset(&m, 0, sizeof m);
-    m.init_roll = (int32_t)lround(roll_rad * 4194304.0); /* 2^-22 rad */
-    m.init_pitch = (int32_t)lround(pitch_rad * 4194304.0);
-    m.att_counter = att_counter;
+    const hal_can_frame_t f = cf_initial_attitude((int32_t)lround(roll_rad * 4194304.0), /* 2^-22 rad */
+                                                  (int32_t)lround(pitch_rad * 4194304.0),
+                                                  att_counter, hal.t_us);
     att_counter = e2e_counter_next(att_counter);
-    navecu_can_cmd_initial_attitude_pack(d, &m, 8u);
-    e2e_protect(NAVECU_CAN_CMD_INITIAL_ATTITUDE_FRAME_ID, d);
-    hal_can_frame_t f = frame(NAVECU_CAN_CMD_INITIAL_ATTITUDE_FRAME_ID, d);
     feed(&f);
 }
 
@@ -891,16 +841,10 @@ static uint8_t wheel_counter;
 
 static void send_wheels(double v_mps)
 {
-    uint8_t d[8];
-    struct navecu_can_wheel_speeds_t w;
-    memset(&w, 0, sizeof w);
     const int16_t raw = (int16_t)lround(v_mps / 0.02);
-    w.wheel_speed_fl = w.wheel_speed_fr = w.wheel_speed_rl = w.wheel_speed_rr = raw;
-    w.wheel_counter = wheel_counter;
+    const int16_t four[4] = {raw, raw, raw, raw};
+    const hal_can_frame_t f = cf_wheels(four, wheel_counter, hal.t_us);
     wheel_counter = e2e_counter_next(wheel_counter);
-    navecu_can_wheel_speeds_pack(d, &w, 8u);
-    e2e_protect(NAVECU_CAN_WHEEL_SPEEDS_FRAME_ID, d);
-    const hal_can_frame_t f = frame(NAVECU_CAN_WHEEL_SPEEDS_FRAME_ID, d);
     feed(&f);
 }
 
@@ -1052,24 +996,18 @@ static void known_point(double dbearing_deg, double scale, int32_t *lat_e7, int3
 
 static void send_known_position(int32_t lat_e7, int32_t lon_e7)
 {
-    uint8_t d[8];
-    struct navecu_can_cmd_known_position_t k = {lat_e7, lon_e7};
-    navecu_can_cmd_known_position_pack(d, &k, 8u);
-    const hal_can_frame_t f = frame(NAVECU_CAN_CMD_KNOWN_POSITION_FRAME_ID, d);
+    const hal_can_frame_t f = cf_known_position(lat_e7, lon_e7, hal.t_us);
     feed(&f);
 }
 
 static void send_command(uint8_t command)
 {
-    uint8_t d[8];
     struct navecu_can_cmd_control_t c;
     memset(&c, 0, sizeof c);
     c.command = command;
     c.cmd_counter = cmd_counter;
     cmd_counter = e2e_counter_next(cmd_counter);
-    navecu_can_cmd_control_pack(d, &c, 8u);
-    e2e_protect(NAVECU_CAN_CMD_CONTROL_FRAME_ID, d);
-    const hal_can_frame_t f = frame(NAVECU_CAN_CMD_CONTROL_FRAME_ID, d);
+    const hal_can_frame_t f = cf_control(&c, hal.t_us);
     feed(&f);
 }
 
@@ -1205,16 +1143,7 @@ static void send_fix(int32_t lat_e7, int32_t lon_e7, uint32_t tow_ms)
 
 static struct navecu_can_nav_status_t last_status_page0(void)
 {
-    struct navecu_can_nav_status_t st;
-    memset(&st, 0, sizeof st);
-    for (uint32_t i = hal.tx_n; i > 0u; i--) {
-        const hal_can_frame_t *fr = &hal.tx[i - 1u];
-        if (fr->id == NAVECU_CAN_NAV_STATUS_FRAME_ID && (fr->data[0] & 0x0Fu) == 0u) {
-            navecu_can_nav_status_unpack(&st, fr->data, 8u);
-            break;
-        }
-    }
-    return st;
+    return cf_last_status_page0(&hal);
 }
 
 /*

@@ -1,6 +1,8 @@
 /*
  * fake_hal.h - an in-memory HAL for application tests: frames to receive are queued by the
- * test, transmitted frames are captured, NVM is a RAM array with the flash semantics of
+ * test (a bounded queue, fake_hal_rx_push; empty, hal_can_receive returns rx_empty_rc,
+ * HAL_ENODATA after fake_hal_reset, and it takes the HAL clock forward to each frame's
+ * t_us as a bus would), transmitted frames are captured, NVM is a RAM array with the flash semantics of
  * hal.h that can be told to fail, lose power in the middle of a write or an erase, or have
  * a byte corrupted.
  *
@@ -24,6 +26,7 @@
 #include "hal.h"
 
 #define FAKE_TX_MAX 8192u
+#define FAKE_RX_MAX 64u
 #define FAKE_NVM_SECTOR_SIZE 128u
 #define FAKE_NVM_SECTORS 2u
 #define FAKE_NVM_SIZE (FAKE_NVM_SECTORS * FAKE_NVM_SECTOR_SIZE)
@@ -43,9 +46,19 @@ struct hal {
     uint32_t nvm_units;    /* bytes programmed + sectors erased since fake_hal_reset */
     int nvm_program_backwards; /* 1: each write programs its last byte first */
     uint32_t kicks;
+    hal_can_frame_t rx[FAKE_RX_MAX]; /* frames to receive, in order */
+    uint32_t rx_head, rx_n;  /* next to receive, frames queued */
+    int rx_empty_rc;         /* what hal_can_receive returns with the queue empty */
+    uint32_t rx_calls;       /* hal_can_receive calls */
 };
 
 void fake_hal_reset(hal_t *hal);
+
+/* Queue a frame to receive. Returns 0, or -1 when the queue is full. */
+int fake_hal_rx_push(hal_t *hal, const hal_can_frame_t *f);
+
+/* Frames queued and not received yet. */
+uint32_t fake_hal_rx_left(const hal_t *hal);
 
 /* Arm a power cut after n_units more NVM units; torn = bits of the cut byte programmed. */
 void fake_hal_nvm_cut_after(hal_t *hal, uint32_t n_units, uint8_t torn);

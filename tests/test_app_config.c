@@ -1,0 +1,117 @@
+/*
+ * test_app_config.c - app_config.h: the defaults the ECU runs with, and the range check
+ * every configuration goes through, field by field at its limits (NaN refused).
+ */
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <string.h>
+#include <cmocka.h>
+
+#include "app_config.h"
+#include "test_util.h"
+
+/* The documented defaults: IMU 100 Hz, outputs 50 Hz, status 10 Hz, levelling 30 s, rear
+ * axle, 2 km minimum base, the mid-grade IMU (0.003 deg/sqrt(h) = 8.73e-7 rad/sqrt(s),
+ * 0.015 deg/h = 7.27e-8 rad/s), latency 0.1 s, 20 s correlation, no lever arms, an
+ * automotive MEMS range of 300 deg/s and 8 g. */
+static void test_defaults(void **state)
+{
+    (void)state;
+    const app_config_t c = app_default_config();
+    assert_int_equal(c.imu_rate_hz, 100u);
+    assert_int_equal(c.nav_rate_hz, 50u);
+    assert_int_equal(c.status_rate_hz, 10u);
+    assert_int_equal(c.level_s, 30u);
+    assert_int_equal(c.odo_axle, ODO_AXLE_REAR);
+    assert_near(c.cal_min_base_m, 2000.0, 0.0);
+    assert_near(c.gyro_arw_rad_rts, 0.003 * 3.14159265358979 / 180.0 / 60.0, 1e-9);
+    assert_near(c.gyro_bias_rps, 0.015 * 3.14159265358979 / 180.0 / 3600.0, 1e-10);
+    assert_near(c.accel_bias_mps2, 1e-3, 1e-10);
+    assert_near(c.gnss_latency_s, 0.1, 1e-8);
+    assert_near(c.gnss_corr_s, 20.0, 0.0);
+    for (int i = 0; i < 3; i++) {
+        assert_near(c.gnss_lever_b_m[i], 0.0, 0.0);
+        assert_near(c.odo_lever_b_m[i], 0.0, 0.0);
+    }
+    assert_near(c.gyro_range_rps, 300.0 * 3.14159265358979 / 180.0, 1e-5);
+    assert_near(c.accel_range_mps2, 8.0 * 9.80665, 1e-4);
+    assert_int_equal(app_config_valid(&c), 1);
+}
+
+typedef struct {
+    const char *what;
+    void (*set)(app_config_t *c);
+    int valid;
+} edge_t;
+
+#define EDGE(name, stmt, ok) \
+    static void set_##name(app_config_t *c) { stmt; }
+#define EDGES(X) \
+    X(imu_10, c->imu_rate_hz = 10u; c->nav_rate_hz = 10u; c->status_rate_hz = 10u, 1) \
+    X(imu_9, c->imu_rate_hz = 9u; c->nav_rate_hz = 9u; c->status_rate_hz = 9u, 0) \
+    X(imu_400, c->imu_rate_hz = 400u, 1) \
+    X(imu_401, c->imu_rate_hz = 401u, 0) \
+    X(nav_0, c->nav_rate_hz = 0u, 0) \
+    X(nav_eq_imu, c->nav_rate_hz = 100u, 1) \
+    X(nav_above_imu, c->nav_rate_hz = 101u, 0) \
+    X(status_0, c->status_rate_hz = 0u, 0) \
+    X(status_above_imu, c->status_rate_hz = 101u, 0) \
+    X(level_0, c->level_s = 0u, 0) \
+    X(level_600, c->level_s = 600u, 1) \
+    X(level_601, c->level_s = 601u, 0) \
+    X(base_0, c->cal_min_base_m = 0.0f, 1) \
+    X(base_neg, c->cal_min_base_m = -1.0f, 0) \
+    X(base_1e6, c->cal_min_base_m = 1e6f, 0) \
+    X(arw_0, c->gyro_arw_rad_rts = 0.0f, 0) \
+    X(arw_nan, c->gyro_arw_rad_rts = NAN, 0) \
+    X(arw_1, c->gyro_arw_rad_rts = 1.0f, 0) \
+    X(bias_0, c->gyro_bias_rps = 0.0f, 0) \
+    X(accel_bias_10, c->accel_bias_mps2 = 10.0f, 0) \
+    X(gyro_rw_nan, c->gyro_bias_rw_rps_rts = NAN, 0) \
+    X(accel_rw_0, c->accel_bias_rw_mps2_rts = 0.0f, 0) \
+    X(latency_0, c->gnss_latency_s = 0.0f, 1) \
+    X(latency_05, c->gnss_latency_s = 0.5f, 1) \
+    X(latency_051, c->gnss_latency_s = 0.51f, 0) \
+    X(latency_neg, c->gnss_latency_s = -0.01f, 0) \
+    X(corr_600, c->gnss_corr_s = 600.0f, 1) \
+    X(corr_601, c->gnss_corr_s = 601.0f, 0) \
+    X(corr_nan, c->gnss_corr_s = NAN, 0) \
+    X(lever_10, c->gnss_lever_b_m[2] = -10.0f, 1) \
+    X(lever_1001, c->gnss_lever_b_m[1] = 10.01f, 0) \
+    X(odo_lever_nan, c->odo_lever_b_m[0] = NAN, 0) \
+    X(gyro_range_0, c->gyro_range_rps = 0.0f, 0) \
+    X(gyro_range_100, c->gyro_range_rps = 100.0f, 1) \
+    X(gyro_range_101, c->gyro_range_rps = 100.1f, 0) \
+    X(accel_range_2000, c->accel_range_mps2 = 2000.0f, 1) \
+    X(accel_range_2001, c->accel_range_mps2 = 2001.0f, 0) \
+    X(accel_range_nan, c->accel_range_mps2 = NAN, 0)
+EDGES(EDGE)
+#define EDGE_ROW(name, stmt, ok) {#name, set_##name, ok},
+
+/* GIVEN the defaults with one field changed THEN valid exactly when that field is within
+ * its documented range. */
+static void test_ranges(void **state)
+{
+    (void)state;
+    static const edge_t edges[] = {EDGES(EDGE_ROW)};
+    for (size_t i = 0u; i < sizeof edges / sizeof edges[0]; i++) {
+        app_config_t c = app_default_config();
+        edges[i].set(&c);
+        if (app_config_valid(&c) != edges[i].valid) {
+            fail_msg("%s: valid %d, expected %d", edges[i].what, app_config_valid(&c),
+                     edges[i].valid);
+        }
+    }
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_defaults),
+        cmocka_unit_test(test_ranges),
+    };
+    return cmocka_run_group_tests_name("app_config", tests, NULL, NULL);
+}

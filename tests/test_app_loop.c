@@ -1,0 +1,189 @@
+/*
+ * test_app_loop.c - app_loop.h: one pass of the main loop against the in-memory HAL's
+ * receive queue (whose clock follows the frames): at most max_frames frames, app_poll
+ * after each, once more on a silent bus, the watchdog kicked only when app_tasks_ok, and
+ * no watchdog decision at the end of a finite input or on a receive error.
+ */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <string.h>
+#include <cmocka.h>
+
+#include "app_loop.h"
+#include "can_frames.h"
+#include "app_fixture.h"
+#include "fake_hal.h"
+
+static hal_t hal;
+static app_t app;
+
+static int setup(void **state)
+{
+    (void)state;
+    assert_int_equal(fx_fresh_app(&app, &hal), NAV_OK);
+    return 0;
+}
+
+/* n frames of a foreign identifier (counted unknown_id, nothing sent), byte 0 = index,
+ * the k-th received at t0 + k * dt */
+static void queue_foreign(uint32_t n, uint64_t t0_us, uint64_t dt_us)
+{
+    for (uint32_t k = 0u; k < n; k++) {
+        const uint8_t d[8] = {(uint8_t)k, 0, 0, 0, 0, 0, 0, 0};
+        const hal_can_frame_t f = cf_frame(0x555u, d, t0_us + k * dt_us);
+        assert_int_equal(fake_hal_rx_push(&hal, &f), 0);
+    }
+}
+
+static app_pass_t pass(uint32_t max_frames, uint8_t poll)
+{
+    const app_pass_cfg_t cfg = {max_frames, poll};
+    return app_pass(&app, &hal, &cfg);
+}
+
+/* GIVEN 10 frames waiting WHEN passes of at most 4 run THEN 4, 4 and 2 are handled, each
+ * pass kicks the watchdog (a flooded bus cannot starve it), and the last pass ends on an
+ * empty queue (HAL_EAGAIN: go on). */
+static void test_at_most_max_frames(void **state)
+{
+    (void)state;
+    hal.rx_empty_rc = HAL_EAGAIN;
+    queue_foreign(10u, 1000u, 1000u);
+    app_pass_t p = pass(4u, 1u);
+    assert_int_equal(p.frames, 4u);
+    assert_int_equal(p.rx_status, 0);
+    assert_int_equal(p.last.data[0], 3);
+    assert_int_equal(fake_hal_rx_left(&hal), 6u);
+    assert_int_equal(app_health(&app)->unknown_id, 4u);
+    assert_int_equal(p.kicked, 1);
+    assert_int_equal(hal.kicks, 1u);
+    p = pass(4u, 1u);
+    assert_int_equal(p.frames, 4u);
+    assert_int_equal(p.last.data[0], 7);
+    p = pass(4u, 1u);
+    assert_int_equal(p.frames, 2u);
+    assert_int_equal(p.rx_status, HAL_EAGAIN);
+    assert_int_equal(app_pass_go_on(&p), 1);
+    assert_int_equal(p.last.data[0], 9);
+    assert_int_equal(app_health(&app)->unknown_id, 10u);
+    assert_int_equal(hal.kicks, 3u);
+}
+
+/* GIVEN an IMU silent since t = 0 (NAV_Status due from app_poll every 100 ms) WHEN three
+ * frames arrive 100 ms apart from 1 s THEN app_poll ran after each: three NAV_Status pairs
+ * (6 frames; one poll per pass would give 2); with poll withheld none. */
+static void test_poll_after_each_frame(void **state)
+{
+    (void)state;
+    app.keep.imu.have_sample = 1u;
+    app.keep.imu.last_t_us = 0u;
+    queue_foreign(3u, 1000000u, 100000u);
+    app_pass_t p = pass(10u, 1u);
+    assert_int_equal(p.frames, 3u);
+    assert_int_equal(cf_tx_count(&hal, NAVECU_CAN_NAV_STATUS_FRAME_ID), 6u);
+    assert_int_equal(app.keep.last_poll_us, 1200000u);
+
+    setup(NULL);
+    app.keep.imu.have_sample = 1u;
+    queue_foreign(3u, 1000000u, 100000u);
+    p = pass(10u, 0u);
+    assert_int_equal(p.frames, 3u);
+    assert_int_equal(cf_tx_count(&hal, NAVECU_CAN_NAV_STATUS_FRAME_ID), 0u);
+    assert_int_equal(app.keep.have_poll, 0);
+}
+
+/* A silent bus (HAL_EAGAIN at once): app_poll once, then the kick. */
+static void test_silent_bus_polls_once(void **state)
+{
+    (void)state;
+    hal.rx_empty_rc = HAL_EAGAIN;
+    hal.t_us = 5000000u;
+    app.keep.imu.have_sample = 1u;
+    const app_pass_t p = pass(10u, 1u);
+    assert_int_equal(p.frames, 0u);
+    assert_int_equal(p.rx_status, HAL_EAGAIN);
+    assert_int_equal(app.keep.have_poll, 1);
+    assert_int_equal(app.keep.last_poll_us, 5000000u);
+    assert_int_equal(cf_tx_count(&hal, NAVECU_CAN_NAV_STATUS_FRAME_ID), 2u); /* the heartbeat */
+    assert_int_equal(p.kicked, 1);
+    assert_int_equal(hal.kicks, 1u);
+}
+
+/* The kick follows app_tasks_ok: never polled (poll withheld) -> no kick, counted late;
+ * polled at 0 then 300 ms without a poll (3 status periods) -> kick, 1 us more -> none. */
+static void test_kick_only_when_tasks_ok(void **state)
+{
+    (void)state;
+    hal.rx_empty_rc = HAL_EAGAIN;
+    app_pass_t p = pass(10u, 0u);
+    assert_int_equal(p.kicked, 0);
+    assert_int_equal(hal.kicks, 0u);
+    assert_int_equal(app_health(&app)->tasks_late, 1u);
+    p = pass(10u, 1u);
+    assert_int_equal(p.kicked, 1);
+    hal.t_us = 300000u;
+    p = pass(10u, 0u);
+    assert_int_equal(p.kicked, 1);
+    hal.t_us = 300001u;
+    p = pass(10u, 0u);
+    assert_int_equal(p.kicked, 0);
+    assert_int_equal(hal.kicks, 2u);
+    assert_int_equal(app_health(&app)->tasks_late, 2u);
+}
+
+/* GIVEN the filter running WHEN 31 samples (3 prediction periods of 10, and one) went by
+ * without its prediction THEN no kick; 30 is still in time. */
+static void test_no_kick_when_prediction_late(void **state)
+{
+    (void)state;
+    hal.rx_empty_rc = HAL_EAGAIN;
+    app.run.mode = APP_MODE_NAVIGATING;
+    app.run.fusion.on = 1u;
+    app.run.fusion.pred_n = 30u;
+    assert_int_equal(pass(10u, 1u).kicked, 1);
+    app.run.fusion.pred_n = 31u;
+    assert_int_equal(pass(10u, 1u).kicked, 0);
+    app.run.fusion.on = 0u; /* the land navigation system has no prediction to wait for */
+    assert_int_equal(pass(10u, 1u).kicked, 1);
+}
+
+/* At the end of a finite input (HAL_ENODATA) or on a receive error the pass returns at
+ * once: no kick, no extra poll; the frames before it were handled and polled. */
+static void test_end_of_input_no_kick(void **state)
+{
+    (void)state;
+    app_pass_t p = pass(10u, 1u); /* the queue is empty: HAL_ENODATA */
+    assert_int_equal(p.rx_status, HAL_ENODATA);
+    assert_int_equal(app_pass_go_on(&p), 0);
+    assert_int_equal(p.kicked, 0);
+    assert_int_equal(hal.kicks, 0u);
+    assert_int_equal(app.keep.have_poll, 0);
+    assert_int_equal(app_health(&app)->tasks_late, 0u); /* no watchdog decision at all */
+    queue_foreign(2u, 1000u, 1000u);
+    p = pass(10u, 1u);
+    assert_int_equal(p.frames, 2u);
+    assert_int_equal(p.rx_status, HAL_ENODATA);
+    assert_int_equal(p.kicked, 0);
+    assert_int_equal(app.keep.have_poll, 1);
+    hal.rx_empty_rc = HAL_EIO;
+    p = pass(10u, 1u);
+    assert_int_equal(p.rx_status, HAL_EIO);
+    assert_int_equal(app_pass_go_on(&p), 0);
+    assert_int_equal(p.kicked, 0);
+    assert_int_equal(hal.kicks, 0u);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test_setup(test_at_most_max_frames, setup),
+        cmocka_unit_test_setup(test_poll_after_each_frame, setup),
+        cmocka_unit_test_setup(test_silent_bus_polls_once, setup),
+        cmocka_unit_test_setup(test_kick_only_when_tasks_ok, setup),
+        cmocka_unit_test_setup(test_no_kick_when_prediction_late, setup),
+        cmocka_unit_test_setup(test_end_of_input_no_kick, setup),
+    };
+    return cmocka_run_group_tests_name("app_loop", tests, NULL, NULL);
+}

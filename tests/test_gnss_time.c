@@ -1,0 +1,235 @@
+/*
+ * test_gnss_time.c - gnss_time.h: the time of validity of a GNSS fix on the IMU time base.
+ * The offset (IMU time - TimeOfWeek) against its running minimum, late epochs, receiver
+ * clock jumps (three late epochs in a row, earlier by more than 1 s, later by more than
+ * 10 s), the 50 ppm creep of the minimum, the reach of the velocity history, and the
+ * displacement integral over it.
+ *
+ * IMU at 100 Hz: one history entry per sample (0.01 s), latency 0.1 s = 10 entries back.
+ * An epoch of a receiver on time: sample n, TimeOfWeek = n * 10 ms + 100 s (offset -100 s).
+ */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <string.h>
+#include <cmocka.h>
+
+#include "gnss_time.h"
+#include "test_util.h"
+
+#define RATE_HZ 100u
+#define LATENCY_S 0.1f
+
+static gnss_time_t g;
+
+static int setup(void **state)
+{
+    (void)state;
+    memset(&g, 0, sizeof g);
+    return 0;
+}
+
+/* n history entries of a constant velocity */
+static void record_constant(uint32_t n, float e, float north, float up)
+{
+    const nav_real_t v[3] = {e, north, up};
+    for (uint32_t k = 1u; k <= n; k++) {
+        gnss_time_record(&g, k, RATE_HZ, v);
+    }
+}
+
+/* an epoch received after sample n, late_ms later than on time */
+static gnss_when_t epoch(uint64_t n, int32_t late_ms)
+{
+    const int64_t tow = (int64_t)n * 10 + 100000 - late_ms;
+    return gnss_time_align(&g, n, RATE_HZ, (uint32_t)tow, LATENCY_S);
+}
+
+/* GIVEN a first epoch THEN it sets the minimum: back = latency (10 entries); WHEN the next
+ * is 0.3 s late THEN back = (0.1 + 0.3) / 0.01 = 40 entries (less the creep of 10 us over
+ * 0.2 s: 39.999); WHEN the one after is on time again THEN 10. */
+static void test_offset_minimum(void **state)
+{
+    (void)state;
+    record_constant(64u, 0.0f, 0.0f, 0.0f);
+    gnss_when_t w = epoch(1000u, 0);
+    assert_int_equal(w.jumped, 0);
+    assert_near(w.entry_s, 0.01, 1e-9);
+    assert_near(w.back, 10.0, 1e-4);
+    assert_int_equal(w.in_history, 1);
+    w = epoch(1020u, 300);
+    assert_int_equal(w.jumped, 0);
+    assert_near(w.back, 39.999, 1e-3);
+    w = epoch(1040u, 0);
+    assert_near(w.back, 10.0, 1e-4);
+    /* an earlier epoch (0.1 s) lowers the minimum: it is the latency's reference now */
+    w = epoch(1060u, -100);
+    assert_int_equal(w.jumped, 0);
+    assert_near(w.back, 10.0, 1e-4);
+    w = epoch(1080u, 0); /* the old offset is now 0.1 s late */
+    assert_near(w.back, 20.0, 2e-3);
+}
+
+/* A single epoch 0.6 s late: not a jump, its lateness is added (back 70: beyond the
+ * history's 64 entries, so not in history). */
+static void test_late_epoch(void **state)
+{
+    (void)state;
+    record_constant(64u, 0.0f, 0.0f, 0.0f);
+    (void)epoch(1000u, 0);
+    const gnss_when_t w = epoch(1020u, 600);
+    assert_int_equal(w.jumped, 0);
+    assert_near(w.back, 69.999, 1e-3);
+    assert_int_equal(w.in_history, 0);
+}
+
+/* GIVEN three epochs in a row later than the minimum by more than 0.5 s THEN the third is
+ * a clock jump: the minimum restarts from it (back 10 again); two late, one on time, two
+ * late is no jump. */
+static void test_three_late_epochs_are_a_jump(void **state)
+{
+    (void)state;
+    record_constant(64u, 0.0f, 0.0f, 0.0f);
+    (void)epoch(1000u, 0);
+    assert_int_equal(epoch(1020u, 600).jumped, 0);
+    assert_int_equal(epoch(1040u, 600).jumped, 0);
+    const gnss_when_t w = epoch(1060u, 600);
+    assert_int_equal(w.jumped, 1);
+    assert_near(w.back, 10.0, 1e-4);
+    assert_near(epoch(1080u, 600).back, 10.0, 1e-3); /* the new offset is on time */
+
+    memset(&g, 0, sizeof g);
+    record_constant(64u, 0.0f, 0.0f, 0.0f);
+    (void)epoch(1000u, 0);
+    assert_int_equal(epoch(1020u, 600).jumped, 0);
+    assert_int_equal(epoch(1040u, 600).jumped, 0);
+    assert_int_equal(epoch(1060u, 0).jumped, 0);
+    assert_int_equal(epoch(1080u, 600).jumped, 0);
+    assert_int_equal(epoch(1100u, 600).jumped, 0);
+}
+
+/* Earlier by more than 1 s: a jump at once; by 0.9 s: a new minimum, not a jump. Later by
+ * more than 10 s: a jump at once. */
+static void test_early_and_very_late_jumps(void **state)
+{
+    (void)state;
+    record_constant(64u, 0.0f, 0.0f, 0.0f);
+    (void)epoch(1000u, 0);
+    gnss_when_t w = epoch(1020u, -900);
+    assert_int_equal(w.jumped, 0);
+    assert_near(w.back, 10.0, 1e-4);
+    w = epoch(1040u, -2000); /* 1.1 s earlier than the minimum now (-0.9 s) */
+    assert_int_equal(w.jumped, 1);
+    assert_near(w.back, 10.0, 1e-4);
+    w = epoch(1060u, 10100 - 2000); /* 10.1 s later than it */
+    assert_int_equal(w.jumped, 1);
+    assert_near(w.back, 10.0, 1e-4);
+}
+
+/* The minimum creeps by 50 ppm of IMU time: over 1000 s, 50 ms. GIVEN an epoch at 10 s
+ * WHEN the next at 1010 s is 50 ms later THEN that is drift, not lateness (back 10);
+ * 60 ms later: 10 ms late (back 11). */
+static void test_50_ppm_creep(void **state)
+{
+    (void)state;
+    record_constant(64u, 0.0f, 0.0f, 0.0f);
+    (void)epoch(1000u, 0);
+    gnss_time_t saved = g;
+    assert_near(epoch(101000u, 50).back, 10.0, 1e-3);
+    g = saved;
+    assert_near(epoch(101000u, 60).back, 11.0, 1e-3);
+}
+
+/* in_history: the history must hold the entry before the one back reaches (m + 1 entries
+ * with m = floor(back)) and stay within its 64 entries. */
+static void test_history_reach(void **state)
+{
+    (void)state;
+    record_constant(11u, 0.0f, 0.0f, 0.0f);
+    assert_int_equal(epoch(1000u, 0).in_history, 0); /* back 10: 11 < 11 fails */
+    memset(&g, 0, sizeof g);
+    record_constant(12u, 0.0f, 0.0f, 0.0f);
+    assert_int_equal(epoch(1000u, 0).in_history, 1);
+    memset(&g, 0, sizeof g);
+    record_constant(200u, 0.0f, 0.0f, 0.0f);
+    assert_int_equal(gnss_time_align(&g, 1000u, RATE_HZ, 5000u, 0.625f).in_history, 1); /* 62.5 */
+    memset(&g, 0, sizeof g);
+    record_constant(200u, 0.0f, 0.0f, 0.0f);
+    assert_int_equal(gnss_time_align(&g, 1000u, RATE_HZ, 5000u, 0.635f).in_history, 0); /* 63.5 */
+    /* forgotten: nothing in history */
+    gnss_time_forget(&g);
+    assert_int_equal(epoch(1020u, 0).in_history, 0);
+}
+
+/* At most 100 entries a second: 200 Hz records every second sample, 400 Hz every fourth,
+ * 150 Hz every second (2/150 s an entry). */
+static void test_history_decimation(void **state)
+{
+    (void)state;
+    const nav_real_t v[3] = {0.0f, 0.0f, 0.0f};
+    for (uint64_t n = 1u; n <= 20u; n++) {
+        gnss_time_record(&g, n, 200u, v);
+    }
+    assert_int_equal(g.vhist_n, 10u);
+    memset(&g, 0, sizeof g);
+    for (uint64_t n = 1u; n <= 20u; n++) {
+        gnss_time_record(&g, n, 400u, v);
+    }
+    assert_int_equal(g.vhist_n, 5u);
+    assert_near(gnss_time_align(&g, 4000u, 400u, 5000u, 0.1f).entry_s, 0.01, 1e-9);
+    assert_near(gnss_time_align(&g, 3000u, 150u, 15000u, 0.1f).entry_s, 2.0 / 150.0, 1e-9);
+}
+
+/* GIVEN a constant velocity (10, -5, 0.5) m/s WHEN the fix is 0.105 s old (10.5 entries)
+ * THEN the displacement since is v * 0.105 s = (1.05, -0.525, 0.0525) m. */
+static void test_displacement_of_constant_velocity(void **state)
+{
+    (void)state;
+    record_constant(30u, 10.0f, -5.0f, 0.5f);
+    const gnss_when_t w = gnss_time_align(&g, 1000u, RATE_HZ, 5000u, 0.105f);
+    assert_int_equal(w.in_history, 1);
+    nav_real_t d[3];
+    gnss_time_displacement(&g, &w, d);
+    assert_near(d[0], 1.05, 1e-5);
+    assert_near(d[1], -0.525, 1e-5);
+    assert_near(d[2], 0.0525, 1e-6);
+}
+
+/* GIVEN entries whose east velocity is their index (0..19 m/s) WHEN 2.5 entries back
+ * THEN the displacement is 0.01 (19 + 18) + 0.5 * 0.01 * 17 = 0.455 m (latest first, the
+ * fraction on the oldest), and the velocity then is the nearest entry's: 2.6 back -> 16,
+ * 2.4 back -> 17. */
+static void test_displacement_and_velocity_then(void **state)
+{
+    (void)state;
+    for (uint32_t k = 0u; k < 20u; k++) {
+        const nav_real_t v[3] = {(nav_real_t)k, 0.0f, 0.0f};
+        gnss_time_record(&g, k, RATE_HZ, v);
+    }
+    gnss_when_t w = gnss_time_align(&g, 1000u, RATE_HZ, 5000u, 0.025f);
+    nav_real_t d[3];
+    gnss_time_displacement(&g, &w, d);
+    assert_near(d[0], 0.455, 1e-5);
+    assert_near(d[1], 0.0, 0.0);
+    w = gnss_time_align(&g, 1000u, RATE_HZ, 5000u, 0.026f);
+    assert_near(gnss_time_velocity_then(&g, &w)[0], 16.0, 0.0);
+    w = gnss_time_align(&g, 1000u, RATE_HZ, 5000u, 0.024f);
+    assert_near(gnss_time_velocity_then(&g, &w)[0], 17.0, 0.0);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test_setup(test_offset_minimum, setup),
+        cmocka_unit_test_setup(test_late_epoch, setup),
+        cmocka_unit_test_setup(test_three_late_epochs_are_a_jump, setup),
+        cmocka_unit_test_setup(test_early_and_very_late_jumps, setup),
+        cmocka_unit_test_setup(test_50_ppm_creep, setup),
+        cmocka_unit_test_setup(test_history_reach, setup),
+        cmocka_unit_test_setup(test_history_decimation, setup),
+        cmocka_unit_test_setup(test_displacement_of_constant_velocity, setup),
+        cmocka_unit_test_setup(test_displacement_and_velocity_then, setup),
+    };
+    return cmocka_run_group_tests_name("gnss_time", tests, NULL, NULL);
+}

@@ -1,0 +1,386 @@
+/*
+ * test_imu_stream.c - imu_stream.h: the IMU pair, its counter (jumps held until a
+ * successor confirms them, corrupt counters), gaps seen by counter and by receive time,
+ * the interpolated bridge, saturation at the configured range, stuck axes. Frames are the
+ * real encoding (tests/support/can_frames.h); the stream is fed their decoded raw values.
+ *
+ * IMU at 100 Hz (10 000 us a sample), the default ranges 5.235988 rad/s and 78.4532 m/s^2:
+ * saturation at 99.9 % of the range per sample is
+ *   gyro  5.235988 * 0.01 * 0.999 / 2^-21 = 109696.8 -> 109696 LSB,
+ *   accel 78.4532  * 0.01 * 0.999 / 2^-12 =   3210.2 ->   3210 LSB.
+ * A moving car: a gyro axis spanning more than 1 deg/s * 0.01 s / 2^-21 = 366.0 LSB.
+ */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <string.h>
+#include <cmocka.h>
+
+#include "can_frames.h"
+#include "e2e.h"
+#include "imu_stream.h"
+
+#define RATE_HZ 100u
+#define PERIOD_US 10000u
+#define GYRO_RANGE_RPS 5.235988f
+#define ACCEL_RANGE_MPS2 78.4532f
+
+static imu_stream_t s;
+static imu_link_t l;
+static imu_sample_t out;
+
+static int setup(void **state)
+{
+    (void)state;
+    memset(&s, 0, sizeof s);
+    imu_link_init(&l, RATE_HZ, GYRO_RANGE_RPS, ACCEL_RANGE_MPS2);
+    memset(&out, 0, sizeof out);
+    return 0;
+}
+
+/* one pair through the stream: IMU_Rate, then IMU_Accel at t_us */
+static imu_verdict_t pair(uint8_t counter, const int32_t w[3], const int32_t v[3], uint64_t t_us)
+{
+    hal_can_frame_t fr, fa;
+    cf_imu_pair(w, v, counter, 0u, t_us, &fr, &fa);
+    (void)imu_stream_rate(&s, counter, w, fr.data);
+    return imu_stream_accel(&s, &l, counter, 0u, v, fa.data, t_us, &out);
+}
+
+static const int32_t W0[3] = {10, -20, 30};
+static const int32_t V0[3] = {-1, 2, 401};
+
+/* the k-th sample of a simple stream: counter k mod 15 at k periods */
+static imu_verdict_t nth(uint32_t k)
+{
+    return pair((uint8_t)(k % 15u), W0, V0, (uint64_t)k * PERIOD_US);
+}
+
+/* ---- the pair ---- */
+
+static void test_pair_gives_a_sample(void **state)
+{
+    (void)state;
+    const int32_t w[3] = {1000, -2000, 3};
+    const int32_t v[3] = {-40, 50, 401};
+    assert_int_equal(pair(0u, w, v, 0u), IMU_SAMPLE);
+    for (int i = 0; i < 3; i++) {
+        assert_int_equal(out.raw[i], w[i]);
+        assert_int_equal(out.raw[i + 3], v[i]);
+        assert_int_equal(out.prev_raw[i], w[i]); /* the first sample: no gap to start from */
+        assert_int_equal(out.prev_raw[i + 3], v[i]);
+    }
+    assert_int_equal(out.lost, 0u);
+    assert_int_equal(out.saturated, 0);
+    assert_int_equal(out.stuck, 0);
+    assert_int_equal(l.have_sample, 1);
+    assert_int_equal(l.last_t_us, 0u);
+    /* the next sample starts from this one */
+    assert_int_equal(pair(1u, W0, V0, PERIOD_US), IMU_SAMPLE);
+    assert_int_equal(out.prev_raw[0], 1000);
+    assert_int_equal(out.prev_raw[5], 401);
+}
+
+/* IMU_Accel without its IMU_Rate, with another counter than it, and an IMU_Rate whose
+ * predecessor never got its IMU_Accel: broken pairs. */
+static void test_broken_pair(void **state)
+{
+    (void)state;
+    hal_can_frame_t fr, fa;
+    cf_imu_pair(W0, V0, 0u, 0u, 0u, &fr, &fa);
+    assert_int_equal(imu_stream_accel(&s, &l, 0u, 0u, V0, fa.data, 0u, &out), IMU_REJ_PAIR);
+    assert_int_equal(imu_stream_rate(&s, 0u, W0, fr.data), 0);
+    assert_int_equal(imu_stream_rate(&s, 0u, W0, fr.data), 1); /* the first had no accel */
+    hal_can_frame_t fr1, fa1;
+    cf_imu_pair(W0, V0, 1u, 0u, 0u, &fr1, &fa1);
+    assert_int_equal(imu_stream_accel(&s, &l, 1u, 0u, V0, fa1.data, 0u, &out), IMU_REJ_PAIR);
+    /* the pending IMU_Rate was consumed by the broken pair: its own accel now fails too */
+    assert_int_equal(imu_stream_accel(&s, &l, 0u, 0u, V0, fa.data, 0u, &out), IMU_REJ_PAIR);
+    assert_int_equal(l.have_sample, 0);
+}
+
+/* The pair CRC covers IMU_Rate too: one bit of IMU_Rate's payload changed -> bad CRC. */
+static void test_bad_pair_crc(void **state)
+{
+    (void)state;
+    hal_can_frame_t fr, fa;
+    cf_imu_pair(W0, V0, 0u, 0u, 0u, &fr, &fa);
+    fr.data[2] ^= 0x04u;
+    (void)imu_stream_rate(&s, 0u, W0, fr.data);
+    assert_int_equal(imu_stream_accel(&s, &l, 0u, 0u, V0, fa.data, 0u, &out), IMU_REJ_CRC);
+    cf_imu_pair(W0, V0, 0u, 0u, 0u, &fr, &fa);
+    fa.data[7] ^= 0x01u;
+    (void)imu_stream_rate(&s, 0u, W0, fr.data);
+    assert_int_equal(imu_stream_accel(&s, &l, 0u, 0u, V0, fa.data, 0u, &out), IMU_REJ_CRC);
+    assert_int_equal(l.have_sample, 0);
+}
+
+/* The fault bit of the sample taken is the link's. */
+static void test_fault_bit(void **state)
+{
+    (void)state;
+    hal_can_frame_t fr, fa;
+    cf_imu_pair(W0, V0, 0u, 1u, 0u, &fr, &fa);
+    (void)imu_stream_rate(&s, 0u, W0, fr.data);
+    assert_int_equal(imu_stream_accel(&s, &l, 0u, 1u, V0, fa.data, 0u, &out), IMU_SAMPLE);
+    assert_int_equal(l.fault, 1);
+    assert_int_equal(nth(1u), IMU_SAMPLE);
+    assert_int_equal(l.fault, 0);
+}
+
+/* ---- the counter ---- */
+
+/* Steps 1 and 2: taken at once (one sample lost with 2); a repeated counter refused. */
+static void test_counter_steps_1_and_2(void **state)
+{
+    (void)state;
+    assert_int_equal(pair(0u, W0, V0, 0u), IMU_SAMPLE);
+    assert_int_equal(pair(1u, W0, V0, PERIOD_US), IMU_SAMPLE);
+    assert_int_equal(out.lost, 0u);
+    assert_int_equal(pair(1u, W0, V0, PERIOD_US), IMU_REJ_COUNTER);
+    assert_int_equal(pair(3u, W0, V0, 3u * PERIOD_US), IMU_SAMPLE);
+    assert_int_equal(out.lost, 1u);
+    assert_int_equal(out.time_gap, 0);
+    assert_int_equal(pair(7u, W0, V0, 7u * PERIOD_US), IMU_SAMPLE); /* step 4 = MAX_DELTA */
+    assert_int_equal(out.lost, 3u);
+}
+
+/* GIVEN counter 0 WHEN counter 5 comes (a step beyond APP_IMU_MAX_DELTA) THEN it is held;
+ * WHEN counter 6 follows it THEN the jump was real: taken, with 5 samples lost (1..4 and
+ * the held 5 itself). */
+static void test_counter_step_5_held_until_confirmed(void **state)
+{
+    (void)state;
+    assert_int_equal(pair(0u, W0, V0, 0u), IMU_SAMPLE);
+    assert_int_equal(pair(5u, W0, V0, 5u * PERIOD_US), IMU_REJ_COUNTER);
+    assert_int_equal(l.counter.last, 0);
+    assert_int_equal(pair(6u, W0, V0, 6u * PERIOD_US), IMU_SAMPLE);
+    assert_int_equal(out.lost, 5u);
+    assert_int_equal(l.counter.last, 6);
+}
+
+/* GIVEN counter 0 WHEN a corrupt counter 9 comes, then 1 (the good one's successor)
+ * THEN 9 was a wrong counter: dropped alone, 1 taken with nothing lost, and the stream
+ * goes on from 1 (a late 9 is old data, not a jump). */
+static void test_corrupt_counter(void **state)
+{
+    (void)state;
+    assert_int_equal(pair(0u, W0, V0, 0u), IMU_SAMPLE);
+    assert_int_equal(pair(9u, W0, V0, PERIOD_US), IMU_REJ_COUNTER);
+    assert_int_equal(pair(1u, W0, V0, 2u * PERIOD_US), IMU_SAMPLE);
+    assert_int_equal(out.lost, 0u);
+    assert_int_equal(l.counter.last, 1);
+    assert_int_equal(pair(2u, W0, V0, 3u * PERIOD_US), IMU_SAMPLE);
+    assert_int_equal(out.lost, 0u);
+    /* 1..4 behind the counter: old data, dropped, and it does not move the counter */
+    assert_int_equal(pair(0u, W0, V0, 4u * PERIOD_US), IMU_REJ_COUNTER);
+    assert_int_equal(l.counter.last, 2);
+}
+
+/* ---- gaps by receive time ---- */
+
+/* GIVEN a sample WHEN the next has the next counter but arrives 16 periods later THEN 15
+ * samples (a whole counter cycle) were lost that the counter could not see; 31 periods:
+ * 30; 8 periods (within the 7-period slack) is only a late sample. */
+static void test_gap_by_receive_time(void **state)
+{
+    (void)state;
+    uint64_t t = 1000000u;
+    assert_int_equal(pair(0u, W0, V0, t), IMU_SAMPLE);
+    t += 16u * PERIOD_US;
+    assert_int_equal(pair(1u, W0, V0, t), IMU_SAMPLE);
+    assert_int_equal(out.lost, 15u);
+    assert_int_equal(out.time_gap, 1);
+    t += 31u * PERIOD_US;
+    assert_int_equal(pair(2u, W0, V0, t), IMU_SAMPLE);
+    assert_int_equal(out.lost, 30u);
+    t += 8u * PERIOD_US;
+    assert_int_equal(pair(3u, W0, V0, t), IMU_SAMPLE);
+    assert_int_equal(out.lost, 0u);
+    assert_int_equal(out.time_gap, 0);
+    /* a counter step of 3 over 3 + 7 periods: still the counter's 2 lost only */
+    t += 10u * PERIOD_US;
+    assert_int_equal(pair(6u, W0, V0, t), IMU_SAMPLE);
+    assert_int_equal(out.lost, 2u);
+    assert_int_equal(out.time_gap, 0);
+    /* a receive time going backwards adds nothing */
+    assert_int_equal(pair(7u, W0, V0, t - 100u * PERIOD_US), IMU_SAMPLE);
+    assert_int_equal(out.lost, 0u);
+}
+
+/* ---- the bridge ---- */
+
+/* GIVEN a sample 0 then counter 3 (2 lost) THEN the bridge is the straight line between
+ * them at 1/3 and 2/3, rounded to nearest: from 0 to 10: 3.33 -> 3, 6.67 -> 7; to -10:
+ * -3, -7; to 100000: 33333, 66667. */
+static void test_bridge_interpolation(void **state)
+{
+    (void)state;
+    const int32_t w0[3] = {0, 0, 0};
+    const int32_t v0[3] = {0, 0, 0};
+    const int32_t w1[3] = {10, -10, 100000};
+    const int32_t v1[3] = {-100000, 2, 1};
+    assert_int_equal(pair(0u, w0, v0, 0u), IMU_SAMPLE);
+    assert_int_equal(pair(3u, w1, v1, 3u * PERIOD_US), IMU_SAMPLE);
+    assert_int_equal(out.lost, 2u);
+    int32_t w[3], v[3];
+    imu_stream_bridge(&out, 0u, w, v);
+    assert_int_equal(w[0], 3);
+    assert_int_equal(w[1], -3);
+    assert_int_equal(w[2], 33333);
+    assert_int_equal(v[0], -33333);
+    assert_int_equal(v[1], 1);  /* 0.67 */
+    assert_int_equal(v[2], 0);  /* 0.33 */
+    imu_stream_bridge(&out, 1u, w, v);
+    assert_int_equal(w[0], 7);
+    assert_int_equal(w[1], -7);
+    assert_int_equal(w[2], 66667);
+    assert_int_equal(v[0], -66667);
+    assert_int_equal(v[1], 1);  /* 1.33 */
+    assert_int_equal(v[2], 1);  /* 0.67 */
+}
+
+/* Halves of the step round away from zero (one lost sample between 0 and +-1: +-0.5 ->
+ * +-1), and the line spans the whole int32 range without overflow. */
+static void test_bridge_halves_and_extremes(void **state)
+{
+    (void)state;
+    imu_sample_t smp;
+    memset(&smp, 0, sizeof smp);
+    smp.lost = 1u;
+    smp.raw[0] = 1;
+    smp.raw[1] = -1;
+    smp.raw[2] = 3;
+    smp.prev_raw[2] = 0;
+    smp.prev_raw[3] = INT32_MIN;
+    smp.raw[3] = INT32_MAX;
+    smp.prev_raw[4] = INT32_MAX;
+    smp.raw[4] = INT32_MIN;
+    int32_t w[3], v[3];
+    imu_stream_bridge(&smp, 0u, w, v);
+    assert_int_equal(w[0], 1);
+    assert_int_equal(w[1], -1);
+    assert_int_equal(w[2], 2);  /* 1.5 -> 2 */
+    /* ties of the result (-0.5 both): the step (+-(2^32 - 1) / 2) is rounded away from
+     * zero, so either neighbour comes out, each nearest */
+    assert_int_equal(v[0], 0);  /* -2^31 + 2^31 */
+    assert_int_equal(v[1], -1); /* 2^31 - 1 - 2^31 */
+    assert_int_equal(v[2], 0);
+}
+
+/* ---- plausibility ---- */
+
+/* GIVEN the ranges above THEN a gyro axis at +-109696 LSB or an accelerometer axis at
+ * +-3210 LSB is saturated, one LSB less is not. */
+static void test_saturation_at_configured_range(void **state)
+{
+    (void)state;
+    assert_int_equal(l.sat_raw[0], 109696);
+    assert_int_equal(l.sat_raw[1], 3210);
+    int32_t w[3] = {109695, -109695, 0};
+    int32_t v[3] = {3209, -3209, 0};
+    uint32_t k = 0u;
+    assert_int_equal(pair((uint8_t)k, w, v, k * PERIOD_US), IMU_SAMPLE);
+    assert_int_equal(out.saturated, 0);
+    const int axis_w[3] = {0, 1, 2};
+    for (int i = 0; i < 3; i++) {
+        int32_t ws[3] = {0, 0, 0};
+        ws[axis_w[i]] = i == 1 ? -109696 : 109696;
+        k++;
+        assert_int_equal(pair((uint8_t)(k % 15u), ws, v, k * PERIOD_US), IMU_SAMPLE);
+        assert_int_equal(out.saturated, 1);
+    }
+    for (int i = 0; i < 3; i++) {
+        int32_t vs[3] = {0, 0, 0};
+        vs[i] = i == 2 ? -3210 : 3210;
+        k++;
+        assert_int_equal(pair((uint8_t)(k % 15u), w, vs, k * PERIOD_US), IMU_SAMPLE);
+        assert_int_equal(out.saturated, 1);
+    }
+    k++;
+    assert_int_equal(pair((uint8_t)(k % 15u), w, v, k * PERIOD_US), IMU_SAMPLE);
+    assert_int_equal(out.saturated, 0);
+}
+
+/* sample k of a car turning (gyro z alternating 0 / 2000 LSB, more than 366), every other
+ * axis moving its last bit, and gyro x at x_raw */
+static void turning(uint32_t k, int32_t x_raw, int32_t w[3], int32_t v[3])
+{
+    const int32_t b = (int32_t)(k % 2u);
+    w[0] = x_raw;
+    w[1] = 5 + b;
+    w[2] = 2000 * b;
+    v[0] = b;
+    v[1] = -b;
+    v[2] = 401 + b;
+}
+
+/* GIVEN gyro x repeating 1234 while the car turns THEN from the sample where it has
+ * repeated for 2 s (200 repeats: sample 201) the sample is stuck, counted once
+ * (stuck_new 1) however long it lasts; WHEN x moves once and repeats again for 2 s THEN
+ * a new episode is counted. */
+static void test_stuck_axis_while_another_moves(void **state)
+{
+    (void)state;
+    uint32_t counted = 0u;
+    uint32_t first_stuck = 0u;
+    int32_t w[3], v[3];
+    for (uint32_t k = 1u; k <= 400u; k++) {
+        turning(k, 1234, w, v);
+        assert_int_equal(pair((uint8_t)(k % 15u), w, v, k * PERIOD_US), IMU_SAMPLE);
+        counted += out.stuck_new;
+        if (out.stuck && first_stuck == 0u) {
+            first_stuck = k;
+        }
+        if (k > 201u) {
+            assert_int_equal(out.stuck, 1);
+        }
+    }
+    assert_int_equal(first_stuck, 201u);
+    assert_int_equal(counted, 1u);
+    turning(401u, 1235, w, v); /* it moved: the episode is over */
+    assert_int_equal(pair((uint8_t)(401u % 15u), w, v, 401u * PERIOD_US), IMU_SAMPLE);
+    assert_int_equal(out.stuck, 0);
+    for (uint32_t k = 402u; k <= 700u; k++) {
+        turning(k, 1235, w, v);
+        assert_int_equal(pair((uint8_t)(k % 15u), w, v, k * PERIOD_US), IMU_SAMPLE);
+        counted += out.stuck_new;
+    }
+    assert_int_equal(counted, 2u);
+}
+
+/* GIVEN a car standing still (gyro x repeating, the others within a few LSB: far below
+ * 1 deg/s and 0.5 m/s^2) THEN after 5 s no axis is stuck: a quiet sensor repeats. */
+static void test_not_stuck_while_still(void **state)
+{
+    (void)state;
+    for (uint32_t k = 1u; k <= 500u; k++) {
+        const int32_t b = (int32_t)(k % 2u);
+        const int32_t w[3] = {1234, 5 + b, 300 * b}; /* 300 LSB < 366: not turning */
+        const int32_t v[3] = {b, 20 * b, 401};       /* 20 LSB < 20.48: not accelerating */
+        assert_int_equal(pair((uint8_t)(k % 15u), w, v, k * PERIOD_US), IMU_SAMPLE);
+        assert_int_equal(out.stuck, 0);
+        assert_int_equal(out.stuck_new, 0);
+    }
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test_setup(test_pair_gives_a_sample, setup),
+        cmocka_unit_test_setup(test_broken_pair, setup),
+        cmocka_unit_test_setup(test_bad_pair_crc, setup),
+        cmocka_unit_test_setup(test_fault_bit, setup),
+        cmocka_unit_test_setup(test_counter_steps_1_and_2, setup),
+        cmocka_unit_test_setup(test_counter_step_5_held_until_confirmed, setup),
+        cmocka_unit_test_setup(test_corrupt_counter, setup),
+        cmocka_unit_test_setup(test_gap_by_receive_time, setup),
+        cmocka_unit_test_setup(test_bridge_interpolation, setup),
+        cmocka_unit_test_setup(test_bridge_halves_and_extremes, setup),
+        cmocka_unit_test_setup(test_saturation_at_configured_range, setup),
+        cmocka_unit_test_setup(test_stuck_axis_while_another_moves, setup),
+        cmocka_unit_test_setup(test_not_stuck_while_still, setup),
+    };
+    return cmocka_run_group_tests_name("imu_stream", tests, NULL, NULL);
+}
