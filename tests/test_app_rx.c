@@ -12,6 +12,7 @@
 #include <cmocka.h>
 
 #include "app_rx.h"
+#include "navecu_protocol.h"
 #include "can_frames.h"
 #include "e2e.h"
 #include "navecu_can.h"
@@ -19,6 +20,7 @@
 
 static rx_state_t rx;
 static rx_input_t in;
+static const uint32_t STOCK_IDS[NAVECU_MSG_N] = NAVECU_MSG_STOCK_IDS;
 
 static int setup(void **state)
 {
@@ -30,7 +32,7 @@ static int setup(void **state)
 
 static rx_verdict_t decode(const hal_can_frame_t *f)
 {
-    return app_rx_decode(&rx, f, &in);
+    return app_rx_decode(&rx, STOCK_IDS, f, &in);
 }
 
 static hal_can_frame_t wheels(int16_t raw, uint8_t counter)
@@ -93,7 +95,7 @@ static void test_dlc_7_refused(void **state)
 {
     (void)state;
     uint32_t ids[16];
-    const size_t n = app_rx_ids(ids, 16u);
+    const size_t n = app_rx_ids(STOCK_IDS, ids, 16u);
     assert_int_equal(n, 10u);
     const uint8_t d[8] = {0};
     for (size_t i = 0u; i < n; i++) {
@@ -110,7 +112,7 @@ static void test_rx_ids(void **state)
     const uint32_t expected[10] = {0x100u, 0x101u, 0x110u, 0x120u, 0x121u,
                                    0x122u, 0x123u, 0x200u, 0x201u, 0x202u};
     uint32_t ids[10];
-    assert_int_equal(app_rx_ids(ids, 10u), 10u);
+    assert_int_equal(app_rx_ids(STOCK_IDS, ids, 10u), 10u);
     for (int i = 0; i < 10; i++) {
         int found = 0;
         for (int j = 0; j < 10; j++) {
@@ -119,7 +121,7 @@ static void test_rx_ids(void **state)
         assert_true(found);
     }
     uint32_t few[4] = {0u, 0u, 0u, 0xDEADu};
-    assert_int_equal(app_rx_ids(few, 3u), 10u);
+    assert_int_equal(app_rx_ids(STOCK_IDS, few, 3u), 10u);
     assert_int_equal(few[3], 0xDEADu); /* nothing written beyond max */
 }
 

@@ -34,7 +34,7 @@ static int setup(void **state)
 {
     (void)state;
     memset(&s, 0, sizeof s);
-    imu_link_init(&l, RATE_HZ, GYRO_RANGE_RPS, ACCEL_RANGE_MPS2);
+    imu_link_init(&l, RATE_HZ, GYRO_RANGE_RPS, ACCEL_RANGE_MPS2, NAVECU_CAN_IMU_ACCEL_FRAME_ID);
     memset(&out, 0, sizeof out);
     return 0;
 }

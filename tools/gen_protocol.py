@@ -9,6 +9,10 @@ It writes
   NAVECU_HEALTH_<NAME> (value 2^k, description "NAME: meaning");
 - the NAV_Status pages, from the multiplexer: NAVECU_NAV_STATUS_PAGE_STATE (the page with
   Mode and HealthFlags) and the first and last counter page;
+- navecu's messages as an index (NAVECU_MSG_<NAME>, NAVECU_MSG_N), their stock CAN
+  identifiers (NAVECU_MSG_STOCK_IDS, the DBC's) and which of them navecu receives
+  (NAVECU_MSG_IS_INPUT: sent by another node) - the identifiers an integrator may change
+  (app_config_t.can_ids);
 - every signal's physical range [min|max] (NAVECU_<MESSAGE>_<SIGNAL>_MIN/_MAX, float) and
   the largest raw value of every unsigned signal (..._RAW_MAX).
 Names follow cantools' C generator (camel_to_snake_case), so they sit beside the codec's.
@@ -59,6 +63,14 @@ def generate(db) -> str:
     counters = [p for p in pages if p != state]
     if counters != list(range(counters[0], counters[-1] + 1)):
         raise ValueError("NAV_Status: the counter pages are not consecutive")
+    names = [camel_to_snake_case(m.name).upper() for m in db.messages]
+    out += ["", "/* navecu's messages: index, stock identifier, direction */",
+            "typedef enum {"]
+    out += [f"    NAVECU_MSG_{n} = {i}," for i, n in enumerate(names)]
+    out += [f"    NAVECU_MSG_N = {len(names)}", "} navecu_msg_t;",
+            "#define NAVECU_MSG_STOCK_IDS {" + ", ".join(f"0x{m.frame_id:03X}u" for m in db.messages) + "}",
+            "#define NAVECU_MSG_IS_INPUT {" + ", ".join("0u" if "NAVECU" in m.senders else "1u"
+                                                        for m in db.messages) + "}"]
     out += ["", f"/* NAV_Status pages ({mux.name}) */",
             f"#define NAVECU_NAV_STATUS_PAGE_STATE {state}u",
             f"#define NAVECU_NAV_STATUS_PAGE_COUNTERS_FIRST {counters[0]}u",

@@ -30,11 +30,10 @@ void SysTick_Handler(void)
 
 void board_main(void)
 {
-    const size_t n_ids = app_rx_ids(rx_ids, RX_IDS_MAX);
-    hal_t *hal = hal_stm32_init(rx_ids, n_ids);
-
     const app_config_t cfg = app_default_config();
     (void)app_init(&app, &cfg); /* the defaults are valid (test_app) */
+    const size_t n_ids = app_rx_ids(app.cfg.can_ids, rx_ids, RX_IDS_MAX);
+    hal_t *hal = hal_stm32_init(rx_ids, n_ids);
     app_boot(&app, hal);
 
     const uint32_t hclk = hal->clock.hclk_hz != 0u ? hal->clock.hclk_hz : 16000000u;

@@ -40,7 +40,8 @@ int app_init(app_t *app, const app_config_t *cfg)
     }
     app->cfg = *cfg;
     calib_init(&app->keep.cal);
-    imu_link_init(&app->keep.imu, cfg->imu_rate_hz, cfg->gyro_range_rps, cfg->accel_range_mps2);
+    imu_link_init(&app->keep.imu, cfg->imu_rate_hz, cfg->gyro_range_rps, cfg->accel_range_mps2,
+                  cfg->can_ids[NAVECU_MSG_IMU_ACCEL]);
     app->run.mode = APP_MODE_WAIT_INIT;
     return NAV_OK;
 }
@@ -276,7 +277,7 @@ void app_handle_frame(app_t *a, hal_t *hal, const hal_can_frame_t *f)
         a->keep.last_rx_t_us = f->t_us;
     }
     rx_input_t in;
-    const rx_verdict_t v = app_rx_decode(&a->keep.rx, f, &in);
+    const rx_verdict_t v = app_rx_decode(&a->keep.rx, a->cfg.can_ids, f, &in);
     if (v != RX_OK) {
         reject(a, rx_counter(&a->keep.health, v));
         if (in.kind == RX_GNSS_POSITION) {

@@ -28,6 +28,10 @@ app_config_t app_default_config(void)
     /* an automotive MEMS IMU's range: 300 deg/s, 8 g */
     cfg.gyro_range_rps = NAV_C(5.235988);
     cfg.accel_range_mps2 = NAV_C(78.4532);
+    static const uint32_t stock_ids[NAVECU_MSG_N] = NAVECU_MSG_STOCK_IDS;
+    for (int i = 0; i < (int)NAVECU_MSG_N; i++) {
+        cfg.can_ids[i] = stock_ids[i];
+    }
     return cfg;
 }
 
@@ -42,9 +46,25 @@ static int lever_ok(const nav_real_t l[3])
            nav_fabs(l[2]) <= NAV_C(10.0);
 }
 
+/* every identifier a standard (11-bit) one, none used twice */
+static int can_ids_ok(const uint32_t ids[NAVECU_MSG_N])
+{
+    for (int i = 0; i < (int)NAVECU_MSG_N; i++) {
+        if (ids[i] > 0x7FFu) {
+            return 0;
+        }
+        for (int j = 0; j < i; j++) {
+            if (ids[j] == ids[i]) {
+                return 0;
+            }
+        }
+    }
+    return 1;
+}
+
 int app_config_valid(const app_config_t *cfg)
 {
-    return cfg->imu_rate_hz >= 10u && cfg->imu_rate_hz <= 400u && cfg->nav_rate_hz != 0u &&
+    return can_ids_ok(cfg->can_ids) && cfg->imu_rate_hz >= 10u && cfg->imu_rate_hz <= 400u && cfg->nav_rate_hz != 0u &&
            cfg->status_rate_hz != 0u && cfg->nav_rate_hz <= cfg->imu_rate_hz &&
            cfg->status_rate_hz <= cfg->imu_rate_hz && cfg->level_s != 0u &&
            cfg->level_s <= 600u && cfg->cal_min_base_m >= NAV_C(0.0) &&

@@ -10,6 +10,7 @@
 #include <stdint.h>
 
 #include "nav_types.h"
+#include "navecu_protocol.h"
 #include "odo.h"
 
 typedef struct {
@@ -34,6 +35,10 @@ typedef struct {
                                      the IMU, body axes, m */
     nav_real_t gyro_range_rps;    /* the IMU's measurement range: a rate at or beyond it is */
     nav_real_t accel_range_mps2;  /* saturated (counted, flagged) */
+    /* navecu's own CAN identifiers (11-bit, all different), indexed by navecu_msg_t
+     * (navecu_protocol.h): the DBC's by default, the vehicle profile's on a car whose bus
+     * already uses them (vehicles/, docs/vehicles.md) */
+    uint32_t can_ids[NAVECU_MSG_N];
 } app_config_t;
 
 /* Defaults: IMU 100 Hz, outputs 50 Hz, status 10 Hz, levelling 30 s, the mid-grade IMU of

@@ -6,46 +6,39 @@
 #include "app_tuning.h"
 #include "navecu_can.h"
 
-static const uint32_t RX_IDS[] = {
-    NAVECU_CAN_IMU_RATE_FRAME_ID,        NAVECU_CAN_IMU_ACCEL_FRAME_ID,
-    NAVECU_CAN_WHEEL_SPEEDS_FRAME_ID,    NAVECU_CAN_GNSS_POSITION_FRAME_ID,
-    NAVECU_CAN_GNSS_VELOCITY_FRAME_ID,   NAVECU_CAN_GNSS_STATUS_FRAME_ID,
-    NAVECU_CAN_GNSS_HEIGHT_FRAME_ID,     NAVECU_CAN_CMD_KNOWN_POSITION_FRAME_ID,
-    NAVECU_CAN_CMD_CONTROL_FRAME_ID,     NAVECU_CAN_CMD_INITIAL_ATTITUDE_FRAME_ID,
-};
+static const uint8_t IS_INPUT[NAVECU_MSG_N] = NAVECU_MSG_IS_INPUT;
 
-size_t app_rx_ids(uint32_t *ids, size_t max)
+size_t app_rx_ids(const uint32_t can_ids[NAVECU_MSG_N], uint32_t *ids, size_t max)
 {
-    const size_t n = sizeof RX_IDS / sizeof RX_IDS[0];
-    for (size_t i = 0u; i < n && i < max; i++) {
-        ids[i] = RX_IDS[i];
+    size_t n = 0u;
+    for (int m = 0; m < (int)NAVECU_MSG_N; m++) {
+        if (IS_INPUT[m]) {
+            if (n < max) {
+                ids[n] = can_ids[m];
+            }
+            n++;
+        }
     }
     return n;
 }
 
-static int is_input(uint32_t id)
+/* the message of navecu's protocol on this identifier, or NAVECU_MSG_N for none */
+static int msg_of(const uint32_t can_ids[NAVECU_MSG_N], uint32_t id)
 {
-    for (size_t i = 0u; i < sizeof RX_IDS / sizeof RX_IDS[0]; i++) {
-        if (RX_IDS[i] == id) {
-            return 1;
+    for (int m = 0; m < (int)NAVECU_MSG_N; m++) {
+        if (can_ids[m] == id) {
+            return m;
         }
     }
-    return 0;
-}
-
-static int is_own_output(uint32_t id)
-{
-    return id == NAVECU_CAN_NAV_POSITION_FRAME_ID || id == NAVECU_CAN_NAV_HEIGHT_FRAME_ID ||
-           id == NAVECU_CAN_NAV_VELOCITY_FRAME_ID || id == NAVECU_CAN_NAV_ATTITUDE_FRAME_ID ||
-           id == NAVECU_CAN_NAV_STATUS_FRAME_ID || id == NAVECU_CAN_NAV_CALIBRATION_FRAME_ID;
+    return (int)NAVECU_MSG_N;
 }
 
 /* 1 if the message carries its own E2E CRC in byte 7 (the IMU pair is checked as a whole
  * when IMU_Accel arrives, imu_stream.h) */
-static int is_e2e(uint32_t id)
+static int is_e2e(int msg)
 {
-    return id == NAVECU_CAN_WHEEL_SPEEDS_FRAME_ID || id == NAVECU_CAN_GNSS_VELOCITY_FRAME_ID ||
-           id == NAVECU_CAN_CMD_CONTROL_FRAME_ID || id == NAVECU_CAN_CMD_INITIAL_ATTITUDE_FRAME_ID;
+    return msg == NAVECU_MSG_WHEEL_SPEEDS || msg == NAVECU_MSG_GNSS_VELOCITY ||
+           msg == NAVECU_MSG_CMD_CONTROL || msg == NAVECU_MSG_CMD_INITIAL_ATTITUDE;
 }
 
 /* GNSS and known positions: the DBC's ranges, except that longitude -180 deg is refused
@@ -70,9 +63,9 @@ static rx_command_t command_of(uint8_t raw)
     return raw < (uint8_t)RX_CMD_UNKNOWN ? (rx_command_t)raw : RX_CMD_UNKNOWN;
 }
 
-static rx_verdict_t decode_imu(uint32_t id, const uint8_t d[8], rx_input_t *in)
+static rx_verdict_t decode_imu(int msg, const uint8_t d[8], rx_input_t *in)
 {
-    if (id == NAVECU_CAN_IMU_RATE_FRAME_ID) {
+    if (msg == NAVECU_MSG_IMU_RATE) {
         struct navecu_can_imu_rate_t m;
         navecu_can_imu_rate_unpack(&m, d, 8u);
         if (m.imu_counter > E2E_COUNTER_MAX) {
@@ -98,10 +91,9 @@ static rx_verdict_t decode_imu(uint32_t id, const uint8_t d[8], rx_input_t *in)
     return RX_OK;
 }
 
-static rx_verdict_t decode_gnss(rx_state_t *rx, uint32_t id, const uint8_t d[8],
-                                rx_input_t *in)
+static rx_verdict_t decode_gnss(rx_state_t *rx, int msg, const uint8_t d[8], rx_input_t *in)
 {
-    if (id == NAVECU_CAN_GNSS_POSITION_FRAME_ID) {
+    if (msg == NAVECU_MSG_GNSS_POSITION) {
         struct navecu_can_gnss_position_t m;
         navecu_can_gnss_position_unpack(&m, d, 8u);
         in->kind = RX_GNSS_POSITION;
@@ -109,7 +101,7 @@ static rx_verdict_t decode_gnss(rx_state_t *rx, uint32_t id, const uint8_t d[8],
         in->u.position.lon_e7 = m.longitude;
         return lat_lon_ok(m.latitude, m.longitude) ? RX_OK : RX_GNSS_BAD;
     }
-    if (id == NAVECU_CAN_GNSS_VELOCITY_FRAME_ID) {
+    if (msg == NAVECU_MSG_GNSS_VELOCITY) {
         struct navecu_can_gnss_velocity_t m;
         navecu_can_gnss_velocity_unpack(&m, d, 8u);
         if (e2e_counter_step(&rx->gnss_vel, m.gnss_epoch) <= 0) {
@@ -123,7 +115,7 @@ static rx_verdict_t decode_gnss(rx_state_t *rx, uint32_t id, const uint8_t d[8],
         in->u.velocity.sacc_mps = navecu_can_gnss_velocity_speed_accuracy_decode(m.speed_accuracy);
         return RX_OK;
     }
-    if (id == NAVECU_CAN_GNSS_HEIGHT_FRAME_ID) {
+    if (msg == NAVECU_MSG_GNSS_HEIGHT) {
         struct navecu_can_gnss_height_t m;
         navecu_can_gnss_height_unpack(&m, d, 8u);
         if (!navecu_can_gnss_height_height_is_in_range(m.height)) {
@@ -148,10 +140,10 @@ static rx_verdict_t decode_gnss(rx_state_t *rx, uint32_t id, const uint8_t d[8],
     return RX_OK;
 }
 
-static rx_verdict_t decode_command(rx_state_t *rx, uint32_t id, const uint8_t d[8],
+static rx_verdict_t decode_command(rx_state_t *rx, int msg, const uint8_t d[8],
                                    rx_input_t *in)
 {
-    if (id == NAVECU_CAN_CMD_KNOWN_POSITION_FRAME_ID) {
+    if (msg == NAVECU_MSG_CMD_KNOWN_POSITION) {
         struct navecu_can_cmd_known_position_t m;
         navecu_can_cmd_known_position_unpack(&m, d, 8u);
         if (!lat_lon_ok(m.latitude, m.longitude)) {
@@ -162,7 +154,7 @@ static rx_verdict_t decode_command(rx_state_t *rx, uint32_t id, const uint8_t d[
         in->u.position.lon_e7 = m.longitude;
         return RX_OK;
     }
-    if (id == NAVECU_CAN_CMD_INITIAL_ATTITUDE_FRAME_ID) {
+    if (msg == NAVECU_MSG_CMD_INITIAL_ATTITUDE) {
         struct navecu_can_cmd_initial_attitude_t m;
         navecu_can_cmd_initial_attitude_unpack(&m, d, 8u);
         if (!command_counter_ok(&rx->att, m.att_counter)) {
@@ -192,29 +184,31 @@ static rx_verdict_t decode_command(rx_state_t *rx, uint32_t id, const uint8_t d[
     return RX_OK;
 }
 
-rx_verdict_t app_rx_decode(rx_state_t *rx, const hal_can_frame_t *f, rx_input_t *in)
+rx_verdict_t app_rx_decode(rx_state_t *rx, const uint32_t can_ids[NAVECU_MSG_N],
+                           const hal_can_frame_t *f, rx_input_t *in)
 {
     in->kind = RX_NONE;
     if (f->extended) {
         return RX_UNKNOWN_ID;
     }
-    if (is_own_output(f->id)) {
-        return RX_OK; /* our own outputs, seen on a shared bus */
-    }
-    if (!is_input(f->id)) {
+    const int msg = msg_of(can_ids, f->id);
+    if (msg == (int)NAVECU_MSG_N) {
         return RX_UNKNOWN_ID;
+    }
+    if (!IS_INPUT[msg]) {
+        return RX_OK; /* our own outputs, seen on a shared bus */
     }
     if (f->dlc != 8u) {
         return RX_BAD_DLC;
     }
-    if (is_e2e(f->id) && !e2e_crc_ok(f->id, f->data)) {
+    if (is_e2e(msg) && !e2e_crc_ok(f->id, f->data)) {
         return RX_BAD_CRC;
     }
-    switch (f->id) {
-    case NAVECU_CAN_IMU_RATE_FRAME_ID:
-    case NAVECU_CAN_IMU_ACCEL_FRAME_ID:
-        return decode_imu(f->id, f->data, in);
-    case NAVECU_CAN_WHEEL_SPEEDS_FRAME_ID: {
+    switch (msg) {
+    case NAVECU_MSG_IMU_RATE:
+    case NAVECU_MSG_IMU_ACCEL:
+        return decode_imu(msg, f->data, in);
+    case NAVECU_MSG_WHEEL_SPEEDS: {
         struct navecu_can_wheel_speeds_t m;
         navecu_can_wheel_speeds_unpack(&m, f->data, 8u);
         if (e2e_counter_step(&rx->wheel, m.wheel_counter) <= 0) {
@@ -227,13 +221,13 @@ rx_verdict_t app_rx_decode(rx_state_t *rx, const hal_can_frame_t *f, rx_input_t 
         in->u.wheels.mps[3] = navecu_can_wheel_speeds_wheel_speed_rr_decode(m.wheel_speed_rr);
         return RX_OK;
     }
-    case NAVECU_CAN_GNSS_POSITION_FRAME_ID:
-    case NAVECU_CAN_GNSS_VELOCITY_FRAME_ID:
-    case NAVECU_CAN_GNSS_HEIGHT_FRAME_ID:
-    case NAVECU_CAN_GNSS_STATUS_FRAME_ID:
-        return decode_gnss(rx, f->id, f->data, in);
+    case NAVECU_MSG_GNSS_POSITION:
+    case NAVECU_MSG_GNSS_VELOCITY:
+    case NAVECU_MSG_GNSS_HEIGHT:
+    case NAVECU_MSG_GNSS_STATUS:
+        return decode_gnss(rx, msg, f->data, in);
     default: /* CMD_KnownPosition, CMD_Control, CMD_InitialAttitude */
-        return decode_command(rx, f->id, f->data, in);
+        return decode_command(rx, msg, f->data, in);
     }
 }
 

@@ -20,6 +20,7 @@
 
 #include "e2e.h"
 #include "hal.h"
+#include "navecu_protocol.h"
 #include "sins.h"
 
 typedef enum {
@@ -115,10 +116,11 @@ typedef struct {
     e2e_counter_t wheel, cmd, gnss_vel, att;
 } rx_state_t;
 
-/* Decode and check one frame. Returns RX_OK with *in filled (kind RX_NONE for navecu's
+/* Decode and check one frame, navecu's messages on the identifiers can_ids. Returns RX_OK with *in filled (kind RX_NONE for navecu's
  * own outputs), or the reason it was refused (*in then undefined, except that a refused
  * GNSS_Position sets kind RX_GNSS_POSITION, which the epoch in assembly must know). */
-rx_verdict_t app_rx_decode(rx_state_t *rx, const hal_can_frame_t *f, rx_input_t *in);
+rx_verdict_t app_rx_decode(rx_state_t *rx, const uint32_t can_ids[NAVECU_MSG_N],
+                           const hal_can_frame_t *f, rx_input_t *in);
 
 /* Raw IMU increments (the signals' LSB) to SI, over an interval of dt_s. */
 void app_rx_imu_increment(const int32_t w_raw[3], const int32_t v_raw[3], nav_real_t dt_s,
@@ -128,8 +130,8 @@ void app_rx_imu_increment(const int32_t w_raw[3], const int32_t v_raw[3], nav_re
 nav_real_t app_rx_angle_lsb_rad(void);
 nav_real_t app_rx_vel_lsb_mps(void);
 
-/* The CAN identifiers the application receives (for receive filters): writes up to max
- * of them to ids and returns how many there are. */
-size_t app_rx_ids(uint32_t *ids, size_t max);
+/* The CAN identifiers the application receives with can_ids (app_config_t.can_ids), for
+ * receive filters: writes up to max of them to ids and returns how many there are. */
+size_t app_rx_ids(const uint32_t can_ids[NAVECU_MSG_N], uint32_t *ids, size_t max);
 
 #endif /* NAVECU_APP_RX_H */

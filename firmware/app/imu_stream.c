@@ -4,13 +4,13 @@
 #include <string.h>
 
 #include "app_tuning.h"
-#include "navecu_can.h"
 
 void imu_link_init(imu_link_t *l, uint32_t rate_hz, nav_real_t gyro_range_rps,
-                   nav_real_t accel_range_mps2)
+                   nav_real_t accel_range_mps2, uint32_t accel_id)
 {
     memset(l, 0, sizeof *l);
     l->rate_hz = rate_hz;
+    l->accel_id = accel_id;
     /* at most 100 rad/s and 2000 m/s^2 (app_config_valid) over 0.1 s: within int32 */
     const nav_real_t dt = NAV_C(1.0) / (nav_real_t)rate_hz;
     const nav_real_t w_lim = gyro_range_rps * dt * APP_IMU_SAT_FRACTION / app_rx_angle_lsb_rad();
@@ -115,7 +115,7 @@ imu_verdict_t imu_stream_accel(imu_stream_t *s, imu_link_t *l, uint8_t counter, 
     }
     s->rate_pending = 0u;
     /* one E2E data element in two frames: the CRC covers IMU_Rate too */
-    if (data[7] != e2e_pair_crc(NAVECU_CAN_IMU_ACCEL_FRAME_ID, s->rate_data, data)) {
+    if (data[7] != e2e_pair_crc(l->accel_id, s->rate_data, data)) {
         return IMU_REJ_CRC;
     }
     e2e_counter_t probe = l->counter;

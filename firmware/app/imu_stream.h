@@ -26,6 +26,7 @@ typedef struct {
     uint8_t fault;         /* the last sample's ImuFault bit */
     int32_t sat_raw[2];    /* gyro and accelerometer range in raw LSB per sample */
     uint32_t rate_hz;      /* the configured IMU rate */
+    uint32_t accel_id;     /* IMU_Accel's CAN identifier: the pair CRC covers it */
 } imu_link_t;
 
 /* Plausibility state: per axis (angle x y z, velocity x y z) the repeats of the raw value
@@ -67,9 +68,10 @@ typedef struct {
     uint8_t stuck;       /* an axis repeats while the car moves */
 } imu_sample_t;
 
-/* Boot: the saturation limits from the configured ranges (rad/s, m/s^2) and IMU rate. */
+/* Boot: the saturation limits from the configured ranges (rad/s, m/s^2) and IMU rate;
+ * accel_id: IMU_Accel's identifier. */
 void imu_link_init(imu_link_t *l, uint32_t rate_hz, nav_real_t gyro_range_rps,
-                   nav_real_t accel_range_mps2);
+                   nav_real_t accel_range_mps2, uint32_t accel_id);
 
 /* An IMU_Rate (its counter already checked in range): held for its IMU_Accel. Returns 1
  * if a previous IMU_Rate was still waiting (a broken pair: count imu_pair_broken). */

@@ -68,7 +68,7 @@ static void emit_navigation(app_t *a, hal_t *hal)
     p.latitude = (int32_t)lsb_div_round(s->pos.lat, GEO_LSB_PER_DEG_E7);
     p.longitude = (int32_t)lsb_div_round(s->pos.lon, GEO_LSB_PER_DEG_E7);
     navecu_can_nav_position_pack(d, &p, sizeof d);
-    send(tx, hal, NAVECU_CAN_NAV_POSITION_FRAME_ID, d);
+    send(tx, hal, a->cfg.can_ids[NAVECU_MSG_NAV_POSITION], d);
 
     struct navecu_can_nav_height_t h;
     h.height = (int32_t)lsb_div_round(s->pos.h, 10 * GEO_LSB_PER_MM); /* 0.01 m */
@@ -84,7 +84,7 @@ static void emit_navigation(app_t *a, hal_t *hal)
     h.nav_counter = next_counter(tx, TX_HEIGHT);
     h.nav_crc = 0u;
     navecu_can_nav_height_pack(d, &h, sizeof d);
-    send_protected(tx, hal, NAVECU_CAN_NAV_HEIGHT_FRAME_ID, d);
+    send_protected(tx, hal, a->cfg.can_ids[NAVECU_MSG_NAV_HEIGHT], d);
 
     struct navecu_can_nav_velocity_t v;
     v.vel_east = navecu_can_nav_velocity_vel_east_encode(nav_clamp(
@@ -96,7 +96,7 @@ static void emit_navigation(app_t *a, hal_t *hal)
     v.nav_counter = next_counter(tx, TX_VEL);
     v.nav_crc = 0u;
     navecu_can_nav_velocity_pack(d, &v, sizeof d);
-    send_protected(tx, hal, NAVECU_CAN_NAV_VELOCITY_FRAME_ID, d);
+    send_protected(tx, hal, a->cfg.can_ids[NAVECU_MSG_NAV_VELOCITY], d);
 
     nav_real_t roll, pitch, heading;
     sins_euler(s, &roll, &pitch, &heading);
@@ -126,7 +126,7 @@ static void emit_navigation(app_t *a, hal_t *hal)
     at.nav_counter = next_counter(tx, TX_ATT);
     at.nav_crc = 0u;
     navecu_can_nav_attitude_pack(d, &at, sizeof d);
-    send_protected(tx, hal, NAVECU_CAN_NAV_ATTITUDE_FRAME_ID, d);
+    send_protected(tx, hal, a->cfg.can_ids[NAVECU_MSG_NAV_ATTITUDE], d);
 }
 
 static uint16_t sat16(uint32_t x)
@@ -265,7 +265,7 @@ void output_status(app_t *a, hal_t *hal)
     }
     st.nav_counter = next_counter(tx, TX_STATUS);
     navecu_can_nav_status_pack(d, &st, sizeof d);
-    send_protected(tx, hal, NAVECU_CAN_NAV_STATUS_FRAME_ID, d);
+    send_protected(tx, hal, a->cfg.can_ids[NAVECU_MSG_NAV_STATUS], d);
 
     memset(&st, 0, sizeof st);
     st.status_page = tx->status_page < NAVECU_NAV_STATUS_PAGE_COUNTERS_FIRST
@@ -277,7 +277,7 @@ void output_status(app_t *a, hal_t *hal)
                                     : st.status_page + 1u);
     st.nav_counter = next_counter(tx, TX_STATUS);
     navecu_can_nav_status_pack(d, &st, sizeof d);
-    send_protected(tx, hal, NAVECU_CAN_NAV_STATUS_FRAME_ID, d);
+    send_protected(tx, hal, a->cfg.can_ids[NAVECU_MSG_NAV_STATUS], d);
 }
 
 static void emit_calibration(app_t *a, hal_t *hal)
@@ -299,7 +299,7 @@ static void emit_calibration(app_t *a, hal_t *hal)
     m.cal_count = c->count;
     m.nav_counter = next_counter(&a->keep.tx, TX_CAL);
     navecu_can_nav_calibration_pack(d, &m, sizeof d);
-    send_protected(&a->keep.tx, hal, NAVECU_CAN_NAV_CALIBRATION_FRAME_ID, d);
+    send_protected(&a->keep.tx, hal, a->cfg.can_ids[NAVECU_MSG_NAV_CALIBRATION], d);
 }
 
 void output_due(app_t *a, hal_t *hal)

@@ -415,7 +415,7 @@ static void gnss_epoch(fz_app_t *z, rd_t *r)
 void fz_run_records(fz_app_t *z, const uint8_t *data, size_t size)
 {
     uint32_t ids[16];
-    size_t n_ids = app_rx_ids(ids, 16u);
+    size_t n_ids = app_rx_ids(z->app->cfg.can_ids, ids, 16u);
     if (n_ids > 16u) {
         n_ids = 16u;
     }

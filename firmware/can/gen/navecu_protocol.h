@@ -17,6 +17,29 @@
 #define NAVECU_HEALTH_ODO_REJECTED 0x0400u /* the wheel speeds disagreed with the filter (locked or spinning wheels) in the last second */
 #define NAVECU_HEALTH_REACQUIRE 0x0800u /* after an IMU gap too long to bridge or a filter reset, waiting for a GNSS epoch to re-acquire position, velocity and heading */
 
+/* navecu's messages: index, stock identifier, direction */
+typedef enum {
+    NAVECU_MSG_IMU_RATE = 0,
+    NAVECU_MSG_IMU_ACCEL = 1,
+    NAVECU_MSG_WHEEL_SPEEDS = 2,
+    NAVECU_MSG_GNSS_POSITION = 3,
+    NAVECU_MSG_GNSS_VELOCITY = 4,
+    NAVECU_MSG_GNSS_STATUS = 5,
+    NAVECU_MSG_GNSS_HEIGHT = 6,
+    NAVECU_MSG_CMD_KNOWN_POSITION = 7,
+    NAVECU_MSG_CMD_CONTROL = 8,
+    NAVECU_MSG_CMD_INITIAL_ATTITUDE = 9,
+    NAVECU_MSG_NAV_POSITION = 10,
+    NAVECU_MSG_NAV_HEIGHT = 11,
+    NAVECU_MSG_NAV_VELOCITY = 12,
+    NAVECU_MSG_NAV_ATTITUDE = 13,
+    NAVECU_MSG_NAV_STATUS = 14,
+    NAVECU_MSG_NAV_CALIBRATION = 15,
+    NAVECU_MSG_N = 16
+} navecu_msg_t;
+#define NAVECU_MSG_STOCK_IDS {0x100u, 0x101u, 0x110u, 0x120u, 0x121u, 0x122u, 0x123u, 0x200u, 0x201u, 0x202u, 0x300u, 0x301u, 0x302u, 0x303u, 0x310u, 0x311u}
+#define NAVECU_MSG_IS_INPUT {1u, 1u, 1u, 1u, 1u, 1u, 1u, 1u, 1u, 1u, 0u, 0u, 0u, 0u, 0u, 0u}
+
 /* NAV_Status pages (StatusPage) */
 #define NAVECU_NAV_STATUS_PAGE_STATE 0u
 #define NAVECU_NAV_STATUS_PAGE_COUNTERS_FIRST 1u
