@@ -19,10 +19,22 @@ CFLAGS_BASE := $(CSTD) -O2 -g $(WARN) $(FPFLAGS)
 SAN_FLAGS := -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
 
 # firmware/ sees only its own folders and the HAL interface (docs/architecture.md)
-FW_INC := -Ifirmware/nav -Ifirmware/can -Ifirmware/can/gen -Ifirmware/app -Ihal
+FW_INC := -Ifirmware/nav -Ifirmware/can -Ifirmware/can/gen -Ifirmware/app -Ifirmware/vehicle -Ihal
 HOST_INC := $(FW_INC) -Ihal/common -Ihal/linux -Ihal/cortex_m4f -Ihost_sim -Itests/support
 
 CORE_SRC := $(wildcard firmware/nav/*.c)
+
+# ---- the vehicle profile (vehicles/NAME.toml, docs/vehicles.md): `make VEHICLE=NAME`.
+# tools/vehicle.py generates the car messages' codec and vehicle_profile.c into
+# build/vehicle/NAME/ from the profile and the car's DBC, and fails on an identifier
+# collision. The tests always use native; the host executable of another profile is
+# build/host/navecu-NAME, its ECU images are in build/target-NAME/.
+VEHICLE ?= native
+VEH_SUFFIX := $(if $(filter native,$(VEHICLE)),,-$(VEHICLE))
+VEH_OUT := $(BUILD)/vehicle
+VEHICLES_BUILT := $(sort native $(VEHICLE))
+VEH_GEN_SRC = $(VEH_OUT)/$(1)/vehicle_profile.c $(VEH_OUT)/$(1)/veh_can.c
+VEH_SRC = $(call VEH_GEN_SRC,$(1)) firmware/vehicle/vehicle_checksum.c
 CODEC_GEN := firmware/can/gen/navecu_can.c firmware/can/gen/navecu_can.h
 APP_SRC := firmware/can/e2e.c firmware/can/gen/navecu_can.c $(sort $(wildcard firmware/app/*.c))
 # the host executable: its board files (host_sim/)
@@ -56,7 +68,7 @@ TESTS_M4_HAL := test_bxcan test_stm32_flash test_stm32_iwdg test_stm32_clock tes
 # keep objects of pattern-built test programs between runs
 .SECONDARY:
 
-all: $(BUILD)/host/navecu
+all: $(BUILD)/host/navecu$(VEH_SUFFIX)
 
 help:
 	@echo "make               build the host firmware: build/host/navecu (see --help)"
@@ -112,9 +124,11 @@ $(BUILD)/$(1)/libtestsupport.a: $(SUPPORT_SRC_F64:%.c=$(BUILD)/$(1)/f64/%.o) \
 	$$(AR) rcs $$@ $$^
 
 $(1)_LIBS := $(BUILD)/$(1)/libtestsupport.a $(BUILD)/$(1)/libnavapp.a \
+             $(BUILD)/$(1)/libvehicle_native.a \
              $(BUILD)/$(1)/libnavcore_f32.a $(BUILD)/$(1)/libnavcore_f64.a
 
-$(BUILD)/$(1)/navecu: $(HOST_SIM_SRC:%.c=$(BUILD)/$(1)/f32/%.o) $(BUILD)/$(1)/libnavapp.a \
+$(BUILD)/$(1)/navecu$(VEH_SUFFIX): $(HOST_SIM_SRC:%.c=$(BUILD)/$(1)/f32/%.o) $(BUILD)/$(1)/libnavapp.a \
+		$(BUILD)/$(1)/libvehicle_$(VEHICLE).a \
 		$(BUILD)/$(1)/libhal_linux.a $(BUILD)/$(1)/libnavcore_f32.a
 	@mkdir -p $$(@D)
 	$$(CC) $(2) $$^ -lm -o $$@
@@ -145,6 +159,19 @@ $(foreach t,$(TESTS_M4_HAL),$(BUILD)/$(1)/tests/$(t)): $(BUILD)/$(1)/tests/test_
 $(1)_TEST_BINS := $(foreach t,$(TESTS_VARIANT),$(BUILD)/$(1)/tests/$(t)_f32 $(BUILD)/$(1)/tests/$(t)_f64) \
                   $(foreach t,$(TESTS_F32) $(TESTS_BOTH) $(TESTS_FAKE_HAL) $(TESTS_M4_HAL) test_hal_linux,$(BUILD)/$(1)/tests/$(t))
 endef
+
+# $(1) = flavour, $(2) = extra flags, $(3) = vehicle profile
+define VEHLIB
+$(BUILD)/$(1)/veh-$(3)/%.o: $(VEH_OUT)/$(3)/%.c $(VEH_OUT)/$(3)/.stamp
+	@mkdir -p $$(@D)
+	$$(CC) $$(CFLAGS_BASE) -D_DEFAULT_SOURCE $(2) $$(HOST_INC) -I$(VEH_OUT)/$(3) -MMD -MP -c $$< -o $$@
+$(BUILD)/$(1)/libvehicle_$(3).a: $(BUILD)/$(1)/veh-$(3)/vehicle_profile.o $(BUILD)/$(1)/veh-$(3)/veh_can.o \
+		$(BUILD)/$(1)/f32/firmware/vehicle/vehicle_checksum.o
+	@mkdir -p $$(@D)
+	$$(AR) rcs $$@ $$^
+endef
+$(foreach v,$(VEHICLES_BUILT),$(eval $(call VEHLIB,host,,$(v))))
+$(foreach v,$(VEHICLES_BUILT),$(eval $(call VEHLIB,asan,$(SAN_FLAGS),$(v))))
 
 $(eval $(call FLAVOUR,host,))
 $(eval $(call FLAVOUR,asan,$(SAN_FLAGS)))
@@ -190,11 +217,20 @@ deps:
 
 # ---- Python environment: pinned, git-ignored ----
 venv: $(VENV)/.stamp
-$(VENV)/.stamp: tools/requirements.txt
+$(VENV)/.stamp: tools/requirements.txt tools/requirements-data.txt
 	@./tools/ensure-deps.sh
 	python3 -m venv $(VENV)
 	$(VENV)/bin/pip install -q --disable-pip-version-check -r tools/requirements.txt
+	$(VENV)/bin/pip install -q --disable-pip-version-check --no-deps -r tools/requirements-data.txt
 	@touch $@
+
+# ---- the vehicle layer, generated per profile ----
+$(VEH_OUT)/%/.stamp: vehicles/%.toml tools/vehicle.py firmware/can/navecu.dbc $(VENV)/.stamp
+	@mkdir -p $(@D)
+	$(PY) -m tools.vehicle generate $* $(@D)
+	@touch $@
+$(VEH_OUT)/%/vehicle_profile.c $(VEH_OUT)/%/veh_can.c $(VEH_OUT)/%/veh_can.h: $(VEH_OUT)/%/.stamp ;
+.PRECIOUS: $(VEH_OUT)/%/.stamp $(VEH_OUT)/%/vehicle_profile.c $(VEH_OUT)/%/veh_can.c $(VEH_OUT)/%/veh_can.h
 
 # ---- the CAN codec, generated from the DBC ----
 codec: venv

@@ -34,6 +34,8 @@ int app_init(app_t *app, const app_config_t *cfg)
     }
     odo_config_t ocfg = odo_default_config();
     ocfg.axle = cfg->odo_axle;
+    ocfg.track_m = cfg->odo_track_m;
+    ocfg.wheelbase_m = cfg->odo_wheelbase_m;
     memset(app, 0, sizeof *app);
     if (odo_init(&app->keep.odo, &ocfg) != NAV_OK) {
         return NAV_EINVAL;

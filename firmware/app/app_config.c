@@ -1,6 +1,8 @@
 /* app_config.c - the default configuration and its range check; see app_config.h. */
 #include "app_config.h"
 
+#include "vehicle.h"
+
 app_config_t app_default_config(void)
 {
     app_config_t cfg;
@@ -9,6 +11,8 @@ app_config_t app_default_config(void)
     cfg.status_rate_hz = 10u;
     cfg.level_s = 30u; /* docs/can.md: levelling error ~ LSB / level time */
     cfg.odo_axle = ODO_AXLE_REAR;
+    cfg.odo_track_m = vehicle_profile.track_m;
+    cfg.odo_wheelbase_m = vehicle_profile.wheelbase_m;
     /* A calibration point's position error e gives errors of about e / base in dH (rad)
      * and in mu: a 3 m point 2 km away, 0.09 deg and 0.15 % (docs/odometry.md). */
     cfg.cal_min_base_m = NAV_C(2000.0);
@@ -28,9 +32,8 @@ app_config_t app_default_config(void)
     /* an automotive MEMS IMU's range: 300 deg/s, 8 g */
     cfg.gyro_range_rps = NAV_C(5.235988);
     cfg.accel_range_mps2 = NAV_C(78.4532);
-    static const uint32_t stock_ids[NAVECU_MSG_N] = NAVECU_MSG_STOCK_IDS;
     for (int i = 0; i < (int)NAVECU_MSG_N; i++) {
-        cfg.can_ids[i] = stock_ids[i];
+        cfg.can_ids[i] = vehicle_profile.can_ids[i];
     }
     return cfg;
 }
@@ -67,7 +70,9 @@ int app_config_valid(const app_config_t *cfg)
     return can_ids_ok(cfg->can_ids) && cfg->imu_rate_hz >= 10u && cfg->imu_rate_hz <= 400u && cfg->nav_rate_hz != 0u &&
            cfg->status_rate_hz != 0u && cfg->nav_rate_hz <= cfg->imu_rate_hz &&
            cfg->status_rate_hz <= cfg->imu_rate_hz && cfg->level_s != 0u &&
-           cfg->level_s <= 600u && cfg->cal_min_base_m >= NAV_C(0.0) &&
+           cfg->level_s <= 600u && cfg->odo_track_m > NAV_C(0.5) && cfg->odo_track_m < NAV_C(3.0) &&
+           cfg->odo_wheelbase_m > NAV_C(1.0) && cfg->odo_wheelbase_m < NAV_C(6.0) &&
+           cfg->cal_min_base_m >= NAV_C(0.0) &&
            cfg->cal_min_base_m < NAV_C(1e6) && within(cfg->gyro_arw_rad_rts, NAV_C(0.0), NAV_C(1.0)) &&
            within(cfg->gyro_bias_rps, NAV_C(0.0), NAV_C(1.0)) &&
            within(cfg->accel_bias_mps2, NAV_C(0.0), NAV_C(10.0)) &&

@@ -19,6 +19,8 @@ typedef struct {
     uint16_t status_rate_hz; /* NAV_Status rate, <= imu_rate_hz */
     uint16_t level_s;        /* accelerometer levelling time before navigation starts */
     odo_axle_t odo_axle;     /* wheels that measure the distance (odo.h) */
+    nav_real_t odo_track_m;       /* the measuring axle's track (the turn's wheel difference) */
+    nav_real_t odo_wheelbase_m;   /* for the front axle's steering correction */
     nav_real_t cal_min_base_m;    /* one-point calibration refused closer than this to its base */
     /* the gyro's noise and bias, for the bias estimate at standstill (a scalar Kalman
      * filter of a constant with a zero-mean prior): */
@@ -42,7 +44,8 @@ typedef struct {
 } app_config_t;
 
 /* Defaults: IMU 100 Hz, outputs 50 Hz, status 10 Hz, levelling 30 s, the mid-grade IMU of
- * seed 000, a u-blox-class standalone receiver. */
+ * seed 000, a u-blox-class standalone receiver; the car's geometry and navecu's CAN
+ * identifiers from the build's vehicle profile (firmware/vehicle/vehicle.h). */
 app_config_t app_default_config(void);
 
 /* 1 if every field is within its range (the comments above and app_config.c), else 0. */

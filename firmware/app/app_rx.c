@@ -5,6 +5,7 @@
 
 #include "app_tuning.h"
 #include "navecu_can.h"
+#include "vehicle.h"
 
 static const uint8_t IS_INPUT[NAVECU_MSG_N] = NAVECU_MSG_IS_INPUT;
 
@@ -19,7 +20,8 @@ size_t app_rx_ids(const uint32_t can_ids[NAVECU_MSG_N], uint32_t *ids, size_t ma
             n++;
         }
     }
-    return n;
+    /* and the car's messages that the vehicle profile reads */
+    return n + vehicle_rx_ids(n < max ? ids + n : ids, n < max ? max - n : 0u);
 }
 
 /* the message of navecu's protocol on this identifier, or NAVECU_MSG_N for none */
@@ -184,6 +186,40 @@ static rx_verdict_t decode_command(rx_state_t *rx, int msg, const uint8_t d[8],
     return RX_OK;
 }
 
+/* One of the car's messages (vehicle.h), or RX_UNKNOWN_ID for a frame the car's profile
+ * does not name either. */
+static rx_verdict_t decode_car(rx_state_t *rx, const hal_can_frame_t *f, rx_input_t *in)
+{
+    vehicle_msg_t m;
+    const vehicle_verdict_t v = vehicle_decode(f, &m);
+    if (m.kind == VEHICLE_MSG_NONE) {
+        return RX_UNKNOWN_ID;
+    }
+    if (v != VEHICLE_OK) {
+        return v == VEHICLE_BAD_DLC ? RX_BAD_DLC
+                                    : (v == VEHICLE_BAD_CHECKSUM ? RX_BAD_CRC : RX_BAD_VALUE);
+    }
+    if (m.kind == VEHICLE_MSG_GEAR) {
+        rx->gear_direction = m.gear_direction;
+        rx->have_gear = 1u;
+    } else if (m.kind == VEHICLE_MSG_YAW_RATE) {
+        rx->esp_yaw_rate_rps = m.yaw_rate_rps;
+        rx->have_esp_yaw = 1u;
+    } else {
+        /* unsigned speeds: backwards in reverse gear (before the first gear frame, and in
+         * park or neutral, forward); signed ones as they are */
+        const nav_real_t sign = vehicle_profile.direction == VEHICLE_DIR_GEAR &&
+                                        rx->have_gear && rx->gear_direction < 0
+                                    ? NAV_C(-1.0)
+                                    : NAV_C(1.0);
+        in->kind = RX_WHEELS;
+        for (int i = 0; i < 4; i++) {
+            in->u.wheels.mps[i] = sign * m.wheel_mps[i];
+        }
+    }
+    return RX_OK;
+}
+
 rx_verdict_t app_rx_decode(rx_state_t *rx, const uint32_t can_ids[NAVECU_MSG_N],
                            const hal_can_frame_t *f, rx_input_t *in)
 {
@@ -193,7 +229,7 @@ rx_verdict_t app_rx_decode(rx_state_t *rx, const uint32_t can_ids[NAVECU_MSG_N],
     }
     const int msg = msg_of(can_ids, f->id);
     if (msg == (int)NAVECU_MSG_N) {
-        return RX_UNKNOWN_ID;
+        return decode_car(rx, f, in);
     }
     if (!IS_INPUT[msg]) {
         return RX_OK; /* our own outputs, seen on a shared bus */

@@ -10,6 +10,9 @@
  * Decoded values are in SI units (rad, m/s, m) or, where a float would lose the protocol's
  * exact value, in the protocol's integer unit named in the field (lat_e7: 1e-7 deg, h_cm:
  * cm), which the core's fixed-point position takes without rounding.
+ * The car's own messages that the build's vehicle profile names (firmware/vehicle/
+ * vehicle.h) are decoded here too: their wheel speeds become RX_WHEELS, signed by the gear
+ * where the profile says so; the gear and the ESP yaw rate update rx_state_t.
  * This is the only application module that knows the codec's message structs.
  */
 #ifndef NAVECU_APP_RX_H
@@ -111,9 +114,14 @@ typedef struct {
 } rx_input_t;
 
 /* The E2E receive state of the single-frame inputs: kept through a navigation reset, so
- * that a replayed old frame is never taken for a first one. */
+ * that a replayed old frame is never taken for a first one; and what the car's own
+ * messages said last (vehicle.h): the gear's direction and the ESP's yaw rate. */
 typedef struct {
     e2e_counter_t wheel, cmd, gnss_vel, att;
+    int8_t gear_direction;  /* +1 forward, -1 reverse, 0 park/neutral (the car's gear) */
+    uint8_t have_gear;
+    nav_real_t esp_yaw_rate_rps; /* the car's ESP, left positive */
+    uint8_t have_esp_yaw;
 } rx_state_t;
 
 /* Decode and check one frame, navecu's messages on the identifiers can_ids. Returns RX_OK with *in filled (kind RX_NONE for navecu's
@@ -130,8 +138,9 @@ void app_rx_imu_increment(const int32_t w_raw[3], const int32_t v_raw[3], nav_re
 nav_real_t app_rx_angle_lsb_rad(void);
 nav_real_t app_rx_vel_lsb_mps(void);
 
-/* The CAN identifiers the application receives with can_ids (app_config_t.can_ids), for
- * receive filters: writes up to max of them to ids and returns how many there are. */
+/* The CAN identifiers the application receives with can_ids (app_config_t.can_ids) and
+ * the car's messages its vehicle profile reads, for receive filters: writes up to max of
+ * them to ids and returns how many there are. */
 size_t app_rx_ids(const uint32_t can_ids[NAVECU_MSG_N], uint32_t *ids, size_t max);
 
 #endif /* NAVECU_APP_RX_H */

@@ -1,0 +1,70 @@
+/*
+ * vehicle.h - the car navecu is built for: its own bus messages that navecu reads (the
+ * wheel speeds, and where the car has them the gear and the ESP yaw rate), the car's
+ * geometry, and the CAN identifiers navecu's own messages take on that car's bus.
+ *
+ * Implemented by code generated at build time from a vehicle profile (vehicles/NAME.toml)
+ * and the car's DBC: tools/vehicle.py writes build/vehicle/NAME/ with the car messages'
+ * codec (cantools' C generator, no hand-written bit packing) and vehicle_profile.c, which
+ * defines what is declared here. `make VEHICLE=NAME` selects the profile (default:
+ * native, navecu's own WheelSpeeds message and the DBC's identifiers). docs/vehicles.md.
+ */
+#ifndef NAVECU_VEHICLE_H
+#define NAVECU_VEHICLE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "hal.h"
+#include "nav_types.h"
+#include "navecu_protocol.h"
+
+/* where the direction of travel comes from */
+typedef enum {
+    VEHICLE_DIR_SIGNED = 0, /* the wheel speeds are signed (navecu's WheelSpeeds) */
+    VEHICLE_DIR_GEAR = 1,   /* unsigned speeds; reverse when the gear says so */
+    VEHICLE_DIR_NONE = 2,   /* unsigned speeds, always taken as forward */
+} vehicle_direction_t;
+
+typedef struct {
+    const char *name;            /* the profile's name (vehicles/NAME.toml) */
+    vehicle_direction_t direction;
+    uint8_t native_wheels;       /* 1: the wheel speeds come in navecu's WheelSpeeds */
+    nav_real_t track_m;          /* rear track: the turn's inner/outer wheel difference */
+    nav_real_t wheelbase_m;      /* for the front axle's steering correction */
+    uint32_t can_ids[NAVECU_MSG_N]; /* navecu's identifiers on this car (navecu_msg_t) */
+} vehicle_profile_t;
+
+/* the build's profile (generated) */
+extern const vehicle_profile_t vehicle_profile;
+
+typedef enum {
+    VEHICLE_MSG_NONE = 0,  /* not one of the car's messages navecu reads */
+    VEHICLE_MSG_WHEELS,    /* wheel_mps */
+    VEHICLE_MSG_GEAR,      /* gear_direction */
+    VEHICLE_MSG_YAW_RATE,  /* yaw_rate_rps */
+} vehicle_kind_t;
+
+typedef enum {
+    VEHICLE_OK = 0,
+    VEHICLE_BAD_DLC,       /* not the length the car's DBC gives the message */
+    VEHICLE_BAD_CHECKSUM,  /* the car's own checksum (where the profile names one) */
+    VEHICLE_BAD_VALUE,     /* outside the DBC's range, or a gear the profile does not know */
+} vehicle_verdict_t;
+
+typedef struct {
+    vehicle_kind_t kind;
+    nav_real_t wheel_mps[4];   /* FL, FR, RL, RR, m/s: signed with VEHICLE_DIR_SIGNED */
+    int8_t gear_direction;     /* +1 a forward gear, -1 reverse, 0 neither (park, neutral) */
+    nav_real_t yaw_rate_rps;   /* about the car's up axis, left positive */
+} vehicle_msg_t;
+
+/* Decode f if it is one of the car's messages the profile names (its kind is then not
+ * VEHICLE_MSG_NONE); the verdict says whether it passed the car's checks. Generated. */
+vehicle_verdict_t vehicle_decode(const hal_can_frame_t *f, vehicle_msg_t *m);
+
+/* The car's identifiers navecu receives: writes up to max to ids, returns how many there
+ * are. Generated. */
+size_t vehicle_rx_ids(uint32_t *ids, size_t max);
+
+#endif /* NAVECU_VEHICLE_H */

@@ -1,0 +1,14 @@
+/* vehicle_checksum.c - car makers' frame checksums; see vehicle_checksum.h. */
+#include "vehicle_checksum.h"
+
+int vehicle_checksum_toyota(uint32_t id, const uint8_t *data, uint8_t dlc)
+{
+    if (dlc == 0u || dlc > 8u) {
+        return 0;
+    }
+    uint32_t sum = (id >> 8) + (id & 0xFFu) + dlc;
+    for (uint8_t i = 0u; i + 1u < dlc; i++) {
+        sum += data[i];
+    }
+    return (uint8_t)(sum & 0xFFu) == data[dlc - 1u];
+}

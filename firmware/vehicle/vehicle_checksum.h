@@ -1,0 +1,16 @@
+/*
+ * vehicle_checksum.h - the car makers' own frame checksums that a vehicle profile may name
+ * for a message it reads ("checksum" in a vehicles/ profile); called by the generated
+ * vehicle_profile.c.
+ */
+#ifndef NAVECU_VEHICLE_CHECKSUM_H
+#define NAVECU_VEHICLE_CHECKSUM_H
+
+#include <stdint.h>
+
+/* Toyota: the last byte is (ID >> 8) + (ID & 0xFF) + DLC + the sum of the other bytes,
+ * modulo 256. 1 if data[0..dlc) carries it (dlc 1..8), else 0. Checked on the RAV4's
+ * recorded bus: every frame of the 87 identifiers that carry it passes (data/comma2k19-rav4). */
+int vehicle_checksum_toyota(uint32_t id, const uint8_t *data, uint8_t dlc);
+
+#endif /* NAVECU_VEHICLE_CHECKSUM_H */

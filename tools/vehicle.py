@@ -1,0 +1,470 @@
+"""Vehicle profiles (vehicles/NAME.toml, docs/vehicles.md): the car's DBC, the messages
+navecu reads from its bus, its geometry, and the identifiers navecu's own messages take on
+it. Generates the firmware's vehicle layer and checks the identifiers for collisions.
+
+    python -m tools.vehicle generate NAME OUT_DIR   veh_can.[ch] (cantools' C generator on the
+                                                    car messages used), vehicle_profile.c
+                                                    (firmware/vehicle/vehicle.h) and
+                                                    navecu.dbc (the protocol with this
+                                                    profile's identifiers); fails on a
+                                                    collision
+    python -m tools.vehicle check NAME [--ids stock] the collision report (exit 1 on any)
+    python -m tools.vehicle dbc NAME OUT.dbc         navecu.dbc with this profile's identifiers
+
+A collision is one of navecu's identifiers that the car uses on one of its buses: named in
+the car's DBC for that bus, or seen in a recording of it (a DBC does not list every frame a
+car sends). `--ids stock` checks the DBC's own identifiers instead of the profile's.
+"""
+from __future__ import annotations
+
+import argparse
+import re
+import sys
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import cantools
+from cantools.database.can.c_source import camel_to_snake_case, generate as generate_c
+
+from tools import navecu_can
+
+ROOT = Path(__file__).resolve().parent.parent
+VEHICLES = ROOT / "vehicles"
+CODEC_DB = "veh_can"
+#: m/s per unit of a wheel-speed signal
+SPEED_UNITS = {"m/s": 1.0, "km/h": 1.0 / 3.6, "kph": 1.0 / 3.6, "mph": 0.44704}
+#: rad/s per unit of a yaw-rate signal
+RATE_UNITS = {"rad/s": 1.0, "deg/s": 3.141592653589793 / 180.0}
+CHECKSUMS = ("none", "toyota")
+DIRECTIONS = {"signed": "VEHICLE_DIR_SIGNED", "gear": "VEHICLE_DIR_GEAR",
+              "none": "VEHICLE_DIR_NONE"}
+WHEELS = ("fl", "fr", "rl", "rr")
+
+
+class ProfileError(ValueError):
+    """A profile that cannot be used, with the reason."""
+
+
+@dataclass
+class CarSignalSet:
+    """One car message navecu reads, and the signals it takes from it."""
+    role: str               # "wheels", "gear" or "yaw_rate"
+    message: object         # cantools Message
+    signals: list           # cantools Signals, in the firmware's order
+    checksum: str = "none"
+
+
+@dataclass
+class Profile:
+    name: str
+    description: str
+    native_wheels: bool
+    direction: str
+    track_m: float
+    wheelbase_m: float
+    can_ids: dict                      # navecu message name -> identifier
+    buses: dict = field(default_factory=dict)   # bus name -> cantools Database
+    ecu_bus: str | None = None
+    reads: list = field(default_factory=list)   # CarSignalSet
+    speed_factor: float = 1.0          # m/s per wheel-signal unit
+    rate_factor: float = 1.0           # rad/s per yaw-rate unit, sign included
+    gear_values: dict = field(default_factory=dict)  # raw gear value -> +1, -1, 0
+    recordings: list = field(default_factory=list)   # (path, {channel: bus})
+
+
+# ------------------------------------------------------------------ loading a profile
+def opendbc_text(ref: str) -> str:
+    """A DBC of the pinned opendbc package (tools/requirements-data.txt): 'file.dbc' in
+    its dbc/ folder, or a generator file 'generator/MAKE/file.dbc', whose IMPORT lines opendbc's
+    own generator resolves."""
+    try:
+        import opendbc
+    except ImportError as e:
+        raise ProfileError("the opendbc package is not installed (make venv installs the pinned "
+                           "one: tools/requirements-data.txt)") from e
+    if ref.startswith("generator/"):
+        name = Path(ref).stem + "_generated"
+        generated = opendbc.get_generated_dbcs()
+        if name not in generated:
+            raise ProfileError(f"opendbc has no generator file {ref}")
+        return generated[name]
+    path = Path(opendbc.DBC_PATH) / ref
+    if not path.is_file():
+        raise ProfileError(f"opendbc has no {ref}")
+    return path.read_text(encoding="utf-8")
+
+
+def load_dbc(ref: str):
+    """'opendbc:PATH' (the opendbc package) or a path in the repository."""
+    if ref.startswith("opendbc:"):
+        text = opendbc_text(ref.split(":", 1)[1])
+    else:
+        path = ROOT / ref
+        if not path.is_file():
+            raise ProfileError(f"DBC {ref} not found")
+        text = path.read_text(encoding="utf-8")
+    try:
+        return cantools.database.load_string(text, database_format="dbc", strict=False)
+    except Exception as e:  # cantools raises several kinds for a malformed DBC
+        raise ProfileError(f"DBC {ref} does not load: {e}") from e
+
+
+def _message(db, name: str, where: str):
+    try:
+        return db.get_message_by_name(name)
+    except KeyError as e:
+        raise ProfileError(f"{where}: no message {name} in the car's DBC") from e
+
+
+def _signal(msg, name: str, where: str):
+    try:
+        return msg.get_signal_by_name(name)
+    except KeyError as e:
+        raise ProfileError(f"{where}: message {msg.name} has no signal {name}") from e
+
+
+def _ids(spec: dict) -> dict:
+    """navecu's identifiers: the DBC's, moved by `base` (the messages in DBC order from it)
+    and then by the per-message map."""
+    db = navecu_can.load_db()
+    ids = {m.name: m.frame_id for m in db.messages}
+    base = spec.get("base")
+    if base is not None:
+        ids = {m.name: int(base) + i for i, m in enumerate(db.messages)}
+    for name, value in spec.items():
+        if name == "base":
+            continue
+        if name not in ids:
+            raise ProfileError(f"can_ids: navecu has no message {name}")
+        ids[name] = int(value)
+    bad = [f"{n}=0x{v:X}" for n, v in ids.items() if not 0 <= v <= 0x7FF]
+    if bad:
+        raise ProfileError(f"can_ids: not 11-bit identifiers: {', '.join(bad)}")
+    seen = {}
+    for n, v in ids.items():
+        if v in seen:
+            raise ProfileError(f"can_ids: {n} and {seen[v]} share 0x{v:03X}")
+        seen[v] = n
+    return ids
+
+
+def load(name: str) -> Profile:
+    path = VEHICLES / f"{name}.toml"
+    if not path.is_file():
+        known = ", ".join(sorted(p.stem for p in VEHICLES.glob("*.toml")))
+        raise ProfileError(f"no vehicle profile {name} (vehicles/: {known})")
+    try:
+        t = tomllib.loads(path.read_text(encoding="utf-8"))
+    except tomllib.TOMLDecodeError as e:
+        raise ProfileError(f"{path.name}: {e}") from e
+    if t.get("name") != name:
+        raise ProfileError(f"{path.name}: name must be {name!r}")
+    wheels = t.get("wheels", {})
+    geo = t.get("geometry", {})
+    try:
+        p = Profile(name=name, description=str(t.get("description", "")),
+                    native_wheels=bool(wheels.get("native", False)),
+                    direction=str(wheels.get("direction", "signed")),
+                    track_m=float(geo["track_m"]), wheelbase_m=float(geo["wheelbase_m"]),
+                    can_ids=_ids(t.get("can_ids", {})))
+    except KeyError as e:
+        raise ProfileError(f"{path.name}: [geometry] needs {e}") from e
+    if p.direction not in DIRECTIONS:
+        raise ProfileError(f"{path.name}: direction must be one of {', '.join(DIRECTIONS)}")
+    if not (0.5 < p.track_m < 3.0 and 1.0 < p.wheelbase_m < 6.0):
+        raise ProfileError(f"{path.name}: track {p.track_m} m or wheelbase {p.wheelbase_m} m "
+                           "is not a car's")
+    for bus, ref in t.get("buses", {}).items():
+        p.buses[bus] = load_dbc(ref)
+    p.ecu_bus = t.get("ecu_bus")
+    if p.native_wheels:
+        if p.direction != "signed":
+            raise ProfileError(f"{path.name}: navecu's WheelSpeeds are signed")
+    else:
+        _car_reads(p, t, path.name)
+    for rec in t.get("recordings", []):
+        f = ROOT / rec["file"]
+        if not f.is_file():
+            raise ProfileError(f"{path.name}: recording {rec['file']} not found")
+        p.recordings.append((f, dict(rec["channels"])))
+    return p
+
+
+def _car_reads(p: Profile, t: dict, fname: str) -> None:
+    if p.ecu_bus not in p.buses:
+        raise ProfileError(f"{fname}: ecu_bus must name one of [buses]")
+    db = p.buses[p.ecu_bus]
+    w = t["wheels"]
+    msg = _message(db, w["message"], f"{fname} [wheels]")
+    sigs = [_signal(msg, w["signals"][k], f"{fname} [wheels]") for k in WHEELS]
+    unit = w.get("unit", "m/s")
+    if unit not in SPEED_UNITS:
+        raise ProfileError(f"{fname}: wheel unit must be one of {', '.join(SPEED_UNITS)}")
+    p.speed_factor = SPEED_UNITS[unit] * float(w.get("scale", 1.0))
+    p.reads.append(CarSignalSet("wheels", msg, sigs, _checksum(w, fname)))
+    if p.direction == "gear":
+        g = t.get("gear")
+        if g is None:
+            raise ProfileError(f"{fname}: direction 'gear' needs a [gear] table")
+        gmsg = _message(db, g["message"], f"{fname} [gear]")
+        gsig = _signal(gmsg, g["signal"], f"{fname} [gear]")
+        names = {str(v): int(k) for k, v in (gsig.choices or {}).items()}
+        for key, sign in (("forward", 1), ("reverse", -1), ("stopped", 0)):
+            for n in g.get(key, []):
+                if n not in names:
+                    raise ProfileError(f"{fname} [gear]: {gsig.name} has no value {n!r} "
+                                       f"(the DBC's: {', '.join(names)})")
+                p.gear_values[names[n]] = sign
+        if -1 not in p.gear_values.values():
+            raise ProfileError(f"{fname} [gear]: no reverse gear named")
+        p.reads.append(CarSignalSet("gear", gmsg, [gsig], _checksum(g, fname)))
+    y = t.get("yaw_rate")
+    if y is not None:
+        ymsg = _message(db, y["message"], f"{fname} [yaw_rate]")
+        ysig = _signal(ymsg, y["signal"], f"{fname} [yaw_rate]")
+        unit = y.get("unit", "rad/s")
+        if unit not in RATE_UNITS:
+            raise ProfileError(f"{fname}: yaw-rate unit must be one of {', '.join(RATE_UNITS)}")
+        p.rate_factor = RATE_UNITS[unit] * (1.0 if y.get("left_positive", True) else -1.0)
+        p.reads.append(CarSignalSet("yaw_rate", ymsg, [ysig], _checksum(y, fname)))
+    ids = [r.message.frame_id for r in p.reads]
+    if len(set(ids)) != len(ids):
+        raise ProfileError(f"{fname}: wheels, gear and yaw rate must be different messages")
+
+
+def _checksum(spec: dict, fname: str) -> str:
+    c = spec.get("checksum", "none")
+    if c not in CHECKSUMS:
+        raise ProfileError(f"{fname}: checksum must be one of {', '.join(CHECKSUMS)}")
+    return c
+
+
+# ----------------------------------------------------------------------- collisions
+@dataclass
+class Collision:
+    can_id: int
+    navecu: str
+    bus: str
+    what: str      # the car's message name, or "not in the DBC"
+    source: str    # "DBC" or a recording's file name
+    frames: int = 0
+    rate_hz: float = 0.0
+
+    def line(self) -> str:
+        seen = f", {self.frames} frames, {self.rate_hz:.1f} Hz" if self.frames else ""
+        return (f"0x{self.can_id:03X} {self.navecu}: {self.bus} bus, {self.what} "
+                f"({self.source}{seen})")
+
+
+def recorded_ids(path: Path, channels: dict) -> dict:
+    """{(bus, id): (frames, rate Hz, DLCs)} of a candump recording (python-can reads it)."""
+    per = {}
+    t0 = t1 = None
+    import can
+    for msg in can.LogReader(str(path)):
+        if msg.is_error_frame or msg.is_extended_id:
+            continue
+        bus = channels.get(str(msg.channel))
+        if bus is None:
+            continue
+        n, dlcs = per.get((bus, msg.arbitration_id), (0, set()))
+        dlcs.add(msg.dlc)
+        per[(bus, msg.arbitration_id)] = (n + 1, dlcs)
+        t0 = msg.timestamp if t0 is None else t0
+        t1 = msg.timestamp
+    span = (t1 - t0) if t0 is not None and t1 > t0 else 1.0
+    return {k: (n, n / span, d) for k, (n, d) in per.items()}
+
+
+def collisions(p: Profile, ids: dict | None = None) -> list:
+    """Every identifier of navecu's (the profile's, or ids) the car uses on a bus."""
+    ids = p.can_ids if ids is None else ids
+    by_id = {v: k for k, v in ids.items()}
+    out = []
+    for bus, db in p.buses.items():
+        for m in db.messages:
+            if not m.is_extended_frame and m.frame_id in by_id:
+                out.append(Collision(m.frame_id, by_id[m.frame_id], bus, m.name, "DBC"))
+    for path, channels in p.recordings:
+        rec = recorded_ids(path, channels)
+        for (bus, cid), (n, rate, _) in sorted(rec.items()):
+            if cid not in by_id:
+                continue
+            db = p.buses.get(bus)
+            named = None
+            if db is not None:
+                named = next((m.name for m in db.messages if m.frame_id == cid), None)
+            prev = next((c for c in out if c.can_id == cid and c.bus == bus), None)
+            if prev is not None:
+                prev.source += f", {path.name}"
+                prev.frames, prev.rate_hz = n, rate
+                continue
+            out.append(Collision(cid, by_id[cid], bus, named or "not in the DBC", path.name,
+                                 n, rate))
+    return sorted(out, key=lambda c: (c.can_id, c.bus))
+
+
+def stock_ids() -> dict:
+    return {m.name: m.frame_id for m in navecu_can.load_db().messages}
+
+
+# ------------------------------------------------------------------------ generation
+def profile_dbc_text(p: Profile) -> str:
+    """firmware/can/navecu.dbc with this profile's identifiers: every line that names a
+    message by its identifier (BO_, CM_ BO_/SG_, VAL_, BA_ ... BO_/SG_, SG_MUL_VAL_)."""
+    stock = stock_ids()
+    move = {stock[n]: p.can_ids[n] for n in stock}
+    text = navecu_can.DBC_PATH.read_text(encoding="utf-8")
+    pat = re.compile(r"^(BO_ |CM_ BO_ |CM_ SG_ |VAL_ |SG_MUL_VAL_ |BA_ \"\w+\" BO_ |"
+                     r"BA_ \"\w+\" SG_ )(\d+)\b", re.M)
+    out = pat.sub(lambda m: m.group(1) + str(move.get(int(m.group(2)), int(m.group(2)))), text)
+    if p.name != "native":
+        out = out.replace('CM_ "navecu CAN protocol.',
+                          f'CM_ "navecu CAN protocol, identifiers of vehicle profile {p.name}.', 1)
+    return out
+
+
+def _c_float(x: float) -> str:
+    return f"NAV_C({x!r})"
+
+
+def _c_name(msg) -> str:
+    return camel_to_snake_case(msg.name)
+
+
+def vehicle_profile_c(p: Profile) -> str:
+    """The generated vehicle_profile.c: the profile's constants and vehicle_decode."""
+    stock = navecu_can.load_db().messages
+    ids = ", ".join(f"0x{p.can_ids[m.name]:03X}u" for m in stock)
+    L = ["/* GENERATED FILE - DO NOT EDIT. Source: vehicles/" + p.name + ".toml and the car's DBC",
+         " * (tools/vehicle.py; firmware/vehicle/vehicle.h). */",
+         '#include "vehicle.h"', ""]
+    if p.reads:
+        L += [f'#include "{CODEC_DB}.h"', '#include "vehicle_checksum.h"', ""]
+    L += [f"const vehicle_profile_t vehicle_profile = {{\"{p.name}\", {DIRECTIONS[p.direction]}, "
+          f"{1 if p.native_wheels else 0}u, {_c_float(p.track_m)}, {_c_float(p.wheelbase_m)},",
+          f"                                           {{{ids}}}}};", ""]
+    fids = [f"{CODEC_DB.upper()}_{_c_name(r.message).upper()}_FRAME_ID" for r in p.reads]
+    L += ["size_t vehicle_rx_ids(uint32_t *ids, size_t max)", "{"]
+    if fids:
+        L += ["    static const uint32_t rx[] = {" + ", ".join(fids) + "};",
+              "    const size_t n = sizeof rx / sizeof rx[0];",
+              "    for (size_t i = 0u; i < n && i < max; i++) {",
+              "        ids[i] = rx[i];", "    }", "    return n;"]
+    else:
+        L += ["    (void)ids;", "    (void)max;", "    return 0u;"]
+    L += ["}", ""]
+    L += ["vehicle_verdict_t vehicle_decode(const hal_can_frame_t *f, vehicle_msg_t *m)", "{",
+          "    m->kind = VEHICLE_MSG_NONE;"]
+    if not p.reads:
+        L += ["    (void)f;", "    return VEHICLE_OK; /* the wheels come in navecu's WheelSpeeds */",
+              "}", ""]
+        return "\n".join(L)
+    L += ["    if (f->extended) {", "        return VEHICLE_OK;", "    }", "    switch (f->id) {"]
+    for r in p.reads:
+        L += _decode_case(p, r)
+    L += ["    default:", "        return VEHICLE_OK;", "    }", "}", ""]
+    return "\n".join(L)
+
+
+def _decode_case(p: Profile, r: CarSignalSet) -> list:
+    mn = _c_name(r.message)
+    up = f"{CODEC_DB.upper()}_{mn.upper()}"
+    fn = f"{CODEC_DB}_{mn}"
+    kind = {"wheels": "VEHICLE_MSG_WHEELS", "gear": "VEHICLE_MSG_GEAR",
+            "yaw_rate": "VEHICLE_MSG_YAW_RATE"}[r.role]
+    L = [f"    case {up}_FRAME_ID: {{", f"        m->kind = {kind};",
+         f"        if (f->dlc != {up}_LENGTH) {{", "            return VEHICLE_BAD_DLC;", "        }"]
+    if r.checksum == "toyota":
+        L += ["        if (!vehicle_checksum_toyota(f->id, f->data, f->dlc)) {",
+              "            return VEHICLE_BAD_CHECKSUM;", "        }"]
+    L += [f"        struct {fn}_t s;",
+          f"        if ({fn}_unpack(&s, f->data, f->dlc) != 0) {{",
+          "            return VEHICLE_BAD_DLC;", "        }"]
+    fields = [camel_to_snake_case(s.name) for s in r.signals]
+    cond = " ||\n            ".join(f"!{fn}_{x}_is_in_range(s.{x})" for x in fields)
+    L += [f"        if ({cond}) {{", "            return VEHICLE_BAD_VALUE;", "        }"]
+    if r.role == "wheels":
+        for i, x in enumerate(fields):
+            L.append(f"        m->wheel_mps[{i}] = {fn}_{x}_decode(s.{x}) * "
+                     f"{_c_float(p.speed_factor)};")
+    elif r.role == "gear":
+        x = fields[0]
+        L.append(f"        switch (s.{x}) {{")
+        for raw, sign in sorted(p.gear_values.items()):
+            L += [f"        case {raw}:", f"            m->gear_direction = {sign};",
+                  "            break;"]
+        L += ["        default:", "            return VEHICLE_BAD_VALUE; /* a gear the profile "
+              "does not name */", "        }"]
+    else:
+        x = fields[0]
+        L.append(f"        m->yaw_rate_rps = {fn}_{x}_decode(s.{x}) * {_c_float(p.rate_factor)};")
+    L += ["        return VEHICLE_OK;", "    }"]
+    return L
+
+
+def generate(p: Profile, out: Path) -> None:
+    """Write the firmware's vehicle layer for p into out/."""
+    out.mkdir(parents=True, exist_ok=True)
+    if p.reads:
+        msgs = [r.message for r in p.reads]
+        sub = cantools.database.can.Database(messages=msgs, strict=False)
+        h, c, _, _ = generate_c(sub, CODEC_DB, f"{CODEC_DB}.h", f"{CODEC_DB}.c", "fuzzer.c",
+                                floating_point_numbers=True, use_float=True, use_round=True)
+        banner = ("/* GENERATED FILE - DO NOT EDIT. Source: vehicles/" + p.name +
+                  ".toml and the car's DBC (tools/vehicle.py). */\n")
+        strip = lambda s: re.sub(r"(generated by cantools version [0-9.]+) .*$", r"\1.", s,
+                                 flags=re.M)
+        (out / f"{CODEC_DB}.h").write_text(banner + strip(h))
+        (out / f"{CODEC_DB}.c").write_text(banner + strip(c))
+    else:
+        banner = (f"/* GENERATED FILE - DO NOT EDIT (tools/vehicle.py): vehicle profile {p.name} "
+                  "reads no car message. */\n")
+        (out / f"{CODEC_DB}.h").write_text(banner)
+        (out / f"{CODEC_DB}.c").write_text(banner + "typedef int veh_can_empty_t; /* ISO C: not "
+                                           "an empty translation unit */\n")
+    (out / "vehicle_profile.c").write_text(vehicle_profile_c(p))
+    (out / "navecu.dbc").write_text(profile_dbc_text(p))
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    sub = ap.add_subparsers(dest="cmd", required=True)
+    g = sub.add_parser("generate")
+    g.add_argument("name")
+    g.add_argument("out")
+    c = sub.add_parser("check")
+    c.add_argument("name")
+    c.add_argument("--ids", choices=("profile", "stock"), default="profile")
+    d = sub.add_parser("dbc")
+    d.add_argument("name")
+    d.add_argument("out")
+    a = ap.parse_args(argv)
+    try:
+        p = load(a.name)
+    except ProfileError as e:
+        print(f"vehicle: {e}", file=sys.stderr)
+        return 2
+    if a.cmd == "dbc":
+        Path(a.out).write_text(profile_dbc_text(p))
+        return 0
+    ids = stock_ids() if getattr(a, "ids", "profile") == "stock" else p.can_ids
+    found = collisions(p, ids)
+    label = "the DBC's stock identifiers" if ids is not p.can_ids else f"profile {p.name}"
+    if found:
+        print(f"vehicle: {len(found)} collision(s) of navecu's identifiers ({label}) with "
+              f"the car's buses:", file=sys.stderr)
+        for col in found:
+            print("  " + col.line(), file=sys.stderr)
+        return 1
+    sources = ", ".join(list(p.buses) + [r[0].name for r in p.recordings]) or "no car bus"
+    print(f"vehicle: {label}: no collision with {sources}")
+    if a.cmd == "generate":
+        generate(p, Path(a.out))
+        print(f"vehicle: {p.name} generated into {a.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
