@@ -82,14 +82,16 @@ void host_summary(FILE *out, const app_t *app, const hal_t *hal, unsigned long f
             (double)app_samples(app) / rate,
             (unsigned)app_mode(app) < 4u ? mode_names[app_mode(app)] : "?");
     fprintf(out,
-            "navecu: rejected: unknown id %lu, bad dlc %lu, bad crc %lu, bad counter %lu, "
+            "navecu: rejected: bad dlc %lu, bad crc %lu, bad counter %lu, "
             "imu pair broken %lu, imu lost %lu, bad value %lu, gnss %lu, command %lu, "
             "core %lu, time jumps %lu\n",
-            (unsigned long)h->unknown_id, (unsigned long)h->bad_dlc, (unsigned long)h->bad_crc,
+            (unsigned long)h->bad_dlc, (unsigned long)h->bad_crc,
             (unsigned long)h->bad_counter, (unsigned long)h->imu_pair_broken,
             (unsigned long)h->imu_lost, (unsigned long)h->bad_value,
             (unsigned long)h->gnss_rejected, (unsigned long)h->cmd_rejected,
             (unsigned long)h->nav_rejected, (unsigned long)h->time_jumps);
+    fprintf(out, "navecu: foreign frames (not read, not refused): %lu\n",
+            (unsigned long)h->foreign);
     if (ekf != NULL) {
         fprintf(out,
                 "navecu: filter: %lu updates, %lu gated, %lu covariance corrections; odometer "

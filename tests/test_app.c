@@ -279,7 +279,7 @@ static void test_bad_input_counted(void **state)
     f.extended = 1u;
     f.id = 0x18FEF100u;
     feed(&f);
-    assert_int_equal(app.keep.health.unknown_id, 2);
+    assert_int_equal(app.keep.health.foreign, 2);
 
     /* wrong DLC of a known message */
     imu_src_next(w, v);
@@ -373,7 +373,7 @@ static void test_bad_input_counted(void **state)
             assert_int_equal(st.mode, APP_MODE_NAVIGATING);
             assert_true(st.health_flags & NAVECU_HEALTH_REJECTED);
         } else if (st.status_page == 1u) {
-            assert_int_equal(st.cnt_unknown_id, 2);
+            assert_int_equal(st.cnt_foreign, 2);
             assert_int_equal(st.cnt_bad_dlc, 1);
             assert_int_equal(st.cnt_bad_crc, 1);
             pages_seen |= 1;
@@ -506,8 +506,8 @@ static void test_rejected_frames_change_nothing(void **state)
     const uint32_t n_dirty = collect_nav(dirty, FAKE_TX_MAX);
     assert_int_equal(hal.tx_dropped, 0);
     const app_health_t *h = &app.keep.health;
-    assert_int_equal(h->unknown_id, 2 * 4000 / 7 + 1);
-    assert_int_equal(h->unknown_id + h->bad_dlc + h->bad_crc + h->gnss_rejected +
+    assert_int_equal(h->foreign, 2 * 4000 / 7 + 1);
+    assert_int_equal(h->foreign + h->bad_dlc + h->bad_crc + h->gnss_rejected +
                          h->bad_value + h->bad_counter,
                      4000);
     assert_true(n_clean > 1000u);

@@ -26,7 +26,7 @@ static int setup(void **state)
     return 0;
 }
 
-/* n frames of a foreign identifier (counted unknown_id, nothing sent), byte 0 = index,
+/* n frames of a foreign identifier (counted foreign, nothing sent), byte 0 = index,
  * the k-th received at t0 + k * dt */
 static void queue_foreign(uint32_t n, uint64_t t0_us, uint64_t dt_us)
 {
@@ -56,7 +56,7 @@ static void test_at_most_max_frames(void **state)
     assert_int_equal(p.rx_status, 0);
     assert_int_equal(p.last.data[0], 3);
     assert_int_equal(fake_hal_rx_left(&hal), 6u);
-    assert_int_equal(app_health(&app)->unknown_id, 4u);
+    assert_int_equal(app_health(&app)->foreign, 4u);
     assert_int_equal(p.kicked, 1);
     assert_int_equal(hal.kicks, 1u);
     p = pass(4u, 1u);
@@ -67,7 +67,7 @@ static void test_at_most_max_frames(void **state)
     assert_int_equal(p.rx_status, HAL_EAGAIN);
     assert_int_equal(app_pass_go_on(&p), 1);
     assert_int_equal(p.last.data[0], 9);
-    assert_int_equal(app_health(&app)->unknown_id, 10u);
+    assert_int_equal(app_health(&app)->foreign, 10u);
     assert_int_equal(hal.kicks, 3u);
 }
 

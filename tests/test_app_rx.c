@@ -71,10 +71,10 @@ static void test_extended_id_refused(void **state)
     (void)state;
     hal_can_frame_t f = wheels(0, 0u);
     f.extended = 1u;
-    assert_int_equal(decode(&f), RX_UNKNOWN_ID);
+    assert_int_equal(decode(&f), RX_FOREIGN);
     f = cf_gnss_position(0, 0, 0u);
     f.extended = 1u;
-    assert_int_equal(decode(&f), RX_UNKNOWN_ID);
+    assert_int_equal(decode(&f), RX_FOREIGN);
 }
 
 static void test_foreign_id_refused(void **state)
@@ -82,12 +82,12 @@ static void test_foreign_id_refused(void **state)
     (void)state;
     const uint8_t d[8] = {0};
     hal_can_frame_t f = cf_frame(0x555u, d, 0u);
-    assert_int_equal(decode(&f), RX_UNKNOWN_ID);
+    assert_int_equal(decode(&f), RX_FOREIGN);
     f = cf_frame(0x102u, d, 0u); /* beside IMU_Accel (0x101): not an input */
-    assert_int_equal(decode(&f), RX_UNKNOWN_ID);
-    /* the identifier is checked before the length: a foreign short frame is unknown_id */
+    assert_int_equal(decode(&f), RX_FOREIGN);
+    /* the identifier is checked before the length: a foreign short frame is foreign traffic */
     f.dlc = 3u;
-    assert_int_equal(decode(&f), RX_UNKNOWN_ID);
+    assert_int_equal(decode(&f), RX_FOREIGN);
 }
 
 /* GIVEN each of navecu's ten inputs with DLC 7 WHEN decoded THEN bad_dlc. */
@@ -126,7 +126,7 @@ static void test_rx_ids(void **state)
 }
 
 /* GIVEN navecu's own outputs seen on a shared bus THEN nothing to act on (RX_OK, kind
- * RX_NONE), whatever their length; an extended one is still unknown_id. */
+ * RX_NONE), whatever their length; an extended one is foreign. */
 static void test_own_outputs_ignored(void **state)
 {
     (void)state;
@@ -139,7 +139,7 @@ static void test_own_outputs_ignored(void **state)
         assert_int_equal(decode(&f), RX_OK);
         assert_int_equal(in.kind, RX_NONE);
         f.extended = 1u;
-        assert_int_equal(decode(&f), RX_UNKNOWN_ID);
+        assert_int_equal(decode(&f), RX_FOREIGN);
     }
 }
 

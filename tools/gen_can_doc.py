@@ -94,7 +94,6 @@ MEANING = {
     ("NAV_Attitude", "Heading"): "heading of the forward axis, clockwise from true north",
     "StatusPage": "multiplexer: page 0 state, pages 1..6 health counters",
     ("NAV_Status", "HorizAccuracy"): "estimated horizontal position accuracy, saturated",
-    "CntUnknownId": "frames with an identifier not in the DBC",
     "CntBadDlc": "frames of a known message with DLC other than 8",
     "CntBadCrc": "frames with a wrong E2E CRC",
     "CntBadCounter": "frames with a repeated or invalid (15) E2E counter",

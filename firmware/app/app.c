@@ -255,8 +255,6 @@ static void on_gnss_status(app_t *a, hal_t *hal, const rx_input_t *in)
 static uint32_t *rx_counter(app_health_t *h, rx_verdict_t v)
 {
     switch (v) {
-    case RX_UNKNOWN_ID:
-        return &h->unknown_id;
     case RX_BAD_DLC:
         return &h->bad_dlc;
     case RX_BAD_CRC:
@@ -280,6 +278,10 @@ void app_handle_frame(app_t *a, hal_t *hal, const hal_can_frame_t *f)
     }
     rx_input_t in;
     const rx_verdict_t v = app_rx_decode(&a->keep.rx, a->cfg.can_ids, f, &in);
+    if (v == RX_FOREIGN) {
+        a->keep.health.foreign++; /* a shared bus: counted apart, never REJECTED */
+        return;
+    }
     if (v != RX_OK) {
         reject(a, rx_counter(&a->keep.health, v));
         if (in.kind == RX_GNSS_POSITION) {

@@ -14,7 +14,8 @@
 
 /* Counters of everything the application refused; saturating at UINT32_MAX. */
 typedef struct {
-    uint32_t unknown_id;       /* frames with an identifier the protocol does not define */
+    uint32_t foreign;          /* frames navecu does not read: other nodes' traffic, not
+                                  refused (no REJECTED flag); wraps modulo 2^32 */
     uint32_t bad_dlc;          /* frames of a known message with DLC != 8 */
     uint32_t bad_crc;          /* E2E CRC mismatch */
     uint32_t bad_counter;      /* alive counter repeated or invalid (15): frame dropped */

@@ -186,14 +186,14 @@ static rx_verdict_t decode_command(rx_state_t *rx, int msg, const uint8_t d[8],
     return RX_OK;
 }
 
-/* One of the car's messages (vehicle.h), or RX_UNKNOWN_ID for a frame the car's profile
+/* One of the car's messages (vehicle.h), or RX_FOREIGN for a frame the car's profile
  * does not name either. */
 static rx_verdict_t decode_car(rx_state_t *rx, const hal_can_frame_t *f, rx_input_t *in)
 {
     vehicle_msg_t m;
     const vehicle_verdict_t v = vehicle_decode(f, &m);
     if (m.kind == VEHICLE_MSG_NONE) {
-        return RX_UNKNOWN_ID;
+        return RX_FOREIGN;
     }
     if (v != VEHICLE_OK) {
         return v == VEHICLE_BAD_DLC ? RX_BAD_DLC
@@ -225,7 +225,7 @@ rx_verdict_t app_rx_decode(rx_state_t *rx, const uint32_t can_ids[NAVECU_MSG_N],
 {
     in->kind = RX_NONE;
     if (f->extended) {
-        return RX_UNKNOWN_ID;
+        return RX_FOREIGN;
     }
     const int msg = msg_of(can_ids, f->id);
     if (msg == (int)NAVECU_MSG_N) {

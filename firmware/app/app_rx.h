@@ -43,7 +43,7 @@ typedef enum {
 /* Why a frame was refused (the counter of app_health_t it is counted in). */
 typedef enum {
     RX_OK = 0,
-    RX_UNKNOWN_ID,  /* unknown_id: an extended or foreign identifier */
+    RX_FOREIGN,     /* foreign: a frame navecu does not read (another node's traffic) */
     RX_BAD_DLC,     /* bad_dlc */
     RX_BAD_CRC,     /* bad_crc */
     RX_BAD_COUNTER, /* bad_counter: repeated, invalid or out-of-sequence alive counter */

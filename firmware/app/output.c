@@ -214,7 +214,7 @@ static void fill_counter_page(struct navecu_can_nav_status_t *st, const app_heal
 {
     switch (st->status_page) {
     case 1u:
-        st->cnt_unknown_id = sat16(h->unknown_id);
+        st->cnt_foreign = (uint16_t)(h->foreign & 0xFFFFu); /* wraps: a rate, not a fault */
         st->cnt_bad_dlc = sat16(h->bad_dlc);
         st->cnt_bad_crc = sat8(h->bad_crc);
         break;

@@ -2404,8 +2404,8 @@ int navecu_can_nav_status_pack(
         break;
 
     case 1:
-        dst_p[1] |= pack_left_shift_u16(src_p->cnt_unknown_id, 0u, 0xffu);
-        dst_p[2] |= pack_right_shift_u16(src_p->cnt_unknown_id, 8u, 0xffu);
+        dst_p[1] |= pack_left_shift_u16(src_p->cnt_foreign, 0u, 0xffu);
+        dst_p[2] |= pack_right_shift_u16(src_p->cnt_foreign, 8u, 0xffu);
         dst_p[3] |= pack_left_shift_u16(src_p->cnt_bad_dlc, 0u, 0xffu);
         dst_p[4] |= pack_right_shift_u16(src_p->cnt_bad_dlc, 8u, 0xffu);
         dst_p[5] |= pack_left_shift_u8(src_p->cnt_bad_crc, 0u, 0xffu);
@@ -2482,8 +2482,8 @@ int navecu_can_nav_status_unpack(
         break;
 
     case 1:
-        dst_p->cnt_unknown_id = unpack_right_shift_u16(src_p[1], 0u, 0xffu);
-        dst_p->cnt_unknown_id |= unpack_left_shift_u16(src_p[2], 8u, 0xffu);
+        dst_p->cnt_foreign = unpack_right_shift_u16(src_p[1], 0u, 0xffu);
+        dst_p->cnt_foreign |= unpack_left_shift_u16(src_p[2], 8u, 0xffu);
         dst_p->cnt_bad_dlc = unpack_right_shift_u16(src_p[3], 0u, 0xffu);
         dst_p->cnt_bad_dlc |= unpack_left_shift_u16(src_p[4], 8u, 0xffu);
         dst_p->cnt_bad_crc = unpack_right_shift_u8(src_p[5], 0u, 0xffu);
@@ -2607,24 +2607,24 @@ bool navecu_can_nav_status_health_flags_is_in_phys_range(float value)
     return ((value >= 0.0f) && (value <= 65535.0f));
 }
 
-uint16_t navecu_can_nav_status_cnt_unknown_id_encode(float value)
+uint16_t navecu_can_nav_status_cnt_foreign_encode(float value)
 {
     return (uint16_t)(cantools_unsigned_from_double(roundf(value)));
 }
 
-float navecu_can_nav_status_cnt_unknown_id_decode(uint16_t value)
+float navecu_can_nav_status_cnt_foreign_decode(uint16_t value)
 {
     return ((float)value);
 }
 
-bool navecu_can_nav_status_cnt_unknown_id_is_in_range(uint16_t value)
+bool navecu_can_nav_status_cnt_foreign_is_in_range(uint16_t value)
 {
     (void)value;
 
     return (true);
 }
 
-bool navecu_can_nav_status_cnt_unknown_id_is_in_phys_range(float value)
+bool navecu_can_nav_status_cnt_foreign_is_in_phys_range(float value)
 {
     return ((value >= 0.0f) && (value <= 65535.0f));
 }

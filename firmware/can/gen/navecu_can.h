@@ -228,7 +228,7 @@ extern "C" {
 #define NAVECU_CAN_NAV_STATUS_STATUS_PAGE_NAME "StatusPage"
 #define NAVECU_CAN_NAV_STATUS_MODE_NAME "Mode"
 #define NAVECU_CAN_NAV_STATUS_HEALTH_FLAGS_NAME "HealthFlags"
-#define NAVECU_CAN_NAV_STATUS_CNT_UNKNOWN_ID_NAME "CntUnknownId"
+#define NAVECU_CAN_NAV_STATUS_CNT_FOREIGN_NAME "CntForeign"
 #define NAVECU_CAN_NAV_STATUS_CNT_BAD_COUNTER_NAME "CntBadCounter"
 #define NAVECU_CAN_NAV_STATUS_CNT_BAD_VALUE_NAME "CntBadValue"
 #define NAVECU_CAN_NAV_STATUS_CNT_CMD_REJECTED_NAME "CntCmdRejected"
@@ -834,11 +834,13 @@ struct navecu_can_nav_status_t {
     uint16_t health_flags;
 
     /**
+     * Frames of other nodes on the bus that navecu does not read (neither its own identifiers nor the car messages of its vehicle profile), extended frames included: traffic, not errors (they set no HealthFlags bit). Counts modulo 65536 (wraps, unlike the other counters), so a receiver sees the rate from two pages.
+     *
      * Range: 0..65535 (0..65535 -)
      * Scale: 1
      * Offset: 0
      */
-    uint16_t cnt_unknown_id;
+    uint16_t cnt_foreign;
 
     /**
      * Range: 0..65535 (0..65535 -)
@@ -4191,7 +4193,7 @@ bool navecu_can_nav_status_health_flags_is_in_phys_range(float value);
  *
  * @return Encoded signal.
  */
-uint16_t navecu_can_nav_status_cnt_unknown_id_encode(float value);
+uint16_t navecu_can_nav_status_cnt_foreign_encode(float value);
 
 /**
  * Decode given signal by applying scaling and offset.
@@ -4200,7 +4202,7 @@ uint16_t navecu_can_nav_status_cnt_unknown_id_encode(float value);
  *
  * @return Decoded signal.
  */
-float navecu_can_nav_status_cnt_unknown_id_decode(uint16_t value);
+float navecu_can_nav_status_cnt_foreign_decode(uint16_t value);
 
 /**
  * Check that given signal is in allowed range.
@@ -4209,7 +4211,7 @@ float navecu_can_nav_status_cnt_unknown_id_decode(uint16_t value);
  *
  * @return true if in range, false otherwise.
  */
-bool navecu_can_nav_status_cnt_unknown_id_is_in_range(uint16_t value);
+bool navecu_can_nav_status_cnt_foreign_is_in_range(uint16_t value);
 
 /**
  * Check that given physical value is in allowed range before encoding.
@@ -4222,7 +4224,7 @@ bool navecu_can_nav_status_cnt_unknown_id_is_in_range(uint16_t value);
  *
  * @return true if in range, false otherwise.
  */
-bool navecu_can_nav_status_cnt_unknown_id_is_in_phys_range(float value);
+bool navecu_can_nav_status_cnt_foreign_is_in_phys_range(float value);
 
 /**
  * Encode given signal by applying scaling and offset.
