@@ -150,10 +150,10 @@ static void test_reset_keeps_the_ecu_state(void **state)
     app.keep.n_samples = 500u;
     app.keep.health.bad_crc = 3u;
     app.keep.cal.mu = 0.01f;
-    app.run.imu.rate_pending = 1u;
+    app.run.imu.n_pending = 1u;
     known(450000000, 100000000);
     set_initial(1, 0.0f, 0);
-    assert_int_equal(app.run.imu.rate_pending, 0);
+    assert_int_equal(app.run.imu.n_pending, 0);
     assert_int_equal(app.run.align.known_valid, 0);
     app.run.mode = APP_MODE_NAVIGATING;
     command(RX_CMD_RESET);

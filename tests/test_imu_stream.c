@@ -82,8 +82,8 @@ static void test_pair_gives_a_sample(void **state)
     assert_int_equal(out.prev_raw[5], 401);
 }
 
-/* IMU_Accel without its IMU_Rate, with another counter than it, and an IMU_Rate whose
- * predecessor never got its IMU_Accel: broken pairs. */
+/* IMU_Accel without its IMU_Rate, with another counter than it, and a third IMU_Rate
+ * while two wait: broken pairs. */
 static void test_broken_pair(void **state)
 {
     (void)state;
@@ -91,13 +91,82 @@ static void test_broken_pair(void **state)
     cf_imu_pair(W0, V0, 0u, 0u, 0u, &fr, &fa);
     assert_int_equal(imu_stream_accel(&s, &l, 0u, 0u, V0, fa.data, 0u, &out), IMU_REJ_PAIR);
     assert_int_equal(imu_stream_rate(&s, 0u, W0, fr.data), 0);
-    assert_int_equal(imu_stream_rate(&s, 0u, W0, fr.data), 1); /* the first had no accel */
+    assert_int_equal(imu_stream_rate(&s, 0u, W0, fr.data), 0); /* two may wait */
+    assert_int_equal(imu_stream_rate(&s, 0u, W0, fr.data), 1); /* the oldest had no accel */
     hal_can_frame_t fr1, fa1;
     cf_imu_pair(W0, V0, 1u, 0u, 0u, &fr1, &fa1);
     assert_int_equal(imu_stream_accel(&s, &l, 1u, 0u, V0, fa1.data, 0u, &out), IMU_REJ_PAIR);
     /* the pending IMU_Rate was consumed by the broken pair: its own accel now fails too */
     assert_int_equal(imu_stream_accel(&s, &l, 0u, 0u, V0, fa.data, 0u, &out), IMU_REJ_PAIR);
     assert_int_equal(l.have_sample, 0);
+}
+
+/* GIVEN another node's 8-byte frame on IMU_Rate's identifier between the two halves of
+ * a sample WHEN the real IMU_Accel comes THEN it pairs with the real IMU_Rate (its counter
+ * and pair CRC); the foreign one after it waits on until the next real pair drops it (a
+ * broken pair); a foreign one before the real IMU_Rate is dropped at once. */
+static void test_foreign_rate_between_halves(void **state)
+{
+    (void)state;
+    hal_can_frame_t fr, fa;
+    cf_imu_pair(W0, V0, 0u, 0u, 0u, &fr, &fa);
+    const uint8_t junk[8] = {0x11, 0x22, 0x33, 0x44, 0x55, 0x66, 0x77, 0x08};
+    const int32_t junk_raw[3] = {5, 6, 7};
+    assert_int_equal(imu_stream_rate(&s, 0u, W0, fr.data), 0);
+    assert_int_equal(imu_stream_rate(&s, 0u, junk_raw, junk), 0);
+    assert_int_equal(imu_stream_accel(&s, &l, 0u, 0u, V0, fa.data, 0u, &out), IMU_SAMPLE);
+    assert_int_equal(out.raw[0], W0[0]);
+    assert_int_equal(out.dropped, 0u);
+    assert_int_equal(s.n_pending, 1u); /* the foreign one */
+    hal_can_frame_t fr2, fa2;
+    cf_imu_pair(W0, V0, 1u, 0u, 0u, &fr2, &fa2);
+    assert_int_equal(imu_stream_rate(&s, 1u, W0, fr2.data), 0);
+    assert_int_equal(imu_stream_accel(&s, &l, 1u, 0u, V0, fa2.data, PERIOD_US, &out), IMU_SAMPLE);
+    assert_int_equal(out.dropped, 1u);
+    assert_int_equal(out.lost, 0u);
+    cf_imu_pair(W0, V0, 2u, 0u, 0u, &fr, &fa);
+    assert_int_equal(imu_stream_rate(&s, 2u, junk_raw, junk), 0);
+    assert_int_equal(imu_stream_rate(&s, 2u, W0, fr.data), 0);
+    assert_int_equal(imu_stream_accel(&s, &l, 2u, 0u, V0, fa.data, 2u * PERIOD_US, &out), IMU_SAMPLE);
+    assert_int_equal(out.raw[2], W0[2]);
+    assert_int_equal(out.dropped, 1u);
+}
+
+/* GIVEN two samples whose frames come reordered (Rate k, Rate k+1, Accel k, Accel k+1)
+ * THEN both pair: the newer IMU_Rate waits on while the older pairs. */
+static void test_reordered_pairs(void **state)
+{
+    (void)state;
+    hal_can_frame_t r0, a0, r1, a1;
+    const int32_t W1[3] = {W0[0] + 3, W0[1], W0[2]};
+    cf_imu_pair(W0, V0, 0u, 0u, 0u, &r0, &a0);
+    cf_imu_pair(W1, V0, 1u, 0u, 0u, &r1, &a1);
+    (void)imu_stream_rate(&s, 0u, W0, r0.data);
+    (void)imu_stream_rate(&s, 1u, W1, r1.data);
+    assert_int_equal(imu_stream_accel(&s, &l, 0u, 0u, V0, a0.data, 0u, &out), IMU_SAMPLE);
+    assert_int_equal(out.raw[0], W0[0]);
+    assert_int_equal(out.dropped, 0u);
+    assert_int_equal(imu_stream_accel(&s, &l, 1u, 0u, V0, a1.data, PERIOD_US, &out), IMU_SAMPLE);
+    assert_int_equal(out.raw[0], W1[0]);
+    assert_int_equal(out.lost, 0u);
+}
+
+/* GIVEN an 8-byte frame with a wrong pair CRC on IMU_Accel's identifier between the two
+ * halves WHEN the real IMU_Accel follows THEN the first is refused (bad CRC) and the real
+ * pair still makes the sample. */
+static void test_foreign_accel_between_halves(void **state)
+{
+    (void)state;
+    hal_can_frame_t fr, fa;
+    cf_imu_pair(W0, V0, 0u, 0u, 0u, &fr, &fa);
+    uint8_t junk[8];
+    memcpy(junk, fa.data, 8u);
+    junk[7] ^= 0x5Au;
+    (void)imu_stream_rate(&s, 0u, W0, fr.data);
+    assert_int_equal(imu_stream_accel(&s, &l, 0u, 0u, V0, junk, 0u, &out), IMU_REJ_CRC);
+    assert_int_equal(imu_stream_accel(&s, &l, 0u, 0u, V0, fa.data, 0u, &out), IMU_SAMPLE);
+    assert_int_equal(out.dropped, 0u);
+    assert_int_equal(out.raw[3], V0[0]);
 }
 
 /* The pair CRC covers IMU_Rate too: one bit of IMU_Rate's payload changed -> bad CRC. */
@@ -370,6 +439,9 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test_setup(test_pair_gives_a_sample, setup),
         cmocka_unit_test_setup(test_broken_pair, setup),
+        cmocka_unit_test_setup(test_foreign_rate_between_halves, setup),
+        cmocka_unit_test_setup(test_foreign_accel_between_halves, setup),
+        cmocka_unit_test_setup(test_reordered_pairs, setup),
         cmocka_unit_test_setup(test_bad_pair_crc, setup),
         cmocka_unit_test_setup(test_fault_bit, setup),
         cmocka_unit_test_setup(test_counter_steps_1_and_2, setup),

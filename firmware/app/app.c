@@ -134,6 +134,9 @@ static void on_imu_accel(app_t *a, hal_t *hal, const rx_input_t *in, uint64_t t_
                                     : (v == IMU_REJ_CRC ? &h->bad_crc : &h->bad_counter));
         return;
     }
+    for (uint8_t i = 0u; i < s.dropped; i++) {
+        reject(a, &a->keep.health.imu_pair_broken); /* an IMU_Rate that got no IMU_Accel */
+    }
     if (s.time_gap) {
         app_count(&a->keep.health.time_jumps);
     }

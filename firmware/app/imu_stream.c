@@ -22,13 +22,18 @@ void imu_link_init(imu_link_t *l, uint32_t rate_hz, nav_real_t gyro_range_rps,
 int imu_stream_rate(imu_stream_t *s, uint8_t counter, const int32_t raw[3],
                     const uint8_t data[8])
 {
-    const int broken = s->rate_pending != 0u;
-    s->rate_pending = 1u;
-    s->rate_counter = counter;
-    memcpy(s->rate_data, data, 8u);
-    s->rate_raw[0] = raw[0];
-    s->rate_raw[1] = raw[1];
-    s->rate_raw[2] = raw[2];
+    int broken = 0;
+    if (s->n_pending == IMU_PENDING_MAX) {
+        s->pending[0] = s->pending[1]; /* the oldest got no IMU_Accel */
+        s->n_pending--;
+        broken = 1;
+    }
+    imu_half_t *h = &s->pending[s->n_pending++];
+    h->counter = counter;
+    memcpy(h->data, data, 8u);
+    h->raw[0] = raw[0];
+    h->raw[1] = raw[1];
+    h->raw[2] = raw[2];
     return broken;
 }
 
@@ -109,15 +114,33 @@ imu_verdict_t imu_stream_accel(imu_stream_t *s, imu_link_t *l, uint8_t counter, 
                                const int32_t raw[3], const uint8_t data[8], uint64_t t_us,
                                imu_sample_t *out)
 {
-    if (!s->rate_pending || counter != s->rate_counter) {
-        s->rate_pending = 0u;
+    /* the waiting IMU_Rate of this counter whose pair CRC (one E2E data element in two
+     * frames: it covers IMU_Rate too) matches, the newest first */
+    int match = -1;
+    int same_counter = 0;
+    for (int k = (int)s->n_pending - 1; k >= 0 && match < 0; k--) {
+        if (s->pending[k].counter == counter) {
+            same_counter = 1;
+            if (data[7] == e2e_pair_crc(l->accel_id, s->pending[k].data, data)) {
+                match = k;
+            }
+        }
+    }
+    if (!same_counter) {
+        s->n_pending = 0u;
         return IMU_REJ_PAIR;
     }
-    s->rate_pending = 0u;
-    /* one E2E data element in two frames: the CRC covers IMU_Rate too */
-    if (data[7] != e2e_pair_crc(l->accel_id, s->rate_data, data)) {
-        return IMU_REJ_CRC;
+    if (match < 0) {
+        return IMU_REJ_CRC; /* this IMU_Accel is not theirs: they wait for the real one */
     }
+    /* the older ones got no IMU_Accel; a newer one waits on (frames reordered on the bus) */
+    const imu_half_t rate = s->pending[match];
+    const uint8_t dropped = (uint8_t)match;
+    uint8_t kept = 0u;
+    for (uint8_t k = (uint8_t)(match + 1); k < s->n_pending; k++) {
+        s->pending[kept++] = s->pending[k];
+    }
+    s->n_pending = kept;
     e2e_counter_t probe = l->counter;
     const int step = e2e_counter_step(&probe, counter);
     if (step <= 0) {
@@ -148,6 +171,7 @@ imu_verdict_t imu_stream_accel(imu_stream_t *s, imu_link_t *l, uint8_t counter, 
     l->counter = probe;
     l->fault = fault ? 1u : 0u;
     memset(out, 0, sizeof *out);
+    out->dropped = dropped;
     /* The 4-bit counter cannot see a gap of 15 samples or more. The receive time can:
      * when more than half a counter cycle beyond the counter's step has elapsed, add the
      * whole cycles it missed. (Time is used only here, for gaps; a replay at any speed
@@ -162,7 +186,7 @@ imu_verdict_t imu_stream_accel(imu_stream_t *s, imu_link_t *l, uint8_t counter, 
         }
     }
     for (int i = 0; i < 3; i++) {
-        out->raw[i] = s->rate_raw[i];
+        out->raw[i] = rate.raw[i];
         out->raw[i + 3] = raw[i];
     }
     for (int i = 0; i < 6; i++) {

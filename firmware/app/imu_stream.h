@@ -40,12 +40,21 @@ typedef struct {
     uint8_t stuck_seen; /* axes whose current stuck episode was counted (bits) */
 } imu_plaus_t;
 
-/* What restarts with navigation: the pair in assembly and the checks. */
+/* An IMU_Rate waiting for its IMU_Accel. */
 typedef struct {
-    uint8_t rate_pending;  /* an IMU_Rate waits for its IMU_Accel */
-    uint8_t rate_counter;
-    uint8_t rate_data[8];  /* its payload, covered by the pair CRC */
-    int32_t rate_raw[3];
+    uint8_t counter;
+    uint8_t data[8];       /* its payload, covered by the pair CRC */
+    int32_t raw[3];
+} imu_half_t;
+
+/* What restarts with navigation: the pair in assembly and the checks. Two IMU_Rate
+ * frames may wait at once: on a shared bus another node's frame on IMU_Rate's identifier
+ * must not take the place of the real one; IMU_Accel pairs with the one whose counter
+ * and pair CRC match. */
+#define IMU_PENDING_MAX 2u
+typedef struct {
+    imu_half_t pending[IMU_PENDING_MAX]; /* oldest first */
+    uint8_t n_pending;
     uint8_t resync_valid;  /* a sample with a counter jump waits for confirmation */
     uint8_t resync_counter;
     imu_plaus_t plaus;
@@ -54,7 +63,8 @@ typedef struct {
 typedef enum {
     IMU_SAMPLE = 0,     /* a sample is ready (imu_sample_t) */
     IMU_REJ_PAIR,       /* imu_pair_broken: IMU_Accel without its IMU_Rate */
-    IMU_REJ_CRC,        /* bad_crc: the pair's CRC */
+    IMU_REJ_CRC,        /* bad_crc: no waiting IMU_Rate gives the pair CRC (they wait on
+                           for the real IMU_Accel) */
     IMU_REJ_COUNTER,    /* bad_counter: repeated, held for confirmation, or old */
 } imu_verdict_t;
 
@@ -66,6 +76,8 @@ typedef struct {
     uint8_t saturated;   /* an axis is at its range */
     uint8_t stuck_new;   /* axes found stuck this sample (each counted once per episode) */
     uint8_t stuck;       /* an axis repeats while the car moves */
+    uint8_t dropped;     /* IMU_Rate frames that waited before the one paired: no IMU_Accel
+                            came for them (count imu_pair_broken); a newer one waits on */
 } imu_sample_t;
 
 /* Boot: the saturation limits from the configured ranges (rad/s, m/s^2) and IMU rate;
@@ -73,8 +85,9 @@ typedef struct {
 void imu_link_init(imu_link_t *l, uint32_t rate_hz, nav_real_t gyro_range_rps,
                    nav_real_t accel_range_mps2, uint32_t accel_id);
 
-/* An IMU_Rate (its counter already checked in range): held for its IMU_Accel. Returns 1
- * if a previous IMU_Rate was still waiting (a broken pair: count imu_pair_broken). */
+/* An IMU_Rate (its counter already checked in range): held for its IMU_Accel beside the
+ * one already waiting. Returns 1 if the oldest of two waiting ones had to go (it got no
+ * IMU_Accel: count imu_pair_broken). */
 int imu_stream_rate(imu_stream_t *s, uint8_t counter, const int32_t raw[3],
                     const uint8_t data[8]);
 
