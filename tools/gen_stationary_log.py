@@ -20,14 +20,11 @@ from __future__ import annotations
 import argparse
 import math
 import sys
-from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-import navecu_can  # noqa: E402
-
-from sim import trajectory  # noqa: E402  (the simulator's WGS-84 model: one copy)
+from tools import navecu_can
+from tools.sim import trajectory  # the simulator's WGS-84 model: one copy
 
 WHEEL_RATE_HZ = 50.0
 

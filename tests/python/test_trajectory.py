@@ -3,17 +3,14 @@ values, exact increments at rest, self-consistency of increments and truth throu
 independent strapdown mechanization, and the shipped scenarios."""
 
 import math
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from tools.sim import trajectory as tr
+
 ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT))
-
-from tools.sim import trajectory as tr  # noqa: E402
-
 SCEN = ROOT / "tools" / "sim" / "scenarios"
 
 
