@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from tools import navecu_can as nc
+from tools import geodesy, navecu_can as nc
 from tools.sim import report, run, sensors, trajectory
 
 BASE_NO_OUTAGE = """name = "base"
@@ -183,7 +183,7 @@ def _gnss_frames(tmp_path, faults_toml):
 
 def _dist_m(a, b):
     lat = math.radians(a["Latitude"])
-    rm, rn = report.radii_m(lat)
+    rm, rn = geodesy.radii_m(lat)
     dn = math.radians(b["Latitude"] - a["Latitude"]) * rm
     de = math.radians(b["Longitude"] - a["Longitude"]) * rn * math.cos(lat)
     return math.hypot(de, dn), math.degrees(math.atan2(de, dn))
@@ -329,7 +329,7 @@ def test_compute_report_fields_and_summary(tmp_path):
     """compute() on a synthetic log: truth standing 2 m south of the NAV positions."""
     n = 100
     nav = nav_log(tmp_path, n, np.full(n, 1.0))
-    rm, _ = report.radii_m(math.radians(45.0))
+    rm, _ = geodesy.radii_m(math.radians(45.0))
     t = np.linspace(0.0, 50.0, 501)
     truth = {"t_s": t, "lat_rad": np.full(t.size, math.radians(45.0) - 2.0 / rm),
              "lon_rad": np.full(t.size, math.radians(10.0)), "heading_rad": np.zeros(t.size),

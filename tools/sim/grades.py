@@ -35,7 +35,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tools import navecu_can as nc
+from tools import geodesy, navecu_can as nc
 from tools.sim import report, sensors, trajectory
 from tools.sim.run import ROOT, frames
 
@@ -107,7 +107,7 @@ def run_one(grade: str, seed: int, duration_s: float, tmp: Path, navecu: str) ->
     pos = report.read_nav_log(nav_log)["NAV_Position"]
     lat_t = np.interp(pos["t_s"], truth.t_s, truth.lat_rad)
     lon_t = np.interp(pos["t_s"], truth.t_s, truth.lon_rad)
-    herr, _, _ = report.horizontal_error_m(lat_t, lon_t, np.radians(pos["Latitude"]),
+    herr, _, _ = geodesy.horizontal_error_m(lat_t, lon_t, np.radians(pos["Latitude"]),
                                            np.radians(pos["Longitude"]))
     t = pos["t_s"]
     # the firmware refuses to integrate beyond 1000 m/s: errors are valid while it runs

@@ -23,16 +23,7 @@ import can
 import numpy as np
 
 from tools import navecu_can as nc
-
-A_M = 6378137.0
-E2 = 6.69437999014e-3
-
-
-def radii_m(lat_rad):
-    """Meridian and prime-vertical radii of curvature (WGS-84), m."""
-    w2 = 1.0 - E2 * np.sin(lat_rad) ** 2
-    return A_M * (1.0 - E2) / w2 ** 1.5, A_M / np.sqrt(w2)
-
+from tools.geodesy import horizontal_error_m, radii_m
 
 def read_nav_log(path) -> dict:
     """Decode NAV_Position / NAV_Attitude / NAV_Velocity / NAV_Height / NAV_Status frames of
@@ -210,14 +201,6 @@ def _interp_truth(truth, t_s):
     lon = np.interp(t_s, truth["t_s"], np.unwrap(truth["lon_rad"]))
     hdg = np.interp(t_s, truth["t_s"], np.unwrap(truth["heading_rad"]))
     return lat, lon, hdg
-
-
-def horizontal_error_m(lat_true, lon_true, lat_est, lon_est):
-    rm, rn = radii_m(lat_true)
-    dn = (lat_est - lat_true) * rm
-    dlon = (lon_est - lon_true + math.pi) % (2 * math.pi) - math.pi
-    de = dlon * rn * np.cos(lat_true)
-    return np.hypot(de, dn), de, dn
 
 
 def _stats(x):

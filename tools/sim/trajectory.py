@@ -151,15 +151,7 @@ from pathlib import Path
 
 import numpy as np
 
-# --- WGS-84 (NIMA TR8350.2), the constants of firmware/nav/earth.h -----------------------
-WGS84_A_M = 6378137.0
-WGS84_F = 1.0 / 298.257223563
-WGS84_E2 = 6.69437999014e-3
-WGS84_OMEGA_IE_RPS = 7.292115e-5
-WGS84_GAMMA_E_MPS2 = 9.7803253359
-WGS84_GAMMA_P_MPS2 = 9.8321849378
-WGS84_SOMIGLIANA_K = 0.00193185265241
-WGS84_M = 0.00344978650684
+from tools.geodesy import earth_rate_n, gravity, pos_rate, transport_rate_n
 
 # 5-point Gauss-Legendre on [-1, 1] (truth.c)
 GL_X = np.array([-0.9061798459386640, -0.5384693101056831, 0.0, 0.5384693101056831,
@@ -180,51 +172,6 @@ ROUGH_SPEED_REF_MPS = 5.0
 _ROUGH_PITCH = ((1.17, 0.5, 0.3), (1.93, 0.3, 1.9), (2.71, 0.2, 4.1))
 _ROUGH_ROLL = ((1.41, 0.5, 2.2), (2.23, 0.3, 0.7), (2.87, 0.2, 5.3))
 _S_NORM = 3.0 * math.sqrt(3.0) / 8.0  # max of 2 sin^3 cos
-
-
-# --- Earth model (earth.c, double) ----------------------------------------------------------
-def earth_radii(sin_lat):
-    """Meridian and prime-vertical radii of curvature (m) for sin(latitude)."""
-    w2 = 1.0 - WGS84_E2 * sin_lat * sin_lat
-    w = np.sqrt(w2)
-    r_n = WGS84_A_M / w
-    r_m = WGS84_A_M * (1.0 - WGS84_E2) / (w2 * w)
-    return r_m, r_n
-
-
-def gravity(sin_lat, h_m):
-    """Normal gravity (m/s^2), Somigliana with the second-order height series."""
-    s2 = sin_lat * sin_lat
-    g0 = WGS84_GAMMA_E_MPS2 * (1.0 + WGS84_SOMIGLIANA_K * s2) / np.sqrt(1.0 - WGS84_E2 * s2)
-    inv_a = 1.0 / WGS84_A_M
-    k1 = 2.0 * inv_a * (1.0 + WGS84_F + WGS84_M - 2.0 * WGS84_F * s2)
-    k2 = 3.0 * inv_a * inv_a
-    return g0 * (1.0 - k1 * h_m + k2 * h_m * h_m)
-
-
-def earth_rate_n(lat_rad):
-    """w_ie in ENU, shape (..., 3)."""
-    lat = np.asarray(lat_rad, dtype=float)
-    return np.stack([np.zeros_like(lat), WGS84_OMEGA_IE_RPS * np.cos(lat),
-                     WGS84_OMEGA_IE_RPS * np.sin(lat)], axis=-1)
-
-
-def transport_rate_n(lat_rad, h_m, v_n):
-    """w_en in ENU (seed 001 eq. 7), shape (..., 3)."""
-    sl, cl = np.sin(lat_rad), np.cos(lat_rad)
-    r_m, r_n = earth_radii(sl)
-    inv_rm = 1.0 / (r_m + h_m)
-    inv_rn = 1.0 / (r_n + h_m)
-    tl = sl / cl
-    v_n = np.asarray(v_n, dtype=float)
-    return np.stack([-v_n[..., 1] * inv_rm, v_n[..., 0] * inv_rn,
-                     v_n[..., 0] * tl * inv_rn], axis=-1)
-
-
-def pos_rate(lat_rad, h_m, v_n):
-    """d(lat, lon, h)/dt (seed 001 eq. 6) as three arrays."""
-    r_m, r_n = earth_radii(np.sin(lat_rad))
-    return v_n[..., 1] / (r_m + h_m), v_n[..., 0] / ((r_n + h_m) * np.cos(lat_rad)), v_n[..., 2]
 
 
 # --- quaternions (nav_math.c conventions) ---------------------------------------------------
@@ -704,16 +651,10 @@ class Trajectory:
 
 def sensed(kin, q_bn, w_nb_b, lat_rad, h_m):
     """w_ib_b and f_b (truth.c sensed()) for kinematics at positions (lat, h)."""
-    sl, cl = np.sin(lat_rad), np.cos(lat_rad)
-    r_m, r_n = earth_radii(sl)
-    g = gravity(sl, h_m)
+    g = gravity(np.sin(lat_rad), h_m)
     v = kin["v"]
-    inv_rm = 1.0 / (r_m + h_m)
-    inv_rn = 1.0 / (r_n + h_m)
-    tl = sl / cl
-    zero = np.zeros_like(sl)
-    w_ie = np.stack([zero, WGS84_OMEGA_IE_RPS * cl, WGS84_OMEGA_IE_RPS * sl], axis=-1)
-    w_en = np.stack([-v[..., 1] * inv_rm, v[..., 0] * inv_rn, v[..., 0] * tl * inv_rn], axis=-1)
+    w_ie = earth_rate_n(lat_rad)
+    w_en = transport_rate_n(lat_rad, h_m, v)
     w_in = w_ie + w_en
     w_cor = 2.0 * w_ie + w_en
     f_n = kin["a"] + np.cross(w_cor, v)
