@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from tools import geodesy, navecu_can as nc
-from tools.sim import report, run, sensors, trajectory
+from tools.sim import report, run, scenario, sensors, trajectory
 
 BASE_NO_OUTAGE = """name = "base"
 description = "the base"
@@ -92,8 +92,8 @@ def test_base_merges_tables_and_inherits_arrays(tmp_path):
 
 
 def test_issue7_scenarios():
-    default = trajectory.load_scenario(run.scenario_path("default"))
-    sc = {n: trajectory.load_scenario(run.scenario_path(n))
+    default = trajectory.load_scenario(scenario.scenario_path("default"))
+    sc = {n: trajectory.load_scenario(scenario.scenario_path(n))
           for n in ("dgnss", "outage5", "outage5-automotive", "gnss-faults")}
     for name, s in sc.items():
         assert s["name"] == name

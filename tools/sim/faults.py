@@ -59,7 +59,7 @@ import can
 import numpy as np
 
 from tools import navecu_can as nc
-from tools.sim import report, run, sensors, trajectory
+from tools.sim import report, run, scenario, sensors, trajectory
 
 ROOT = Path(__file__).resolve().parents[2]
 BEGIN = "<!-- BEGIN GENERATED: make faults -->"
@@ -105,33 +105,33 @@ class Drive:
         return [m for _, _, m in self.frames]
 
 
-def build_drive(scenario: str = "default", seed: int = 1, imu_rate_hz: int = 100,
+def build_drive(name: str = "default", seed: int = 1, imu_rate_hz: int = 100,
                 log=print) -> Drive:
     """The clean drive, as run.main builds it for `make sim` (same presets, seeds, options,
     frames and order)."""
-    scen = trajectory.load_scenario(run.scenario_path(scenario))
+    scen = trajectory.load_scenario(scenario.scenario_path(name))
     sim_cfg = scen.get("sim", {})
     imu_name = sim_cfg.get("imu", "mid-grade")
     gnss_name = sim_cfg.get("gnss", "standalone")
     t = time.monotonic()
     truth = trajectory.generate(scen, imu_rate_hz)
-    imu_spec, odo = run.sensor_specs(scen, imu_name, truth.vehicle)
+    imu_spec, odo = scenario.sensor_specs(scen, imu_name, truth.vehicle)
     dtheta, dv = sensors.apply_imu(truth, imu_spec, 3 * seed)
     wheels = sensors.wheel_speeds(truth, odo, 3 * seed + 1)
     gnss = sensors.gnss_epochs(truth, sensors.GNSS_PRESETS[gnss_name], 3 * seed + 2)
     if scen.get("gnss_faults") or scen.get("calibration"):
-        raise SystemExit(f"scenario '{scenario}': fault drives start from a drive without "
+        raise SystemExit(f"scenario '{name}': fault drives start from a drive without "
                          "[gnss_faults] or [calibration]")
     fw_args = run.firmware_args(sensors.PRESETS[imu_name], sensors.GNSS_PRESETS[gnss_name])
-    log(f"  trajectory and sensors ({scen.get('name', scenario)}, IMU {imu_name}, GNSS "
+    log(f"  trajectory and sensors ({scen.get('name', name)}, IMU {imu_name}, GNSS "
         f"{gnss_name}): {time.monotonic() - t:.1f} s")
     t = time.monotonic()
     db = nc.load_db()
-    hdg = run.heading_command_deg(truth.heading_rad[0], scen)
+    hdg = scenario.heading_command_deg(truth.heading_rad[0], scen)
     fr = run.frames(truth, dtheta, dv, wheels, gnss, db, heading_deg=hdg)
     fr.sort(key=lambda x: (x[0], x[1]))
     log(f"  CAN encoding: {len(fr)} frames, {time.monotonic() - t:.1f} s")
-    d = Drive(scen.get("name", scenario), imu_name, gnss_name, seed, imu_rate_hz, truth,
+    d = Drive(scen.get("name", name), imu_name, gnss_name, seed, imu_rate_hz, truth,
               dtheta, dv, wheels, gnss, fw_args, hdg, db, fr)
     d.imu_encoder = ImuEncoder(d)
     return d

@@ -24,6 +24,7 @@ import numpy as np
 
 from tools import navecu_can as nc
 from tools.geodesy import horizontal_error_m, radii_m
+from tools.sim import scenario, sensors, trajectory
 
 def read_nav_log(path) -> dict:
     """Decode NAV_Position / NAV_Attitude / NAV_Velocity / NAV_Height / NAV_Status frames of
@@ -680,12 +681,11 @@ def main(argv=None):
     nav = read_nav_log(args.nav)
     rep, series = compute(data, nav, outages)
     if args.scenario:
-        from tools.sim import run, sensors, trajectory  # run imports this module
-        scen = trajectory.load_scenario(run.scenario_path(args.scenario))
-        imu, odo = run.sensor_specs(scen, scen.get("sim", {}).get("imu", "mid-grade"),
-                                    scen["vehicle"])
-        hdg = run.heading_command_deg(float(data["heading_rad"][0]), scen)
-        rep["truth"] = run.scenario_truths(scen, float(data["heading_rad"][0]), imu, odo, hdg)
+        scen = trajectory.load_scenario(scenario.scenario_path(args.scenario))
+        imu, odo = scenario.sensor_specs(scen, scen.get("sim", {}).get("imu", "mid-grade"),
+                                         scen["vehicle"])
+        hdg = scenario.heading_command_deg(float(data["heading_rad"][0]), scen)
+        rep["truth"] = scenario.scenario_truths(scen, float(data["heading_rad"][0]), imu, odo, hdg)
         cal = scen.get("calibration")
         cal_log = read_calibration_log(args.nav)
         rep["calibration"] = (calibration_report(data, series, cal_log, cal, rep["truth"])
