@@ -55,7 +55,7 @@ def test_report_fields_and_plots(perfect_run):
 
 def test_no_gnss_frames_in_outages(perfect_run):
     """Outage segments of the scenario have no GNSS frame in the CAN log."""
-    truth = trajectory.generate(trajectory.load_scenario(scenario.scenario_path("default")), 10)
+    truth = trajectory.generate(scenario.load_scenario(scenario.scenario_path("default")), 10)
     db = nc.load_db()
     gnss_ids = {db.get_message_by_name(n).frame_id
                 for n in ("GNSS_Position", "GNSS_Velocity", "GNSS_Height", "GNSS_Status")}
@@ -102,7 +102,7 @@ duration_s = 20
 def short_scenario(tmp_path, extra="", lat=56.0, heading=10.0):
     p = tmp_path / "short.toml"
     p.write_text(SHORT.format(lat=lat, heading=heading) + extra)
-    return trajectory.load_scenario(p)
+    return scenario.load_scenario(p)
 
 
 def decode(db, msg):
@@ -121,9 +121,9 @@ def test_scenario_tables_defaults_and_validation(tmp_path):
             short_scenario(tmp_path, bad)
     # every [odometer] key the format accepts is an OdoSpec field
     fields = set(sensors.OdoSpec.__dataclass_fields__)
-    assert trajectory._OPTIONAL_TABLES["odometer"] <= fields - {"track_m", "wheelbase_m"}
+    assert scenario._OPTIONAL_TABLES["odometer"] <= fields - {"track_m", "wheelbase_m"}
     # without the tables the default drive keeps its heading command and sensors
-    default = trajectory.load_scenario(scenario.scenario_path("default"))
+    default = scenario.load_scenario(scenario.scenario_path("default"))
     imu, odo = scenario.sensor_specs(default, "mid-grade", default["vehicle"])
     assert imu == sensors.PRESETS["mid-grade"] and odo.mu == sensors.OdoSpec().mu
     assert scenario.heading_command_deg(math.radians(30.004), default) == 30.0
@@ -176,7 +176,8 @@ def _frames_of(tmp_path, extra, seed=1, heading=10.0):
         cal = dict(cal, gnss_epoch=run.calibration_epoch(truth, cal, gnss, 3 * seed + 2))
     db = nc.load_db()
     fr = run.frames(truth, dth, dv, wheels, gnss, db,
-                    heading_deg=scenario.heading_command_deg(truth.heading_rad[0], sc), calibration=cal)
+                    heading_deg=scenario.heading_command_deg(truth.heading_rad[0], sc),
+                    calibration=cal)
     fr.sort(key=lambda x: (x[0], x[1]))
     return sc, truth, db, [(t, m) for t, _, m in fr]
 

@@ -10,6 +10,7 @@ import pytest
 
 from tools import geodesy as geo
 from tools.sim import trajectory as tr
+from tools.sim.scenario import load_scenario
 
 ROOT = Path(__file__).resolve().parents[2]
 SCEN = ROOT / "tools" / "sim" / "scenarios"
@@ -253,7 +254,7 @@ def test_increments_reproduce_truth_through_strapdown():
 # --- shipped scenarios --------------------------------------------------------------------
 @pytest.fixture(scope="module")
 def default_truth():
-    return tr.generate(tr.load_scenario(SCEN / "default.toml"), 100.0)
+    return tr.generate(load_scenario(SCEN / "default.toml"), 100.0)
 
 
 def test_default_scenario(default_truth, tmp_path):
@@ -297,7 +298,7 @@ def test_default_scenario(default_truth, tmp_path):
 
 
 def test_figure8_returns_to_start():
-    t = tr.generate(tr.load_scenario(SCEN / "figure8.toml"), 50.0)
+    t = tr.generate(load_scenario(SCEN / "figure8.toml"), 50.0)
     assert 9 * 60 <= t.t_s[-1] <= 11 * 60
     rm, rn = geo.earth_radii(math.sin(t.lat_rad[0]))
     dn = (t.lat_rad[-1] - t.lat_rad[0]) * (rm + t.h_m[0])
@@ -310,7 +311,7 @@ def test_figure8_returns_to_start():
 def test_seed000_scenario():
     """Seed 000's drive: long enough for 20 minutes after the calibration at 3431 s,
     moving there, standing still for the levelling and at stops along the way."""
-    sc = tr.load_scenario(SCEN / "seed000.toml")
+    sc = load_scenario(SCEN / "seed000.toml")
     traj = tr.Trajectory(sc)
     cal = sc["calibration"]
     assert cal["at_s"] == 3431.0 and cal["source"] in ("known_position", "gnss")

@@ -109,10 +109,8 @@ def build_drive(name: str = "default", seed: int = 1, imu_rate_hz: int = 100,
                 log=print) -> Drive:
     """The clean drive, as run.main builds it for `make sim` (same presets, seeds, options,
     frames and order)."""
-    scen = trajectory.load_scenario(scenario.scenario_path(name))
-    sim_cfg = scen.get("sim", {})
-    imu_name = sim_cfg.get("imu", "mid-grade")
-    gnss_name = sim_cfg.get("gnss", "standalone")
+    scen = scenario.load(name)
+    imu_name, gnss_name = scenario.preset_names(scen)
     t = time.monotonic()
     truth = trajectory.generate(scen, imu_rate_hz)
     imu_spec, odo = scenario.sensor_specs(scen, imu_name, truth.vehicle)

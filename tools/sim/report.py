@@ -24,7 +24,7 @@ import numpy as np
 
 from tools import navecu_can as nc
 from tools.geodesy import horizontal_error_m, radii_m
-from tools.sim import scenario, sensors, trajectory
+from tools.sim import scenario, sensors
 
 def read_nav_log(path) -> dict:
     """Decode NAV_Position / NAV_Attitude / NAV_Velocity / NAV_Height / NAV_Status frames of
@@ -681,16 +681,16 @@ def main(argv=None):
     nav = read_nav_log(args.nav)
     rep, series = compute(data, nav, outages)
     if args.scenario:
-        scen = trajectory.load_scenario(scenario.scenario_path(args.scenario))
-        imu, odo = scenario.sensor_specs(scen, scen.get("sim", {}).get("imu", "mid-grade"),
-                                         scen["vehicle"])
+        scen = scenario.load(args.scenario)
+        imu_name, gnss_name = scenario.preset_names(scen)
+        imu, odo = scenario.sensor_specs(scen, imu_name, scen["vehicle"])
         hdg = scenario.heading_command_deg(float(data["heading_rad"][0]), scen)
         rep["truth"] = scenario.scenario_truths(scen, float(data["heading_rad"][0]), imu, odo, hdg)
         cal = scen.get("calibration")
         cal_log = read_calibration_log(args.nav)
         rep["calibration"] = (calibration_report(data, series, cal_log, cal, rep["truth"])
                               if cal else None)
-        no_gnss = not sensors.GNSS_PRESETS[scen.get("sim", {}).get("gnss", "standalone")].enabled
+        no_gnss = not sensors.GNSS_PRESETS[gnss_name].enabled
         t600 = None if no_gnss else gnss_driving_reached(
             data, FILTER_CAL_GNSS_DRIVING_S, rep.get("navigation_start_s", 0.0),
             outages=outages)

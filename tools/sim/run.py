@@ -208,11 +208,9 @@ def main(argv=None) -> int:
                          "(tools/vcan/bus_run.py)")
     a = ap.parse_args(argv)
 
-    scen = trajectory.load_scenario(scenario.scenario_path(a.scenario))
+    scen = scenario.load(a.scenario)
     name = scen.get("name", Path(a.scenario).stem)
-    sim_cfg = scen.get("sim", {})
-    imu_name = a.imu or sim_cfg.get("imu", "mid-grade")
-    gnss_name = a.gnss or sim_cfg.get("gnss", "standalone")
+    imu_name, gnss_name = scenario.preset_names(scen, a.imu, a.gnss)
     if imu_name not in sensors.PRESETS:
         raise SystemExit(f"no IMU preset '{imu_name}' (known: {', '.join(sensors.PRESETS)})")
     if gnss_name not in sensors.GNSS_PRESETS:

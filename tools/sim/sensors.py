@@ -700,7 +700,7 @@ def _epoch_at_or_after(t_s, t: float, what: str) -> int:
 
 def apply_gnss_faults(epochs: dict, faults: dict) -> tuple[dict, list]:
     """Bad GNSS epochs for the gate tests (a scenario's [gnss_faults], validated by
-    trajectory.load_scenario): (a new epoch dict, one log entry per fault).
+    scenario.load_scenario): (a new epoch dict, one log entry per fault).
 
     freeze [t0, t1]: every epoch with t0 <= t_s < t1 repeats the position, velocity,
     height, accuracies, satellites, fix type and validity of the last epoch before t0; its
