@@ -78,20 +78,9 @@ from tools.geodesy import horizontal_distance_m
 ROOT = Path(__file__).resolve().parents[2]
 
 
-def _data_dir() -> Path:
-    """The recorded drive: $NAVECU_KINGSTON_DIR, else ../shared/data/kingston-2008 beside
-    the checkout, else the workplace's /work/shared copy (a clone elsewhere)."""
-    env = os.environ.get("NAVECU_KINGSTON_DIR")
-    if env:
-        return Path(env)
-    for cand in (ROOT.parent / "shared" / "data" / "kingston-2008",
-                 Path("/work/shared/data/kingston-2008")):
-        if (cand / "imu.csv").exists():
-            return cand
-    return ROOT.parent / "shared" / "data" / "kingston-2008"
-
-
-DATA_DIR = _data_dir()
+#: The recorded drive: data/kingston-2008 in the repository (its README.md: source,
+#: licence), or the folder $NAVECU_KINGSTON_DIR names; --data DIR overrides both.
+DATA_DIR = Path(os.environ.get("NAVECU_KINGSTON_DIR") or ROOT / "data" / "kingston-2008")
 IMU_RATE_HZ = 10
 DEFAULT_OUTAGES = "every:240:60"
 DEFAULT_CAL_KM = 5.0
