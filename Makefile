@@ -243,7 +243,7 @@ codec-check: venv
 	  echo "codec: firmware/can/gen is STALE - run 'make codec' and commit"; exit 1; fi
 
 doc-check: venv
-	$(PY) tools/gen_can_doc.py --check
+	$(PY) -m tools.gen_can_doc --check
 
 # ---- Cortex-M4F: the same firmware sources, single-precision FPU, hard float ABI ----
 # (hal/cortex_m4f/ drivers find their own header beside them; the include path stays

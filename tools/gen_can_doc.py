@@ -7,8 +7,8 @@ Only the text between the markers
 is rewritten; the prose around it is hand-written. The hand-written overview table (rows
 starting "| 0x") is checked against the DBC (ID, name, sender, DLC, E2E) but not rewritten.
 
-    tools/gen_can_doc.py            rewrite docs/can.md
-    tools/gen_can_doc.py --check    exit 1 if docs/can.md is stale or its overview disagrees
+    python -m tools.gen_can_doc            rewrite docs/can.md
+    python -m tools.gen_can_doc --check    exit 1 if docs/can.md is stale or its overview disagrees
 
 The meaning column is the DBC comment of the signal where there is one, else the text in
 MEANING below, followed by the value table and, for multiplexed signals, the page. A DBC
@@ -22,8 +22,7 @@ import math
 import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-import navecu_can  # noqa: E402
+from tools import navecu_can
 
 ROOT = Path(__file__).resolve().parent.parent
 DOC = ROOT / "docs" / "can.md"
@@ -255,7 +254,8 @@ def main(argv=None) -> int:
         print(f"gen_can_doc: {problem}", file=sys.stderr)
     if a.check:
         if new != text:
-            print(f"gen_can_doc: {a.doc} is stale; run tools/gen_can_doc.py", file=sys.stderr)
+            print(f"gen_can_doc: {a.doc} is stale; run python -m tools.gen_can_doc",
+                  file=sys.stderr)
             return 1
         return 1 if problems else 0
     if new != text:

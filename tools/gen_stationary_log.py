@@ -20,27 +20,24 @@ from __future__ import annotations
 import argparse
 import math
 import sys
-from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-import navecu_can  # noqa: E402
-
-from sim import trajectory  # noqa: E402  (the simulator's WGS-84 model: one copy)
+from tools import geodesy, navecu_can
+from tools.sim import trajectory
 
 WHEEL_RATE_HZ = 50.0
 
 
 def normal_gravity(lat_rad: float, h_m: float) -> float:
     """Normal gravity magnitude (m/s^2) as firmware/nav/earth.c computes it (TR8350.2 eqs.
-    4-1, 4-3), from tools/sim/trajectory.py."""
-    return float(trajectory.gravity(math.sin(lat_rad), h_m))
+    4-1, 4-3), from tools/geodesy.py."""
+    return float(geodesy.gravity(math.sin(lat_rad), h_m))
 
 
 def earth_rate_n(lat_rad: float) -> np.ndarray:
     """Earth rate in ENU: (0, U cos lat, U sin lat) rad/s."""
-    return trajectory.earth_rate_n(lat_rad)
+    return geodesy.earth_rate_n(lat_rad)
 
 
 def c_bn(roll_rad: float, pitch_rad: float, heading_rad: float) -> np.ndarray:

@@ -381,10 +381,13 @@ class ImuQuantizer:
     def signals(self, dtheta_rad: Iterable[float], dv_mps: Iterable[float]) -> tuple:
         """(IMU_Rate signals, IMU_Accel signals) in physical units, exact multiples of the
         LSBs, without counter, ImuFault and CRC (E2ESender.encode_imu_pair fills them)."""
-        a = self.quantize_angle(dtheta_rad)
-        v = self.quantize_vel(dv_mps)
-        rate = {name: raw * self.angle_lsb_rad for name, raw in zip(ANGLE_SIGNALS, a)}
-        accel = {name: raw * self.vel_lsb_mps for name, raw in zip(VEL_SIGNALS, v)}
+        return self.raw_signals(self.quantize_angle(dtheta_rad), self.quantize_vel(dv_mps))
+
+    def raw_signals(self, angle_raw: Iterable[int], vel_raw: Iterable[int]) -> tuple:
+        """(IMU_Rate signals, IMU_Accel signals) of raw AngleIncX/Y/Z and VelIncX/Y/Z values
+        (as quantize_angle and quantize_vel give them), in physical units."""
+        rate = {name: raw * self.angle_lsb_rad for name, raw in zip(ANGLE_SIGNALS, angle_raw)}
+        accel = {name: raw * self.vel_lsb_mps for name, raw in zip(VEL_SIGNALS, vel_raw)}
         return rate, accel
 
 

@@ -12,12 +12,10 @@ import cantools
 import numpy as np
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
-TOOLS = ROOT / "tools"
-sys.path.insert(0, str(TOOLS))
+from tools import gen_stationary_log as gen
+from tools import navecu_can as nc
 
-import gen_stationary_log as gen  # noqa: E402
-import navecu_can as nc  # noqa: E402
+ROOT = Path(__file__).resolve().parents[2]
 
 U = 7.292115e-5
 ANGLE_LSB = 2.0**-21
@@ -467,8 +465,8 @@ def test_normal_gravity_values():
 
 def _run_gen(tmp_path, *args):
     out = tmp_path / "stationary.log"
-    res = subprocess.run([sys.executable, str(TOOLS / "gen_stationary_log.py"), "--out", str(out),
-                          *args], capture_output=True, text=True, check=True)
+    res = subprocess.run([sys.executable, "-m", "tools.gen_stationary_log", "--out", str(out),
+                          *args], capture_output=True, text=True, check=True, cwd=ROOT)
     assert len(res.stdout.strip().splitlines()) == 1 and "frames" in res.stdout
     return out
 
@@ -556,6 +554,6 @@ def test_stationary_log_default_arguments(tmp_path):
 # -------------------------------------------------------------------------- doc ----
 
 def test_can_doc_is_current():
-    res = subprocess.run([sys.executable, str(TOOLS / "gen_can_doc.py"), "--check"],
-                         capture_output=True, text=True)
+    res = subprocess.run([sys.executable, "-m", "tools.gen_can_doc", "--check"],
+                         capture_output=True, text=True, cwd=ROOT)
     assert res.returncode == 0, res.stderr

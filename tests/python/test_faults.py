@@ -1,6 +1,8 @@
 """make faults (tools/sim/faults.py): the frame-level fault transformations on a small
-synthetic frame list, the vectorised IMU encoding against navecu_can, and the recovery-time
+synthetic frame list, the IMU re-encoding of the sensor-level faults, and the recovery-time
 functions on synthetic error series. Fast: no firmware run, no full drive."""
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 
@@ -197,35 +199,45 @@ def test_jitter_keeps_order_and_bounds(frames):
         [m for m in frames if m.arbitration_id not in imu]
 
 
-def test_vectorised_imu_packing_matches_navecu_can():
-    """pack_signals + the CRC table give the bytes of E2ESender.encode_imu_pair."""
-    rng_ = np.random.default_rng(5)
+def _imu_frames(dtheta, dv, t):
+    """(t, order, msg) of one IMU pair per sample 1..n, as run.frames sends them."""
+    s, q = nc.E2ESender(DB), nc.ImuQuantizer()
+    out = []
+    for k in range(1, len(t)):
+        r, a = s.encode_imu_pair(*q.signals(dtheta[k], dv[k]), float(t[k]))
+        out += [(float(t[k]), 2, r), (float(t[k]), 3, a)]
+    return out
+
+
+def test_imu_encoder_is_navecu_cans_encoding():
+    """ImuEncoder.frames gives the frames run.frames' own loop gives for the changed
+    increments (counters, pair CRC, remainder carry), leaves the other frames alone and
+    counts the samples that changed."""
+    g = np.random.default_rng(5)
+    n = 300
+    t = np.arange(n + 1) / IMU_HZ
+    th, dv = g.normal(0, 1e-3, (n + 1, 3)), g.normal(0, 1e-2, (n + 1, 3))
+    th[0] = dv[0] = 0.0
     s = nc.E2ESender(DB)
-    q = nc.ImuQuantizer()
-    rate_def, accel_def = (DB.get_message_by_name(n) for n in nc.IMU_PAIR)
-    ref, ra, rv, cnt = [], [], [], []
-    for k in range(40):
-        th, dv = rng_.normal(0, 0.01, 3), rng_.normal(0, 0.1, 3)
-        c = s.next_counter("IMU_Rate")
-        ref.append(s.encode_imu_pair(*q.signals(th, dv), k * 0.01))
-        cnt.append(c)
-    q2 = nc.ImuQuantizer()
-    rng_ = np.random.default_rng(5)
-    for k in range(40):
-        th, dv = rng_.normal(0, 0.01, 3), rng_.normal(0, 0.1, 3)
-        ra.append(q2.quantize_angle(th))
-        rv.append(q2.quantize_vel(dv))
-    ra, rv = np.array(ra), np.array(rv)
-    rate = faults.pack_signals(rate_def, {**dict(zip(nc.ANGLE_SIGNALS, ra.T)),
-                                          "ImuCounter": cnt}, 40)
-    accel = faults.pack_signals(accel_def, {**dict(zip(nc.VEL_SIGNALS, rv.T)),
-                                            "ImuCounter": cnt}, 40)
-    fid = accel_def.frame_id
-    ids = np.tile(np.array([fid & 0xFF, fid >> 8], np.uint8), (40, 1))
-    accel[:, 7] = faults._crc8_rows(faults._crc8_table(), np.hstack([ids, rate, accel[:, :7]]))
-    for k, (r, a) in enumerate(ref):
-        assert bytes(rate[k]) == bytes(r.data)
-        assert bytes(accel[k]) == bytes(a.data)
+    wheels = [(float(x), 4, s.encode("WheelSpeeds", {"WheelSpeedFL": 1.0, "WheelSpeedFR": 1.0,
+                                                      "WheelSpeedRL": 1.0, "WheelSpeedRR": 1.0},
+                                      float(x))) for x in t[::5]]
+    fr = sorted(_imu_frames(th, dv, t) + wheels, key=lambda x: (x[0], x[1]))
+    drive = faults.Drive("synthetic", "perfect", "none", 1, IMU_HZ, SimpleNamespace(t_s=t), th,
+                         dv, None, None, [], 0.0, DB, fr)
+    enc = faults.ImuEncoder(drive)
+    same, n_same = enc.frames(drive, th, dv)
+    assert n_same == 0 and [key(m) for _, _, m in same] == [key(m) for _, _, m in fr]
+    th2 = faults.freeze_axis(th, t, 1.0, 1.5, 2, nc.ANGLE_LSB_RAD)
+    out, changed = enc.frames(drive, th2, dv)
+    want = sorted(_imu_frames(th2, dv, t) + wheels, key=lambda x: (x[0], x[1]))
+    assert [(m.timestamp, key(m)) for _, _, m in out] == [(m.timestamp, key(m)) for _, _, m in want]
+    assert [o for _, o, _ in out] == [o for _, o, _ in want]
+    imu_id = ID["IMU_Rate"]
+    differ = sum(key(a) != key(b) for (_, _, a), (_, _, b) in zip(out, fr)
+                 if a.arbitration_id == imu_id)
+    assert changed == differ >= 50
+    assert all_valid([m for _, _, m in out])
 
 
 def test_freeze_axis_repeats_one_word():

@@ -21,11 +21,8 @@ from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from test_vcan_harness import no_vcan, require_vcan  # noqa: E402
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
-from tools.vcan import bus_run  # noqa: E402
+from test_vcan_harness import no_vcan, require_vcan
+from tools.vcan import bus_run
 
 ROOT = Path(__file__).resolve().parents[2]
 NAVECU = os.environ.get("NAVECU_BIN", str(ROOT / "build" / "host" / "navecu"))
@@ -33,9 +30,9 @@ WITH_VCAN = ROOT / "tools" / "vcan" / "with_vcan.sh"
 
 
 def gen_log(path, duration_s):
-    subprocess.run([sys.executable, ROOT / "tools" / "gen_stationary_log.py", "--out", path,
+    subprocess.run([sys.executable, "-m", "tools.gen_stationary_log", "--out", path,
                     "--duration-s", str(duration_s), "--roll-deg", "2", "--pitch-deg", "-1"],
-                   check=True, capture_output=True)
+                   check=True, capture_output=True, cwd=ROOT)
 
 
 def reference(log, out):
@@ -45,7 +42,7 @@ def reference(log, out):
 
 def live(*args, timeout=600):
     env = dict(os.environ, NAVECU_BIN=NAVECU, NAVECU_VCAN_TIMEOUT=str(timeout))
-    proc = subprocess.run([str(WITH_VCAN), sys.executable, "tools/vcan/live_check.py", *args],
+    proc = subprocess.run([str(WITH_VCAN), sys.executable, "-m", "tools.vcan.live_check", *args],
                           capture_output=True, text=True, cwd=ROOT, env=env, timeout=timeout + 60)
     require_vcan(proc)
     assert proc.returncode == 0, proc.stderr[-2000:]

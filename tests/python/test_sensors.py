@@ -6,17 +6,12 @@ uses fixed seeds; the statistical tolerances are chosen several standard deviati
 """
 
 import math
-import sys
-from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT))
-
-from tools.sim import sensors as S  # noqa: E402
+from tools.sim import sensors as S
 
 G = 9.80665
 U = 7.292115e-5

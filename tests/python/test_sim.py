@@ -12,7 +12,7 @@ import can
 import pytest
 
 from tools import navecu_can as nc
-from tools.sim import run, trajectory
+from tools.sim import run, scenario, trajectory
 
 ROOT = Path(__file__).resolve().parents[2]
 NAVECU = os.environ.get("NAVECU_BIN", str(ROOT / "build" / "host" / "navecu"))
@@ -23,7 +23,7 @@ def perfect_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("sim")
     # the default drive with a perfect odometer too (the firmware dead-reckons with it)
     scen = out / "default_perfect.toml"
-    scen.write_text(run.scenario_path("default").read_text() + "\n[odometer]\nmu = 0.0\n")
+    scen.write_text(scenario.scenario_path("default").read_text() + "\n[odometer]\nmu = 0.0\n")
     rc = run.main(["--scenario", str(scen), "--imu", "perfect", "--gnss", "perfect",
                    "--out", str(out), "--navecu", NAVECU])
     assert rc == 0
@@ -55,7 +55,7 @@ def test_report_fields_and_plots(perfect_run):
 
 def test_no_gnss_frames_in_outages(perfect_run):
     """Outage segments of the scenario have no GNSS frame in the CAN log."""
-    truth = trajectory.generate(trajectory.load_scenario(run.scenario_path("default")), 10)
+    truth = trajectory.generate(scenario.load_scenario(scenario.scenario_path("default")), 10)
     db = nc.load_db()
     gnss_ids = {db.get_message_by_name(n).frame_id
                 for n in ("GNSS_Position", "GNSS_Velocity", "GNSS_Height", "GNSS_Status")}
@@ -102,7 +102,7 @@ duration_s = 20
 def short_scenario(tmp_path, extra="", lat=56.0, heading=10.0):
     p = tmp_path / "short.toml"
     p.write_text(SHORT.format(lat=lat, heading=heading) + extra)
-    return trajectory.load_scenario(p)
+    return scenario.load_scenario(p)
 
 
 def decode(db, msg):
@@ -121,12 +121,12 @@ def test_scenario_tables_defaults_and_validation(tmp_path):
             short_scenario(tmp_path, bad)
     # every [odometer] key the format accepts is an OdoSpec field
     fields = set(sensors.OdoSpec.__dataclass_fields__)
-    assert trajectory._OPTIONAL_TABLES["odometer"] <= fields - {"track_m", "wheelbase_m"}
+    assert scenario._OPTIONAL_TABLES["odometer"] <= fields - {"track_m", "wheelbase_m"}
     # without the tables the default drive keeps its heading command and sensors
-    default = trajectory.load_scenario(run.scenario_path("default"))
-    imu, odo = run.sensor_specs(default, "mid-grade", default["vehicle"])
+    default = scenario.load_scenario(scenario.scenario_path("default"))
+    imu, odo = scenario.sensor_specs(default, "mid-grade", default["vehicle"])
     assert imu == sensors.PRESETS["mid-grade"] and odo.mu == sensors.OdoSpec().mu
-    assert run.heading_command_deg(math.radians(30.004), default) == 30.0
+    assert scenario.heading_command_deg(math.radians(30.004), default) == 30.0
 
 
 def test_mounting_yaw_rotates_the_specific_force(tmp_path):
@@ -136,7 +136,7 @@ def test_mounting_yaw_rotates_the_specific_force(tmp_path):
     -sin(psi) x forward, i.e. the car moving psi to the left of its own forward axis."""
     sc = short_scenario(tmp_path, "[imu_mounting]\nyaw_deg = -0.15\n", lat=0.0, heading=0.0)
     truth = trajectory.generate(sc, 50)
-    imu, _ = run.sensor_specs(sc, "perfect", sc["vehicle"])
+    imu, _ = scenario.sensor_specs(sc, "perfect", sc["vehicle"])
     assert imu.mounting_yaw_deg == -0.15
     _, dv = sensors.apply_imu(truth, imu, 1)
     psi = math.radians(-0.15)
@@ -156,7 +156,7 @@ def test_odometer_mu_from_the_scenario(tmp_path):
     for extra, mu in (("", 0.012), ("[odometer]\nmu = 0.05\n", 0.05)):
         sc = short_scenario(tmp_path, extra)
         truth = trajectory.generate(sc, 50)
-        _, odo = run.sensor_specs(sc, "perfect", sc["vehicle"])
+        _, odo = scenario.sensor_specs(sc, "perfect", sc["vehicle"])
         assert odo.mu == mu and odo.track_m == sc["vehicle"]["track_m"]
         tw, w = sensors.wheel_speeds(truth, odo, 1)
         cruise = tw > 14.0                                        # 12 m/s straight
@@ -167,7 +167,7 @@ def test_odometer_mu_from_the_scenario(tmp_path):
 def _frames_of(tmp_path, extra, seed=1, heading=10.0):
     sc = short_scenario(tmp_path, extra, heading=heading)
     truth = trajectory.generate(sc, 50)
-    imu, odo = run.sensor_specs(sc, "perfect", sc["vehicle"])
+    imu, odo = scenario.sensor_specs(sc, "perfect", sc["vehicle"])
     dth, dv = sensors.apply_imu(truth, imu, 3 * seed)
     wheels = sensors.wheel_speeds(truth, odo, 3 * seed + 1)
     gnss = sensors.gnss_epochs(truth, sensors.GNSS_PRESETS["none"], 3 * seed + 2)
@@ -176,7 +176,8 @@ def _frames_of(tmp_path, extra, seed=1, heading=10.0):
         cal = dict(cal, gnss_epoch=run.calibration_epoch(truth, cal, gnss, 3 * seed + 2))
     db = nc.load_db()
     fr = run.frames(truth, dth, dv, wheels, gnss, db,
-                    heading_deg=run.heading_command_deg(truth.heading_rad[0], sc), calibration=cal)
+                    heading_deg=scenario.heading_command_deg(truth.heading_rad[0], sc),
+                    calibration=cal)
     fr.sort(key=lambda x: (x[0], x[1]))
     return sc, truth, db, [(t, m) for t, _, m in fr]
 
@@ -217,7 +218,7 @@ at_s = 12.3
     assert c1["Command"] == 5 and c1["HeadingValid"] == 0 and c1["CmdCounter"] == 1
     assert nc.check_e2e(fr[j][1], db)
     assert abs(truth.speed_mps[k]) > 10.0                          # moving when calibrating
-    truths = run.scenario_truths(sc, truth.heading_rad[0], *run.sensor_specs(
+    truths = scenario.scenario_truths(sc, truth.heading_rad[0], *scenario.sensor_specs(
         sc, "perfect", sc["vehicle"]), c0["Heading"])
     assert truths["dH_deg"] == pytest.approx(-0.177, abs=1e-9)
     assert truths["imu_heading_error_deg"] == pytest.approx(-0.027, abs=1e-9)

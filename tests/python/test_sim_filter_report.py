@@ -9,8 +9,8 @@ import math
 import numpy as np
 import pytest
 
-from tools import navecu_can as nc
-from tools.sim import report, run, sensors, trajectory
+from tools import geodesy, navecu_can as nc
+from tools.sim import report, run, scenario, sensors, trajectory
 
 BASE_NO_OUTAGE = """name = "base"
 description = "the base"
@@ -58,42 +58,42 @@ def test_base_merges_tables_and_inherits_arrays(tmp_path):
     write(tmp_path, "base", BASE)
     child = write(tmp_path, "child", 'base = "base"\n[sim]\ngnss = "differential"\n'
                                      "[odometer]\nmu = 0.012\n[imu_mounting]\nyaw_deg = 0.3\n")
-    sc = trajectory.load_scenario(child)
+    sc = scenario.load_scenario(child)
     assert sc["name"] == "child" and sc["description"] == ""         # never inherited
     assert sc["base"] == "base"
     assert sc["sim"] == {"imu": "mid-grade", "gnss": "differential"}  # merged key by key
     assert sc["odometer"] == {"mu": 0.012, "noise_mps": 0.01}
     assert sc["imu_mounting"]["yaw_deg"] == 0.3
     assert sc["start"]["heading_deg"] == 30.0
-    base = trajectory.load_scenario(tmp_path / "base.toml")
+    base = scenario.load_scenario(tmp_path / "base.toml")
     assert sc["segment"] == base["segment"] and sc["outage"] == base["outage"]
     # own outages replace the base's; `outage = []` drops them; own segments replace
-    sc = trajectory.load_scenario(write(tmp_path, "c2", 'base = "base"\n[[outage]]\nstart_s = 30\n'
+    sc = scenario.load_scenario(write(tmp_path, "c2", 'base = "base"\n[[outage]]\nstart_s = 30\n'
                                                         "end_s = 35\n"))
     assert [(o["start_s"], o["end_s"]) for o in sc["outage"]] == [(30.0, 35.0)]
-    sc = trajectory.load_scenario(write(tmp_path, "c3", 'base = "base"\noutage = []\n'))
+    sc = scenario.load_scenario(write(tmp_path, "c3", 'base = "base"\noutage = []\n'))
     assert sc["outage"] == [] and len(sc["segment"]) == 3
-    sc = trajectory.load_scenario(write(tmp_path, "c4", 'base = "base"\n[[segment]]\n'
+    sc = scenario.load_scenario(write(tmp_path, "c4", 'base = "base"\n[[segment]]\n'
                                                         'kind = "stop"\nduration_s = 5\n'))
     assert len(sc["segment"]) == 1
     # a chain (c5 -> child -> base), a path base, and the errors
-    sc = trajectory.load_scenario(write(tmp_path, "c5",
+    sc = scenario.load_scenario(write(tmp_path, "c5",
                                         'base = "child.toml"\n[sim]\nimu = "tactical"\n'))
     assert sc["sim"] == {"imu": "tactical", "gnss": "differential"}
     assert sc["odometer"]["mu"] == 0.012
     write(tmp_path, "loop_a", 'base = "loop_b"\n')
     write(tmp_path, "loop_b", 'base = "loop_a"\n')
     with pytest.raises(ValueError, match="cycle"):
-        trajectory.load_scenario(tmp_path / "loop_a.toml")
+        scenario.load_scenario(tmp_path / "loop_a.toml")
     with pytest.raises(ValueError, match="no file"):
-        trajectory.load_scenario(write(tmp_path, "orphan", 'base = "nowhere"\n'))
+        scenario.load_scenario(write(tmp_path, "orphan", 'base = "nowhere"\n'))
     with pytest.raises(ValueError, match=r"\[odometer\]"):                # merged, then validated
-        trajectory.load_scenario(write(tmp_path, "bad", 'base = "base"\n[odometer]\nscale = 1\n'))
+        scenario.load_scenario(write(tmp_path, "bad", 'base = "base"\n[odometer]\nscale = 1\n'))
 
 
 def test_issue7_scenarios():
-    default = trajectory.load_scenario(run.scenario_path("default"))
-    sc = {n: trajectory.load_scenario(run.scenario_path(n))
+    default = scenario.load_scenario(scenario.scenario_path("default"))
+    sc = {n: scenario.load_scenario(scenario.scenario_path(n))
           for n in ("dgnss", "outage5", "outage5-automotive", "gnss-faults")}
     for name, s in sc.items():
         assert s["name"] == name
@@ -137,26 +137,26 @@ latency_spike = [[35.0, 0.5]]
 
 def test_gnss_faults_table_validation(tmp_path):
     write(tmp_path, "base", BASE)
-    sc = trajectory.load_scenario(write(tmp_path, "f", 'base = "base"\n' + FAULTS))
+    sc = scenario.load_scenario(write(tmp_path, "f", 'base = "base"\n' + FAULTS))
     f = sc["gnss_faults"]
     assert f["jumps"] == [{"t_s": 10.0, "metres": 100.0, "azimuth_deg": 90.0, "duration_s": 0.0},
                           {"t_s": 20.0, "metres": -50.0, "azimuth_deg": 0.0, "duration_s": 0.4}]
     assert f["freeze"] == [{"t0_s": 30.0, "t1_s": 31.0}]
     assert f["latency_spike"] == [{"t_s": 35.0, "extra_s": 0.5}]
-    sc = trajectory.load_scenario(write(tmp_path, "g", BASE + "[gnss_faults]\njumps = [[5, 10]]\n"))
-    assert sc["gnss_faults"]["jumps"][0]["azimuth_deg"] == trajectory.GNSS_JUMP_AZIMUTH_DEG_DEFAULT
+    sc = scenario.load_scenario(write(tmp_path, "g", BASE + "[gnss_faults]\njumps = [[5, 10]]\n"))
+    assert sc["gnss_faults"]["jumps"][0]["azimuth_deg"] == scenario.GNSS_JUMP_AZIMUTH_DEG_DEFAULT
     for bad in ("jumps = [[5]]", "jumps = [[5, 0]]", "freeze = [[9, 8]]",
                 "latency_spike = [[5, -1]]", "latency_spike = [[5, 1, 2]]", "glitch = [[1, 2]]",
                 "jumps = 5"):
         with pytest.raises(ValueError):
-            trajectory.load_scenario(write(tmp_path, "h", BASE + "[gnss_faults]\n" + bad + "\n"))
+            scenario.load_scenario(write(tmp_path, "h", BASE + "[gnss_faults]\n" + bad + "\n"))
 
 
 def _gnss_frames(tmp_path, faults_toml):
     """The GNSS frames of the BASE drive without its outage, with a perfect receiver (no
     error, no latency), without and with the faults, as
     [(t, {message: decoded signals})] per epoch (GnssEpoch groups the four frames)."""
-    sc = trajectory.load_scenario(write(tmp_path, "f", BASE_NO_OUTAGE + faults_toml))
+    sc = scenario.load_scenario(write(tmp_path, "f", BASE_NO_OUTAGE + faults_toml))
     truth = trajectory.generate(sc, 50)
     ep = sensors.gnss_epochs(truth, sensors.GNSS_PRESETS["perfect"], 1)
     out = []
@@ -183,7 +183,7 @@ def _gnss_frames(tmp_path, faults_toml):
 
 def _dist_m(a, b):
     lat = math.radians(a["Latitude"])
-    rm, rn = report.radii_m(lat)
+    rm, rn = geodesy.radii_m(lat)
     dn = math.radians(b["Latitude"] - a["Latitude"]) * rm
     de = math.radians(b["Longitude"] - a["Longitude"]) * rn * math.cos(lat)
     return math.hypot(de, dn), math.degrees(math.atan2(de, dn))
@@ -240,7 +240,7 @@ def test_fault_injection_frames(tmp_path):
 
 def test_fault_log_and_errors(tmp_path):
     write(tmp_path, "base", BASE)
-    sc = trajectory.load_scenario(write(tmp_path, "f", 'base = "base"\n' + FAULTS))
+    sc = scenario.load_scenario(write(tmp_path, "f", 'base = "base"\n' + FAULTS))
     truth = trajectory.generate(sc, 50)
     ep = sensors.gnss_epochs(truth, sensors.GNSS_PRESETS["perfect"], 1)   # outage 20-25 s
     with pytest.raises(ValueError, match="jump at 20"):
@@ -329,7 +329,7 @@ def test_compute_report_fields_and_summary(tmp_path):
     """compute() on a synthetic log: truth standing 2 m south of the NAV positions."""
     n = 100
     nav = nav_log(tmp_path, n, np.full(n, 1.0))
-    rm, _ = report.radii_m(math.radians(45.0))
+    rm, _ = geodesy.radii_m(math.radians(45.0))
     t = np.linspace(0.0, 50.0, 501)
     truth = {"t_s": t, "lat_rad": np.full(t.size, math.radians(45.0) - 2.0 / rm),
              "lon_rad": np.full(t.size, math.radians(10.0)), "heading_rad": np.zeros(t.size),

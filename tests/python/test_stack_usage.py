@@ -7,7 +7,6 @@ compiler wrote to the .su files, never from hard-coded numbers; the tool reads o
 what a host compile cannot produce on demand (dynamic,bounded frames, merging).
 """
 
-import importlib.util
 import json
 import shutil
 import subprocess
@@ -16,13 +15,10 @@ from pathlib import Path
 
 import pytest
 
+from tools.target import stack_usage as SU
+
 ROOT = Path(__file__).resolve().parents[2]
 TOOL = ROOT / "tools" / "target" / "stack_usage.py"
-
-_spec = importlib.util.spec_from_file_location("stack_usage", TOOL)
-SU = importlib.util.module_from_spec(_spec)
-sys.modules["stack_usage"] = SU
-_spec.loader.exec_module(SU)
 
 
 # ----------------------------------------------------------------------------- helpers

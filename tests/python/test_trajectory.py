@@ -1,19 +1,18 @@
-"""Drive-simulator truth (tools/sim/trajectory.py): the Earth model against WGS-84 published
-values, exact increments at rest, self-consistency of increments and truth through an
-independent strapdown mechanization, and the shipped scenarios."""
+"""Drive-simulator truth (tools/sim/trajectory.py): the Earth model (tools/geodesy.py)
+against WGS-84 published values, exact increments at rest, self-consistency of increments
+and truth through an independent strapdown mechanization, and the shipped scenarios."""
 
 import math
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from tools import geodesy as geo
+from tools.sim import trajectory as tr
+from tools.sim.scenario import load_scenario
+
 ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT))
-
-from tools.sim import trajectory as tr  # noqa: E402
-
 SCEN = ROOT / "tools" / "sim" / "scenarios"
 
 
@@ -31,15 +30,32 @@ def test_wgs84_published_values():
     cases = [(0.0, 6335439.3273, 6378137.0), (45.0, 6367381.8156, 6388838.2901),
              (90.0, 6399593.6258, 6399593.6258)]
     for lat_deg, rm_pub, rn_pub in cases:
-        rm, rn = tr.earth_radii(math.sin(math.radians(lat_deg)))
+        rm, rn = geo.earth_radii(math.sin(math.radians(lat_deg)))
         assert rm == pytest.approx(rm_pub, rel=1e-9)
         assert rn == pytest.approx(rn_pub, rel=1e-9)
-    assert tr.gravity(0.0, 0.0) == pytest.approx(9.7803253359, rel=1e-9)
-    assert tr.gravity(1.0, 0.0) == pytest.approx(9.8321849378, rel=1e-9)
+        # the other rounding order of the same formula (the reports' and the GNSS model's)
+        assert geo.radii_m(math.radians(lat_deg)) == pytest.approx((rm, rn), rel=1e-15)
+    assert geo.gravity(0.0, 0.0) == pytest.approx(9.7803253359, rel=1e-9)
+    assert geo.gravity(1.0, 0.0) == pytest.approx(9.8321849378, rel=1e-9)
     # free-air gradient ~ -3.086e-6 /s^2 at mid latitude
-    grad = (tr.gravity(math.sin(math.radians(45.0)), 100.0)
-            - tr.gravity(math.sin(math.radians(45.0)), 0.0)) / 100.0
+    grad = (geo.gravity(math.sin(math.radians(45.0)), 100.0)
+            - geo.gravity(math.sin(math.radians(45.0)), 0.0)) / 100.0
     assert grad == pytest.approx(-3.086e-6, rel=2e-3)
+
+
+def test_horizontal_distances_agree():
+    """horizontal_error_m (rad, east and north parts) and horizontal_distance_m (deg) are
+    the same distance, across the antimeridian too."""
+    lat1, lon1 = np.radians([45.0, -33.9, 10.0]), np.radians([10.0, 151.2, 179.9999])
+    lat2, lon2 = lat1 + np.array([1e-5, -2e-6, 0.0]), lon1 + np.array([-3e-6, 0.0, 4e-6])
+    lon2 = (lon2 + math.pi) % (2.0 * math.pi) - math.pi
+    d, de, dn = geo.horizontal_error_m(lat1, lon1, lat2, lon2)
+    assert np.allclose(d, np.hypot(de, dn))
+    assert de[2] > 0.0 and dn[0] > 0.0 > de[0]
+    assert np.allclose(geo.horizontal_distance_m(*np.degrees([lat1, lon1, lat2, lon2])), d,
+                       rtol=1e-9)
+    rm, rn = geo.radii_m(lat1[0])
+    assert d[0] == pytest.approx(math.hypot(1e-5 * rm, 3e-6 * rn * math.cos(lat1[0])), rel=1e-9)
 
 
 def test_euler_conventions():
@@ -62,9 +78,9 @@ def test_stationary_increments_exact():
     dt = 1.0 / rate
     lat = math.radians(45.0)
     C_bn = tr.quat_to_dcm(tr.quat_from_euler(0.0, 0.0, math.radians(30.0)))
-    w_ie = np.array([0.0, tr.WGS84_OMEGA_IE_RPS * math.cos(lat),
-                     tr.WGS84_OMEGA_IE_RPS * math.sin(lat)])
-    g = tr.gravity(math.sin(lat), 100.0)
+    w_ie = np.array([0.0, geo.WGS84_OMEGA_IE_RPS * math.cos(lat),
+                     geo.WGS84_OMEGA_IE_RPS * math.sin(lat)])
+    g = geo.gravity(math.sin(lat), 100.0)
     assert np.all(t.dtheta_b_rad[0] == 0.0) and np.all(t.dv_b_mps[0] == 0.0)
     assert np.abs(t.dtheta_b_rad[1:].sum(axis=0) - C_bn.T @ w_ie * dt * n).max() < 1e-12
     assert np.abs(t.dv_b_mps[1:] - C_bn.T @ np.array([0.0, 0.0, g]) * dt).max() < 1e-12
@@ -138,13 +154,13 @@ def _rotate(q, x):  # C_bn x
 
 def _earth(lat, h, v):
     sl, cl = math.sin(lat), math.cos(lat)
-    w2 = 1.0 - tr.WGS84_E2 * sl * sl
-    rn = tr.WGS84_A_M / math.sqrt(w2)
-    rm = tr.WGS84_A_M * (1.0 - tr.WGS84_E2) / (w2 * math.sqrt(w2))
-    U = tr.WGS84_OMEGA_IE_RPS
+    w2 = 1.0 - geo.WGS84_E2 * sl * sl
+    rn = geo.WGS84_A_M / math.sqrt(w2)
+    rm = geo.WGS84_A_M * (1.0 - geo.WGS84_E2) / (w2 * math.sqrt(w2))
+    U = geo.WGS84_OMEGA_IE_RPS
     w_ie = (0.0, U * cl, U * sl)
     w_en = (-v[1] / (rm + h), v[0] / (rn + h), v[0] * sl / cl / (rn + h))
-    g = tr.gravity(sl, h)
+    g = geo.gravity(sl, h)
     return rm, rn, w_ie, w_en, g
 
 
@@ -223,7 +239,7 @@ def test_increments_reproduce_truth_through_strapdown():
     assert truth.dist_m[n] > 600.0 and truth.speed_mps[: n + 1].min() < -1.9
     assert np.abs(truth.grade_rad).max() > 0.07
     pos, q, v = strapdown(truth, n)
-    rm, rn = tr.earth_radii(math.sin(truth.lat_rad[0]))
+    rm, rn = geo.earth_radii(math.sin(truth.lat_rad[0]))
     dn = (pos[:, 0] - truth.lat_rad[: n + 1]) * (rm + 100.0)
     de = (pos[:, 1] - truth.lon_rad[: n + 1]) * (rn + 100.0) * math.cos(truth.lat_rad[0])
     dh = pos[:, 2] - truth.h_m[: n + 1]
@@ -238,7 +254,7 @@ def test_increments_reproduce_truth_through_strapdown():
 # --- shipped scenarios --------------------------------------------------------------------
 @pytest.fixture(scope="module")
 def default_truth():
-    return tr.generate(tr.load_scenario(SCEN / "default.toml"), 100.0)
+    return tr.generate(load_scenario(SCEN / "default.toml"), 100.0)
 
 
 def test_default_scenario(default_truth, tmp_path):
@@ -282,9 +298,9 @@ def test_default_scenario(default_truth, tmp_path):
 
 
 def test_figure8_returns_to_start():
-    t = tr.generate(tr.load_scenario(SCEN / "figure8.toml"), 50.0)
+    t = tr.generate(load_scenario(SCEN / "figure8.toml"), 50.0)
     assert 9 * 60 <= t.t_s[-1] <= 11 * 60
-    rm, rn = tr.earth_radii(math.sin(t.lat_rad[0]))
+    rm, rn = geo.earth_radii(math.sin(t.lat_rad[0]))
     dn = (t.lat_rad[-1] - t.lat_rad[0]) * (rm + t.h_m[0])
     de = (t.lon_rad[-1] - t.lon_rad[0]) * (rn + t.h_m[0]) * math.cos(t.lat_rad[0])
     assert math.hypot(dn, de) < 5.0
@@ -295,7 +311,7 @@ def test_figure8_returns_to_start():
 def test_seed000_scenario():
     """Seed 000's drive: long enough for 20 minutes after the calibration at 3431 s,
     moving there, standing still for the levelling and at stops along the way."""
-    sc = tr.load_scenario(SCEN / "seed000.toml")
+    sc = load_scenario(SCEN / "seed000.toml")
     traj = tr.Trajectory(sc)
     cal = sc["calibration"]
     assert cal["at_s"] == 3431.0 and cal["source"] in ("known_position", "gnss")

@@ -11,10 +11,10 @@ dur=${1:-300}
 runs=${2:-3}
 mkdir -p out/bench
 log=out/bench/fastest_input.log
-.venv/bin/python tools/gen_stationary_log.py --out "$log" --duration-s "$dur" >/dev/null
+.venv/bin/python -m tools.gen_stationary_log --out "$log" --duration-s "$dur" >/dev/null
 : > out/bench/fastest_vcan.json
 for _ in $(seq "$runs"); do
-    tools/vcan/with_vcan.sh .venv/bin/python tools/vcan/live_check.py --fastest --no-frames \
+    tools/vcan/with_vcan.sh .venv/bin/python -m tools.vcan.live_check --fastest --no-frames \
         --log "$log" 2>/dev/null | tail -1 | .venv/bin/python -c '
 import json, re, sys
 r = json.loads(sys.stdin.read())

@@ -8,7 +8,7 @@ cd "$(dirname "$0")/../.."
 dur=${1:-60}
 mkdir -p out/bench
 log=out/bench/latency_input.log
-.venv/bin/python tools/gen_stationary_log.py --out "$log" --duration-s "$dur" >/dev/null
-tools/vcan/with_vcan.sh sh -c ".venv/bin/python tools/vcan/live_check.py --latency --log $log" \
+.venv/bin/python -m tools.gen_stationary_log --out "$log" --duration-s "$dur" >/dev/null
+tools/vcan/with_vcan.sh sh -c ".venv/bin/python -m tools.vcan.live_check --latency --log $log" \
     | tail -1 > out/bench/latency_vcan.json
 cat out/bench/latency_vcan.json

@@ -33,9 +33,10 @@ from pathlib import Path
 
 import numpy as np
 
+from tools import geodesy
 from tools.kingston import convert
 
-EARTH_RATE = 7.292115e-5  # rad/s
+EARTH_RATE = geodesy.WGS84_OMEGA_IE_RPS  # rad/s
 DEG_PER_H = 180.0 / math.pi * 3600.0
 
 
@@ -228,7 +229,7 @@ def gnss_vs_reference(drive) -> dict:
     g, r = drive.gnss, drive.ref
     common, gi, ri = np.intersect1d(np.rint(g["time_s"]), np.rint(r["time_s"]),
                                     return_indices=True)
-    e = convert.horizontal_distance_m(r["lat_deg"][ri], r["lon_deg"][ri],
+    e = geodesy.horizontal_distance_m(r["lat_deg"][ri], r["lon_deg"][ri],
                                       g["lat_deg"][gi], g["lon_deg"][gi])
     dh = g["height_m"][gi] - r["height_m"][ri]
     return {"n": int(e.size), "rms_m": float(np.sqrt(np.mean(e ** 2))),

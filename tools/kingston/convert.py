@@ -73,24 +73,14 @@ from pathlib import Path
 import numpy as np
 
 from tools import navecu_can as nc
+from tools.geodesy import horizontal_distance_m
 
 ROOT = Path(__file__).resolve().parents[2]
 
 
-def _data_dir() -> Path:
-    """The recorded drive: $NAVECU_KINGSTON_DIR, else ../shared/data/kingston-2008 beside
-    the checkout, else the workplace's /work/shared copy (a clone elsewhere)."""
-    env = os.environ.get("NAVECU_KINGSTON_DIR")
-    if env:
-        return Path(env)
-    for cand in (ROOT.parent / "shared" / "data" / "kingston-2008",
-                 Path("/work/shared/data/kingston-2008")):
-        if (cand / "imu.csv").exists():
-            return cand
-    return ROOT.parent / "shared" / "data" / "kingston-2008"
-
-
-DATA_DIR = _data_dir()
+#: The recorded drive: data/kingston-2008 in the repository (its README.md: source,
+#: licence), or the folder $NAVECU_KINGSTON_DIR names; --data DIR overrides both.
+DATA_DIR = Path(os.environ.get("NAVECU_KINGSTON_DIR") or ROOT / "data" / "kingston-2008")
 IMU_RATE_HZ = 10
 DEFAULT_OUTAGES = "every:240:60"
 DEFAULT_CAL_KM = 5.0
@@ -104,9 +94,6 @@ GPS_WEEK = 1485
 # frame order at equal timestamps
 O_KNOWN, O_SETPOS, O_ATT, O_RATE, O_ACCEL, O_WHEEL = 0, 1, 2, 3, 4, 5
 O_GPOS, O_GVEL, O_GHGT, O_GSTAT, O_CAL_KNOWN, O_CAL_CMD = 6, 7, 8, 9, 10, 11
-
-A_M = 6378137.0
-E2 = 6.69437999014e-3
 
 
 @dataclass
@@ -151,21 +138,6 @@ def load(data_dir=None) -> Drive:
 
 
 # ------------------------------------------------------------------ geometry ----
-
-def radii_m(lat_rad):
-    """Meridian and prime-vertical radii of curvature (WGS-84), m."""
-    w2 = 1.0 - E2 * np.sin(lat_rad) ** 2
-    return A_M * (1.0 - E2) / w2 ** 1.5, A_M / np.sqrt(w2)
-
-
-def horizontal_distance_m(lat1_deg, lon1_deg, lat2_deg, lon2_deg):
-    """Horizontal distance between two (arrays of) points, local radii at the first, m."""
-    la1, la2 = np.radians(lat1_deg), np.radians(lat2_deg)
-    rm, rn = radii_m(la1)
-    dn = (la2 - la1) * rm
-    de = np.radians((np.asarray(lon2_deg) - lon1_deg + 180.0) % 360.0 - 180.0) * rn * np.cos(la1)
-    return np.hypot(de, dn)
-
 
 def reference_track(drive: Drive) -> dict:
     """reference.csv on the log's time base: t_s (s from the first IMU sample), lat/lon in

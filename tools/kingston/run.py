@@ -40,7 +40,7 @@ from pathlib import Path
 import can
 import numpy as np
 
-from tools import navecu_can as nc
+from tools import geodesy, navecu_can as nc
 from tools.kingston import convert
 from tools.sim import report
 from tools.sim.run import Stages
@@ -171,7 +171,7 @@ def gnss_errors(drive, sent_times=None) -> dict:
     if sent_times is not None:
         keep = np.isin(common, np.rint(sent_times))
         gi, ri = gi[keep], ri[keep]
-    e = convert.horizontal_distance_m(drive.ref["lat_deg"][ri], drive.ref["lon_deg"][ri],
+    e = geodesy.horizontal_distance_m(drive.ref["lat_deg"][ri], drive.ref["lon_deg"][ri],
                                       g["lat_deg"][gi], g["lon_deg"][gi])
     if not e.size:
         return {"n": 0, "rms": None, "p95": None, "median": None, "max": None}
@@ -240,7 +240,7 @@ def compute(drive, meta, nav, cal_log) -> tuple:
     lat_e, lon_e = pos["Latitude"][sel], pos["Longitude"][sel]
     lat_r = np.interp(t, ref["t_s"], ref["lat_deg"])
     lon_r = np.interp(t, ref["t_s"], ref["lon_deg"])
-    herr = convert.horizontal_distance_m(lat_r, lon_r, lat_e, lon_e)
+    herr = geodesy.horizontal_distance_m(lat_r, lon_r, lat_e, lon_e)
     dist_at = np.interp(t, ref["t_s"], ref["dist_m"])
     dist = float(dist_at[-1] - dist_at[0])
     rep.update({"navigating": True, "navigation_start_s": float(t_all[0]),
@@ -278,7 +278,7 @@ def plot(drive, meta, series, rep, out: Path, title: str) -> list:
 
     ref = convert.reference_track(drive)
     lat0, lon0 = math.radians(ref["lat_deg"][0]), ref["lon_deg"][0]
-    rm, rn = convert.radii_m(lat0)
+    rm, rn = geodesy.radii_m(lat0)
 
     def en(lat_deg, lon_deg):
         return (np.radians(np.asarray(lon_deg) - lon0) * rn * math.cos(lat0),

@@ -8,11 +8,11 @@ The clean drive is generated once exactly as `make sim` does (tools/sim/run.py: 
 scenario, its IMU and GNSS presets, seed 1, run.firmware_args) and kept in memory as its
 sorted frame list. Frame-level faults transform that list (loss, duplicates, reordering,
 bad CRCs, bad counters, IMU silence, IMU timing jitter); sensor-level faults change the
-sensor data and re-encode only that sensor's frames (the IMU through a vectorised copy of
-the DBC encoding, checked byte for byte against navecu_can on the clean drive; wheels and
-GNSS through run.frames). The CMD_* frames (the driver's initialization at t = 0) are
-never touched by the frame-level faults: without them the firmware does not navigate at
-all, which is not what these rows measure.
+sensor data and re-encode only that sensor's frames (the IMU samples that change through
+navecu_can's ImuQuantizer and E2ESender, ImuEncoder; wheels and GNSS through run.frames).
+The CMD_* frames (the driver's initialization at t = 0) are never touched by the
+frame-level faults: without them the firmware does not navigate at all, which is not what
+these rows measure.
 
 For each row (out/<row>/: can_in.log, nav.log, navecu.txt; out/faults.json; the table in
 --doc between the markers below):
@@ -60,7 +60,7 @@ import numpy as np
 
 from tools import navecu_can as nc
 from tools.navecu_can import counter_max, health_bits, status_signals
-from tools.sim import report, run, sensors, trajectory
+from tools.sim import report, run, scenario, sensors, trajectory
 
 ROOT = Path(__file__).resolve().parents[2]
 BEGIN = "<!-- BEGIN GENERATED: make faults -->"
@@ -101,140 +101,80 @@ class Drive:
         return [m for _, _, m in self.frames]
 
 
-def build_drive(scenario: str = "default", seed: int = 1, imu_rate_hz: int = 100,
+def build_drive(name: str = "default", seed: int = 1, imu_rate_hz: int = 100,
                 log=print) -> Drive:
     """The clean drive, as run.main builds it for `make sim` (same presets, seeds, options,
     frames and order)."""
-    scen = trajectory.load_scenario(run.scenario_path(scenario))
-    sim_cfg = scen.get("sim", {})
-    imu_name = sim_cfg.get("imu", "mid-grade")
-    gnss_name = sim_cfg.get("gnss", "standalone")
+    scen = scenario.load(name)
+    imu_name, gnss_name = scenario.preset_names(scen)
     t = time.monotonic()
     truth = trajectory.generate(scen, imu_rate_hz)
-    imu_spec, odo = run.sensor_specs(scen, imu_name, truth.vehicle)
+    imu_spec, odo = scenario.sensor_specs(scen, imu_name, truth.vehicle)
     dtheta, dv = sensors.apply_imu(truth, imu_spec, 3 * seed)
     wheels = sensors.wheel_speeds(truth, odo, 3 * seed + 1)
     gnss = sensors.gnss_epochs(truth, sensors.GNSS_PRESETS[gnss_name], 3 * seed + 2)
     if scen.get("gnss_faults") or scen.get("calibration"):
-        raise SystemExit(f"scenario '{scenario}': fault drives start from a drive without "
+        raise SystemExit(f"scenario '{name}': fault drives start from a drive without "
                          "[gnss_faults] or [calibration]")
     fw_args = run.firmware_args(sensors.PRESETS[imu_name], sensors.GNSS_PRESETS[gnss_name])
-    log(f"  trajectory and sensors ({scen.get('name', scenario)}, IMU {imu_name}, GNSS "
+    log(f"  trajectory and sensors ({scen.get('name', name)}, IMU {imu_name}, GNSS "
         f"{gnss_name}): {time.monotonic() - t:.1f} s")
     t = time.monotonic()
     db = nc.load_db()
-    hdg = run.heading_command_deg(truth.heading_rad[0], scen)
+    hdg = scenario.heading_command_deg(truth.heading_rad[0], scen)
     fr = run.frames(truth, dtheta, dv, wheels, gnss, db, heading_deg=hdg)
     fr.sort(key=lambda x: (x[0], x[1]))
     log(f"  CAN encoding: {len(fr)} frames, {time.monotonic() - t:.1f} s")
-    d = Drive(scen.get("name", scenario), imu_name, gnss_name, seed, imu_rate_hz, truth,
+    d = Drive(scen.get("name", name), imu_name, gnss_name, seed, imu_rate_hz, truth,
               dtheta, dv, wheels, gnss, fw_args, hdg, db, fr)
     d.imu_encoder = ImuEncoder(d)
     return d
 
 
 # ============================================================================ IMU re-encoding
-_CRC8_TABLE = None
-
-
-def _crc8_table() -> np.ndarray:
-    """CRC8 SAE-J1850 byte table (poly 0x1D, not reflected), checked against navecu_can."""
-    global _CRC8_TABLE
-    if _CRC8_TABLE is None:
-        tab = np.zeros(256, dtype=np.uint8)
-        for i in range(256):
-            c = i
-            for _ in range(8):
-                c = ((c << 1) ^ 0x1D) & 0xFF if c & 0x80 else (c << 1) & 0xFF
-            tab[i] = c
-        for probe in (b"123456789", bytes(range(17)), b"\xff" * 9):
-            if _crc8_rows(tab, np.frombuffer(probe, np.uint8)[None, :])[0] != \
-                    nc.crc8_sae_j1850(probe):
-                raise RuntimeError("CRC8 table disagrees with navecu_can.crc8_sae_j1850")
-        _CRC8_TABLE = tab
-    return _CRC8_TABLE
-
-
-def _crc8_rows(tab: np.ndarray, rows: np.ndarray) -> np.ndarray:
-    """CRC8 SAE-J1850 (init 0xFF, xor-out 0xFF) of each row of a (n, k) uint8 array."""
-    c = np.full(rows.shape[0], 0xFF, dtype=np.uint8)
-    for j in range(rows.shape[1]):
-        c = tab[c ^ rows[:, j]]
-    return c ^ np.uint8(0xFF)
-
-
-def pack_signals(msg_def, raw: dict, n: int) -> np.ndarray:
-    """(n, 8) uint8 payloads of a little-endian DBC message from raw integer arrays per
-    signal name (a missing signal is 0), bit positions from the DBC."""
-    word = np.zeros(n, dtype=np.uint64)
-    for s in msg_def.signals:
-        if s.byte_order != "little_endian":
-            raise ValueError(f"{msg_def.name}.{s.name}: only little-endian signals")
-        if s.name not in raw:
-            continue
-        v = np.asarray(raw[s.name], dtype=np.int64) & np.int64((1 << s.length) - 1)
-        word |= v.astype(np.uint64) << np.uint64(s.start)
-    return word.astype("<u8").view(np.uint8).reshape(n, 8)
-
-
 class ImuEncoder:
-    """The clean drive's IMU frames re-encoded from other increments, vectorised: the
-    increments quantised by navecu_can.ImuQuantizer (remainder carried, as run.frames),
-    IMU_Rate/IMU_Accel packed from the DBC's bit positions with the clean frames' counters,
-    the pair CRC computed as navecu_can.imu_pair_crc. Checked byte for byte against the
-    clean frames when built."""
+    """The clean drive's IMU frames re-encoded from other increments by navecu_can, as
+    run.frames encodes them: quantised by ImuQuantizer (remainder carried), and each sample
+    whose raw values differ from the clean drive's sent again through
+    E2ESender.encode_imu_pair with the clean frame's time and counter (the pair CRC follows);
+    the other samples keep the clean frames."""
 
     def __init__(self, drive: Drive):
-        db = drive.db
-        self.rate_def, self.accel_def = map(db.get_message_by_name, nc.IMU_PAIR)
+        self.db = drive.db
+        rate_def, accel_def = map(self.db.get_message_by_name, nc.IMU_PAIR)
         msgs = drive.messages
         ids = np.array([m.arbitration_id for m in msgs])
-        self.i_rate = np.nonzero(ids == self.rate_def.frame_id)[0]
-        self.i_accel = np.nonzero(ids == self.accel_def.frame_id)[0]
+        self.i_rate = np.nonzero(ids == rate_def.frame_id)[0]
+        self.i_accel = np.nonzero(ids == accel_def.frame_id)[0]
         n = len(drive.truth.t_s) - 1
         if len(self.i_rate) != n or len(self.i_accel) != n:
             raise RuntimeError("IMU frames of the clean drive are not one pair per sample")
-        cnt_sig = nc.e2e_signals(self.rate_def)[0]
-        self.counters = np.array([nc._counter_value(msgs[i].data, cnt_sig) for i in self.i_rate])
-        clean_r = np.array([bytes(msgs[i].data) for i in self.i_rate], dtype="S8")
-        clean_a = np.array([bytes(msgs[i].data) for i in self.i_accel], dtype="S8")
-        self.clean_rate = np.frombuffer(clean_r.tobytes(), np.uint8).reshape(n, 8)
-        self.clean_accel = np.frombuffer(clean_a.tobytes(), np.uint8).reshape(n, 8)
-        r, a = self.payloads(drive.dtheta, drive.dv)
-        if not (np.array_equal(r, self.clean_rate) and np.array_equal(a, self.clean_accel)):
-            bad = np.nonzero(np.any(r != self.clean_rate, 1) | np.any(a != self.clean_accel, 1))[0]
-            raise RuntimeError(f"the vectorised IMU encoding differs from navecu_can's in "
-                               f"{len(bad)} samples (first: {bad[:5].tolist()})")
+        cnt_sig = nc.e2e_signals(rate_def)[0]
+        self.counters = [nc._counter_value(msgs[i].data, cnt_sig) for i in self.i_rate]
+        self.clean_raw = self.raw(drive.dtheta, drive.dv)
 
-    def payloads(self, dtheta, dv) -> tuple:
-        """(IMU_Rate, IMU_Accel) payloads (n, 8) of samples 1..n of these increments."""
+    @staticmethod
+    def raw(dtheta, dv) -> np.ndarray:
+        """(n, 6) raw AngleIncX/Y/Z, VelIncX/Y/Z of samples 1..n of these increments."""
         q = nc.ImuQuantizer()
-        ra = np.array([q.quantize_angle(x) for x in dtheta[1:]], dtype=np.int64)
-        rv = np.array([q.quantize_vel(x) for x in dv[1:]], dtype=np.int64)
-        n = len(ra)
-        cnt_r = nc.e2e_signals(self.rate_def)[0].name
-        cnt_a, crc_a = (s.name for s in nc.e2e_signals(self.accel_def))
-        rate = pack_signals(self.rate_def, {**dict(zip(nc.ANGLE_SIGNALS, ra.T)),
-                                            cnt_r: self.counters}, n)
-        accel = pack_signals(self.accel_def, {**dict(zip(nc.VEL_SIGNALS, rv.T)),
-                                              cnt_a: self.counters}, n)
-        fid = self.accel_def.frame_id
-        ids = np.tile(np.array([fid & 0xFF, (fid >> 8) & 0xFF], np.uint8), (n, 1))
-        accel[:, 7] = _crc8_rows(_crc8_table(), np.hstack([ids, rate, accel[:, :7]]))
-        if self.accel_def.get_signal_by_name(crc_a).start != nc.CRC_START_BIT:
-            raise RuntimeError("IMU_Accel's CRC is not in byte 7")
-        return rate, accel
+        return np.array([q.quantize_angle(a) + q.quantize_vel(v)
+                         for a, v in zip(dtheta[1:], dv[1:])], dtype=np.int64).reshape(-1, 6)
 
     def frames(self, drive: Drive, dtheta, dv) -> tuple:
-        """The clean sorted frame list with its IMU frames carrying these increments (a new
-        Message where the payload changed), and the number of samples changed."""
-        r, a = self.payloads(dtheta, dv)
+        """The clean sorted frame list with its IMU frames carrying these increments (new
+        frames where a sample's raw values changed), and the number of samples changed."""
+        raw = self.raw(dtheta, dv)
+        changed = np.nonzero(np.any(raw != self.clean_raw, 1))[0]
+        sender = nc.E2ESender(self.db)
+        q = nc.ImuQuantizer()
         out = list(drive.frames)
-        changed = np.nonzero(np.any(r != self.clean_rate, 1) | np.any(a != self.clean_accel, 1))[0]
         for k in changed:
-            for idx, data in ((self.i_rate[k], r[k]), (self.i_accel[k], a[k])):
-                t, o, m = out[idx]
-                out[idx] = (t, o, copy_msg(m, data=bytearray(data.tobytes())))
+            rate, accel = q.raw_signals(raw[k, :3].tolist(), raw[k, 3:].tolist())
+            i_r, i_a = self.i_rate[k], self.i_accel[k]
+            msgs = sender.encode_imu_pair(rate, accel, out[i_r][2].timestamp,
+                                          counter=self.counters[k])
+            for idx, m in zip((i_r, i_a), msgs):
+                out[idx] = (out[idx][0], out[idx][1], m)
         return out, int(len(changed))
 
 

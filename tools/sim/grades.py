@@ -35,8 +35,8 @@ from pathlib import Path
 
 import numpy as np
 
-from tools import navecu_can as nc
-from tools.sim import report, sensors, trajectory
+from tools import geodesy, navecu_can as nc
+from tools.sim import report, scenario, sensors, trajectory
 from tools.sim.run import ROOT, frames
 
 # seed 003, Table 2: error after 100 s (m), time to reach 100 m (s)
@@ -66,25 +66,8 @@ def table1_spec(grade: str) -> sensors.ImuSpec:
     return dataclasses.replace(spec, **TABLE1_BOUNDS.get(grade, {}))
 
 
-def stationary_scenario(duration_s: float, tmp: Path) -> dict:
-    path = tmp / "still.toml"
-    path.write_text(f"""name = "grades-still"
-[start]
-lat_deg = 45.0
-lon_deg = 10.0
-h_m = 100.0
-heading_deg = 0.0
-[vehicle]
-roughness_deg = 0.0
-[[segment]]
-kind = "stop"
-duration_s = {duration_s}
-""")
-    return trajectory.load_scenario(path)
-
-
 def run_one(grade: str, seed: int, duration_s: float, tmp: Path, navecu: str) -> dict:
-    truth = trajectory.generate(stationary_scenario(duration_s, tmp), RATE_HZ)
+    truth = trajectory.generate(scenario.stationary(duration_s, tmp, "grades-still"), RATE_HZ)
     spec = table1_spec(grade)
     # Table 1 states bias magnitudes: every axis gets exactly that magnitude, with a sign
     # drawn from the seed (a Gaussian draw would make 'the grade' a random fraction of it).
@@ -107,7 +90,7 @@ def run_one(grade: str, seed: int, duration_s: float, tmp: Path, navecu: str) ->
     pos = report.read_nav_log(nav_log)["NAV_Position"]
     lat_t = np.interp(pos["t_s"], truth.t_s, truth.lat_rad)
     lon_t = np.interp(pos["t_s"], truth.t_s, truth.lon_rad)
-    herr, _, _ = report.horizontal_error_m(lat_t, lon_t, np.radians(pos["Latitude"]),
+    herr, _, _ = geodesy.horizontal_error_m(lat_t, lon_t, np.radians(pos["Latitude"]),
                                            np.radians(pos["Longitude"]))
     t = pos["t_s"]
     # the firmware refuses to integrate beyond 1000 m/s: errors are valid while it runs

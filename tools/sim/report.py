@@ -23,16 +23,8 @@ import can
 import numpy as np
 
 from tools import navecu_can as nc
-
-A_M = 6378137.0
-E2 = 6.69437999014e-3
-
-
-def radii_m(lat_rad):
-    """Meridian and prime-vertical radii of curvature (WGS-84), m."""
-    w2 = 1.0 - E2 * np.sin(lat_rad) ** 2
-    return A_M * (1.0 - E2) / w2 ** 1.5, A_M / np.sqrt(w2)
-
+from tools.geodesy import horizontal_error_m, radii_m
+from tools.sim import scenario, sensors
 
 def read_nav_log(path) -> dict:
     """Decode NAV_Position / NAV_Attitude / NAV_Velocity / NAV_Height / NAV_Status frames of
@@ -210,14 +202,6 @@ def _interp_truth(truth, t_s):
     lon = np.interp(t_s, truth["t_s"], np.unwrap(truth["lon_rad"]))
     hdg = np.interp(t_s, truth["t_s"], np.unwrap(truth["heading_rad"]))
     return lat, lon, hdg
-
-
-def horizontal_error_m(lat_true, lon_true, lat_est, lon_est):
-    rm, rn = radii_m(lat_true)
-    dn = (lat_est - lat_true) * rm
-    dlon = (lon_est - lon_true + math.pi) % (2 * math.pi) - math.pi
-    de = dlon * rn * np.cos(lat_true)
-    return np.hypot(de, dn), de, dn
 
 
 def _stats(x):
@@ -697,17 +681,16 @@ def main(argv=None):
     nav = read_nav_log(args.nav)
     rep, series = compute(data, nav, outages)
     if args.scenario:
-        from tools.sim import run, sensors, trajectory  # run imports this module
-        scen = trajectory.load_scenario(run.scenario_path(args.scenario))
-        imu, odo = run.sensor_specs(scen, scen.get("sim", {}).get("imu", "mid-grade"),
-                                    scen["vehicle"])
-        hdg = run.heading_command_deg(float(data["heading_rad"][0]), scen)
-        rep["truth"] = run.scenario_truths(scen, float(data["heading_rad"][0]), imu, odo, hdg)
+        scen = scenario.load(args.scenario)
+        imu_name, gnss_name = scenario.preset_names(scen)
+        imu, odo = scenario.sensor_specs(scen, imu_name, scen["vehicle"])
+        hdg = scenario.heading_command_deg(float(data["heading_rad"][0]), scen)
+        rep["truth"] = scenario.scenario_truths(scen, float(data["heading_rad"][0]), imu, odo, hdg)
         cal = scen.get("calibration")
         cal_log = read_calibration_log(args.nav)
         rep["calibration"] = (calibration_report(data, series, cal_log, cal, rep["truth"])
                               if cal else None)
-        no_gnss = not sensors.GNSS_PRESETS[scen.get("sim", {}).get("gnss", "standalone")].enabled
+        no_gnss = not sensors.GNSS_PRESETS[gnss_name].enabled
         t600 = None if no_gnss else gnss_driving_reached(
             data, FILTER_CAL_GNSS_DRIVING_S, rep.get("navigation_start_s", 0.0),
             outages=outages)

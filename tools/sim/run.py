@@ -3,24 +3,24 @@
     python -m tools.sim.run [--scenario default] [--imu mid-grade] [--gnss standalone]
                             [--seed 1] [--out out/sim/NAME] [--navecu build/host/navecu]
 
-Stages: the scenario's exact trajectory (tools/sim/trajectory.py); sensor data from the
-error models (tools/sim/sensors.py); everything encoded through the project's DBC into a
-candump log (tools/navecu_can.py: E2E counters and CRCs, IMU remainder carry); the host
-firmware run over it (build/host/navecu --can-log); the report (tools/sim/report.py):
-report.json and PNG plots in the output folder, a summary on stdout.
+Stages: the scenario (tools/sim/scenario.py) and its exact trajectory
+(tools/sim/trajectory.py); sensor data from the error models (tools/sim/sensors.py);
+everything encoded through the project's DBC into a candump log (tools/navecu_can.py: E2E
+counters and CRCs, IMU remainder carry); the host firmware run over it (build/host/navecu
+--can-log); the report (tools/sim/report.py): report.json and PNG plots in the output
+folder, a summary on stdout.
 
 Initialization as a driver would do it: at t = 0 the vehicle stands still and receives
 CMD_KnownPosition and CMD_Control SetInitialPosition (true position, height and heading);
 the firmware levels for 30 s and navigates from then on. The heading sent is the car's, or
 with the scenario's [initialization] that of the IMU's axes and/or with an error
-(heading_command_deg). A scenario's [calibration] adds the one-point calibration request of
-seed 000 at its at_s: CMD_KnownPosition with the true position and CMD_Control CalibrateHere,
-or CalibrateAtGnss and the next GNSS epoch (calibration_frames).
+(scenario.heading_command_deg). A scenario's [calibration] adds the one-point calibration
+request of seed 000 at its at_s: CMD_KnownPosition with the true position and CMD_Control
+CalibrateHere, or CalibrateAtGnss and the next GNSS epoch (calibration_frames).
 """
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 import math
 import subprocess
@@ -31,10 +31,9 @@ from pathlib import Path
 import numpy as np
 
 from tools import navecu_can as nc
-from tools.sim import report, sensors, trajectory
+from tools.sim import report, scenario, sensors, trajectory
 
 ROOT = Path(__file__).resolve().parents[2]
-SCENARIOS = Path(__file__).resolve().parent / "scenarios"
 GPS_TOW0_S = 302400.0  # GNSS time of week at t = 0 (Wednesday noon)
 
 
@@ -52,36 +51,6 @@ class Stages:
     def done(self, extra=""):
         print(f" {time.monotonic() - self.t0:.1f} s{(' - ' + extra) if extra else ''}",
               flush=True)
-
-
-def scenario_path(name: str) -> Path:
-    p = Path(name)
-    if p.suffix == ".toml" and p.exists():
-        return p
-    p = SCENARIOS / f"{name}.toml"
-    if not p.exists():
-        known = ", ".join(sorted(q.stem for q in SCENARIOS.glob("*.toml")))
-        raise SystemExit(f"no scenario '{name}' (known: {known})")
-    return p
-
-
-def heading_command_deg(heading0_rad: float, scen: dict | None = None) -> float:
-    """The Heading of CMD_Control SetInitialPosition (deg, on the DBC's 0.01 deg grid): the
-    car's true heading at t = 0, plus the IMU's mounting yaw if the scenario's
-    [initialization] heading_reference is "imu", plus its heading_error_deg.
-
-    The firmware takes the IMU's axes for the car's: it is told that its forward axis
-    points along this heading and reports it as the car's. The error of the car's heading
-    as the firmware sees it is dH = command - true car heading (seed 000's sign: dH =
-    H_sins - H_true), its initial attitude error about the IMU's own axes command - (true
-    car heading + mounting yaw)."""
-    h = math.degrees(heading0_rad)
-    if scen is not None:
-        ini = scen.get("initialization", trajectory.INITIALIZATION_DEFAULTS)
-        if ini.get("heading_reference", "car") == "imu":
-            h += float(scen.get("imu_mounting", {}).get("yaw_deg", 0.0))
-        h += float(ini.get("heading_error_deg", 0.0))
-    return (round(h % 360.0 * 100.0) % 36000) / 100.0
 
 
 def _one_epoch(gnss: dict, i: int) -> dict:
@@ -143,13 +112,14 @@ def frames(truth, dtheta, dv, wheels, gnss, db, initial_attitude=False, heading_
     """Every input frame of the drive as (t_s, order, can.Message), unsorted. With
     initial_attitude, a CMD_InitialAttitude with the true roll and pitch follows the
     initialization commands: a perfect start, no levelling. heading_deg: the Heading of
-    SetInitialPosition (default: the car's true heading; see heading_command_deg).
+    SetInitialPosition (default: the car's true heading; scenario.heading_command_deg).
     calibration: a scenario's [calibration] table (calibration_frames), with an optional
     "gnss_epoch" (calibration_epoch) sent among the GNSS epochs."""
     sender = nc.E2ESender(db)
     out = []
     lat0, lon0 = math.degrees(truth.lat_rad[0]), math.degrees(truth.lon_rad[0])
-    hdg0 = heading_command_deg(truth.heading_rad[0]) if heading_deg is None else heading_deg
+    hdg0 = (scenario.heading_command_deg(truth.heading_rad[0]) if heading_deg is None
+            else heading_deg)
     out.append((0.0, 0, sender.encode("CMD_KnownPosition",
                                       {"Latitude": lat0, "Longitude": lon0}, 0.0)))
     out.append((0.0, 1, sender.encode("CMD_Control", {"Command": 2, "HeadingValid": 1,
@@ -213,41 +183,6 @@ def firmware_args(imu: "sensors.ImuSpec", gnss: "sensors.GnssSpec") -> list:
     return args
 
 
-def sensor_specs(scen: dict, imu_name: str, vehicle: dict):
-    """(ImuSpec, OdoSpec) of a scenario: the IMU preset with the scenario's [imu_mounting]
-    (the car's installation, whatever the IMU grade), the odometer with the [vehicle]'s
-    track and wheelbase and the [odometer] table's fields (e.g. mu)."""
-    m = dict(trajectory.MOUNTING_DEFAULTS)
-    m.update(scen.get("imu_mounting", {}))
-    imu = dataclasses.replace(sensors.PRESETS[imu_name], mounting_roll_deg=float(m["roll_deg"]),
-                              mounting_pitch_deg=float(m["pitch_deg"]),
-                              mounting_yaw_deg=float(m["yaw_deg"]))
-    odo = sensors.OdoSpec(track_m=vehicle["track_m"], wheelbase_m=vehicle["wheelbase_m"],
-                          **scen.get("odometer", {}))
-    return imu, odo
-
-
-def scenario_truths(scen: dict, heading0_rad: float, imu: "sensors.ImuSpec",
-                    odo: "sensors.OdoSpec", heading_deg: float) -> dict:
-    """What the scenario makes true, for report.json: the IMU's mounting, the odometer's
-    scale error, the initial heading command, and the heading errors they give (seed 000:
-    dH = H_sins - H_true; constant through the drive but for the gyros' drift)."""
-    ini = dict(trajectory.INITIALIZATION_DEFAULTS)
-    ini.update(scen.get("initialization", {}))
-    h0 = math.degrees(heading0_rad) % 360.0
-    dh = (heading_deg - h0 + 180.0) % 360.0 - 180.0
-    return {"imu_mounting_deg": {"roll": imu.mounting_roll_deg, "pitch": imu.mounting_pitch_deg,
-                                 "yaw": imu.mounting_yaw_deg},
-            "odometer_mu": odo.mu,
-            "initial_heading": {"reference": ini["heading_reference"],
-                                "error_deg": float(ini["heading_error_deg"]),
-                                "car_true_deg": h0, "commanded_deg": heading_deg},
-            # the car's heading as the firmware sees it minus the true one
-            "dH_deg": dh,
-            # the firmware's initial attitude error about the IMU's own axes
-            "imu_heading_error_deg": dh - imu.mounting_yaw_deg}
-
-
 def save_truth(truth, out: Path):
     np.savez_compressed(out / "truth.npz", t_s=truth.t_s, lat_rad=truth.lat_rad,
                         lon_rad=truth.lon_rad, h_m=truth.h_m, heading_rad=truth.heading_rad,
@@ -273,11 +208,9 @@ def main(argv=None) -> int:
                          "(tools/vcan/bus_run.py)")
     a = ap.parse_args(argv)
 
-    scen = trajectory.load_scenario(scenario_path(a.scenario))
+    scen = scenario.load(a.scenario)
     name = scen.get("name", Path(a.scenario).stem)
-    sim_cfg = scen.get("sim", {})
-    imu_name = a.imu or sim_cfg.get("imu", "mid-grade")
-    gnss_name = a.gnss or sim_cfg.get("gnss", "standalone")
+    imu_name, gnss_name = scenario.preset_names(scen, a.imu, a.gnss)
     if imu_name not in sensors.PRESETS:
         raise SystemExit(f"no IMU preset '{imu_name}' (known: {', '.join(sensors.PRESETS)})")
     if gnss_name not in sensors.GNSS_PRESETS:
@@ -292,7 +225,7 @@ def main(argv=None) -> int:
 
     st.start(f"sensors: IMU {imu_name}, GNSS {gnss_name}, odometer")
     # one seed per model, distinct across --seed values
-    imu_spec, odo = sensor_specs(scen, imu_name, truth.vehicle)
+    imu_spec, odo = scenario.sensor_specs(scen, imu_name, truth.vehicle)
     dtheta, dv = sensors.apply_imu(truth, imu_spec, 3 * a.seed)
     wheels = sensors.wheel_speeds(truth, odo, 3 * a.seed + 1)
     gnss = sensors.gnss_epochs(truth, sensors.GNSS_PRESETS[gnss_name], 3 * a.seed + 2)
@@ -309,7 +242,7 @@ def main(argv=None) -> int:
 
     st.start("CAN encoding")
     db = nc.load_db()
-    hdg_cmd = heading_command_deg(truth.heading_rad[0], scen)
+    hdg_cmd = scenario.heading_command_deg(truth.heading_rad[0], scen)
     fr = frames(truth, dtheta, dv, wheels, gnss, db, heading_deg=hdg_cmd, calibration=cal)
     fr.sort(key=lambda x: (x[0], x[1]))
     can_in = out / "can_in.log"
@@ -361,7 +294,7 @@ def main(argv=None) -> int:
     rep.update({"scenario": name, "imu": imu_name, "gnss": gnss_name, "seed": a.seed,
                 "imu_rate_hz": a.imu_rate_hz, "navecu_summary": res.stderr.strip().splitlines(),
                 "navecu_binary": report.navecu_binary(a.navecu)})
-    rep["truth"] = scenario_truths(scen, truth.heading_rad[0], imu_spec, odo, hdg_cmd)
+    rep["truth"] = scenario.scenario_truths(scen, truth.heading_rad[0], imu_spec, odo, hdg_cmd)
     cal_log = report.read_calibration_log(nav_log)
     rep["calibration"] = (report.calibration_report(truth_r, series, cal_log, cal, rep["truth"])
                           if cal is not None else None)

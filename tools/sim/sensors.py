@@ -163,11 +163,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from tools import geodesy
+
 G0_MPS2 = 9.80665                     # standard gravity: µg -> m/s²
 DEG_PER_H_TO_RPS = math.pi / 180.0 / 3600.0
 ARW_DEG_PER_RTH_TO_RAD_PER_RTS = math.pi / 180.0 / 60.0
-WGS84_A_M = 6378137.0
-WGS84_E2 = 6.69437999014e-3
 P68 = math.erf(1.0 / math.sqrt(2.0))  # 0.682689: the 1-sigma probability
 K68_2D = math.sqrt(-2.0 * math.log(1.0 - P68))  # 1.5152: Rayleigh radius holding P68
 
@@ -592,10 +592,8 @@ GNSS_PRESETS: dict[str, GnssSpec] = {
 
 
 def _radii(lat_rad, h_m):
-    s2 = np.sin(lat_rad) ** 2
-    w = np.sqrt(1.0 - WGS84_E2 * s2)
-    r_m = WGS84_A_M * (1.0 - WGS84_E2) / (w ** 3)
-    r_n = WGS84_A_M / w
+    """Meridian and prime-vertical radii of curvature plus the height (m)."""
+    r_m, r_n = geodesy.radii_m(lat_rad)
     return r_m + h_m, r_n + h_m
 
 
@@ -702,7 +700,7 @@ def _epoch_at_or_after(t_s, t: float, what: str) -> int:
 
 def apply_gnss_faults(epochs: dict, faults: dict) -> tuple[dict, list]:
     """Bad GNSS epochs for the gate tests (a scenario's [gnss_faults], validated by
-    trajectory.load_scenario): (a new epoch dict, one log entry per fault).
+    scenario.load_scenario): (a new epoch dict, one log entry per fault).
 
     freeze [t0, t1]: every epoch with t0 <= t_s < t1 repeats the position, velocity,
     height, accuracies, satellites, fix type and validity of the last epoch before t0; its

@@ -12,106 +12,7 @@ Frames (docs/frames.md): navigation frame ENU; body x right, y forward, z up; Eu
 ``C_bn = Rz(-heading) Rx(pitch) Ry(roll)``; heading clockwise from north in [0, 2 pi),
 pitch nose up positive, roll right side down positive; ``q_bn = {w, x, y, z}``.
 
-Scenario file (TOML, read by :func:`load_scenario`)
-----------------------------------------------------
-::
-
-    name = "default"
-    description = "..."
-
-    [start]
-    lat_deg = 45.0
-    lon_deg = 10.0
-    h_m = 100.0
-    heading_deg = 30.0            # nose direction, clockwise from north
-
-    [vehicle]                     # optional; the defaults are shown
-    pitch_per_accel_deg = 0.4     # nose up per m/s^2 of longitudinal acceleration (squat/dive)
-    roll_per_lat_accel_deg = 0.5  # roll out of the turn per m/s^2 of lateral acceleration
-    roughness_deg = 0.05          # amplitude of road-induced pitch/roll oscillation
-    track_m = 1.6                 # (for the wheel-speed model of the sensors)
-    wheelbase_m = 2.7
-
-    [[segment]]                   # executed in order
-    kind = "stop"                 # stand still; the speed must already be 0
-    duration_s = 40
-
-    [[segment]]
-    kind = "speed"                # change speed along a straight line, C2 (quintic) ramp
-    to_mps = 14                   # negative: reversing (the nose keeps its direction)
-    accel_mps2 = 1.5              # peak |acceleration|; or duration_s, or distance_m
-
-    [[segment]]
-    kind = "straight"             # constant speed
-    distance_m = 500              # or duration_s
-
-    [[segment]]
-    kind = "turn"                 # constant speed, which must not be 0
-    radius_m = 30
-    angle_deg = 90                # heading change, positive = clockwise (right)
-    ramp_frac = 0.3               # optional: curvature entry/exit ramp as a fraction of
-                                  # angle*radius/|speed| (default 0.3; 0 < ramp_frac <= 1),
-                                  # speed independent geometry; or ramp_s (seconds)
-
-    [[segment]]
-    kind = "hill"                 # constant speed, which must not be 0
-    distance_m = 400              # path length of the bump
-    grade_pct = 6                 # peak grade; or rise_m (peak height, negative = dip)
-
-    [[outage]]                    # GNSS outages, for the sensor model and the report
-    start_s = 300
-    end_s = 360
-    label = "tunnel"
-
-    # --- optional tables for the sensors and the commands (tools/sim/run.py); defaults shown
-    [sim]
-    imu = "mid-grade"             # IMU preset (tools/sim/sensors.py PRESETS); --imu overrides
-    gnss = "standalone"           # GNSS preset (GNSS_PRESETS; "none": no GNSS frames at all)
-
-    [imu_mounting]                # the IMU on the car: sensor axes = body axes rotated by
-    roll_deg = 0.0                # these (3-1-2, like the attitude; yaw clockwise positive),
-    pitch_deg = 0.0               # with any IMU preset: the sensor's forward axis points
-    yaw_deg = 0.0                 # along heading + yaw_deg
-
-    [odometer]                    # OdoSpec fields (tools/sim/sensors.py), e.g.
-    mu = 0.012                    # scale error: wheel speeds read (1 + mu) x true
-
-    [initialization]              # CMD_Control SetInitialPosition at t = 0
-    heading_reference = "car"     # "car": the commanded heading is the car's true heading;
-                                  # "imu": that of the IMU's forward axis (car + mounting
-                                  # yaw), as a SINS's own alignment would find it
-    heading_error_deg = 0.0       # added to it (then rounded to the DBC's 0.01 deg)
-
-    [calibration]                 # one-point calibration (seed 000), absent: none
-    at_s = 3431                   # when; the true position at this instant is the point
-    source = "known_position"     # CMD_KnownPosition (true position) + CMD_Control 5
-                                  # CalibrateHere; or "gnss": CMD_Control 6 CalibrateAtGnss
-                                  # and the next GNSS epoch
-    gnss = "standalone"           # source "gnss" with [sim] gnss = "none": the preset of the
-                                  # one epoch sent after the command
-
-    [gnss_faults]                 # bad GNSS epochs (tools/sim/sensors.py apply_gnss_faults),
-                                  # absent: none; every time is on the drive's clock (s)
-    jumps = [[300, 100], [500, 100, 90, 1.0]]
-                                  # [t_s, metres, azimuth_deg = 0 (north), duration_s = 0]:
-                                  # the first epoch at or after t_s (and every epoch up to
-                                  # duration_s after it) reports its position moved by metres
-                                  # towards the azimuth (clockwise from north); velocity,
-                                  # height and accuracies unchanged
-    freeze = [[700, 705]]         # [t0, t1]: epochs with t0 <= t < t1 repeat the last epoch
-                                  # before t0 (position, velocity, height, accuracies,
-                                  # satellites, fix) while their time of week advances
-    latency_spike = [[900, 0.6]]  # [t_s, extra_s]: the first epoch at or after t_s is
-                                  # delivered extra_s late (frames at t + extra_s, after the
-                                  # epochs reported meanwhile) with its TimeOfWeek unchanged
-
-Inheritance: a top-level ``base = "default"`` (a scenario name in the same folder, or a
-.toml path relative to this file's folder) starts from that scenario: its tables ([start],
-[vehicle], [sim], [imu_mounting], [odometer], [initialization], [calibration],
-[gnss_faults]) are merged key by key with this file's (this file's keys win), its
-[[segment]] and [[outage]] arrays are kept unless this file gives its own (which replace
-them as a whole; ``outage = []`` drops the base's outages). name and description are never
-inherited. Bases may themselves have a base (no cycles).
+The scenario file (TOML) and its loading: tools/sim/scenario.py.
 
 Motion model
 ------------
@@ -145,21 +46,12 @@ accumulated distance / Earth radius, so it converges to rounding in a few passes
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
-# --- WGS-84 (NIMA TR8350.2), the constants of firmware/nav/earth.h -----------------------
-WGS84_A_M = 6378137.0
-WGS84_F = 1.0 / 298.257223563
-WGS84_E2 = 6.69437999014e-3
-WGS84_OMEGA_IE_RPS = 7.292115e-5
-WGS84_GAMMA_E_MPS2 = 9.7803253359
-WGS84_GAMMA_P_MPS2 = 9.8321849378
-WGS84_SOMIGLIANA_K = 0.00193185265241
-WGS84_M = 0.00344978650684
+from tools.geodesy import earth_rate_n, gravity, pos_rate, transport_rate_n
+from tools.sim.scenario import VEHICLE_DEFAULTS
 
 # 5-point Gauss-Legendre on [-1, 1] (truth.c)
 GL_X = np.array([-0.9061798459386640, -0.5384693101056831, 0.0, 0.5384693101056831,
@@ -167,64 +59,12 @@ GL_X = np.array([-0.9061798459386640, -0.5384693101056831, 0.0, 0.53846931010568
 GL_W = np.array([0.2369268850561891, 0.4786286704993665, 0.5688888888888889,
                  0.4786286704993665, 0.2369268850561891])
 
-VEHICLE_DEFAULTS = {
-    "pitch_per_accel_deg": 0.4,
-    "roll_per_lat_accel_deg": 0.5,
-    "roughness_deg": 0.05,
-    "track_m": 1.6,
-    "wheelbase_m": 2.7,
-}
 TURN_RAMP_FRAC_DEFAULT = 0.3
 ROUGH_SPEED_REF_MPS = 5.0
 # roughness: (frequency Hz, weight, phase rad); weights sum to 1 -> peak <= roughness_deg
 _ROUGH_PITCH = ((1.17, 0.5, 0.3), (1.93, 0.3, 1.9), (2.71, 0.2, 4.1))
 _ROUGH_ROLL = ((1.41, 0.5, 2.2), (2.23, 0.3, 0.7), (2.87, 0.2, 5.3))
 _S_NORM = 3.0 * math.sqrt(3.0) / 8.0  # max of 2 sin^3 cos
-
-
-# --- Earth model (earth.c, double) ----------------------------------------------------------
-def earth_radii(sin_lat):
-    """Meridian and prime-vertical radii of curvature (m) for sin(latitude)."""
-    w2 = 1.0 - WGS84_E2 * sin_lat * sin_lat
-    w = np.sqrt(w2)
-    r_n = WGS84_A_M / w
-    r_m = WGS84_A_M * (1.0 - WGS84_E2) / (w2 * w)
-    return r_m, r_n
-
-
-def gravity(sin_lat, h_m):
-    """Normal gravity (m/s^2), Somigliana with the second-order height series."""
-    s2 = sin_lat * sin_lat
-    g0 = WGS84_GAMMA_E_MPS2 * (1.0 + WGS84_SOMIGLIANA_K * s2) / np.sqrt(1.0 - WGS84_E2 * s2)
-    inv_a = 1.0 / WGS84_A_M
-    k1 = 2.0 * inv_a * (1.0 + WGS84_F + WGS84_M - 2.0 * WGS84_F * s2)
-    k2 = 3.0 * inv_a * inv_a
-    return g0 * (1.0 - k1 * h_m + k2 * h_m * h_m)
-
-
-def earth_rate_n(lat_rad):
-    """w_ie in ENU, shape (..., 3)."""
-    lat = np.asarray(lat_rad, dtype=float)
-    return np.stack([np.zeros_like(lat), WGS84_OMEGA_IE_RPS * np.cos(lat),
-                     WGS84_OMEGA_IE_RPS * np.sin(lat)], axis=-1)
-
-
-def transport_rate_n(lat_rad, h_m, v_n):
-    """w_en in ENU (seed 001 eq. 7), shape (..., 3)."""
-    sl, cl = np.sin(lat_rad), np.cos(lat_rad)
-    r_m, r_n = earth_radii(sl)
-    inv_rm = 1.0 / (r_m + h_m)
-    inv_rn = 1.0 / (r_n + h_m)
-    tl = sl / cl
-    v_n = np.asarray(v_n, dtype=float)
-    return np.stack([-v_n[..., 1] * inv_rm, v_n[..., 0] * inv_rn,
-                     v_n[..., 0] * tl * inv_rn], axis=-1)
-
-
-def pos_rate(lat_rad, h_m, v_n):
-    """d(lat, lon, h)/dt (seed 001 eq. 6) as three arrays."""
-    r_m, r_n = earth_radii(np.sin(lat_rad))
-    return v_n[..., 1] / (r_m + h_m), v_n[..., 0] / ((r_n + h_m) * np.cos(lat_rad)), v_n[..., 2]
 
 
 # --- quaternions (nav_math.c conventions) ---------------------------------------------------
@@ -313,176 +153,6 @@ def _hill_gmax_for_rise(distance_m, rise_m):
         else:
             hi = mid
     return math.copysign(0.5 * (lo + hi), rise_m)
-
-
-# --- scenario ------------------------------------------------------------------------------
-_SEG_KEYS = {
-    "stop": {"duration_s"},
-    "speed": {"to_mps", "accel_mps2", "duration_s", "distance_m"},
-    "straight": {"distance_m", "duration_s"},
-    "turn": {"radius_m", "angle_deg", "ramp_frac", "ramp_s"},
-    "hill": {"distance_m", "grade_pct", "rise_m"},
-}
-
-
-MOUNTING_DEFAULTS = {"roll_deg": 0.0, "pitch_deg": 0.0, "yaw_deg": 0.0}
-INITIALIZATION_DEFAULTS = {"heading_reference": "car", "heading_error_deg": 0.0}
-_OPTIONAL_TABLES = {
-    "sim": {"imu", "gnss"},
-    "imu_mounting": set(MOUNTING_DEFAULTS),
-    # the OdoSpec fields a scenario may set (track and wheelbase come from [vehicle])
-    "odometer": {"mu", "wheel_mu_sigma", "rate_hz", "latency_s", "noise_mps", "slip_frac",
-                 "slip_accel_threshold_mps2", "driven_axle"},
-    "initialization": set(INITIALIZATION_DEFAULTS),
-    "calibration": {"at_s", "source", "gnss"},
-    "gnss_faults": {"jumps", "freeze", "latency_spike"},
-}
-GNSS_JUMP_AZIMUTH_DEG_DEFAULT = 0.0   # a jump without an azimuth moves the fix north
-
-
-def _gnss_faults(path, table: dict) -> dict:
-    """[gnss_faults] as lists of dicts (format in the module docstring), validated."""
-    def rows(key, lo, hi):
-        out = table.get(key, [])
-        if not isinstance(out, list):
-            raise ValueError(f"{path}: [gnss_faults] {key} must be a list of lists")
-        for r in out:
-            if (not isinstance(r, list) or not lo <= len(r) <= hi
-                    or not all(isinstance(x, (int, float)) for x in r)):
-                n = f"{lo}..{hi}" if lo != hi else f"{lo}"
-                raise ValueError(f"{path}: [gnss_faults] {key}: {r!r} is not a list of {n} "
-                                 "numbers")
-        return [[float(x) for x in r] for r in out]
-
-    jumps = []
-    for r in rows("jumps", 2, 4):
-        t, m = r[0], r[1]
-        az = r[2] if len(r) > 2 else GNSS_JUMP_AZIMUTH_DEG_DEFAULT
-        dur = r[3] if len(r) > 3 else 0.0
-        if not (t > 0.0 and m != 0.0 and dur >= 0.0):
-            raise ValueError(f"{path}: [gnss_faults] jump {r}: needs t_s > 0, metres != 0, "
-                             "duration_s >= 0")
-        jumps.append({"t_s": t, "metres": m, "azimuth_deg": az, "duration_s": dur})
-    freeze = []
-    for r in rows("freeze", 2, 2):
-        if not 0.0 < r[0] < r[1]:
-            raise ValueError(f"{path}: [gnss_faults] freeze {r}: needs 0 < t0 < t1")
-        freeze.append({"t0_s": r[0], "t1_s": r[1]})
-    spikes = []
-    for r in rows("latency_spike", 2, 2):
-        if not (r[0] > 0.0 and r[1] > 0.0):
-            raise ValueError(f"{path}: [gnss_faults] latency_spike {r}: needs t_s > 0, "
-                             "extra_s > 0")
-        spikes.append({"t_s": r[0], "extra_s": r[1]})
-    return {"jumps": jumps, "freeze": freeze, "latency_spike": spikes}
-
-
-# tables a scenario with `base` merges key by key over its base's (the rest: replaced)
-_MERGED_TABLES = ("start", "vehicle", "sim", "imu_mounting", "odometer", "initialization",
-                  "calibration", "gnss_faults")
-# top-level keys that belong to the file itself, never inherited
-_OWN_KEYS = ("name", "description", "base")
-
-
-def base_path(path, base: str) -> Path:
-    """The file a scenario's `base = "..."` names: a scenario name (NAME.toml next to the
-    file) or a .toml path relative to the file's folder."""
-    b = Path(base)
-    if b.suffix != ".toml":
-        b = b.with_name(b.name + ".toml")
-    return b if b.is_absolute() else Path(path).resolve().parent / b
-
-
-def read_scenario_toml(path, _chain=()) -> dict:
-    """A scenario file's TOML with its `base` resolved (not yet validated): the base's
-    content (itself resolved, recursively), then this file's over it. Tables of
-    _MERGED_TABLES are merged key by key (this file's keys win); arrays of tables
-    ([[segment]], [[outage]]) are replaced as a whole when this file has the key
-    (`outage = []` drops the base's outages); name, description and base are this file's
-    own (name defaults to the file's stem)."""
-    path = Path(path).resolve()
-    if path in _chain:
-        raise ValueError(f"{path}: base cycle: {' -> '.join(p.name for p in _chain + (path,))}")
-    with open(path, "rb") as fh:
-        own = tomllib.load(fh)
-    if "base" not in own:
-        return own
-    if not isinstance(own["base"], str) or not own["base"]:
-        raise ValueError(f"{path}: base must be a scenario name or a .toml path")
-    bp = base_path(path, own["base"])
-    if not bp.exists():
-        raise ValueError(f"{path}: base {own['base']!r}: no file {bp}")
-    sc = {k: v for k, v in read_scenario_toml(bp, _chain + (path,)).items()
-          if k not in _OWN_KEYS}
-    for k, v in own.items():
-        if k in _MERGED_TABLES and isinstance(v, dict) and isinstance(sc.get(k), dict):
-            sc[k] = {**sc[k], **v}
-        else:
-            sc[k] = v
-    sc["base"] = own["base"]
-    return sc
-
-
-def load_scenario(path) -> dict:
-    """Read and validate a scenario TOML file (format in the module docstring), with its
-    `base` scenario resolved (read_scenario_toml)."""
-    path = Path(path)
-    sc = read_scenario_toml(path)
-    sc.setdefault("name", path.stem)
-    sc.setdefault("description", "")
-    for key in ("lat_deg", "lon_deg", "h_m", "heading_deg"):
-        if key not in sc.get("start", {}):
-            raise ValueError(f"{path}: [start] needs {key}")
-    veh = dict(VEHICLE_DEFAULTS)
-    unknown = set(sc.get("vehicle", {})) - set(VEHICLE_DEFAULTS)
-    if unknown:
-        raise ValueError(f"{path}: unknown [vehicle] keys {sorted(unknown)}")
-    veh.update(sc.get("vehicle", {}))
-    sc["vehicle"] = veh
-    segs = sc.get("segment", [])
-    if not segs:
-        raise ValueError(f"{path}: no [[segment]]")
-    for i, seg in enumerate(segs):
-        kind = seg.get("kind")
-        if kind not in _SEG_KEYS:
-            raise ValueError(f"{path}: segment {i}: unknown kind {kind!r}")
-        unknown = set(seg) - _SEG_KEYS[kind] - {"kind", "note"}
-        if unknown:
-            raise ValueError(f"{path}: segment {i} ({kind}): unknown keys {sorted(unknown)}")
-    sc["segment"] = segs
-    outs = []
-    for o in sc.get("outage", []):
-        s0, s1 = float(o["start_s"]), float(o["end_s"])
-        if not s1 > s0:
-            raise ValueError(f"{path}: outage {o} ends before it starts")
-        outs.append({"start_s": s0, "end_s": s1, "label": str(o.get("label", "outage"))})
-    sc["outage"] = outs
-    for table, known in _OPTIONAL_TABLES.items():
-        unknown = set(sc.get(table, {})) - known
-        if unknown:
-            raise ValueError(f"{path}: unknown [{table}] keys {sorted(unknown)}")
-    mnt = dict(MOUNTING_DEFAULTS)
-    mnt.update({k: float(v) for k, v in sc.get("imu_mounting", {}).items()})
-    sc["imu_mounting"] = mnt
-    sc["odometer"] = dict(sc.get("odometer", {}))
-    ini = dict(INITIALIZATION_DEFAULTS)
-    ini.update(sc.get("initialization", {}))
-    if ini["heading_reference"] not in ("car", "imu"):
-        raise ValueError(f"{path}: [initialization] heading_reference must be 'car' or 'imu'")
-    ini["heading_error_deg"] = float(ini["heading_error_deg"])
-    sc["initialization"] = ini
-    if "calibration" in sc:
-        cal = {"source": "known_position", "gnss": "standalone"}
-        cal.update(sc["calibration"])
-        if "at_s" not in cal or not float(cal["at_s"]) > 0.0:
-            raise ValueError(f"{path}: [calibration] needs at_s > 0")
-        cal["at_s"] = float(cal["at_s"])
-        if cal["source"] not in ("known_position", "gnss"):
-            raise ValueError(f"{path}: [calibration] source must be 'known_position' or 'gnss'")
-        sc["calibration"] = cal
-    if "gnss_faults" in sc:
-        sc["gnss_faults"] = _gnss_faults(path, sc["gnss_faults"])
-    return sc
 
 
 def _one_of(seg, keys, i):
@@ -704,16 +374,10 @@ class Trajectory:
 
 def sensed(kin, q_bn, w_nb_b, lat_rad, h_m):
     """w_ib_b and f_b (truth.c sensed()) for kinematics at positions (lat, h)."""
-    sl, cl = np.sin(lat_rad), np.cos(lat_rad)
-    r_m, r_n = earth_radii(sl)
-    g = gravity(sl, h_m)
+    g = gravity(np.sin(lat_rad), h_m)
     v = kin["v"]
-    inv_rm = 1.0 / (r_m + h_m)
-    inv_rn = 1.0 / (r_n + h_m)
-    tl = sl / cl
-    zero = np.zeros_like(sl)
-    w_ie = np.stack([zero, WGS84_OMEGA_IE_RPS * cl, WGS84_OMEGA_IE_RPS * sl], axis=-1)
-    w_en = np.stack([-v[..., 1] * inv_rm, v[..., 0] * inv_rn, v[..., 0] * tl * inv_rn], axis=-1)
+    w_ie = earth_rate_n(lat_rad)
+    w_en = transport_rate_n(lat_rad, h_m, v)
     w_in = w_ie + w_en
     w_cor = 2.0 * w_ie + w_en
     f_n = kin["a"] + np.cross(w_cor, v)
@@ -876,6 +540,8 @@ def timeline(scenario: dict):
 
 if __name__ == "__main__":  # print a scenario's timeline
     import sys
+
+    from tools.sim.scenario import load_scenario
 
     sc = load_scenario(sys.argv[1])
     tr = Trajectory(sc)

@@ -8,7 +8,7 @@ check that the two give the same NAV_* frames (`make sim BUS=vcan0`, tools/sim/r
 1. OUT_DIR/nav_file.log: `navecu --can-log IN.log`, the reference.
 2. OUT_DIR/nav.log: `navecu --can vcan0` with IN.log replayed into it by
    tools/can_replay.py --fastest (as fast as the firmware acknowledges) and its output
-   recorded (tools/vcan/live_check.py --fastest --out). On vcan0 this runs inside
+   recorded (python -m tools.vcan.live_check --fastest --out). On vcan0 this runs inside
    tools/vcan/with_vcan.sh (User-Mode Linux where the kernel has no CAN); another
    interface is used directly and must exist.
 3. The check: nav.log and nav_file.log carry the same payloads, frame for frame and in
@@ -31,7 +31,6 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
 WITH_VCAN = ROOT / "tools" / "vcan" / "with_vcan.sh"
-LIVE_CHECK = ROOT / "tools" / "vcan" / "live_check.py"
 NO_VCAN = 77
 
 
@@ -71,9 +70,9 @@ def run(navecu, can_in, out_dir, bus="vcan0", imu_rate_hz=100, navecu_args=(),
                          capture_output=True, text=True)
     if ref.returncode != 0:
         raise BusRunError(f"navecu --can-log failed:\n{ref.stderr}", 3)
-    cmd = [sys.executable, str(LIVE_CHECK), "--log", str(can_in), "--fastest", "--channel",
-           bus, "--imu-rate-hz", str(imu_rate_hz), "--out", str(nav_bus), "--no-frames",
-           "--navecu-args=" + shlex.join(navecu_args)]
+    cmd = [sys.executable, "-m", "tools.vcan.live_check", "--log", str(can_in), "--fastest",
+           "--channel", bus, "--imu-rate-hz", str(imu_rate_hz), "--out", str(nav_bus),
+           "--no-frames", "--navecu-args=" + shlex.join(navecu_args)]
     if bus == "vcan0":
         cmd = [str(WITH_VCAN)] + cmd
     env = dict(os.environ, NAVECU_BIN=str(navecu), NAVECU_VCAN_TIMEOUT=str(timeout_s))

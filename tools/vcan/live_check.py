@@ -8,12 +8,12 @@ the replay's flow-control figures ("replay": tools/can_replay.py replay()), --ou
 writes the recorded frames as a candump log too (with their kernel receive times),
 --no-frames leaves "frames" out of the JSON line.
 
-    with_vcan.sh .venv/bin/python tools/vcan/live_check.py --log IN.log --speed 1
-    with_vcan.sh .venv/bin/python tools/vcan/live_check.py --log IN.log --max-rate 3000
-    with_vcan.sh .venv/bin/python tools/vcan/live_check.py --log IN.log --fastest --out NAV.log
-    with_vcan.sh .venv/bin/python tools/vcan/live_check.py --interop
-    with_vcan.sh .venv/bin/python tools/vcan/live_check.py --latency --log IN.log
-    with_vcan.sh .venv/bin/python tools/vcan/live_check.py --robust --log IN.log
+    with_vcan.sh .venv/bin/python -m tools.vcan.live_check --log IN.log --speed 1
+    with_vcan.sh .venv/bin/python -m tools.vcan.live_check --log IN.log --max-rate 3000
+    with_vcan.sh .venv/bin/python -m tools.vcan.live_check --log IN.log --fastest --out NAV.log
+    with_vcan.sh .venv/bin/python -m tools.vcan.live_check --interop
+    with_vcan.sh .venv/bin/python -m tools.vcan.live_check --latency --log IN.log
+    with_vcan.sh .venv/bin/python -m tools.vcan.live_check --robust --log IN.log
 """
 from __future__ import annotations
 
@@ -32,9 +32,9 @@ from pathlib import Path
 
 import can
 
+from tools import can_replay, navecu_can
+
 ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT))
-from tools import can_replay, navecu_can  # noqa: E402
 
 NAV_IDS = list(range(0x300, 0x304)) + [0x310, 0x311]
 FRAME_HEAD = struct.Struct("=IB")  # struct can_frame: can_id, len (data at offset 8)
