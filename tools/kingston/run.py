@@ -32,7 +32,6 @@ import hashlib
 import json
 import math
 import shlex
-import subprocess
 import sys
 import time
 from pathlib import Path
@@ -440,13 +439,8 @@ def main(argv=None) -> int:
     nav_log = out / "nav.log"
     cmd = [a.navecu, "--can-log", str(can_in), "--out", str(nav_log)] + RATES + SENSORS + \
         shlex.split(a.navecu_args)
-    res = subprocess.run(cmd, capture_output=True, text=True)
-    (out / "navecu.txt").write_text(" ".join(cmd) + "\n" + res.stderr)
-    if res.returncode != 0:
-        print()
-        print(res.stderr, file=sys.stderr)
+    if st.firmware(cmd, out, " ".join(cmd) + "\n") != 0:
         return 1
-    st.done(res.stderr.strip().splitlines()[0].replace("navecu: ", ""))
 
     st.start("read NAV outputs")
     nav = report.read_nav_log(nav_log)

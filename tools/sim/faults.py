@@ -405,16 +405,21 @@ def clip_increments(x, limit, axes=(0, 1, 2)):
 
 
 # ============================================================================ recovery
+def _after(t, err, band, t_end):
+    """(times from t_end on, whether err is within band there, the indices where not)."""
+    t, err, band = (np.asarray(x, dtype=float) for x in (t, err, band))
+    sel = t >= t_end
+    ok = (err <= band)[sel]
+    return t[sel], ok, np.nonzero(~ok)[0]
+
+
 def recovery_time(t, err, band, t_end, hold_s: float = RECOVERY_HOLD_S):
     """Seconds from t_end until err stays <= band for hold_s: 0.0 if it does from the
     first sample at or after t_end, None if it never does (including when the series
     ends less than hold_s after the last return into the band)."""
-    t, err, band = (np.asarray(x, dtype=float) for x in (t, err, band))
-    sel = t >= t_end
-    t, ok = t[sel], (err <= band)[sel]
+    t, ok, bad = _after(t, err, band, t_end)
     if t.size == 0:
         return None
-    bad = np.nonzero(~ok)[0]
     limit = np.full(t.size, t[-1])           # in the band from here until ...
     if bad.size:
         nxt = np.searchsorted(bad, np.arange(t.size))   # the first bad sample at or after
@@ -431,12 +436,9 @@ def settled_time(t, err, band, t_end, hold_s: float = RECOVERY_HOLD_S):
     """Seconds from t_end until err is within band for good (to the end of the series, at
     least hold_s of it): 0.0 if it never leaves the band after t_end, None if it is out of
     the band within hold_s of the end."""
-    t, err, band = (np.asarray(x, dtype=float) for x in (t, err, band))
-    sel = t >= t_end
-    t, ok = t[sel], (err <= band)[sel]
+    t, ok, bad = _after(t, err, band, t_end)
     if t.size == 0:
         return None
-    bad = np.nonzero(~ok)[0]
     if bad.size == 0:
         return 0.0 if t[-1] - t[0] >= hold_s - 1e-9 else None
     i = int(bad[-1]) + 1

@@ -52,6 +52,18 @@ class Stages:
         print(f" {time.monotonic() - self.t0:.1f} s{(' - ' + extra) if extra else ''}",
               flush=True)
 
+    def firmware(self, cmd: list, out: Path, head: str = "") -> int:
+        """Run navecu (cmd) as this stage: its stderr into out/navecu.txt (after head),
+        the summary's first line as the stage's result; 1 (stderr printed) on a failure."""
+        res = subprocess.run([str(c) for c in cmd], capture_output=True, text=True)
+        (out / "navecu.txt").write_text(head + res.stderr)
+        if res.returncode != 0:
+            print()
+            print(res.stderr, file=sys.stderr)
+            return 1
+        self.done(res.stderr.strip().splitlines()[0].replace("navecu: ", ""))
+        return 0
+
 
 def _one_epoch(gnss: dict, i: int) -> dict:
     return {k: np.asarray(v)[i:i + 1] for k, v in gnss.items()}
@@ -276,15 +288,9 @@ def main(argv=None) -> int:
             return 1
     else:
         st.start("firmware (build/host/navecu --can-log)")
-        res = subprocess.run([a.navecu, "--can-log", str(can_in), "--out", str(nav_log),
-                              "--imu-rate-hz", str(a.imu_rate_hz)] + fw_args,
-                             capture_output=True, text=True)
-        (out / "navecu.txt").write_text(res.stderr)
-        if res.returncode != 0:
-            print()
-            print(res.stderr, file=sys.stderr)
+        if st.firmware([a.navecu, "--can-log", can_in, "--out", nav_log,
+                        "--imu-rate-hz", str(a.imu_rate_hz)] + fw_args, out) != 0:
             return 1
-        st.done(res.stderr.strip().splitlines()[0].replace("navecu: ", ""))
 
     st.start("report")
     nav = report.read_nav_log(nav_log)
