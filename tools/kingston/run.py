@@ -439,7 +439,8 @@ def main(argv=None) -> int:
     nav_log = out / "nav.log"
     cmd = [a.navecu, "--can-log", str(can_in), "--out", str(nav_log)] + RATES + SENSORS + \
         shlex.split(a.navecu_args)
-    if st.firmware(cmd, out, " ".join(cmd) + "\n") != 0:
+    res = st.firmware(cmd, out, " ".join(cmd) + "\n")
+    if res.returncode != 0:
         return 1
 
     st.start("read NAV outputs")

@@ -52,17 +52,18 @@ class Stages:
         print(f" {time.monotonic() - self.t0:.1f} s{(' - ' + extra) if extra else ''}",
               flush=True)
 
-    def firmware(self, cmd: list, out: Path, head: str = "") -> int:
+    def firmware(self, cmd: list, out: Path, head: str = "") -> subprocess.CompletedProcess:
         """Run navecu (cmd) as this stage: its stderr into out/navecu.txt (after head),
-        the summary's first line as the stage's result; 1 (stderr printed) on a failure."""
+        the summary's first line as the stage's result; on a failure (returncode not 0)
+        its stderr printed."""
         res = subprocess.run([str(c) for c in cmd], capture_output=True, text=True)
         (out / "navecu.txt").write_text(head + res.stderr)
         if res.returncode != 0:
             print()
             print(res.stderr, file=sys.stderr)
-            return 1
-        self.done(res.stderr.strip().splitlines()[0].replace("navecu: ", ""))
-        return 0
+        else:
+            self.done(res.stderr.strip().splitlines()[0].replace("navecu: ", ""))
+        return res
 
 
 def _one_epoch(gnss: dict, i: int) -> dict:
@@ -288,8 +289,9 @@ def main(argv=None) -> int:
             return 1
     else:
         st.start("firmware (build/host/navecu --can-log)")
-        if st.firmware([a.navecu, "--can-log", can_in, "--out", nav_log,
-                        "--imu-rate-hz", str(a.imu_rate_hz)] + fw_args, out) != 0:
+        res = st.firmware([a.navecu, "--can-log", can_in, "--out", nav_log,
+                           "--imu-rate-hz", str(a.imu_rate_hz)] + fw_args, out)
+        if res.returncode != 0:
             return 1
 
     st.start("report")
