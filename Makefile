@@ -251,10 +251,10 @@ doc-check: venv
 ARM_CC := arm-none-eabi-gcc
 ARM_NM := arm-none-eabi-nm
 M4_FLAGS := -mcpu=cortex-m4 -mfpu=fpv4-sp-d16 -mfloat-abi=hard -mthumb
-M4_SRC := $(CORE_SRC) $(APP_SRC) $(HAL_M4_SRC)
+M4_SRC := $(CORE_SRC) $(APP_SRC) $(HAL_M4_SRC) $(call VEH_SRC,$(VEHICLE))
 $(BUILD)/m4/%.o: %.c
 	@mkdir -p $(@D)
-	$(ARM_CC) $(CFLAGS_BASE) $(M4_FLAGS) $(FW_INC) -MMD -MP -c $< -o $@
+	$(ARM_CC) $(CFLAGS_BASE) $(M4_FLAGS) $(FW_INC) -I$(VEH_OUT)/$(VEHICLE) -MMD -MP -c $< -o $@
 $(BUILD)/m4/libnavecu.a: $(M4_SRC:%.c=$(BUILD)/m4/%.o)
 	arm-none-eabi-ar rcs $@ $^
 
@@ -272,17 +272,17 @@ cross test-cross: $(BUILD)/m4/libnavecu.a
 # NVM, watchdog: hal/cortex_m4f/); build/target/navecu-qemu.elf: the same application and
 # layout with a semihosting CAN backend, run on QEMU's netduinoplus2 (an STM32F405).
 # Objects carry -fstack-usage and -fcallgraph-info for the stack budget.
-TGT := $(BUILD)/target
+TGT := $(BUILD)/target$(VEH_SUFFIX)
 M4_LD := boards/stm32f405/stm32f405.ld
 M4_TGT_CFLAGS := $(CFLAGS_BASE) $(M4_FLAGS) -ffunction-sections -fdata-sections \
                  -fstack-usage -fcallgraph-info=su
-M4_TGT_INC := $(FW_INC) -Ihal/common -Ihal/cortex_m4f -Iboards/qemu
+M4_TGT_INC := $(FW_INC) -Ihal/common -Ihal/cortex_m4f -Iboards/qemu -I$(VEH_OUT)/$(VEHICLE)
 M4_LDFLAGS := $(M4_FLAGS) -nostartfiles --specs=nano.specs -T $(M4_LD) -Wl,--gc-sections
 # boards/: the entry points and startup of the two Cortex-M4F images (the QEMU machine is
 # an STM32F405 too: the same startup and linker script)
 M4_BOARD_SRC := boards/stm32f405/startup.c hal/cortex_m4f/f2l.c
 ECU_SRC := $(M4_SRC) $(M4_BOARD_SRC) hal/cortex_m4f/hal_stm32.c boards/stm32f405/main.c
-QEMU_SRC := $(CORE_SRC) $(APP_SRC) $(M4_BOARD_SRC) hal/common/candump.c hal/common/nvm_flash.c \
+QEMU_SRC := $(CORE_SRC) $(APP_SRC) $(call VEH_SRC,$(VEHICLE)) $(M4_BOARD_SRC) hal/common/candump.c hal/common/nvm_flash.c \
             hal/cortex_m4f/semihost.c \
             hal/cortex_m4f/hal_semihost.c \
             boards/qemu/main.c boards/qemu/bench_trace.c
@@ -311,13 +311,13 @@ target: deps $(TGT)/navecu.elf $(TGT)/navecu.bin $(TGT)/navecu-vectors.bin $(TGT
 target-qemu: deps $(TGT)/navecu-qemu.elf
 
 # the QEMU image against the host float32 build on a 10-minute drive, byte for byte
-target-test: deps venv target-qemu target $(BUILD)/host/navecu
-	$(PY) -m tools.target.qemu_run --check
+target-test: deps venv target-qemu target $(BUILD)/host/navecu$(VEH_SUFFIX)
+	$(PY) -m tools.target.qemu_run --target-dir $(TGT) --navecu $(BUILD)/host/navecu$(VEH_SUFFIX) --check
 
 # what make test runs of the target: the budget, and one QEMU run that is both the
 # bit-exactness test and the instruction-count benchmark (fails over 5 % CPU)
-target-check: target-budget target-qemu $(BUILD)/host/navecu
-	$(PY) -m tools.target.qemu_run --check --bench --json out/target-bench.json
+target-check: target-budget target-qemu $(BUILD)/host/navecu$(VEH_SUFFIX)
+	$(PY) -m tools.target.qemu_run --target-dir $(TGT) --navecu $(BUILD)/host/navecu$(VEH_SUFFIX) --check --bench --json out/target-bench$(VEH_SUFFIX).json
 
 # flash, static RAM, worst-case stack, no heap, no double: fails when a limit is exceeded.
 # The drivers' only indirect calls are their wait hooks; the board passes one function
@@ -330,11 +330,11 @@ target-budget: deps venv target
 	$(PY) -m tools.target.budget --elf $(TGT)/navecu.elf --objs $(ECU_SRC:%.c=$(TGT)/obj/%.o) \
 	  --entry Reset_Handler --isr CAN1_RX0_IRQHandler --isr CAN1_SCE_IRQHandler \
 	  --isr SysTick_Handler $(foreach f,$(M4_WAIT_HOOK_CALLERS),--indirect $(f)=$(M4_WAIT_HOOK)) \
-	  --json out/target-budget.json
+	  --json out/target-budget$(VEH_SUFFIX).json
 
 # instruction counts per IMU step and per measurement update -> out/target-bench.json
-target-bench: deps venv target-qemu $(BUILD)/host/navecu
-	$(PY) -m tools.target.qemu_run --bench --json out/target-bench.json
+target-bench: deps venv target-qemu $(BUILD)/host/navecu$(VEH_SUFFIX)
+	$(PY) -m tools.target.qemu_run --target-dir $(TGT) --navecu $(BUILD)/host/navecu$(VEH_SUFFIX) --bench --json out/target-bench$(VEH_SUFFIX).json
 
 # ---- numerics study: compensated vs plain float32 accumulation ----
 numerics: $(BUILD)/host/tests/study_numerics $(BUILD)/plainacc/tests/study_numerics
@@ -403,9 +403,10 @@ FUZZ := $(BUILD)/fuzz
 FUZZ_NAMES := fuzz_codec fuzz_app fuzz_calstore fuzz_candump fuzz_options fuzz_cmdline
 FUZZ_SAN := -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
 FUZZ_CFLAGS := $(CSTD) -O2 -g $(WARN) $(FPFLAGS) -D_DEFAULT_SOURCE $(FUZZ_SAN)
-FUZZ_INC := $(HOST_INC) -Ihost_sim -Itests/fuzz -I$(FUZZ)/gen
+FUZZ_INC := $(HOST_INC) -Ihost_sim -Itests/fuzz -I$(FUZZ)/gen -I$(VEH_OUT)/native
 FUZZ_COMMON := tests/fuzz/fuzz_fail.c tests/fuzz/codec_check.c
 FUZZ_APP_SRC := tests/fuzz/fuzz_app_common.c $(FUZZ_COMMON) $(APP_SRC) $(CORE_SRC) \
+                $(call VEH_SRC,native) \
                 tests/support/fake_hal.c
 fuzz_codec_SRC := tests/fuzz/fuzz_codec.c $(FUZZ_COMMON) firmware/can/e2e.c \
                   firmware/can/gen/navecu_can.c
@@ -415,6 +416,7 @@ fuzz_calstore_SRC := tests/fuzz/fuzz_calstore.c tests/fuzz/fuzz_fail.c firmware/
                      tests/support/fake_hal.c
 fuzz_candump_SRC := tests/fuzz/fuzz_candump.c tests/fuzz/fuzz_fail.c $(HAL_LINUX_SRC)
 fuzz_cmdline_SRC := tests/fuzz/fuzz_cmdline.c tests/fuzz/fuzz_fail.c host_sim/options.c $(APP_SRC) \
+                    $(call VEH_SRC,native) \
                     tests/support/fake_hal.c \
                     $(CORE_SRC)
 

@@ -48,10 +48,30 @@ ANGLE_SIGNALS = ("AngleIncX", "AngleIncY", "AngleIncZ")
 VEL_SIGNALS = ("VelIncX", "VelIncY", "VelIncZ")
 
 
+_VEHICLE_DB = None  # the protocol with a vehicle profile's identifiers (select_vehicle)
+
+
 def load_db(path: Optional[Path] = None) -> cantools.database.can.Database:
     """The navecu DBC, loaded with cantools' strict checks (overlapping or out-of-frame
-    signals raise)."""
+    signals raise); without a path, with the identifiers of the vehicle profile chosen by
+    select_vehicle, if any."""
+    if path is None and _VEHICLE_DB is not None:
+        return _VEHICLE_DB
     return cantools.database.load_file(str(path or DBC_PATH), database_format="dbc", strict=True)
+
+
+def select_vehicle(name: Optional[str]) -> cantools.database.can.Database:
+    """Use the identifiers of vehicle profile `name` (vehicles/NAME.toml; None or "native":
+    the DBC's) for every later load_db() and DEFAULT_DB: the tools then speak to a build of
+    that profile (make VEHICLE=NAME)."""
+    global _VEHICLE_DB, DEFAULT_DB
+    _VEHICLE_DB = None
+    if name not in (None, "native"):
+        from tools import vehicle
+        _VEHICLE_DB = cantools.database.load_string(
+            vehicle.profile_dbc_text(vehicle.load(name)), database_format="dbc", strict=True)
+    DEFAULT_DB = load_db()
+    return DEFAULT_DB
 
 
 def _axis_format(db, message: str, names: tuple) -> tuple:

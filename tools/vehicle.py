@@ -24,6 +24,7 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import can
 import cantools
 from cantools.database.can.c_source import camel_to_snake_case, generate as generate_c
 
@@ -307,6 +308,68 @@ def collisions(p: Profile, ids: dict | None = None) -> list:
 
 def stock_ids() -> dict:
     return {m.name: m.frame_id for m in navecu_can.load_db().messages}
+
+
+# ------------------------------------------------------------------- the car's frames
+class CarEncoder:
+    """The car's own frames that a profile reads, encoded with the car's DBC as the car
+    sends them: the wheel speeds (unsigned where the profile takes the direction from the
+    gear), the gear (on every change and every gear_period_s), the ESP yaw rate."""
+
+    def __init__(self, p: Profile, gear_period_s: float = 1.0):
+        self.p = p
+        self.by_role = {r.role: r for r in p.reads}
+        self.gear_period_s = gear_period_s
+        self._gear = None
+        self._gear_t = -1e9
+        gear = self.by_role.get("gear")
+        if gear is not None:
+            sig = gear.signals[0]
+            names = {int(k): str(v) for k, v in (sig.choices or {}).items()}
+            fwd = [v for v, s in p.gear_values.items() if s > 0]
+            rev = [v for v, s in p.gear_values.items() if s < 0]
+            self.gear_raw = {1: fwd[0], -1: rev[0]}
+            self.gear_names = names
+
+    def _message(self, role: str, values: dict, t: float) -> can.Message:
+        r = self.by_role[role]
+        msg = r.message
+        full = {s.name: (s.initial if s.initial is not None else
+                         (s.minimum if s.minimum is not None and s.minimum > 0 else 0))
+                for s in msg.signals}
+        full.update(values)
+        data = bytearray(msg.encode(full, scaling=True, strict=False))
+        if r.checksum == "toyota":
+            data[-1] = (msg.frame_id >> 8) + (msg.frame_id & 0xFF) + len(data) + sum(data[:-1])
+            data[-1] &= 0xFF
+        return can.Message(timestamp=t, arbitration_id=msg.frame_id, is_extended_id=False,
+                           dlc=msg.length, data=bytes(data))
+
+    def wheels(self, t: float, v_mps) -> list:
+        """The frames at t for wheel speeds v_mps (FL, FR, RL, RR, signed m/s)."""
+        out = []
+        r = self.by_role["wheels"]
+        direction = 1 if sum(v_mps) >= 0 else -1
+        if self.p.direction == "gear" and (direction != self._gear
+                                            or t - self._gear_t >= self.gear_period_s):
+            self._gear, self._gear_t = direction, t
+            sig = self.by_role["gear"].signals[0]
+            out.append(self._message("gear", {sig.name: self.gear_raw[direction]}, t))
+        vals = {}
+        for s, v in zip(r.signals, v_mps):
+            unit = abs(v) if self.p.direction != "signed" else v
+            lo = s.minimum if s.minimum is not None else -1e9
+            hi = s.maximum if s.maximum is not None else 1e9
+            vals[s.name] = min(max(unit / self.p.speed_factor, lo), hi)
+        out.append(self._message("wheels", vals, t))
+        return out
+
+    def yaw_rate(self, t: float, rate_rps: float) -> list:
+        """The ESP's yaw-rate frame at t (rad/s, left positive), if the profile reads one."""
+        if "yaw_rate" not in self.by_role:
+            return []
+        s = self.by_role["yaw_rate"].signals[0]
+        return [self._message("yaw_rate", {s.name: rate_rps / self.p.rate_factor}, t)]
 
 
 # ------------------------------------------------------------------------ generation

@@ -121,13 +121,15 @@ def calibration_frames(sender, truth, cal: dict) -> list:
 
 
 def frames(truth, dtheta, dv, wheels, gnss, db, initial_attitude=False, heading_deg=None,
-           calibration=None):
+           calibration=None, car=None):
     """Every input frame of the drive as (t_s, order, can.Message), unsorted. With
     initial_attitude, a CMD_InitialAttitude with the true roll and pitch follows the
     initialization commands: a perfect start, no levelling. heading_deg: the Heading of
     SetInitialPosition (default: the car's true heading; scenario.heading_command_deg).
     calibration: a scenario's [calibration] table (calibration_frames), with an optional
-    "gnss_epoch" (calibration_epoch) sent among the GNSS epochs."""
+    "gnss_epoch" (calibration_epoch) sent among the GNSS epochs. car: a vehicle profile's
+    tools.vehicle.CarEncoder: the wheel speeds (and gear) in the car's own messages instead
+    of navecu's WheelSpeeds."""
     sender = nc.E2ESender(db)
     out = []
     lat0, lon0 = math.degrees(truth.lat_rad[0]), math.degrees(truth.lon_rad[0])
@@ -154,6 +156,9 @@ def frames(truth, dtheta, dv, wheels, gnss, db, initial_attitude=False, heading_
             gnss = _merge_epochs(gnss, calibration["gnss_epoch"])
     w_t, w_v = wheels
     for t, v in zip(w_t, np.clip(w_v, -81.9, 81.9)):
+        if car is not None:
+            out.extend((float(t), 4, m) for m in car.wheels(float(t), [float(x) for x in v]))
+            continue
         out.append((float(t), 4, sender.encode("WheelSpeeds", {
             "WheelSpeedFL": float(v[0]), "WheelSpeedFR": float(v[1]),
             "WheelSpeedRL": float(v[2]), "WheelSpeedRR": float(v[3])}, float(t))))
@@ -212,7 +217,12 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--imu-rate-hz", type=int, default=100)
     ap.add_argument("--out", default=None, help="output folder (default out/sim/NAME)")
-    ap.add_argument("--navecu", default=str(ROOT / "build" / "host" / "navecu"))
+    ap.add_argument("--navecu", default=None,
+                    help="the firmware (default build/host/navecu, with --vehicle NAME "
+                         "build/host/navecu-NAME)")
+    ap.add_argument("--vehicle", default=None,
+                    help="vehicle profile of the firmware build (vehicles/NAME.toml): its "
+                         "identifiers, and its car's own wheel-speed and gear frames")
     ap.add_argument("--bus", default=None, metavar="IFACE",
                     help="run the firmware live on this SocketCAN bus (vcan0: inside "
                          "tools/vcan/with_vcan.sh), the log replayed with can_replay --fastest "
@@ -220,6 +230,15 @@ def main(argv=None) -> int:
                          "nav_file.log and checks that the two are identical "
                          "(tools/vcan/bus_run.py)")
     a = ap.parse_args(argv)
+    car = None
+    if a.vehicle not in (None, "native"):
+        from tools import vehicle
+        profile = vehicle.load(a.vehicle)
+        car = None if profile.native_wheels else vehicle.CarEncoder(profile)
+    nc.select_vehicle(a.vehicle)
+    if a.navecu is None:
+        suffix = "" if a.vehicle in (None, "native") else f"-{a.vehicle}"
+        a.navecu = str(ROOT / "build" / "host" / f"navecu{suffix}")
 
     scen = scenario.load(a.scenario)
     name = scen.get("name", Path(a.scenario).stem)
@@ -256,7 +275,8 @@ def main(argv=None) -> int:
     st.start("CAN encoding")
     db = nc.load_db()
     hdg_cmd = scenario.heading_command_deg(truth.heading_rad[0], scen)
-    fr = frames(truth, dtheta, dv, wheels, gnss, db, heading_deg=hdg_cmd, calibration=cal)
+    fr = frames(truth, dtheta, dv, wheels, gnss, db, heading_deg=hdg_cmd, calibration=cal,
+                car=car)
     fr.sort(key=lambda x: (x[0], x[1]))
     can_in = out / "can_in.log"
     n = nc.write_candump(can_in, (m for _, _, m in fr))
@@ -288,7 +308,7 @@ def main(argv=None) -> int:
                   f"({out / 'bus_run.json'})", file=sys.stderr)
             return 1
     else:
-        st.start("firmware (build/host/navecu --can-log)")
+        st.start(f"firmware ({Path(a.navecu).name} --can-log)")
         res = st.firmware([a.navecu, "--can-log", can_in, "--out", nav_log,
                            "--imu-rate-hz", str(a.imu_rate_hz)] + fw_args, out)
         if res.returncode != 0:

@@ -30,8 +30,7 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[2]
-QEMU_ELF = ROOT / "build" / "target" / "navecu-qemu.elf"
-ECU_ELF = ROOT / "build" / "target" / "navecu.elf"
+TARGET_DIR = ROOT / "build" / "target"   # make VEHICLE=NAME: build/target-NAME
 NAVECU = ROOT / "build" / "host" / "navecu"
 
 IMU_RATE, IMU_ACCEL = 0x100, 0x101
@@ -55,11 +54,11 @@ def run(cmd, **kw):
                           **kw)
 
 
-def qemu_cmd(in_log: Path, out_log: Path, trace: Path | None) -> list:
+def qemu_cmd(qemu_elf: Path, in_log: Path, out_log: Path, trace: Path | None) -> list:
     args = ["navecu", in_log, out_log] + ([trace] if trace else [])
     semi = "enable=on,target=native," + ",".join(f"arg={a}" for a in args)
     cmd = ["qemu-system-arm", "-M", "netduinoplus2", "-nographic", "-monitor", "none",
-           "-serial", "none", "-semihosting-config", semi, "-kernel", QEMU_ELF]
+           "-serial", "none", "-semihosting-config", semi, "-kernel", qemu_elf]
     if trace:
         cmd[1:1] = ["-icount", "shift=0"]
     return cmd
@@ -79,7 +78,7 @@ def first_difference(a: Path, b: Path, n_show: int = 3) -> str:
     return "\n".join(out)
 
 
-def boot_ecu(seconds: float = 2.0) -> tuple[bool, str]:
+def boot_ecu(ecu_elf: Path, seconds: float = 2.0) -> tuple[bool, str]:
     """The ECU image (build/target/navecu.elf) booted on netduinoplus2 for `seconds` of wall
     time under -icount (virtual time runs from instructions, so a slow machine only runs
     fewer of them): QEMU emulates no RCC, so the clock setup times out and the board runs
@@ -90,7 +89,7 @@ def boot_ecu(seconds: float = 2.0) -> tuple[bool, str]:
     then resets the ECU (board_fault), which would show as a second boot."""
     cmd = ["qemu-system-arm", "-M", "netduinoplus2", "-nographic", "-monitor", "none",
            "-serial", "none", "-icount", "shift=0,sleep=off", "-d", "int", "-kernel",
-           str(ECU_ELF)]
+           str(ecu_elf)]
     try:
         r = subprocess.run(cmd, capture_output=True, text=True, timeout=seconds)
         log = r.stderr
@@ -208,14 +207,23 @@ def main(argv=None) -> int:
     ap.add_argument("--json", default=None, help="bench results (with --bench)")
     ap.add_argument("--max-load-pct", type=float, default=5.0)
     ap.add_argument("--timeout-s", type=float, default=600.0)
+    ap.add_argument("--target-dir", default=str(TARGET_DIR),
+                    help="the images' folder (make VEHICLE=NAME: build/target-NAME)")
+    ap.add_argument("--navecu", default=str(NAVECU), help="the host build of the same profile")
+    ap.add_argument("--vehicle", default=None,
+                    help="the vehicle profile of the build (default: the host executable's)")
     a = ap.parse_args(argv)
+    qemu_elf = Path(a.target_dir) / "navecu-qemu.elf"
+    ecu_elf = Path(a.target_dir) / "navecu.elf"
+    navecu = Path(a.navecu)
+    vehicle = a.vehicle or (navecu.name.split("-", 1)[1] if "-" in navecu.name else None)
     if not (a.check or a.bench):
         ap.error("give --check and/or --bench")
     if shutil.which("qemu-system-arm") is None:
         print("qemu_run: qemu-system-arm not found (Debian: apt-get install qemu-system-arm)",
               file=sys.stderr)
         return 1
-    for f in (QEMU_ELF, NAVECU):
+    for f in (qemu_elf, navecu):
         if not f.exists():
             print(f"qemu_run: {f} missing (make target-qemu build/host/navecu)", file=sys.stderr)
             return 1
@@ -225,11 +233,12 @@ def main(argv=None) -> int:
 
     from tools.sim import run as sim_run
     print(f"== scenario {a.scenario}: simulated CAN log")
-    if sim_run.main(["--scenario", a.scenario, "--out", str(out)]) != 0:
+    if sim_run.main(["--scenario", a.scenario, "--out", str(out), "--navecu", str(navecu)]
+                    + (["--vehicle", vehicle] if vehicle else [])) != 0:
         return 1
 
     host_log = out / "host.log"
-    r = run([NAVECU, "--can-log", in_log, "--out", host_log])
+    r = run([navecu, "--can-log", in_log, "--out", host_log])
     if r.returncode != 0:
         print(r.stderr, file=sys.stderr)
         return 1
@@ -242,7 +251,7 @@ def main(argv=None) -> int:
     qemu_log = out / "qemu.log"
     trace = out / "trace.txt" if a.bench else None
     t0 = time.monotonic()
-    r = run(qemu_cmd(in_log, qemu_log, trace), timeout=a.timeout_s)
+    r = run(qemu_cmd(qemu_elf, in_log, qemu_log, trace), timeout=a.timeout_s)
     wall = time.monotonic() - t0
     print(f"== QEMU netduinoplus2 ({wall:.1f} s): {r.stderr.strip() or r.stdout.strip()}")
     if r.returncode != 0:
@@ -250,8 +259,8 @@ def main(argv=None) -> int:
         return 1
 
     status = 0
-    if a.check and ECU_ELF.exists():
-        ok, what = boot_ecu()
+    if a.check and ecu_elf.exists():
+        ok, what = boot_ecu(ecu_elf)
         print(f"target-test: the ECU image on netduinoplus2 for 2 s (icount): {what}: "
               f"{'PASS' if ok else 'FAIL'}")
         status |= 0 if ok else 1
