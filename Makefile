@@ -32,7 +32,8 @@ CORE_SRC := $(wildcard firmware/nav/*.c)
 VEHICLE ?= native
 VEH_SUFFIX := $(if $(filter native,$(VEHICLE)),,-$(VEHICLE))
 VEH_OUT := $(BUILD)/vehicle
-VEHICLES_BUILT := $(sort native $(VEHICLE))
+# native for the tests, the RAV4 for its filter-bank test (tests/test_bxcan_profile.c)
+VEHICLES_BUILT := $(sort native toyota_rav4_2017 $(VEHICLE))
 VEH_GEN_SRC = $(VEH_OUT)/$(1)/vehicle_profile.c $(VEH_OUT)/$(1)/veh_can.c
 VEH_SRC = $(call VEH_GEN_SRC,$(1)) firmware/vehicle/vehicle_checksum.c
 CODEC_GEN := firmware/can/gen/navecu_can.c firmware/can/gen/navecu_can.h
@@ -156,7 +157,15 @@ $(foreach t,$(TESTS_M4_HAL),$(BUILD)/$(1)/tests/$(t)): $(BUILD)/$(1)/tests/test_
 	@mkdir -p $$(@D)
 	$$(CC) $(2) $$^ -lcmocka -lm -o $$@
 
-$(1)_TEST_BINS := $(foreach t,$(TESTS_VARIANT),$(BUILD)/$(1)/tests/$(t)_f32 $(BUILD)/$(1)/tests/$(t)_f64) \
+# the ECU's receive filters for the RAV4 profile: the driver, the application's receive
+# list and the RAV4's generated vehicle layer
+$(BUILD)/$(1)/tests/test_bxcan_profile: $(BUILD)/$(1)/f32/tests/test_bxcan_profile.o \
+		$(BUILD)/$(1)/f32/hal/cortex_m4f/bxcan.o $(BUILD)/$(1)/libnavapp.a \
+		$(BUILD)/$(1)/libvehicle_toyota_rav4_2017.a $(BUILD)/$(1)/libnavcore_f32.a
+	@mkdir -p $$(@D)
+	$$(CC) $(2) $$^ -lcmocka -lm -o $$@
+
+$(1)_TEST_BINS := $(BUILD)/$(1)/tests/test_bxcan_profile $(foreach t,$(TESTS_VARIANT),$(BUILD)/$(1)/tests/$(t)_f32 $(BUILD)/$(1)/tests/$(t)_f64) \
                   $(foreach t,$(TESTS_F32) $(TESTS_BOTH) $(TESTS_FAKE_HAL) $(TESTS_M4_HAL) test_hal_linux,$(BUILD)/$(1)/tests/$(t))
 endef
 
