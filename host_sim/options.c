@@ -95,6 +95,9 @@ int host_options_parse(int argc, char **argv, host_options_t *o, char *err, size
         } else if (strcmp(a, "--nav-rate-hz") == 0) {
             bad = parse_u16(v, 1, 400, &o->cfg.nav_rate_hz);
             o->nav_rate_given = 1;
+        } else if (strcmp(a, "--dyn-rate-hz") == 0) {
+            bad = parse_u16(v, 0, 400, &o->cfg.dyn_rate_hz);
+            o->dyn_rate_given = 1;
         } else if (strcmp(a, "--status-rate-hz") == 0) {
             bad = parse_u16(v, 1, 400, &o->cfg.status_rate_hz);
         } else if (strcmp(a, "--level-s") == 0) {
@@ -169,7 +172,11 @@ int host_options_parse(int argc, char **argv, host_options_t *o, char *err, size
     if (!o->nav_rate_given && o->cfg.nav_rate_hz > o->cfg.imu_rate_hz) {
         o->cfg.nav_rate_hz = o->cfg.imu_rate_hz;
     }
-    if (o->cfg.nav_rate_hz > o->cfg.imu_rate_hz || o->cfg.status_rate_hz > o->cfg.imu_rate_hz) {
+    if (!o->dyn_rate_given && o->cfg.dyn_rate_hz > o->cfg.imu_rate_hz) {
+        o->cfg.dyn_rate_hz = o->cfg.imu_rate_hz;
+    }
+    if (o->cfg.nav_rate_hz > o->cfg.imu_rate_hz || o->cfg.status_rate_hz > o->cfg.imu_rate_hz ||
+        o->cfg.dyn_rate_hz > o->cfg.imu_rate_hz) {
         say(err, err_len, "output rates cannot exceed the IMU rate", "", "");
         return 2;
     }

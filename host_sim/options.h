@@ -17,6 +17,7 @@ typedef struct {
     const char *iface;     /* --iface */
     const char *live_if;   /* --can */
     int nav_rate_given;    /* --nav-rate-hz was given */
+    int dyn_rate_given;    /* --dyn-rate-hz was given */
     int stall_poll;        /* --test-stall-poll-s given: stop calling app_poll ... */
     uint64_t stall_poll_us; /* ... this long after the first frame */
     int help;              /* --help or -h: nothing else was parsed */

@@ -50,14 +50,24 @@ typedef struct {
 #define EDGE(name, stmt, ok) \
     static void set_##name(app_config_t *c) { stmt; }
 #define EDGES(X) \
-    X(imu_10, c->imu_rate_hz = 10u; c->nav_rate_hz = 10u; c->status_rate_hz = 10u, 1) \
-    X(imu_9, c->imu_rate_hz = 9u; c->nav_rate_hz = 9u; c->status_rate_hz = 9u, 0) \
+    X(imu_10, c->imu_rate_hz = 10u; c->nav_rate_hz = 10u; c->status_rate_hz = 10u; \
+          c->dyn_rate_hz = 10u, 1) \
+    X(imu_9, c->imu_rate_hz = 9u; c->nav_rate_hz = 9u; c->status_rate_hz = 9u; \
+          c->dyn_rate_hz = 9u, 0) \
     X(imu_400, c->imu_rate_hz = 400u, 1) \
     X(imu_401, c->imu_rate_hz = 401u, 0) \
     X(nav_0, c->nav_rate_hz = 0u, 0) \
     X(nav_eq_imu, c->nav_rate_hz = 100u, 1) \
     X(nav_above_imu, c->nav_rate_hz = 101u, 0) \
     X(status_0, c->status_rate_hz = 0u, 0) \
+    X(dyn_0, c->dyn_rate_hz = 0u, 1) \
+    X(dyn_eq_imu, c->dyn_rate_hz = 100u, 1) \
+    X(dyn_above_imu, c->dyn_rate_hz = 101u, 0) \
+    X(track_05, c->odo_track_m = 0.5f, 0) \
+    X(wheelbase_6, c->odo_wheelbase_m = 6.0f, 0) \
+    X(can_id_11bit, c->can_ids[NAVECU_MSG_NAV_TIME] = 0x7FFu, 1) \
+    X(can_id_12bit, c->can_ids[NAVECU_MSG_NAV_TIME] = 0x800u, 0) \
+    X(can_id_twice, c->can_ids[NAVECU_MSG_NAV_TIME] = c->can_ids[NAVECU_MSG_IMU_RATE], 0) \
     X(status_above_imu, c->status_rate_hz = 101u, 0) \
     X(level_0, c->level_s = 0u, 0) \
     X(level_600, c->level_s = 600u, 1) \

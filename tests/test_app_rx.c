@@ -90,13 +90,13 @@ static void test_foreign_id_refused(void **state)
     assert_int_equal(decode(&f), RX_FOREIGN);
 }
 
-/* GIVEN each of navecu's ten inputs with DLC 7 WHEN decoded THEN bad_dlc. */
+/* GIVEN each of navecu's eleven inputs with DLC 7 WHEN decoded THEN bad_dlc. */
 static void test_dlc_7_refused(void **state)
 {
     (void)state;
     uint32_t ids[16];
     const size_t n = app_rx_ids(STOCK_IDS, ids, 16u);
-    assert_int_equal(n, 10u);
+    assert_int_equal(n, 11u);
     const uint8_t d[8] = {0};
     for (size_t i = 0u; i < n; i++) {
         hal_can_frame_t f = cf_frame(ids[i], d, 0u);
@@ -105,23 +105,23 @@ static void test_dlc_7_refused(void **state)
     }
 }
 
-/* The ten input identifiers of the DBC, and a short array gets only what fits. */
+/* The eleven input identifiers of the DBC, and a short array gets only what fits. */
 static void test_rx_ids(void **state)
 {
     (void)state;
-    const uint32_t expected[10] = {0x100u, 0x101u, 0x110u, 0x120u, 0x121u,
-                                   0x122u, 0x123u, 0x200u, 0x201u, 0x202u};
-    uint32_t ids[10];
-    assert_int_equal(app_rx_ids(STOCK_IDS, ids, 10u), 10u);
-    for (int i = 0; i < 10; i++) {
+    const uint32_t expected[11] = {0x100u, 0x101u, 0x110u, 0x120u, 0x121u, 0x122u,
+                                   0x123u, 0x125u, 0x200u, 0x201u, 0x202u};
+    uint32_t ids[11];
+    assert_int_equal(app_rx_ids(STOCK_IDS, ids, 11u), 11u);
+    for (int i = 0; i < 11; i++) {
         int found = 0;
-        for (int j = 0; j < 10; j++) {
+        for (int j = 0; j < 11; j++) {
             found |= ids[j] == expected[i];
         }
         assert_true(found);
     }
     uint32_t few[4] = {0u, 0u, 0u, 0xDEADu};
-    assert_int_equal(app_rx_ids(STOCK_IDS, few, 3u), 10u);
+    assert_int_equal(app_rx_ids(STOCK_IDS, few, 3u), 11u);
     assert_int_equal(few[3], 0xDEADu); /* nothing written beyond max */
 }
 

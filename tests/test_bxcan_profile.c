@@ -5,7 +5,7 @@
  * Built with the RAV4's generated vehicle layer (build/vehicle/toyota_rav4_2017/).
  *
  * GIVEN the RAV4 profile's identifiers (navecu's inputs, GNSS_Height moved to 0x124, and
- * the car's WHEEL_SPEEDS 0x0AA, GEAR_PACKET 0x3BC, KINEMATICS 0x024)
+ * GNSS_Time 0x125, the car's WHEEL_SPEEDS 0x0AA, GEAR_PACKET 0x3BC, KINEMATICS 0x024)
  * WHEN the board sets the filters from app_rx_ids as boards/stm32f405/main.c does
  * THEN the banks in 16-bit list mode hold exactly those identifiers, so the radar bus's
  * 0x123 and every other frame of the car are kept out in hardware.
@@ -86,7 +86,7 @@ static void test_rav4_filter_banks(void **state)
     assert_int_equal(bxcan_set_filters(&dev, ids, n), 0);
 
     static const uint32_t expected[] = {0x100u, 0x101u, 0x110u, 0x120u, 0x121u, 0x122u, 0x124u,
-                                        0x200u, 0x201u, 0x202u, 0x0AAu, 0x3BCu, 0x024u};
+                                        0x125u, 0x200u, 0x201u, 0x202u, 0x0AAu, 0x3BCu, 0x024u};
     const size_t n_exp = sizeof expected / sizeof expected[0];
     uint32_t got[64];
     const size_t n_got = accepted(got, 64u);
@@ -98,7 +98,7 @@ static void test_rav4_filter_banks(void **state)
     assert_false(has(got, n_got, 0x123u));
     assert_false(has(got, n_got, 0x300u));
     assert_false(has(got, n_got, 0x025u)); /* STEER_ANGLE_SENSOR, 83 Hz */
-    /* ceil(13 / 4) banks in use, the rest inactive */
+    /* ceil(14 / 4) banks in use, the rest inactive */
     assert_int_equal(regs.FA1R & 0x3FFFu, 0xFu);
 }
 

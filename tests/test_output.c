@@ -364,8 +364,10 @@ static void test_position_height_velocity(void **state)
     assert_int_equal(v.vel_north, -123);
 }
 
-/* Over 100 samples (1 s at 100 Hz) navigating: 50 of each navigation frame, 10 NAV_Status
- * pairs, 1 NAV_Calibration; not navigating: only status and calibration. */
+/* Over 100 samples (1 s at 100 Hz) navigating: 50 of each navigation frame and of
+ * NAV_Time, 10 NAV_Status pairs and NAV_Accuracy, 1 NAV_Calibration; no dynamics frame, as
+ * no IMU sample came (dynamics_take has nothing to average); not navigating: only status,
+ * accuracy and calibration. */
 static void test_output_rates(void **state)
 {
     (void)state;
@@ -380,7 +382,10 @@ static void test_output_rates(void **state)
     assert_int_equal(cf_tx_count(&hal, NAVECU_CAN_NAV_ATTITUDE_FRAME_ID), 50u);
     assert_int_equal(cf_tx_count(&hal, NAVECU_CAN_NAV_STATUS_FRAME_ID), 20u);
     assert_int_equal(cf_tx_count(&hal, NAVECU_CAN_NAV_CALIBRATION_FRAME_ID), 1u);
-    assert_int_equal(app.keep.tx.frames_sent, 221u);
+    assert_int_equal(cf_tx_count(&hal, NAVECU_CAN_NAV_TIME_FRAME_ID), 50u);
+    assert_int_equal(cf_tx_count(&hal, NAVECU_CAN_NAV_ACCURACY_FRAME_ID), 10u);
+    assert_int_equal(cf_tx_count(&hal, NAVECU_CAN_NAV_RATES_FRAME_ID), 0u);
+    assert_int_equal(app.keep.tx.frames_sent, 281u);
     hal.tx_n = 0u;
     app.run.mode = APP_MODE_LEVELLING;
     for (uint64_t n = 101u; n <= 200u; n++) {
@@ -388,7 +393,7 @@ static void test_output_rates(void **state)
         output_due(&app, &hal);
     }
     assert_int_equal(cf_tx_count(&hal, NAVECU_CAN_NAV_POSITION_FRAME_ID), 0u);
-    assert_int_equal(hal.tx_n, 21u);
+    assert_int_equal(hal.tx_n, 31u);
 }
 
 /* A navigator that is not finite is never on the bus: counted instead. */

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Replay a CAN log onto a bus (python-can): candump .log, .asc, .blf, .csv, .trc, .gz.
 
-    tools/can_replay.py LOG [--channel vcan0] [--speed 1.0 | --max-rate FPS | --fastest]
+    python -m tools.can_replay LOG [--channel vcan0] [--vehicle NAME] [--speed 1.0 | --max-rate FPS | --fastest]
 
 --speed S replays with the log's timing scaled by 1/S (1 = real time, 10 = ten times
 faster; can.MessageSync paces it). --max-rate F ignores the log's timing and sends at most
@@ -47,9 +47,25 @@ import time
 
 import can
 
+from tools import navecu_can as nc
+
+# From the DBC (with --vehicle, that profile's identifiers: use_vehicle)
 IMU_ACCEL_ID = 0x101      # the second frame of an IMU sample: one per sample
 NAV_STATUS_ID = 0x310     # page 0 once per status period: the acknowledgement
-HEALTH_IMU_STALE = 0x1    # NAV_Status HealthFlags bit 0 (app.h APP_FLAG_IMU_STALE)
+HEALTH_IMU_STALE = 0x1    # NAV_Status HealthFlags bit IMU_STALE
+
+
+def use_vehicle(name=None) -> None:
+    """The identifiers and the IMU_STALE bit of the protocol, with vehicle profile name's
+    identifiers (None: the DBC's)."""
+    global IMU_ACCEL_ID, NAV_STATUS_ID, HEALTH_IMU_STALE
+    db = nc.select_vehicle(name)
+    IMU_ACCEL_ID = db.get_message_by_name("IMU_Accel").frame_id
+    NAV_STATUS_ID = db.get_message_by_name("NAV_Status").frame_id
+    HEALTH_IMU_STALE = nc.health_flag(db, "IMU_STALE")
+
+
+use_vehicle()
 ACK_EVERY = 10            # IMU samples per NAV_Status page 0: 100 Hz / 10 Hz (navecu defaults)
 WINDOW = 30               # IMU samples the replay may run ahead of the acknowledged ones
 ACK_TIMEOUT_S = 2.0
@@ -304,6 +320,8 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("log")
     ap.add_argument("--channel", default="vcan0")
+    ap.add_argument("--vehicle", default=None,
+                    help="the firmware's vehicle profile (its identifiers; default the DBC's)")
     ap.add_argument("--interface", default="socketcan")
     g = ap.add_mutually_exclusive_group()
     g.add_argument("--speed", type=float, default=None, help="time scale (1 = real time)")
@@ -319,6 +337,7 @@ def main(argv=None) -> int:
                     help=f"--fastest: error after this long without an acknowledgement "
                          f"(default {ACK_TIMEOUT_S:g})")
     a = ap.parse_args(argv)
+    use_vehicle(a.vehicle)
     if a.ack_every < 1:
         ap.error("--ack-every must be at least 1")
     try:

@@ -38,6 +38,28 @@ _HEIGHT = "height above the WGS-84 ellipsoid"
 
 # (message, signal) or signal -> meaning, for signals without a DBC comment.
 MEANING = {
+    "GpsWeek": "GPS week number (weeks since 1980-01-06, no 1024 rollover)",
+    ("GNSS_Time", "GnssEpoch"): "number of the epoch this frame belongs to",
+    "GnssTimeCrc": _E2E_CRC,
+    "RateX": "angular rate about the vehicle's x axis (right): the pitch rate of the car body",
+    "RateY": "angular rate about the vehicle's y axis (forward): the roll rate",
+    "RateZ": "angular rate about the vehicle's z axis (up): the yaw rate, left positive",
+    "RollRate": "rate of NAV_Attitude's Roll",
+    "PitchRate": "rate of NAV_Attitude's Pitch",
+    "HeadingRate": "rate of NAV_Attitude's Heading (clockwise positive)",
+    "AccelX": "acceleration along the vehicle's x axis (right), gravity removed",
+    "AccelY": "acceleration along the vehicle's y axis (forward), gravity removed",
+    "AccelZ": "acceleration along the vehicle's z axis (up), gravity removed",
+    "AccelEast": "d/dt of VelEast",
+    "AccelNorth": "d/dt of VelNorth",
+    "AccelUp": "d/dt of VelUp",
+    "VelAccEast": "1-sigma of VelEast; 40.95 unknown",
+    "VelAccNorth": "1-sigma of VelNorth; 40.95 unknown",
+    "VelAccUp": "1-sigma of VelUp; 40.95 unknown",
+    "HeadingAccuracy": "1-sigma of NAV_Attitude's Heading; 40.95 unknown",
+    ("NAV_Time", "TimeOfWeek"): "GPS time of week of the output set's validity, 1 us; "
+                                "1099511.627775 unknown",
+    ("NAV_Time", "GpsWeek"): "GPS week of it; 65535 unknown (no GNSS_Time received)",
     "AngleIncX": "angle increment about body x (right), " + _INC,
     "AngleIncY": "angle increment about body y (forward), " + _INC,
     "AngleIncZ": "angle increment about body z (up), " + _INC,
@@ -180,6 +202,8 @@ def generate(db) -> str:
         elif msg.name == second:
             e2e_text = (f"E2E with {first} (one IMU sample): counter `{e2e[0].name}`, CRC "
                         f"`{e2e[1].name}` over both frames")
+        elif e2e[0] is None:
+            e2e_text = f"E2E: CRC `{e2e[1].name}`, no alive counter"
         else:
             e2e_text = f"E2E: counter `{e2e[0].name}`, CRC `{e2e[1].name}`"
         out.append(f"Sender {', '.join(msg.senders)}, receiver {', '.join(receivers)}; "

@@ -41,6 +41,9 @@ CRC_START_BIT = 56
 #: E2E alive counters run 0..14; 15 is never sent and invalid on reception.
 E2E_COUNTER_MAX = 14
 
+#: E2E messages with a CRC and no alive counter: NAV_Time's TimeOfWeek itself advances.
+E2E_NO_COUNTER = ("NAV_Time",)
+
 #: The IMU sample: (first frame, second frame). The first carries the counter and no CRC;
 #: the CRC in the second covers all 8 bytes of the first (docs/can.md, E2E protection).
 IMU_PAIR = ("IMU_Rate", "IMU_Accel")
@@ -139,7 +142,8 @@ def e2e_signals(message) -> Optional[tuple]:
     """(counter signal, CRC signal) of an E2E-protected cantools message, or None.
 
     For IMU_Rate, the first frame of the IMU pair, the CRC signal is None: the CRC of the
-    sample is IMU_Accel's ImuCrc (see imu_pair_crc)."""
+    sample is IMU_Accel's ImuCrc (see imu_pair_crc). For E2E_NO_COUNTER messages the
+    counter signal is None."""
     crc = _crc_signal(message)
     if message.name == IMU_PAIR[0]:
         if crc is not None:
@@ -147,6 +151,8 @@ def e2e_signals(message) -> Optional[tuple]:
         return _counter_signal(message, 63), None
     if crc is None:
         return None
+    if message.name in E2E_NO_COUNTER:
+        return None, crc
     return _counter_signal(message, CRC_START_BIT - 1), crc
 
 
@@ -229,6 +235,11 @@ class E2ESender:
         if crc_sig.name in signals:
             raise ValueError(f"{name}: {crc_sig.name} is computed by E2ESender, do not pass it")
         values = dict(signals)
+        if counter_sig is None:
+            values[crc_sig.name] = 0
+            msg = encode_frame(self.db, name, values, timestamp)
+            msg.data[7] = e2e_crc(msg_def.frame_id, msg.data)
+            return msg
         if counter_sig.name in values:
             counter = int(values[counter_sig.name])
         else:
@@ -310,7 +321,7 @@ def check_e2e(msg: can.Message, db) -> bool:
     counter_sig, crc_sig = e2e
     if crc_sig is not None and msg.data[7] != e2e_crc(msg.arbitration_id, msg.data):
         return False
-    return _counter_value(msg.data, counter_sig) <= E2E_COUNTER_MAX
+    return counter_sig is None or _counter_value(msg.data, counter_sig) <= E2E_COUNTER_MAX
 
 
 def check_imu_pair(rate_msg: can.Message, accel_msg: can.Message, db=None) -> bool:

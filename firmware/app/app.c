@@ -118,6 +118,9 @@ static void process_sample(app_t *a, hal_t *hal, const int32_t w_raw[3], const i
             gnss_time_record(&a->run.fusion.time, a->keep.n_samples, a->cfg.imu_rate_hz,
                              a->run.nav.v_n_mps);
         }
+        if (a->run.mode == APP_MODE_NAVIGATING) {
+            dynamics_sample(&a->run.dyn, &a->run.nav, &inc);
+        }
     }
     output_due(a, hal);
 }
@@ -201,6 +204,9 @@ static void on_gnss_status(app_t *a, hal_t *hal, const rx_input_t *in)
         return;
     }
     app_stamp(&a->run.gnss, a->keep.n_samples);
+    if (fix.has_week) {
+        gnss_time_week(&a->run.fusion.time, fix.gps_week);
+    }
     if (a->run.cal.at_gnss) {
         /* the fix marked as the calibration point is that and nothing else: it neither
          * starts the filter nor feeds it */
@@ -321,6 +327,9 @@ void app_handle_frame(app_t *a, hal_t *hal, const hal_can_frame_t *f)
         break;
     case RX_GNSS_STATUS:
         on_gnss_status(a, hal, &in);
+        break;
+    case RX_GNSS_TIME:
+        gnss_epoch_week(&a->run.gnss_asm, in.u.time.epoch, in.u.time.gps_week);
         break;
     case RX_KNOWN_POSITION:
     case RX_COMMAND:

@@ -35,6 +35,7 @@
 #include "app_rx.h"
 #include "calib.h"
 #include "dr.h"
+#include "dynamics.h"
 #include "fusion.h"
 #include "gnss_epoch.h"
 #include "hal.h"
@@ -81,6 +82,7 @@ typedef struct {
     landnav_t land;         /* standstill, dead reckoning output */
     fusion_t fusion;        /* the Kalman filter */
     calib_trip_t cal;       /* this trip's calibration storage policy */
+    dynamics_t dyn;         /* the motion since the last dynamics output */
     nav_real_t yaw_rate_rps;/* body z rate of the last IMU sample */
 } app_run_t;
 

@@ -9,6 +9,7 @@ app_config_t app_default_config(void)
     cfg.imu_rate_hz = 100u;
     cfg.nav_rate_hz = 50u;
     cfg.status_rate_hz = 10u;
+    cfg.dyn_rate_hz = 50u;
     cfg.level_s = 30u; /* docs/can.md: levelling error ~ LSB / level time */
     cfg.odo_axle = ODO_AXLE_REAR;
     cfg.odo_track_m = vehicle_profile.track_m;
@@ -69,7 +70,8 @@ int app_config_valid(const app_config_t *cfg)
 {
     return can_ids_ok(cfg->can_ids) && cfg->imu_rate_hz >= 10u && cfg->imu_rate_hz <= 400u && cfg->nav_rate_hz != 0u &&
            cfg->status_rate_hz != 0u && cfg->nav_rate_hz <= cfg->imu_rate_hz &&
-           cfg->status_rate_hz <= cfg->imu_rate_hz && cfg->level_s != 0u &&
+           cfg->status_rate_hz <= cfg->imu_rate_hz && cfg->dyn_rate_hz <= cfg->imu_rate_hz &&
+           cfg->level_s != 0u &&
            cfg->level_s <= 600u && cfg->odo_track_m > NAV_C(0.5) && cfg->odo_track_m < NAV_C(3.0) &&
            cfg->odo_wheelbase_m > NAV_C(1.0) && cfg->odo_wheelbase_m < NAV_C(6.0) &&
            cfg->cal_min_base_m >= NAV_C(0.0) &&

@@ -16,7 +16,9 @@
 typedef struct {
     uint16_t imu_rate_hz;    /* IMU sample rate, 10..400 */
     uint16_t nav_rate_hz;    /* NAV_Position/Height/Velocity/Attitude rate, <= imu_rate_hz */
-    uint16_t status_rate_hz; /* NAV_Status rate, <= imu_rate_hz */
+    uint16_t status_rate_hz; /* NAV_Status (and NAV_Accuracy) rate, <= imu_rate_hz */
+    uint16_t dyn_rate_hz;    /* NAV_Rates/AttitudeRates/Accel/AccelEnu rate, <= imu_rate_hz;
+                                0: not sent */
     uint16_t level_s;        /* accelerometer levelling time before navigation starts */
     odo_axle_t odo_axle;     /* wheels that measure the distance (odo.h) */
     nav_real_t odo_track_m;       /* the measuring axle's track (the turn's wheel difference) */

@@ -40,6 +40,7 @@ static int msg_of(const uint32_t can_ids[NAVECU_MSG_N], uint32_t id)
 static int is_e2e(int msg)
 {
     return msg == NAVECU_MSG_WHEEL_SPEEDS || msg == NAVECU_MSG_GNSS_VELOCITY ||
+           msg == NAVECU_MSG_GNSS_TIME ||
            msg == NAVECU_MSG_CMD_CONTROL || msg == NAVECU_MSG_CMD_INITIAL_ATTITUDE;
 }
 
@@ -115,6 +116,17 @@ static rx_verdict_t decode_gnss(rx_state_t *rx, int msg, const uint8_t d[8], rx_
         in->u.velocity.v_enu_mps[1] = navecu_can_gnss_velocity_vel_north_decode(m.vel_north);
         in->u.velocity.v_enu_mps[2] = navecu_can_gnss_velocity_vel_up_decode(m.vel_up);
         in->u.velocity.sacc_mps = navecu_can_gnss_velocity_speed_accuracy_decode(m.speed_accuracy);
+        return RX_OK;
+    }
+    if (msg == NAVECU_MSG_GNSS_TIME) {
+        struct navecu_can_gnss_time_t m;
+        navecu_can_gnss_time_unpack(&m, d, 8u);
+        if (!navecu_can_gnss_time_gps_week_is_in_range(m.gps_week) || m.gnss_epoch > E2E_COUNTER_MAX) {
+            return RX_BAD_VALUE;
+        }
+        in->kind = RX_GNSS_TIME;
+        in->u.time.epoch = m.gnss_epoch;
+        in->u.time.gps_week = m.gps_week;
         return RX_OK;
     }
     if (msg == NAVECU_MSG_GNSS_HEIGHT) {
@@ -261,6 +273,7 @@ rx_verdict_t app_rx_decode(rx_state_t *rx, const uint32_t can_ids[NAVECU_MSG_N],
     case NAVECU_MSG_GNSS_VELOCITY:
     case NAVECU_MSG_GNSS_HEIGHT:
     case NAVECU_MSG_GNSS_STATUS:
+    case NAVECU_MSG_GNSS_TIME:
         return decode_gnss(rx, msg, f->data, in);
     default: /* CMD_KnownPosition, CMD_Control, CMD_InitialAttitude */
         return decode_command(rx, msg, f->data, in);

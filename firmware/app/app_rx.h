@@ -35,6 +35,7 @@ typedef enum {
     RX_GNSS_VELOCITY,
     RX_GNSS_HEIGHT,
     RX_GNSS_STATUS,
+    RX_GNSS_TIME,
     RX_KNOWN_POSITION,
     RX_COMMAND,
     RX_INITIAL_ATTITUDE,
@@ -92,6 +93,10 @@ typedef struct {
             uint8_t epoch;
             int32_t h_cm;   /* above the ellipsoid */
         } height;
+        struct rx_time {   /* GNSS_Time */
+            uint8_t epoch;
+            uint16_t gps_week;
+        } time;
         struct rx_status { /* GNSS_Status, closing an epoch */
             uint8_t epoch;
             uint8_t defined;  /* epoch and fix type are values the protocol defines */

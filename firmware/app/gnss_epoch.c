@@ -34,6 +34,13 @@ void gnss_epoch_height(gnss_asm_t *g, uint8_t epoch, int32_t h_cm)
     g->h_pending = 1u;
 }
 
+void gnss_epoch_week(gnss_asm_t *g, uint8_t epoch, uint16_t gps_week)
+{
+    g->gps_week = gps_week;
+    g->week_epoch = epoch;
+    g->week_pending = 1u;
+}
+
 gnss_close_t gnss_epoch_close(gnss_asm_t *g, const rx_input_t *status, gnss_fix_t *fix)
 {
     gnss_close_t r = {0u, 0u, 0u, 0u, 0u, 0u};
@@ -41,7 +48,8 @@ gnss_close_t gnss_epoch_close(gnss_asm_t *g, const rx_input_t *status, gnss_fix_
     int have_vel = g->vel_pending;
     int have_h = g->h_pending;
     const int pos_refused = g->pos_refused;
-    g->pos_pending = g->vel_pending = g->h_pending = 0u;
+    const int have_week = g->week_pending;
+    g->pos_pending = g->vel_pending = g->h_pending = g->week_pending = 0u;
     g->pos_refused = 0u;
     if (!status->u.status.defined) {
         r.undefined = 1u;
@@ -53,6 +61,8 @@ gnss_close_t gnss_epoch_close(gnss_asm_t *g, const rx_input_t *status, gnss_fix_
         have_vel = have_vel && g->vel_epoch == epoch;
         have_h = have_h && g->h_epoch == epoch;
     }
+    fix->has_week = (uint8_t)(have_week && g->week_epoch == epoch ? 1u : 0u);
+    fix->gps_week = g->gps_week;
     fix->has_vel = have_vel ? 1u : 0u;
     fix->has_h = have_h ? 1u : 0u;
     fix->speed_mps = NAV_C(-1.0);

@@ -14,9 +14,10 @@
 #include "earth.h"
 
 typedef struct {
-    uint8_t pos_pending, vel_pending, h_pending;
+    uint8_t pos_pending, vel_pending, h_pending, week_pending;
     uint8_t pos_refused;     /* this epoch's position was refused (counted once) */
-    uint8_t vel_epoch, h_epoch;
+    uint8_t vel_epoch, h_epoch, week_epoch;
+    uint16_t gps_week;
     int32_t lat_e7, lon_e7;
     int32_t h_cm;            /* the latest height received (kept across epochs) */
     nav_real_t v_enu_mps[3];
@@ -24,7 +25,8 @@ typedef struct {
 } gnss_asm_t;
 
 typedef struct {
-    uint8_t has_vel, has_h;
+    uint8_t has_vel, has_h, has_week;
+    uint16_t gps_week;       /* with has_week */
     geo_pos_t pos;           /* latitude, longitude; height from the latest GNSS_Height */
     int32_t h_cm;            /* that height, above the ellipsoid */
     nav_real_t v_enu_mps[3]; /* with has_vel */
@@ -50,6 +52,7 @@ void gnss_epoch_position_refused(gnss_asm_t *g);
 void gnss_epoch_velocity(gnss_asm_t *g, uint8_t epoch, const nav_real_t v_enu_mps[3],
                          nav_real_t sacc_mps);
 void gnss_epoch_height(gnss_asm_t *g, uint8_t epoch, int32_t h_cm);
+void gnss_epoch_week(gnss_asm_t *g, uint8_t epoch, uint16_t gps_week);
 
 /* Close the epoch with its GNSS_Status (decoded by app_rx). The frames in assembly are
  * consumed whatever the result; *fix is filled as far as the epoch allows (speed and

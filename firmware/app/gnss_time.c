@@ -81,3 +81,33 @@ void gnss_time_forget(gnss_time_t *g)
 {
     g->vhist_n = 0u;
 }
+
+void gnss_time_week(gnss_time_t *g, uint16_t gps_week)
+{
+    g->gps_week = gps_week;
+    g->have_week = 1u;
+}
+
+#define US_PER_WEEK INT64_C(604800000000)
+
+int gnss_time_at(const gnss_time_t *g, uint64_t n_samples, uint32_t imu_rate_hz,
+                 nav_real_t latency_s, uint64_t *tow_us, uint16_t *gps_week)
+{
+    if (!g->off_valid) {
+        return -1;
+    }
+    const int64_t t_imu_us = (int64_t)(n_samples * 1000000u / imu_rate_hz);
+    const int64_t latency_us = (int64_t)(latency_s * NAV_C(1e6) + NAV_C(0.5));
+    int64_t tow = t_imu_us - g->off_min_us + latency_us;
+    int32_t week = g->have_week ? (int32_t)g->gps_week : -1;
+    if (tow >= US_PER_WEEK) { /* the week ended since the last epoch */
+        tow -= US_PER_WEEK;
+        week = week >= 0 ? week + 1 : week;
+    } else if (tow < 0) {
+        tow += US_PER_WEEK;
+        week = week > 0 ? week - 1 : week;
+    }
+    *tow_us = tow >= 0 && tow < US_PER_WEEK ? (uint64_t)tow : 0u;
+    *gps_week = week >= 0 && week < 65535 ? (uint16_t)week : 65535u;
+    return 0;
+}

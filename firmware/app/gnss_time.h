@@ -24,6 +24,8 @@ typedef struct {
     uint8_t off_valid;
     uint8_t late_run;               /* consecutive epochs more than 0.5 s late */
     int64_t prev_t_us;              /* IMU time of the previous epoch (drift allowance) */
+    uint16_t gps_week;              /* GPS week of the latest epoch that had one */
+    uint8_t have_week;
 } gnss_time_t;
 
 /* How far back a fix's time of validity lies. */
@@ -48,6 +50,16 @@ void gnss_time_displacement(const gnss_time_t *g, const gnss_when_t *w, nav_real
 
 /* The navigator's velocity then (the nearest entry). */
 const nav_real_t *gnss_time_velocity_then(const gnss_time_t *g, const gnss_when_t *w);
+
+/* The GPS week of a usable epoch (GNSS_Time). */
+void gnss_time_week(gnss_time_t *g, uint16_t gps_week);
+
+/* The GNSS time of IMU sample n: the IMU time less the offset to the receiver's clock
+ * (its running minimum, an on-time epoch) plus the latency (the epoch's time of validity
+ * is that long before its arrival): time of week in microseconds, and the week (65535
+ * unknown). 0, or -1 before the first epoch. */
+int gnss_time_at(const gnss_time_t *g, uint64_t n_samples, uint32_t imu_rate_hz,
+                 nav_real_t latency_s, uint64_t *tow_us, uint16_t *gps_week);
 
 /* Forget the history (a new navigator: its velocities before are not this one's). */
 void gnss_time_forget(gnss_time_t *g);

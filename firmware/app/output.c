@@ -9,7 +9,8 @@
 #include "navecu_can.h"
 #include "navecu_protocol.h"
 
-enum { TX_HEIGHT = 0, TX_VEL, TX_ATT, TX_STATUS, TX_CAL };
+enum { TX_HEIGHT = 0, TX_VEL, TX_ATT, TX_STATUS, TX_CAL, TX_RATES, TX_ATT_RATES, TX_ACCEL,
+       TX_ACCEL_ENU, TX_ACCURACY };
 
 static void send(tx_state_t *tx, hal_t *hal, uint32_t id, const uint8_t data[8])
 {
@@ -51,6 +52,32 @@ static uint32_t accuracy_raw(nav_real_t sigma_lsb, uint32_t raw_max)
 {
     const nav_real_t top = (nav_real_t)(raw_max - 1u);
     return sigma_lsb < top ? (uint32_t)(sigma_lsb + NAV_C(0.5)) : raw_max - 1u;
+}
+
+/* The attitude NAV_Attitude sends: the IMU's roll, the car's pitch (within +-90 deg) and
+ * heading ([0, 2 pi)): the IMU's less the mounting (the filter's estimate) or, without
+ * the filter, less the one-point calibration's dH. *mount_yaw, *mount_pitch: that
+ * mounting. */
+static void car_attitude(const app_t *a, nav_real_t att[3], nav_real_t *mount_yaw,
+                         nav_real_t *mount_pitch)
+{
+    const ekf_t *ekf = app_filter(a);
+    nav_real_t roll, pitch, heading;
+    sins_euler(&a->run.nav, &roll, &pitch, &heading);
+    *mount_yaw = ekf != NULL ? ekf->mount_yaw_rad : a->run.dr.dh_rad;
+    *mount_pitch = ekf != NULL ? ekf->mount_pitch_rad : NAV_C(0.0);
+    heading -= *mount_yaw;
+    pitch -= *mount_pitch;
+    if (heading < NAV_C(0.0)) {
+        heading += NAV_C(2.0) * NAV_PI;
+    } else if (heading >= NAV_C(2.0) * NAV_PI) {
+        heading -= NAV_C(2.0) * NAV_PI;
+    }
+    /* the car's pitch within the DBC's +-90 deg: the IMU at 89.7 deg less a mounting pitch
+     * of -1 deg would otherwise be sent as 90.7 (found by tests/fuzz/fuzz_options.c) */
+    att[0] = roll;
+    att[1] = nav_clamp(pitch, -NAV_C(0.5) * NAV_PI, NAV_C(0.5) * NAV_PI);
+    att[2] = heading;
 }
 
 static void emit_navigation(app_t *a, hal_t *hal)
@@ -98,28 +125,12 @@ static void emit_navigation(app_t *a, hal_t *hal)
     navecu_can_nav_velocity_pack(d, &v, sizeof d);
     send_protected(tx, hal, a->cfg.can_ids[NAVECU_MSG_NAV_VELOCITY], d);
 
-    nav_real_t roll, pitch, heading;
-    sins_euler(s, &roll, &pitch, &heading);
-    /* the car's heading and pitch, not the IMU's: less the mounting (the filter's
-     * estimate) or, without the filter, the one-point calibration's dH */
-    if (ekf != NULL) {
-        heading -= ekf->mount_yaw_rad;
-        pitch -= ekf->mount_pitch_rad;
-    } else {
-        heading -= a->run.dr.dh_rad;
-    }
-    if (heading < NAV_C(0.0)) {
-        heading += NAV_C(2.0) * NAV_PI;
-    } else if (heading >= NAV_C(2.0) * NAV_PI) {
-        heading -= NAV_C(2.0) * NAV_PI;
-    }
-    /* the car's pitch within the DBC's +-90 deg: the IMU at 89.7 deg less a mounting pitch
-     * of -1 deg would otherwise be sent as 90.7 (found by tests/fuzz/fuzz_options.c) */
-    pitch = nav_clamp(pitch, -NAV_C(0.5) * NAV_PI, NAV_C(0.5) * NAV_PI);
+    nav_real_t att[3], my, mp;
+    car_attitude(a, att, &my, &mp);
     struct navecu_can_nav_attitude_t at;
-    at.roll = navecu_can_nav_attitude_roll_encode(roll * NAV_DEG_PER_RAD);
-    at.pitch = navecu_can_nav_attitude_pitch_encode(pitch * NAV_DEG_PER_RAD);
-    at.heading = navecu_can_nav_attitude_heading_encode(heading * NAV_DEG_PER_RAD);
+    at.roll = navecu_can_nav_attitude_roll_encode(att[0] * NAV_DEG_PER_RAD);
+    at.pitch = navecu_can_nav_attitude_pitch_encode(att[1] * NAV_DEG_PER_RAD);
+    at.heading = navecu_can_nav_attitude_heading_encode(att[2] * NAV_DEG_PER_RAD);
     if (at.heading > navecu_can_nav_attitude_heading_encode(NAVECU_NAV_ATTITUDE_HEADING_MAX)) {
         at.heading = 0u; /* 359.996 deg rounds to 360.00: that is north */
     }
@@ -127,6 +138,101 @@ static void emit_navigation(app_t *a, hal_t *hal)
     at.nav_crc = 0u;
     navecu_can_nav_attitude_pack(d, &at, sizeof d);
     send_protected(tx, hal, a->cfg.can_ids[NAVECU_MSG_NAV_ATTITUDE], d);
+
+    /* the set's GNSS time of validity (raw microseconds: a float would keep 60 ms) */
+    struct navecu_can_nav_time_t nt;
+    uint64_t tow_us;
+    uint16_t week;
+    if (gnss_time_at(&a->run.fusion.time, a->keep.n_samples, a->cfg.imu_rate_hz,
+                     a->cfg.gnss_latency_s, &tow_us, &week) != 0) {
+        tow_us = NAVECU_NAV_TIME_TIME_OF_WEEK_RAW_MAX;
+        week = NAVECU_NAV_TIME_GPS_WEEK_RAW_MAX;
+    }
+    nt.time_of_week = tow_us;
+    nt.gps_week = week;
+    nt.nav_crc = 0u;
+    navecu_can_nav_time_pack(d, &nt, sizeof d);
+    send_protected(tx, hal, a->cfg.can_ids[NAVECU_MSG_NAV_TIME], d);
+}
+
+static void emit_dynamics(app_t *a, hal_t *hal)
+{
+    tx_state_t *tx = &a->keep.tx;
+    nav_real_t att[3], my, mp;
+    car_attitude(a, att, &my, &mp);
+    dynamics_out_t m;
+    if (!sins_finite(&a->run.nav) || dynamics_take(&a->run.dyn, &a->run.nav, my, mp, &m) != 0) {
+        return;
+    }
+    uint8_t d[8];
+    const nav_real_t rlo = NAVECU_NAV_RATES_RATE_X_MIN, rhi = NAVECU_NAV_RATES_RATE_X_MAX;
+    struct navecu_can_nav_rates_t r;
+    r.rate_x = navecu_can_nav_rates_rate_x_encode(nav_clamp(m.rate_v_rps[0] * NAV_DEG_PER_RAD, rlo, rhi));
+    r.rate_y = navecu_can_nav_rates_rate_y_encode(nav_clamp(m.rate_v_rps[1] * NAV_DEG_PER_RAD, rlo, rhi));
+    r.rate_z = navecu_can_nav_rates_rate_z_encode(nav_clamp(m.rate_v_rps[2] * NAV_DEG_PER_RAD, rlo, rhi));
+    r.nav_counter = next_counter(tx, TX_RATES);
+    r.nav_crc = 0u;
+    navecu_can_nav_rates_pack(d, &r, sizeof d);
+    send_protected(tx, hal, a->cfg.can_ids[NAVECU_MSG_NAV_RATES], d);
+    {
+        struct navecu_can_nav_attitude_rates_t ar;
+        ar.roll_rate = navecu_can_nav_attitude_rates_roll_rate_encode(nav_clamp(m.att_rate_rps[0] * NAV_DEG_PER_RAD, rlo, rhi));
+        ar.pitch_rate = navecu_can_nav_attitude_rates_pitch_rate_encode(nav_clamp(m.att_rate_rps[1] * NAV_DEG_PER_RAD, rlo, rhi));
+        ar.heading_rate = navecu_can_nav_attitude_rates_heading_rate_encode(nav_clamp(m.att_rate_rps[2] * NAV_DEG_PER_RAD, rlo, rhi));
+        ar.nav_counter = next_counter(tx, TX_ATT_RATES);
+        ar.nav_crc = 0u;
+        navecu_can_nav_attitude_rates_pack(d, &ar, sizeof d);
+        send_protected(tx, hal, a->cfg.can_ids[NAVECU_MSG_NAV_ATTITUDE_RATES], d);
+    }
+    const nav_real_t alo = NAVECU_NAV_ACCEL_ACCEL_X_MIN, ahi = NAVECU_NAV_ACCEL_ACCEL_X_MAX;
+    struct navecu_can_nav_accel_t ac;
+    ac.accel_x = navecu_can_nav_accel_accel_x_encode(nav_clamp(m.accel_v_mps2[0], alo, ahi));
+    ac.accel_y = navecu_can_nav_accel_accel_y_encode(nav_clamp(m.accel_v_mps2[1], alo, ahi));
+    ac.accel_z = navecu_can_nav_accel_accel_z_encode(nav_clamp(m.accel_v_mps2[2], alo, ahi));
+    ac.nav_counter = next_counter(tx, TX_ACCEL);
+    ac.nav_crc = 0u;
+    navecu_can_nav_accel_pack(d, &ac, sizeof d);
+    send_protected(tx, hal, a->cfg.can_ids[NAVECU_MSG_NAV_ACCEL], d);
+    struct navecu_can_nav_accel_enu_t ae;
+    ae.accel_east = navecu_can_nav_accel_enu_accel_east_encode(nav_clamp(m.accel_n_mps2[0], alo, ahi));
+    ae.accel_north = navecu_can_nav_accel_enu_accel_north_encode(nav_clamp(m.accel_n_mps2[1], alo, ahi));
+    ae.accel_up = navecu_can_nav_accel_enu_accel_up_encode(nav_clamp(m.accel_n_mps2[2], alo, ahi));
+    ae.nav_counter = next_counter(tx, TX_ACCEL_ENU);
+    ae.nav_crc = 0u;
+    navecu_can_nav_accel_enu_pack(d, &ae, sizeof d);
+    send_protected(tx, hal, a->cfg.can_ids[NAVECU_MSG_NAV_ACCEL_ENU], d);
+}
+
+/* an accuracy of NAV_Accuracy: never below one LSB (a sigma smaller than the resolution is
+ * sent as the resolution, not as zero) */
+static uint16_t accuracy_lsb(nav_real_t sigma_lsb, uint32_t raw_max)
+{
+    return (uint16_t)accuracy_raw(sigma_lsb > NAV_C(1.0) ? sigma_lsb : NAV_C(1.0), raw_max);
+}
+
+/* NAV_Accuracy: the filter's 1-sigma of the velocity and of the car's heading (the
+ * IMU's heading error psi_U less the mounting yaw's, with their covariance) */
+static void emit_accuracy(app_t *a, hal_t *hal)
+{
+    const ekf_t *ekf = a->run.mode == APP_MODE_NAVIGATING ? app_filter(a) : NULL;
+    const uint32_t unknown = NAVECU_NAV_ACCURACY_VEL_ACC_EAST_RAW_MAX;
+    struct navecu_can_nav_accuracy_t m;
+    m.vel_acc_east = m.vel_acc_north = m.vel_acc_up = m.heading_accuracy = (uint16_t)unknown;
+    if (ekf != NULL) {
+        m.vel_acc_east = accuracy_lsb(ekf_state_sigma(ekf, EKF_DV) * NAV_C(100.0), unknown);
+        m.vel_acc_north = accuracy_lsb(ekf_state_sigma(ekf, EKF_DV + 1) * NAV_C(100.0), unknown);
+        m.vel_acc_up = accuracy_lsb(ekf_state_sigma(ekf, EKF_DV + 2) * NAV_C(100.0), unknown);
+        const nav_real_t var = ekf_state_cov(ekf, EKF_PSI + 2, EKF_PSI + 2) +
+                               ekf_state_cov(ekf, EKF_MY, EKF_MY) -
+                               NAV_C(2.0) * ekf_state_cov(ekf, EKF_PSI + 2, EKF_MY);
+        m.heading_accuracy = accuracy_lsb(
+            nav_sqrt(var > NAV_C(0.0) ? var : NAV_C(0.0)) * NAV_DEG_PER_RAD * NAV_C(100.0), unknown);
+    }
+    m.nav_counter = next_counter(&a->keep.tx, TX_ACCURACY);
+    m.nav_crc = 0u;
+    uint8_t d[8];
+    navecu_can_nav_accuracy_pack(d, &m, sizeof d);
+    send_protected(&a->keep.tx, hal, a->cfg.can_ids[NAVECU_MSG_NAV_ACCURACY], d);
 }
 
 static uint16_t sat16(uint32_t x)
@@ -311,8 +417,13 @@ void output_due(app_t *a, hal_t *hal)
     if (a->run.mode == APP_MODE_NAVIGATING && n % nav_div == 0u) {
         emit_navigation(a, hal);
     }
+    if (a->run.mode == APP_MODE_NAVIGATING && a->cfg.dyn_rate_hz != 0u &&
+        n % (a->cfg.dyn_rate_hz >= imu ? 1u : imu / a->cfg.dyn_rate_hz) == 0u) {
+        emit_dynamics(a, hal);
+    }
     if (n % st_div == 0u) {
         output_status(a, hal);
+        emit_accuracy(a, hal);
     }
     if (n % imu == 0u) {
         emit_calibration(a, hal);

@@ -12,7 +12,7 @@
 
 /* E2E transmit state and what was sent: survives a navigation reset. */
 typedef struct {
-    uint8_t counter[5];         /* alive counters of the E2E-protected outputs */
+    uint8_t counter[10];        /* alive counters of the E2E-protected outputs */
     uint8_t status_page;        /* next counter page of NAV_Status */
     uint32_t frames_sent;
     uint32_t send_errors;

@@ -366,6 +366,11 @@ nav_real_t ekf_state_sigma(const ekf_t *k, int i)
     return nav_sqrt(k->P[i][i]);
 }
 
+nav_real_t ekf_state_cov(const ekf_t *k, int i, int j)
+{
+    return k->P[i][j];
+}
+
 static int finite_n(const nav_real_t *v, int n)
 {
     for (int i = 0; i < n; i++) {

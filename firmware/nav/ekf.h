@@ -250,12 +250,16 @@ int ekf_zero_rate(ekf_t *k, nav_real_t residual_rate_z_rps, nav_real_t sigma_rps
  * the stated range. */
 #define ekf_state_sigma NAV_SYM(ekf_state_sigma)
 #define ekf_state_ok NAV_SYM(ekf_state_ok)
+#define ekf_state_cov NAV_SYM(ekf_state_cov)
 #define ekf_set_gyro_bias NAV_SYM(ekf_set_gyro_bias)
 #define ekf_set_odo_scale NAV_SYM(ekf_set_odo_scale)
 #define ekf_set_mount_yaw NAV_SYM(ekf_set_mount_yaw)
 
 /* 1-sigma of error state i (0 <= i < EKF_N): sqrt(P_ii), in that state's unit. */
 nav_real_t ekf_state_sigma(const ekf_t *k, int i);
+
+/* Covariance of error states i and j (0 <= i, j < EKF_N): P_ij. */
+nav_real_t ekf_state_cov(const ekf_t *k, int i, int j);
 
 /* 1 if the error state, the fed-back estimates and the covariance's diagonal are finite
  * and no variance is negative; 0 is a diverged filter (app: fusion supervision). */

@@ -124,7 +124,7 @@ def test_fastest_without_firmware_is_an_error(logs):
     """Nobody acknowledges: --fastest stops with a clear message after its timeout."""
     log, _ = logs["short"]
     env = dict(os.environ, NAVECU_VCAN_TIMEOUT="120")
-    proc = subprocess.run([str(WITH_VCAN), sys.executable, "tools/can_replay.py", str(log),
+    proc = subprocess.run([str(WITH_VCAN), sys.executable, "-m", "tools.can_replay", str(log),
                            "--fastest", "--timeout-s", "1"],
                           capture_output=True, text=True, cwd=ROOT, env=env, timeout=180)
     require_vcan(proc)

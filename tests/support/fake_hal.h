@@ -25,7 +25,7 @@
 
 #include "hal.h"
 
-#define FAKE_TX_MAX 8192u
+#define FAKE_TX_MAX 32768u
 #define FAKE_RX_MAX 64u
 #define FAKE_NVM_SECTOR_SIZE 128u
 #define FAKE_NVM_SECTORS 2u

@@ -27,17 +27,17 @@ from tools.geodesy import horizontal_error_m, radii_m
 from tools.sim import scenario, sensors
 
 def read_nav_log(path) -> dict:
-    """Decode NAV_Position / NAV_Attitude / NAV_Velocity / NAV_Height / NAV_Status frames of
-    a candump log into arrays keyed by message; each has 't_s' and the signal columns.
+    """Decode the NAV_* frames of a candump log (every message navecu sends) into arrays
+    keyed by message; each has 't_s' and the signal columns.
 
     't_s' is the firmware's own time of validity (NAV_Height TimeOfValidity, IMU time,
     unwrapped from its 65.536 s modulus), not the log's timestamps: a recording made over
     a live bus, at any replay speed, gives the same times as a --can-log run. Each
     NAV_Position opens a navigation set (Position, Height, Velocity, Attitude) that takes
-    its NAV_Height's time; NAV_Status takes the time of the last set (NaN before one)."""
+    its NAV_Height's time; the others take the time of the last set (NaN before one): at
+    the default rates every output of a sample follows its set (docs/can.md)."""
     db = nc.load_db()
-    want = {db.get_message_by_name(n).frame_id: n
-            for n in ("NAV_Position", "NAV_Attitude", "NAV_Velocity", "NAV_Height", "NAV_Status")}
+    want = {m.frame_id: m.name for m in db.messages if "NAVECU" in m.senders}
     rows = {n: [] for n in want.values()}
     cycle_rows, t_cycle, last_ms, wraps = [], math.nan, None, 0
     with can.LogReader(str(path)) as reader:

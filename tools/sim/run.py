@@ -35,6 +35,7 @@ from tools.sim import report, scenario, sensors, trajectory
 
 ROOT = Path(__file__).resolve().parents[2]
 GPS_TOW0_S = 302400.0  # GNSS time of week at t = 0 (Wednesday noon)
+GPS_WEEK = 2400        # its GPS week (2026-01-04 .. 2026-01-10)
 
 
 class Stages:
@@ -174,6 +175,7 @@ def frames(truth, dtheta, dv, wheels, gnss, db, initial_attitude=False, heading_
             "SpeedAccuracy": float(min(gnss["sacc_mps"][i], 1.5))}, t)))
         out.append((t, 7, sender.encode("GNSS_Height", {
             "Height": float(gnss["h_m"][i]), "GnssEpoch": epoch}, t)))
+        out.append((t, 7, sender.encode("GNSS_Time", {"GpsWeek": GPS_WEEK, "GnssEpoch": epoch}, t)))
         out.append((t, 8, sender.encode("GNSS_Status", {
             "FixType": int(gnss["fix_type"][i]), "NumSatellites": int(gnss["num_sats"][i]),
             "HorizAccuracy": float(min(gnss["hacc_m"][i], 102.3)),

@@ -36,7 +36,9 @@ from tools import can_replay, navecu_can
 
 ROOT = Path(__file__).resolve().parents[2]
 
-NAV_IDS = list(range(0x300, 0x304)) + [0x310, 0x311]
+# navecu's outputs (the messages its DBC says it sends)
+NAV_IDS = [m.frame_id for m in navecu_can.load_db().messages if "NAVECU" in m.senders]
+NAV_STATUS_ID = navecu_can.load_db().get_message_by_name("NAV_Status").frame_id
 FRAME_HEAD = struct.Struct("=IB")  # struct can_frame: can_id, len (data at offset 8)
 CHANNEL = "vcan0"  # --channel
 
@@ -100,7 +102,7 @@ class Recorder(threading.Thread):
             fid = can_id & 0x7FF
             frames.append(f"{fid:03X}#{data.hex().upper()}")
             times.append(_timestamp(ancdata))
-            if fid == 0x310 and dlc >= 3 and data[0] & 0x0F == 0:
+            if fid == NAV_STATUS_ID and dlc >= 3 and data[0] & 0x0F == 0:
                 self.acked += 1             # can_replay.is_ack
         self.bus.shutdown()
 
@@ -203,7 +205,7 @@ def interop_mode() -> dict:
     for line in dump.read_text().splitlines():
         frame = line.split()[2]
         data = bytes.fromhex(frame.split("#")[1])
-        sig = db.decode_message(0x310, data, decode_choices=False)
+        sig = db.decode_message(NAV_STATUS_ID, data, decode_choices=False)
         if sig["StatusPage"] == 0:
             modes.append(int(sig["Mode"]))
     return {"mode": "interop", "status_modes": modes, "firmware_summary": summary}
@@ -212,7 +214,7 @@ def interop_mode() -> dict:
 def latency_mode(a) -> dict:
     """Kernel receive time of each IMU_Accel (which completes an IMU sample) to that of the
     NAV_Position it causes, both stamped by the recorder's socket, at real-time replay."""
-    rec = Recorder(extra_ids=[0x101])
+    rec = Recorder(extra_ids=[navecu_can.load_db().get_message_by_name("IMU_Accel").frame_id])
     rec.start()
     fw = start_firmware(["--level-s", "1"])
     can_replay.replay(a.log, CHANNEL, speed=1.0)
@@ -259,7 +261,7 @@ def robust_mode(a) -> dict:
     for f in rec.frames[n_before:]:
         fid, data = f.split("#")
         if fid == "310":
-            sig = db.decode_message(0x310, bytes.fromhex(data), decode_choices=False)
+            sig = db.decode_message(NAV_STATUS_ID, bytes.fromhex(data), decode_choices=False)
             if sig["StatusPage"] == 0 and int(sig["HealthFlags"]) & 0x1:
                 stale += 1
     pos_after = sum(1 for f in rec.frames[n_before:] if f.startswith("300#"))

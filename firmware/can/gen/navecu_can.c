@@ -60,6 +60,14 @@ static inline uint8_t pack_left_shift_u32(
     return (uint8_t)((uint8_t)(value << shift) & mask);
 }
 
+static inline uint8_t pack_left_shift_u64(
+    uint64_t value,
+    uint8_t shift,
+    uint8_t mask)
+{
+    return (uint8_t)((uint8_t)(value << shift) & mask);
+}
+
 static inline uint8_t pack_right_shift_u8(
     uint8_t value,
     uint8_t shift,
@@ -78,6 +86,14 @@ static inline uint8_t pack_right_shift_u16(
 
 static inline uint8_t pack_right_shift_u32(
     uint32_t value,
+    uint8_t shift,
+    uint8_t mask)
+{
+    return (uint8_t)((uint8_t)(value >> shift) & mask);
+}
+
+static inline uint8_t pack_right_shift_u64(
+    uint64_t value,
     uint8_t shift,
     uint8_t mask)
 {
@@ -108,6 +124,14 @@ static inline uint32_t unpack_left_shift_u32(
     return (uint32_t)((uint32_t)(value & mask) << shift);
 }
 
+static inline uint64_t unpack_left_shift_u64(
+    uint8_t value,
+    uint8_t shift,
+    uint8_t mask)
+{
+    return (uint64_t)((uint64_t)(value & mask) << shift);
+}
+
 static inline uint8_t unpack_right_shift_u8(
     uint8_t value,
     uint8_t shift,
@@ -130,6 +154,14 @@ static inline uint32_t unpack_right_shift_u32(
     uint8_t mask)
 {
     return (uint32_t)((uint32_t)(value & mask) >> shift);
+}
+
+static inline uint64_t unpack_right_shift_u64(
+    uint8_t value,
+    uint8_t shift,
+    uint8_t mask)
+{
+    return (uint64_t)((uint64_t)(value & mask) >> shift);
 }
 
 static uint64_t cantools_unsigned_from_double(double value)
@@ -1319,6 +1351,113 @@ bool navecu_can_gnss_height_gnss_epoch_is_in_phys_range(float value)
     return ((value >= 0.0f) && (value <= 14.0f));
 }
 
+int navecu_can_gnss_time_pack(
+    uint8_t *dst_p,
+    const struct navecu_can_gnss_time_t *src_p,
+    size_t size)
+{
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    memset(&dst_p[0], 0, 8);
+
+    dst_p[0] |= pack_left_shift_u16(src_p->gps_week, 0u, 0xffu);
+    dst_p[1] |= pack_right_shift_u16(src_p->gps_week, 8u, 0xffu);
+    dst_p[6] |= pack_left_shift_u8(src_p->gnss_epoch, 0u, 0x0fu);
+    dst_p[7] |= pack_left_shift_u8(src_p->gnss_time_crc, 0u, 0xffu);
+
+    return (8);
+}
+
+int navecu_can_gnss_time_unpack(
+    struct navecu_can_gnss_time_t *dst_p,
+    const uint8_t *src_p,
+    size_t size)
+{
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    dst_p->gps_week = unpack_right_shift_u16(src_p[0], 0u, 0xffu);
+    dst_p->gps_week |= unpack_left_shift_u16(src_p[1], 8u, 0xffu);
+    dst_p->gnss_epoch = unpack_right_shift_u8(src_p[6], 0u, 0x0fu);
+    dst_p->gnss_time_crc = unpack_right_shift_u8(src_p[7], 0u, 0xffu);
+
+    return (0);
+}
+
+int navecu_can_gnss_time_init(struct navecu_can_gnss_time_t *msg_p)
+{
+    if (msg_p == NULL) return -1;
+
+    memset(msg_p, 0, sizeof(struct navecu_can_gnss_time_t));
+
+    return 0;
+}
+
+uint16_t navecu_can_gnss_time_gps_week_encode(float value)
+{
+    return (uint16_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_gnss_time_gps_week_decode(uint16_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_gnss_time_gps_week_is_in_range(uint16_t value)
+{
+    return (value <= 65534u);
+}
+
+bool navecu_can_gnss_time_gps_week_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 65534.0f));
+}
+
+uint8_t navecu_can_gnss_time_gnss_epoch_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_gnss_time_gnss_epoch_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_gnss_time_gnss_epoch_is_in_range(uint8_t value)
+{
+    return (value <= 14u);
+}
+
+bool navecu_can_gnss_time_gnss_epoch_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 14.0f));
+}
+
+uint8_t navecu_can_gnss_time_gnss_time_crc_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_gnss_time_gnss_time_crc_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_gnss_time_gnss_time_crc_is_in_range(uint8_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_gnss_time_gnss_time_crc_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 255.0f));
+}
+
 int navecu_can_cmd_known_position_pack(
     uint8_t *dst_p,
     const struct navecu_can_cmd_known_position_t *src_p,
@@ -2378,6 +2517,706 @@ bool navecu_can_nav_attitude_nav_crc_is_in_phys_range(float value)
     return ((value >= 0.0f) && (value <= 255.0f));
 }
 
+int navecu_can_nav_rates_pack(
+    uint8_t *dst_p,
+    const struct navecu_can_nav_rates_t *src_p,
+    size_t size)
+{
+    uint16_t rate_x;
+    uint16_t rate_y;
+    uint16_t rate_z;
+
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    memset(&dst_p[0], 0, 8);
+
+    rate_x = (uint16_t)src_p->rate_x;
+    dst_p[0] |= pack_left_shift_u16(rate_x, 0u, 0xffu);
+    dst_p[1] |= pack_right_shift_u16(rate_x, 8u, 0xffu);
+    rate_y = (uint16_t)src_p->rate_y;
+    dst_p[2] |= pack_left_shift_u16(rate_y, 0u, 0xffu);
+    dst_p[3] |= pack_right_shift_u16(rate_y, 8u, 0xffu);
+    rate_z = (uint16_t)src_p->rate_z;
+    dst_p[4] |= pack_left_shift_u16(rate_z, 0u, 0xffu);
+    dst_p[5] |= pack_right_shift_u16(rate_z, 8u, 0xffu);
+    dst_p[6] |= pack_left_shift_u8(src_p->nav_counter, 0u, 0x0fu);
+    dst_p[7] |= pack_left_shift_u8(src_p->nav_crc, 0u, 0xffu);
+
+    return (8);
+}
+
+int navecu_can_nav_rates_unpack(
+    struct navecu_can_nav_rates_t *dst_p,
+    const uint8_t *src_p,
+    size_t size)
+{
+    uint16_t rate_x;
+    uint16_t rate_y;
+    uint16_t rate_z;
+
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    rate_x = unpack_right_shift_u16(src_p[0], 0u, 0xffu);
+    rate_x |= unpack_left_shift_u16(src_p[1], 8u, 0xffu);
+    dst_p->rate_x = (int16_t)rate_x;
+    rate_y = unpack_right_shift_u16(src_p[2], 0u, 0xffu);
+    rate_y |= unpack_left_shift_u16(src_p[3], 8u, 0xffu);
+    dst_p->rate_y = (int16_t)rate_y;
+    rate_z = unpack_right_shift_u16(src_p[4], 0u, 0xffu);
+    rate_z |= unpack_left_shift_u16(src_p[5], 8u, 0xffu);
+    dst_p->rate_z = (int16_t)rate_z;
+    dst_p->nav_counter = unpack_right_shift_u8(src_p[6], 0u, 0x0fu);
+    dst_p->nav_crc = unpack_right_shift_u8(src_p[7], 0u, 0xffu);
+
+    return (0);
+}
+
+int navecu_can_nav_rates_init(struct navecu_can_nav_rates_t *msg_p)
+{
+    if (msg_p == NULL) return -1;
+
+    memset(msg_p, 0, sizeof(struct navecu_can_nav_rates_t));
+
+    return 0;
+}
+
+int16_t navecu_can_nav_rates_rate_x_encode(float value)
+{
+    return (int16_t)(roundf(value / 0.01f));
+}
+
+float navecu_can_nav_rates_rate_x_decode(int16_t value)
+{
+    return ((float)value * 0.01f);
+}
+
+bool navecu_can_nav_rates_rate_x_is_in_range(int16_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_nav_rates_rate_x_is_in_phys_range(float value)
+{
+    return ((value >= -327.68f) && (value <= 327.67f));
+}
+
+int16_t navecu_can_nav_rates_rate_y_encode(float value)
+{
+    return (int16_t)(roundf(value / 0.01f));
+}
+
+float navecu_can_nav_rates_rate_y_decode(int16_t value)
+{
+    return ((float)value * 0.01f);
+}
+
+bool navecu_can_nav_rates_rate_y_is_in_range(int16_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_nav_rates_rate_y_is_in_phys_range(float value)
+{
+    return ((value >= -327.68f) && (value <= 327.67f));
+}
+
+int16_t navecu_can_nav_rates_rate_z_encode(float value)
+{
+    return (int16_t)(roundf(value / 0.01f));
+}
+
+float navecu_can_nav_rates_rate_z_decode(int16_t value)
+{
+    return ((float)value * 0.01f);
+}
+
+bool navecu_can_nav_rates_rate_z_is_in_range(int16_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_nav_rates_rate_z_is_in_phys_range(float value)
+{
+    return ((value >= -327.68f) && (value <= 327.67f));
+}
+
+uint8_t navecu_can_nav_rates_nav_counter_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_nav_rates_nav_counter_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_nav_rates_nav_counter_is_in_range(uint8_t value)
+{
+    return (value <= 14u);
+}
+
+bool navecu_can_nav_rates_nav_counter_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 14.0f));
+}
+
+uint8_t navecu_can_nav_rates_nav_crc_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_nav_rates_nav_crc_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_nav_rates_nav_crc_is_in_range(uint8_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_nav_rates_nav_crc_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 255.0f));
+}
+
+int navecu_can_nav_attitude_rates_pack(
+    uint8_t *dst_p,
+    const struct navecu_can_nav_attitude_rates_t *src_p,
+    size_t size)
+{
+    uint16_t heading_rate;
+    uint16_t pitch_rate;
+    uint16_t roll_rate;
+
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    memset(&dst_p[0], 0, 8);
+
+    roll_rate = (uint16_t)src_p->roll_rate;
+    dst_p[0] |= pack_left_shift_u16(roll_rate, 0u, 0xffu);
+    dst_p[1] |= pack_right_shift_u16(roll_rate, 8u, 0xffu);
+    pitch_rate = (uint16_t)src_p->pitch_rate;
+    dst_p[2] |= pack_left_shift_u16(pitch_rate, 0u, 0xffu);
+    dst_p[3] |= pack_right_shift_u16(pitch_rate, 8u, 0xffu);
+    heading_rate = (uint16_t)src_p->heading_rate;
+    dst_p[4] |= pack_left_shift_u16(heading_rate, 0u, 0xffu);
+    dst_p[5] |= pack_right_shift_u16(heading_rate, 8u, 0xffu);
+    dst_p[6] |= pack_left_shift_u8(src_p->nav_counter, 0u, 0x0fu);
+    dst_p[7] |= pack_left_shift_u8(src_p->nav_crc, 0u, 0xffu);
+
+    return (8);
+}
+
+int navecu_can_nav_attitude_rates_unpack(
+    struct navecu_can_nav_attitude_rates_t *dst_p,
+    const uint8_t *src_p,
+    size_t size)
+{
+    uint16_t heading_rate;
+    uint16_t pitch_rate;
+    uint16_t roll_rate;
+
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    roll_rate = unpack_right_shift_u16(src_p[0], 0u, 0xffu);
+    roll_rate |= unpack_left_shift_u16(src_p[1], 8u, 0xffu);
+    dst_p->roll_rate = (int16_t)roll_rate;
+    pitch_rate = unpack_right_shift_u16(src_p[2], 0u, 0xffu);
+    pitch_rate |= unpack_left_shift_u16(src_p[3], 8u, 0xffu);
+    dst_p->pitch_rate = (int16_t)pitch_rate;
+    heading_rate = unpack_right_shift_u16(src_p[4], 0u, 0xffu);
+    heading_rate |= unpack_left_shift_u16(src_p[5], 8u, 0xffu);
+    dst_p->heading_rate = (int16_t)heading_rate;
+    dst_p->nav_counter = unpack_right_shift_u8(src_p[6], 0u, 0x0fu);
+    dst_p->nav_crc = unpack_right_shift_u8(src_p[7], 0u, 0xffu);
+
+    return (0);
+}
+
+int navecu_can_nav_attitude_rates_init(struct navecu_can_nav_attitude_rates_t *msg_p)
+{
+    if (msg_p == NULL) return -1;
+
+    memset(msg_p, 0, sizeof(struct navecu_can_nav_attitude_rates_t));
+
+    return 0;
+}
+
+int16_t navecu_can_nav_attitude_rates_roll_rate_encode(float value)
+{
+    return (int16_t)(roundf(value / 0.01f));
+}
+
+float navecu_can_nav_attitude_rates_roll_rate_decode(int16_t value)
+{
+    return ((float)value * 0.01f);
+}
+
+bool navecu_can_nav_attitude_rates_roll_rate_is_in_range(int16_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_nav_attitude_rates_roll_rate_is_in_phys_range(float value)
+{
+    return ((value >= -327.68f) && (value <= 327.67f));
+}
+
+int16_t navecu_can_nav_attitude_rates_pitch_rate_encode(float value)
+{
+    return (int16_t)(roundf(value / 0.01f));
+}
+
+float navecu_can_nav_attitude_rates_pitch_rate_decode(int16_t value)
+{
+    return ((float)value * 0.01f);
+}
+
+bool navecu_can_nav_attitude_rates_pitch_rate_is_in_range(int16_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_nav_attitude_rates_pitch_rate_is_in_phys_range(float value)
+{
+    return ((value >= -327.68f) && (value <= 327.67f));
+}
+
+int16_t navecu_can_nav_attitude_rates_heading_rate_encode(float value)
+{
+    return (int16_t)(roundf(value / 0.01f));
+}
+
+float navecu_can_nav_attitude_rates_heading_rate_decode(int16_t value)
+{
+    return ((float)value * 0.01f);
+}
+
+bool navecu_can_nav_attitude_rates_heading_rate_is_in_range(int16_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_nav_attitude_rates_heading_rate_is_in_phys_range(float value)
+{
+    return ((value >= -327.68f) && (value <= 327.67f));
+}
+
+uint8_t navecu_can_nav_attitude_rates_nav_counter_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_nav_attitude_rates_nav_counter_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_nav_attitude_rates_nav_counter_is_in_range(uint8_t value)
+{
+    return (value <= 14u);
+}
+
+bool navecu_can_nav_attitude_rates_nav_counter_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 14.0f));
+}
+
+uint8_t navecu_can_nav_attitude_rates_nav_crc_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_nav_attitude_rates_nav_crc_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_nav_attitude_rates_nav_crc_is_in_range(uint8_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_nav_attitude_rates_nav_crc_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 255.0f));
+}
+
+int navecu_can_nav_accel_pack(
+    uint8_t *dst_p,
+    const struct navecu_can_nav_accel_t *src_p,
+    size_t size)
+{
+    uint16_t accel_x;
+    uint16_t accel_y;
+    uint16_t accel_z;
+
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    memset(&dst_p[0], 0, 8);
+
+    accel_x = (uint16_t)src_p->accel_x;
+    dst_p[0] |= pack_left_shift_u16(accel_x, 0u, 0xffu);
+    dst_p[1] |= pack_right_shift_u16(accel_x, 8u, 0xffu);
+    accel_y = (uint16_t)src_p->accel_y;
+    dst_p[2] |= pack_left_shift_u16(accel_y, 0u, 0xffu);
+    dst_p[3] |= pack_right_shift_u16(accel_y, 8u, 0xffu);
+    accel_z = (uint16_t)src_p->accel_z;
+    dst_p[4] |= pack_left_shift_u16(accel_z, 0u, 0xffu);
+    dst_p[5] |= pack_right_shift_u16(accel_z, 8u, 0xffu);
+    dst_p[6] |= pack_left_shift_u8(src_p->nav_counter, 0u, 0x0fu);
+    dst_p[7] |= pack_left_shift_u8(src_p->nav_crc, 0u, 0xffu);
+
+    return (8);
+}
+
+int navecu_can_nav_accel_unpack(
+    struct navecu_can_nav_accel_t *dst_p,
+    const uint8_t *src_p,
+    size_t size)
+{
+    uint16_t accel_x;
+    uint16_t accel_y;
+    uint16_t accel_z;
+
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    accel_x = unpack_right_shift_u16(src_p[0], 0u, 0xffu);
+    accel_x |= unpack_left_shift_u16(src_p[1], 8u, 0xffu);
+    dst_p->accel_x = (int16_t)accel_x;
+    accel_y = unpack_right_shift_u16(src_p[2], 0u, 0xffu);
+    accel_y |= unpack_left_shift_u16(src_p[3], 8u, 0xffu);
+    dst_p->accel_y = (int16_t)accel_y;
+    accel_z = unpack_right_shift_u16(src_p[4], 0u, 0xffu);
+    accel_z |= unpack_left_shift_u16(src_p[5], 8u, 0xffu);
+    dst_p->accel_z = (int16_t)accel_z;
+    dst_p->nav_counter = unpack_right_shift_u8(src_p[6], 0u, 0x0fu);
+    dst_p->nav_crc = unpack_right_shift_u8(src_p[7], 0u, 0xffu);
+
+    return (0);
+}
+
+int navecu_can_nav_accel_init(struct navecu_can_nav_accel_t *msg_p)
+{
+    if (msg_p == NULL) return -1;
+
+    memset(msg_p, 0, sizeof(struct navecu_can_nav_accel_t));
+
+    return 0;
+}
+
+int16_t navecu_can_nav_accel_accel_x_encode(float value)
+{
+    return (int16_t)(roundf(value / 0.001f));
+}
+
+float navecu_can_nav_accel_accel_x_decode(int16_t value)
+{
+    return ((float)value * 0.001f);
+}
+
+bool navecu_can_nav_accel_accel_x_is_in_range(int16_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_nav_accel_accel_x_is_in_phys_range(float value)
+{
+    return ((value >= -32.768f) && (value <= 32.767f));
+}
+
+int16_t navecu_can_nav_accel_accel_y_encode(float value)
+{
+    return (int16_t)(roundf(value / 0.001f));
+}
+
+float navecu_can_nav_accel_accel_y_decode(int16_t value)
+{
+    return ((float)value * 0.001f);
+}
+
+bool navecu_can_nav_accel_accel_y_is_in_range(int16_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_nav_accel_accel_y_is_in_phys_range(float value)
+{
+    return ((value >= -32.768f) && (value <= 32.767f));
+}
+
+int16_t navecu_can_nav_accel_accel_z_encode(float value)
+{
+    return (int16_t)(roundf(value / 0.001f));
+}
+
+float navecu_can_nav_accel_accel_z_decode(int16_t value)
+{
+    return ((float)value * 0.001f);
+}
+
+bool navecu_can_nav_accel_accel_z_is_in_range(int16_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_nav_accel_accel_z_is_in_phys_range(float value)
+{
+    return ((value >= -32.768f) && (value <= 32.767f));
+}
+
+uint8_t navecu_can_nav_accel_nav_counter_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_nav_accel_nav_counter_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_nav_accel_nav_counter_is_in_range(uint8_t value)
+{
+    return (value <= 14u);
+}
+
+bool navecu_can_nav_accel_nav_counter_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 14.0f));
+}
+
+uint8_t navecu_can_nav_accel_nav_crc_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_nav_accel_nav_crc_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_nav_accel_nav_crc_is_in_range(uint8_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_nav_accel_nav_crc_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 255.0f));
+}
+
+int navecu_can_nav_accel_enu_pack(
+    uint8_t *dst_p,
+    const struct navecu_can_nav_accel_enu_t *src_p,
+    size_t size)
+{
+    uint16_t accel_east;
+    uint16_t accel_north;
+    uint16_t accel_up;
+
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    memset(&dst_p[0], 0, 8);
+
+    accel_east = (uint16_t)src_p->accel_east;
+    dst_p[0] |= pack_left_shift_u16(accel_east, 0u, 0xffu);
+    dst_p[1] |= pack_right_shift_u16(accel_east, 8u, 0xffu);
+    accel_north = (uint16_t)src_p->accel_north;
+    dst_p[2] |= pack_left_shift_u16(accel_north, 0u, 0xffu);
+    dst_p[3] |= pack_right_shift_u16(accel_north, 8u, 0xffu);
+    accel_up = (uint16_t)src_p->accel_up;
+    dst_p[4] |= pack_left_shift_u16(accel_up, 0u, 0xffu);
+    dst_p[5] |= pack_right_shift_u16(accel_up, 8u, 0xffu);
+    dst_p[6] |= pack_left_shift_u8(src_p->nav_counter, 0u, 0x0fu);
+    dst_p[7] |= pack_left_shift_u8(src_p->nav_crc, 0u, 0xffu);
+
+    return (8);
+}
+
+int navecu_can_nav_accel_enu_unpack(
+    struct navecu_can_nav_accel_enu_t *dst_p,
+    const uint8_t *src_p,
+    size_t size)
+{
+    uint16_t accel_east;
+    uint16_t accel_north;
+    uint16_t accel_up;
+
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    accel_east = unpack_right_shift_u16(src_p[0], 0u, 0xffu);
+    accel_east |= unpack_left_shift_u16(src_p[1], 8u, 0xffu);
+    dst_p->accel_east = (int16_t)accel_east;
+    accel_north = unpack_right_shift_u16(src_p[2], 0u, 0xffu);
+    accel_north |= unpack_left_shift_u16(src_p[3], 8u, 0xffu);
+    dst_p->accel_north = (int16_t)accel_north;
+    accel_up = unpack_right_shift_u16(src_p[4], 0u, 0xffu);
+    accel_up |= unpack_left_shift_u16(src_p[5], 8u, 0xffu);
+    dst_p->accel_up = (int16_t)accel_up;
+    dst_p->nav_counter = unpack_right_shift_u8(src_p[6], 0u, 0x0fu);
+    dst_p->nav_crc = unpack_right_shift_u8(src_p[7], 0u, 0xffu);
+
+    return (0);
+}
+
+int navecu_can_nav_accel_enu_init(struct navecu_can_nav_accel_enu_t *msg_p)
+{
+    if (msg_p == NULL) return -1;
+
+    memset(msg_p, 0, sizeof(struct navecu_can_nav_accel_enu_t));
+
+    return 0;
+}
+
+int16_t navecu_can_nav_accel_enu_accel_east_encode(float value)
+{
+    return (int16_t)(roundf(value / 0.001f));
+}
+
+float navecu_can_nav_accel_enu_accel_east_decode(int16_t value)
+{
+    return ((float)value * 0.001f);
+}
+
+bool navecu_can_nav_accel_enu_accel_east_is_in_range(int16_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_nav_accel_enu_accel_east_is_in_phys_range(float value)
+{
+    return ((value >= -32.768f) && (value <= 32.767f));
+}
+
+int16_t navecu_can_nav_accel_enu_accel_north_encode(float value)
+{
+    return (int16_t)(roundf(value / 0.001f));
+}
+
+float navecu_can_nav_accel_enu_accel_north_decode(int16_t value)
+{
+    return ((float)value * 0.001f);
+}
+
+bool navecu_can_nav_accel_enu_accel_north_is_in_range(int16_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_nav_accel_enu_accel_north_is_in_phys_range(float value)
+{
+    return ((value >= -32.768f) && (value <= 32.767f));
+}
+
+int16_t navecu_can_nav_accel_enu_accel_up_encode(float value)
+{
+    return (int16_t)(roundf(value / 0.001f));
+}
+
+float navecu_can_nav_accel_enu_accel_up_decode(int16_t value)
+{
+    return ((float)value * 0.001f);
+}
+
+bool navecu_can_nav_accel_enu_accel_up_is_in_range(int16_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_nav_accel_enu_accel_up_is_in_phys_range(float value)
+{
+    return ((value >= -32.768f) && (value <= 32.767f));
+}
+
+uint8_t navecu_can_nav_accel_enu_nav_counter_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_nav_accel_enu_nav_counter_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_nav_accel_enu_nav_counter_is_in_range(uint8_t value)
+{
+    return (value <= 14u);
+}
+
+bool navecu_can_nav_accel_enu_nav_counter_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 14.0f));
+}
+
+uint8_t navecu_can_nav_accel_enu_nav_crc_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_nav_accel_enu_nav_crc_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_nav_accel_enu_nav_crc_is_in_range(uint8_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_nav_accel_enu_nav_crc_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 255.0f));
+}
+
 int navecu_can_nav_status_pack(
     uint8_t *dst_p,
     const struct navecu_can_nav_status_t *src_p,
@@ -3063,6 +3902,302 @@ bool navecu_can_nav_status_nav_crc_is_in_range(uint8_t value)
 }
 
 bool navecu_can_nav_status_nav_crc_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 255.0f));
+}
+
+int navecu_can_nav_accuracy_pack(
+    uint8_t *dst_p,
+    const struct navecu_can_nav_accuracy_t *src_p,
+    size_t size)
+{
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    memset(&dst_p[0], 0, 8);
+
+    dst_p[0] |= pack_left_shift_u16(src_p->vel_acc_east, 0u, 0xffu);
+    dst_p[1] |= pack_right_shift_u16(src_p->vel_acc_east, 8u, 0x0fu);
+    dst_p[1] |= pack_left_shift_u16(src_p->vel_acc_north, 4u, 0xf0u);
+    dst_p[2] |= pack_right_shift_u16(src_p->vel_acc_north, 4u, 0xffu);
+    dst_p[3] |= pack_left_shift_u16(src_p->vel_acc_up, 0u, 0xffu);
+    dst_p[4] |= pack_right_shift_u16(src_p->vel_acc_up, 8u, 0x0fu);
+    dst_p[4] |= pack_left_shift_u16(src_p->heading_accuracy, 4u, 0xf0u);
+    dst_p[5] |= pack_right_shift_u16(src_p->heading_accuracy, 4u, 0xffu);
+    dst_p[6] |= pack_left_shift_u8(src_p->nav_counter, 0u, 0x0fu);
+    dst_p[7] |= pack_left_shift_u8(src_p->nav_crc, 0u, 0xffu);
+
+    return (8);
+}
+
+int navecu_can_nav_accuracy_unpack(
+    struct navecu_can_nav_accuracy_t *dst_p,
+    const uint8_t *src_p,
+    size_t size)
+{
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    dst_p->vel_acc_east = unpack_right_shift_u16(src_p[0], 0u, 0xffu);
+    dst_p->vel_acc_east |= unpack_left_shift_u16(src_p[1], 8u, 0x0fu);
+    dst_p->vel_acc_north = unpack_right_shift_u16(src_p[1], 4u, 0xf0u);
+    dst_p->vel_acc_north |= unpack_left_shift_u16(src_p[2], 4u, 0xffu);
+    dst_p->vel_acc_up = unpack_right_shift_u16(src_p[3], 0u, 0xffu);
+    dst_p->vel_acc_up |= unpack_left_shift_u16(src_p[4], 8u, 0x0fu);
+    dst_p->heading_accuracy = unpack_right_shift_u16(src_p[4], 4u, 0xf0u);
+    dst_p->heading_accuracy |= unpack_left_shift_u16(src_p[5], 4u, 0xffu);
+    dst_p->nav_counter = unpack_right_shift_u8(src_p[6], 0u, 0x0fu);
+    dst_p->nav_crc = unpack_right_shift_u8(src_p[7], 0u, 0xffu);
+
+    return (0);
+}
+
+int navecu_can_nav_accuracy_init(struct navecu_can_nav_accuracy_t *msg_p)
+{
+    if (msg_p == NULL) return -1;
+
+    memset(msg_p, 0, sizeof(struct navecu_can_nav_accuracy_t));
+
+    return 0;
+}
+
+uint16_t navecu_can_nav_accuracy_vel_acc_east_encode(float value)
+{
+    return (uint16_t)(cantools_unsigned_from_double(roundf(value / 0.01f)));
+}
+
+float navecu_can_nav_accuracy_vel_acc_east_decode(uint16_t value)
+{
+    return ((float)value * 0.01f);
+}
+
+bool navecu_can_nav_accuracy_vel_acc_east_is_in_range(uint16_t value)
+{
+    return (value <= 4095u);
+}
+
+bool navecu_can_nav_accuracy_vel_acc_east_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 40.95f));
+}
+
+uint16_t navecu_can_nav_accuracy_vel_acc_north_encode(float value)
+{
+    return (uint16_t)(cantools_unsigned_from_double(roundf(value / 0.01f)));
+}
+
+float navecu_can_nav_accuracy_vel_acc_north_decode(uint16_t value)
+{
+    return ((float)value * 0.01f);
+}
+
+bool navecu_can_nav_accuracy_vel_acc_north_is_in_range(uint16_t value)
+{
+    return (value <= 4095u);
+}
+
+bool navecu_can_nav_accuracy_vel_acc_north_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 40.95f));
+}
+
+uint16_t navecu_can_nav_accuracy_vel_acc_up_encode(float value)
+{
+    return (uint16_t)(cantools_unsigned_from_double(roundf(value / 0.01f)));
+}
+
+float navecu_can_nav_accuracy_vel_acc_up_decode(uint16_t value)
+{
+    return ((float)value * 0.01f);
+}
+
+bool navecu_can_nav_accuracy_vel_acc_up_is_in_range(uint16_t value)
+{
+    return (value <= 4095u);
+}
+
+bool navecu_can_nav_accuracy_vel_acc_up_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 40.95f));
+}
+
+uint16_t navecu_can_nav_accuracy_heading_accuracy_encode(float value)
+{
+    return (uint16_t)(cantools_unsigned_from_double(roundf(value / 0.01f)));
+}
+
+float navecu_can_nav_accuracy_heading_accuracy_decode(uint16_t value)
+{
+    return ((float)value * 0.01f);
+}
+
+bool navecu_can_nav_accuracy_heading_accuracy_is_in_range(uint16_t value)
+{
+    return (value <= 4095u);
+}
+
+bool navecu_can_nav_accuracy_heading_accuracy_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 40.95f));
+}
+
+uint8_t navecu_can_nav_accuracy_nav_counter_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_nav_accuracy_nav_counter_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_nav_accuracy_nav_counter_is_in_range(uint8_t value)
+{
+    return (value <= 14u);
+}
+
+bool navecu_can_nav_accuracy_nav_counter_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 14.0f));
+}
+
+uint8_t navecu_can_nav_accuracy_nav_crc_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_nav_accuracy_nav_crc_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_nav_accuracy_nav_crc_is_in_range(uint8_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_nav_accuracy_nav_crc_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 255.0f));
+}
+
+int navecu_can_nav_time_pack(
+    uint8_t *dst_p,
+    const struct navecu_can_nav_time_t *src_p,
+    size_t size)
+{
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    memset(&dst_p[0], 0, 8);
+
+    dst_p[0] |= pack_left_shift_u64(src_p->time_of_week, 0u, 0xffu);
+    dst_p[1] |= pack_right_shift_u64(src_p->time_of_week, 8u, 0xffu);
+    dst_p[2] |= pack_right_shift_u64(src_p->time_of_week, 16u, 0xffu);
+    dst_p[3] |= pack_right_shift_u64(src_p->time_of_week, 24u, 0xffu);
+    dst_p[4] |= pack_right_shift_u64(src_p->time_of_week, 32u, 0xffu);
+    dst_p[5] |= pack_left_shift_u16(src_p->gps_week, 0u, 0xffu);
+    dst_p[6] |= pack_right_shift_u16(src_p->gps_week, 8u, 0xffu);
+    dst_p[7] |= pack_left_shift_u8(src_p->nav_crc, 0u, 0xffu);
+
+    return (8);
+}
+
+int navecu_can_nav_time_unpack(
+    struct navecu_can_nav_time_t *dst_p,
+    const uint8_t *src_p,
+    size_t size)
+{
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    dst_p->time_of_week = unpack_right_shift_u64(src_p[0], 0u, 0xffu);
+    dst_p->time_of_week |= unpack_left_shift_u64(src_p[1], 8u, 0xffu);
+    dst_p->time_of_week |= unpack_left_shift_u64(src_p[2], 16u, 0xffu);
+    dst_p->time_of_week |= unpack_left_shift_u64(src_p[3], 24u, 0xffu);
+    dst_p->time_of_week |= unpack_left_shift_u64(src_p[4], 32u, 0xffu);
+    dst_p->gps_week = unpack_right_shift_u16(src_p[5], 0u, 0xffu);
+    dst_p->gps_week |= unpack_left_shift_u16(src_p[6], 8u, 0xffu);
+    dst_p->nav_crc = unpack_right_shift_u8(src_p[7], 0u, 0xffu);
+
+    return (0);
+}
+
+int navecu_can_nav_time_init(struct navecu_can_nav_time_t *msg_p)
+{
+    if (msg_p == NULL) return -1;
+
+    memset(msg_p, 0, sizeof(struct navecu_can_nav_time_t));
+
+    return 0;
+}
+
+uint64_t navecu_can_nav_time_time_of_week_encode(float value)
+{
+    return (uint64_t)(cantools_unsigned_from_double(roundf(value / 1e-06f)));
+}
+
+float navecu_can_nav_time_time_of_week_decode(uint64_t value)
+{
+    return ((float)value * 1e-06f);
+}
+
+bool navecu_can_nav_time_time_of_week_is_in_range(uint64_t value)
+{
+    return (value <= 1099511627775ull);
+}
+
+bool navecu_can_nav_time_time_of_week_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 1099511.627775f));
+}
+
+uint16_t navecu_can_nav_time_gps_week_encode(float value)
+{
+    return (uint16_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_nav_time_gps_week_decode(uint16_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_nav_time_gps_week_is_in_range(uint16_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_nav_time_gps_week_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 65535.0f));
+}
+
+uint8_t navecu_can_nav_time_nav_crc_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_nav_time_nav_crc_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_nav_time_nav_crc_is_in_range(uint8_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_nav_time_nav_crc_is_in_phys_range(float value)
 {
     return ((value >= 0.0f) && (value <= 255.0f));
 }

@@ -54,6 +54,7 @@ extern "C" {
 #define NAVECU_CAN_GNSS_VELOCITY_FRAME_ID (0x121u)
 #define NAVECU_CAN_GNSS_STATUS_FRAME_ID (0x122u)
 #define NAVECU_CAN_GNSS_HEIGHT_FRAME_ID (0x123u)
+#define NAVECU_CAN_GNSS_TIME_FRAME_ID (0x125u)
 #define NAVECU_CAN_CMD_KNOWN_POSITION_FRAME_ID (0x200u)
 #define NAVECU_CAN_CMD_CONTROL_FRAME_ID (0x201u)
 #define NAVECU_CAN_CMD_INITIAL_ATTITUDE_FRAME_ID (0x202u)
@@ -61,7 +62,13 @@ extern "C" {
 #define NAVECU_CAN_NAV_HEIGHT_FRAME_ID (0x301u)
 #define NAVECU_CAN_NAV_VELOCITY_FRAME_ID (0x302u)
 #define NAVECU_CAN_NAV_ATTITUDE_FRAME_ID (0x303u)
+#define NAVECU_CAN_NAV_RATES_FRAME_ID (0x304u)
+#define NAVECU_CAN_NAV_ATTITUDE_RATES_FRAME_ID (0x305u)
+#define NAVECU_CAN_NAV_ACCEL_FRAME_ID (0x306u)
+#define NAVECU_CAN_NAV_ACCEL_ENU_FRAME_ID (0x307u)
 #define NAVECU_CAN_NAV_STATUS_FRAME_ID (0x310u)
+#define NAVECU_CAN_NAV_ACCURACY_FRAME_ID (0x312u)
+#define NAVECU_CAN_NAV_TIME_FRAME_ID (0x313u)
 #define NAVECU_CAN_NAV_CALIBRATION_FRAME_ID (0x311u)
 
 /* Frame lengths in bytes. */
@@ -72,6 +79,7 @@ extern "C" {
 #define NAVECU_CAN_GNSS_VELOCITY_LENGTH (8u)
 #define NAVECU_CAN_GNSS_STATUS_LENGTH (8u)
 #define NAVECU_CAN_GNSS_HEIGHT_LENGTH (8u)
+#define NAVECU_CAN_GNSS_TIME_LENGTH (8u)
 #define NAVECU_CAN_CMD_KNOWN_POSITION_LENGTH (8u)
 #define NAVECU_CAN_CMD_CONTROL_LENGTH (8u)
 #define NAVECU_CAN_CMD_INITIAL_ATTITUDE_LENGTH (8u)
@@ -79,7 +87,13 @@ extern "C" {
 #define NAVECU_CAN_NAV_HEIGHT_LENGTH (8u)
 #define NAVECU_CAN_NAV_VELOCITY_LENGTH (8u)
 #define NAVECU_CAN_NAV_ATTITUDE_LENGTH (8u)
+#define NAVECU_CAN_NAV_RATES_LENGTH (8u)
+#define NAVECU_CAN_NAV_ATTITUDE_RATES_LENGTH (8u)
+#define NAVECU_CAN_NAV_ACCEL_LENGTH (8u)
+#define NAVECU_CAN_NAV_ACCEL_ENU_LENGTH (8u)
 #define NAVECU_CAN_NAV_STATUS_LENGTH (8u)
+#define NAVECU_CAN_NAV_ACCURACY_LENGTH (8u)
+#define NAVECU_CAN_NAV_TIME_LENGTH (8u)
 #define NAVECU_CAN_NAV_CALIBRATION_LENGTH (8u)
 
 /* Extended or standard frame types. */
@@ -90,6 +104,7 @@ extern "C" {
 #define NAVECU_CAN_GNSS_VELOCITY_IS_EXTENDED (0)
 #define NAVECU_CAN_GNSS_STATUS_IS_EXTENDED (0)
 #define NAVECU_CAN_GNSS_HEIGHT_IS_EXTENDED (0)
+#define NAVECU_CAN_GNSS_TIME_IS_EXTENDED (0)
 #define NAVECU_CAN_CMD_KNOWN_POSITION_IS_EXTENDED (0)
 #define NAVECU_CAN_CMD_CONTROL_IS_EXTENDED (0)
 #define NAVECU_CAN_CMD_INITIAL_ATTITUDE_IS_EXTENDED (0)
@@ -97,7 +112,13 @@ extern "C" {
 #define NAVECU_CAN_NAV_HEIGHT_IS_EXTENDED (0)
 #define NAVECU_CAN_NAV_VELOCITY_IS_EXTENDED (0)
 #define NAVECU_CAN_NAV_ATTITUDE_IS_EXTENDED (0)
+#define NAVECU_CAN_NAV_RATES_IS_EXTENDED (0)
+#define NAVECU_CAN_NAV_ATTITUDE_RATES_IS_EXTENDED (0)
+#define NAVECU_CAN_NAV_ACCEL_IS_EXTENDED (0)
+#define NAVECU_CAN_NAV_ACCEL_ENU_IS_EXTENDED (0)
 #define NAVECU_CAN_NAV_STATUS_IS_EXTENDED (0)
+#define NAVECU_CAN_NAV_ACCURACY_IS_EXTENDED (0)
+#define NAVECU_CAN_NAV_TIME_IS_EXTENDED (0)
 #define NAVECU_CAN_NAV_CALIBRATION_IS_EXTENDED (0)
 
 /* Frame cycle times in milliseconds. */
@@ -153,6 +174,7 @@ extern "C" {
 #define NAVECU_CAN_GNSS_VELOCITY_NAME "GNSS_Velocity"
 #define NAVECU_CAN_GNSS_STATUS_NAME "GNSS_Status"
 #define NAVECU_CAN_GNSS_HEIGHT_NAME "GNSS_Height"
+#define NAVECU_CAN_GNSS_TIME_NAME "GNSS_Time"
 #define NAVECU_CAN_CMD_KNOWN_POSITION_NAME "CMD_KnownPosition"
 #define NAVECU_CAN_CMD_CONTROL_NAME "CMD_Control"
 #define NAVECU_CAN_CMD_INITIAL_ATTITUDE_NAME "CMD_InitialAttitude"
@@ -160,7 +182,13 @@ extern "C" {
 #define NAVECU_CAN_NAV_HEIGHT_NAME "NAV_Height"
 #define NAVECU_CAN_NAV_VELOCITY_NAME "NAV_Velocity"
 #define NAVECU_CAN_NAV_ATTITUDE_NAME "NAV_Attitude"
+#define NAVECU_CAN_NAV_RATES_NAME "NAV_Rates"
+#define NAVECU_CAN_NAV_ATTITUDE_RATES_NAME "NAV_AttitudeRates"
+#define NAVECU_CAN_NAV_ACCEL_NAME "NAV_Accel"
+#define NAVECU_CAN_NAV_ACCEL_ENU_NAME "NAV_AccelEnu"
 #define NAVECU_CAN_NAV_STATUS_NAME "NAV_Status"
+#define NAVECU_CAN_NAV_ACCURACY_NAME "NAV_Accuracy"
+#define NAVECU_CAN_NAV_TIME_NAME "NAV_Time"
 #define NAVECU_CAN_NAV_CALIBRATION_NAME "NAV_Calibration"
 
 /* Signal Names. */
@@ -196,6 +224,9 @@ extern "C" {
 #define NAVECU_CAN_GNSS_STATUS_TIME_OF_WEEK_NAME "TimeOfWeek"
 #define NAVECU_CAN_GNSS_HEIGHT_HEIGHT_NAME "Height"
 #define NAVECU_CAN_GNSS_HEIGHT_GNSS_EPOCH_NAME "GnssEpoch"
+#define NAVECU_CAN_GNSS_TIME_GPS_WEEK_NAME "GpsWeek"
+#define NAVECU_CAN_GNSS_TIME_GNSS_EPOCH_NAME "GnssEpoch"
+#define NAVECU_CAN_GNSS_TIME_GNSS_TIME_CRC_NAME "GnssTimeCrc"
 #define NAVECU_CAN_CMD_KNOWN_POSITION_LATITUDE_NAME "Latitude"
 #define NAVECU_CAN_CMD_KNOWN_POSITION_LONGITUDE_NAME "Longitude"
 #define NAVECU_CAN_CMD_CONTROL_COMMAND_NAME "Command"
@@ -225,6 +256,26 @@ extern "C" {
 #define NAVECU_CAN_NAV_ATTITUDE_HEADING_NAME "Heading"
 #define NAVECU_CAN_NAV_ATTITUDE_NAV_COUNTER_NAME "NavCounter"
 #define NAVECU_CAN_NAV_ATTITUDE_NAV_CRC_NAME "NavCrc"
+#define NAVECU_CAN_NAV_RATES_RATE_X_NAME "RateX"
+#define NAVECU_CAN_NAV_RATES_RATE_Y_NAME "RateY"
+#define NAVECU_CAN_NAV_RATES_RATE_Z_NAME "RateZ"
+#define NAVECU_CAN_NAV_RATES_NAV_COUNTER_NAME "NavCounter"
+#define NAVECU_CAN_NAV_RATES_NAV_CRC_NAME "NavCrc"
+#define NAVECU_CAN_NAV_ATTITUDE_RATES_ROLL_RATE_NAME "RollRate"
+#define NAVECU_CAN_NAV_ATTITUDE_RATES_PITCH_RATE_NAME "PitchRate"
+#define NAVECU_CAN_NAV_ATTITUDE_RATES_HEADING_RATE_NAME "HeadingRate"
+#define NAVECU_CAN_NAV_ATTITUDE_RATES_NAV_COUNTER_NAME "NavCounter"
+#define NAVECU_CAN_NAV_ATTITUDE_RATES_NAV_CRC_NAME "NavCrc"
+#define NAVECU_CAN_NAV_ACCEL_ACCEL_X_NAME "AccelX"
+#define NAVECU_CAN_NAV_ACCEL_ACCEL_Y_NAME "AccelY"
+#define NAVECU_CAN_NAV_ACCEL_ACCEL_Z_NAME "AccelZ"
+#define NAVECU_CAN_NAV_ACCEL_NAV_COUNTER_NAME "NavCounter"
+#define NAVECU_CAN_NAV_ACCEL_NAV_CRC_NAME "NavCrc"
+#define NAVECU_CAN_NAV_ACCEL_ENU_ACCEL_EAST_NAME "AccelEast"
+#define NAVECU_CAN_NAV_ACCEL_ENU_ACCEL_NORTH_NAME "AccelNorth"
+#define NAVECU_CAN_NAV_ACCEL_ENU_ACCEL_UP_NAME "AccelUp"
+#define NAVECU_CAN_NAV_ACCEL_ENU_NAV_COUNTER_NAME "NavCounter"
+#define NAVECU_CAN_NAV_ACCEL_ENU_NAV_CRC_NAME "NavCrc"
 #define NAVECU_CAN_NAV_STATUS_STATUS_PAGE_NAME "StatusPage"
 #define NAVECU_CAN_NAV_STATUS_MODE_NAME "Mode"
 #define NAVECU_CAN_NAV_STATUS_HEALTH_FLAGS_NAME "HealthFlags"
@@ -249,6 +300,15 @@ extern "C" {
 #define NAVECU_CAN_NAV_STATUS_CNT_IMU_STUCK_NAME "CntImuStuck"
 #define NAVECU_CAN_NAV_STATUS_NAV_COUNTER_NAME "NavCounter"
 #define NAVECU_CAN_NAV_STATUS_NAV_CRC_NAME "NavCrc"
+#define NAVECU_CAN_NAV_ACCURACY_VEL_ACC_EAST_NAME "VelAccEast"
+#define NAVECU_CAN_NAV_ACCURACY_VEL_ACC_NORTH_NAME "VelAccNorth"
+#define NAVECU_CAN_NAV_ACCURACY_VEL_ACC_UP_NAME "VelAccUp"
+#define NAVECU_CAN_NAV_ACCURACY_HEADING_ACCURACY_NAME "HeadingAccuracy"
+#define NAVECU_CAN_NAV_ACCURACY_NAV_COUNTER_NAME "NavCounter"
+#define NAVECU_CAN_NAV_ACCURACY_NAV_CRC_NAME "NavCrc"
+#define NAVECU_CAN_NAV_TIME_TIME_OF_WEEK_NAME "TimeOfWeek"
+#define NAVECU_CAN_NAV_TIME_GPS_WEEK_NAME "GpsWeek"
+#define NAVECU_CAN_NAV_TIME_NAV_CRC_NAME "NavCrc"
 #define NAVECU_CAN_NAV_CALIBRATION_HEADING_CORRECTION_NAME "HeadingCorrection"
 #define NAVECU_CAN_NAV_CALIBRATION_ODO_SCALE_ERROR_NAME "OdoScaleError"
 #define NAVECU_CAN_NAV_CALIBRATION_CAL_VALID_NAME "CalValid"
@@ -543,6 +603,36 @@ struct navecu_can_gnss_height_t {
 };
 
 /**
+ * Signals in message GNSS_Time.
+ *
+ * The GPS week of the epoch (optional; with it NAV_Time carries the week). Belongs to the epoch the GNSS_Status with the same GnssEpoch closes.
+ *
+ * All signal values are as on the CAN bus.
+ */
+struct navecu_can_gnss_time_t {
+    /**
+     * Range: 0..65534 (0..65534 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint16_t gps_week;
+
+    /**
+     * Range: 0..14 (0..14 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t gnss_epoch;
+
+    /**
+     * Range: 0..255 (0..255 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t gnss_time_crc;
+};
+
+/**
  * Signals in message CMD_KnownPosition.
  *
  * The vehicle's current position from another source (map, surveyed point), used for calibration or by CMD_Control SetInitialPosition.
@@ -801,6 +891,182 @@ struct navecu_can_nav_attitude_t {
 };
 
 /**
+ * Signals in message NAV_Rates.
+ *
+ * The vehicle's angular rates in the vehicle frame (x right, y forward, z up: the IMU's axes turned by the mounting estimate), bias-compensated, the mean over the output interval, Earth's rotation included (what a perfect gyro mounted square to the car reads). Sent at the dynamics rate (default 50 Hz) while navigating.
+ *
+ * All signal values are as on the CAN bus.
+ */
+struct navecu_can_nav_rates_t {
+    /**
+     * Range: -32768..32767 (-327.68..327.67 deg/s)
+     * Scale: 0.01
+     * Offset: 0
+     */
+    int16_t rate_x;
+
+    /**
+     * Range: -32768..32767 (-327.68..327.67 deg/s)
+     * Scale: 0.01
+     * Offset: 0
+     */
+    int16_t rate_y;
+
+    /**
+     * Range: -32768..32767 (-327.68..327.67 deg/s)
+     * Scale: 0.01
+     * Offset: 0
+     */
+    int16_t rate_z;
+
+    /**
+     * Range: 0..14 (0..14 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t nav_counter;
+
+    /**
+     * Range: 0..255 (0..255 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t nav_crc;
+};
+
+/**
+ * Signals in message NAV_AttitudeRates.
+ *
+ * The rates of the roll, pitch and heading of NAV_Attitude (the car's heading and pitch), the mean over the output interval. Sent at the dynamics rate while navigating.
+ *
+ * All signal values are as on the CAN bus.
+ */
+struct navecu_can_nav_attitude_rates_t {
+    /**
+     * Range: -32768..32767 (-327.68..327.67 deg/s)
+     * Scale: 0.01
+     * Offset: 0
+     */
+    int16_t roll_rate;
+
+    /**
+     * Range: -32768..32767 (-327.68..327.67 deg/s)
+     * Scale: 0.01
+     * Offset: 0
+     */
+    int16_t pitch_rate;
+
+    /**
+     * Range: -32768..32767 (-327.68..327.67 deg/s)
+     * Scale: 0.01
+     * Offset: 0
+     */
+    int16_t heading_rate;
+
+    /**
+     * Range: 0..14 (0..14 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t nav_counter;
+
+    /**
+     * Range: 0..255 (0..255 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t nav_crc;
+};
+
+/**
+ * Signals in message NAV_Accel.
+ *
+ * The vehicle's acceleration relative to the Earth without gravity, vehicle frame (x right, y forward, z up), the mean over the output interval (Coriolis and transport-rate terms, below 5 mm/s2 for a car, neglected). Sent at the dynamics rate while navigating.
+ *
+ * All signal values are as on the CAN bus.
+ */
+struct navecu_can_nav_accel_t {
+    /**
+     * Range: -32768..32767 (-32.768..32.767 m/s2)
+     * Scale: 0.001
+     * Offset: 0
+     */
+    int16_t accel_x;
+
+    /**
+     * Range: -32768..32767 (-32.768..32.767 m/s2)
+     * Scale: 0.001
+     * Offset: 0
+     */
+    int16_t accel_y;
+
+    /**
+     * Range: -32768..32767 (-32.768..32.767 m/s2)
+     * Scale: 0.001
+     * Offset: 0
+     */
+    int16_t accel_z;
+
+    /**
+     * Range: 0..14 (0..14 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t nav_counter;
+
+    /**
+     * Range: 0..255 (0..255 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t nav_crc;
+};
+
+/**
+ * Signals in message NAV_AccelEnu.
+ *
+ * The derivative of the ENU velocity of NAV_Velocity: the same acceleration in the local-level frame. Sent at the dynamics rate while navigating.
+ *
+ * All signal values are as on the CAN bus.
+ */
+struct navecu_can_nav_accel_enu_t {
+    /**
+     * Range: -32768..32767 (-32.768..32.767 m/s2)
+     * Scale: 0.001
+     * Offset: 0
+     */
+    int16_t accel_east;
+
+    /**
+     * Range: -32768..32767 (-32.768..32.767 m/s2)
+     * Scale: 0.001
+     * Offset: 0
+     */
+    int16_t accel_north;
+
+    /**
+     * Range: -32768..32767 (-32.768..32.767 m/s2)
+     * Scale: 0.001
+     * Offset: 0
+     */
+    int16_t accel_up;
+
+    /**
+     * Range: 0..14 (0..14 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t nav_counter;
+
+    /**
+     * Range: 0..255 (0..255 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t nav_crc;
+};
+
+/**
  * Signals in message NAV_Status.
  *
  * Multiplexed: every 100 ms two frames, page 0 and one of the counter pages 1..6 in rotation (counters saturate), hence a 50 ms mean cycle.
@@ -986,6 +1252,87 @@ struct navecu_can_nav_status_t {
      * Offset: 0
      */
     uint8_t nav_counter;
+
+    /**
+     * Range: 0..255 (0..255 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t nav_crc;
+};
+
+/**
+ * Signals in message NAV_Accuracy.
+ *
+ * 1-sigma accuracy of the velocity (per ENU axis) and of the car's heading, from the Kalman filter; never below the resolution (0.01); 40.95 (raw 4095) is unknown or beyond (no filter). Sent with NAV_Status, at its rate.
+ *
+ * All signal values are as on the CAN bus.
+ */
+struct navecu_can_nav_accuracy_t {
+    /**
+     * Range: 0..4095 (0..40.95 m/s)
+     * Scale: 0.01
+     * Offset: 0
+     */
+    uint16_t vel_acc_east;
+
+    /**
+     * Range: 0..4095 (0..40.95 m/s)
+     * Scale: 0.01
+     * Offset: 0
+     */
+    uint16_t vel_acc_north;
+
+    /**
+     * Range: 0..4095 (0..40.95 m/s)
+     * Scale: 0.01
+     * Offset: 0
+     */
+    uint16_t vel_acc_up;
+
+    /**
+     * Range: 0..4095 (0..40.95 deg)
+     * Scale: 0.01
+     * Offset: 0
+     */
+    uint16_t heading_accuracy;
+
+    /**
+     * Range: 0..14 (0..14 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t nav_counter;
+
+    /**
+     * Range: 0..255 (0..255 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t nav_crc;
+};
+
+/**
+ * Signals in message NAV_Time.
+ *
+ * GNSS (GPS) time of validity of the output set it follows (NAV_Position, NAV_Height, NAV_Velocity, NAV_Attitude of the same IMU sample): TimeOfWeek in microseconds from the receiver's TimeOfWeek and the estimated latency; GpsWeek from GNSS_Time. E2E: the CRC, no alive counter (TimeOfWeek itself advances). Unknown: TimeOfWeek 1099511.627775 (raw 2^40 - 1) before the first usable GNSS epoch, GpsWeek 65535 without GNSS_Time.
+ *
+ * All signal values are as on the CAN bus.
+ */
+struct navecu_can_nav_time_t {
+    /**
+     * Range: 0..1099511627775 (0..1099511.62777 s)
+     * Scale: 1e-06
+     * Offset: 0
+     */
+    uint64_t time_of_week;
+
+    /**
+     * Range: 0..65535 (0..65535 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint16_t gps_week;
 
     /**
      * Range: 0..255 (0..255 -)
@@ -2611,6 +2958,163 @@ bool navecu_can_gnss_height_gnss_epoch_is_in_range(uint8_t value);
 bool navecu_can_gnss_height_gnss_epoch_is_in_phys_range(float value);
 
 /**
+ * Pack message GNSS_Time.
+ *
+ * @param[out] dst_p Buffer to pack the message into.
+ * @param[in] src_p Data to pack.
+ * @param[in] size Size of dst_p.
+ *
+ * @return Size of packed data, or negative error code.
+ */
+int navecu_can_gnss_time_pack(
+    uint8_t *dst_p,
+    const struct navecu_can_gnss_time_t *src_p,
+    size_t size);
+
+/**
+ * Unpack message GNSS_Time.
+ *
+ * @param[out] dst_p Object to unpack the message into.
+ * @param[in] src_p Message to unpack.
+ * @param[in] size Size of src_p.
+ *
+ * @return zero(0) or negative error code.
+ */
+int navecu_can_gnss_time_unpack(
+    struct navecu_can_gnss_time_t *dst_p,
+    const uint8_t *src_p,
+    size_t size);
+
+/**
+ * Init message fields to default values from GNSS_Time.
+ *
+ * @param[in] msg_p Message to init.
+ *
+ * @return zero(0) on success or (-1) in case of nullptr argument.
+ */
+int navecu_can_gnss_time_init(struct navecu_can_gnss_time_t *msg_p);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint16_t navecu_can_gnss_time_gps_week_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_gnss_time_gps_week_decode(uint16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_time_gps_week_is_in_range(uint16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_time_gps_week_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_gnss_time_gnss_epoch_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_gnss_time_gnss_epoch_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_time_gnss_epoch_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_time_gnss_epoch_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_gnss_time_gnss_time_crc_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_gnss_time_gnss_time_crc_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_time_gnss_time_crc_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_time_gnss_time_crc_is_in_phys_range(float value);
+
+/**
  * Pack message CMD_KnownPosition.
  *
  * @param[out] dst_p Buffer to pack the message into.
@@ -4030,6 +4534,954 @@ bool navecu_can_nav_attitude_nav_crc_is_in_range(uint8_t value);
 bool navecu_can_nav_attitude_nav_crc_is_in_phys_range(float value);
 
 /**
+ * Pack message NAV_Rates.
+ *
+ * @param[out] dst_p Buffer to pack the message into.
+ * @param[in] src_p Data to pack.
+ * @param[in] size Size of dst_p.
+ *
+ * @return Size of packed data, or negative error code.
+ */
+int navecu_can_nav_rates_pack(
+    uint8_t *dst_p,
+    const struct navecu_can_nav_rates_t *src_p,
+    size_t size);
+
+/**
+ * Unpack message NAV_Rates.
+ *
+ * @param[out] dst_p Object to unpack the message into.
+ * @param[in] src_p Message to unpack.
+ * @param[in] size Size of src_p.
+ *
+ * @return zero(0) or negative error code.
+ */
+int navecu_can_nav_rates_unpack(
+    struct navecu_can_nav_rates_t *dst_p,
+    const uint8_t *src_p,
+    size_t size);
+
+/**
+ * Init message fields to default values from NAV_Rates.
+ *
+ * @param[in] msg_p Message to init.
+ *
+ * @return zero(0) on success or (-1) in case of nullptr argument.
+ */
+int navecu_can_nav_rates_init(struct navecu_can_nav_rates_t *msg_p);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+int16_t navecu_can_nav_rates_rate_x_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_rates_rate_x_decode(int16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_rates_rate_x_is_in_range(int16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_rates_rate_x_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+int16_t navecu_can_nav_rates_rate_y_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_rates_rate_y_decode(int16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_rates_rate_y_is_in_range(int16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_rates_rate_y_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+int16_t navecu_can_nav_rates_rate_z_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_rates_rate_z_decode(int16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_rates_rate_z_is_in_range(int16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_rates_rate_z_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_nav_rates_nav_counter_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_rates_nav_counter_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_rates_nav_counter_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_rates_nav_counter_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_nav_rates_nav_crc_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_rates_nav_crc_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_rates_nav_crc_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_rates_nav_crc_is_in_phys_range(float value);
+
+/**
+ * Pack message NAV_AttitudeRates.
+ *
+ * @param[out] dst_p Buffer to pack the message into.
+ * @param[in] src_p Data to pack.
+ * @param[in] size Size of dst_p.
+ *
+ * @return Size of packed data, or negative error code.
+ */
+int navecu_can_nav_attitude_rates_pack(
+    uint8_t *dst_p,
+    const struct navecu_can_nav_attitude_rates_t *src_p,
+    size_t size);
+
+/**
+ * Unpack message NAV_AttitudeRates.
+ *
+ * @param[out] dst_p Object to unpack the message into.
+ * @param[in] src_p Message to unpack.
+ * @param[in] size Size of src_p.
+ *
+ * @return zero(0) or negative error code.
+ */
+int navecu_can_nav_attitude_rates_unpack(
+    struct navecu_can_nav_attitude_rates_t *dst_p,
+    const uint8_t *src_p,
+    size_t size);
+
+/**
+ * Init message fields to default values from NAV_AttitudeRates.
+ *
+ * @param[in] msg_p Message to init.
+ *
+ * @return zero(0) on success or (-1) in case of nullptr argument.
+ */
+int navecu_can_nav_attitude_rates_init(struct navecu_can_nav_attitude_rates_t *msg_p);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+int16_t navecu_can_nav_attitude_rates_roll_rate_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_attitude_rates_roll_rate_decode(int16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_attitude_rates_roll_rate_is_in_range(int16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_attitude_rates_roll_rate_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+int16_t navecu_can_nav_attitude_rates_pitch_rate_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_attitude_rates_pitch_rate_decode(int16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_attitude_rates_pitch_rate_is_in_range(int16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_attitude_rates_pitch_rate_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+int16_t navecu_can_nav_attitude_rates_heading_rate_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_attitude_rates_heading_rate_decode(int16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_attitude_rates_heading_rate_is_in_range(int16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_attitude_rates_heading_rate_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_nav_attitude_rates_nav_counter_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_attitude_rates_nav_counter_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_attitude_rates_nav_counter_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_attitude_rates_nav_counter_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_nav_attitude_rates_nav_crc_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_attitude_rates_nav_crc_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_attitude_rates_nav_crc_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_attitude_rates_nav_crc_is_in_phys_range(float value);
+
+/**
+ * Pack message NAV_Accel.
+ *
+ * @param[out] dst_p Buffer to pack the message into.
+ * @param[in] src_p Data to pack.
+ * @param[in] size Size of dst_p.
+ *
+ * @return Size of packed data, or negative error code.
+ */
+int navecu_can_nav_accel_pack(
+    uint8_t *dst_p,
+    const struct navecu_can_nav_accel_t *src_p,
+    size_t size);
+
+/**
+ * Unpack message NAV_Accel.
+ *
+ * @param[out] dst_p Object to unpack the message into.
+ * @param[in] src_p Message to unpack.
+ * @param[in] size Size of src_p.
+ *
+ * @return zero(0) or negative error code.
+ */
+int navecu_can_nav_accel_unpack(
+    struct navecu_can_nav_accel_t *dst_p,
+    const uint8_t *src_p,
+    size_t size);
+
+/**
+ * Init message fields to default values from NAV_Accel.
+ *
+ * @param[in] msg_p Message to init.
+ *
+ * @return zero(0) on success or (-1) in case of nullptr argument.
+ */
+int navecu_can_nav_accel_init(struct navecu_can_nav_accel_t *msg_p);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+int16_t navecu_can_nav_accel_accel_x_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_accel_accel_x_decode(int16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_accel_accel_x_is_in_range(int16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_accel_accel_x_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+int16_t navecu_can_nav_accel_accel_y_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_accel_accel_y_decode(int16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_accel_accel_y_is_in_range(int16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_accel_accel_y_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+int16_t navecu_can_nav_accel_accel_z_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_accel_accel_z_decode(int16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_accel_accel_z_is_in_range(int16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_accel_accel_z_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_nav_accel_nav_counter_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_accel_nav_counter_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_accel_nav_counter_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_accel_nav_counter_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_nav_accel_nav_crc_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_accel_nav_crc_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_accel_nav_crc_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_accel_nav_crc_is_in_phys_range(float value);
+
+/**
+ * Pack message NAV_AccelEnu.
+ *
+ * @param[out] dst_p Buffer to pack the message into.
+ * @param[in] src_p Data to pack.
+ * @param[in] size Size of dst_p.
+ *
+ * @return Size of packed data, or negative error code.
+ */
+int navecu_can_nav_accel_enu_pack(
+    uint8_t *dst_p,
+    const struct navecu_can_nav_accel_enu_t *src_p,
+    size_t size);
+
+/**
+ * Unpack message NAV_AccelEnu.
+ *
+ * @param[out] dst_p Object to unpack the message into.
+ * @param[in] src_p Message to unpack.
+ * @param[in] size Size of src_p.
+ *
+ * @return zero(0) or negative error code.
+ */
+int navecu_can_nav_accel_enu_unpack(
+    struct navecu_can_nav_accel_enu_t *dst_p,
+    const uint8_t *src_p,
+    size_t size);
+
+/**
+ * Init message fields to default values from NAV_AccelEnu.
+ *
+ * @param[in] msg_p Message to init.
+ *
+ * @return zero(0) on success or (-1) in case of nullptr argument.
+ */
+int navecu_can_nav_accel_enu_init(struct navecu_can_nav_accel_enu_t *msg_p);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+int16_t navecu_can_nav_accel_enu_accel_east_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_accel_enu_accel_east_decode(int16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_accel_enu_accel_east_is_in_range(int16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_accel_enu_accel_east_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+int16_t navecu_can_nav_accel_enu_accel_north_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_accel_enu_accel_north_decode(int16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_accel_enu_accel_north_is_in_range(int16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_accel_enu_accel_north_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+int16_t navecu_can_nav_accel_enu_accel_up_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_accel_enu_accel_up_decode(int16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_accel_enu_accel_up_is_in_range(int16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_accel_enu_accel_up_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_nav_accel_enu_nav_counter_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_accel_enu_nav_counter_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_accel_enu_nav_counter_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_accel_enu_nav_counter_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_nav_accel_enu_nav_crc_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_accel_enu_nav_crc_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_accel_enu_nav_crc_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_accel_enu_nav_crc_is_in_phys_range(float value);
+
+/**
  * Pack message NAV_Status.
  *
  * @param[out] dst_p Buffer to pack the message into.
@@ -5025,6 +6477,440 @@ bool navecu_can_nav_status_nav_crc_is_in_range(uint8_t value);
  * @return true if in range, false otherwise.
  */
 bool navecu_can_nav_status_nav_crc_is_in_phys_range(float value);
+
+/**
+ * Pack message NAV_Accuracy.
+ *
+ * @param[out] dst_p Buffer to pack the message into.
+ * @param[in] src_p Data to pack.
+ * @param[in] size Size of dst_p.
+ *
+ * @return Size of packed data, or negative error code.
+ */
+int navecu_can_nav_accuracy_pack(
+    uint8_t *dst_p,
+    const struct navecu_can_nav_accuracy_t *src_p,
+    size_t size);
+
+/**
+ * Unpack message NAV_Accuracy.
+ *
+ * @param[out] dst_p Object to unpack the message into.
+ * @param[in] src_p Message to unpack.
+ * @param[in] size Size of src_p.
+ *
+ * @return zero(0) or negative error code.
+ */
+int navecu_can_nav_accuracy_unpack(
+    struct navecu_can_nav_accuracy_t *dst_p,
+    const uint8_t *src_p,
+    size_t size);
+
+/**
+ * Init message fields to default values from NAV_Accuracy.
+ *
+ * @param[in] msg_p Message to init.
+ *
+ * @return zero(0) on success or (-1) in case of nullptr argument.
+ */
+int navecu_can_nav_accuracy_init(struct navecu_can_nav_accuracy_t *msg_p);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint16_t navecu_can_nav_accuracy_vel_acc_east_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_accuracy_vel_acc_east_decode(uint16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_accuracy_vel_acc_east_is_in_range(uint16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_accuracy_vel_acc_east_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint16_t navecu_can_nav_accuracy_vel_acc_north_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_accuracy_vel_acc_north_decode(uint16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_accuracy_vel_acc_north_is_in_range(uint16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_accuracy_vel_acc_north_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint16_t navecu_can_nav_accuracy_vel_acc_up_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_accuracy_vel_acc_up_decode(uint16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_accuracy_vel_acc_up_is_in_range(uint16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_accuracy_vel_acc_up_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint16_t navecu_can_nav_accuracy_heading_accuracy_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_accuracy_heading_accuracy_decode(uint16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_accuracy_heading_accuracy_is_in_range(uint16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_accuracy_heading_accuracy_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_nav_accuracy_nav_counter_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_accuracy_nav_counter_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_accuracy_nav_counter_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_accuracy_nav_counter_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_nav_accuracy_nav_crc_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_accuracy_nav_crc_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_accuracy_nav_crc_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_accuracy_nav_crc_is_in_phys_range(float value);
+
+/**
+ * Pack message NAV_Time.
+ *
+ * @param[out] dst_p Buffer to pack the message into.
+ * @param[in] src_p Data to pack.
+ * @param[in] size Size of dst_p.
+ *
+ * @return Size of packed data, or negative error code.
+ */
+int navecu_can_nav_time_pack(
+    uint8_t *dst_p,
+    const struct navecu_can_nav_time_t *src_p,
+    size_t size);
+
+/**
+ * Unpack message NAV_Time.
+ *
+ * @param[out] dst_p Object to unpack the message into.
+ * @param[in] src_p Message to unpack.
+ * @param[in] size Size of src_p.
+ *
+ * @return zero(0) or negative error code.
+ */
+int navecu_can_nav_time_unpack(
+    struct navecu_can_nav_time_t *dst_p,
+    const uint8_t *src_p,
+    size_t size);
+
+/**
+ * Init message fields to default values from NAV_Time.
+ *
+ * @param[in] msg_p Message to init.
+ *
+ * @return zero(0) on success or (-1) in case of nullptr argument.
+ */
+int navecu_can_nav_time_init(struct navecu_can_nav_time_t *msg_p);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint64_t navecu_can_nav_time_time_of_week_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_time_time_of_week_decode(uint64_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_time_time_of_week_is_in_range(uint64_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_time_time_of_week_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint16_t navecu_can_nav_time_gps_week_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_time_gps_week_decode(uint16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_time_gps_week_is_in_range(uint16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_time_gps_week_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_nav_time_nav_crc_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_time_nav_crc_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_time_nav_crc_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_time_nav_crc_is_in_phys_range(float value);
 
 /**
  * Pack message NAV_Calibration.
