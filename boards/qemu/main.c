@@ -21,6 +21,7 @@
 
 static hal_t hal;
 static app_t app;
+static app_config_t cfg; /* off the stack, as on the ECU */
 
 void board_main(void) __attribute__((noreturn));
 void board_fault(void);
@@ -36,7 +37,7 @@ void board_main(void)
 {
     const char *argv[5];
     const size_t argc = bench_args(argv, 5u);
-    const app_config_t cfg = app_default_config();
+    app_config_defaults(&cfg);
     if (argc < 3u || app_init(&app, &cfg) != 0) {
         bench_puts("usage: navecu-qemu IN.log OUT.log [TRACE.txt] (semihosting arguments)\n");
         semihost_exit(2u);

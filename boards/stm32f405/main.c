@@ -18,7 +18,8 @@
 #define BATCH_MAX 64u /* the RX ring's length */
 
 static app_t app;
-static uint32_t rx_ids[RX_IDS_MAX]; /* static: 128 bytes off the 2 KiB stack budget */
+static app_config_t cfg;            /* static, as the receive list: off the 2 KiB stack */
+static uint32_t rx_ids[RX_IDS_MAX];
 
 void board_main(void) __attribute__((noreturn));
 void SysTick_Handler(void);
@@ -30,7 +31,7 @@ void SysTick_Handler(void)
 
 void board_main(void)
 {
-    const app_config_t cfg = app_default_config();
+    app_config_defaults(&cfg);
     (void)app_init(&app, &cfg); /* the defaults are valid (test_app) */
     const size_t n_ids = app_rx_ids(app.cfg.can_ids, rx_ids, RX_IDS_MAX);
     hal_t *hal = hal_stm32_init(rx_ids, n_ids);

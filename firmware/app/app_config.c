@@ -6,37 +6,42 @@
 app_config_t app_default_config(void)
 {
     app_config_t cfg;
-    cfg.imu_rate_hz = 100u;
-    cfg.nav_rate_hz = 50u;
-    cfg.status_rate_hz = 10u;
-    cfg.dyn_rate_hz = 50u;
-    cfg.level_s = 30u; /* docs/can.md: levelling error ~ LSB / level time */
-    cfg.odo_axle = ODO_AXLE_REAR;
-    cfg.odo_track_m = vehicle_profile.track_m;
-    cfg.odo_wheelbase_m = vehicle_profile.wheelbase_m;
+    app_config_defaults(&cfg);
+    return cfg;
+}
+
+void app_config_defaults(app_config_t *out)
+{
+    out->imu_rate_hz = 100u;
+    out->nav_rate_hz = 50u;
+    out->status_rate_hz = 10u;
+    out->dyn_rate_hz = 50u;
+    out->level_s = 30u; /* docs/can.md: levelling error ~ LSB / level time */
+    out->odo_axle = ODO_AXLE_REAR;
+    out->odo_track_m = vehicle_profile.track_m;
+    out->odo_wheelbase_m = vehicle_profile.wheelbase_m;
     /* A calibration point's position error e gives errors of about e / base in dH (rad)
      * and in mu: a 3 m point 2 km away, 0.09 deg and 0.15 % (docs/odometry.md). */
-    cfg.cal_min_base_m = NAV_C(2000.0);
+    out->cal_min_base_m = NAV_C(2000.0);
     /* the mid-grade IMU of seed 000 (tools/sim/sensors.py "mid-grade"): ARW 0.003 deg/sqrt(h),
      * turn-on bias 0.015 deg/h */
-    cfg.gyro_arw_rad_rts = NAV_C(8.73e-7);
-    cfg.gyro_bias_rps = NAV_C(7.27e-8);
-    cfg.accel_bias_mps2 = NAV_C(1e-3);
+    out->gyro_arw_rad_rts = NAV_C(8.73e-7);
+    out->gyro_bias_rps = NAV_C(7.27e-8);
+    out->accel_bias_mps2 = NAV_C(1e-3);
     /* in-run instability 0.005 deg/h and 1e-4 m/s^2 over a 300 s correlation time as random
      * walks: sigma sqrt(2 / tau) */
-    cfg.gyro_bias_rw_rps_rts = NAV_C(2.0e-9);
-    cfg.accel_bias_rw_mps2_rts = NAV_C(8.2e-6);
-    cfg.gnss_latency_s = NAV_C(0.1); /* u-blox-class receivers: about 0.1 s */
-    cfg.gnss_corr_s = NAV_C(20.0);   /* standalone code receiver: atmosphere, orbits */
-    cfg.gnss_lever_b_m[0] = cfg.gnss_lever_b_m[1] = cfg.gnss_lever_b_m[2] = NAV_C(0.0);
-    cfg.odo_lever_b_m[0] = cfg.odo_lever_b_m[1] = cfg.odo_lever_b_m[2] = NAV_C(0.0);
+    out->gyro_bias_rw_rps_rts = NAV_C(2.0e-9);
+    out->accel_bias_rw_mps2_rts = NAV_C(8.2e-6);
+    out->gnss_latency_s = NAV_C(0.1); /* u-blox-class receivers: about 0.1 s */
+    out->gnss_corr_s = NAV_C(20.0);   /* standalone code receiver: atmosphere, orbits */
+    out->gnss_lever_b_m[0] = out->gnss_lever_b_m[1] = out->gnss_lever_b_m[2] = NAV_C(0.0);
+    out->odo_lever_b_m[0] = out->odo_lever_b_m[1] = out->odo_lever_b_m[2] = NAV_C(0.0);
     /* an automotive MEMS IMU's range: 300 deg/s, 8 g */
-    cfg.gyro_range_rps = NAV_C(5.235988);
-    cfg.accel_range_mps2 = NAV_C(78.4532);
+    out->gyro_range_rps = NAV_C(5.235988);
+    out->accel_range_mps2 = NAV_C(78.4532);
     for (int i = 0; i < (int)NAVECU_MSG_N; i++) {
-        cfg.can_ids[i] = vehicle_profile.can_ids[i];
+        out->can_ids[i] = vehicle_profile.can_ids[i];
     }
-    return cfg;
 }
 
 static int within(nav_real_t x, nav_real_t lo_excl, nav_real_t hi_excl)

@@ -50,6 +50,9 @@ typedef struct {
  * identifiers from the build's vehicle profile (firmware/vehicle/vehicle.h). */
 app_config_t app_default_config(void);
 
+/* The same, written into *cfg (no copy of the struct on the caller's stack: a board's). */
+void app_config_defaults(app_config_t *cfg);
+
 /* 1 if every field is within its range (the comments above and app_config.c), else 0. */
 int app_config_valid(const app_config_t *cfg);
 

@@ -284,8 +284,16 @@ size_t candump_format_line(char *buf, size_t cap, uint64_t t_us, const char *ifa
     return len;
 }
 
-int candump_read(candump_next_byte_t next, void *ctx, char *line, size_t cap,
-                 hal_can_frame_t *f, uint32_t *malformed)
+/*
+ * Read lines from a byte source until one holds a frame: each line's first cap
+ * characters are kept in line[0..cap) (the rest of a longer line is read and dropped),
+ * then parsed by candump_parse_line. A malformed or overlong line adds one to *malformed
+ * (saturating) and is skipped; a blank line is skipped; a last line without a newline is
+ * parsed like any other. Returns 0 with *f filled, HAL_ENODATA at the end of the source
+ * (the caller should not read again), or HAL_EIO on a read error.
+ */
+static int candump_read(candump_next_byte_t next, void *ctx, char *line, size_t cap,
+                        hal_can_frame_t *f, uint32_t *malformed)
 {
     for (;;) {
         size_t n = 0u;

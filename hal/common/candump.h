@@ -57,22 +57,11 @@ candump_line_t candump_parse_line(const char *s, size_t n, hal_can_frame_t *f);
 size_t candump_format_line(char *buf, size_t cap, uint64_t t_us, const char *iface,
                            const hal_can_frame_t *f);
 
-/* A byte source for candump_read: the next byte 0..255, CANDUMP_SRC_END at its end, or
+/* A byte source for candump_replay: the next byte 0..255, CANDUMP_SRC_END at its end, or
  * CANDUMP_SRC_ERROR on a read error. */
 #define CANDUMP_SRC_END (-1)
 #define CANDUMP_SRC_ERROR (-2)
 typedef int (*candump_next_byte_t)(void *ctx);
-
-/*
- * Read lines from a byte source until one holds a frame: each line's first cap
- * characters are kept in line[0..cap) (the rest of a longer line is read and dropped),
- * then parsed by candump_parse_line. A malformed or overlong line adds one to *malformed
- * (saturating) and is skipped; a blank line is skipped; a last line without a newline is
- * parsed like any other. Returns 0 with *f filled, HAL_ENODATA at the end of the source
- * (the caller should not read again), or HAL_EIO on a read error.
- */
-int candump_read(candump_next_byte_t next, void *ctx, char *line, size_t cap,
-                 hal_can_frame_t *f, uint32_t *malformed);
 
 /* A log replayed as CAN receive: its clock (the last frame's timestamp, 0 before any),
  * the malformed lines skipped and the frames returned (both saturating), and its end. */
@@ -85,7 +74,7 @@ typedef struct {
 
 /*
  * The next frame of a replay: HAL_ENODATA once the source has ended (it is not read
- * again), else candump_read's result; a frame sets the replay's clock and is counted.
+ * again), else the result of reading lines until one holds a frame (candump.c); a frame sets the replay's clock and is counted.
  */
 int candump_replay(candump_rx_t *rx, candump_next_byte_t next, void *ctx, char *line,
                    size_t cap, hal_can_frame_t *f);

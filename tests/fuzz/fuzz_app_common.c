@@ -50,19 +50,18 @@ void fz_begin(fz_app_t *z, app_t *app, hal_t *hal)
     hal->tx_n = 0u;
 }
 
-static int is_output_id(uint32_t id)
+/* The stock identifier of the output message the application sends on id with its configured
+   identifiers (navecu_protocol.h's message table), or 0 when id is none of its outputs. */
+static uint32_t output_stock_id(const app_t *a, uint32_t id)
 {
-    switch (id) {
-    case NAVECU_CAN_NAV_POSITION_FRAME_ID:
-    case NAVECU_CAN_NAV_HEIGHT_FRAME_ID:
-    case NAVECU_CAN_NAV_VELOCITY_FRAME_ID:
-    case NAVECU_CAN_NAV_ATTITUDE_FRAME_ID:
-    case NAVECU_CAN_NAV_STATUS_FRAME_ID:
-    case NAVECU_CAN_NAV_CALIBRATION_FRAME_ID:
-        return 1;
-    default:
-        return 0;
+    static const uint32_t stock[NAVECU_MSG_N] = NAVECU_MSG_STOCK_IDS;
+    static const uint8_t is_input[NAVECU_MSG_N] = NAVECU_MSG_IS_INPUT;
+    for (size_t m = 0u; m < (size_t)NAVECU_MSG_N; m++) {
+        if (is_input[m] == 0u && a->cfg.can_ids[m] == id) {
+            return stock[m];
+        }
     }
+    return 0u;
 }
 
 void fz_check(fz_app_t *z)
@@ -89,7 +88,8 @@ void fz_check(fz_app_t *z)
     memcpy(z->health, h, sizeof h);
     for (uint32_t k = 0u; k < hal->tx_n; k++) {
         const hal_can_frame_t *f = &hal->tx[k];
-        if (f->dlc != 8u || f->extended != 0u || !is_output_id(f->id)) {
+        const uint32_t stock_id = output_stock_id(a, f->id);
+        if (f->dlc != 8u || f->extended != 0u || stock_id == 0u) {
             fuzz_fail("app: sent frame id 0x%X ext %u dlc %u is not a NAV_* output", (unsigned)f->id,
                       f->extended, f->dlc);
         }
@@ -98,8 +98,8 @@ void fz_check(fz_app_t *z)
         c.flags = CODEC_REQUIRE_RANGE;
         uint8_t d[8];
         memcpy(d, f->data, 8u);
-        (void)codec_check_frame(&c, f->id, d);
-        if (f->id != NAVECU_CAN_NAV_POSITION_FRAME_ID && !e2e_crc_ok(f->id, f->data)) {
+        (void)codec_check_frame(&c, stock_id, d);
+        if (stock_id != NAVECU_CAN_NAV_POSITION_FRAME_ID && !e2e_crc_ok(f->id, f->data)) {
             fuzz_fail("app: sent frame 0x%X has a wrong E2E CRC", (unsigned)f->id);
         }
     }
