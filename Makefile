@@ -80,6 +80,8 @@ help:
 	@echo "                   (SCENARIO=name for another tools/sim/scenarios/name.toml;"
 	@echo "                   BUS=vcan0 runs the firmware live on vcan, docs/live-can.md)"
 	@echo "make kingston      the real Kingston 2008 drive (MODE=dr|full, OUTAGES=a-b,c-d|none)"
+	@echo "make drive DATA=data/comma2k19-rav4 VEHICLE=toyota_rav4_2017"
+	@echo "                   the real RAV4's whole bus through the RAV4 build, against its reference"
 	@echo "make vcan          set up vcan0 on a normal Linux machine (sudo)"
 	@echo "make bench-latency IMU frame to NAV frame latency over vcan (out/bench/)"
 	@echo "make grades        free-inertial error per IMU grade vs seed 003's Table 2"
@@ -399,6 +401,16 @@ OUTAGES ?= default
 kingston: deps venv $(BUILD)/host/navecu
 	$(PY) -m tools.kingston.run --mode $(MODE) --outages "$(OUTAGES)" \
 	  --out $(if $(filter dr,$(MODE)),out/kingston-dr,out/kingston)
+
+# ---- a recorded drive (tools/drive.py): DATA=data/comma2k19-rav4 (default) is the 2017
+# RAV4's whole recorded bus with the device's IMU and GNSS, run through the build for
+# VEHICLE=toyota_rav4_2017 against the reference pose (tools/comma2k19/run.py,
+# docs/vehicles.md), out/drive-comma2k19-rav4/; DATA=data/kingston-2008 runs the Kingston
+# drive (VEHICLE=native)
+.PHONY: drive
+DATA ?= data/comma2k19-rav4
+drive: deps venv $(BUILD)/host/navecu$(VEH_SUFFIX)
+	$(PY) -m tools.drive --data $(DATA) --vehicle $(VEHICLE)
 
 # ---- fuzzing: libFuzzer harnesses of tests/fuzz/ (tests/fuzz/README.md) ----
 # make fuzz-build: every harness into build/fuzz/; make fuzz: each runs FUZZ_SECONDS

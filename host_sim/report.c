@@ -3,6 +3,7 @@
 
 #include "hal_linux.h"
 #include "hal_socketcan.h"
+#include "vehicle.h"
 
 #define RAD_PER_DEG (3.14159265358979323846 / 180.0)
 
@@ -94,6 +95,14 @@ void host_summary(FILE *out, const app_t *app, const hal_t *hal, unsigned long f
             (unsigned long)h->nav_rejected, (unsigned long)h->time_jumps);
     fprintf(out, "navecu: foreign frames (not read, not refused): %lu\n",
             (unsigned long)h->foreign);
+    if (!vehicle_profile.native_wheels) {
+        const uint32_t *n = app->keep.rx.car_read;
+        fprintf(out,
+                "navecu: car messages read (profile %s): wheel speeds %lu, gear %lu, yaw rate "
+                "%lu\n",
+                vehicle_profile.name, (unsigned long)n[VEHICLE_MSG_WHEELS],
+                (unsigned long)n[VEHICLE_MSG_GEAR], (unsigned long)n[VEHICLE_MSG_YAW_RATE]);
+    }
     if (ekf != NULL) {
         fprintf(out,
                 "navecu: filter: %lu updates, %lu gated, %lu covariance corrections; odometer "

@@ -199,6 +199,7 @@ def _car_reads(p: Profile, t: dict, fname: str) -> None:
     w = t["wheels"]
     msg = _message(db, w["message"], f"{fname} [wheels]")
     sigs = [_signal(msg, w["signals"][k], f"{fname} [wheels]") for k in WHEELS]
+    _range_override(w, sigs, f"{fname} [wheels]")
     unit = w.get("unit", "m/s")
     if unit not in SPEED_UNITS:
         raise ProfileError(f"{fname}: wheel unit must be one of {', '.join(SPEED_UNITS)}")
@@ -224,6 +225,7 @@ def _car_reads(p: Profile, t: dict, fname: str) -> None:
     if y is not None:
         ymsg = _message(db, y["message"], f"{fname} [yaw_rate]")
         ysig = _signal(ymsg, y["signal"], f"{fname} [yaw_rate]")
+        _range_override(y, [ysig], f"{fname} [yaw_rate]")
         unit = y.get("unit", "rad/s")
         if unit not in RATE_UNITS:
             raise ProfileError(f"{fname}: yaw-rate unit must be one of {', '.join(RATE_UNITS)}")
@@ -232,6 +234,33 @@ def _car_reads(p: Profile, t: dict, fname: str) -> None:
     ids = [r.message.frame_id for r in p.reads]
     if len(set(ids)) != len(ids):
         raise ProfileError(f"{fname}: wheels, gear and yaw rate must be different messages")
+
+
+def _raw_span(sig) -> tuple:
+    """The physical values a signal's bits can hold (DBC units)."""
+    lo = -(1 << (sig.length - 1)) if sig.is_signed else 0
+    hi = (1 << (sig.length - 1)) - 1 if sig.is_signed else (1 << sig.length) - 1
+    a, b = sig.offset + sig.scale * lo, sig.offset + sig.scale * hi
+    return (min(a, b), max(a, b))
+
+
+def _range_override(spec: dict, sigs: list, where: str) -> None:
+    """`range = [lo, hi]` (the signal's DBC units) replaces the DBC's [min|max] of the
+    table's signal(s) where that is wrong (a placeholder): the generated decoder's range
+    check then uses it. It must lie within what the signal's bits can hold."""
+    r = spec.get("range")
+    if r is None:
+        return
+    if (not isinstance(r, list) or len(r) != 2 or
+            not all(isinstance(x, (int, float)) for x in r) or not r[0] < r[1]):
+        raise ProfileError(f"{where}: range must be [lo, hi] with lo < hi")
+    for sig in sigs:
+        lo, hi = _raw_span(sig)
+        eps = 1e-9 * max(1.0, abs(lo), abs(hi))
+        if r[0] < lo - eps or r[1] > hi + eps:
+            raise ProfileError(f"{where}: range {r} is beyond what {sig.name}'s "
+                               f"{sig.length} bits hold ([{lo:g}, {hi:g}])")
+        sig.minimum, sig.maximum = float(r[0]), float(r[1])
 
 
 def _checksum(spec: dict, fname: str) -> str:

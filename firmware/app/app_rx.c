@@ -211,6 +211,9 @@ static rx_verdict_t decode_car(rx_state_t *rx, const hal_can_frame_t *f, rx_inpu
         return v == VEHICLE_BAD_DLC ? RX_BAD_DLC
                                     : (v == VEHICLE_BAD_CHECKSUM ? RX_BAD_CRC : RX_BAD_VALUE);
     }
+    if ((unsigned)m.kind < (unsigned)VEHICLE_MSG_N && rx->car_read[m.kind] < UINT32_MAX) {
+        rx->car_read[m.kind]++;
+    }
     if (m.kind == VEHICLE_MSG_GEAR) {
         rx->gear_direction = m.gear_direction;
         rx->have_gear = 1u;

@@ -25,6 +25,7 @@
 #include "hal.h"
 #include "navecu_protocol.h"
 #include "sins.h"
+#include "vehicle.h"
 
 typedef enum {
     RX_NONE = 0,          /* nothing to act on: one of navecu's own outputs on the bus */
@@ -127,6 +128,8 @@ typedef struct {
     uint8_t have_gear;
     nav_real_t esp_yaw_rate_rps; /* the car's ESP, left positive */
     uint8_t have_esp_yaw;
+    uint32_t car_read[VEHICLE_MSG_N]; /* the car's frames read and passed, by vehicle_kind_t
+                                         (saturating; host summary) */
 } rx_state_t;
 
 /* Decode and check one frame, navecu's messages on the identifiers can_ids. Returns RX_OK with *in filled (kind RX_NONE for navecu's

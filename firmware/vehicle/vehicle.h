@@ -43,6 +43,7 @@ typedef enum {
     VEHICLE_MSG_WHEELS,    /* wheel_mps */
     VEHICLE_MSG_GEAR,      /* gear_direction */
     VEHICLE_MSG_YAW_RATE,  /* yaw_rate_rps */
+    VEHICLE_MSG_N
 } vehicle_kind_t;
 
 typedef enum {

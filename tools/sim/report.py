@@ -26,7 +26,7 @@ from tools import navecu_can as nc
 from tools.geodesy import horizontal_error_m, radii_m
 from tools.sim import scenario, sensors
 
-def read_nav_log(path) -> dict:
+def read_nav_log(path, db=None) -> dict:
     """Decode the NAV_* frames of a candump log (every message navecu sends) into arrays
     keyed by message; each has 't_s' and the signal columns.
 
@@ -35,8 +35,9 @@ def read_nav_log(path) -> dict:
     a live bus, at any replay speed, gives the same times as a --can-log run. Each
     NAV_Position opens a navigation set (Position, Height, Velocity, Attitude) that takes
     its NAV_Height's time; the others take the time of the last set (NaN before one): at
-    the default rates every output of a sample follows its set (docs/can.md)."""
-    db = nc.load_db()
+    the default rates every output of a sample follows its set (docs/can.md). db: the
+    protocol to decode with (default nc.load_db(), the selected vehicle's)."""
+    db = db if db is not None else nc.load_db()
     want = {m.frame_id: m.name for m in db.messages if "NAVECU" in m.senders}
     rows = {n: [] for n in want.values()}
     cycle_rows, t_cycle, last_ms, wraps = [], math.nan, None, 0

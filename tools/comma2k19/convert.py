@@ -1,0 +1,324 @@
+"""The comma2k19 RAV4 segment as navecu's input: the car's whole recorded bus, unchanged,
+merged with the windshield device's IMU and u-blox GNSS encoded as navecu frames.
+
+    python -m tools.comma2k19.convert OUT.log [--data data/comma2k19-rav4]
+        [--vehicle toyota_rav4_2017] [--channels can0,can1,can2,can3] [--no-car-bus]
+        [--outage A-B]
+
+The files are described in data/comma2k19-rav4/README.md; docs/vehicles.md says how they
+are used. What navecu is given beyond the recording (none of it is in the car's frames):
+
+- **Time base**: t = segment clock - t0, t0 the first IMU sample; the firmware's own time
+  is its IMU sample count (docs/can.md), the log's timestamps only order the frames.
+- **IMU**: 104.26 Hz with jittered stamps (314..316 ticks of 32.768 kHz) resampled to a
+  fixed IMU_RATE_HZ grid without losing any motion: the trapezoidal integral of the rates
+  and specific forces at the device's stamps, interpolated to the grid, differenced (each
+  grid increment holds exactly what the device measured over that interval); rotated from
+  the device's x forward / y right / z down axes into the car's (navecu body: x right,
+  y forward, z up) with the mounting measured against the reference (MOUNT_DEG, README:
+  "Mounting"): navecu estimates only a small mounting pitch and yaw (issue #16 brings a
+  configured mounting).
+- **GNSS**: the u-blox fixes (9.7 Hz), sent when they were logged (t_s), with their own
+  time of validity in TimeOfWeek (gps_tow_s) and the week in GNSS_Time; the latency of the
+  earliest-logged fix is the firmware's --gnss-latency-ms (gnss_latency_ms in the meta);
+  the receiver gives no accuracy: HorizAccuracy / VertAccuracy / SpeedAccuracy are the
+  u-blox M8 class's datasheet figures (GNSS_ACCURACY); it gives no vertical velocity
+  either, and the road climbs and dips by up to 5 % (reference: -0.7..+0.9 m/s): VelUp is
+  the fixes' height change over the last VUP_BACK_S (causal, what the receiver's host
+  could compute: 0.10 m/s rms, 0.38 m/s max against the reference here).
+- **Initial state**: the car never stops, so it cannot level: the reference pose at t0
+  (position, height, the car's heading, roll and pitch) in CMD_KnownPosition,
+  SetInitialPosition and CMD_InitialAttitude (issue #17 brings a start while moving).
+- **The car's bus**: every frame of car_bus.log (all four channels on navecu's bus, as if a
+  gateway bridged them: 2,258 frames/s), untouched, at its recorded time.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import sys
+from pathlib import Path
+
+import can
+import numpy as np
+
+from tools import navecu_can as nc
+from tools import vehicle
+
+ROOT = Path(__file__).resolve().parents[2]
+DATA_DIR = Path(os.environ.get("NAVECU_COMMA2K19_DIR") or ROOT / "data" / "comma2k19-rav4")
+IMU_RATE_HZ = 100
+GPS_WEEK = 2012
+#: GPS time of week = segment clock + this (README "Time base")
+GPS_TOW_MINUS_T_S = 357697.849502
+#: the device relative to the car, Z-Y-X in FRD (README "Mounting"), deg
+MOUNT_DEG = {"roll": 1.25, "pitch": -3.75, "yaw": -0.90}
+#: u-blox NEO-M8 datasheet (UBX-15031086): horizontal 2.5 m CEP (GPS+GLONASS) = 1.1774
+#: sigma per axis, sent as the 68.27 % radius (1.5152 sigma, as the simulator and the
+#: Kingston converter do); vertical about twice the horizontal sigma; velocity 0.05 m/s,
+#: widened to 0.2 m/s for the missing vertical velocity
+GNSS_ACCURACY = {"horiz_m": round(2.5 / 1.1774 * 1.5152, 1), "vert_m": 4.2, "speed_mps": 0.2}
+#: VelUp = height change over this span of past fixes (s); the first fixes send 0
+VUP_BACK_S = 1.0
+# frame order within one timestamp: commands, then IMU halves, then GNSS epoch
+O_KNOWN, O_SETPOS, O_ATT, O_CAR, O_RATE, O_ACCEL = 0, 1, 2, 3, 4, 5
+O_GPOS, O_GVEL, O_GHGT, O_GTIME, O_GSTAT = 6, 7, 8, 9, 10
+
+
+def _csv(path: Path) -> np.ndarray:
+    return np.genfromtxt(path, delimiter=",", names=True, dtype=float)
+
+
+def _rot(axis: int, a: float) -> np.ndarray:
+    c, s = math.cos(a), math.sin(a)
+    m = np.eye(3)
+    i, j = [(1, 2), (0, 2), (0, 1)][axis]
+    m[i, i] = m[j, j] = c
+    m[i, j], m[j, i] = (-s, s) if axis != 1 else (s, -s)
+    return m
+
+
+def zyx(yaw_deg: float, pitch_deg: float, roll_deg: float) -> np.ndarray:
+    """Rz(yaw) Ry(pitch) Rx(roll): maps a vector from the rotated frame to the reference
+    one (aerospace Z-Y-X, e.g. body FRD to NED)."""
+    return (_rot(2, math.radians(yaw_deg)) @ _rot(1, math.radians(pitch_deg))
+            @ _rot(0, math.radians(roll_deg)))
+
+
+#: FRD <-> RFU and NED <-> ENU (its own inverse)
+P_SWAP = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
+#: car RFU <- device FRD
+C_CAR_DEV = P_SWAP @ zyx(MOUNT_DEG["yaw"], MOUNT_DEG["pitch"], MOUNT_DEG["roll"])
+
+
+def car_attitude(roll_deg, pitch_deg, heading_deg) -> tuple:
+    """The car's roll, pitch, heading (deg, docs/frames.md: 3-1-2, roll right side down,
+    pitch nose up, heading clockwise from north) from the device's reference attitude
+    (Z-Y-X against NED) and the mounting."""
+    c_ned_dev = zyx(heading_deg, pitch_deg, roll_deg)
+    c_bn = P_SWAP @ c_ned_dev @ C_CAR_DEV.T   # ENU <- car RFU
+    pitch = math.asin(max(-1.0, min(1.0, c_bn[2, 1])))
+    roll = math.atan2(-c_bn[2, 0], c_bn[2, 2])
+    heading = math.atan2(c_bn[0, 1], c_bn[1, 1]) % (2 * math.pi)
+    return math.degrees(roll), math.degrees(pitch), math.degrees(heading)
+
+
+def resample_increments(t_s, w, f, rate_hz: int = IMU_RATE_HZ) -> dict:
+    """Angle and velocity increments on a fixed grid t0 + k / rate_hz (k = 0..) from
+    samples at irregular stamps: the trapezoidal integral at the stamps, linearly
+    interpolated to the grid and differenced. Sum of the increments = the integral over
+    the grid's span (nothing lost or counted twice)."""
+    t_s = np.asarray(t_s, dtype=float)
+    if t_s.size < 2 or np.any(np.diff(t_s) <= 0.0):
+        raise ValueError("IMU stamps must increase strictly")
+    dt = np.diff(t_s)
+    cum = {}
+    for name, x in (("w", np.asarray(w, float)), ("f", np.asarray(f, float))):
+        seg = 0.5 * (x[1:] + x[:-1]) * dt[:, None]
+        cum[name] = np.vstack([np.zeros(3), np.cumsum(seg, axis=0)])
+    n = int(math.floor((t_s[-1] - t_s[0]) * rate_hz + 1e-9))
+    grid = t_s[0] + np.arange(n + 1) / rate_hz
+    out = {}
+    for name in ("w", "f"):
+        g = np.column_stack([np.interp(grid, t_s, cum[name][:, i]) for i in range(3)])
+        out[name] = np.diff(g, axis=0)
+    return {"t_grid_s": grid, "dtheta": out["w"], "dv": out["f"],
+            "interval_min_s": float(dt.min()), "interval_max_s": float(dt.max()),
+            "rate_measured_hz": float((len(t_s) - 1) / (t_s[-1] - t_s[0]))}
+
+
+def vertical_velocity(t_s, h_m, back_s: float = VUP_BACK_S) -> np.ndarray:
+    """Vertical velocity of each fix from the heights of the fixes before it: (h_i - h_j) /
+    (t_i - t_j), j the latest fix at least back_s earlier; 0 before there is one."""
+    t_s, h_m = np.asarray(t_s, float), np.asarray(h_m, float)
+    j = np.searchsorted(t_s, t_s - back_s, side="right") - 1
+    out = np.zeros(len(t_s))
+    ok = j >= 0
+    jj = j[ok]
+    out[ok] = (h_m[ok] - h_m[jj]) / (t_s[ok] - t_s[jj])
+    return out
+
+
+def parse_outage(spec):
+    if spec in (None, "", "none"):
+        return None
+    try:
+        a, b = (float(x) for x in spec.split("-"))
+    except ValueError:
+        raise ValueError(f"outage '{spec}' is not A-B (s from the start)") from None
+    if not 0 <= a < b:
+        raise ValueError(f"outage '{spec}' needs 0 <= A < B")
+    return (a, b)
+
+
+_CAR_FRAMES = {}
+
+
+def car_frames(path: Path) -> list:
+    """The frames of a car's candump log (python-can), read once per process."""
+    key = str(Path(path).resolve())
+    if key not in _CAR_FRAMES:
+        with can.LogReader(str(path)) as reader:
+            _CAR_FRAMES[key] = list(reader)
+    return _CAR_FRAMES[key]
+
+
+def build(data_dir=None, vehicle_name="toyota_rav4_2017", channels=None, car_bus=True,
+          outage=None, car_ids=None) -> tuple:
+    """Every input frame as (t_s, order, can.Message) sorted, and the metadata (a dict,
+    JSON-ready): module docstring. channels: the car_bus.log channels taken (None: all);
+    car_ids: only the car's frames with these identifiers (None: all)."""
+    data = Path(data_dir or DATA_DIR)
+    db = nc.select_vehicle(vehicle_name)
+    sender = nc.E2ESender(db)
+    imu = _csv(data / "imu.csv")
+    gps = _csv(data / "gnss_ublox.csv")
+    ref = _csv(data / "reference.csv")
+
+    # IMU: device FRD -> car RFU, resampled
+    w_dev = np.column_stack([imu["wx_radps"], imu["wy_radps"], imu["wz_radps"]])
+    f_dev = np.column_stack([imu["ax_mps2"], imu["ay_mps2"], imu["az_mps2"]])
+    rs = resample_increments(imu["t_s"], w_dev @ C_CAR_DEV.T, f_dev @ C_CAR_DEV.T)
+    t0 = float(rs["t_grid_s"][0])
+    t_imu = np.round(rs["t_grid_s"][1:] - t0, 6)
+    t_last = float(t_imu[-1])
+    out = []
+    meta = {"data_dir": str(data), "vehicle": vehicle_name, "t0_segment_s": t0,
+            "t0_gps_tow_s": t0 + GPS_TOW_MINUS_T_S, "gps_week": GPS_WEEK,
+            "time_base": "t = segment clock - t0_segment_s (first IMU sample)",
+            "imu": {"rows": int(len(imu)), "rate_measured_hz": rs["rate_measured_hz"],
+                    "interval_min_s": rs["interval_min_s"],
+                    "interval_max_s": rs["interval_max_s"],
+                    "resampled_to_hz": IMU_RATE_HZ, "samples_sent": int(len(t_imu)),
+                    "mounting_deg": MOUNT_DEG},
+            "last_imu_sample_s": t_last}
+
+    # initial state: the reference at t0
+    def ref_at(col):
+        return float(np.interp(t0, ref["t_s"], ref[col]))
+    roll, pitch, heading = car_attitude(ref_at("roll_deg"), ref_at("pitch_deg"),
+                                        ref_at("heading_deg"))
+    hdg_cmd = (round(heading * 100.0) % 36000) / 100.0
+    init = {"lat_deg": ref_at("lat_deg"), "lon_deg": ref_at("lon_deg"),
+            "height_m": ref_at("height_m"), "heading_deg": hdg_cmd, "roll_deg": roll,
+            "pitch_deg": pitch, "speed_mps": math.hypot(ref_at("ve_mps"), ref_at("vn_mps")),
+            "source": "reference.csv at t0 (interpolated), the car's attitude from the "
+                      "device's and the mounting"}
+    meta["init"] = init
+    out.append((0.0, O_KNOWN, sender.encode("CMD_KnownPosition", {
+        "Latitude": init["lat_deg"], "Longitude": init["lon_deg"]}, 0.0)))
+    out.append((0.0, O_SETPOS, sender.encode("CMD_Control", {
+        "Command": 2, "HeadingValid": 1, "Heading": hdg_cmd, "Height": init["height_m"]},
+        0.0)))
+    out.append((0.0, O_ATT, sender.encode("CMD_InitialAttitude", {
+        "InitRoll": math.radians(roll), "InitPitch": math.radians(pitch)}, 0.0)))
+
+    quant = nc.ImuQuantizer()
+    for k in range(len(t_imu)):
+        t = float(t_imu[k])
+        rate, accel = quant.signals(rs["dtheta"][k], rs["dv"][k])
+        r, a = sender.encode_imu_pair(rate, accel, t)
+        out.append((t, O_RATE, r))
+        out.append((t, O_ACCEL, a))
+
+    # GNSS: u-blox, sent when logged
+    latency = gps["t_s"] - gps["t_fix_s"]
+    lat_ms = int(math.floor(float(latency.min()) * 1000.0))
+    meta["gnss_latency_ms"] = lat_ms
+    vel_up = vertical_velocity(gps["t_fix_s"], gps["height_m"])
+    n_ep = n_out = 0
+    for row, vu in zip(gps, vel_up):
+        t = round(float(row["t_s"]) - t0, 6)
+        if t < 0.0 or t > t_last:
+            continue
+        t_fix = float(row["t_fix_s"]) - t0
+        if outage is not None and outage[0] <= t_fix < outage[1]:
+            n_out += 1
+            continue
+        ep = sender.next_counter("GNSS_Velocity")
+        out.append((t, O_GPOS, sender.encode("GNSS_Position", {
+            "Latitude": float(row["lat_deg"]), "Longitude": float(row["lon_deg"])}, t)))
+        out.append((t, O_GVEL, sender.encode("GNSS_Velocity", {
+            "VelEast": float(row["ve_mps"]), "VelNorth": float(row["vn_mps"]), "VelUp": float(vu),
+            "SpeedAccuracy": GNSS_ACCURACY["speed_mps"]}, t)))
+        out.append((t, O_GHGT, sender.encode("GNSS_Height", {
+            "Height": float(row["height_m"]), "GnssEpoch": ep}, t)))
+        out.append((t, O_GTIME, sender.encode("GNSS_Time", {
+            "GpsWeek": int(row["gps_week"]), "GnssEpoch": ep}, t)))
+        out.append((t, O_GSTAT, sender.encode("GNSS_Status", {
+            "FixType": 3, "NumSatellites": min(int(row["n_raw_meas"]), 63),
+            "HorizAccuracy": GNSS_ACCURACY["horiz_m"], "VertAccuracy": GNSS_ACCURACY["vert_m"],
+            "GnssEpoch": ep, "TimeOfWeek": round(float(row["gps_tow_s"]) % 604800.0, 3)}, t)))
+        n_ep += 1
+    meta["gnss"] = {"receiver": "u-blox (gnss_ublox.csv)", "rows": int(len(gps)),
+                    "epochs_sent": n_ep, "accuracy_sent": GNSS_ACCURACY,
+                    "vel_up": f"height change over the last {VUP_BACK_S} s of fixes",
+                    "latency_s": {"min": float(latency.min()), "max": float(latency.max()),
+                                  "median": float(np.median(latency))},
+                    "outage": None if outage is None else
+                    {"start_s": outage[0], "end_s": outage[1], "epochs_dropped": n_out}}
+
+    # the car's bus
+    prof = vehicle.load(vehicle_name)
+    read_ids = {}
+    for r in prof.reads:
+        read_ids[r.message.frame_id] = r.message.name
+    per_ch, per_id, n_car = {}, {}, 0
+    if car_bus:
+        for msg in car_frames(data / "car_bus.log"):
+            ch = str(msg.channel)
+            if ((channels is not None and ch not in channels) or
+                    (car_ids is not None and msg.arbitration_id not in car_ids)):
+                continue
+            t = round(float(msg.timestamp) - t0, 6)
+            if t < 0.0 or t > t_last:
+                continue
+            out.append((t, O_CAR, can.Message(
+                timestamp=t, arbitration_id=msg.arbitration_id,
+                is_extended_id=msg.is_extended_id, data=bytes(msg.data), dlc=msg.dlc)))
+            per_ch[ch] = per_ch.get(ch, 0) + 1
+            if msg.arbitration_id in read_ids:
+                name = read_ids[msg.arbitration_id]
+                per_id[name] = per_id.get(name, 0) + 1
+            n_car += 1
+    meta["car_bus"] = {"file": str(data / "car_bus.log"), "frames": n_car,
+                       "per_channel": per_ch, "profile_messages": per_id,
+                       "frames_per_s": n_car / t_last if t_last > 0 else None}
+    out.sort(key=lambda x: (x[0], x[1]))
+    meta["frames"] = len(out)
+    return out, meta
+
+
+def write(out_log, frames, meta) -> None:
+    out_log = Path(out_log)
+    out_log.parent.mkdir(parents=True, exist_ok=True)
+    nc.write_candump(out_log, (m for _, _, m in frames))
+    out_log.with_suffix(".json").write_text(json.dumps(meta, indent=2) + "\n")
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("out", help="candump log to write (its metadata beside it, .json)")
+    ap.add_argument("--data", default=None)
+    ap.add_argument("--vehicle", default="toyota_rav4_2017")
+    ap.add_argument("--channels", default=None, help="car_bus.log channels (default all)")
+    ap.add_argument("--no-car-bus", action="store_true", help="without the car's frames")
+    ap.add_argument("--outage", default=None, help="GNSS outage A-B, s from the start")
+    a = ap.parse_args(argv)
+    try:
+        frames, meta = build(a.data, a.vehicle,
+                             None if a.channels is None else set(a.channels.split(",")),
+                             not a.no_car_bus, parse_outage(a.outage))
+    except (OSError, ValueError, vehicle.ProfileError) as e:
+        print(f"comma2k19: {e}", file=sys.stderr)
+        return 1
+    write(a.out, frames, meta)
+    print(f"comma2k19: {meta['frames']} frames, {meta['car_bus']['frames']} of the car's "
+          f"bus, {meta['gnss']['epochs_sent']} GNSS epochs -> {a.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
