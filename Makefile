@@ -182,6 +182,15 @@ $(BUILD)/$(1)/libvehicle_$(3).a: $(BUILD)/$(1)/veh-$(3)/vehicle_profile.o $(BUIL
 	$$(AR) rcs $$@ $$^
 endef
 $(foreach v,$(VEHICLES_BUILT),$(eval $(call VEHLIB,host,,$(v))))
+
+# the host executable of each other profile built (VEHICLE's own is the FLAVOUR rule's)
+define HOSTEXE
+$(BUILD)/host/navecu-$(1): $(HOST_SIM_SRC:%.c=$(BUILD)/host/f32/%.o) $(BUILD)/host/libnavapp.a \
+		$(BUILD)/host/libvehicle_$(1).a $(BUILD)/host/libhal_linux.a $(BUILD)/host/libnavcore_f32.a
+	@mkdir -p $$(@D)
+	$$(CC) $$^ -lm -o $$@
+endef
+$(foreach v,$(filter-out native $(VEHICLE),$(VEHICLES_BUILT)),$(eval $(call HOSTEXE,$(v))))
 $(foreach v,$(VEHICLES_BUILT),$(eval $(call VEHLIB,asan,$(SAN_FLAGS),$(v))))
 
 $(eval $(call FLAVOUR,host,))
@@ -207,7 +216,7 @@ test-asan: $(asan_TEST_BINS)
 test-c: test-plain test-asan
 
 # Python tests drive the host executable (plain build) through real CAN logs.
-test-python: venv $(BUILD)/host/navecu
+test-python: venv $(BUILD)/host/navecu $(BUILD)/host/navecu-toyota_rav4_2017
 	NAVECU_BIN=$(BUILD)/host/navecu $(PY) -m pytest -q -rs tests/python
 
 test: deps
