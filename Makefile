@@ -19,8 +19,8 @@ CFLAGS_BASE := $(CSTD) -O2 -g $(WARN) $(FPFLAGS)
 SAN_FLAGS := -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
 
 # firmware/ sees only its own folders and the HAL interface (docs/architecture.md)
-FW_INC := -Ifirmware/nav -Ifirmware/can -Ifirmware/can/gen -Ifirmware/app -Ifirmware/vehicle -Ihal
-HOST_INC := $(FW_INC) -Ihal/common -Ihal/linux -Ihal/cortex_m4f -Ihost_sim -Itests/support
+FW_INC := -Ifirmware/nav -Ifirmware/can -Ifirmware/can/gen -Ifirmware/app -Ifirmware/app/gen -Ifirmware/vehicle -Ihal
+HOST_INC := $(FW_INC) -Ihal/common -Ihal/linux -Ihal/cortex_m4f -Ihost_sim -Ihost_sim/gen -Itests/support
 
 CORE_SRC := $(wildcard firmware/nav/*.c)
 
@@ -37,7 +37,8 @@ VEHICLES_BUILT := $(sort native toyota_rav4_2017 $(VEHICLE))
 VEH_GEN_SRC = $(VEH_OUT)/$(1)/vehicle_profile.c $(VEH_OUT)/$(1)/veh_can.c
 VEH_SRC = $(call VEH_GEN_SRC,$(1)) firmware/vehicle/vehicle_checksum.c
 CODEC_GEN := firmware/can/gen/navecu_can.c firmware/can/gen/navecu_can.h
-APP_SRC := firmware/can/e2e.c firmware/can/gen/navecu_can.c $(sort $(wildcard firmware/app/*.c))
+APP_SRC := firmware/can/e2e.c firmware/can/gen/navecu_can.c firmware/app/gen/app_params.c \
+           $(sort $(wildcard firmware/app/*.c))
 # the host executable: its board files (host_sim/)
 HOST_SIM_SRC := host_sim/main.c host_sim/options.c host_sim/report.c host_sim/host_board.c
 HAL_LINUX_SRC := hal/linux/hal_linux.c hal/linux/hal_socketcan.c hal/common/candump.c \
@@ -64,7 +65,7 @@ FAKE_HAL_SUPPORT := tests/support/fake_hal.c tests/support/can_frames.c tests/su
 TESTS_M4_HAL := test_bxcan test_stm32_flash test_stm32_iwdg test_stm32_clock test_stm32_timebase test_f2l
 
 .PHONY: grades
-.PHONY: all test test-c test-plain test-asan test-cross test-python codec codec-check \
+.PHONY: all test test-c test-plain test-asan test-cross test-python codec codec-check params params-check \
         doc-check venv sim clean help numerics deps
 # keep objects of pattern-built test programs between runs
 .SECONDARY:
@@ -221,7 +222,7 @@ test-python: venv $(BUILD)/host/navecu $(BUILD)/host/navecu-toyota_rav4_2017
 
 test: deps
 	./tools/check_layers.sh
-	$(MAKE) codec-check doc-check
+	$(MAKE) codec-check doc-check params-check
 	$(MAKE) test-plain
 	$(MAKE) test-asan
 	$(MAKE) test-python
@@ -255,6 +256,13 @@ $(VEH_OUT)/%/vehicle_profile.c $(VEH_OUT)/%/veh_can.c $(VEH_OUT)/%/veh_can.h: $(
 # ---- the CAN codec, generated from the DBC ----
 codec: venv
 	PYTHON=$(PY) ./tools/gen_codec.sh
+
+# the parameter table (firmware/app/params.toml, docs/configuration.md): its generated C
+# table, the host's options and the docs table
+params: venv
+	$(PY) -m tools.gen_params
+params-check: venv
+	$(PY) -m tools.gen_params --check
 
 codec-check: venv
 	@tmp=$$(mktemp -d) && PYTHON=$(PY) ./tools/gen_codec.sh $$tmp && \

@@ -11,6 +11,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "params_cli.h"
+
 /* err = a + b + c, truncated to err_len - 1 characters */
 static void say(char *err, size_t err_len, const char *a, const char *b, const char *c)
 {
@@ -19,47 +21,84 @@ static void say(char *err, size_t err_len, const char *a, const char *b, const c
     }
 }
 
-/* parse an unsigned decimal in [lo, hi]; 0 on success */
-static int parse_u16(const char *s, unsigned lo, unsigned hi, uint16_t *out)
-{
-    char *end = NULL;
-    errno = 0;
-    const unsigned long v = strtoul(s, &end, 10);
-    if (errno != 0 || end == s || *end != '\0' || v < lo || v > hi) {
-        return -1;
-    }
-    *out = (uint16_t)v;
-    return 0;
-}
-
-/* parse a finite decimal in [lo, hi]; 0 on success */
-static int parse_real(const char *s, double lo, double hi, double *out)
+/* parse a finite decimal; 0 on success */
+static int parse_double(const char *s, double *out)
 {
     char *end = NULL;
     errno = 0;
     const double v = strtod(s, &end);
-    if (errno != 0 || end == s || *end != '\0' || !(v >= lo && v <= hi)) {
+    if (errno != 0 || end == s || *end != '\0' || !isfinite(v)) {
         return -1;
     }
     *out = v;
     return 0;
 }
 
-#define RAD_PER_DEG (3.14159265358979323846 / 180.0)
-
-/* parse "X,Y,Z" metres, each within 10 m; 0 on success */
-static int parse_lever(const char *s, nav_real_t out[3])
+static int in_range(const params_cli_t *c, double x)
 {
-    double x = 0.0, y = 0.0, z = 0.0;
-    char tail = 0;
-    if (sscanf(s, "%lf,%lf,%lf%c", &x, &y, &z, &tail) != 3 || !(fabs(x) <= 10.0) ||
-        !(fabs(y) <= 10.0) || !(fabs(z) <= 10.0)) {
-        return -1;
+    const int lo = app_params[c->id].min_exclusive ? x > c->min : x >= c->min;
+    return lo && x <= c->max;
+}
+
+/* the index of name among values ("a|b|c"), or -1 */
+static int enum_index(const char *values, const char *name)
+{
+    const size_t n = strlen(name);
+    int k = 0;
+    for (const char *p = values; *p != '\0'; k++) {
+        const char *bar = strchr(p, '|');
+        const size_t len = bar != NULL ? (size_t)(bar - p) : strlen(p);
+        if (len == n && strncmp(p, name, n) == 0) {
+            return k;
+        }
+        p += len + (bar != NULL ? 1u : 0u);
     }
-    out[0] = (nav_real_t)x;
-    out[1] = (nav_real_t)y;
-    out[2] = (nav_real_t)z;
-    return 0;
+    return -1;
+}
+
+/* The value of a table parameter's option (its unit; a vec3 "X,Y,Z") into cfg; 0 on
+ * success, -1 when it is malformed or out of range. */
+static int parse_param(const params_cli_t *c, const char *v, app_config_t *cfg)
+{
+    const app_param_t *p = &app_params[c->id];
+    nav_real_t si[3] = {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)};
+    if (p->type == APP_PARAM_ENUM) {
+        const int k = enum_index(c->values, v);
+        if (k < 0) {
+            return -1;
+        }
+        si[0] = (nav_real_t)k;
+    } else if (p->type == APP_PARAM_VEC3) {
+        double x[3] = {0.0, 0.0, 0.0};
+        char tail = 0;
+        if (sscanf(v, "%lf,%lf,%lf%c", &x[0], &x[1], &x[2], &tail) != 3) {
+            return -1;
+        }
+        for (int i = 0; i < 3; i++) {
+            if (!isfinite(x[i]) || !in_range(c, x[i])) {
+                return -1;
+            }
+            si[i] = (nav_real_t)(x[i] * c->to_si);
+        }
+    } else {
+        double x = 0.0;
+        if (parse_double(v, &x) != 0 || !in_range(c, x) ||
+            (p->type == APP_PARAM_U16 && floor(x) < x)) {
+            return -1;
+        }
+        si[0] = (nav_real_t)(x * c->to_si);
+    }
+    return app_param_set(cfg, c->id, si);
+}
+
+static const params_cli_t *param_option(const char *name)
+{
+    for (size_t k = 0u; k < (size_t)PARAMS_CLI_N; k++) {
+        if (strcmp(params_cli[k].option, name) == 0) {
+            return &params_cli[k];
+        }
+    }
+    return NULL;
 }
 
 int host_options_parse(int argc, char **argv, host_options_t *o, char *err, size_t err_len)
@@ -68,6 +107,21 @@ int host_options_parse(int argc, char **argv, host_options_t *o, char *err, size
     o->cfg = app_default_config();
     if (err != NULL && err_len > 0u) {
         err[0] = '\0';
+    }
+    /* --imu-preset first, wherever it is: the other options override its figures */
+    for (int i = 1; i + 1 < argc; i += 2) {
+        if (strcmp(argv[i], "--imu-preset") == 0) {
+            int found = 0;
+            for (int k = 0; k < (int)APP_PRESET_N; k++) {
+                if (strcmp(argv[i + 1], app_presets[k].name) == 0) {
+                    found = app_config_preset(&o->cfg, (app_preset_id_t)k) == 0;
+                }
+            }
+            if (!found) {
+                say(err, err_len, "unknown --imu-preset '", argv[i + 1], "'");
+                return 2;
+            }
+        }
     }
     for (int i = 1; i < argc; i += 2) { /* an option and its value */
         const char *a = argv[i];
@@ -90,70 +144,17 @@ int host_options_parse(int argc, char **argv, host_options_t *o, char *err, size
         } else if (strcmp(a, "--iface") == 0) {
             o->iface = v;
             bad = strlen(v) == 0 || strlen(v) > 15;
-        } else if (strcmp(a, "--imu-rate-hz") == 0) {
-            bad = parse_u16(v, 10, 400, &o->cfg.imu_rate_hz);
-        } else if (strcmp(a, "--nav-rate-hz") == 0) {
-            bad = parse_u16(v, 1, 400, &o->cfg.nav_rate_hz);
-            o->nav_rate_given = 1;
-        } else if (strcmp(a, "--dyn-rate-hz") == 0) {
-            bad = parse_u16(v, 0, 400, &o->cfg.dyn_rate_hz);
-            o->dyn_rate_given = 1;
-        } else if (strcmp(a, "--status-rate-hz") == 0) {
-            bad = parse_u16(v, 1, 400, &o->cfg.status_rate_hz);
-        } else if (strcmp(a, "--level-s") == 0) {
-            bad = parse_u16(v, 1, 600, &o->cfg.level_s);
-        } else if (strcmp(a, "--odo-axle") == 0) {
-            bad = strcmp(v, "rear") != 0 && strcmp(v, "front") != 0;
-            o->cfg.odo_axle = strcmp(v, "front") == 0 ? ODO_AXLE_FRONT : ODO_AXLE_REAR;
-        } else if (strcmp(a, "--cal-min-base-m") == 0) {
-            double x = 0.0;
-            bad = parse_real(v, 0.0, 1e5, &x);
-            o->cfg.cal_min_base_m = (nav_real_t)x;
-        } else if (strcmp(a, "--gyro-arw-dpsh") == 0) {
-            double x = 0.0;
-            bad = parse_real(v, 1e-6, 100.0, &x);
-            o->cfg.gyro_arw_rad_rts = (nav_real_t)(x * RAD_PER_DEG / 60.0);
-        } else if (strcmp(a, "--accel-bias-mg") == 0) {
-            double x = 0.0;
-            bad = parse_real(v, 1e-4, 1000.0, &x);
-            o->cfg.accel_bias_mps2 = (nav_real_t)(x * 9.80665e-3);
-        } else if (strcmp(a, "--gyro-instability-dph") == 0) {
-            double x = 0.0;
-            bad = parse_real(v, 1e-6, 1e4, &x);
-            o->cfg.gyro_bias_rw_rps_rts = (nav_real_t)(x * RAD_PER_DEG / 3600.0 * sqrt(2.0 / 300.0));
-        } else if (strcmp(a, "--accel-instability-mg") == 0) {
-            double x = 0.0;
-            bad = parse_real(v, 1e-5, 1000.0, &x);
-            o->cfg.accel_bias_rw_mps2_rts = (nav_real_t)(x * 9.80665e-3 * sqrt(2.0 / 300.0));
-        } else if (strcmp(a, "--gnss-corr-s") == 0) {
-            double x = 0.0;
-            bad = parse_real(v, 0.0, 600.0, &x);
-            o->cfg.gnss_corr_s = (nav_real_t)x;
-        } else if (strcmp(a, "--gnss-latency-ms") == 0) {
-            double x = 0.0;
-            bad = parse_real(v, 0.0, 500.0, &x);
-            o->cfg.gnss_latency_s = (nav_real_t)(x * 1e-3);
-        } else if (strcmp(a, "--gnss-lever-m") == 0) {
-            bad = parse_lever(v, o->cfg.gnss_lever_b_m);
-        } else if (strcmp(a, "--odo-lever-m") == 0) {
-            bad = parse_lever(v, o->cfg.odo_lever_b_m);
-        } else if (strcmp(a, "--gyro-range-dps") == 0) {
-            double x = 0.0;
-            bad = parse_real(v, 1.0, 5000.0, &x);
-            o->cfg.gyro_range_rps = (nav_real_t)(x * RAD_PER_DEG);
-        } else if (strcmp(a, "--accel-range-mps2") == 0) {
-            double x = 0.0;
-            bad = parse_real(v, 1.0, 2000.0, &x);
-            o->cfg.accel_range_mps2 = (nav_real_t)x;
+        } else if (strcmp(a, "--imu-preset") == 0) {
+            /* applied above */
         } else if (strcmp(a, "--test-stall-poll-s") == 0) {
             double x = 0.0;
-            bad = parse_real(v, 0.0, 1e6, &x);
+            bad = parse_double(v, &x) != 0 || x < 0.0 || x > 1e6;
             o->stall_poll_us = (uint64_t)(x * 1e6);
             o->stall_poll = 1;
-        } else if (strcmp(a, "--gyro-bias-dph") == 0) {
-            double x = 0.0;
-            bad = parse_real(v, 1e-6, 1e4, &x);
-            o->cfg.gyro_bias_rps = (nav_real_t)(x * RAD_PER_DEG / 3600.0);
+        } else if (param_option(a) != NULL) {
+            bad = parse_param(param_option(a), v, &o->cfg) != 0;
+            o->nav_rate_given |= strcmp(a, "--nav-rate-hz") == 0;
+            o->dyn_rate_given |= strcmp(a, "--dyn-rate-hz") == 0;
         } else {
             say(err, err_len, "unknown option '", a, "'");
             return 2;

@@ -5,6 +5,10 @@
 #include "hal_socketcan.h"
 #include "vehicle.h"
 
+#include <string.h>
+
+#include "params_cli.h"
+
 #define RAD_PER_DEG (3.14159265358979323846 / 180.0)
 
 void host_usage(FILE *out)
@@ -21,48 +25,53 @@ void host_usage(FILE *out)
             "  --can IFACE          live SocketCAN interface instead of a log\n"
             "  --out FILE           output log, created or truncated (required with\n"
             "                       --can-log; with --can it records what is sent)\n"
-            "  --imu-rate-hz N      IMU sample rate of the log, 10..400 (default 100)\n"
-            "  --nav-rate-hz N      NAV_Position/Height/Velocity/Attitude rate (default 50,\n"
-            "                       at most the IMU rate)\n"
-            "  --status-rate-hz N   NAV_Status and NAV_Accuracy rate (default 10)\n"
-            "  --dyn-rate-hz N      NAV_Rates, NAV_AttitudeRates, NAV_Accel, NAV_AccelEnu rate\n"
-            "                       (default 50, at most the IMU rate; 0: not sent)\n"
-            "  --level-s N          accelerometer levelling time before navigating, 1..600 s\n"
-            "                       (default 30)\n"
+            "  --imu-preset NAME    the IMU figures of a grade, together (below); the other\n"
+            "                       options override them, wherever they are\n"
             "  --nvm FILE           file backing the non-volatile memory (default: none, in\n"
             "                       memory only)\n"
             "  --iface NAME         interface name written in OUT.log (default can0)\n"
-            "  --odo-axle AXLE      wheels measuring the distance: rear (default) or front\n"
-            "                       (docs/odometry.md)\n"
-            "  --cal-min-base-m X   refuse a one-point calibration closer than X m to its\n"
-            "                       base (default 2000)\n"
-            "  --gyro-arw-dpsh X    gyro angle random walk, deg/sqrt(h) (default 0.003)\n"
-            "  --gyro-range-dps X   the IMU's gyro range, deg/s (default 300): a rate at it is\n"
-            "                       saturated (counted, flagged in NAV_Status)\n"
-            "  --accel-range-mps2 X the IMU's accelerometer range, m/s^2 (default 78.45, 8 g)\n"
             "  --test-stall-poll-s S  test only: stop calling app_poll S seconds of bus time\n"
             "                       after the first frame (a stuck task: the watchdog expires,\n"
             "                       exit status 3)\n"
-            "  --gyro-bias-dph X    gyro turn-on bias, 1 sigma, deg/h (default 0.015); both\n"
-            "                       weigh the gyro bias estimate at standstill\n"
-            "  --accel-bias-mg X    accelerometer bias, 1 sigma, mg (default 0.1)\n"
-            "  --gyro-instability-dph X, --accel-instability-mg X\n"
-            "                       in-run bias instability over 300 s (defaults 0.005\n"
-            "                       deg/h, 0.01 mg): the filter's bias random walks\n"
-            "  --gnss-latency-ms N  GNSS receiver latency, 0..500 ms (default 100)\n"
-            "  --gnss-corr-s X      correlation time of the receiver's position errors, s\n"
-            "                       (default 20; docs/kalman.md)\n"
-            "  --gnss-lever-m X,Y,Z GNSS antenna from the IMU, body axes (x right, y\n"
-            "                       forward, z up), m (default 0,0,0)\n"
-            "  --odo-lever-m X,Y,Z  the odometer's reference point (middle of the measuring\n"
-            "                       axle) from the IMU, body axes, m (default 0,0,0)\n"
             "  --help               this text\n"
             "\n"
             "Exit status: 0 when the whole log was processed (or the live run was stopped\n"
             "by a signal), 1 on an I/O error or a missing interface, 2 on a usage error,\n"
             "3 when the watchdog expired (a task of the application was late).\n"
             "Rejected input is never fatal: it is counted in NAV_Status and in the summary\n"
-            "printed to stderr.\n");
+            "printed to stderr.\n"
+            "\n"
+            "Parameters (firmware/app/params.toml, docs/configuration.md): --OPTION VALUE in\n"
+            "the unit shown, within the range shown; a three-axis value is X,Y,Z (body axes\n"
+            "x right, y forward, z up).\n");
+    for (size_t k = 0u; k < (size_t)PARAMS_CLI_N; k++) {
+        const params_cli_t *c = &params_cli[k];
+        const app_param_t *p = &app_params[c->id];
+        fprintf(out, "  %-22s ", c->option);
+        if (p->type == APP_PARAM_ENUM) {
+            fprintf(out, "%s", c->values);
+        } else {
+            fprintf(out, "%s%g..%g %s", p->min_exclusive ? ">" : "", c->min, c->max, c->unit);
+        }
+        if (p->vehicle_default) {
+            fprintf(out, ", default: the vehicle profile's (%s)\n", vehicle_profile.name);
+        } else if (p->type == APP_PARAM_ENUM) {
+            const char *v = c->values;
+            for (int i = 0; i < (int)p->default_si[0] && strchr(v, '|') != NULL; i++) {
+                v = strchr(v, '|') + 1;
+            }
+            const char *bar = strchr(v, '|');
+            fprintf(out, ", default %.*s\n", (int)(bar != NULL ? (size_t)(bar - v) : strlen(v)), v);
+        } else {
+            fprintf(out, ", default %g\n", (double)p->default_si[0] / c->to_si);
+        }
+        fprintf(out, "                         %s\n", c->description);
+    }
+    fprintf(out, "\nIMU presets (--imu-preset NAME; default %s):\n",
+            app_presets[APP_PRESET_DEFAULT].name);
+    for (int k = 0; k < (int)APP_PRESET_N; k++) {
+        fprintf(out, "  %-12s %s\n", app_presets[k].name, params_cli_preset_about[k]);
+    }
 }
 
 void host_summary(FILE *out, const app_t *app, const hal_t *hal, unsigned long frames_in,

@@ -1,4 +1,5 @@
-/* app_config.c - the default configuration and its range check; see app_config.h. */
+/* app_config.c - the default configuration and its range check, both from the parameter
+ * table (firmware/app/params.toml, generated app_params.c); see app_config.h. */
 #include "app_config.h"
 
 #include "vehicle.h"
@@ -12,47 +13,65 @@ app_config_t app_default_config(void)
 
 void app_config_defaults(app_config_t *out)
 {
-    out->imu_rate_hz = 100u;
-    out->nav_rate_hz = 50u;
-    out->status_rate_hz = 10u;
-    out->dyn_rate_hz = 50u;
-    out->level_s = 30u; /* docs/can.md: levelling error ~ LSB / level time */
-    out->odo_axle = ODO_AXLE_REAR;
+    for (int k = 0; k < (int)APP_PARAM_N; k++) {
+        const app_param_id_t id = (app_param_id_t)k;
+        (void)app_param_set(out, id, app_params[k].default_si);
+    }
     out->odo_track_m = vehicle_profile.track_m;
     out->odo_wheelbase_m = vehicle_profile.wheelbase_m;
-    /* A calibration point's position error e gives errors of about e / base in dH (rad)
-     * and in mu: a 3 m point 2 km away, 0.09 deg and 0.15 % (docs/odometry.md). */
-    out->cal_min_base_m = NAV_C(2000.0);
-    /* the mid-grade IMU of seed 000 (tools/sim/sensors.py "mid-grade"): ARW 0.003 deg/sqrt(h),
-     * turn-on bias 0.015 deg/h */
-    out->gyro_arw_rad_rts = NAV_C(8.73e-7);
-    out->gyro_bias_rps = NAV_C(7.27e-8);
-    out->accel_bias_mps2 = NAV_C(1e-3);
-    /* in-run instability 0.005 deg/h and 1e-4 m/s^2 over a 300 s correlation time as random
-     * walks: sigma sqrt(2 / tau) */
-    out->gyro_bias_rw_rps_rts = NAV_C(2.0e-9);
-    out->accel_bias_rw_mps2_rts = NAV_C(8.2e-6);
-    out->gnss_latency_s = NAV_C(0.1); /* u-blox-class receivers: about 0.1 s */
-    out->gnss_corr_s = NAV_C(20.0);   /* standalone code receiver: atmosphere, orbits */
-    out->gnss_lever_b_m[0] = out->gnss_lever_b_m[1] = out->gnss_lever_b_m[2] = NAV_C(0.0);
-    out->odo_lever_b_m[0] = out->odo_lever_b_m[1] = out->odo_lever_b_m[2] = NAV_C(0.0);
-    /* an automotive MEMS IMU's range: 300 deg/s, 8 g */
-    out->gyro_range_rps = NAV_C(5.235988);
-    out->accel_range_mps2 = NAV_C(78.4532);
     for (int i = 0; i < (int)NAVECU_MSG_N; i++) {
         out->can_ids[i] = vehicle_profile.can_ids[i];
     }
 }
 
-static int within(nav_real_t x, nav_real_t lo_excl, nav_real_t hi_excl)
+/* x equals y (no -Wfloat-equal: neither below nor above) */
+static int same(nav_real_t x, nav_real_t y)
 {
-    return x > lo_excl && x < hi_excl; /* false for NaN */
+    return !(x < y) && !(x > y);
 }
 
-static int lever_ok(const nav_real_t l[3])
+int app_config_preset(app_config_t *cfg, app_preset_id_t id)
 {
-    return nav_fabs(l[0]) <= NAV_C(10.0) && nav_fabs(l[1]) <= NAV_C(10.0) &&
-           nav_fabs(l[2]) <= NAV_C(10.0);
+    if ((unsigned)id >= (unsigned)APP_PRESET_N) {
+        return -1;
+    }
+    for (int k = 0; k < APP_PRESET_PARAMS; k++) {
+        const nav_real_t v[3] = {app_presets[id].value_si[k], NAV_C(0.0), NAV_C(0.0)};
+        if (app_param_set(cfg, app_preset_params[k], v) != 0) {
+            return -1; /* cannot happen: the generator checks the presets' ranges */
+        }
+    }
+    return 0;
+}
+
+static int value_in_range(const app_param_t *p, nav_real_t x)
+{
+    const int lo = p->min_exclusive ? x > p->min_si : x >= p->min_si;
+    return lo && x <= p->max_si; /* false for NaN */
+}
+
+int app_param_in_range(app_param_id_t id, const nav_real_t v[3])
+{
+    if ((unsigned)id >= (unsigned)APP_PARAM_N) {
+        return 0;
+    }
+    const app_param_t *p = &app_params[id];
+    if (p->vehicle_default && same(v[0], NAV_C(0.0))) {
+        return 1; /* the defaults' placeholder, replaced by the vehicle profile's */
+    }
+    int n = 1;
+    if (p->type == APP_PARAM_VEC3) {
+        n = 3;
+    }
+    for (int i = 0; i < n; i++) {
+        if (!value_in_range(p, v[i])) {
+            return 0;
+        }
+    }
+    if (p->type == APP_PARAM_U16 || p->type == APP_PARAM_ENUM) {
+        return same(v[0], (nav_real_t)(int32_t)v[0]); /* a whole number */
+    }
+    return 1;
 }
 
 /* every identifier a standard (11-bit) one, none used twice */
@@ -73,21 +92,15 @@ static int can_ids_ok(const uint32_t ids[NAVECU_MSG_N])
 
 int app_config_valid(const app_config_t *cfg)
 {
-    return can_ids_ok(cfg->can_ids) && cfg->imu_rate_hz >= 10u && cfg->imu_rate_hz <= 400u && cfg->nav_rate_hz != 0u &&
-           cfg->status_rate_hz != 0u && cfg->nav_rate_hz <= cfg->imu_rate_hz &&
-           cfg->status_rate_hz <= cfg->imu_rate_hz && cfg->dyn_rate_hz <= cfg->imu_rate_hz &&
-           cfg->level_s != 0u &&
-           cfg->level_s <= 600u && cfg->odo_track_m > NAV_C(0.5) && cfg->odo_track_m < NAV_C(3.0) &&
-           cfg->odo_wheelbase_m > NAV_C(1.0) && cfg->odo_wheelbase_m < NAV_C(6.0) &&
-           cfg->cal_min_base_m >= NAV_C(0.0) &&
-           cfg->cal_min_base_m < NAV_C(1e6) && within(cfg->gyro_arw_rad_rts, NAV_C(0.0), NAV_C(1.0)) &&
-           within(cfg->gyro_bias_rps, NAV_C(0.0), NAV_C(1.0)) &&
-           within(cfg->accel_bias_mps2, NAV_C(0.0), NAV_C(10.0)) &&
-           within(cfg->gyro_bias_rw_rps_rts, NAV_C(0.0), NAV_C(1.0)) &&
-           within(cfg->accel_bias_rw_mps2_rts, NAV_C(0.0), NAV_C(10.0)) &&
-           cfg->gnss_latency_s >= NAV_C(0.0) && cfg->gnss_latency_s <= NAV_C(0.5) &&
-           cfg->gnss_corr_s >= NAV_C(0.0) && cfg->gnss_corr_s <= NAV_C(600.0) &&
-           lever_ok(cfg->gnss_lever_b_m) && lever_ok(cfg->odo_lever_b_m) &&
-           cfg->gyro_range_rps > NAV_C(0.0) && cfg->gyro_range_rps <= NAV_C(100.0) &&
-           cfg->accel_range_mps2 > NAV_C(0.0) && cfg->accel_range_mps2 <= NAV_C(2000.0);
+    for (int k = 0; k < (int)APP_PARAM_N; k++) {
+        const app_param_id_t id = (app_param_id_t)k;
+        nav_real_t v[3];
+        app_param_get(cfg, id, v);
+        if (!app_param_in_range(id, v) ||
+            (app_params[k].vehicle_default && !(v[0] > NAV_C(0.0)))) {
+            return 0;
+        }
+    }
+    return can_ids_ok(cfg->can_ids) && cfg->nav_rate_hz <= cfg->imu_rate_hz &&
+           cfg->status_rate_hz <= cfg->imu_rate_hz && cfg->dyn_rate_hz <= cfg->imu_rate_hz;
 }

@@ -1,14 +1,18 @@
 /*
  * app_config.h - what an integrator configures: the IMU, the GNSS receiver, the car's
- * odometer and the output rates. app_default_config() gives the values the ECU runs with
- * when nothing else is configured; app_config_valid() is the one range check every
- * source of a configuration (the host's options, a stored record) goes through.
+ * odometer and the output rates. Every field but can_ids is a parameter of the one table
+ * firmware/app/params.toml (docs/configuration.md): its range, default, unit and UDS data
+ * identifier are there, generated into app_params.[ch]. app_default_config() gives the
+ * values the ECU runs with when nothing else is configured; app_config_valid() is the one
+ * range check every source of a configuration (the host's options, a stored record) goes
+ * through.
  */
 #ifndef NAVECU_APP_CONFIG_H
 #define NAVECU_APP_CONFIG_H
 
 #include <stdint.h>
 
+#include "app_params.h"
 #include "nav_types.h"
 #include "navecu_protocol.h"
 #include "odo.h"
@@ -45,15 +49,33 @@ typedef struct {
     uint32_t can_ids[NAVECU_MSG_N];
 } app_config_t;
 
-/* Defaults: IMU 100 Hz, outputs 50 Hz, status 10 Hz, levelling 30 s, the mid-grade IMU of
- * seed 000, a u-blox-class standalone receiver; the car's geometry and navecu's CAN
- * identifiers from the build's vehicle profile (firmware/vehicle/vehicle.h). */
+/* Defaults: the table's (IMU 100 Hz, outputs 50 Hz, status 10 Hz, levelling 30 s, the IMU
+ * figures of its default preset, automotive MEMS; a u-blox-class standalone receiver); the
+ * car's geometry and navecu's CAN identifiers from the build's vehicle profile
+ * (firmware/vehicle/vehicle.h). */
 app_config_t app_default_config(void);
 
 /* The same, written into *cfg (no copy of the struct on the caller's stack: a board's). */
 void app_config_defaults(app_config_t *cfg);
 
-/* 1 if every field is within its range (the comments above and app_config.c), else 0. */
+/* Set the IMU parameters of preset id together (app_presets, generated from the table's
+ * [presets.NAME]): 0, or -1 for an unknown preset (cfg unchanged). */
+int app_config_preset(app_config_t *cfg, app_preset_id_t id);
+
+/* 1 if every field is within its range (the parameter table), the output rates at most the
+ * IMU rate and the CAN identifiers 11-bit and distinct, else 0. */
 int app_config_valid(const app_config_t *cfg);
+
+/* Parameter id's value(s), SI units (one value in v[0]; APP_PARAM_VEC3 three; an enum its
+ * index), generated from the table. */
+void app_param_get(const app_config_t *cfg, app_param_id_t id, nav_real_t v[3]);
+
+/* Set parameter id from v (as app_param_get gives it): 0, or -1 (cfg unchanged) when v is
+ * outside the parameter's range. Generated. */
+int app_param_set(app_config_t *cfg, app_param_id_t id, const nav_real_t v[3]);
+
+/* 1 if v is a value of parameter id (its range; a whole number for APP_PARAM_U16 and
+ * APP_PARAM_ENUM), else 0. */
+int app_param_in_range(app_param_id_t id, const nav_real_t v[3]);
 
 #endif /* NAVECU_APP_CONFIG_H */

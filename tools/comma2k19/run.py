@@ -47,14 +47,9 @@ from tools.sim.run import Stages
 ROOT = Path(__file__).resolve().parents[2]
 DEFAULT_OUTAGE = "28-58"
 NAV_TIME_SETTLED_S = 10.0
-# The device's IMU, configured as an ECU would be for a consumer MEMS part (issue #16 gives
-# these a preset): gyro noise 0.007 deg/s/sqrt(Hz) = 0.42 deg/sqrt(h) (Bosch BMI160
-# datasheet class); biases left after the phone's own calibration of the order of its
-# resolution (0.07 deg/s = 252 deg/h, README) and in-run drift a tenth of that; an
-# accelerometer bias of tens of mg (a phone's, uncalibrated in the car)
-IMU_OPTIONS = ["--gyro-arw-dpsh", "0.42", "--gyro-bias-dph", "250",
-               "--gyro-instability-dph", "25", "--accel-bias-mg", "30",
-               "--accel-instability-mg", "3"]
+# The device's IMU, configured as an ECU is for a consumer MEMS part: the consumer preset
+# (firmware/app/params.toml: BMI160-datasheet class figures, not fitted to this drive)
+IMU_OPTIONS = ["--imu-preset", "consumer"]
 RATES = ["--imu-rate-hz", str(convert.IMU_RATE_HZ), "--nav-rate-hz", "10",
          "--status-rate-hz", "10", "--dyn-rate-hz", "10"]
 

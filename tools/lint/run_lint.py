@@ -589,6 +589,17 @@ def main():
         cpp_out.seek(0)
         found, other = parse_cppcheck(cpp_out.read())
         cpp_out.close()
+        if other and cpp_proc.returncode == 0 and cfg.jobs > 1:
+            # cppcheck's parallel workers can interleave their lines in one output (seen on a
+            # loaded machine): run it again on one worker, whose output cannot interleave
+            print("lint: cppcheck's output interleaved (-j %d); once more with -j 1" % cfg.jobs,
+                  file=sys.stderr)
+            cmd1 = cppcheck_cmd(files, cfg)
+            cmd1[cmd1.index("-j") + 1] = "1"
+            res = subprocess.run(cmd1, cwd=ROOT, stdout=subprocess.PIPE,
+                                 stderr=subprocess.STDOUT, text=True, errors="replace")
+            found, other = parse_cppcheck(res.stdout)
+            cpp_proc.returncode = res.returncode
         findings += found
         if cpp_proc.returncode != 0:
             failures.append("cppcheck exited with %d:\n%s" % (cpp_proc.returncode, "\n".join(other[-40:])))

@@ -1,0 +1,77 @@
+/* GENERATED FILE - DO NOT EDIT. Source: firmware/app/params.toml.
+ * Regenerate with 'make params' (tools/gen_params.py); 'make test' fails if stale. */
+
+#ifndef NAVECU_APP_PARAMS_H
+#define NAVECU_APP_PARAMS_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "nav_types.h"
+
+/* what a parameter holds: one value (APP_PARAM_U16, an integer; APP_PARAM_ENUM, the
+ * index of its value name; APP_PARAM_REAL) or three (APP_PARAM_VEC3) */
+typedef enum {
+    APP_PARAM_U16 = 0,
+    APP_PARAM_REAL = 1,
+    APP_PARAM_VEC3 = 2,
+    APP_PARAM_ENUM = 3,
+} app_param_type_t;
+
+typedef struct {
+    const char *name;       /* the app_config_t field */
+    uint16_t did;           /* UDS data identifier */
+    app_param_type_t type;
+    uint8_t min_exclusive;  /* the range excludes min */
+    uint8_t vehicle_default; /* the default is the vehicle profile's */
+    nav_real_t min_si, max_si; /* range, SI units (enum: 0..values - 1) */
+    nav_real_t default_si[3];  /* default, SI (vehicle_default: unused) */
+} app_param_t;
+
+/* the parameters, in the table's order */
+typedef enum {
+    APP_PARAM_IMU_RATE_HZ = 0,
+    APP_PARAM_NAV_RATE_HZ = 1,
+    APP_PARAM_STATUS_RATE_HZ = 2,
+    APP_PARAM_DYN_RATE_HZ = 3,
+    APP_PARAM_LEVEL_S = 4,
+    APP_PARAM_ODO_AXLE = 5,
+    APP_PARAM_ODO_TRACK_M = 6,
+    APP_PARAM_ODO_WHEELBASE_M = 7,
+    APP_PARAM_ODO_LEVER_B_M = 8,
+    APP_PARAM_CAL_MIN_BASE_M = 9,
+    APP_PARAM_GYRO_ARW_RAD_RTS = 10,
+    APP_PARAM_GYRO_BIAS_RPS = 11,
+    APP_PARAM_ACCEL_BIAS_MPS2 = 12,
+    APP_PARAM_GYRO_BIAS_RW_RPS_RTS = 13,
+    APP_PARAM_ACCEL_BIAS_RW_MPS2_RTS = 14,
+    APP_PARAM_GYRO_RANGE_RPS = 15,
+    APP_PARAM_ACCEL_RANGE_MPS2 = 16,
+    APP_PARAM_GNSS_LATENCY_S = 17,
+    APP_PARAM_GNSS_CORR_S = 18,
+    APP_PARAM_GNSS_LEVER_B_M = 19,
+    APP_PARAM_N = 20
+} app_param_id_t;
+
+extern const app_param_t app_params[APP_PARAM_N];
+
+/* IMU presets: the values (SI) of the parameters app_preset_params names, together */
+#define APP_PRESET_PARAMS 7
+typedef enum {
+    APP_PRESET_CONSUMER = 0,
+    APP_PRESET_AUTOMOTIVE = 1,
+    APP_PRESET_TACTICAL = 2,
+    APP_PRESET_NAVIGATION = 3,
+    APP_PRESET_N = 4
+} app_preset_id_t;
+#define APP_PRESET_DEFAULT APP_PRESET_AUTOMOTIVE
+
+typedef struct {
+    const char *name;
+    nav_real_t value_si[APP_PRESET_PARAMS];
+} app_preset_t;
+
+extern const app_param_id_t app_preset_params[APP_PRESET_PARAMS];
+extern const app_preset_t app_presets[APP_PRESET_N];
+
+#endif /* NAVECU_APP_PARAMS_H */

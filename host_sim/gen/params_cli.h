@@ -1,0 +1,54 @@
+/* GENERATED FILE - DO NOT EDIT. Source: firmware/app/params.toml.
+ * Regenerate with 'make params' (tools/gen_params.py); 'make test' fails if stale. */
+
+#ifndef NAVECU_PARAMS_CLI_H
+#define NAVECU_PARAMS_CLI_H
+
+#include "app_params.h"
+
+/* a parameter's command-line option: its value in `unit`, range [min, max] (min
+ * excluded with min_exclusive), times to_si gives the field's SI value; an enum's
+ * value is one of `values` (names separated by '|') */
+typedef struct {
+    const char *option;
+    app_param_id_t id;
+    const char *unit;
+    double min, max, to_si;
+    const char *values;
+    const char *description;
+} params_cli_t;
+
+#define PARAMS_CLI_N 20
+
+static const params_cli_t params_cli[PARAMS_CLI_N] = {
+    {"--imu-rate-hz", APP_PARAM_IMU_RATE_HZ, "Hz", 10.0, 400.0, 1.0, "", "IMU sample rate: one IMU_Rate + IMU_Accel pair per sample"},
+    {"--nav-rate-hz", APP_PARAM_NAV_RATE_HZ, "Hz", 1.0, 400.0, 1.0, "", "NAV_Position, NAV_Height, NAV_Velocity, NAV_Attitude and NAV_Time rate (at most the IMU rate; the host lowers the default to it)"},
+    {"--status-rate-hz", APP_PARAM_STATUS_RATE_HZ, "Hz", 1.0, 400.0, 1.0, "", "NAV_Status page 0 (and NAV_Accuracy) rate, at most the IMU rate"},
+    {"--dyn-rate-hz", APP_PARAM_DYN_RATE_HZ, "Hz", 0.0, 400.0, 1.0, "", "NAV_Rates, NAV_AttitudeRates, NAV_Accel, NAV_AccelEnu rate (at most the IMU rate; 0: not sent)"},
+    {"--level-s", APP_PARAM_LEVEL_S, "s", 1.0, 600.0, 1.0, "", "accelerometer levelling time at rest before navigation starts"},
+    {"--odo-axle", APP_PARAM_ODO_AXLE, "", 0.0, 1.0, 1.0, "rear|front", "the wheels that measure the distance (docs/odometry.md)"},
+    {"--odo-track-m", APP_PARAM_ODO_TRACK_M, "m", 0.5, 3.0, 1.0, "", "track of the measuring axle: the turn's inner/outer wheel difference"},
+    {"--odo-wheelbase-m", APP_PARAM_ODO_WHEELBASE_M, "m", 1.0, 6.0, 1.0, "", "wheelbase, for the front axle's steering correction"},
+    {"--odo-lever-m", APP_PARAM_ODO_LEVER_B_M, "m", -10.0, 10.0, 1.0, "", "the odometer's reference point (middle of the measuring axle) from the IMU, body axes x right, y forward, z up"},
+    {"--cal-min-base-m", APP_PARAM_CAL_MIN_BASE_M, "m", 0.0, 100000.0, 1.0, "", "a one-point calibration closer than this to its base is refused: a point's error e gives about e / base in dH (rad) and in mu"},
+    {"--gyro-arw-dpsh", APP_PARAM_GYRO_ARW_RAD_RTS, "deg/sqrt(h)", 1e-06, 100.0, 0.0002908882086657216, "", "gyro angle random walk"},
+    {"--gyro-bias-dph", APP_PARAM_GYRO_BIAS_RPS, "deg/h", 1e-06, 10000.0, 4.84813681109536e-06, "", "gyro turn-on bias, 1 sigma: weighs the bias estimate at standstill and in the filter"},
+    {"--accel-bias-mg", APP_PARAM_ACCEL_BIAS_MPS2, "mg", 0.0001, 1000.0, 0.00980665, "", "accelerometer turn-on bias, 1 sigma"},
+    {"--gyro-instability-dph", APP_PARAM_GYRO_BIAS_RW_RPS_RTS, "deg/h", 1e-06, 10000.0, 3.9584871301292104e-07, "", "gyro in-run bias instability over a 300 s correlation time, taken by the filter as a random walk of sigma sqrt(2 / 300 s)"},
+    {"--accel-instability-mg", APP_PARAM_ACCEL_BIAS_RW_MPS2_RTS, "mg", 1e-05, 1000.0, 0.0008007096195354885, "", "accelerometer in-run bias instability over 300 s, as the gyro's"},
+    {"--gyro-range-dps", APP_PARAM_GYRO_RANGE_RPS, "deg/s", 1.0, 5000.0, 0.017453292519943295, "", "the gyro's measurement range: a rate at or beyond it is saturated (counted, flagged)"},
+    {"--accel-range-mps2", APP_PARAM_ACCEL_RANGE_MPS2, "m/s^2", 1.0, 2000.0, 1.0, "", "the accelerometer's measurement range (default 8 g)"},
+    {"--gnss-latency-ms", APP_PARAM_GNSS_LATENCY_S, "ms", 0.0, 500.0, 0.001, "", "receiver latency: a fix's time of validity to its arrival (more when TimeOfWeek shows a late epoch)"},
+    {"--gnss-corr-s", APP_PARAM_GNSS_CORR_S, "s", 0.0, 600.0, 1.0, "", "correlation time of the receiver's position errors (docs/kalman.md)"},
+    {"--gnss-lever-m", APP_PARAM_GNSS_LEVER_B_M, "m", -10.0, 10.0, 1.0, "", "the GNSS antenna from the IMU, body axes x right, y forward, z up"},
+};
+
+/* --imu-preset NAME: the presets' descriptions, in app_presets' order */
+static const char *const params_cli_preset_about[APP_PRESET_N] = {
+    "consumer / phone MEMS (a windshield phone or dashcam IMU)",
+    "automotive MEMS: the ESP/airbag-class IMU a car's navigation ECU usually carries (the default)",
+    "tactical grade (fibre-optic or high-end MEMS)",
+    "navigation grade (ring-laser class), seed 000's IMU",
+};
+
+#endif /* NAVECU_PARAMS_CLI_H */
