@@ -20,6 +20,9 @@
 #define PI 3.14159265358979323846
 #define DEG (PI / 180.0)
 
+/* the identity mounting: the IMU square in the vehicle */
+static const mounting_t no_mount;
+
 static align_t al;
 static sins_t nav;
 static dr_t dr;
@@ -56,7 +59,7 @@ static void test_level_exact_attitude(void **state)
     }
     assert_int_equal(align_level_sample(&al, v, n), 1); /* the window is complete */
     nav_real_t roll, pitch;
-    align_level_attitude(&al, &roll, &pitch);
+    align_level_attitude(&al, &no_mount, &roll, &pitch);
     assert_near(roll, 0.6435011087932844, 1e-6);
     assert_near(pitch, PI / 4.0, 1e-6);
 }
@@ -76,7 +79,7 @@ static void test_level_tilted_vehicle(void **state)
         (void)align_level_sample(&al, v, 3000u);
     }
     nav_real_t roll, pitch;
-    align_level_attitude(&al, &roll, &pitch);
+    align_level_attitude(&al, &no_mount, &roll, &pitch);
     assert_near(roll, atan2(-(double)v[0], (double)v[2]), 1e-6);
     assert_near(pitch, atan2((double)v[1], hypot((double)v[0], (double)v[2])), 1e-6);
     assert_near(roll, r, 0.07 * DEG);
@@ -95,7 +98,7 @@ static void test_level_parabolic_weights(void **state)
         (void)align_level_sample(&al, v, 4u);
     }
     nav_real_t roll, pitch;
-    align_level_attitude(&al, &roll, &pitch);
+    align_level_attitude(&al, &no_mount, &roll, &pitch);
     assert_near(roll, atan2(-20.0, 1000.0), 1e-7);
     assert_near(pitch, 0.0, 0.0);
     /* a restart forgets everything: the same window without the x ramp is level */
@@ -105,7 +108,7 @@ static void test_level_parabolic_weights(void **state)
         const int32_t v[3] = {k == 4 ? 100000 : 0, 0, 100};
         (void)align_level_sample(&al, v, 4u);
     }
-    align_level_attitude(&al, &roll, &pitch);
+    align_level_attitude(&al, &no_mount, &roll, &pitch);
     assert_near(roll, 0.0, 0.0);
 }
 

@@ -39,11 +39,14 @@ int align_level_sample(align_t *al, const int32_t v_raw[3], uint32_t n_total)
     return al->level_n >= n_total;
 }
 
-void align_level_attitude(const align_t *al, nav_real_t *roll_rad, nav_real_t *pitch_rad)
+void align_level_attitude(const align_t *al, const mounting_t *mount, nav_real_t *roll_rad,
+                          nav_real_t *pitch_rad)
 {
-    const nav_real_t fx = al->level_wsum[0];
-    const nav_real_t fy = al->level_wsum[1];
-    const nav_real_t fz = al->level_wsum[2];
+    nav_real_t f[3];
+    mounting_to_vehicle(mount, al->level_wsum, f);
+    const nav_real_t fx = f[0];
+    const nav_real_t fy = f[1];
+    const nav_real_t fz = f[2];
     *roll_rad = nav_atan2(-fx, fz);
     *pitch_rad = nav_atan2(fy, nav_sqrt(fx * fx + fz * fz));
 }

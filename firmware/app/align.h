@@ -19,6 +19,7 @@
 #include "calib.h"
 #include "dr.h"
 #include "gnss_epoch.h"
+#include "mounting.h"
 #include "sins.h"
 
 typedef struct {
@@ -58,8 +59,10 @@ void align_level_restart(align_t *al);
  * the window is complete. */
 int align_level_sample(align_t *al, const int32_t v_raw[3], uint32_t n_total);
 
-/* Roll and pitch (rad) of the levelled specific force. */
-void align_level_attitude(const align_t *al, nav_real_t *roll_rad, nav_real_t *pitch_rad);
+/* Roll and pitch (rad) of the vehicle from the levelled specific force (IMU axes), turned
+ * into the vehicle's axes by the configured mounting. */
+void align_level_attitude(const align_t *al, const mounting_t *mount, nav_real_t *roll_rad,
+                          nav_real_t *pitch_rad);
 
 /* Navigate from the initial position and heading with roll and pitch (rad), at rest: the
  * navigator, its height reference (held at the initial height until GNSS heights

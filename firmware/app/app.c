@@ -44,6 +44,7 @@ int app_init(app_t *app, const app_config_t *cfg)
     calib_init(&app->keep.cal);
     imu_link_init(&app->keep.imu, cfg->imu_rate_hz, cfg->gyro_range_rps, cfg->accel_range_mps2,
                   cfg->can_ids[NAVECU_MSG_IMU_ACCEL]);
+    mounting_init(&app->keep.mount, cfg->imu_mount_rad);
     app->run.mode = APP_MODE_WAIT_INIT;
     return NAV_OK;
 }
@@ -98,12 +99,13 @@ static void process_sample(app_t *a, hal_t *hal, const int32_t w_raw[3], const i
         const uint32_t n_total = (uint32_t)a->cfg.level_s * a->cfg.imu_rate_hz;
         if (align_level_sample(&a->run.align, v_raw, n_total)) {
             nav_real_t roll, pitch;
-            align_level_attitude(&a->run.align, &roll, &pitch);
+            align_level_attitude(&a->run.align, &a->keep.mount, &roll, &pitch);
             commands_start_navigation(a, roll, pitch);
         }
     } else if (a->run.mode == APP_MODE_NAVIGATING) {
         imu_inc_t inc;
         app_rx_imu_increment(w_raw, v_raw, NAV_C(1.0) / (nav_real_t)a->cfg.imu_rate_hz, &inc);
+        mounting_apply(&a->keep.mount, &inc);
         const app_diag_t d = diag_of(a);
         if (a->run.fusion.on) {
             const fusion_ctx_t c = fusion_ctx(a, &d);

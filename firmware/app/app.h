@@ -41,6 +41,7 @@
 #include "hal.h"
 #include "imu_stream.h"
 #include "landnav.h"
+#include "mounting.h"
 #include "odo.h"
 #include "output.h"
 #include "sins.h"
@@ -67,6 +68,7 @@ typedef struct {
     calib_t cal;            /* the car's calibration and the NVM */
     zbias_t zbias;          /* the z gyro bias learnt at standstill (the IMU's) */
     odo_t odo;              /* the car's odometer */
+    mounting_t mount;       /* the IMU's configured rotation into the vehicle's axes */
 } app_keep_t;
 
 /* What restarts with navigation: a reset is one assignment of zeros (app_reset). */

@@ -41,6 +41,8 @@ typedef struct {
     nav_real_t gnss_corr_s;       /* correlation time of the receiver's position errors */
     nav_real_t odo_lever_b_m[3];  /* the odometer's reference point (rear axle middle) from
                                      the IMU, body axes, m */
+    nav_real_t imu_mount_rad[3];  /* the IMU's attitude in the vehicle: roll, pitch, yaw
+                                     (mounting.h) */
     nav_real_t gyro_range_rps;    /* the IMU's measurement range: a rate at or beyond it is */
     nav_real_t accel_range_mps2;  /* saturated (counted, flagged) */
     /* navecu's own CAN identifiers (11-bit, all different), indexed by navecu_msg_t

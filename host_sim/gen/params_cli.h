@@ -18,7 +18,7 @@ typedef struct {
     const char *description;
 } params_cli_t;
 
-#define PARAMS_CLI_N 20
+#define PARAMS_CLI_N 21
 
 static const params_cli_t params_cli[PARAMS_CLI_N] = {
     {"--imu-rate-hz", APP_PARAM_IMU_RATE_HZ, "Hz", 10.0, 400.0, 1.0, "", "IMU sample rate: one IMU_Rate + IMU_Accel pair per sample"},
@@ -31,6 +31,7 @@ static const params_cli_t params_cli[PARAMS_CLI_N] = {
     {"--odo-wheelbase-m", APP_PARAM_ODO_WHEELBASE_M, "m", 1.0, 6.0, 1.0, "", "wheelbase, for the front axle's steering correction"},
     {"--odo-lever-m", APP_PARAM_ODO_LEVER_B_M, "m", -10.0, 10.0, 1.0, "", "the odometer's reference point (middle of the measuring axle) from the IMU, body axes x right, y forward, z up"},
     {"--cal-min-base-m", APP_PARAM_CAL_MIN_BASE_M, "m", 0.0, 100000.0, 1.0, "", "a one-point calibration closer than this to its base is refused: a point's error e gives about e / base in dH (rad) and in mu"},
+    {"--imu-mount-deg", APP_PARAM_IMU_MOUNT_RAD, "deg", -180.0, 180.0, 0.017453292519943295, "", "the IMU's attitude in the vehicle, roll, pitch, yaw (firmware/app/mounting.h: 3-1-2 as the navigation attitude; yaw clockwise, pitch nose up, roll right side down): any rotation, e.g. 0,0,90 turned right, 180,0,0 upside down; the filter estimates the small residual yaw and pitch"},
     {"--gyro-arw-dpsh", APP_PARAM_GYRO_ARW_RAD_RTS, "deg/sqrt(h)", 1e-06, 100.0, 0.0002908882086657216, "", "gyro angle random walk"},
     {"--gyro-bias-dph", APP_PARAM_GYRO_BIAS_RPS, "deg/h", 1e-06, 10000.0, 4.84813681109536e-06, "", "gyro turn-on bias, 1 sigma: weighs the bias estimate at standstill and in the filter"},
     {"--accel-bias-mg", APP_PARAM_ACCEL_BIAS_MPS2, "mg", 0.0001, 1000.0, 0.00980665, "", "accelerometer turn-on bias, 1 sigma"},

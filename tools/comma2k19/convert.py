@@ -13,11 +13,12 @@ are used. What navecu is given beyond the recording (none of it is in the car's 
 - **IMU**: 104.26 Hz with jittered stamps (314..316 ticks of 32.768 kHz) resampled to a
   fixed IMU_RATE_HZ grid without losing any motion: the trapezoidal integral of the rates
   and specific forces at the device's stamps, interpolated to the grid, differenced (each
-  grid increment holds exactly what the device measured over that interval); rotated from
-  the device's x forward / y right / z down axes into the car's (navecu body: x right,
-  y forward, z up) with the mounting measured against the reference (MOUNT_DEG, README:
-  "Mounting"): navecu estimates only a small mounting pitch and yaw (issue #16 brings a
-  configured mounting).
+  grid increment holds exactly what the device measured over that interval); sent in the
+  device's own axes (x forward, y right, z down): the firmware is configured with the
+  device's mounting in the car (--imu-mount-deg, MOUNT_312_DEG: its x forward / y right /
+  z down axes and the roll, pitch and yaw measured against the reference, MOUNT_DEG,
+  README "Mounting"), the rotation that navecu's own body axes (x right, y forward, z up)
+  need.
 - **GNSS**: the u-blox fixes (9.7 Hz), sent when they were logged (t_s), with their own
   time of validity in TimeOfWeek (gps_tow_s) and the week in GNSS_Time; the latency of the
   earliest-logged fix is the firmware's --gnss-latency-ms (gnss_latency_ms in the meta);
@@ -105,6 +106,21 @@ def car_attitude(roll_deg, pitch_deg, heading_deg) -> tuple:
     return math.degrees(roll), math.degrees(pitch), math.degrees(heading)
 
 
+def euler_312_deg(C) -> tuple:
+    """(roll, pitch, yaw) deg of a rotation C (vehicle <- IMU) in docs/frames.md's 3-1-2
+    convention, C = Rz(-yaw) Rx(pitch) Ry(roll): what --imu-mount-deg takes
+    (firmware/app/mounting.h)."""
+    pitch = math.asin(max(-1.0, min(1.0, C[2, 1])))
+    roll = math.atan2(-C[2, 0], C[2, 2])
+    yaw = math.atan2(C[0, 1], C[1, 1])
+    return tuple(round(math.degrees(x), 4) for x in (roll, pitch, yaw))
+
+
+#: the device's axes (x forward, y right, z down) in the car's (x right, y forward, z up):
+#: the firmware's --imu-mount-deg; the IMU samples are sent in the device's own axes
+MOUNT_312_DEG = euler_312_deg(C_CAR_DEV)
+
+
 def resample_increments(t_s, w, f, rate_hz: int = IMU_RATE_HZ) -> dict:
     """Angle and velocity increments on a fixed grid t0 + k / rate_hz (k = 0..) from
     samples at irregular stamps: the trapezoidal integral at the stamps, linearly
@@ -180,7 +196,7 @@ def build(data_dir=None, vehicle_name="toyota_rav4_2017", channels=None, car_bus
     # IMU: device FRD -> car RFU, resampled
     w_dev = np.column_stack([imu["wx_radps"], imu["wy_radps"], imu["wz_radps"]])
     f_dev = np.column_stack([imu["ax_mps2"], imu["ay_mps2"], imu["az_mps2"]])
-    rs = resample_increments(imu["t_s"], w_dev @ C_CAR_DEV.T, f_dev @ C_CAR_DEV.T)
+    rs = resample_increments(imu["t_s"], w_dev, f_dev)
     t0 = float(rs["t_grid_s"][0])
     t_imu = np.round(rs["t_grid_s"][1:] - t0, 6)
     t_last = float(t_imu[-1])
@@ -192,7 +208,8 @@ def build(data_dir=None, vehicle_name="toyota_rav4_2017", channels=None, car_bus
                     "interval_min_s": rs["interval_min_s"],
                     "interval_max_s": rs["interval_max_s"],
                     "resampled_to_hz": IMU_RATE_HZ, "samples_sent": int(len(t_imu)),
-                    "mounting_deg": MOUNT_DEG},
+                    "mounting_deg": MOUNT_DEG, "axes": "the device's own (x forward, y right, z down)",
+                    "imu_mount_deg_312": list(MOUNT_312_DEG)},
             "last_imu_sample_s": t_last}
 
     # initial state: the reference at t0

@@ -228,7 +228,8 @@ def main(argv=None) -> int:
     meta = built["bus"][1]
     stages.done(f"{meta['frames']} frames, {meta['car_bus']['frames']} of the car's bus")
     truth = reference_truth(data, meta["t0_segment_s"])
-    opts = [*RATES, "--gnss-latency-ms", str(meta["gnss_latency_ms"]), *IMU_OPTIONS]
+    opts = [*RATES, "--gnss-latency-ms", str(meta["gnss_latency_ms"]), *IMU_OPTIONS,
+            "--imu-mount-deg", ",".join(f"{x:g}" for x in meta["imu"]["imu_mount_deg_312"])]
     reps, series = {}, {}
     for k, (frames, m) in built.items():
         reps[k], series[k], _ = run_one(stages, navecu, k, frames, m, out, opts, db, truth,

@@ -264,6 +264,10 @@ def main(argv=None) -> int:
     wheels = sensors.wheel_speeds(truth, odo, 3 * a.seed + 1)
     gnss = sensors.gnss_epochs(truth, sensors.GNSS_PRESETS[gnss_name], 3 * a.seed + 2)
     fw_args = firmware_args(sensors.PRESETS[imu_name], sensors.GNSS_PRESETS[gnss_name])
+    mnt = scen["imu_mounting"]
+    if mnt.get("configured"):  # the installer configured the IMU's mounting
+        fw_args += ["--imu-mount-deg",
+                    f"{mnt['roll_deg']:.6g},{mnt['pitch_deg']:.6g},{mnt['yaw_deg']:.6g}"]
     fault_log = []
     if scen.get("gnss_faults"):
         gnss, fault_log = sensors.apply_gnss_faults(gnss, scen["gnss_faults"])

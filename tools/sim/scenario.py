@@ -66,6 +66,7 @@ Scenario file (TOML, read by :func:`load_scenario`)
     roll_deg = 0.0                # these (3-1-2, like the attitude; yaw clockwise positive),
     pitch_deg = 0.0               # with any IMU preset: the sensor's forward axis points
     yaw_deg = 0.0                 # along heading + yaw_deg
+    configured = false            # true: the firmware is told (--imu-mount-deg R,P,Y)
 
     [odometer]                    # OdoSpec fields (tools/sim/sensors.py), e.g.
     mu = 0.012                    # scale error: wheel speeds read (1 + mu) x true
@@ -136,7 +137,7 @@ _SEG_KEYS = {
 }
 
 
-MOUNTING_DEFAULTS = {"roll_deg": 0.0, "pitch_deg": 0.0, "yaw_deg": 0.0}
+MOUNTING_DEFAULTS = {"roll_deg": 0.0, "pitch_deg": 0.0, "yaw_deg": 0.0, "configured": False}
 INITIALIZATION_DEFAULTS = {"heading_reference": "car", "heading_error_deg": 0.0}
 _OPTIONAL_TABLES = {
     "sim": {"imu", "gnss"},
@@ -273,7 +274,8 @@ def load_scenario(path) -> dict:
         if unknown:
             raise ValueError(f"{path}: unknown [{table}] keys {sorted(unknown)}")
     mnt = dict(MOUNTING_DEFAULTS)
-    mnt.update({k: float(v) for k, v in sc.get("imu_mounting", {}).items()})
+    mnt.update({k: (bool(v) if k == "configured" else float(v))
+                for k, v in sc.get("imu_mounting", {}).items()})
     sc["imu_mounting"] = mnt
     sc["odometer"] = dict(sc.get("odometer", {}))
     ini = dict(INITIALIZATION_DEFAULTS)

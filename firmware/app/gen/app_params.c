@@ -16,6 +16,7 @@ const app_param_t app_params[APP_PARAM_N] = {
     [APP_PARAM_ODO_WHEELBASE_M] = {"odo_wheelbase_m", 0x0212u, APP_PARAM_REAL, 1u, 1u, NAV_C(1.0), NAV_C(6.0), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_ODO_LEVER_B_M] = {"odo_lever_b_m", 0x0213u, APP_PARAM_VEC3, 0u, 0u, NAV_C(-10.0), NAV_C(10.0), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_CAL_MIN_BASE_M] = {"cal_min_base_m", 0x0220u, APP_PARAM_REAL, 0u, 0u, NAV_C(0.0), NAV_C(100000.0), {NAV_C(2000.0), NAV_C(0.0), NAV_C(0.0)}},
+    [APP_PARAM_IMU_MOUNT_RAD] = {"imu_mount_rad", 0x0205u, APP_PARAM_VEC3, 0u, 0u, NAV_C(-3.141592653589793), NAV_C(3.141592653589793), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_GYRO_ARW_RAD_RTS] = {"gyro_arw_rad_rts", 0x0230u, APP_PARAM_REAL, 0u, 0u, NAV_C(2.908882086657216e-10), NAV_C(0.02908882086657216), {NAV_C(0.0005817764173314432), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_GYRO_BIAS_RPS] = {"gyro_bias_rps", 0x0231u, APP_PARAM_REAL, 0u, 0u, NAV_C(4.84813681109536e-12), NAV_C(0.0484813681109536), {NAV_C(0.0009999999697132222), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_ACCEL_BIAS_MPS2] = {"accel_bias_mps2", 0x0232u, APP_PARAM_REAL, 0u, 0u, NAV_C(9.80665e-07), NAV_C(9.80665), {NAV_C(0.199999762095), NAV_C(0.0), NAV_C(0.0)}},
@@ -87,6 +88,11 @@ void app_param_get(const app_config_t *cfg, app_param_id_t id, nav_real_t v[3])
         break;
     case APP_PARAM_CAL_MIN_BASE_M:
         v[0] = cfg->cal_min_base_m;
+        break;
+    case APP_PARAM_IMU_MOUNT_RAD:
+        v[0] = cfg->imu_mount_rad[0];
+        v[1] = cfg->imu_mount_rad[1];
+        v[2] = cfg->imu_mount_rad[2];
         break;
     case APP_PARAM_GYRO_ARW_RAD_RTS:
         v[0] = cfg->gyro_arw_rad_rts;
@@ -165,6 +171,11 @@ int app_param_set(app_config_t *cfg, app_param_id_t id, const nav_real_t v[3])
         break;
     case APP_PARAM_CAL_MIN_BASE_M:
         cfg->cal_min_base_m = v[0];
+        break;
+    case APP_PARAM_IMU_MOUNT_RAD:
+        cfg->imu_mount_rad[0] = v[0];
+        cfg->imu_mount_rad[1] = v[1];
+        cfg->imu_mount_rad[2] = v[2];
         break;
     case APP_PARAM_GYRO_ARW_RAD_RTS:
         cfg->gyro_arw_rad_rts = v[0];
