@@ -19,7 +19,7 @@ CFLAGS_BASE := $(CSTD) -O2 -g $(WARN) $(FPFLAGS)
 SAN_FLAGS := -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
 
 # firmware/ sees only its own folders and the HAL interface (docs/architecture.md)
-FW_INC := -Ifirmware/nav -Ifirmware/can -Ifirmware/can/gen -Ifirmware/app -Ifirmware/vehicle -Ihal
+FW_INC := -Ifirmware/nav -Ifirmware/can -Ifirmware/can/gen -Ifirmware/diag -Ifirmware/app -Ifirmware/vehicle -Ihal
 HOST_INC := $(FW_INC) -Ihal/common -Ihal/linux -Ihal/cortex_m4f -Ihost_sim -Itests/support
 
 CORE_SRC := $(wildcard firmware/nav/*.c)
@@ -37,7 +37,10 @@ VEHICLES_BUILT := $(sort native toyota_rav4_2017 $(VEHICLE))
 VEH_GEN_SRC = $(VEH_OUT)/$(1)/vehicle_profile.c $(VEH_OUT)/$(1)/veh_can.c
 VEH_SRC = $(call VEH_GEN_SRC,$(1)) firmware/vehicle/vehicle_checksum.c
 CODEC_GEN := firmware/can/gen/navecu_can.c firmware/can/gen/navecu_can.h
-APP_SRC := firmware/can/e2e.c firmware/can/gen/navecu_can.c $(sort $(wildcard firmware/app/*.c))
+# the diagnostic transport (ISO-TP, docs/can.md): part of the application's library, linked
+# into the images, kept out of them by --gc-sections until the application calls it
+DIAG_SRC := $(sort $(wildcard firmware/diag/*.c))
+APP_SRC := firmware/can/e2e.c firmware/can/gen/navecu_can.c $(DIAG_SRC) $(sort $(wildcard firmware/app/*.c))
 # the host executable: its board files (host_sim/)
 HOST_SIM_SRC := host_sim/main.c host_sim/options.c host_sim/report.c host_sim/host_board.c
 HAL_LINUX_SRC := hal/linux/hal_linux.c hal/linux/hal_socketcan.c hal/common/candump.c \
@@ -51,7 +54,7 @@ SUPPORT_SRC_BOTH := tests/support/nav_run.c
 # tests built once per numeric variant (f32 firmware, f64 reference)
 TESTS_VARIANT := test_nav_math test_earth test_sins test_dr test_ekf test_ekf_rows
 # tests of the float32 firmware only (application, codec, HAL)
-TESTS_F32 := test_e2e test_codec test_trig
+TESTS_F32 := test_e2e test_codec test_trig test_isotp
 # tests that link both variants themselves
 TESTS_BOTH := test_drive
 # tests of application modules against the in-memory HAL (tests/support/fake_hal.c)
@@ -283,7 +286,7 @@ $(BUILD)/m4/libnavecu.a: $(M4_SRC:%.c=$(BUILD)/m4/%.o)
 cross test-cross: $(BUILD)/m4/libnavecu.a
 	@if $(ARM_NM) $< | grep -E ' U (__aeabi_(d|f2d|l2d|ul2d|i2d|ui2d)|(sin|cos|tan|sqrt|atan2|asin|acos|atan|fabs|exp|log|pow|floor|ceil|round)$$)'; then \
 	  echo "cross: the Cortex-M4F firmware uses double-precision arithmetic (above)"; exit 1; fi
-	@echo "cross: firmware (core, codec, application) and the STM32 drivers built for Cortex-M4F, no double-precision arithmetic"
+	@echo "cross: firmware (core, codec, diagnostic transport, application) and the STM32 drivers built for Cortex-M4F, no double-precision arithmetic"
 	@arm-none-eabi-size -t $(M4_SRC:%.c=$(BUILD)/m4/%.o) | tail -1 | \
 	  awk '{print "cross: firmware code size " $$1 " bytes text, " $$3 " bytes bss"}'
 
