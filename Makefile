@@ -218,9 +218,16 @@ test-asan: $(asan_TEST_BINS)
 
 test-c: test-plain test-asan
 
+# the firmware's ISO-TP transport as a server on SocketCAN, the peer of can-isotp in
+# tests/python/test_isotp_peer.py (tests/tools/isotp_peer.c)
+ISOTP_PEER := $(BUILD)/host/tests/isotp_peer
+$(ISOTP_PEER): $(BUILD)/host/f32/tests/tools/isotp_peer.o $(BUILD)/host/libnavapp.a $(BUILD)/host/libhal_linux.a
+	@mkdir -p $(@D)
+	$(CC) $^ -o $@
+
 # Python tests drive the host executable (plain build) through real CAN logs.
-test-python: venv $(BUILD)/host/navecu $(BUILD)/host/navecu-toyota_rav4_2017
-	NAVECU_BIN=$(BUILD)/host/navecu $(PY) -m pytest -q -rs tests/python
+test-python: venv $(BUILD)/host/navecu $(BUILD)/host/navecu-toyota_rav4_2017 $(ISOTP_PEER)
+	NAVECU_BIN=$(BUILD)/host/navecu ISOTP_PEER_BIN=$(ISOTP_PEER) $(PY) -m pytest -q -rs tests/python
 
 test: deps
 	./tools/check_layers.sh
