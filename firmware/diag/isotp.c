@@ -18,7 +18,7 @@
 _Static_assert(ISOTP_MAX_LEN >= 8u && ISOTP_MAX_LEN <= FF_DL_MAX,
                "ISOTP_MAX_LEN must be 8..4095 (a classic first frame's 12-bit FF_DL)");
 
-static uint32_t sat_inc(uint32_t n)
+static uint32_t count_up(uint32_t n)
 {
     return (n == UINT32_MAX) ? n : (n + 1u);
 }
@@ -52,7 +52,7 @@ void isotp_config_defaults(isotp_config_t *cfg, uint32_t rx_id, uint32_t tx_id)
     if (cfg == NULL) {
         return;
     }
-    memset(cfg, 0, sizeof *cfg);
+    (void)memset(cfg, 0, sizeof *cfg);
     cfg->rx_id = rx_id;
     cfg->tx_id = tx_id;
     cfg->padding = 1u;
@@ -77,7 +77,7 @@ int isotp_init(isotp_t *c, const isotp_config_t *cfg)
         (cfg->n_bs_us == 0u) || (cfg->n_cr_us == 0u)) {
         return HAL_EINVAL;
     }
-    memset(c, 0, sizeof *c);
+    (void)memset(c, 0, sizeof *c);
     c->cfg = *cfg;
     c->rx_result = ISOTP_N_NONE;
     c->tx_result = ISOTP_N_NONE;
@@ -110,7 +110,7 @@ static void rx_fc_due(isotp_t *c, uint8_t fs, uint64_t now_us)
 static void rx_interrupt(isotp_t *c)
 {
     if (c->rx_state != ISOTP_RX_IDLE) {
-        c->cnt.rx_unexpected = sat_inc(c->cnt.rx_unexpected);
+        c->cnt.rx_unexpected = count_up(c->cnt.rx_unexpected);
         rx_end(c, ISOTP_N_UNEXP_PDU);
     }
 }
@@ -119,24 +119,24 @@ static void on_sf(isotp_t *c, const hal_can_frame_t *f)
 {
     const uint8_t sf_dl = (uint8_t)(f->data[0] & 0x0Fu);
     if ((sf_dl == 0u) || (sf_dl > SF_MAX) || (sf_dl > (uint8_t)(f->dlc - 1u))) {
-        c->cnt.rx_invalid = sat_inc(c->cnt.rx_invalid);
+        c->cnt.rx_invalid = count_up(c->cnt.rx_invalid);
         return;
     }
     rx_interrupt(c);
     if (c->ready_len != 0u) {
-        c->cnt.rx_busy = sat_inc(c->cnt.rx_busy); /* no flow control for an SF: dropped */
+        c->cnt.rx_busy = count_up(c->cnt.rx_busy); /* no flow control for an SF: dropped */
         return;
     }
-    memcpy(c->rx_buf, &f->data[1], sf_dl);
+    (void)memcpy(c->rx_buf, &f->data[1], sf_dl);
     c->ready_len = sf_dl;
-    c->cnt.rx_msgs = sat_inc(c->cnt.rx_msgs);
+    c->cnt.rx_msgs = count_up(c->cnt.rx_msgs);
     rx_end(c, ISOTP_N_OK);
 }
 
 static void on_ff(isotp_t *c, const hal_can_frame_t *f, uint64_t now_us)
 {
     if (f->dlc != 8u) {
-        c->cnt.rx_invalid = sat_inc(c->cnt.rx_invalid);
+        c->cnt.rx_invalid = count_up(c->cnt.rx_invalid);
         return;
     }
     uint32_t ff_dl = ((uint32_t)f->data[0] & 0x0Fu) << 8;
@@ -146,19 +146,19 @@ static void on_ff(isotp_t *c, const hal_can_frame_t *f, uint64_t now_us)
         const uint32_t dl32 = ((uint32_t)f->data[2] << 24) | ((uint32_t)f->data[3] << 16) |
                               ((uint32_t)f->data[4] << 8) | (uint32_t)f->data[5];
         if (dl32 <= FF_DL_MAX) {
-            c->cnt.rx_invalid = sat_inc(c->cnt.rx_invalid);
+            c->cnt.rx_invalid = count_up(c->cnt.rx_invalid);
             return;
         }
         ff_dl = dl32;
     } else if (ff_dl <= SF_MAX) {
-        c->cnt.rx_invalid = sat_inc(c->cnt.rx_invalid); /* fits a single frame */
+        c->cnt.rx_invalid = count_up(c->cnt.rx_invalid); /* fits a single frame */
         return;
     } else {
         /* a 12-bit FF_DL of 8..4095 */
     }
     rx_interrupt(c);
     if (ff_dl > ISOTP_MAX_LEN) {
-        c->cnt.rx_overflow = sat_inc(c->cnt.rx_overflow);
+        c->cnt.rx_overflow = count_up(c->cnt.rx_overflow);
         c->rx_result = ISOTP_N_BUFFER_OVFLW;
         rx_fc_due(c, ISOTP_FS_OVFLW, now_us);
         return;
@@ -168,13 +168,13 @@ static void on_ff(isotp_t *c, const hal_can_frame_t *f, uint64_t now_us)
     c->rx_waits = 0u;
     if (c->ready_len != 0u) {
         /* the buffer still holds an unread message: keep the FF's data, send WAITs */
-        memcpy(c->rx_head, &f->data[2], FF_DATA);
+        (void)memcpy(c->rx_head, &f->data[2], FF_DATA);
         c->rx_pos = 0u;
         c->rx_state = ISOTP_RX_WAIT_BUF;
         c->rx_timer_us = now_us; /* the first WAIT (or OVFLW) is due at once */
         return;
     }
-    memcpy(c->rx_buf, &f->data[2], FF_DATA);
+    (void)memcpy(c->rx_buf, &f->data[2], FF_DATA);
     c->rx_pos = (uint16_t)FF_DATA;
     rx_fc_due(c, ISOTP_FS_CTS, now_us);
 }
@@ -182,27 +182,27 @@ static void on_ff(isotp_t *c, const hal_can_frame_t *f, uint64_t now_us)
 static void on_cf(isotp_t *c, const hal_can_frame_t *f, uint64_t now_us)
 {
     if (c->rx_state != ISOTP_RX_WAIT_CF) {
-        c->cnt.rx_unexpected = sat_inc(c->cnt.rx_unexpected); /* ignored */
+        c->cnt.rx_unexpected = count_up(c->cnt.rx_unexpected); /* ignored */
         return;
     }
     const uint16_t left = (uint16_t)(c->rx_len - c->rx_pos);
     const uint16_t n = (left < CF_DATA) ? left : (uint16_t)CF_DATA;
-    if ((uint16_t)(f->dlc - 1u) < n) {
-        c->cnt.rx_invalid = sat_inc(c->cnt.rx_invalid); /* too short for its data: ignored */
+    if ((uint16_t)f->dlc < (uint16_t)(n + 1u)) {
+        c->cnt.rx_invalid = count_up(c->cnt.rx_invalid); /* too short for its data: ignored */
         return;
     }
     if ((uint8_t)(f->data[0] & 0x0Fu) != c->rx_sn) {
-        c->cnt.rx_wrong_sn = sat_inc(c->cnt.rx_wrong_sn);
+        c->cnt.rx_wrong_sn = count_up(c->cnt.rx_wrong_sn);
         rx_end(c, ISOTP_N_WRONG_SN); /* a lost or repeated CF: the message is dropped */
         return;
     }
-    memcpy(&c->rx_buf[c->rx_pos], &f->data[1], n);
+    (void)memcpy(&c->rx_buf[c->rx_pos], &f->data[1], n);
     c->rx_pos = (uint16_t)(c->rx_pos + n);
     c->rx_sn = (uint8_t)((c->rx_sn + 1u) & 0x0Fu);
     c->rx_timer_us = now_us;
     if (c->rx_pos == c->rx_len) {
         c->ready_len = c->rx_len;
-        c->cnt.rx_msgs = sat_inc(c->cnt.rx_msgs);
+        c->cnt.rx_msgs = count_up(c->cnt.rx_msgs);
         rx_end(c, ISOTP_N_OK);
         return;
     }
@@ -229,11 +229,11 @@ static void tx_end(isotp_t *c, isotp_result_t result)
 static void on_fc(isotp_t *c, const hal_can_frame_t *f, uint64_t now_us)
 {
     if (f->dlc < 3u) {
-        c->cnt.rx_invalid = sat_inc(c->cnt.rx_invalid);
+        c->cnt.rx_invalid = count_up(c->cnt.rx_invalid);
         return;
     }
     if (c->tx_state != ISOTP_TX_WAIT_FC) {
-        c->cnt.rx_unexpected = sat_inc(c->cnt.rx_unexpected); /* ignored */
+        c->cnt.rx_unexpected = count_up(c->cnt.rx_unexpected); /* ignored */
         return;
     }
     const uint8_t fs = (uint8_t)(f->data[0] & 0x0Fu);
@@ -245,19 +245,19 @@ static void on_fc(isotp_t *c, const hal_can_frame_t *f, uint64_t now_us)
         c->tx_state = ISOTP_TX_SEND;
         c->tx_due_us = now_us; /* the first CF of a block may go at once */
     } else if (fs == ISOTP_FS_WAIT) {
-        c->cnt.wait_received = sat_inc(c->cnt.wait_received);
+        c->cnt.wait_received = count_up(c->cnt.wait_received);
         c->tx_waits = (c->tx_waits == UINT16_MAX) ? c->tx_waits : (uint16_t)(c->tx_waits + 1u);
         if ((c->cfg.wait_rx_max != 0u) && (c->tx_waits > c->cfg.wait_rx_max)) {
-            c->cnt.tx_wft_ovrn = sat_inc(c->cnt.tx_wft_ovrn);
+            c->cnt.tx_wft_ovrn = count_up(c->cnt.tx_wft_ovrn);
             tx_end(c, ISOTP_N_WFT_OVRN);
         } else {
             c->tx_timer_us = now_us; /* N_Bs starts again */
         }
     } else if (fs == ISOTP_FS_OVFLW) {
-        c->cnt.tx_overflow = sat_inc(c->cnt.tx_overflow);
+        c->cnt.tx_overflow = count_up(c->cnt.tx_overflow);
         tx_end(c, ISOTP_N_BUFFER_OVFLW);
     } else {
-        c->cnt.tx_invalid_fs = sat_inc(c->cnt.tx_invalid_fs);
+        c->cnt.tx_invalid_fs = count_up(c->cnt.tx_invalid_fs);
         tx_end(c, ISOTP_N_INVALID_FS);
     }
 }
@@ -268,22 +268,22 @@ static void check_timers(isotp_t *c, uint64_t now_us)
 {
     if ((c->rx_state == ISOTP_RX_WAIT_CF) &&
         (elapsed(now_us, c->rx_timer_us) > c->cfg.n_cr_us)) {
-        c->cnt.rx_timeout_cr = sat_inc(c->cnt.rx_timeout_cr);
+        c->cnt.rx_timeout_cr = count_up(c->cnt.rx_timeout_cr);
         rx_end(c, ISOTP_N_TIMEOUT_CR);
     } else if ((c->rx_state == ISOTP_RX_FC) &&
                (elapsed(now_us, c->rx_fc_due_us) > c->cfg.n_ar_us)) {
-        c->cnt.rx_timeout_ar = sat_inc(c->cnt.rx_timeout_ar);
+        c->cnt.rx_timeout_ar = count_up(c->cnt.rx_timeout_ar);
         rx_end(c, ISOTP_N_TIMEOUT_A);
     } else {
         /* no reception timer ran out */
     }
     if ((c->tx_state == ISOTP_TX_WAIT_FC) &&
         (elapsed(now_us, c->tx_timer_us) > c->cfg.n_bs_us)) {
-        c->cnt.tx_timeout_bs = sat_inc(c->cnt.tx_timeout_bs);
+        c->cnt.tx_timeout_bs = count_up(c->cnt.tx_timeout_bs);
         tx_end(c, ISOTP_N_TIMEOUT_BS);
     } else if ((c->tx_state == ISOTP_TX_SEND) &&
                (elapsed(now_us, c->tx_due_us) > c->cfg.n_as_us)) {
-        c->cnt.tx_timeout_as = sat_inc(c->cnt.tx_timeout_as);
+        c->cnt.tx_timeout_as = count_up(c->cnt.tx_timeout_as);
         tx_end(c, ISOTP_N_TIMEOUT_A);
     } else {
         /* no transmission timer ran out */
@@ -295,11 +295,11 @@ static void check_timers(isotp_t *c, uint64_t now_us)
 /* f := a frame on tx_id with the first n bytes of body, padded (or DLC n) */
 static void frame_make(const isotp_t *c, hal_can_frame_t *f, const uint8_t *body, uint8_t n)
 {
-    memset(f, 0, sizeof *f);
+    (void)memset(f, 0, sizeof *f);
     f->id = c->cfg.tx_id;
     f->extended = 0u;
-    memset(f->data, c->cfg.pad_byte, sizeof f->data);
-    memcpy(f->data, body, n);
+    (void)memset(f->data, c->cfg.pad_byte, sizeof f->data);
+    (void)memcpy(f->data, body, n);
     f->dlc = (c->cfg.padding != 0u) ? 8u : n;
 }
 
@@ -317,7 +317,7 @@ static int rx_send_fc(isotp_t *c, uint64_t now_us, isotp_tx_fn tx, void *user)
     hal_can_frame_t f;
     frame_make(c, &f, body, 3u);
     if (tx(user, &f) != 0) {
-        c->cnt.tx_refused = sat_inc(c->cnt.tx_refused);
+        c->cnt.tx_refused = count_up(c->cnt.tx_refused);
         return 0;
     }
     if (c->rx_fc == ISOTP_FS_CTS) {
@@ -325,7 +325,7 @@ static int rx_send_fc(isotp_t *c, uint64_t now_us, isotp_tx_fn tx, void *user)
         c->rx_timer_us = now_us; /* N_Cr from the FC on */
         c->rx_block_left = c->cfg.block_size;
     } else if (c->rx_fc == ISOTP_FS_WAIT) {
-        c->cnt.wait_sent = sat_inc(c->cnt.wait_sent);
+        c->cnt.wait_sent = count_up(c->cnt.wait_sent);
         c->rx_waits = (uint8_t)(c->rx_waits + 1u);
         c->rx_state = ISOTP_RX_WAIT_BUF;
         c->rx_timer_us = now_us + c->cfg.wait_period_us;
@@ -341,7 +341,7 @@ static int rx_send_fc(isotp_t *c, uint64_t now_us, isotp_tx_fn tx, void *user)
 static void rx_wait_buf(isotp_t *c, uint64_t now_us)
 {
     if (c->ready_len == 0u) {
-        memcpy(c->rx_buf, c->rx_head, FF_DATA);
+        (void)memcpy(c->rx_buf, c->rx_head, FF_DATA);
         c->rx_pos = (uint16_t)FF_DATA;
         c->rx_waits = 0u;
         rx_fc_due(c, ISOTP_FS_CTS, now_us);
@@ -350,9 +350,9 @@ static void rx_wait_buf(isotp_t *c, uint64_t now_us)
             rx_fc_due(c, ISOTP_FS_WAIT, now_us);
         } else {
             if (c->cfg.wft_max == 0u) {
-                c->cnt.rx_busy = sat_inc(c->cnt.rx_busy);
+                c->cnt.rx_busy = count_up(c->cnt.rx_busy);
             } else {
-                c->cnt.rx_wft_ovrn = sat_inc(c->cnt.rx_wft_ovrn);
+                c->cnt.rx_wft_ovrn = count_up(c->cnt.rx_wft_ovrn);
             }
             c->rx_result = ISOTP_N_WFT_OVRN;
             rx_fc_due(c, ISOTP_FS_OVFLW, now_us);
@@ -383,20 +383,20 @@ static int tx_send_next(isotp_t *c, uint64_t now_us, isotp_tx_fn tx, void *user)
         take = (left < CF_DATA) ? left : (uint16_t)CF_DATA;
     }
     const uint8_t hdr = ((c->tx_pos == 0u) && (c->tx_len > SF_MAX)) ? 2u : 1u;
-    memcpy(&body[hdr], &c->tx_data[c->tx_pos], take);
+    (void)memcpy(&body[hdr], &c->tx_data[c->tx_pos], take);
     n = (uint8_t)(hdr + take);
     hal_can_frame_t f;
     frame_make(c, &f, body, n);
     if (tx(user, &f) != 0) {
-        c->cnt.tx_refused = sat_inc(c->cnt.tx_refused);
+        c->cnt.tx_refused = count_up(c->cnt.tx_refused);
         return 0;
     }
-    const int first = (c->tx_pos == 0u) ? 1 : 0;
+    const uint8_t first = (c->tx_pos == 0u) ? 1u : 0u;
     c->tx_pos = (uint16_t)(c->tx_pos + take);
     if (c->tx_pos == c->tx_len) {
-        c->cnt.tx_msgs = sat_inc(c->cnt.tx_msgs);
+        c->cnt.tx_msgs = count_up(c->cnt.tx_msgs);
         tx_end(c, ISOTP_N_OK);
-    } else if (first != 0) {
+    } else if (first != 0u) {
         c->tx_sn = 1u;
         c->tx_state = ISOTP_TX_WAIT_FC; /* after the FF */
         c->tx_timer_us = now_us;
@@ -426,7 +426,7 @@ int isotp_on_frame(isotp_t *c, const hal_can_frame_t *f, uint64_t now_us)
     }
     check_timers(c, now_us);
     if (f->dlc == 0u) {
-        c->cnt.rx_invalid = sat_inc(c->cnt.rx_invalid);
+        c->cnt.rx_invalid = count_up(c->cnt.rx_invalid);
         return 1;
     }
     const uint8_t pci = (uint8_t)(f->data[0] >> 4);
@@ -439,7 +439,7 @@ int isotp_on_frame(isotp_t *c, const hal_can_frame_t *f, uint64_t now_us)
     } else if (pci == PCI_FC) {
         on_fc(c, f, now_us);
     } else {
-        c->cnt.rx_invalid = sat_inc(c->cnt.rx_invalid); /* PCI type 4..15: reserved */
+        c->cnt.rx_invalid = count_up(c->cnt.rx_invalid); /* PCI type 4..15: reserved */
     }
     return 1;
 }
@@ -499,7 +499,7 @@ int isotp_receive(isotp_t *c, uint8_t *buf, size_t cap, size_t *len)
     if (cap < c->ready_len) {
         return HAL_ENOSPC;
     }
-    memcpy(buf, c->rx_buf, c->ready_len);
+    (void)memcpy(buf, c->rx_buf, c->ready_len);
     *len = c->ready_len;
     c->ready_len = 0u;
     return 0;
