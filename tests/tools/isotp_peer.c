@@ -114,11 +114,23 @@ int main(int argc, char **argv)
     isotp_config_t cfg;
     isotp_config_defaults(&cfg, rx_id, tx_id);
     int id_set = 0;
+    /* the options that set one field: byte values, and times given in ms */
+    struct {
+        const char *opt;
+        uint8_t *field;
+    } const u8_opts[] = {{"--bs", &cfg.block_size}, {"--stmin", &cfg.st_min},
+                         {"--pad", &cfg.pad_byte}, {"--wft-max", &cfg.wft_max}};
+    struct {
+        const char *opt;
+        uint32_t *us;
+    } const ms_opts[] = {{"--wait-period-ms", &cfg.wait_period_us}, {"--n-as-ms", &cfg.n_as_us},
+                         {"--n-ar-ms", &cfg.n_ar_us}, {"--n-bs-ms", &cfg.n_bs_us},
+                         {"--n-cr-ms", &cfg.n_cr_us}};
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         const char *v = (i + 1 < argc) ? argv[i + 1] : NULL;
         uint32_t x = 0u;
-        int bad = 0;
+        int bad = 0, known = 0;
         if (strcmp(a, "--no-padding") == 0) {
             cfg.padding = 0u;
             continue;
@@ -128,7 +140,23 @@ int main(int argc, char **argv)
             return 2;
         }
         i++;
-        if (strcmp(a, "--can") == 0) {
+        for (size_t k = 0; k < sizeof u8_opts / sizeof u8_opts[0]; k++) {
+            if (strcmp(a, u8_opts[k].opt) == 0) {
+                known = 1;
+                bad = parse_u32(v, 255u, &x);
+                *u8_opts[k].field = (uint8_t)x;
+            }
+        }
+        for (size_t k = 0; k < sizeof ms_opts / sizeof ms_opts[0]; k++) {
+            if (strcmp(a, ms_opts[k].opt) == 0) {
+                known = 1;
+                bad = parse_u32(v, 60000u, &x);
+                *ms_opts[k].us = x * 1000u;
+            }
+        }
+        if (known != 0) {
+            /* set above */
+        } else if (strcmp(a, "--can") == 0) {
             iface = v;
         } else if (strcmp(a, "--rx-id") == 0) {
             bad = parse_u32(v, 0x7FFu, &rx_id);
@@ -136,36 +164,9 @@ int main(int argc, char **argv)
         } else if (strcmp(a, "--tx-id") == 0) {
             bad = parse_u32(v, 0x7FFu, &tx_id);
             id_set = 1;
-        } else if (strcmp(a, "--bs") == 0) {
-            bad = parse_u32(v, 255u, &x);
-            cfg.block_size = (uint8_t)x;
-        } else if (strcmp(a, "--stmin") == 0) {
-            bad = parse_u32(v, 255u, &x);
-            cfg.st_min = (uint8_t)x;
-        } else if (strcmp(a, "--pad") == 0) {
-            bad = parse_u32(v, 255u, &x);
-            cfg.pad_byte = (uint8_t)x;
-        } else if (strcmp(a, "--wft-max") == 0) {
-            bad = parse_u32(v, 255u, &x);
-            cfg.wft_max = (uint8_t)x;
         } else if (strcmp(a, "--wait-rx-max") == 0) {
             bad = parse_u32(v, 65535u, &x);
             cfg.wait_rx_max = (uint16_t)x;
-        } else if (strcmp(a, "--wait-period-ms") == 0) {
-            bad = parse_u32(v, 60000u, &x);
-            cfg.wait_period_us = x * 1000u;
-        } else if (strcmp(a, "--n-as-ms") == 0) {
-            bad = parse_u32(v, 60000u, &x);
-            cfg.n_as_us = x * 1000u;
-        } else if (strcmp(a, "--n-ar-ms") == 0) {
-            bad = parse_u32(v, 60000u, &x);
-            cfg.n_ar_us = x * 1000u;
-        } else if (strcmp(a, "--n-bs-ms") == 0) {
-            bad = parse_u32(v, 60000u, &x);
-            cfg.n_bs_us = x * 1000u;
-        } else if (strcmp(a, "--n-cr-ms") == 0) {
-            bad = parse_u32(v, 60000u, &x);
-            cfg.n_cr_us = x * 1000u;
         } else if (strcmp(a, "--hold-ms") == 0) {
             bad = parse_u32(v, 60000u, &hold_ms);
         } else if (strcmp(a, "--duration-s") == 0) {
