@@ -19,7 +19,7 @@ CFLAGS_BASE := $(CSTD) -O2 -g $(WARN) $(FPFLAGS)
 SAN_FLAGS := -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
 
 # firmware/ sees only its own folders and the HAL interface (docs/architecture.md)
-FW_INC := -Ifirmware/nav -Ifirmware/can -Ifirmware/can/gen -Ifirmware/app -Ifirmware/app/gen -Ifirmware/vehicle -Ihal
+FW_INC := -Ifirmware/nav -Ifirmware/can -Ifirmware/can/gen -Ifirmware/diag -Ifirmware/app -Ifirmware/app/gen -Ifirmware/vehicle -Ihal
 HOST_INC := $(FW_INC) -Ihal/common -Ihal/linux -Ihal/cortex_m4f -Ihost_sim -Ihost_sim/gen -Itests/support
 
 CORE_SRC := $(wildcard firmware/nav/*.c)
@@ -37,8 +37,11 @@ VEHICLES_BUILT := $(sort native toyota_rav4_2017 $(VEHICLE))
 VEH_GEN_SRC = $(VEH_OUT)/$(1)/vehicle_profile.c $(VEH_OUT)/$(1)/veh_can.c
 VEH_SRC = $(call VEH_GEN_SRC,$(1)) firmware/vehicle/vehicle_checksum.c
 CODEC_GEN := firmware/can/gen/navecu_can.c firmware/can/gen/navecu_can.h
+# the diagnostic transport (ISO-TP, docs/can.md): part of the application's library, linked
+# into the images, kept out of them by --gc-sections until the application calls it
+DIAG_SRC := $(sort $(wildcard firmware/diag/*.c))
 APP_SRC := firmware/can/e2e.c firmware/can/gen/navecu_can.c firmware/app/gen/app_params.c \
-           $(sort $(wildcard firmware/app/*.c))
+           $(DIAG_SRC) $(sort $(wildcard firmware/app/*.c))
 # the host executable: its board files (host_sim/)
 HOST_SIM_SRC := host_sim/main.c host_sim/options.c host_sim/report.c host_sim/host_board.c
 HAL_LINUX_SRC := hal/linux/hal_linux.c hal/linux/hal_socketcan.c hal/common/candump.c \
@@ -52,7 +55,7 @@ SUPPORT_SRC_BOTH := tests/support/nav_run.c
 # tests built once per numeric variant (f32 firmware, f64 reference)
 TESTS_VARIANT := test_nav_math test_earth test_sins test_dr test_ekf test_ekf_rows
 # tests of the float32 firmware only (application, codec, HAL)
-TESTS_F32 := test_e2e test_codec test_trig
+TESTS_F32 := test_e2e test_codec test_trig test_isotp
 # tests that link both variants themselves
 TESTS_BOTH := test_drive
 # tests of application modules against the in-memory HAL (tests/support/fake_hal.c)
@@ -216,9 +219,16 @@ test-asan: $(asan_TEST_BINS)
 
 test-c: test-plain test-asan
 
+# the firmware's ISO-TP transport as a server on SocketCAN, the peer of can-isotp in
+# tests/python/test_isotp_peer.py (tests/tools/isotp_peer.c)
+ISOTP_PEER := $(BUILD)/host/tests/isotp_peer
+$(ISOTP_PEER): $(BUILD)/host/f32/tests/tools/isotp_peer.o $(BUILD)/host/libnavapp.a $(BUILD)/host/libhal_linux.a
+	@mkdir -p $(@D)
+	$(CC) $^ -o $@
+
 # Python tests drive the host executable (plain build) through real CAN logs.
-test-python: venv $(BUILD)/host/navecu $(BUILD)/host/navecu-toyota_rav4_2017
-	NAVECU_BIN=$(BUILD)/host/navecu $(PY) -m pytest -q -rs tests/python
+test-python: venv $(BUILD)/host/navecu $(BUILD)/host/navecu-toyota_rav4_2017 $(ISOTP_PEER)
+	NAVECU_BIN=$(BUILD)/host/navecu ISOTP_PEER_BIN=$(ISOTP_PEER) $(PY) -m pytest -q -rs tests/python
 
 test: deps
 	./tools/check_layers.sh
@@ -291,7 +301,7 @@ $(BUILD)/m4/libnavecu.a: $(M4_SRC:%.c=$(BUILD)/m4/%.o)
 cross test-cross: $(BUILD)/m4/libnavecu.a
 	@if $(ARM_NM) $< | grep -E ' U (__aeabi_(d|f2d|l2d|ul2d|i2d|ui2d)|(sin|cos|tan|sqrt|atan2|asin|acos|atan|fabs|exp|log|pow|floor|ceil|round)$$)'; then \
 	  echo "cross: the Cortex-M4F firmware uses double-precision arithmetic (above)"; exit 1; fi
-	@echo "cross: firmware (core, codec, application) and the STM32 drivers built for Cortex-M4F, no double-precision arithmetic"
+	@echo "cross: firmware (core, codec, diagnostic transport, application) and the STM32 drivers built for Cortex-M4F, no double-precision arithmetic"
 	@arm-none-eabi-size -t $(M4_SRC:%.c=$(BUILD)/m4/%.o) | tail -1 | \
 	  awk '{print "cross: firmware code size " $$1 " bytes text, " $$3 " bytes bss"}'
 
@@ -438,7 +448,7 @@ drive: deps venv $(BUILD)/host/navecu$(VEH_SUFFIX)
 FUZZ_CC := clang
 FUZZ_SECONDS ?= 60
 FUZZ := $(BUILD)/fuzz
-FUZZ_NAMES := fuzz_codec fuzz_app fuzz_calstore fuzz_candump fuzz_options fuzz_cmdline
+FUZZ_NAMES := fuzz_codec fuzz_app fuzz_calstore fuzz_candump fuzz_options fuzz_cmdline fuzz_isotp
 FUZZ_SAN := -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
 FUZZ_CFLAGS := $(CSTD) -O2 -g $(WARN) $(FPFLAGS) -D_DEFAULT_SOURCE $(FUZZ_SAN)
 FUZZ_INC := $(HOST_INC) -Ihost_sim -Itests/fuzz -I$(FUZZ)/gen -I$(VEH_OUT)/native
@@ -453,6 +463,7 @@ fuzz_options_SRC := tests/fuzz/fuzz_options.c $(FUZZ_APP_SRC)
 fuzz_calstore_SRC := tests/fuzz/fuzz_calstore.c tests/fuzz/fuzz_fail.c firmware/app/calstore.c \
                      tests/support/fake_hal.c
 fuzz_candump_SRC := tests/fuzz/fuzz_candump.c tests/fuzz/fuzz_fail.c $(HAL_LINUX_SRC)
+fuzz_isotp_SRC := tests/fuzz/fuzz_isotp.c tests/fuzz/fuzz_fail.c $(DIAG_SRC)
 fuzz_cmdline_SRC := tests/fuzz/fuzz_cmdline.c tests/fuzz/fuzz_fail.c host_sim/options.c $(APP_SRC) \
                     $(call VEH_SRC,native) \
                     tests/support/fake_hal.c \

@@ -2,15 +2,17 @@
 # The layering rules of docs/architecture.md, checked on the include lines:
 # firmware/ includes no OS header and nothing of a HAL implementation; firmware/nav/
 # (the core) includes nothing of the application, the CAN layer or the HAL at all;
-# the Cortex-M4F drivers (hal/cortex_m4f/) and the shared HAL modules (hal/common/)
-# include no OS header either; hal/ includes nothing of the application, the core or the
-# CAN layer (it is the interface and its drivers: the board entry points that tie the
+# the diagnostic transport (firmware/diag/) includes, of the project's headers, only its own
+# and hal/hal.h (no application, core or CAN header); the Cortex-M4F drivers
+# (hal/cortex_m4f/) and the shared HAL modules (hal/common/) include no OS header either;
+# hal/ includes nothing of the application, the core, the CAN layer or the diagnostic
+# transport (it is the interface and its drivers: the board entry points that tie the
 # application to a HAL live in boards/ and host_sim/).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 fail=0
 os_headers='stdio\.h|stdlib\.h|unistd\.h|fcntl\.h|pthread\.h|time\.h|signal\.h|sys/|linux/|net/|errno\.h'
-if grep -nE "#include <($os_headers)" firmware/nav/*.[ch] firmware/app/*.[ch] firmware/can/*.[ch]; then
+if grep -nE "#include <($os_headers)" firmware/nav/*.[ch] firmware/app/*.[ch] firmware/can/*.[ch] firmware/diag/*.[ch]; then
     echo "layers: firmware/ includes an OS header (above)"; fail=1
 fi
 if grep -nE "#include <($os_headers)" hal/cortex_m4f/*.[ch] hal/common/*.[ch]; then
@@ -22,7 +24,11 @@ fi
 if grep -nE '#include "(hal|app|e2e|navecu_can)\.h"' firmware/nav/*.[ch]; then
     echo "layers: the navigation core includes a layer above it (above)"; fail=1
 fi
-app_headers=$(cd firmware && ls app/*.h nav/*.h can/*.h can/gen/*.h | xargs -n1 basename | sed 's/\./\\./' | paste -sd'|')
+diag_headers=$(cd firmware/diag && ls *.h | sed 's/\./\\./' | paste -sd'|')
+if grep -nE '#include "' firmware/diag/*.[ch] | grep -vE "#include \"(hal\\.h|$diag_headers)\""; then
+    echo "layers: the diagnostic transport includes a project header other than hal.h (above)"; fail=1
+fi
+app_headers=$(cd firmware && ls app/*.h nav/*.h can/*.h can/gen/*.h diag/*.h | xargs -n1 basename | sed 's/\./\\./' | paste -sd'|')
 if grep -rnE "#include \"($app_headers)\"" hal/; then
     echo "layers: hal/ includes an application, core or CAN header (above): board code belongs in boards/"; fail=1
 fi

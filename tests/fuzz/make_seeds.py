@@ -5,7 +5,7 @@ Valid inputs, so that the fuzzer starts from the protocol rather than from nothi
 frames encoded from the DBC with E2E (tools/navecu_can.py, cantools), candump lines and a
 log written by python-can, NVM images in calstore.h's layout, and record sequences for
 the application harnesses (formats in tests/fuzz/fuzz_app_common.c, fuzz_options.c,
-fuzz_calstore.c, fuzz_codec.c). Deterministic: the outputs are committed.
+fuzz_calstore.c, fuzz_codec.c), and ISO-TP exchanges for fuzz_isotp.c. Deterministic: the outputs are committed.
 
     .venv/bin/python tests/fuzz/make_seeds.py
 """
@@ -231,6 +231,72 @@ def seeds_candump():
         shutil.rmtree(tmp)
 
 
+# ---- fuzz_isotp: cfg(8) then records (tests/fuzz/fuzz_isotp.c) ----
+def iso_cfg(padding=1, pad=0xCC, bs=8, st_min=0, wft=10, wait_rx=0, timeout=250, wait_period=99):
+    return bytes([padding, pad, bs, st_min, wft, wait_rx, timeout, wait_period])
+
+
+def iso_frame(*data, dt=1, where=0, dlc=None):
+    d = bytes(data) + bytes(8 - len(data))
+    return bytes([0, dt, where, len(data) if dlc is None else dlc]) + d
+
+
+def iso_poll(dt_10us=1):
+    return bytes([1]) + struct.pack("<H", dt_10us)
+
+
+def iso_send(n, dt=1):
+    return bytes([2, dt]) + struct.pack("<H", n)
+
+
+def iso_receive(cap=4095):
+    return bytes([3]) + struct.pack("<H", cap)
+
+
+def iso_clock(step):
+    return bytes([5, step])
+
+
+def iso_tester_message(n, bs=8):
+    """a tester's n-byte message, FF then CFs, with a poll for each FC of block size bs"""
+    msg = bytes((i * 7 + 1) & 0xFF for i in range(n))
+    r = iso_frame(0x10 | (n >> 8), n & 0xFF, *msg[:6]) + iso_poll()
+    pos, sn, k = 6, 1, 0
+    while pos < n:
+        chunk = msg[pos:pos + 7]
+        r += iso_frame(0x20 | sn, *chunk, dlc=8)
+        pos, sn, k = pos + len(chunk), (sn + 1) & 0xF, k + 1
+        if bs and k % bs == 0:
+            r += iso_poll()
+    return r + iso_receive()
+
+
+def seeds_isotp():
+    write("fuzz_isotp", "receive-62", iso_cfg() + iso_tester_message(62))
+    write("fuzz_isotp", "receive-300-bs3", iso_cfg(bs=3, st_min=0xF5) + iso_tester_message(300, bs=3))
+    write("fuzz_isotp", "send-100-bs2-stmin",
+          iso_cfg() + iso_send(100) + iso_poll() + iso_frame(0x30, 2, 5)
+          + b"".join(iso_poll(600) for _ in range(3)) + iso_frame(0x30, 0, 0xF3)
+          + b"".join(iso_poll(40) for _ in range(14)))
+    write("fuzz_isotp", "wait-while-busy",
+          iso_cfg(wft=2) + iso_frame(0x01, 0x3E) + iso_frame(0x10, 20, 1, 2, 3, 4, 5, 6)
+          + iso_poll() + iso_poll(10000) + iso_receive() + iso_poll()
+          + iso_frame(0x21, 7, 8, 9, 10, 11, 12, 13) + iso_frame(0x22, 14, 15, 16, 17, 18, 19, 20)
+          + iso_receive())
+    write("fuzz_isotp", "overflow-both",
+          iso_cfg() + iso_frame(0x10, 0, 0, 0, 0x13, 0x88, 1, 2) + iso_poll()
+          + iso_send(3000) + iso_poll() + iso_frame(0x32, 0, 0) + iso_poll())
+    write("fuzz_isotp", "timeouts-refused",
+          iso_cfg(timeout=10) + iso_frame(0x10, 20, 1, 2, 3, 4, 5, 6) + iso_poll()
+          + iso_clock(200) + iso_poll() + bytes([4]) + iso_send(5) + iso_poll()
+          + iso_clock(255) + iso_poll() + iso_clock(100) + iso_poll())
+    write("fuzz_isotp", "unpadded-wrong-sn",
+          iso_cfg(padding=0, pad=0x00) + iso_frame(0x10, 30, 1, 2, 3, 4, 5, 6) + iso_poll()
+          + iso_frame(0x21, 1, 2, 3, 4, 5, 6, 7) + iso_frame(0x23, 1, 2, 3, 4, 5, 6, 7)
+          + iso_send(9) + iso_poll() + iso_frame(0x30, 0, 0, dlc=3) + iso_poll()
+          + iso_frame(0x21, 7, 8, dlc=3, where=1) + iso_frame(0x02, 1, 2, where=2))
+
+
 def main():
     shutil.rmtree(OUT, ignore_errors=True)
     seeds_codec()
@@ -238,6 +304,7 @@ def main():
     seeds_options()
     seeds_calstore()
     seeds_candump()
+    seeds_isotp()
     for d in sorted(OUT.iterdir()):
         print(f"make_seeds: {d.relative_to(ROOT)}: {len(list(d.iterdir()))} seeds")
     return 0

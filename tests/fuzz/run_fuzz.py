@@ -28,6 +28,7 @@ OPTIONS = {
     "fuzz_options": ["-max_len=4096"],
     "fuzz_calstore": ["-max_len=300"],
     "fuzz_codec": ["-max_len=512"],
+    "fuzz_isotp": ["-max_len=4096"],
 }
 
 

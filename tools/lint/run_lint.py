@@ -64,7 +64,8 @@ TOOLS = ("cppcheck", "clang-tidy", "gcc-analyzer")
 DEFAULT_CFLAGS = ("-std=c11 -O2 -g -Wall -Wextra -Werror -Wpedantic -Wconversion "
                   "-Wdouble-promotion -Wfloat-equal -Wshadow -Wstrict-prototypes "
                   "-Wmissing-prototypes -ffp-contract=off -fno-math-errno")
-DEFAULT_FW_INC = "-Ifirmware/nav -Ifirmware/can -Ifirmware/can/gen -Ifirmware/app -Ihal"
+DEFAULT_FW_INC = ("-Ifirmware/nav -Ifirmware/can -Ifirmware/can/gen -Ifirmware/diag -Ifirmware/app "
+                  "-Ifirmware/vehicle -Ihal")
 DEFAULT_M4_FLAGS = "-mcpu=cortex-m4 -mfpu=fpv4-sp-d16 -mfloat-abi=hard -mthumb"
 # hal/cortex_m4f/ drivers the host also compiles (their tests run against register blocks
 # in RAM: TESTS_M4_HAL); the rest of hal/cortex_m4f/ builds for the M4F only
