@@ -369,8 +369,8 @@ class CarEncoder:
         full.update(values)
         data = bytearray(msg.encode(full, scaling=True, strict=False))
         if r.checksum == "toyota":
-            data[-1] = (msg.frame_id >> 8) + (msg.frame_id & 0xFF) + len(data) + sum(data[:-1])
-            data[-1] &= 0xFF
+            data[-1] = ((msg.frame_id >> 8) + (msg.frame_id & 0xFF) + len(data)
+                        + sum(data[:-1])) & 0xFF
         return can.Message(timestamp=t, arbitration_id=msg.frame_id, is_extended_id=False,
                            dlc=msg.length, data=bytes(data))
 
