@@ -17,6 +17,7 @@ out. Tolerances, from the DBC and the generated code, not chosen:
   raw value, its (value - offset)/scale adding 2^-52 relative) times the unit factor, plus
   the float32 bound above.
 """
+import math
 import os
 import subprocess
 from collections import namedtuple
@@ -264,3 +265,182 @@ def test_other_frames_are_not_the_cars(name, tmp_path):
                          data=bytes(rng.integers(0, 256, 8).tolist())) for i in sorted(read_ids)]
     for m, d in zip(msgs, decode(name, msgs, tmp_path)):
         assert (d.verdict, d.kind) == ("OK", "NONE"), (m, d)
+
+
+# ------------------------------------------------------------ the VW on its own frames
+VW = "vw_mqb"
+IMU_HZ = 100
+# a short drive without GNSS: 35 s parked (levelling), away at 12 m/s, a right turn, a stop
+# and 15 m reversing (the gear's R gives the unsigned wheel speeds their sign); the car is
+# the profile's (its track and wheelbase), the IMU perfect: what is left is the odometer
+VW_DRIVE = """name = "vw-dead-reckoning"
+[start]
+lat_deg = 45.0
+lon_deg = 10.0
+h_m = 100.0
+heading_deg = 30.0
+[vehicle]
+track_m = {track}
+wheelbase_m = {wheelbase}
+[sim]
+imu = "perfect"
+gnss = "none"
+[odometer]
+mu = 0.012
+[[segment]]
+kind = "stop"
+duration_s = 35
+[[segment]]
+kind = "speed"
+to_mps = 12
+accel_mps2 = 1.5
+[[segment]]
+kind = "straight"
+distance_m = 250
+[[segment]]
+kind = "turn"
+radius_m = 40
+angle_deg = 90
+[[segment]]
+kind = "straight"
+distance_m = 150
+[[segment]]
+kind = "speed"
+to_mps = 0
+accel_mps2 = 2.0
+[[segment]]
+kind = "stop"
+duration_s = 2
+[[segment]]
+kind = "speed"
+to_mps = -2
+accel_mps2 = 1.0
+[[segment]]
+kind = "straight"
+distance_m = 15
+[[segment]]
+kind = "speed"
+to_mps = 0
+accel_mps2 = 1.0
+[[segment]]
+kind = "stop"
+duration_s = 3
+"""
+
+
+@pytest.fixture(scope="module")
+def vw_drive(tmp_path_factory):
+    """The drive as the VW's bus carries it (navecu's IMU frames at the profile's
+    identifiers, the car's ESP_19 wheel speeds and Getriebe_11 gear), and
+    build/host/navecu-vw_mqb run on it with and without the ESP_19 frames."""
+    from tools.sim import faults, report, scenario
+    exe = HOST / f"navecu-{VW}"
+    if not exe.exists():
+        pytest.fail(f"{exe} not built: run 'make test-python'")
+    d = tmp_path_factory.mktemp("vw")
+    p = profile(VW)
+    toml = d / "vw.toml"
+    toml.write_text(VW_DRIVE.format(track=p.track_m, wheelbase=p.wheelbase_m))
+    nc.select_vehicle(VW)
+    try:
+        drive = faults.build_drive(str(toml), imu_rate_hz=IMU_HZ, log=lambda *a: None,
+                                   car=vehicle.CarEncoder(p))
+        wheels_id = read(VW, "wheels").message.frame_id
+        runs = {}
+        for label, keep in (("wheels", lambda m: True),
+                            ("no-wheels", lambda m: m.arbitration_id != wheels_id)):
+            log, out = d / f"{label}.log", d / f"{label}-nav.log"
+            n = nc.write_candump(log, (m for m in drive.messages if keep(m)))
+            subprocess.run([str(exe), "--can-log", str(log), "--out", str(out),
+                            "--imu-rate-hz", str(IMU_HZ)] + drive.fw_args,
+                           check=True, capture_output=True, text=True)
+            runs[label] = (n, report.read_nav_log(out))
+        _, odo = scenario.sensor_specs(scenario.load(str(toml)), drive.imu_name,
+                                       drive.truth.vehicle)   # the drive's odometer
+        yield drive, runs, odo, p
+    finally:
+        nc.select_vehicle(None)
+
+
+def odometer_model_error_m(truth, nav, mu):
+    """|DR - p0 - (1 + mu)(truth - p0)| at each NAV_Position (m, in the start's local
+    plane): how far the position is from the truth as an odometer reading (1 + mu) long
+    dead-reckons it, and the true displacement |truth - p0|."""
+    from tools.geodesy import radii_m
+    pos = nav["NAV_Position"]
+    t = pos["t_s"]
+    lat0, lon0, h0 = truth.lat_rad[0], truth.lon_rad[0], truth.h_m[0]
+    r_m, r_n = radii_m(lat0)
+
+    def local(lat, lon):
+        return np.c_[(lon - lon0) * (r_n + h0) * math.cos(lat0), (lat - lat0) * (r_m + h0)]
+
+    est = local(np.radians(pos["Latitude"]), np.radians(pos["Longitude"]))
+    tru = local(np.interp(t, truth.t_s, truth.lat_rad), np.interp(t, truth.t_s, truth.lon_rad))
+    return np.linalg.norm(est - (1.0 + mu) * tru, axis=1), np.linalg.norm(tru, axis=1)
+
+
+def odometer_bound_m(truth, odo, p) -> float:
+    """What the odometer model cannot promise closer than (odometer_model_error_m), summed
+    from the scenario's odometer and the DBCs:
+    - the wheel speeds' latency and the 50 Hz frames' hold, L = latency + 1/rate: a speed
+      late by L is off by at most L times the speed's total variation over the drive;
+    - rounding to the simulator's WheelSpeed step and again to the car's signal LSB, each
+      half a step of the mean speed, over the time the car moves;
+    - the heading commanded at the start (CMD_Control's LSB, half of it) and the IMU's
+      angle increments (half of 2^-21 rad, carried), times the distance from the start;
+    - NAV_Position's and CMD_KnownPosition's LSBs, half of each, on both axes."""
+    from tools.geodesy import radii_m
+    db = nc.load_db()
+    mu = odo.mu
+    r = read(VW, "wheels")
+    q_car = max(s.conversion.scale for s in r.signals) * p.speed_factor
+    dt = np.diff(truth.t_s)
+    speed = np.asarray(truth.speed_mps)
+    moving_s = float(np.sum(dt[(speed[1:] != 0) | (speed[:-1] != 0)]))
+    lag = (1.0 + mu) * (odo.latency_s + 1.0 / odo.rate_hz) * float(np.sum(np.abs(np.diff(speed))))
+    quant = (odo.quant_mps + q_car) / 2.0 * (1.0 + mu) * moving_s
+    hdg_lsb = math.radians(db.get_message_by_name("CMD_Control")
+                           .get_signal_by_name("Heading").conversion.scale)
+    heading = (hdg_lsb / 2.0 + nc.ANGLE_LSB_RAD / 2.0) * (1.0 + mu) * float(truth.dist_m[-1])
+    deg_m = math.radians(1.0) * (max(radii_m(truth.lat_rad[0])) + truth.h_m[0])
+    pos_lsb = sum(db.get_message_by_name(m).get_signal_by_name("Latitude").conversion.scale
+                  for m in ("NAV_Position", "CMD_KnownPosition")) * deg_m
+    return lag + quant + heading + pos_lsb / 2.0 * math.sqrt(2.0)
+
+
+def test_vw_frames_drive_the_dead_reckoning(vw_drive):
+    """navecu-vw_mqb dead-reckons the drive (Mode DeadReckoning, no GNSS) on the VW's own
+    wheel-speed and gear frames: its position is the truth as an odometer reading 1.2 %
+    long sees it, forward, through the turn and reversing, within the bound the odometer
+    and the DBCs leave (odometer_bound_m)."""
+    drive, runs, odo, p = vw_drive
+    _, nav = runs["wheels"]
+    mu = odo.mu
+    err, disp = odometer_model_error_m(drive.truth, nav, mu)
+    bound = odometer_bound_m(drive.truth, odo, p)
+    status = nav["NAV_Status"]
+    modes = set(status["Mode"][status["StatusPage"] == 0].astype(int))
+    print(f"VW wheels: {len(err)} positions over {drive.truth.dist_m[-1]:.0f} m, largest "
+          f"distance from the odometer's model {err.max():.3f} m (bound {bound:.3f} m, "
+          f"the odometer's error itself {mu * disp.max():.2f} m); modes {sorted(modes)}")
+    assert min(drive.truth.speed_mps) < -1.5       # the drive reverses
+    assert 4 in modes and 5 not in modes           # DeadReckoning, never GnssIns
+    assert err.max() <= bound
+    assert mu * disp.max() > 2 * bound             # the model's mu is visible beyond it
+
+
+def test_without_the_vw_wheel_frames_no_dead_reckoning(vw_drive):
+    """The same log without ESP_19: no dead reckoning (Mode never DeadReckoning) and the
+    position does not follow the odometer's model: the VW's frames drove it."""
+    drive, runs, odo, p = vw_drive
+    (n_with, _), (n_without, nav) = runs["wheels"], runs["no-wheels"]
+    err, _ = odometer_model_error_m(drive.truth, nav, odo.mu)
+    bound = odometer_bound_m(drive.truth, odo, p)
+    status = nav["NAV_Status"]
+    modes = set(status["Mode"][status["StatusPage"] == 0].astype(int))
+    print(f"VW without ESP_19 ({n_with - n_without} frames removed): largest distance from "
+          f"the odometer's model {err.max():.3f} m (bound {bound:.3f} m); modes {sorted(modes)}")
+    assert n_with - n_without > 1000
+    assert 4 not in modes
+    assert err.max() > bound
