@@ -97,8 +97,8 @@ def bit_range(sig) -> tuple:
 def dbc_raw_range(sig) -> tuple:
     """The raw range of the DBC's [minimum, maximum] (the whole bit range without one) as
     cantools' C generator writes it into the _is_in_range checks: each limit rounded to the
-    nearest raw value, within what the bits carry. A limit off the raw grid so admits up to
-    half an LSB beyond it (KINEMATICS YAW_RATE's minimum 0 deg/s is raw 512, -0.072 deg/s)."""
+    nearest raw value, within what the bits carry (with the profile's `range`, where it
+    replaces a placeholder). A limit off the raw grid so admits up to half an LSB beyond it."""
     lo, hi = bit_range(sig)
     s, o = sig.conversion.scale, sig.conversion.offset
     if sig.minimum is not None and sig.maximum is not None and sig.minimum < sig.maximum:
@@ -244,7 +244,9 @@ def test_out_of_range(name, role, tmp_path):
             v[sig.name] = phys(sig, raw)
             msgs.append(car.message(role, v))
             what.append((sig.name, raw))
-    assert msgs, "no read signal has raw values outside its DBC range"
+    if not msgs:
+        pytest.skip(f"{r.message.name}: every raw value of its read signals is in range "
+                    "(the range is the bits' whole span)")
     for m, w, d in zip(msgs, what, decode(name, msgs, tmp_path)):
         assert raw_of(r.message, m)[w[0]] == w[1]
         assert (d.verdict, d.kind) == ("BAD_VALUE", KIND[role]), (w, d)
