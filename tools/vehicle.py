@@ -360,7 +360,12 @@ class CarEncoder:
             self.gear_raw = {1: fwd[0], -1: rev[0]}
             self.gear_names = names
 
-    def _message(self, role: str, values: dict, t: float) -> can.Message:
+    def message(self, role: str, values: dict, t: float = 0.0) -> can.Message:
+        """The car's frame of role ("wheels", "gear", "yaw_rate") at t with these signal
+        values (the DBC's physical units; the message's other signals at their initial
+        value, else 0 or their minimum if that is above 0), encoded with the car's DBC
+        without range checks (cantools rounds to the nearest raw value), with the car's
+        checksum where the profile names one."""
         r = self.by_role[role]
         msg = r.message
         full = {s.name: (s.initial if s.initial is not None else
@@ -369,8 +374,8 @@ class CarEncoder:
         full.update(values)
         data = bytearray(msg.encode(full, scaling=True, strict=False))
         if r.checksum == "toyota":
-            data[-1] = (msg.frame_id >> 8) + (msg.frame_id & 0xFF) + len(data) + sum(data[:-1])
-            data[-1] &= 0xFF
+            data[-1] = ((msg.frame_id >> 8) + (msg.frame_id & 0xFF) + len(data)
+                        + sum(data[:-1])) & 0xFF
         return can.Message(timestamp=t, arbitration_id=msg.frame_id, is_extended_id=False,
                            dlc=msg.length, data=bytes(data))
 
@@ -383,14 +388,14 @@ class CarEncoder:
                                             or t - self._gear_t >= self.gear_period_s):
             self._gear, self._gear_t = direction, t
             sig = self.by_role["gear"].signals[0]
-            out.append(self._message("gear", {sig.name: self.gear_raw[direction]}, t))
+            out.append(self.message("gear", {sig.name: self.gear_raw[direction]}, t))
         vals = {}
         for s, v in zip(r.signals, v_mps):
             unit = abs(v) if self.p.direction != "signed" else v
             lo = s.minimum if s.minimum is not None else -1e9
             hi = s.maximum if s.maximum is not None else 1e9
             vals[s.name] = min(max(unit / self.p.speed_factor, lo), hi)
-        out.append(self._message("wheels", vals, t))
+        out.append(self.message("wheels", vals, t))
         return out
 
     def yaw_rate(self, t: float, rate_rps: float) -> list:
@@ -398,7 +403,7 @@ class CarEncoder:
         if "yaw_rate" not in self.by_role:
             return []
         s = self.by_role["yaw_rate"].signals[0]
-        return [self._message("yaw_rate", {s.name: rate_rps / self.p.rate_factor}, t)]
+        return [self.message("yaw_rate", {s.name: rate_rps / self.p.rate_factor}, t)]
 
 
 # ------------------------------------------------------------------------ generation
