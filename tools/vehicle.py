@@ -211,13 +211,18 @@ def _car_reads(p: Profile, t: dict, fname: str) -> None:
             raise ProfileError(f"{fname}: direction 'gear' needs a [gear] table")
         gmsg = _message(db, g["message"], f"{fname} [gear]")
         gsig = _signal(gmsg, g["signal"], f"{fname} [gear]")
-        names = {str(v): int(k) for k, v in (gsig.choices or {}).items()}
+        # a DBC may give one name to several raw values (VW's GE_Fahrstufe: 13 and 14 are
+        # both "T"): a name in the profile stands for all of them
+        names = {}
+        for k, v in (gsig.choices or {}).items():
+            names.setdefault(str(v), []).append(int(k))
         for key, sign in (("forward", 1), ("reverse", -1), ("stopped", 0)):
             for n in g.get(key, []):
                 if n not in names:
                     raise ProfileError(f"{fname} [gear]: {gsig.name} has no value {n!r} "
                                        f"(the DBC's: {', '.join(names)})")
-                p.gear_values[names[n]] = sign
+                for raw in names[n]:
+                    p.gear_values[raw] = sign
         if -1 not in p.gear_values.values():
             raise ProfileError(f"{fname} [gear]: no reverse gear named")
         p.reads.append(CarSignalSet("gear", gmsg, [gsig], _checksum(g, fname)))
