@@ -336,9 +336,14 @@ fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_pr
         app_diag_reject(c->diag, &c->diag->health->gnss_rejected);
         return FUSION_GO_ON;
     }
-    const nav_real_t sh = nav_clamp(fix->hacc_m * APP_GNSS_HACC_PER_AXIS, APP_GNSS_SIGMA_FLOOR_M,
+    /* a receiver that reports no accuracy: its declared figures (docs/configuration.md) */
+    const int declared = cfg->gnss_accuracy == GNSS_ACC_DECLARED;
+    const nav_real_t hacc = declared ? cfg->gnss_hacc_m : fix->hacc_m;
+    const nav_real_t vacc = declared ? cfg->gnss_vacc_m : fix->vacc_m;
+    const nav_real_t sacc = declared ? cfg->gnss_sacc_mps : fix->sacc_mps;
+    const nav_real_t sh = nav_clamp(hacc * APP_GNSS_HACC_PER_AXIS, APP_GNSS_SIGMA_FLOOR_M,
                                  APP_GNSS_SIGMA_MAX_M);
-    const nav_real_t sv = nav_clamp(fix->vacc_m, APP_GNSS_SIGMA_V_MIN_M, APP_GNSS_SIGMA_MAX_M);
+    const nav_real_t sv = nav_clamp(vacc, APP_GNSS_SIGMA_V_MIN_M, APP_GNSS_SIGMA_MAX_M);
     /* A receiver's position errors are correlated over tens of seconds (multipath,
      * atmosphere, orbits), the filter's noise model is white: N fixes within the
      * correlation time carry the information of about one. Each fix's variance is
@@ -358,9 +363,12 @@ fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_pr
     int rv = 1;
     if (fix->has_vel) {
         const nav_real_t *vthen = gnss_time_velocity_then(&fu->time, &when);
-        const nav_real_t ss = nav_clamp(fix->sacc_mps, APP_GNSS_SACC_MIN_MPS, APP_GNSS_SACC_MAX_MPS);
-        rv = ekf_gnss_velocity(&fu->ekf, vthen, fix->v_enu_mps, ss, APP_GNSS_VUP_SIGMA_RATIO * ss,
-                               APP_GNSS_GATE_SIGMA);
+        const nav_real_t ss = nav_clamp(sacc, APP_GNSS_SACC_MIN_MPS, APP_GNSS_SACC_MAX_MPS);
+        rv = cfg->gnss_vel_up == GNSS_VUP_NONE
+                 ? ekf_gnss_velocity_horizontal(&fu->ekf, vthen, fix->v_enu_mps, ss,
+                                                APP_GNSS_GATE_SIGMA)
+                 : ekf_gnss_velocity(&fu->ekf, vthen, fix->v_enu_mps, ss,
+                                     APP_GNSS_VUP_SIGMA_RATIO * ss, APP_GNSS_GATE_SIGMA);
     }
     if (rp < 2 || rv == 0) {
         app_diag_reject(c->diag, &c->diag->health->gnss_rejected); /* beyond the gate */

@@ -50,8 +50,13 @@ typedef enum {
     APP_PARAM_ACCEL_RANGE_MPS2 = 17,
     APP_PARAM_GNSS_LATENCY_S = 18,
     APP_PARAM_GNSS_CORR_S = 19,
-    APP_PARAM_GNSS_LEVER_B_M = 20,
-    APP_PARAM_N = 21
+    APP_PARAM_GNSS_ACCURACY = 20,
+    APP_PARAM_GNSS_HACC_M = 21,
+    APP_PARAM_GNSS_VACC_M = 22,
+    APP_PARAM_GNSS_SACC_MPS = 23,
+    APP_PARAM_GNSS_VEL_UP = 24,
+    APP_PARAM_GNSS_LEVER_B_M = 25,
+    APP_PARAM_N = 26
 } app_param_id_t;
 
 extern const app_param_t app_params[APP_PARAM_N];
