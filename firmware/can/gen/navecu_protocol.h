@@ -15,7 +15,7 @@
 #define NAVECU_HEALTH_IMU_SUSPECT 0x0100u /* an IMU axis was found stuck in the last 10 s */
 #define NAVECU_HEALTH_IMU_SATURATED 0x0200u /* an IMU axis was at its configured range (saturated) in the last second */
 #define NAVECU_HEALTH_ODO_REJECTED 0x0400u /* the wheel speeds disagreed with the filter (locked or spinning wheels) in the last second */
-#define NAVECU_HEALTH_REACQUIRE 0x0800u /* after an IMU gap too long to bridge or a filter reset, waiting for a GNSS epoch to re-acquire position, velocity and heading */
+#define NAVECU_HEALTH_REACQUIRE 0x0800u /* after an IMU gap too long to bridge, a filter reset or an IMU rate mismatch while navigating, waiting for a GNSS epoch to re-acquire position, velocity and heading */
 #define NAVECU_HEALTH_IMU_RATE_MISMATCH 0x1000u /* the IMU samples counted between GNSS epochs (received and lost, by the IMU counter) disagree with the configured IMU rate over their TimeOfWeek interval: navigation refused (Mode Fault) until they match again */
 
 /* navecu's messages: index, stock identifier, direction */
