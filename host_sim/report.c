@@ -104,6 +104,14 @@ void host_summary(FILE *out, const app_t *app, const hal_t *hal, unsigned long f
             (unsigned long)h->nav_rejected, (unsigned long)h->time_jumps);
     fprintf(out, "navecu: foreign frames (not read, not refused): %lu\n",
             (unsigned long)h->foreign);
+    if (h->imu_rate_mismatch != 0u) {
+        fprintf(out,
+                "navecu: IMU rate mismatch found %lu times: configured %u Hz, the data %s "
+                "(measured %.2f Hz from the samples between GNSS epochs)\n",
+                (unsigned long)h->imu_rate_mismatch, (unsigned)app->cfg.imu_rate_hz,
+                imu_rate_mismatch(&app->keep.rate) ? "still disagree" : "match again",
+                (double)app->keep.rate.measured_chz * 0.01);
+    }
     if (!vehicle_profile.native_wheels) {
         const uint32_t *n = app->keep.rx.car_read;
         fprintf(out,

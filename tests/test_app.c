@@ -1308,6 +1308,142 @@ static void test_task_supervision(void **state)
     assert_int_equal(app.keep.health.tasks_late, 1u);
 }
 
+/* ---- the IMU rate against the data (imu_rate.h) ----
+ * The configured rate is 100 Hz; what the IMU really sends is told by the GNSS epochs'
+ * TimeOfWeek: 100 samples per 1000 ms is 100 Hz, 100 samples per 250 ms is a 400 Hz IMU
+ * (and per 4000 ms a 25 Hz one). */
+
+/* n epochs at the start point (standing), each after `samples` IMU samples with the wheels
+ * at zero, TimeOfWeek on by tow_step_ms; *nav_frames += the NAV_Position frames sent.
+ * Returns the next TimeOfWeek. */
+static uint32_t run_epochs(int n, int samples, uint32_t tow_step_ms, uint32_t tow,
+                           uint32_t *nav_frames)
+{
+    const int32_t lat0 = (int32_t)lround(LAT0_DEG * 1e7), lon0 = (int32_t)lround(LON0_DEG * 1e7);
+    for (int k = 0; k < n; k++) {
+        hal.tx_n = 0u;
+        run_wheels(samples, 0.0, 0);
+        tow += tow_step_ms;
+        send_fix(lat0, lon0, tow);
+        *nav_frames += tx_count(NAVECU_CAN_NAV_POSITION_FRAME_ID);
+    }
+    return tow;
+}
+
+static uint16_t flags_after_one_status(void)
+{
+    run_wheels(RATE_HZ / 10, 0.0, 0);
+    return health_flags_now();
+}
+
+/*
+ * GIVEN levelling after SetInitialPosition, and the samples of a 400 Hz IMU (100 per
+ *       0.25 s of TimeOfWeek) with the rate configured as 100 Hz
+ * THEN the second epoch (one interval) changes nothing, the third finds the mismatch:
+ *      mode Fault, HealthFlags IMU_RATE_MISMATCH, NAV_Status ImuRateMeasured 400 Hz,
+ *      counted once; for 60 s of such data (levelling would have ended at 30 s) no
+ *      NAV_Position is sent, and Reset, SetInitialPosition and CMD_InitialAttitude do not
+ *      start navigation;
+ * WHEN the data come at 100 Hz again
+ * THEN the second interval at the rate ends the mismatch: levelling starts again from the
+ *      commanded position, and navigation 30 s later.
+ */
+static void test_imu_rate_mismatch_holds_levelling(void **state)
+{
+    (void)state;
+    fix_epoch = 0u;
+    wheel_counter = 0u;
+    att_counter = 0u;
+    send_init_commands(30.0);
+    assert_int_equal(app.run.mode, APP_MODE_LEVELLING);
+    uint32_t nav = 0u;
+    uint32_t tow = run_epochs(2, 100, 250u, 100000u, &nav);
+    assert_int_equal(app.run.mode, APP_MODE_LEVELLING);
+    tow = run_epochs(1, 100, 250u, tow, &nav);
+    assert_int_equal(app.run.mode, APP_MODE_FAULT);
+    assert_int_equal(app.keep.health.imu_rate_mismatch, 1u);
+    assert_true(flags_after_one_status() & NAVECU_HEALTH_IMU_RATE_MISMATCH);
+    struct navecu_can_nav_status_t st = last_status_page0();
+    assert_int_equal(st.mode, NAVECU_CAN_NAV_STATUS_MODE_FAULT_CHOICE);
+    assert_near(navecu_can_nav_status_imu_rate_measured_decode(st.imu_rate_measured), 400.0, 1e-9);
+    tow = run_epochs(240, 100, 250u, tow, &nav); /* 60 s of 400 Hz data */
+    assert_int_equal(app.run.mode, APP_MODE_FAULT);
+    send_command(1u); /* Reset */
+    assert_int_equal(app.run.mode, APP_MODE_FAULT);
+    send_init_commands(30.0);
+    assert_int_equal(app.run.mode, APP_MODE_FAULT);
+    const uint32_t refused = app.keep.health.cmd_rejected;
+    send_initial_attitude(STILL.roll, STILL.pitch);
+    assert_int_equal(app.keep.health.cmd_rejected, refused + 1u);
+    tow = run_epochs(40, 100, 250u, tow, &nav);
+    assert_int_equal(app.run.mode, APP_MODE_FAULT);
+    assert_int_equal(nav, 0u);
+    assert_int_equal(app.keep.health.imu_rate_mismatch, 1u);
+    /* the IMU at 100 Hz: the first interval is on rate, the second ends it */
+    tow = run_epochs(1, 100, 1000u, tow, &nav);
+    assert_int_equal(app.run.mode, APP_MODE_FAULT);
+    tow = run_epochs(1, 100, 1000u, tow, &nav);
+    assert_int_equal(app.run.mode, APP_MODE_LEVELLING);
+    assert_int_equal(app.run.align.level_n, 0u);
+    assert_false(flags_after_one_status() & NAVECU_HEALTH_IMU_RATE_MISMATCH);
+    assert_int_equal(last_status_page0().imu_rate_measured, 0u);
+    (void)run_epochs(31, 100, 1000u, tow, &nav);
+    assert_int_equal(app.run.mode, APP_MODE_NAVIGATING);
+    assert_true(nav > 0u);
+}
+
+/*
+ * GIVEN the filter navigating on GNSS (standing) with the IMU at its configured 100 Hz
+ * WHEN the IMU sends 25 Hz (100 samples per 4 s of TimeOfWeek)
+ * THEN the second epoch after the change finds it: navigation stops (mode Fault,
+ *      HealthFlags IMU_RATE_MISMATCH and REACQUIRE, no NAV_Position), and the epochs after
+ *      do not re-acquire while it lasts;
+ * WHEN the IMU is back at 100 Hz
+ * THEN at the second epoch at the rate navigation re-acquires from that epoch, as after a
+ *      long IMU gap: the attitude from before is kept (heading 30 deg), and the filter
+ *      runs again at the next.
+ */
+static void test_imu_rate_mismatch_reacquires(void **state)
+{
+    (void)state;
+    start_perfect();
+    fix_epoch = 0u;
+    uint32_t nav = 0u;
+    uint32_t tow = run_epochs(20, 100, 1000u, 100000u, &nav);
+    assert_true(app.run.fusion.on);
+    assert_true(nav > 0u);
+    tow = run_epochs(1, 100, 4000u, tow, &nav);
+    assert_int_equal(app.run.mode, APP_MODE_NAVIGATING);
+    tow = run_epochs(1, 100, 4000u, tow, &nav);
+    assert_int_equal(app.run.mode, APP_MODE_FAULT);
+    assert_true(app.run.align.reacquire);
+    assert_false(app.run.fusion.on);
+    const uint16_t fl = flags_after_one_status();
+    assert_true(fl & NAVECU_HEALTH_IMU_RATE_MISMATCH);
+    assert_true(fl & NAVECU_HEALTH_REACQUIRE);
+    assert_near(navecu_can_nav_status_imu_rate_measured_decode(last_status_page0().imu_rate_measured),
+                26.0, 1e-9); /* 25 Hz in 2 Hz steps, rounded up */
+    nav = 0u;
+    tow = run_epochs(10, 100, 4000u, tow, &nav);
+    assert_int_equal(app.run.mode, APP_MODE_FAULT);
+    tow = run_epochs(1, 100, 1000u, tow, &nav);
+    assert_int_equal(app.run.mode, APP_MODE_FAULT);
+    assert_int_equal(nav, 0u);
+    tow = run_epochs(1, 100, 1000u, tow, &nav);
+    assert_int_equal(app.run.mode, APP_MODE_NAVIGATING);
+    assert_false(app.run.align.reacquire);
+    nav_real_t roll, pitch, heading;
+    sins_euler(&app.run.nav, &roll, &pitch, &heading);
+    assert_true(fabs((double)heading / DEG - 30.0) < 0.05);
+    (void)run_epochs(2, 100, 1000u, tow, &nav);
+    assert_true(app.run.fusion.on);
+    assert_true(nav > 0u);
+    const uint16_t after = flags_after_one_status();
+    assert_false(after & NAVECU_HEALTH_IMU_RATE_MISMATCH);
+    assert_false(after & NAVECU_HEALTH_REACQUIRE);
+    assert_int_equal(app.keep.health.imu_rate_mismatch, 1u);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1333,6 +1469,8 @@ int main(void)
         cmocka_unit_test_setup(test_task_supervision, setup),
         cmocka_unit_test_setup(test_calibrate_at_gnss, setup),
         cmocka_unit_test_setup(test_filter_with_gnss, setup),
+        cmocka_unit_test_setup(test_imu_rate_mismatch_holds_levelling, setup),
+        cmocka_unit_test_setup(test_imu_rate_mismatch_reacquires, setup),
     };
     return cmocka_run_group_tests_name("app", tests, NULL, NULL);
 }

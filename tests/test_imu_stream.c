@@ -253,7 +253,8 @@ static void test_corrupt_counter(void **state)
 
 /* GIVEN a sample WHEN the next has the next counter but arrives 16 periods later THEN 15
  * samples (a whole counter cycle) were lost that the counter could not see; 31 periods:
- * 30; 8 periods (within the 7-period slack) is only a late sample. */
+ * 30; 8 periods (within the 7-period slack) is only a late sample. lost_by_time is the
+ * part of lost only receive time showed (the IMU rate check counts without it). */
 static void test_gap_by_receive_time(void **state)
 {
     (void)state;
@@ -262,21 +263,31 @@ static void test_gap_by_receive_time(void **state)
     t += 16u * PERIOD_US;
     assert_int_equal(pair(1u, W0, V0, t), IMU_SAMPLE);
     assert_int_equal(out.lost, 15u);
+    assert_int_equal(out.lost_by_time, 15u);
     assert_int_equal(out.time_gap, 1);
     t += 31u * PERIOD_US;
     assert_int_equal(pair(2u, W0, V0, t), IMU_SAMPLE);
     assert_int_equal(out.lost, 30u);
+    assert_int_equal(out.lost_by_time, 30u);
     t += 8u * PERIOD_US;
     assert_int_equal(pair(3u, W0, V0, t), IMU_SAMPLE);
     assert_int_equal(out.lost, 0u);
+    assert_int_equal(out.lost_by_time, 0u);
     assert_int_equal(out.time_gap, 0);
     /* a counter step of 3 over 3 + 7 periods: still the counter's 2 lost only */
     t += 10u * PERIOD_US;
     assert_int_equal(pair(6u, W0, V0, t), IMU_SAMPLE);
     assert_int_equal(out.lost, 2u);
+    assert_int_equal(out.lost_by_time, 0u);
     assert_int_equal(out.time_gap, 0);
+    /* a step of 3 and 19 periods: the counter's 2 and a whole cycle by time */
+    t += 19u * PERIOD_US;
+    assert_int_equal(pair(9u, W0, V0, t), IMU_SAMPLE);
+    assert_int_equal(out.lost, 17u);
+    assert_int_equal(out.lost_by_time, 15u);
+    assert_int_equal(out.time_gap, 1);
     /* a receive time going backwards adds nothing */
-    assert_int_equal(pair(7u, W0, V0, t - 100u * PERIOD_US), IMU_SAMPLE);
+    assert_int_equal(pair(10u, W0, V0, t - 100u * PERIOD_US), IMU_SAMPLE);
     assert_int_equal(out.lost, 0u);
 }
 

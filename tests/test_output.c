@@ -157,6 +157,27 @@ static void test_state_flags(void **state)
     assert_int_equal(flags_now(), NAVECU_HEALTH_REACQUIRE);
 }
 
+/* IMU_RATE_MISMATCH while the rate check says so, with the measured rate in page 0's
+ * ImuRateMeasured (2 Hz steps, rounded; saturated at 510 Hz); 0 without a mismatch, even
+ * with a rate measured before. */
+static void test_imu_rate_mismatch_flag(void **state)
+{
+    (void)state;
+    app_stamp(&app.run.gnss, 0u);
+    app.keep.rate.measured_chz = 40000u;
+    assert_int_equal(flags_now(), 0u);
+    assert_int_equal(cf_last_status_page0(&hal).imu_rate_measured, 0u);
+    app.keep.rate.mismatch = 1u;
+    assert_int_equal(flags_now(), NAVECU_HEALTH_IMU_RATE_MISMATCH);
+    assert_int_equal(cf_last_status_page0(&hal).imu_rate_measured, 200u);
+    app.keep.rate.measured_chz = 12345u; /* 123.45 Hz: 62 x 2 Hz */
+    (void)flags_now();
+    assert_int_equal(cf_last_status_page0(&hal).imu_rate_measured, 62u);
+    app.keep.rate.measured_chz = 200000u; /* 2 kHz */
+    (void)flags_now();
+    assert_int_equal(cf_last_status_page0(&hal).imu_rate_measured, 255u);
+}
+
 /* ---- NAV_Status pages ---- */
 
 static uint8_t page_of(const hal_can_frame_t *f)
@@ -457,6 +478,7 @@ int main(void)
         cmocka_unit_test_setup(test_flag_no_gnss, setup),
         cmocka_unit_test_setup(test_flag_imu_stale, setup),
         cmocka_unit_test_setup(test_state_flags, setup),
+        cmocka_unit_test_setup(test_imu_rate_mismatch_flag, setup),
         cmocka_unit_test_setup(test_page_rotation, setup),
         cmocka_unit_test_setup(test_counter_pages, setup),
         cmocka_unit_test_setup(test_output_mode, setup),

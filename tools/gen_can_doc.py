@@ -223,7 +223,20 @@ def generate(db) -> str:
                 f"| {fmt_num(sig.minimum)} | {fmt_num(sig.maximum)} | {sig.unit or ''} "
                 f"| {meaning(msg, sig)} |")
         out.append("")
+        if any(sig.name == "HealthFlags" for sig in msg.signals):
+            out += health_flags_table(db)
     return "\n".join(out)
+
+
+def health_flags_table(db) -> list:
+    """The HealthFlags bits: the DBC's value table HealthFlagBits, the one the firmware's
+    NAVECU_HEALTH_* constants are generated from (tools/gen_protocol.py)."""
+    out = ["HealthFlags bits (the DBC's value table `HealthFlagBits`):", "",
+           "| bit | value | name | set while |", "|---:|---:|---|---|"]
+    for bit, (name, text) in sorted(navecu_can.health_bits(db).items()):
+        out.append(f"| {bit} | {1 << bit} | {name} | {text.replace('|', '/')} |")
+    out.append("")
+    return out
 
 
 def check_overview(db, text: str) -> list:

@@ -42,6 +42,7 @@ int app_init(app_t *app, const app_config_t *cfg)
     }
     app->cfg = *cfg;
     calib_init(&app->keep.cal);
+    imu_rate_init(&app->keep.rate);
     imu_link_init(&app->keep.imu, cfg->imu_rate_hz, cfg->gyro_range_rps, cfg->accel_range_mps2,
                   cfg->can_ids[NAVECU_MSG_IMU_ACCEL]);
     mounting_init(&app->keep.mount, cfg->imu_mount_rad);
@@ -88,6 +89,35 @@ static void after_fusion(app_t *a, fusion_action_t act)
     } else if (act == FUSION_REACQUIRE) {
         begin_reacquire(a);
     }
+}
+
+/* The IMU samples disagree with the configured rate (imu_rate.h): no navigation. A
+ * navigator stops and re-acquires from GNSS once the rate matches again (its state was
+ * integrated with the wrong time step); waiting for an initial state and levelling are
+ * held in mode Fault and go on from the start when it matches. Applied after every frame,
+ * so that nothing (a command, a reset) starts navigation while the mismatch lasts. */
+static void hold_for_rate(app_t *a)
+{
+    if (a->run.mode == APP_MODE_NAVIGATING) {
+        begin_reacquire(a);
+    } else if (a->run.mode == APP_MODE_WAIT_INIT || a->run.mode == APP_MODE_LEVELLING) {
+        a->run.rate_resume = a->run.mode;
+        a->run.rate_held = 1u;
+        a->run.mode = APP_MODE_FAULT;
+    } else {
+        /* Fault already (re-acquiring, or levelling stopped by a gap): it stays */
+    }
+}
+
+static void release_for_rate(app_t *a)
+{
+    if (a->run.rate_held && a->run.mode == APP_MODE_FAULT) {
+        a->run.mode = a->run.rate_resume;
+        if (a->run.mode == APP_MODE_LEVELLING) {
+            align_level_restart(&a->run.align);
+        }
+    }
+    a->run.rate_held = 0u;
 }
 
 /* One IMU sample (raw LSB): levelling, or a navigation step with or without the filter,
@@ -142,6 +172,7 @@ static void on_imu_accel(app_t *a, hal_t *hal, const rx_input_t *in, uint64_t t_
     for (uint8_t i = 0u; i < s.dropped; i++) {
         reject(a, &a->keep.health.imu_pair_broken); /* an IMU_Rate that got no IMU_Accel */
     }
+    imu_rate_sample(&a->keep.rate, s.lost - s.lost_by_time, s.time_gap);
     if (s.time_gap) {
         app_count(&a->keep.health.time_jumps);
     }
@@ -206,6 +237,15 @@ static void on_gnss_status(app_t *a, hal_t *hal, const rx_input_t *in)
         return;
     }
     app_stamp(&a->run.gnss, a->keep.n_samples);
+    const imu_rate_change_t rate = imu_rate_epoch(&a->keep.rate, a->cfg.imu_rate_hz, fix.tow_ms);
+    if (rate == IMU_RATE_MISMATCH) {
+        app_count(&a->keep.health.imu_rate_mismatch);
+        hold_for_rate(a);
+    } else if (rate == IMU_RATE_MATCH) {
+        release_for_rate(a); /* a navigator re-acquires below, at this epoch if it can */
+    } else {
+        /* no change */
+    }
     if (fix.has_week) {
         gnss_time_week(&a->run.fusion.time, fix.gps_week);
     }
@@ -217,7 +257,7 @@ static void on_gnss_status(app_t *a, hal_t *hal, const rx_input_t *in)
         return;
     }
     if (a->run.align.reacquire && a->run.mode == APP_MODE_FAULT) {
-        if (align_reacquire_ready(&fix)) {
+        if (!imu_rate_mismatch(&a->keep.rate) && align_reacquire_ready(&fix)) {
             if (align_reacquire(&a->run.align, &fix, &a->run.nav, &a->run.dr, &a->keep.cal) !=
                 NAV_OK) {
                 reject(a, &a->keep.health.gnss_rejected);
@@ -227,7 +267,8 @@ static void on_gnss_status(app_t *a, hal_t *hal, const rx_input_t *in)
             gnss_time_forget(&a->run.fusion.time); /* the velocities before the gap */
             a->run.mode = APP_MODE_NAVIGATING;
         }
-        return; /* between 0.3 and 5 m/s the course is not a heading: wait */
+        return; /* between 0.3 and 5 m/s the course is not a heading, or the IMU rate
+                   disagrees with the data: wait */
     }
     if (a->run.mode == APP_MODE_NAVIGATING) {
         const app_diag_t d = diag_of(a);
@@ -340,6 +381,9 @@ void app_handle_frame(app_t *a, hal_t *hal, const hal_can_frame_t *f)
         break;
     default: /* RX_NONE: our own outputs on a shared bus */
         break;
+    }
+    if (imu_rate_mismatch(&a->keep.rate)) {
+        hold_for_rate(a);
     }
 }
 

@@ -5,6 +5,7 @@
  * concern each (docs/architecture.md draws who calls whom):
  *   app_rx       receive and validate one frame -> decoded input in SI units
  *   imu_stream   IMU pairing, counter, gap bridging, plausibility -> raw samples
+ *   imu_rate     the configured IMU rate against the samples counted between GNSS epochs
  *   gnss_epoch   GNSS frames -> one epoch (gnss_fix_t) with its time of validity
  *   align        initial state, levelling, start, re-acquisition
  *   landnav      standstill and dead reckoning without the filter
@@ -39,6 +40,7 @@
 #include "fusion.h"
 #include "gnss_epoch.h"
 #include "hal.h"
+#include "imu_rate.h"
 #include "imu_stream.h"
 #include "landnav.h"
 #include "mounting.h"
@@ -59,6 +61,8 @@ typedef struct {
     app_health_t health;
     rx_state_t rx;          /* E2E receive state of the single-frame inputs */
     imu_link_t imu;         /* the IMU's counter, staleness and fault bit */
+    imu_rate_t rate;        /* the configured IMU rate against the data: a mismatch holds
+                               navigation whatever restarts it (imu_rate.h) */
     uint64_t n_samples;     /* IMU samples processed: the time base, runs on */
     uint64_t last_rx_t_us;  /* latest receive time seen (time jumps) */
     tx_state_t tx;          /* E2E transmit state and what was sent */
@@ -86,6 +90,8 @@ typedef struct {
     calib_trip_t cal;       /* this trip's calibration storage policy */
     dynamics_t dyn;         /* the motion since the last dynamics output */
     nav_real_t yaw_rate_rps;/* body z rate of the last IMU sample */
+    uint8_t rate_held;      /* mode Fault for an IMU rate mismatch, from rate_resume */
+    app_mode_t rate_resume; /* WaitInit or Levelling: where it goes on when the rate matches */
 } app_run_t;
 
 struct app {

@@ -37,6 +37,8 @@ typedef struct {
     uint32_t imu_timing;       /* IMU samples received more than half a period off time */
     uint32_t odo_rejected;     /* odometer updates refused by the filter's gate (wheel
                                   lock, spin, slip) */
+    uint32_t imu_rate_mismatch; /* IMU rate mismatches found: the samples counted between
+                                  GNSS epochs disagreed with the configured rate (imu_rate.h) */
 } app_health_t;
 
 /* The sample count of the latest event of a kind, and whether there was one. */

@@ -36,6 +36,20 @@
 #define APP_IMU_MOVE_ACCEL_MPS2 NAV_C(0.5)
 #define APP_IMU_SAT_FRACTION NAV_C(0.999)
 
+/* the IMU rate against the data (imu_rate.h): an interval between GNSS epochs is off-rate
+ * beyond 1/APP_IMU_RATE_TOL_DIV (5 %) + APP_IMU_RATE_QUANT samples (each epoch's arrival
+ * is known to one sample, and one more of latency jitter); a mismatch is APP_IMU_RATE_RUN
+ * off-rate intervals in a row at one rate, together off by more than that plus a steady
+ * change of the receiver's latency of APP_IMU_RATE_LATE_MS (2.5 times the 0.1 s latency
+ * of a u-blox-class receiver; isolated late epochs of any size form no run); it ends
+ * with APP_IMU_RATE_RUN on-rate intervals. Longer intervals (or going back in
+ * TimeOfWeek: a clock jump) restart the measurement. */
+#define APP_IMU_RATE_TOL_DIV 20
+#define APP_IMU_RATE_QUANT 2
+#define APP_IMU_RATE_LATE_MS 250
+#define APP_IMU_RATE_RUN 2u
+#define APP_IMU_RATE_MAX_MS 600000u
+
 /* ---- how long NAV_Status flags an event (docs/can.md, HealthFlags) ---- */
 #define APP_FLAG_HOLD_S 1u          /* REJECTED, IMU_GAP, IMU_SATURATED, ODO_REJECTED */
 #define APP_FLAG_HOLD_LONG_S 10u    /* FILTER_RESET, IMU_SUSPECT */

@@ -182,7 +182,8 @@ imu_verdict_t imu_stream_accel(imu_stream_t *s, imu_link_t *l, uint8_t counter, 
         const uint64_t period_us = 1000000u / l->rate_hz;
         const uint64_t by_time = (t_us - l->last_t_us + period_us / 2u) / period_us;
         if (by_time > (uint64_t)step + APP_IMU_GAP_SLACK_PERIODS) {
-            out->lost += (by_time - (uint64_t)step + APP_IMU_GAP_SLACK_PERIODS) / 15u * 15u;
+            out->lost_by_time = (by_time - (uint64_t)step + APP_IMU_GAP_SLACK_PERIODS) / 15u * 15u;
+            out->lost += out->lost_by_time;
             out->time_gap = 1u;
         }
     }

@@ -72,6 +72,7 @@ typedef struct {
     int32_t raw[6];      /* this sample: angle x y z, velocity x y z, LSB */
     int32_t prev_raw[6]; /* the last sample before it: where a bridge starts */
     uint64_t lost;       /* samples missing before this one */
+    uint64_t lost_by_time; /* of lost, the whole counter cycles seen only in receive time */
     uint8_t time_gap;    /* some were seen missing only in receive time */
     uint8_t saturated;   /* an axis is at its range */
     uint8_t stuck_new;   /* axes found stuck this sample (each counted once per episode) */

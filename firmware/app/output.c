@@ -289,6 +289,9 @@ static uint16_t health_flags(const app_t *a, const hal_t *hal)
     if (r->align.reacquire) {
         fl |= NAVECU_HEALTH_REACQUIRE;
     }
+    if (imu_rate_mismatch(&k->rate)) {
+        fl |= NAVECU_HEALTH_IMU_RATE_MISMATCH;
+    }
     return (uint16_t)fl;
 }
 
@@ -369,6 +372,11 @@ void output_status(app_t *a, hal_t *hal)
         st.horiz_accuracy = (uint16_t)accuracy_raw(ekf_sigma_h_m(ekf) * NAV_C(100.0),
                                                    NAVECU_NAV_STATUS_HORIZ_ACCURACY_RAW_MAX);
     }
+    /* the IMU rate measured from the data while it disagrees with the configured one */
+    const uint32_t chz = imu_rate_measured_chz(&a->keep.rate);
+    st.imu_rate_measured = navecu_can_nav_status_imu_rate_measured_encode(
+        nav_clamp((nav_real_t)chz * NAV_C(0.01), NAVECU_NAV_STATUS_IMU_RATE_MEASURED_MIN,
+                  NAVECU_NAV_STATUS_IMU_RATE_MEASURED_MAX));
     st.nav_counter = next_counter(tx, TX_STATUS);
     navecu_can_nav_status_pack(d, &st, sizeof d);
     send_protected(tx, hal, a->cfg.can_ids[NAVECU_MSG_NAV_STATUS], d);

@@ -282,7 +282,8 @@ def nav_log(tmp_path, n, sigma, rejected=None, t0=30.0, dt=0.1):
         msgs.append(tx.encode("NAV_Height", {"Height": 100.0, "VertAccuracy": 1.0,
                                              "TimeOfValidity": int(round(t * 1000)) % 65536}, ts))
         msgs.append(tx.encode("NAV_Status", {"StatusPage": 0, "Mode": 5, "HealthFlags": 0,
-                                             "HorizAccuracy": float(sigma[k])}, ts))
+                                             "HorizAccuracy": float(sigma[k]),
+                                             "ImuRateMeasured": 0.0}, ts))
         if rejected is not None:
             msgs.append(tx.encode("NAV_Status", {"StatusPage": 3, "CntBadValue": 0,
                                                  "CntGnssRejected": int(rejected[k]),

@@ -3240,6 +3240,7 @@ int navecu_can_nav_status_pack(
         dst_p[2] |= pack_right_shift_u16(src_p->health_flags, 8u, 0xffu);
         dst_p[3] |= pack_left_shift_u16(src_p->horiz_accuracy, 0u, 0xffu);
         dst_p[4] |= pack_right_shift_u16(src_p->horiz_accuracy, 8u, 0xffu);
+        dst_p[5] |= pack_left_shift_u8(src_p->imu_rate_measured, 0u, 0xffu);
         break;
 
     case 1:
@@ -3318,6 +3319,7 @@ int navecu_can_nav_status_unpack(
         dst_p->health_flags |= unpack_left_shift_u16(src_p[2], 8u, 0xffu);
         dst_p->horiz_accuracy = unpack_right_shift_u16(src_p[3], 0u, 0xffu);
         dst_p->horiz_accuracy |= unpack_left_shift_u16(src_p[4], 8u, 0xffu);
+        dst_p->imu_rate_measured = unpack_right_shift_u8(src_p[5], 0u, 0xffu);
         break;
 
     case 1:
@@ -3730,6 +3732,28 @@ bool navecu_can_nav_status_cnt_odo_rejected_is_in_range(uint16_t value)
 bool navecu_can_nav_status_cnt_odo_rejected_is_in_phys_range(float value)
 {
     return ((value >= 0.0f) && (value <= 65535.0f));
+}
+
+uint8_t navecu_can_nav_status_imu_rate_measured_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value / 2.0f)));
+}
+
+float navecu_can_nav_status_imu_rate_measured_decode(uint8_t value)
+{
+    return ((float)value * 2.0f);
+}
+
+bool navecu_can_nav_status_imu_rate_measured_is_in_range(uint8_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_nav_status_imu_rate_measured_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 510.0f));
 }
 
 uint8_t navecu_can_nav_status_cnt_bad_crc_encode(float value)

@@ -292,6 +292,7 @@ extern "C" {
 #define NAVECU_CAN_NAV_STATUS_CNT_CORE_REJECTED_NAME "CntCoreRejected"
 #define NAVECU_CAN_NAV_STATUS_CNT_TASKS_LATE_NAME "CntTasksLate"
 #define NAVECU_CAN_NAV_STATUS_CNT_ODO_REJECTED_NAME "CntOdoRejected"
+#define NAVECU_CAN_NAV_STATUS_IMU_RATE_MEASURED_NAME "ImuRateMeasured"
 #define NAVECU_CAN_NAV_STATUS_CNT_BAD_CRC_NAME "CntBadCrc"
 #define NAVECU_CAN_NAV_STATUS_CNT_IMU_LOST_NAME "CntImuLost"
 #define NAVECU_CAN_NAV_STATUS_CNT_LOG_LINE_BAD_NAME "CntLogLineBad"
@@ -1199,6 +1200,15 @@ struct navecu_can_nav_status_t {
      * Offset: 0
      */
     uint16_t cnt_odo_rejected;
+
+    /**
+     * While HealthFlags IMU_RATE_MISMATCH is set: the IMU sample rate measured from the data (samples counted between GNSS epochs over their TimeOfWeek interval), saturated at 510 Hz; 0 otherwise (no mismatch: the rate is the configured one).
+     *
+     * Range: 0..255 (0..510 Hz)
+     * Scale: 2
+     * Offset: 0
+     */
+    uint8_t imu_rate_measured;
 
     /**
      * Range: 0..255 (0..255 -)
@@ -6157,6 +6167,46 @@ bool navecu_can_nav_status_cnt_odo_rejected_is_in_range(uint16_t value);
  * @return true if in range, false otherwise.
  */
 bool navecu_can_nav_status_cnt_odo_rejected_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_nav_status_imu_rate_measured_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_status_imu_rate_measured_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_status_imu_rate_measured_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_status_imu_rate_measured_is_in_phys_range(float value);
 
 /**
  * Encode given signal by applying scaling and offset.

@@ -15,7 +15,8 @@
 #define NAVECU_HEALTH_IMU_SUSPECT 0x0100u /* an IMU axis was found stuck in the last 10 s */
 #define NAVECU_HEALTH_IMU_SATURATED 0x0200u /* an IMU axis was at its configured range (saturated) in the last second */
 #define NAVECU_HEALTH_ODO_REJECTED 0x0400u /* the wheel speeds disagreed with the filter (locked or spinning wheels) in the last second */
-#define NAVECU_HEALTH_REACQUIRE 0x0800u /* after an IMU gap too long to bridge or a filter reset, waiting for a GNSS epoch to re-acquire position, velocity and heading */
+#define NAVECU_HEALTH_REACQUIRE 0x0800u /* after an IMU gap too long to bridge, a filter reset or an IMU rate mismatch while navigating, waiting for a GNSS epoch to re-acquire position, velocity and heading */
+#define NAVECU_HEALTH_IMU_RATE_MISMATCH 0x1000u /* the IMU samples counted between GNSS epochs (received and lost, by the IMU counter) disagree with the configured IMU rate over their TimeOfWeek interval: navigation refused (Mode Fault) until they match again */
 
 /* navecu's messages: index, stock identifier, direction */
 typedef enum {
@@ -312,6 +313,9 @@ typedef enum {
 #define NAVECU_NAV_STATUS_CNT_ODO_REJECTED_MIN ((float)(0.0))
 #define NAVECU_NAV_STATUS_CNT_ODO_REJECTED_MAX ((float)(65535.0))
 #define NAVECU_NAV_STATUS_CNT_ODO_REJECTED_RAW_MAX 65535u
+#define NAVECU_NAV_STATUS_IMU_RATE_MEASURED_MIN ((float)(0.0))
+#define NAVECU_NAV_STATUS_IMU_RATE_MEASURED_MAX ((float)(510.0))
+#define NAVECU_NAV_STATUS_IMU_RATE_MEASURED_RAW_MAX 255u
 #define NAVECU_NAV_STATUS_CNT_BAD_CRC_MIN ((float)(0.0))
 #define NAVECU_NAV_STATUS_CNT_BAD_CRC_MAX ((float)(255.0))
 #define NAVECU_NAV_STATUS_CNT_BAD_CRC_RAW_MAX 255u
