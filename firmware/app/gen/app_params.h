@@ -24,6 +24,8 @@ typedef struct {
     app_param_type_t type;
     uint8_t min_exclusive;  /* the range excludes min */
     uint8_t vehicle_default; /* the default is the vehicle profile's */
+    uint8_t at_reset;       /* apply = "reset": copied at app_init, so a UDS write
+                               needs navigation stopped and is in force after ECUReset */
     nav_real_t min_si, max_si; /* range, SI units (enum: 0..values - 1) */
     nav_real_t default_si[3];  /* default, SI (vehicle_default: unused) */
 } app_param_t;
@@ -51,7 +53,9 @@ typedef enum {
     APP_PARAM_GNSS_LATENCY_S = 18,
     APP_PARAM_GNSS_CORR_S = 19,
     APP_PARAM_GNSS_LEVER_B_M = 20,
-    APP_PARAM_N = 21
+    APP_PARAM_UDS_REQUEST_ID = 21,
+    APP_PARAM_UDS_RESPONSE_ID = 22,
+    APP_PARAM_N = 23
 } app_param_id_t;
 
 extern const app_param_t app_params[APP_PARAM_N];
