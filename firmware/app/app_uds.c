@@ -57,11 +57,14 @@ static nav_real_t get_f32(const uint8_t *p)
     return (nav_real_t)f;
 }
 
+/* the string's characters without a terminator (a DID's ASCII value) */
 static size_t put_string(uint8_t *buf, size_t cap, const char *s)
 {
     const size_t n = strlen(s);
     if (n <= cap) {
-        memcpy(buf, s, n);
+        for (size_t i = 0u; i < n; i++) {
+            buf[i] = (uint8_t)s[i];
+        }
     }
     return n; /* > cap: the server answers 0x14 */
 }
@@ -128,7 +131,8 @@ static uint8_t write_did(void *user, uint16_t did, const uint8_t *data, size_t l
     }
     nav_real_t v[3] = {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)};
     if (t == APP_PARAM_U16) {
-        v[0] = (nav_real_t)(((uint32_t)data[0] << 8) | data[1]);
+        const uint32_t u = ((uint32_t)data[0] << 8) | data[1];
+        v[0] = (nav_real_t)u;
     } else if (t == APP_PARAM_ENUM) {
         v[0] = (nav_real_t)data[0];
     } else {
@@ -186,11 +190,17 @@ static void serve(app_t *a, hal_t *hal, uint64_t now)
     if (uds_take_reset(&u->srv)) {
         u->reset_due = 1u;
     }
+    int sent = 0;
     if (n > 0u && isotp_send(&u->tp, u->rsp, n, now) == 0) {
+        sent = 1;
+    }
+    if (sent) {
         (void)isotp_poll(&u->tp, now, tx_frame, hal);
-    } else if (u->reset_due) {
-        u->reset_due = 0u;
-        restart(a, hal); /* suppressed response: at once */
+    } else {
+        if (u->reset_due) {
+            u->reset_due = 0u;
+            restart(a, hal); /* suppressed response: at once */
+        }
     }
 }
 

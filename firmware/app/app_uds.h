@@ -49,19 +49,19 @@ typedef struct {
     uint8_t rsp[ISOTP_MAX_LEN];
 } app_uds_t;
 
-typedef struct app app_t; /* app.h */
+struct app; /* app.h (its typedef app_t is output.h's) */
 
 /* Start the channel and the server on a->cfg's IDs (app_init calls it; a is otherwise
  * initialised). 0, or -1 when the channel refuses them (diagnostics then stay off). */
-int app_uds_init(app_t *a);
+int app_uds_init(struct app *a);
 
 /* A received frame: 1 if it is the diagnostic channel's (on the request ID: taken by
  * ISO-TP, a complete request served at once), else 0 (navecu's own dispatch goes on). */
-int app_uds_frame(app_t *a, hal_t *hal, const hal_can_frame_t *f);
+int app_uds_frame(struct app *a, hal_t *hal, const hal_can_frame_t *f);
 
 /* From app_poll: the channel's frames due, a complete request served, the server's timers
  * (S3, the security delay), an accepted ECUReset carried out once its response left. */
-void app_uds_poll(app_t *a, hal_t *hal);
+void app_uds_poll(struct app *a, hal_t *hal);
 
 /* The receive list of a board's CAN filters: app_rx_ids' and the UDS request ID (written
  * if it fits max); the number of identifiers there are. */

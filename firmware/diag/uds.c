@@ -91,7 +91,7 @@ static void put_u16(uint8_t *p, uint32_t v)
 static void put_u32(uint8_t *p, uint32_t v)
 {
     put_u16(p, v >> 16);
-    put_u16(p + 2, v & 0xFFFFu);
+    put_u16(&p[2], v & 0xFFFFu);
 }
 
 static uint32_t get_u32(const uint8_t *p)
@@ -254,6 +254,26 @@ static result_t write_data(uds_t *s, const uint8_t *req, size_t len, uint8_t *rs
     return positive(3u, 0u);
 }
 
+/* 1 for the services whose byte 1 is a sub-function */
+static int has_subfunction(uint8_t sid)
+{
+    switch (sid) {
+    case UDS_SID_SESSION:
+    case UDS_SID_ECU_RESET:
+    case UDS_SID_SECURITY:
+    case UDS_SID_TESTER_PRESENT:
+        return 1;
+    default:
+        return 0;
+    }
+}
+
+/* 1 for the services of the extended session only */
+static int extended_only(uint8_t sid)
+{
+    return (sid == UDS_SID_SECURITY || sid == UDS_SID_WRITE_DID) ? 1 : 0;
+}
+
 size_t uds_handle(uds_t *s, const uint8_t *req, size_t len, uint64_t now_us, uint8_t *rsp,
                   size_t cap)
 {
@@ -265,12 +285,10 @@ size_t uds_handle(uds_t *s, const uint8_t *req, size_t len, uint64_t now_us, uin
     s->last_request_us = now_us; /* S3 restarts with every request */
     const uint8_t sid = req[0];
     result_t r;
-    const int has_sub = sid == UDS_SID_SESSION || sid == UDS_SID_ECU_RESET ||
-                        sid == UDS_SID_SECURITY || sid == UDS_SID_TESTER_PRESENT;
+    const int has_sub = has_subfunction(sid);
     /* ISO 14229-1 Figure 5 / 7 order: the service (0x11), the session (0x7F), the minimum
      * length (0x13), the sub-function (0x12), then each service's own checks */
-    const int extended_only = sid == UDS_SID_SECURITY || sid == UDS_SID_WRITE_DID;
-    if (extended_only && s->session != UDS_SESSION_EXTENDED) {
+    if (extended_only(sid) && s->session != UDS_SESSION_EXTENDED) {
         r = nrc(UDS_NRC_NOT_IN_ACTIVE_SESSION);
     } else if (has_sub && len < 2u) {
         r = nrc(UDS_NRC_INCORRECT_LENGTH); /* no sub-function at all */
@@ -301,7 +319,7 @@ size_t uds_handle(uds_t *s, const uint8_t *req, size_t len, uint64_t now_us, uin
     }
     if (r.nrc != UDS_NRC_OK) {
         count(&s->cnt.negative);
-        rsp[0] = UDS_NEGATIVE;
+        rsp[0] = (uint8_t)UDS_NEGATIVE;
         rsp[1] = sid;
         rsp[2] = r.nrc;
         return 3u;
