@@ -255,8 +255,6 @@ static void test_write_refused_then_accepted_and_read_back(void **state)
     expect_nrc(REQUEST(0x2E, 0x77, 0x77, 0x00), 0x2E, 0x31);       /* no such DID */
     /* nav_rate_hz 200 > imu_rate_hz 100: a rule between parameters */
     expect_nrc(REQUEST(0x2E, 0x02, 0x01, 0x00, 0xC8), 0x2E, 0x31);
-    /* the UDS request ID onto one of navecu's IDs (0x100, IMU_Rate) */
-    expect_nrc(REQUEST(0x2E, 0x02, 0x50, 0x01, 0x00), 0x2E, 0x31);
     /* a float: gnss_latency_s (0x0240) NaN, then 0.1 s */
     expect_nrc(REQUEST(0x2E, 0x02, 0x40, 0x7F, 0xC0, 0x00, 0x00), 0x2E, 0x31);
     assert_int_equal(REQUEST(0x2E, 0x02, 0x40, 0x3D, 0xCC, 0xCC, 0xCD), 3u);
@@ -318,16 +316,20 @@ static void test_ecu_reset_restarts_with_the_configuration(void **state)
     assert_int_equal(app_samples(&app), 0u);
 }
 
-static void test_new_ids_in_force_after_reset(void **state)
+static void test_uds_ids_read_only(void **state)
 {
     (void)state;
     unlock();
-    assert_int_equal(REQUEST(0x2E, 0x02, 0x50, 0x07, 0xB0), 3u); /* request 0x7B0 */
-    assert_int_equal(REQUEST(0x2E, 0x02, 0x51, 0x07, 0xB8), 3u); /* response 0x7B8 */
-    assert_int_equal(REQUEST(0x3E, 0x00), 2u);                   /* still on 0x7A0 */
-    assert_int_equal(REQUEST(0x11, 0x01), 2u);
-    app_poll(&app, &hal);
-    assert_int_equal(REQUEST(0x3E, 0x00), 0u); /* 0x7A0 is not the channel's any more */
+    /* the boards' receive filters are set from them at start: not writable over UDS */
+    expect_nrc(REQUEST(0x2E, 0x02, 0x50, 0x07, 0xB0), 0x2E, 0x31);
+    expect_nrc(REQUEST(0x2E, 0x02, 0x51, 0x07, 0xB8), 0x2E, 0x31);
+    assert_int_equal(app.cfg.uds_request_id, 0x7A0u);
+    /* configured at start, the channel uses them */
+    app_config_t c = app_default_config();
+    c.uds_request_id = 0x7B0u;
+    c.uds_response_id = 0x7B8u;
+    assert_int_equal(app_init(&app, &c), NAV_OK);
+    assert_int_equal(REQUEST(0x3E, 0x00), 0u); /* 0x7A0 is not the channel's: foreign */
     assert_int_equal(app_health(&app)->foreign, 1u);
     assert_int_equal(app.uds.tp.cfg.rx_id, 0x7B0u);
     assert_int_equal(app.uds.tp.cfg.tx_id, 0x7B8u);
@@ -396,7 +398,7 @@ int main(void)
         cmocka_unit_test_setup(test_write_refused_then_accepted_and_read_back, setup),
         cmocka_unit_test_setup(test_reset_parameter_needs_navigation_stopped, setup),
         cmocka_unit_test_setup(test_ecu_reset_restarts_with_the_configuration, setup),
-        cmocka_unit_test_setup(test_new_ids_in_force_after_reset, setup),
+        cmocka_unit_test_setup(test_uds_ids_read_only, setup),
         cmocka_unit_test_setup(test_s3_on_the_hal_clock, setup),
         cmocka_unit_test_setup(test_three_wrong_keys_then_delay_on_the_hal_clock, setup),
         cmocka_unit_test_setup(test_identifier_rules_and_receive_list, setup),

@@ -126,6 +126,9 @@ def load(path: Path = TABLE) -> list:
         if p.get("apply", "now") not in ("now", "reset"):
             raise TableError(f"{where}: apply must be now or reset")
         q["at_reset"] = p.get("apply", "now") == "reset"
+        if not isinstance(p.get("uds_write", True), bool):
+            raise TableError(f"{where}: uds_write must be true or false")
+        q["uds_read_only"] = not p.get("uds_write", True)
         if p["type"] == "enum":
             vals = p.get("values")
             if not vals or len(set(vals)) != len(vals):
@@ -201,6 +204,7 @@ def gen_h(params, pre) -> str:
          "    uint8_t vehicle_default; /* the default is the vehicle profile's */",
          "    uint8_t at_reset;       /* apply = \"reset\": copied at app_init, so a UDS write",
          "                               needs navigation stopped and is in force after ECUReset */",
+         "    uint8_t uds_read_only;  /* uds_write = false: ReadDataByIdentifier only */",
          "    nav_real_t min_si, max_si; /* range, SI units (enum: 0..values - 1) */",
          "    nav_real_t default_si[3];  /* default, SI (vehicle_default: unused) */",
          "} app_param_t;", "",
@@ -238,7 +242,7 @@ def gen_c(params, pre) -> str:
                "enum": "APP_PARAM_ENUM"}[p["type"]]
         L.append(f"    [{_const(p)}] = {{\"{p['name']}\", 0x{int(p['did']):04X}u, {typ}, "
                  f"{int(p['min_exclusive'])}u, {int(p['vehicle_default'])}u, "
-                 f"{int(p['at_reset'])}u, "
+                 f"{int(p['at_reset'])}u, {int(p['uds_read_only'])}u, "
                  f"{_c_real(_si(p, p['min']))}, {_c_real(_si(p, p['max']))}, "
                  f"{{{', '.join(_c_real(x) for x in d)}}}}},")
     names, lst, _ = pre
@@ -383,6 +387,8 @@ def gen_uds_table(params) -> str:
             if p["vehicle_default"]:
                 rng += " (0: the vehicle profile's)"
         when = "navigation stopped; after ECUReset" if p["at_reset"] else "at once"
+        if p["uds_read_only"]:
+            when = "read-only over UDS"
         L.append(f"| `0x{int(p['did']):04X}` | `{p['name']}` | {n} | {e} | {si_unit(p)} | {rng} "
                  f"| {when} |")
     L += ["", UDS_END]

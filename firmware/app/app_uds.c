@@ -109,14 +109,15 @@ static size_t read_did(void *user, uint16_t did, uint8_t *buf, size_t cap)
 static int is_writable(void *user, uint16_t did)
 {
     (void)user;
-    return param_of_did(did) != APP_PARAM_N;
+    const app_param_id_t id = param_of_did(did);
+    return (id != APP_PARAM_N && !app_params[id].uds_read_only) ? 1 : 0;
 }
 
 static uint8_t write_did(void *user, uint16_t did, const uint8_t *data, size_t len)
 {
     app_t *a = (app_t *)user;
     const app_param_id_t id = param_of_did(did);
-    if (id == APP_PARAM_N) {
+    if (id == APP_PARAM_N || app_params[id].uds_read_only) {
         return UDS_NRC_REQUEST_OUT_OF_RANGE;
     }
     const app_param_type_t t = app_params[id].type;

@@ -42,8 +42,8 @@ static const params_cli_t params_cli[PARAMS_CLI_N] = {
     {"--gnss-latency-ms", APP_PARAM_GNSS_LATENCY_S, "ms", 0.0, 500.0, 0.001, "", "receiver latency: a fix's time of validity to its arrival (more when TimeOfWeek shows a late epoch)"},
     {"--gnss-corr-s", APP_PARAM_GNSS_CORR_S, "s", 0.0, 600.0, 1.0, "", "correlation time of the receiver's position errors (docs/kalman.md)"},
     {"--gnss-lever-m", APP_PARAM_GNSS_LEVER_B_M, "m", -10.0, 10.0, 1.0, "", "the GNSS antenna from the IMU, body axes x right, y forward, z up"},
-    {"--uds-request-id", APP_PARAM_UDS_REQUEST_ID, "", 1.0, 2047.0, 1.0, "", "the UDS server's physical request ID (11-bit; docs/can.md, Diagnostics (UDS)): frames on it go to ISO-TP, never to navigation; a UDS write of it is in force after the next ECUReset"},
-    {"--uds-response-id", APP_PARAM_UDS_RESPONSE_ID, "", 1.0, 2047.0, 1.0, "", "the UDS server's response ID (11-bit, by convention request + 8); a UDS write of it is in force after the next ECUReset"},
+    {"--uds-request-id", APP_PARAM_UDS_REQUEST_ID, "", 1.0, 2047.0, 1.0, "", "the UDS server's physical request ID (11-bit; docs/can.md, Diagnostics (UDS)): frames on it go to ISO-TP, never to navigation; read-only over UDS (the boards set their receive filters at start)"},
+    {"--uds-response-id", APP_PARAM_UDS_RESPONSE_ID, "", 1.0, 2047.0, 1.0, "", "the UDS server's response ID (11-bit, by convention request + 8); read-only over UDS"},
 };
 
 /* --imu-preset NAME: the presets' descriptions, in app_presets' order */

@@ -88,6 +88,7 @@ def test_write_refused_without_session_or_security(r):
 def test_unlock_write_read_back(r):
     assert r["seed_when_unlocked"] == "00000000"
     assert r["nrc_write_range"] == 0x31
+    assert r["nrc_write_uds_id"] == 0x31  # the UDS IDs are read-only over UDS
     assert r["level_s_back"] == 45
     assert r["lever_back"] == [1.0, -0.5, 0.25]
 

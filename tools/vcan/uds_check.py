@@ -152,6 +152,7 @@ def run(binary, params):
             c.unlock_security_access(1)
             r["seed_when_unlocked"] = c.request_seed(1).service_data.seed.hex()
             r["nrc_write_range"] = nrc_of(lambda: c.write_data_by_identifier(0x0204, 0))
+            r["nrc_write_uds_id"] = nrc_of(lambda: c.write_data_by_identifier(0x0250, 0x7B0))
             c.write_data_by_identifier(0x0204, 45)
             c.write_data_by_identifier(0x0242, [1.0, -0.5, 0.25])
             r["level_s_back"] = c.read_data_by_identifier(0x0204).service_data.values[0x0204]

@@ -26,6 +26,7 @@ typedef struct {
     uint8_t vehicle_default; /* the default is the vehicle profile's */
     uint8_t at_reset;       /* apply = "reset": copied at app_init, so a UDS write
                                needs navigation stopped and is in force after ECUReset */
+    uint8_t uds_read_only;  /* uds_write = false: ReadDataByIdentifier only */
     nav_real_t min_si, max_si; /* range, SI units (enum: 0..values - 1) */
     nav_real_t default_si[3];  /* default, SI (vehicle_default: unused) */
 } app_param_t;
