@@ -32,8 +32,10 @@ CORE_SRC := $(wildcard firmware/nav/*.c)
 VEHICLE ?= native
 VEH_SUFFIX := $(if $(filter native,$(VEHICLE)),,-$(VEHICLE))
 VEH_OUT := $(BUILD)/vehicle
-# native for the tests, the RAV4 for its filter-bank test (tests/test_bxcan_profile.c)
-VEHICLES_BUILT := $(sort native toyota_rav4_2017 $(VEHICLE))
+# every profile of vehicles/: native for the tests, the RAV4 for its filter-bank test
+# (tests/test_bxcan_profile.c), each profile's layer against cantools and the VW's host
+# executable on its own frames (tests/python/test_vehicle_profiles.py)
+VEHICLES_BUILT := $(sort $(basename $(notdir $(wildcard vehicles/*.toml))) $(VEHICLE))
 VEH_GEN_SRC = $(VEH_OUT)/$(1)/vehicle_profile.c $(VEH_OUT)/$(1)/veh_can.c
 VEH_SRC = $(call VEH_GEN_SRC,$(1)) firmware/vehicle/vehicle_checksum.c
 CODEC_GEN := firmware/can/gen/navecu_can.c firmware/can/gen/navecu_can.h
@@ -134,12 +136,6 @@ $(1)_LIBS := $(BUILD)/$(1)/libtestsupport.a $(BUILD)/$(1)/libnavapp.a \
              $(BUILD)/$(1)/libvehicle_native.a \
              $(BUILD)/$(1)/libnavcore_f32.a $(BUILD)/$(1)/libnavcore_f64.a
 
-$(BUILD)/$(1)/navecu$(VEH_SUFFIX): $(HOST_SIM_SRC:%.c=$(BUILD)/$(1)/f32/%.o) $(BUILD)/$(1)/libnavapp.a \
-		$(BUILD)/$(1)/libvehicle_$(VEHICLE).a \
-		$(BUILD)/$(1)/libhal_linux.a $(BUILD)/$(1)/libnavcore_f32.a
-	@mkdir -p $$(@D)
-	$$(CC) $(2) $$^ -lm -o $$@
-
 $(foreach t,$(TESTS_VARIANT),$(BUILD)/$(1)/tests/$(t)_f32): $(BUILD)/$(1)/tests/%_f32: $(BUILD)/$(1)/f32/tests/%.o $$($(1)_LIBS)
 	@mkdir -p $$(@D)
 	$$(CC) $(2) $$^ -lcmocka -lm -o $$@
@@ -184,17 +180,19 @@ $(BUILD)/$(1)/libvehicle_$(3).a: $(BUILD)/$(1)/veh-$(3)/vehicle_profile.o $(BUIL
 		$(BUILD)/$(1)/f32/firmware/vehicle/vehicle_checksum.o
 	@mkdir -p $$(@D)
 	$$(AR) rcs $$@ $$^
+# the host executable of this profile: build/host/navecu (native), build/host/navecu-NAME
+$(BUILD)/$(1)/navecu$(if $(filter native,$(3)),,-$(3)): $(HOST_SIM_SRC:%.c=$(BUILD)/$(1)/f32/%.o) \
+		$(BUILD)/$(1)/libnavapp.a $(BUILD)/$(1)/libvehicle_$(3).a \
+		$(BUILD)/$(1)/libhal_linux.a $(BUILD)/$(1)/libnavcore_f32.a
+	@mkdir -p $$(@D)
+	$$(CC) $(2) $$^ -lm -o $$@
+# the profile's vehicle_decode() as a filter of candump lines (tests/tools/vehicle_decode.c)
+$(BUILD)/$(1)/tests/vehicle_decode-$(3): $(BUILD)/$(1)/f32/tests/tools/vehicle_decode.o \
+		$(BUILD)/$(1)/f32/hal/common/candump.o $(BUILD)/$(1)/libvehicle_$(3).a
+	@mkdir -p $$(@D)
+	$$(CC) $(2) $$^ -lm -o $$@
 endef
 $(foreach v,$(VEHICLES_BUILT),$(eval $(call VEHLIB,host,,$(v))))
-
-# the host executable of each other profile built (VEHICLE's own is the FLAVOUR rule's)
-define HOSTEXE
-$(BUILD)/host/navecu-$(1): $(HOST_SIM_SRC:%.c=$(BUILD)/host/f32/%.o) $(BUILD)/host/libnavapp.a \
-		$(BUILD)/host/libvehicle_$(1).a $(BUILD)/host/libhal_linux.a $(BUILD)/host/libnavcore_f32.a
-	@mkdir -p $$(@D)
-	$$(CC) $$^ -lm -o $$@
-endef
-$(foreach v,$(filter-out native $(VEHICLE),$(VEHICLES_BUILT)),$(eval $(call HOSTEXE,$(v))))
 $(foreach v,$(VEHICLES_BUILT),$(eval $(call VEHLIB,asan,$(SAN_FLAGS),$(v))))
 
 $(eval $(call FLAVOUR,host,))
@@ -226,8 +224,12 @@ $(ISOTP_PEER): $(BUILD)/host/f32/tests/tools/isotp_peer.o $(BUILD)/host/libnavap
 	@mkdir -p $(@D)
 	$(CC) $^ -o $@
 
-# Python tests drive the host executable (plain build) through real CAN logs.
-test-python: venv $(BUILD)/host/navecu $(BUILD)/host/navecu-toyota_rav4_2017 $(ISOTP_PEER)
+# Python tests drive the host executable (plain build) through real CAN logs; the vehicle
+# profiles' tests also run each profile's host executable (the RAV4's on its recorded bus,
+# the VW's on its generated frames) and its decoder.
+VEH_TEST_BINS := $(foreach v,$(filter-out native,$(VEHICLES_BUILT)),$(BUILD)/host/navecu-$(v)) \
+                 $(foreach v,$(VEHICLES_BUILT),$(BUILD)/host/tests/vehicle_decode-$(v))
+test-python: venv $(BUILD)/host/navecu $(VEH_TEST_BINS) $(ISOTP_PEER)
 	NAVECU_BIN=$(BUILD)/host/navecu ISOTP_PEER_BIN=$(ISOTP_PEER) $(PY) -m pytest -q -rs tests/python
 
 test: deps

@@ -306,17 +306,11 @@ static void test_nan_measurement_noise_refused(void **state)
  * THEN, as fusion.h documents ("the filter's state ... is no longer finite" is divergence,
  * counted in filter_resets), the next GNSS epoch's supervision finds it diverged:
  * REACQUIRE (GNSS at hand, the navigator still finite), counted, no adoption.
- *
- * BUG: the NaN passes the innovation gate (NaN compares false), ekf_feedback then finds
- * the state non-finite, zeroes it and refuses the feedback (counted in nav_rejected), and
- * only after that does supervise() look: ekf_state_ok is true again, n_nonfinite counts
- * only the covariance, so the divergence is never reported (fusion_gnss returns
- * FUSION_GO_ON, filter_resets stays 0, adopt is 1). The same holds for the prediction
- * path (fusion_imu_step feeds back before it supervises). Skipped until decided. */
+ * (The NaN passes the innovation gate, NaN compares false; ekf_feedback zeroes the state
+ * it refuses, so supervise must learn it from the feedback: fusion.c feed_back.) */
 static void test_nan_state_found_at_gnss_update(void **state)
 {
     (void)state;
-    skip();
     start_filter();
     for (int k = 0; k < 20; k++) {
         (void)rest_sample();
@@ -331,6 +325,63 @@ static void test_nan_state_found_at_gnss_update(void **state)
     assert_int_equal(fu.on, 0);
     assert_int_equal(health.filter_resets, 1u);
     assert_true(sins_finite(&nav)); /* the NaN was not fed back into the navigator */
+}
+
+/* GIVEN the filter running at rest and a receiver that measures no vertical velocity
+ * (gnss_vel_up none) WHEN a fix says VelUp 3 m/s (a receiver's placeholder, not a
+ * measurement) THEN only its east and north rows are fused: not gated, two velocity rows;
+ * the same fix with gnss_vel_up measured is refused by the gate (3 m/s against a sigma of
+ * 1.5 x the speed accuracy). */
+static void test_vel_up_none_not_fused(void **state)
+{
+    (void)state;
+    const nav_real_t v[3] = {0.0f, 0.0f, 3.0f};
+    for (int measured = 0; measured < 2; measured++) {
+        start_filter();
+        cfg.gnss_vel_up = measured ? GNSS_VUP_MEASURED : GNSS_VUP_NONE;
+        for (int k = 0; k < 20; k++) {
+            (void)rest_sample();
+        }
+        gnss_fix_t f = fix_at(450000000, 100000000, v);
+        f.tow_ms += 200u;
+        const uint32_t updates = fu.ekf.n_updates;
+        const uint32_t gated = fu.ekf.n_gated;
+        const uint32_t rejected = health.gnss_rejected;
+        int adopt = 0;
+        assert_int_equal(fusion_gnss(&fu, &ctx, &PRIOR, &f, &adopt), FUSION_GO_ON);
+        if (measured) {
+            assert_int_equal(fu.ekf.n_gated, gated + 1u);
+            assert_int_equal(health.gnss_rejected, rejected + 1u);
+        } else {
+            assert_int_equal(fu.ekf.n_gated, gated);
+            assert_int_equal(health.gnss_rejected, rejected);
+            assert_int_equal(fu.ekf.n_updates, updates + 5u); /* 3 position, 2 velocity */
+        }
+    }
+    cfg.gnss_vel_up = GNSS_VUP_MEASURED;
+}
+
+/* GIVEN gnss_accuracy declared WHEN the filter starts at a fix that reports HorizAccuracy
+ * 0 (a receiver that sends none) THEN the declared figure weighs it: the filter's
+ * horizontal sigma is the declared accuracy's, not the floor a reported 0 gives. */
+static void test_declared_accuracy_used(void **state)
+{
+    nav_real_t sig[2];
+    for (int declared = 0; declared < 2; declared++) {
+        assert_int_equal(setup(state), 0);
+        cfg.gnss_accuracy = declared ? GNSS_ACC_DECLARED : GNSS_ACC_REPORTED;
+        cfg.gnss_hacc_m = 5.0f;
+        const nav_real_t v0[3] = {0.0f, 0.0f, 0.0f};
+        gnss_fix_t f = fix_at(450000000, 100000000, v0);
+        f.hacc_m = 0.0f;
+        int adopt = 0;
+        assert_int_equal(fusion_gnss(&fu, &ctx, &PRIOR, &f, &adopt), FUSION_GO_ON);
+        assert_int_equal(fu.on, 1);
+        sig[declared] = ekf_state_sigma(&fu.ekf, EKF_DR);
+    }
+    cfg.gnss_accuracy = GNSS_ACC_REPORTED;
+    /* 5 m as a 68 % radius is 3.3 m per axis; the floor is a fraction of that */
+    assert_true(sig[1] > 2.0f * sig[0]);
 }
 
 /* The course and speed noted, and a stop: off, its last fix forgotten. */
@@ -392,6 +443,8 @@ int main(void)
         cmocka_unit_test_setup(test_nonfinite_navigator_restarts, setup),
         cmocka_unit_test_setup(test_nan_measurement_noise_refused, setup),
         cmocka_unit_test_setup(test_nan_state_found_at_gnss_update, setup),
+        cmocka_unit_test_setup(test_vel_up_none_not_fused, setup),
+        cmocka_unit_test_setup(test_declared_accuracy_used, setup),
         cmocka_unit_test_setup(test_note_course_and_stop, setup),
         cmocka_unit_test_setup(test_outlier_fix_refused, setup),
     };

@@ -96,9 +96,9 @@ static void test_broken_pair(void **state)
     hal_can_frame_t fr1, fa1;
     cf_imu_pair(W0, V0, 1u, 0u, 0u, &fr1, &fa1);
     assert_int_equal(imu_stream_accel(&s, &l, 1u, 0u, V0, fa1.data, 0u, &out), IMU_REJ_PAIR);
-    /* the pending IMU_Rate was consumed by the broken pair: its own accel now fails too */
-    assert_int_equal(imu_stream_accel(&s, &l, 0u, 0u, V0, fa.data, 0u, &out), IMU_REJ_PAIR);
-    assert_int_equal(l.have_sample, 0);
+    /* an IMU_Accel of no waiting IMU_Rate (its IMU_Rate lost, or a foreign frame) leaves
+     * the waiting ones alone: the real IMU_Accel of counter 0 still completes its sample */
+    assert_int_equal(imu_stream_accel(&s, &l, 0u, 0u, V0, fa.data, 0u, &out), IMU_SAMPLE);
 }
 
 /* GIVEN another node's 8-byte frame on IMU_Rate's identifier between the two halves of
@@ -164,6 +164,8 @@ static void test_foreign_accel_between_halves(void **state)
     junk[7] ^= 0x5Au;
     (void)imu_stream_rate(&s, 0u, W0, fr.data);
     assert_int_equal(imu_stream_accel(&s, &l, 0u, 0u, V0, junk, 0u, &out), IMU_REJ_CRC);
+    /* and one with another counter (another node's frame, its own counter) */
+    assert_int_equal(imu_stream_accel(&s, &l, 9u, 0u, V0, junk, 0u, &out), IMU_REJ_PAIR);
     assert_int_equal(imu_stream_accel(&s, &l, 0u, 0u, V0, fa.data, 0u, &out), IMU_SAMPLE);
     assert_int_equal(out.dropped, 0u);
     assert_int_equal(out.raw[3], V0[0]);

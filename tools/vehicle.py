@@ -211,13 +211,18 @@ def _car_reads(p: Profile, t: dict, fname: str) -> None:
             raise ProfileError(f"{fname}: direction 'gear' needs a [gear] table")
         gmsg = _message(db, g["message"], f"{fname} [gear]")
         gsig = _signal(gmsg, g["signal"], f"{fname} [gear]")
-        names = {str(v): int(k) for k, v in (gsig.choices or {}).items()}
+        # a DBC may give one name to several raw values (VW's GE_Fahrstufe: 13 and 14 are
+        # both "T"): a name in the profile stands for all of them
+        names = {}
+        for k, v in (gsig.choices or {}).items():
+            names.setdefault(str(v), []).append(int(k))
         for key, sign in (("forward", 1), ("reverse", -1), ("stopped", 0)):
             for n in g.get(key, []):
                 if n not in names:
                     raise ProfileError(f"{fname} [gear]: {gsig.name} has no value {n!r} "
                                        f"(the DBC's: {', '.join(names)})")
-                p.gear_values[names[n]] = sign
+                for raw in names[n]:
+                    p.gear_values[raw] = sign
         if -1 not in p.gear_values.values():
             raise ProfileError(f"{fname} [gear]: no reverse gear named")
         p.reads.append(CarSignalSet("gear", gmsg, [gsig], _checksum(g, fname)))
@@ -369,7 +374,12 @@ class CarEncoder:
             self.gear_raw = {1: fwd[0], -1: rev[0]}
             self.gear_names = names
 
-    def _message(self, role: str, values: dict, t: float) -> can.Message:
+    def message(self, role: str, values: dict, t: float = 0.0) -> can.Message:
+        """The car's frame of role ("wheels", "gear", "yaw_rate") at t with these signal
+        values (the DBC's physical units; the message's other signals at their initial
+        value, else 0 or their minimum if that is above 0), encoded with the car's DBC
+        without range checks (cantools rounds to the nearest raw value), with the car's
+        checksum where the profile names one."""
         r = self.by_role[role]
         msg = r.message
         full = {s.name: (s.initial if s.initial is not None else
@@ -378,8 +388,8 @@ class CarEncoder:
         full.update(values)
         data = bytearray(msg.encode(full, scaling=True, strict=False))
         if r.checksum == "toyota":
-            data[-1] = (msg.frame_id >> 8) + (msg.frame_id & 0xFF) + len(data) + sum(data[:-1])
-            data[-1] &= 0xFF
+            data[-1] = ((msg.frame_id >> 8) + (msg.frame_id & 0xFF) + len(data)
+                        + sum(data[:-1])) & 0xFF
         return can.Message(timestamp=t, arbitration_id=msg.frame_id, is_extended_id=False,
                            dlc=msg.length, data=bytes(data))
 
@@ -392,14 +402,14 @@ class CarEncoder:
                                             or t - self._gear_t >= self.gear_period_s):
             self._gear, self._gear_t = direction, t
             sig = self.by_role["gear"].signals[0]
-            out.append(self._message("gear", {sig.name: self.gear_raw[direction]}, t))
+            out.append(self.message("gear", {sig.name: self.gear_raw[direction]}, t))
         vals = {}
         for s, v in zip(r.signals, v_mps):
             unit = abs(v) if self.p.direction != "signed" else v
             lo = s.minimum if s.minimum is not None else -1e9
             hi = s.maximum if s.maximum is not None else 1e9
             vals[s.name] = min(max(unit / self.p.speed_factor, lo), hi)
-        out.append(self._message("wheels", vals, t))
+        out.append(self.message("wheels", vals, t))
         return out
 
     def yaw_rate(self, t: float, rate_rps: float) -> list:
@@ -407,7 +417,7 @@ class CarEncoder:
         if "yaw_rate" not in self.by_role:
             return []
         s = self.by_role["yaw_rate"].signals[0]
-        return [self._message("yaw_rate", {s.name: rate_rps / self.p.rate_factor}, t)]
+        return [self.message("yaw_rate", {s.name: rate_rps / self.p.rate_factor}, t)]
 
 
 # ------------------------------------------------------------------------ generation

@@ -17,6 +17,19 @@
 #include "navecu_protocol.h"
 #include "odo.h"
 
+/* where the GNSS accuracies come from (the parameter gnss_accuracy) */
+typedef enum {
+    GNSS_ACC_REPORTED = 0, /* the receiver's own, in GNSS_Status and GNSS_Velocity */
+    GNSS_ACC_DECLARED = 1, /* a receiver that reports none: gnss_hacc_m, gnss_vacc_m,
+                              gnss_sacc_mps (its datasheet's figures) */
+} gnss_acc_source_t;
+
+/* whether the receiver measures the vertical velocity (the parameter gnss_vel_up) */
+typedef enum {
+    GNSS_VUP_MEASURED = 0,
+    GNSS_VUP_NONE = 1, /* GNSS_Velocity VelUp is not a measurement: not fused */
+} gnss_vel_up_t;
+
 typedef struct {
     uint16_t imu_rate_hz;    /* IMU sample rate, 10..400 */
     uint16_t nav_rate_hz;    /* NAV_Position/Height/Velocity/Attitude rate, <= imu_rate_hz */
@@ -39,6 +52,11 @@ typedef struct {
                                      arrival (more when TimeOfWeek shows a late epoch) */
     nav_real_t gnss_lever_b_m[3]; /* GNSS antenna from the IMU, body axes, m */
     nav_real_t gnss_corr_s;       /* correlation time of the receiver's position errors */
+    gnss_acc_source_t gnss_accuracy; /* reported, or declared by the next three */
+    nav_real_t gnss_hacc_m;       /* declared horizontal accuracy, 68 % radius */
+    nav_real_t gnss_vacc_m;       /* declared vertical accuracy, 1 sigma */
+    nav_real_t gnss_sacc_mps;     /* declared speed accuracy */
+    gnss_vel_up_t gnss_vel_up;    /* the receiver measures VelUp, or not */
     nav_real_t odo_lever_b_m[3];  /* the odometer's reference point (rear axle middle) from
                                      the IMU, body axes, m */
     nav_real_t imu_mount_rad[3];  /* the IMU's attitude in the vehicle: roll, pitch, yaw

@@ -65,8 +65,9 @@ static int diverged(fusion_t *fu, const fusion_ctx_t *c)
                                  angle_exceeds(course_err, APP_COURSE_MISMATCH_RAD);
     const int aiding_disagrees = gnss_fresh && fu->reopen_run >= APP_FILTER_REOPEN_LIMIT &&
                                  (odo_disagrees || course_disagrees);
-    const int bad = k->n_nonfinite != fu->nonfinite_seen ||
+    const int bad = fu->state_lost || k->n_nonfinite != fu->nonfinite_seen ||
                     k->n_negative_var != fu->negative_seen || aiding_disagrees;
+    fu->state_lost = 0u;
     fu->nonfinite_seen = k->n_nonfinite;
     fu->negative_seen = k->n_negative_var;
     return bad || !ekf_state_ok(k) || !sins_finite(c->nav);
@@ -94,6 +95,20 @@ static fusion_action_t reset(fusion_t *fu, const fusion_ctx_t *c)
 }
 
 /* After each filter step: reset it if it diverged. */
+/* The filter's corrections into the navigator. A state that is no longer finite (NaN
+ * passes every gate: it compares false) is the filter's divergence, for supervise to
+ * find: ekf_feedback refuses it and zeroes the state, which would otherwise look sound
+ * again. */
+static void feed_back(fusion_t *fu, const fusion_ctx_t *c)
+{
+    if (!ekf_state_ok(&fu->ekf)) {
+        fu->state_lost = 1u;
+    }
+    if (ekf_feedback(&fu->ekf, c->nav) != NAV_OK) {
+        app_diag_reject(c->diag, &c->diag->health->nav_rejected);
+    }
+}
+
 static fusion_action_t supervise(fusion_t *fu, const fusion_ctx_t *c, int *was_reset)
 {
     *was_reset = 0;
@@ -202,9 +217,7 @@ fusion_action_t fusion_imu_step(fusion_t *fu, const fusion_ctx_t *c, imu_inc_t *
     ekf_predict(&fu->ekf, c->nav, f_mean, T);
     app_trace(APP_TRACE_PREDICTION, 1u);
     odometer_updates(fu, c, T);
-    if (ekf_feedback(&fu->ekf, c->nav) != NAV_OK) {
-        app_diag_reject(c->diag, &c->diag->health->nav_rejected);
-    }
+    feed_back(fu, c);
     int was_reset;
     const fusion_action_t act = supervise(fu, c, &was_reset);
     clear_interval(fu);
@@ -323,9 +336,14 @@ fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_pr
         app_diag_reject(c->diag, &c->diag->health->gnss_rejected);
         return FUSION_GO_ON;
     }
-    const nav_real_t sh = nav_clamp(fix->hacc_m * APP_GNSS_HACC_PER_AXIS, APP_GNSS_SIGMA_FLOOR_M,
+    /* a receiver that reports no accuracy: its declared figures (docs/configuration.md) */
+    const int declared = cfg->gnss_accuracy == GNSS_ACC_DECLARED;
+    const nav_real_t hacc = declared ? cfg->gnss_hacc_m : fix->hacc_m;
+    const nav_real_t vacc = declared ? cfg->gnss_vacc_m : fix->vacc_m;
+    const nav_real_t sacc = declared ? cfg->gnss_sacc_mps : fix->sacc_mps;
+    const nav_real_t sh = nav_clamp(hacc * APP_GNSS_HACC_PER_AXIS, APP_GNSS_SIGMA_FLOOR_M,
                                  APP_GNSS_SIGMA_MAX_M);
-    const nav_real_t sv = nav_clamp(fix->vacc_m, APP_GNSS_SIGMA_V_MIN_M, APP_GNSS_SIGMA_MAX_M);
+    const nav_real_t sv = nav_clamp(vacc, APP_GNSS_SIGMA_V_MIN_M, APP_GNSS_SIGMA_MAX_M);
     /* A receiver's position errors are correlated over tens of seconds (multipath,
      * atmosphere, orbits), the filter's noise model is white: N fixes within the
      * correlation time carry the information of about one. Each fix's variance is
@@ -345,17 +363,18 @@ fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_pr
     int rv = 1;
     if (fix->has_vel) {
         const nav_real_t *vthen = gnss_time_velocity_then(&fu->time, &when);
-        const nav_real_t ss = nav_clamp(fix->sacc_mps, APP_GNSS_SACC_MIN_MPS, APP_GNSS_SACC_MAX_MPS);
-        rv = ekf_gnss_velocity(&fu->ekf, vthen, fix->v_enu_mps, ss, APP_GNSS_VUP_SIGMA_RATIO * ss,
-                               APP_GNSS_GATE_SIGMA);
+        const nav_real_t ss = nav_clamp(sacc, APP_GNSS_SACC_MIN_MPS, APP_GNSS_SACC_MAX_MPS);
+        rv = cfg->gnss_vel_up == GNSS_VUP_NONE
+                 ? ekf_gnss_velocity_horizontal(&fu->ekf, vthen, fix->v_enu_mps, ss,
+                                                APP_GNSS_GATE_SIGMA)
+                 : ekf_gnss_velocity(&fu->ekf, vthen, fix->v_enu_mps, ss,
+                                     APP_GNSS_VUP_SIGMA_RATIO * ss, APP_GNSS_GATE_SIGMA);
     }
     if (rp < 2 || rv == 0) {
         app_diag_reject(c->diag, &c->diag->health->gnss_rejected); /* beyond the gate */
     }
     gate_run(fu, c, rp >= 2, sh); /* rp >= 2: the horizontal fix was taken */
-    if (ekf_feedback(&fu->ekf, c->nav) != NAV_OK) {
-        app_diag_reject(c->diag, &c->diag->health->nav_rejected);
-    }
+    feed_back(fu, c);
     int was_reset;
     const fusion_action_t act = supervise(fu, c, &was_reset);
     *adopt = !was_reset;

@@ -50,6 +50,7 @@ typedef struct {
     uint8_t reopen_run;         /* covariance reopens since the last fix taken */
     uint64_t prev_fix_sample;   /* sample of the previous fix offered (fix interval) */
     uint32_t nonfinite_seen, negative_seen; /* ekf counters at the last check */
+    uint8_t state_lost;         /* the filter's state was found not finite at a feedback */
     nav_real_t course_rad, speed_mps; /* of the latest GNSS epoch with a velocity */
     gnss_time_t time;           /* velocity history and receiver latency */
 } fusion_t;

@@ -127,7 +127,8 @@ imu_verdict_t imu_stream_accel(imu_stream_t *s, imu_link_t *l, uint8_t counter, 
         }
     }
     if (!same_counter) {
-        s->n_pending = 0u;
+        /* an IMU_Accel of no waiting IMU_Rate (its IMU_Rate lost, or a foreign frame on
+         * the identifier): refused; the waiting ones stay for their own IMU_Accel */
         return IMU_REJ_PAIR;
     }
     if (match < 0) {

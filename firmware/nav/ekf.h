@@ -128,6 +128,7 @@ nav_real_t ekf_sigma_h_m(const ekf_t *k);
  * for invalid input. */
 #define ekf_gnss_position NAV_SYM(ekf_gnss_position)
 #define ekf_gnss_velocity NAV_SYM(ekf_gnss_velocity)
+#define ekf_gnss_velocity_horizontal NAV_SYM(ekf_gnss_velocity_horizontal)
 #define ekf_odometer NAV_SYM(ekf_odometer)
 #define ekf_zero_velocity NAV_SYM(ekf_zero_velocity)
 #define ekf_zero_rate NAV_SYM(ekf_zero_rate)
@@ -223,6 +224,12 @@ int ekf_gnss_position(ekf_t *k, const sins_t *s, const geo_pos_t *pos_then,
 /* GNSS velocity (ENU m/s) against the navigator's velocity at the fix's time v_then. */
 int ekf_gnss_velocity(ekf_t *k, const nav_real_t v_then_mps[3], const nav_real_t meas_mps[3],
                       nav_real_t sigma_h_mps, nav_real_t sigma_v_mps, nav_real_t gate_sigma);
+
+/* The same with the east and north rows only, for a receiver that measures no vertical
+ * velocity (meas_mps[2] unused). */
+int ekf_gnss_velocity_horizontal(ekf_t *k, const nav_real_t v_then_mps[3],
+                                 const nav_real_t meas_mps[3], nav_real_t sigma_h_mps,
+                                 nav_real_t gate_sigma);
 
 /* Odometer speed of the car's reference point (m/s, as read: (1 + k) x true) along the
  * car's forward axis, and the non-holonomic constraints (no lateral, no vertical velocity

@@ -135,6 +135,17 @@ int ekf_gnss_velocity(ekf_t *k, const nav_real_t v_then_mps[3], const nav_real_t
     return apply_rows(k, H, z, r, 3, gate_sigma);
 }
 
+int ekf_gnss_velocity_horizontal(ekf_t *k, const nav_real_t v_then_mps[3],
+                                 const nav_real_t meas_mps[3], nav_real_t sigma_h_mps,
+                                 nav_real_t gate_sigma)
+{
+    nav_real_t H[MAX_ROWS][EKF_N];
+    nav_real_t z[3];
+    ekf_rows_gnss_velocity(v_then_mps, meas_mps, H, z);
+    const nav_real_t r[2] = {sigma_h_mps * sigma_h_mps, sigma_h_mps * sigma_h_mps};
+    return apply_rows(k, H, z, r, 2, gate_sigma);
+}
+
 void ekf_rows_odometer(const ekf_t *k, const sins_t *s, const nav_real_t w_b_rps[3],
                        const nav_real_t lever_b_m[3], nav_real_t speed_mps,
                        nav_real_t h[EKF_ODO_ROWS][EKF_N], nav_real_t z_car_mps[EKF_ODO_ROWS])

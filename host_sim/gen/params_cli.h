@@ -18,7 +18,7 @@ typedef struct {
     const char *description;
 } params_cli_t;
 
-#define PARAMS_CLI_N 23
+#define PARAMS_CLI_N 28
 
 static const params_cli_t params_cli[PARAMS_CLI_N] = {
     {"--imu-rate-hz", APP_PARAM_IMU_RATE_HZ, "Hz", 10.0, 400.0, 1.0, "", "IMU sample rate: one IMU_Rate + IMU_Accel pair per sample"},
@@ -41,6 +41,11 @@ static const params_cli_t params_cli[PARAMS_CLI_N] = {
     {"--accel-range-mps2", APP_PARAM_ACCEL_RANGE_MPS2, "m/s^2", 1.0, 2000.0, 1.0, "", "the accelerometer's measurement range (default 8 g)"},
     {"--gnss-latency-ms", APP_PARAM_GNSS_LATENCY_S, "ms", 0.0, 500.0, 0.001, "", "receiver latency: a fix's time of validity to its arrival (more when TimeOfWeek shows a late epoch)"},
     {"--gnss-corr-s", APP_PARAM_GNSS_CORR_S, "s", 0.0, 600.0, 1.0, "", "correlation time of the receiver's position errors (docs/kalman.md)"},
+    {"--gnss-accuracy", APP_PARAM_GNSS_ACCURACY, "", 0.0, 1.0, 1.0, "reported|declared", "where the fixes' accuracies come from: the receiver's GNSS_Status/GNSS_Velocity fields, or declared here for a receiver that reports none (gnss_hacc_m, gnss_vacc_m, gnss_sacc_mps: its datasheet's figures)"},
+    {"--gnss-hacc-m", APP_PARAM_GNSS_HACC_M, "m", 0.1, 102.3, 1.0, "", "declared horizontal accuracy (68 % radius, as HorizAccuracy), used with gnss_accuracy = declared"},
+    {"--gnss-vacc-m", APP_PARAM_GNSS_VACC_M, "m", 0.1, 102.3, 1.0, "", "declared vertical accuracy (1 sigma, as VertAccuracy), used with gnss_accuracy = declared"},
+    {"--gnss-sacc-mps", APP_PARAM_GNSS_SACC_MPS, "m/s", 0.01, 1.5, 1.0, "", "declared speed accuracy (as SpeedAccuracy), used with gnss_accuracy = declared"},
+    {"--gnss-vel-up", APP_PARAM_GNSS_VEL_UP, "", 0.0, 1.0, 1.0, "measured|none", "whether the receiver measures the vertical velocity: with none, GNSS_Velocity's VelUp is not fused (its east and north are)"},
     {"--gnss-lever-m", APP_PARAM_GNSS_LEVER_B_M, "m", -10.0, 10.0, 1.0, "", "the GNSS antenna from the IMU, body axes x right, y forward, z up"},
     {"--uds-request-id", APP_PARAM_UDS_REQUEST_ID, "", 1.0, 2047.0, 1.0, "", "the UDS server's physical request ID (11-bit; docs/can.md, Diagnostics (UDS)): frames on it go to ISO-TP, never to navigation; read-only over UDS (the boards set their receive filters at start)"},
     {"--uds-response-id", APP_PARAM_UDS_RESPONSE_ID, "", 1.0, 2047.0, 1.0, "", "the UDS server's response ID (11-bit, by convention request + 8); read-only over UDS"},

@@ -42,6 +42,9 @@ def test_the_rest_of_the_bus_is_foreign_and_only_that(drive):
     assert rep["runs"]["quiet"]["foreign_frames"] == 0
     assert "bad dlc 0, bad crc 0, bad counter 0" in bus["rejected"]
     assert "bad value 0" in bus["rejected"]
+    # fused without refusals: the fixes' missing accuracy and vertical velocity declared
+    # (GNSS_OPTIONS), only the two fixes valid before the first IMU sample refused
+    assert "gnss 2," in bus["rejected"]
 
 
 def test_car_traffic_changes_no_output_and_raises_no_flag(drive):

@@ -111,7 +111,8 @@ def decode(db, msg):
 
 def test_scenario_tables_defaults_and_validation(tmp_path):
     sc = short_scenario(tmp_path)
-    assert sc["imu_mounting"] == {"roll_deg": 0.0, "pitch_deg": 0.0, "yaw_deg": 0.0}
+    assert sc["imu_mounting"] == {"roll_deg": 0.0, "pitch_deg": 0.0, "yaw_deg": 0.0,
+                                 "configured": False}
     assert sc["odometer"] == {} and "calibration" not in sc
     assert sc["initialization"] == {"heading_reference": "car", "heading_error_deg": 0.0}
     for bad in ("[imu_mounting]\nheading_deg = 1\n", "[odometer]\nscale = 0.01\n",

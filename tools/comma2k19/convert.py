@@ -22,11 +22,10 @@ are used. What navecu is given beyond the recording (none of it is in the car's 
 - **GNSS**: the u-blox fixes (9.7 Hz), sent when they were logged (t_s), with their own
   time of validity in TimeOfWeek (gps_tow_s) and the week in GNSS_Time; the latency of the
   earliest-logged fix is the firmware's --gnss-latency-ms (gnss_latency_ms in the meta);
-  the receiver gives no accuracy: HorizAccuracy / VertAccuracy / SpeedAccuracy are the
-  u-blox M8 class's datasheet figures (GNSS_ACCURACY); it gives no vertical velocity
-  either, and the road climbs and dips by up to 5 % (reference: -0.7..+0.9 m/s): VelUp is
-  the fixes' height change over the last VUP_BACK_S (causal, what the receiver's host
-  could compute: 0.10 m/s rms, 0.38 m/s max against the reference here).
+  the log has no accuracy fields and no vertical velocity: the frames carry
+  HorizAccuracy, VertAccuracy, SpeedAccuracy and VelUp 0, and the firmware is told so
+  (run.py: --gnss-accuracy declared with the receiver class's datasheet figures,
+  --gnss-vel-up none).
 - **Initial state**: the car never stops, so it cannot level: the reference pose at t0
   (position, height, the car's heading, roll and pitch) in CMD_KnownPosition,
   SetInitialPosition and CMD_InitialAttitude (issue #17 brings a start while moving).
@@ -56,13 +55,6 @@ GPS_WEEK = 2012
 GPS_TOW_MINUS_T_S = 357697.849502
 #: the device relative to the car, Z-Y-X in FRD (README "Mounting"), deg
 MOUNT_DEG = {"roll": 1.25, "pitch": -3.75, "yaw": -0.90}
-#: u-blox NEO-M8 datasheet (UBX-15031086): horizontal 2.5 m CEP (GPS+GLONASS) = 1.1774
-#: sigma per axis, sent as the 68.27 % radius (1.5152 sigma, as the simulator and the
-#: Kingston converter do); vertical about twice the horizontal sigma; velocity 0.05 m/s,
-#: widened to 0.2 m/s for the missing vertical velocity
-GNSS_ACCURACY = {"horiz_m": round(2.5 / 1.1774 * 1.5152, 1), "vert_m": 4.2, "speed_mps": 0.2}
-#: VelUp = height change over this span of past fixes (s); the first fixes send 0
-VUP_BACK_S = 1.0
 # frame order within one timestamp: commands, then IMU halves, then GNSS epoch
 O_KNOWN, O_SETPOS, O_ATT, O_CAR, O_RATE, O_ACCEL = 0, 1, 2, 3, 4, 5
 O_GPOS, O_GVEL, O_GHGT, O_GTIME, O_GSTAT = 6, 7, 8, 9, 10
@@ -143,18 +135,6 @@ def resample_increments(t_s, w, f, rate_hz: int = IMU_RATE_HZ) -> dict:
     return {"t_grid_s": grid, "dtheta": out["w"], "dv": out["f"],
             "interval_min_s": float(dt.min()), "interval_max_s": float(dt.max()),
             "rate_measured_hz": float((len(t_s) - 1) / (t_s[-1] - t_s[0]))}
-
-
-def vertical_velocity(t_s, h_m, back_s: float = VUP_BACK_S) -> np.ndarray:
-    """Vertical velocity of each fix from the heights of the fixes before it: (h_i - h_j) /
-    (t_i - t_j), j the latest fix at least back_s earlier; 0 before there is one."""
-    t_s, h_m = np.asarray(t_s, float), np.asarray(h_m, float)
-    j = np.searchsorted(t_s, t_s - back_s, side="right") - 1
-    out = np.zeros(len(t_s))
-    ok = j >= 0
-    jj = j[ok]
-    out[ok] = (h_m[ok] - h_m[jj]) / (t_s[ok] - t_s[jj])
-    return out
 
 
 def parse_outage(spec):
@@ -244,9 +224,8 @@ def build(data_dir=None, vehicle_name="toyota_rav4_2017", channels=None, car_bus
     latency = gps["t_s"] - gps["t_fix_s"]
     lat_ms = int(math.floor(float(latency.min()) * 1000.0))
     meta["gnss_latency_ms"] = lat_ms
-    vel_up = vertical_velocity(gps["t_fix_s"], gps["height_m"])
     n_ep = n_out = 0
-    for row, vu in zip(gps, vel_up):
+    for row in gps:
         t = round(float(row["t_s"]) - t0, 6)
         if t < 0.0 or t > t_last:
             continue
@@ -258,20 +237,20 @@ def build(data_dir=None, vehicle_name="toyota_rav4_2017", channels=None, car_bus
         out.append((t, O_GPOS, sender.encode("GNSS_Position", {
             "Latitude": float(row["lat_deg"]), "Longitude": float(row["lon_deg"])}, t)))
         out.append((t, O_GVEL, sender.encode("GNSS_Velocity", {
-            "VelEast": float(row["ve_mps"]), "VelNorth": float(row["vn_mps"]), "VelUp": float(vu),
-            "SpeedAccuracy": GNSS_ACCURACY["speed_mps"]}, t)))
+            "VelEast": float(row["ve_mps"]), "VelNorth": float(row["vn_mps"]), "VelUp": 0.0,
+            "SpeedAccuracy": 0.0}, t)))
         out.append((t, O_GHGT, sender.encode("GNSS_Height", {
             "Height": float(row["height_m"]), "GnssEpoch": ep}, t)))
         out.append((t, O_GTIME, sender.encode("GNSS_Time", {
             "GpsWeek": int(row["gps_week"]), "GnssEpoch": ep}, t)))
         out.append((t, O_GSTAT, sender.encode("GNSS_Status", {
             "FixType": 3, "NumSatellites": min(int(row["n_raw_meas"]), 63),
-            "HorizAccuracy": GNSS_ACCURACY["horiz_m"], "VertAccuracy": GNSS_ACCURACY["vert_m"],
+            "HorizAccuracy": 0.0, "VertAccuracy": 0.0,
             "GnssEpoch": ep, "TimeOfWeek": round(float(row["gps_tow_s"]) % 604800.0, 3)}, t)))
         n_ep += 1
     meta["gnss"] = {"receiver": "u-blox (gnss_ublox.csv)", "rows": int(len(gps)),
-                    "epochs_sent": n_ep, "accuracy_sent": GNSS_ACCURACY,
-                    "vel_up": f"height change over the last {VUP_BACK_S} s of fixes",
+                    "epochs_sent": n_ep,
+                    "accuracy_and_vel_up_sent": "0: the log has none (declared to the firmware)",
                     "latency_s": {"min": float(latency.min()), "max": float(latency.max()),
                                   "median": float(np.median(latency))},
                     "outage": None if outage is None else

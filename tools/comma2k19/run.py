@@ -50,6 +50,12 @@ NAV_TIME_SETTLED_S = 10.0
 # The device's IMU, configured as an ECU is for a consumer MEMS part: the consumer preset
 # (firmware/app/params.toml: BMI160-datasheet class figures, not fitted to this drive)
 IMU_OPTIONS = ["--imu-preset", "consumer"]
+# The u-blox fixes of the log carry no accuracy and no vertical velocity: declared, with the
+# receiver class's datasheet figures (u-blox NEO-M8, UBX-15031086: horizontal 2.5 m CEP =
+# 1.1774 sigma per axis, given as the 68.27 % radius, 1.5152 sigma: 3.2 m; vertical about
+# twice the horizontal sigma: 4.2 m; velocity 0.05 m/s, 0.2 m/s taken for a car's antenna)
+GNSS_OPTIONS = ["--gnss-accuracy", "declared", "--gnss-hacc-m", "3.2", "--gnss-vacc-m", "4.2",
+                "--gnss-sacc-mps", "0.2", "--gnss-vel-up", "none"]
 RATES = ["--imu-rate-hz", str(convert.IMU_RATE_HZ), "--nav-rate-hz", "10",
          "--status-rate-hz", "10", "--dyn-rate-hz", "10"]
 
@@ -229,6 +235,7 @@ def main(argv=None) -> int:
     stages.done(f"{meta['frames']} frames, {meta['car_bus']['frames']} of the car's bus")
     truth = reference_truth(data, meta["t0_segment_s"])
     opts = [*RATES, "--gnss-latency-ms", str(meta["gnss_latency_ms"]), *IMU_OPTIONS,
+            *GNSS_OPTIONS,
             "--imu-mount-deg", ",".join(f"{x:g}" for x in meta["imu"]["imu_mount_deg_312"])]
     reps, series = {}, {}
     for k, (frames, m) in built.items():

@@ -102,9 +102,11 @@ class Drive:
 
 
 def build_drive(name: str = "default", seed: int = 1, imu_rate_hz: int = 100,
-                log=print) -> Drive:
+                log=print, car=None) -> Drive:
     """The clean drive, as run.main builds it for `make sim` (same presets, seeds, options,
-    frames and order)."""
+    frames and order). car: as run.frames', a vehicle profile's tools.vehicle.CarEncoder
+    (the wheel speeds in the car's own frames; with navecu_can.select_vehicle of that
+    profile for navecu's identifiers)."""
     scen = scenario.load(name)
     imu_name, gnss_name = scenario.preset_names(scen)
     t = time.monotonic()
@@ -122,7 +124,7 @@ def build_drive(name: str = "default", seed: int = 1, imu_rate_hz: int = 100,
     t = time.monotonic()
     db = nc.load_db()
     hdg = scenario.heading_command_deg(truth.heading_rad[0], scen)
-    fr = run.frames(truth, dtheta, dv, wheels, gnss, db, heading_deg=hdg)
+    fr = run.frames(truth, dtheta, dv, wheels, gnss, db, heading_deg=hdg, car=car)
     fr.sort(key=lambda x: (x[0], x[1]))
     log(f"  CAN encoding: {len(fr)} frames, {time.monotonic() - t:.1f} s")
     d = Drive(scen.get("name", name), imu_name, gnss_name, seed, imu_rate_hz, truth,

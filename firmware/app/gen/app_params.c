@@ -26,6 +26,11 @@ const app_param_t app_params[APP_PARAM_N] = {
     [APP_PARAM_ACCEL_RANGE_MPS2] = {"accel_range_mps2", 0x0236u, APP_PARAM_REAL, 0u, 0u, 1u, 0u, NAV_C(1.0), NAV_C(2000.0), {NAV_C(78.4532), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_GNSS_LATENCY_S] = {"gnss_latency_s", 0x0240u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(0.5), {NAV_C(0.1), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_GNSS_CORR_S] = {"gnss_corr_s", 0x0241u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(600.0), {NAV_C(20.0), NAV_C(0.0), NAV_C(0.0)}},
+    [APP_PARAM_GNSS_ACCURACY] = {"gnss_accuracy", 0x0243u, APP_PARAM_ENUM, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(1.0), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
+    [APP_PARAM_GNSS_HACC_M] = {"gnss_hacc_m", 0x0244u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.1), NAV_C(102.3), {NAV_C(3.0), NAV_C(0.0), NAV_C(0.0)}},
+    [APP_PARAM_GNSS_VACC_M] = {"gnss_vacc_m", 0x0245u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.1), NAV_C(102.3), {NAV_C(5.0), NAV_C(0.0), NAV_C(0.0)}},
+    [APP_PARAM_GNSS_SACC_MPS] = {"gnss_sacc_mps", 0x0246u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.01), NAV_C(1.5), {NAV_C(0.2), NAV_C(0.0), NAV_C(0.0)}},
+    [APP_PARAM_GNSS_VEL_UP] = {"gnss_vel_up", 0x0247u, APP_PARAM_ENUM, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(1.0), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_GNSS_LEVER_B_M] = {"gnss_lever_b_m", 0x0242u, APP_PARAM_VEC3, 0u, 0u, 0u, 0u, NAV_C(-10.0), NAV_C(10.0), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_UDS_REQUEST_ID] = {"uds_request_id", 0x0250u, APP_PARAM_U16, 0u, 0u, 1u, 1u, NAV_C(1.0), NAV_C(2047.0), {NAV_C(1952.0), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_UDS_RESPONSE_ID] = {"uds_response_id", 0x0251u, APP_PARAM_U16, 0u, 0u, 1u, 1u, NAV_C(1.0), NAV_C(2047.0), {NAV_C(1960.0), NAV_C(0.0), NAV_C(0.0)}},
@@ -123,6 +128,31 @@ void app_param_get(const app_config_t *cfg, app_param_id_t id, nav_real_t v[3])
     case APP_PARAM_GNSS_CORR_S:
         v[0] = cfg->gnss_corr_s;
         break;
+    case APP_PARAM_GNSS_ACCURACY:
+        if (cfg->gnss_accuracy == GNSS_ACC_REPORTED) {
+            v[0] = NAV_C(0.0);
+        }
+        if (cfg->gnss_accuracy == GNSS_ACC_DECLARED) {
+            v[0] = NAV_C(1.0);
+        }
+        break;
+    case APP_PARAM_GNSS_HACC_M:
+        v[0] = cfg->gnss_hacc_m;
+        break;
+    case APP_PARAM_GNSS_VACC_M:
+        v[0] = cfg->gnss_vacc_m;
+        break;
+    case APP_PARAM_GNSS_SACC_MPS:
+        v[0] = cfg->gnss_sacc_mps;
+        break;
+    case APP_PARAM_GNSS_VEL_UP:
+        if (cfg->gnss_vel_up == GNSS_VUP_MEASURED) {
+            v[0] = NAV_C(0.0);
+        }
+        if (cfg->gnss_vel_up == GNSS_VUP_NONE) {
+            v[0] = NAV_C(1.0);
+        }
+        break;
     case APP_PARAM_GNSS_LEVER_B_M:
         v[0] = cfg->gnss_lever_b_m[0];
         v[1] = cfg->gnss_lever_b_m[1];
@@ -211,6 +241,27 @@ int app_param_set(app_config_t *cfg, app_param_id_t id, const nav_real_t v[3])
         break;
     case APP_PARAM_GNSS_CORR_S:
         cfg->gnss_corr_s = v[0];
+        break;
+    case APP_PARAM_GNSS_ACCURACY:
+        cfg->gnss_accuracy = GNSS_ACC_REPORTED;
+        if (v[0] > NAV_C(0.5)) {
+            cfg->gnss_accuracy = GNSS_ACC_DECLARED;
+        }
+        break;
+    case APP_PARAM_GNSS_HACC_M:
+        cfg->gnss_hacc_m = v[0];
+        break;
+    case APP_PARAM_GNSS_VACC_M:
+        cfg->gnss_vacc_m = v[0];
+        break;
+    case APP_PARAM_GNSS_SACC_MPS:
+        cfg->gnss_sacc_mps = v[0];
+        break;
+    case APP_PARAM_GNSS_VEL_UP:
+        cfg->gnss_vel_up = GNSS_VUP_MEASURED;
+        if (v[0] > NAV_C(0.5)) {
+            cfg->gnss_vel_up = GNSS_VUP_NONE;
+        }
         break;
     case APP_PARAM_GNSS_LEVER_B_M:
         cfg->gnss_lever_b_m[0] = v[0];
