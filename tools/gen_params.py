@@ -385,7 +385,7 @@ def gen_uds_table(params) -> str:
             lo = "(" if p["min_exclusive"] else "["
             rng = f"{lo}{p['min'] * p['factor']:.6g}, {p['max'] * p['factor']:.6g}]"
             if p["vehicle_default"]:
-                rng += " (0: the vehicle profile's)"
+                rng += ", default the vehicle profile's"
         when = "navigation stopped; after ECUReset" if p["at_reset"] else "at once"
         if p["uds_read_only"]:
             when = "read-only over UDS"
