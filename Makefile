@@ -57,11 +57,11 @@ SUPPORT_SRC_BOTH := tests/support/nav_run.c
 # tests built once per numeric variant (f32 firmware, f64 reference)
 TESTS_VARIANT := test_nav_math test_earth test_sins test_dr test_ekf test_ekf_rows
 # tests of the float32 firmware only (application, codec, HAL)
-TESTS_F32 := test_e2e test_codec test_trig test_isotp
+TESTS_F32 := test_e2e test_codec test_trig test_isotp test_uds
 # tests that link both variants themselves
 TESTS_BOTH := test_drive
 # tests of application modules against the in-memory HAL (tests/support/fake_hal.c)
-TESTS_FAKE_HAL := test_app test_calstore test_app_rx test_imu_stream test_imu_rate test_gnss_epoch test_gnss_time test_align test_landnav test_calib test_app_health test_app_config test_app_loop test_output test_commands test_fusion test_dynamics test_mounting
+TESTS_FAKE_HAL := test_app test_calstore test_app_rx test_imu_stream test_imu_rate test_gnss_epoch test_gnss_time test_align test_landnav test_calib test_app_health test_app_config test_app_loop test_output test_commands test_fusion test_dynamics test_mounting test_app_uds
 # what they link besides the application: the in-memory HAL, frames as the senders encode
 # them, a fresh application
 FAKE_HAL_SUPPORT := tests/support/fake_hal.c tests/support/can_frames.c tests/support/app_fixture.c
@@ -290,7 +290,12 @@ doc-check: venv
 # firmware/ and hal/hal.h, docs/architecture.md)
 ARM_CC := arm-none-eabi-gcc
 ARM_NM := arm-none-eabi-nm
-M4_FLAGS := -mcpu=cortex-m4 -mfpu=fpv4-sp-d16 -mfloat-abi=hard -mthumb
+# the ECU's diagnostic buffers: ISO-TP messages of at most 512 bytes (the channel's buffer
+# and the UDS server's request and response, 3 x 512 instead of 3 x 4,095 bytes of the
+# 16 KiB RAM); the longest UDS message the server handles is shorter (docs/can.md,
+# "Diagnostics (UDS)")
+M4_DEFS := -DISOTP_MAX_LEN=512u
+M4_FLAGS := -mcpu=cortex-m4 -mfpu=fpv4-sp-d16 -mfloat-abi=hard -mthumb $(M4_DEFS)
 M4_SRC := $(CORE_SRC) $(APP_SRC) $(HAL_M4_SRC) $(call VEH_SRC,$(VEHICLE))
 $(BUILD)/m4/%.o: %.c
 	@mkdir -p $(@D)
@@ -366,11 +371,16 @@ M4_WAIT_HOOK := hal/cortex_m4f/hal_stm32.c:watchdog_hook
 M4_WAIT_HOOK_CALLERS := bxcan_init hal/cortex_m4f/stm32_clock.c:fail stm32_clock_init \
   stm32_flash_erase_sector stm32_flash_unlock stm32_flash_write stm32_iwdg_init \
   stm32_iwdg_set_timeout
+# the diagnostics' indirect calls: ISO-TP's transmit function and the UDS server's three
+# data functions, all the application's (firmware/app/app_uds.c)
+M4_UDS := firmware/app/app_uds.c
+M4_UDS_INDIRECT := --indirect isotp_poll=$(M4_UDS):tx_frame \
+  --indirect uds_handle=$(M4_UDS):read_did,$(M4_UDS):write_did,$(M4_UDS):is_writable
 target-budget: deps venv target
 	$(PY) -m tools.target.budget --elf $(TGT)/navecu.elf --objs $(ECU_SRC:%.c=$(TGT)/obj/%.o) \
 	  --entry Reset_Handler --isr CAN1_RX0_IRQHandler --isr CAN1_SCE_IRQHandler \
 	  --isr SysTick_Handler $(foreach f,$(M4_WAIT_HOOK_CALLERS),--indirect $(f)=$(M4_WAIT_HOOK)) \
-	  --json out/target-budget$(VEH_SUFFIX).json
+	  $(M4_UDS_INDIRECT) --json out/target-budget$(VEH_SUFFIX).json
 
 # instruction counts per IMU step and per measurement update -> out/target-bench.json
 target-bench: deps venv target-qemu $(BUILD)/host/navecu$(VEH_SUFFIX)

@@ -23,7 +23,7 @@ int host_open(hal_t *hal, const host_options_t *o)
     uint32_t ids[HAL_SOCKETCAN_MAX_FILTERS];
     const int rc = o->live_if != NULL
                        ? hal_socketcan_open(hal, o->live_if, ids,
-                                            app_rx_ids(o->cfg.can_ids, ids, HAL_SOCKETCAN_MAX_FILTERS),
+                                            app_uds_rx_ids(&o->cfg, ids, HAL_SOCKETCAN_MAX_FILTERS),
                                             o->out_path, o->nvm_path)
                        : hal_linux_open(hal, o->in_path, o->out_path, o->nvm_path);
     if (rc != 0) {

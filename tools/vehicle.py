@@ -312,6 +312,15 @@ def recorded_ids(path: Path, channels: dict) -> dict:
     return {k: (n, n / span, d) for k, (n, d) in per.items()}
 
 
+def uds_ids() -> dict:
+    """The UDS server's request and response IDs (their defaults in the parameter table,
+    firmware/app/params.toml), checked against the car's buses like navecu's messages."""
+    from tools import gen_params
+    by_name = {q["name"]: q for q in gen_params.load()}
+    return {"UDS request (uds_request_id)": int(by_name["uds_request_id"]["default"]),
+            "UDS response (uds_response_id)": int(by_name["uds_response_id"]["default"])}
+
+
 def collisions(p: Profile, ids: dict | None = None) -> list:
     """Every identifier of navecu's (the profile's, or ids) the car uses on a bus."""
     ids = p.can_ids if ids is None else ids
@@ -552,8 +561,8 @@ def main(argv=None) -> int:
         Path(a.out).write_text(profile_dbc_text(p))
         return 0
     ids = stock_ids() if getattr(a, "ids", "profile") == "stock" else p.can_ids
-    found = collisions(p, ids)
     label = "the DBC's stock identifiers" if ids is not p.can_ids else f"profile {p.name}"
+    found = collisions(p, {**ids, **uds_ids()})
     if found:
         print(f"vehicle: {len(found)} collision(s) of navecu's identifiers ({label}) with "
               f"the car's buses:", file=sys.stderr)

@@ -33,7 +33,7 @@ void board_main(void)
 {
     app_config_defaults(&cfg);
     (void)app_init(&app, &cfg); /* the defaults are valid (test_app) */
-    const size_t n_ids = app_rx_ids(app.cfg.can_ids, rx_ids, RX_IDS_MAX);
+    const size_t n_ids = app_uds_rx_ids(&app.cfg, rx_ids, RX_IDS_MAX);
     hal_t *hal = hal_stm32_init(rx_ids, n_ids);
     app_boot(&app, hal);
 

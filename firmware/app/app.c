@@ -47,6 +47,7 @@ int app_init(app_t *app, const app_config_t *cfg)
                   cfg->can_ids[NAVECU_MSG_IMU_ACCEL]);
     mounting_init(&app->keep.mount, cfg->imu_mount_rad);
     app->run.mode = APP_MODE_WAIT_INIT;
+    (void)app_uds_init(app); /* valid IDs (app_config_valid): cannot fail */
     return NAV_OK;
 }
 
@@ -323,6 +324,9 @@ static uint32_t *rx_counter(app_health_t *h, rx_verdict_t v)
 void app_handle_frame(app_t *a, hal_t *hal, const hal_can_frame_t *f)
 {
     a->keep.health.log_line_bad = hal_can_rx_malformed(hal);
+    if (app_uds_frame(a, hal, f)) {
+        return; /* diagnostics: never navecu's input, never foreign */
+    }
     if (f->t_us < a->keep.last_rx_t_us) {
         app_count(&a->keep.health.time_jumps); /* the IMU counter keeps the time base */
     } else {
@@ -389,6 +393,7 @@ void app_handle_frame(app_t *a, hal_t *hal, const hal_can_frame_t *f)
 
 void app_poll(app_t *a, hal_t *hal)
 {
+    app_uds_poll(a, hal); /* first: an ECUReset restarts the application */
     const uint64_t now = hal_time_us(hal);
     a->keep.last_poll_us = now;
     a->keep.have_poll = 1u;

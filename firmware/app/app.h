@@ -15,6 +15,7 @@
  *   commands     CMD_Control, CMD_KnownPosition, CMD_InitialAttitude
  *   output       NAV_* frames, HealthFlags, the output mode
  *   app_loop     the main loop's pass, the same on every board
+ *   app_uds      diagnostics: the UDS server on its ISO-TP channel, the parameters' DIDs
  * with app_config (what an integrator sets), app_tuning.h (the tuning constants) and
  * app_health (counters and flags).
  *
@@ -34,6 +35,7 @@
 #include "app_config.h"
 #include "app_health.h"
 #include "app_rx.h"
+#include "app_uds.h"
 #include "calib.h"
 #include "dr.h"
 #include "dynamics.h"
@@ -98,6 +100,8 @@ struct app {
     app_config_t cfg;
     app_keep_t keep;
     app_run_t run;
+    app_uds_t uds;          /* diagnostics: UDS over ISO-TP (app_uds.h), off the navigation
+                               path; restarted with the application (ECUReset) */
 };
 
 /* Start in APP_MODE_WAIT_INIT. Returns NAV_OK, or NAV_EINVAL for a config out of range. */
@@ -109,7 +113,8 @@ int app_init(app_t *app, const app_config_t *cfg);
 void app_boot(app_t *app, hal_t *hal);
 
 /* Process one received frame; may send frames through hal. Never fails: whatever is
- * wrong with the frame is counted in app->keep.health. */
+ * wrong with the frame is counted in app->keep.health. A frame on the UDS request ID goes
+ * to the diagnostic channel first (app_uds.h) and to nothing else. */
 void app_handle_frame(app_t *app, hal_t *hal, const hal_can_frame_t *frame);
 
 /* Restart navigation (CMD_Control Reset): everything in app_run_t starts again;
@@ -118,7 +123,8 @@ void app_handle_frame(app_t *app, hal_t *hal, const hal_can_frame_t *frame);
 void app_reset(app_t *app);
 
 /* Call from the main loop (after each frame, or on a timer): while no IMU data arrives,
- * NAV_Status goes on at its rate on the HAL clock with the IMU_STALE flag. */
+ * NAV_Status goes on at its rate on the HAL clock with the IMU_STALE flag. Diagnostics
+ * are served here too (app_uds_poll: ISO-TP timing, S3, a pending ECUReset). */
 void app_poll(app_t *app, hal_t *hal);
 
 /*

@@ -101,6 +101,12 @@ int app_config_valid(const app_config_t *cfg)
             return 0;
         }
     }
-    return can_ids_ok(cfg->can_ids) && cfg->nav_rate_hz <= cfg->imu_rate_hz &&
+    for (int i = 0; i < (int)NAVECU_MSG_N; i++) {
+        if (cfg->can_ids[i] == cfg->uds_request_id || cfg->can_ids[i] == cfg->uds_response_id) {
+            return 0; /* a diagnostic frame would be taken for one of navecu's messages */
+        }
+    }
+    return can_ids_ok(cfg->can_ids) && cfg->uds_request_id != cfg->uds_response_id &&
+           cfg->nav_rate_hz <= cfg->imu_rate_hz &&
            cfg->status_rate_hz <= cfg->imu_rate_hz && cfg->dyn_rate_hz <= cfg->imu_rate_hz;
 }

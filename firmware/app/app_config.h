@@ -63,6 +63,8 @@ typedef struct {
                                      (mounting.h) */
     nav_real_t gyro_range_rps;    /* the IMU's measurement range: a rate at or beyond it is */
     nav_real_t accel_range_mps2;  /* saturated (counted, flagged) */
+    uint16_t uds_request_id;      /* the UDS server's physical request ID (11-bit) */
+    uint16_t uds_response_id;     /* its response ID (11-bit) */
     /* navecu's own CAN identifiers (11-bit, all different), indexed by navecu_msg_t
      * (navecu_protocol.h): the DBC's by default, the vehicle profile's on a car whose bus
      * already uses them (vehicles/, docs/vehicles.md) */
@@ -83,7 +85,8 @@ void app_config_defaults(app_config_t *cfg);
 int app_config_preset(app_config_t *cfg, app_preset_id_t id);
 
 /* 1 if every field is within its range (the parameter table), the output rates at most the
- * IMU rate and the CAN identifiers 11-bit and distinct, else 0. */
+ * IMU rate and the CAN identifiers 11-bit and distinct (navecu's messages and the two UDS
+ * identifiers together), else 0. */
 int app_config_valid(const app_config_t *cfg);
 
 /* Parameter id's value(s), SI units (one value in v[0]; APP_PARAM_VEC3 three; an enum its

@@ -247,7 +247,10 @@ def test_foreign_traffic_changes_nothing_but_its_count(clean):
     msgs, args, outs, _, d = clean
     rng = np.random.default_rng(2000)
     navecu_ids = set(ID.values())
-    free = np.array([i for i in range(0x800) if i not in navecu_ids])
+    # the UDS request ID is navecu's too: its frames go to ISO-TP, never counted foreign
+    from tools import gen_params
+    uds_req = next(int(p["default"]) for p in gen_params.load() if p["name"] == "uds_request_id")
+    free = np.array([i for i in range(0x800) if i not in navecu_ids and i != uds_req])
     n = int(T_END_S * FOREIGN_HZ)
     ts = (np.arange(n) + 0.5) / FOREIGN_HZ       # between the 10 ms IMU grid's instants
     extended = rng.random(n) < 0.3

@@ -6,32 +6,34 @@
 #include "app_config.h"
 
 const app_param_t app_params[APP_PARAM_N] = {
-    [APP_PARAM_IMU_RATE_HZ] = {"imu_rate_hz", 0x0200u, APP_PARAM_U16, 0u, 0u, NAV_C(10.0), NAV_C(400.0), {NAV_C(100.0), NAV_C(0.0), NAV_C(0.0)}},
-    [APP_PARAM_NAV_RATE_HZ] = {"nav_rate_hz", 0x0201u, APP_PARAM_U16, 0u, 0u, NAV_C(1.0), NAV_C(400.0), {NAV_C(50.0), NAV_C(0.0), NAV_C(0.0)}},
-    [APP_PARAM_STATUS_RATE_HZ] = {"status_rate_hz", 0x0202u, APP_PARAM_U16, 0u, 0u, NAV_C(1.0), NAV_C(400.0), {NAV_C(10.0), NAV_C(0.0), NAV_C(0.0)}},
-    [APP_PARAM_DYN_RATE_HZ] = {"dyn_rate_hz", 0x0203u, APP_PARAM_U16, 0u, 0u, NAV_C(0.0), NAV_C(400.0), {NAV_C(50.0), NAV_C(0.0), NAV_C(0.0)}},
-    [APP_PARAM_LEVEL_S] = {"level_s", 0x0204u, APP_PARAM_U16, 0u, 0u, NAV_C(1.0), NAV_C(600.0), {NAV_C(30.0), NAV_C(0.0), NAV_C(0.0)}},
-    [APP_PARAM_ODO_AXLE] = {"odo_axle", 0x0210u, APP_PARAM_ENUM, 0u, 0u, NAV_C(0.0), NAV_C(1.0), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
-    [APP_PARAM_ODO_TRACK_M] = {"odo_track_m", 0x0211u, APP_PARAM_REAL, 1u, 1u, NAV_C(0.5), NAV_C(3.0), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
-    [APP_PARAM_ODO_WHEELBASE_M] = {"odo_wheelbase_m", 0x0212u, APP_PARAM_REAL, 1u, 1u, NAV_C(1.0), NAV_C(6.0), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
-    [APP_PARAM_ODO_LEVER_B_M] = {"odo_lever_b_m", 0x0213u, APP_PARAM_VEC3, 0u, 0u, NAV_C(-10.0), NAV_C(10.0), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
-    [APP_PARAM_CAL_MIN_BASE_M] = {"cal_min_base_m", 0x0220u, APP_PARAM_REAL, 0u, 0u, NAV_C(0.0), NAV_C(100000.0), {NAV_C(2000.0), NAV_C(0.0), NAV_C(0.0)}},
-    [APP_PARAM_IMU_MOUNT_RAD] = {"imu_mount_rad", 0x0205u, APP_PARAM_VEC3, 0u, 0u, NAV_C(-3.141592653589793), NAV_C(3.141592653589793), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
-    [APP_PARAM_GYRO_ARW_RAD_RTS] = {"gyro_arw_rad_rts", 0x0230u, APP_PARAM_REAL, 0u, 0u, NAV_C(2.908882086657216e-10), NAV_C(0.02908882086657216), {NAV_C(0.0005817764173314432), NAV_C(0.0), NAV_C(0.0)}},
-    [APP_PARAM_GYRO_BIAS_RPS] = {"gyro_bias_rps", 0x0231u, APP_PARAM_REAL, 0u, 0u, NAV_C(4.84813681109536e-12), NAV_C(0.0484813681109536), {NAV_C(0.0009999999697132222), NAV_C(0.0), NAV_C(0.0)}},
-    [APP_PARAM_ACCEL_BIAS_MPS2] = {"accel_bias_mps2", 0x0232u, APP_PARAM_REAL, 0u, 0u, NAV_C(9.80665e-07), NAV_C(9.80665), {NAV_C(0.199999762095), NAV_C(0.0), NAV_C(0.0)}},
-    [APP_PARAM_GYRO_BIAS_RW_RPS_RTS] = {"gyro_bias_rw_rps_rts", 0x0233u, APP_PARAM_REAL, 0u, 0u, NAV_C(3.9584871301292103e-13), NAV_C(0.0039584871301292105), {NAV_C(7.916974260258421e-06), NAV_C(0.0), NAV_C(0.0)}},
-    [APP_PARAM_ACCEL_BIAS_RW_MPS2_RTS] = {"accel_bias_rw_mps2_rts", 0x0234u, APP_PARAM_REAL, 0u, 0u, NAV_C(8.007096195354886e-09), NAV_C(0.8007096195354885), {NAV_C(0.0016329912193692611), NAV_C(0.0), NAV_C(0.0)}},
-    [APP_PARAM_GYRO_RANGE_RPS] = {"gyro_range_rps", 0x0235u, APP_PARAM_REAL, 0u, 0u, NAV_C(0.017453292519943295), NAV_C(87.26646259971648), {NAV_C(5.235987755982989), NAV_C(0.0), NAV_C(0.0)}},
-    [APP_PARAM_ACCEL_RANGE_MPS2] = {"accel_range_mps2", 0x0236u, APP_PARAM_REAL, 0u, 0u, NAV_C(1.0), NAV_C(2000.0), {NAV_C(78.4532), NAV_C(0.0), NAV_C(0.0)}},
-    [APP_PARAM_GNSS_LATENCY_S] = {"gnss_latency_s", 0x0240u, APP_PARAM_REAL, 0u, 0u, NAV_C(0.0), NAV_C(0.5), {NAV_C(0.1), NAV_C(0.0), NAV_C(0.0)}},
-    [APP_PARAM_GNSS_CORR_S] = {"gnss_corr_s", 0x0241u, APP_PARAM_REAL, 0u, 0u, NAV_C(0.0), NAV_C(600.0), {NAV_C(20.0), NAV_C(0.0), NAV_C(0.0)}},
-    [APP_PARAM_GNSS_ACCURACY] = {"gnss_accuracy", 0x0243u, APP_PARAM_ENUM, 0u, 0u, NAV_C(0.0), NAV_C(1.0), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
-    [APP_PARAM_GNSS_HACC_M] = {"gnss_hacc_m", 0x0244u, APP_PARAM_REAL, 0u, 0u, NAV_C(0.1), NAV_C(102.3), {NAV_C(3.0), NAV_C(0.0), NAV_C(0.0)}},
-    [APP_PARAM_GNSS_VACC_M] = {"gnss_vacc_m", 0x0245u, APP_PARAM_REAL, 0u, 0u, NAV_C(0.1), NAV_C(102.3), {NAV_C(5.0), NAV_C(0.0), NAV_C(0.0)}},
-    [APP_PARAM_GNSS_SACC_MPS] = {"gnss_sacc_mps", 0x0246u, APP_PARAM_REAL, 0u, 0u, NAV_C(0.01), NAV_C(1.5), {NAV_C(0.2), NAV_C(0.0), NAV_C(0.0)}},
-    [APP_PARAM_GNSS_VEL_UP] = {"gnss_vel_up", 0x0247u, APP_PARAM_ENUM, 0u, 0u, NAV_C(0.0), NAV_C(1.0), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
-    [APP_PARAM_GNSS_LEVER_B_M] = {"gnss_lever_b_m", 0x0242u, APP_PARAM_VEC3, 0u, 0u, NAV_C(-10.0), NAV_C(10.0), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
+    [APP_PARAM_IMU_RATE_HZ] = {"imu_rate_hz", 0x0200u, APP_PARAM_U16, 0u, 0u, 1u, 0u, NAV_C(10.0), NAV_C(400.0), {NAV_C(100.0), NAV_C(0.0), NAV_C(0.0)}},
+    [APP_PARAM_NAV_RATE_HZ] = {"nav_rate_hz", 0x0201u, APP_PARAM_U16, 0u, 0u, 0u, 0u, NAV_C(1.0), NAV_C(400.0), {NAV_C(50.0), NAV_C(0.0), NAV_C(0.0)}},
+    [APP_PARAM_STATUS_RATE_HZ] = {"status_rate_hz", 0x0202u, APP_PARAM_U16, 0u, 0u, 0u, 0u, NAV_C(1.0), NAV_C(400.0), {NAV_C(10.0), NAV_C(0.0), NAV_C(0.0)}},
+    [APP_PARAM_DYN_RATE_HZ] = {"dyn_rate_hz", 0x0203u, APP_PARAM_U16, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(400.0), {NAV_C(50.0), NAV_C(0.0), NAV_C(0.0)}},
+    [APP_PARAM_LEVEL_S] = {"level_s", 0x0204u, APP_PARAM_U16, 0u, 0u, 0u, 0u, NAV_C(1.0), NAV_C(600.0), {NAV_C(30.0), NAV_C(0.0), NAV_C(0.0)}},
+    [APP_PARAM_ODO_AXLE] = {"odo_axle", 0x0210u, APP_PARAM_ENUM, 0u, 0u, 1u, 0u, NAV_C(0.0), NAV_C(1.0), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
+    [APP_PARAM_ODO_TRACK_M] = {"odo_track_m", 0x0211u, APP_PARAM_REAL, 1u, 1u, 1u, 0u, NAV_C(0.5), NAV_C(3.0), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
+    [APP_PARAM_ODO_WHEELBASE_M] = {"odo_wheelbase_m", 0x0212u, APP_PARAM_REAL, 1u, 1u, 1u, 0u, NAV_C(1.0), NAV_C(6.0), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
+    [APP_PARAM_ODO_LEVER_B_M] = {"odo_lever_b_m", 0x0213u, APP_PARAM_VEC3, 0u, 0u, 0u, 0u, NAV_C(-10.0), NAV_C(10.0), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
+    [APP_PARAM_CAL_MIN_BASE_M] = {"cal_min_base_m", 0x0220u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(100000.0), {NAV_C(2000.0), NAV_C(0.0), NAV_C(0.0)}},
+    [APP_PARAM_IMU_MOUNT_RAD] = {"imu_mount_rad", 0x0205u, APP_PARAM_VEC3, 0u, 0u, 1u, 0u, NAV_C(-3.141592653589793), NAV_C(3.141592653589793), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
+    [APP_PARAM_GYRO_ARW_RAD_RTS] = {"gyro_arw_rad_rts", 0x0230u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(2.908882086657216e-10), NAV_C(0.02908882086657216), {NAV_C(0.0005817764173314432), NAV_C(0.0), NAV_C(0.0)}},
+    [APP_PARAM_GYRO_BIAS_RPS] = {"gyro_bias_rps", 0x0231u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(4.84813681109536e-12), NAV_C(0.0484813681109536), {NAV_C(0.0009999999697132222), NAV_C(0.0), NAV_C(0.0)}},
+    [APP_PARAM_ACCEL_BIAS_MPS2] = {"accel_bias_mps2", 0x0232u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(9.80665e-07), NAV_C(9.80665), {NAV_C(0.199999762095), NAV_C(0.0), NAV_C(0.0)}},
+    [APP_PARAM_GYRO_BIAS_RW_RPS_RTS] = {"gyro_bias_rw_rps_rts", 0x0233u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(3.9584871301292103e-13), NAV_C(0.0039584871301292105), {NAV_C(7.916974260258421e-06), NAV_C(0.0), NAV_C(0.0)}},
+    [APP_PARAM_ACCEL_BIAS_RW_MPS2_RTS] = {"accel_bias_rw_mps2_rts", 0x0234u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(8.007096195354886e-09), NAV_C(0.8007096195354885), {NAV_C(0.0016329912193692611), NAV_C(0.0), NAV_C(0.0)}},
+    [APP_PARAM_GYRO_RANGE_RPS] = {"gyro_range_rps", 0x0235u, APP_PARAM_REAL, 0u, 0u, 1u, 0u, NAV_C(0.017453292519943295), NAV_C(87.26646259971648), {NAV_C(5.235987755982989), NAV_C(0.0), NAV_C(0.0)}},
+    [APP_PARAM_ACCEL_RANGE_MPS2] = {"accel_range_mps2", 0x0236u, APP_PARAM_REAL, 0u, 0u, 1u, 0u, NAV_C(1.0), NAV_C(2000.0), {NAV_C(78.4532), NAV_C(0.0), NAV_C(0.0)}},
+    [APP_PARAM_GNSS_LATENCY_S] = {"gnss_latency_s", 0x0240u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(0.5), {NAV_C(0.1), NAV_C(0.0), NAV_C(0.0)}},
+    [APP_PARAM_GNSS_CORR_S] = {"gnss_corr_s", 0x0241u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(600.0), {NAV_C(20.0), NAV_C(0.0), NAV_C(0.0)}},
+    [APP_PARAM_GNSS_ACCURACY] = {"gnss_accuracy", 0x0243u, APP_PARAM_ENUM, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(1.0), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
+    [APP_PARAM_GNSS_HACC_M] = {"gnss_hacc_m", 0x0244u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.1), NAV_C(102.3), {NAV_C(3.0), NAV_C(0.0), NAV_C(0.0)}},
+    [APP_PARAM_GNSS_VACC_M] = {"gnss_vacc_m", 0x0245u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.1), NAV_C(102.3), {NAV_C(5.0), NAV_C(0.0), NAV_C(0.0)}},
+    [APP_PARAM_GNSS_SACC_MPS] = {"gnss_sacc_mps", 0x0246u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.01), NAV_C(1.5), {NAV_C(0.2), NAV_C(0.0), NAV_C(0.0)}},
+    [APP_PARAM_GNSS_VEL_UP] = {"gnss_vel_up", 0x0247u, APP_PARAM_ENUM, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(1.0), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
+    [APP_PARAM_GNSS_LEVER_B_M] = {"gnss_lever_b_m", 0x0242u, APP_PARAM_VEC3, 0u, 0u, 0u, 0u, NAV_C(-10.0), NAV_C(10.0), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
+    [APP_PARAM_UDS_REQUEST_ID] = {"uds_request_id", 0x0250u, APP_PARAM_U16, 0u, 0u, 1u, 1u, NAV_C(1.0), NAV_C(2047.0), {NAV_C(1952.0), NAV_C(0.0), NAV_C(0.0)}},
+    [APP_PARAM_UDS_RESPONSE_ID] = {"uds_response_id", 0x0251u, APP_PARAM_U16, 0u, 0u, 1u, 1u, NAV_C(1.0), NAV_C(2047.0), {NAV_C(1960.0), NAV_C(0.0), NAV_C(0.0)}},
 };
 
 const app_param_id_t app_preset_params[APP_PRESET_PARAMS] = {
@@ -156,6 +158,12 @@ void app_param_get(const app_config_t *cfg, app_param_id_t id, nav_real_t v[3])
         v[1] = cfg->gnss_lever_b_m[1];
         v[2] = cfg->gnss_lever_b_m[2];
         break;
+    case APP_PARAM_UDS_REQUEST_ID:
+        v[0] = (nav_real_t)cfg->uds_request_id;
+        break;
+    case APP_PARAM_UDS_RESPONSE_ID:
+        v[0] = (nav_real_t)cfg->uds_response_id;
+        break;
     default:
         break;
     }
@@ -259,6 +267,12 @@ int app_param_set(app_config_t *cfg, app_param_id_t id, const nav_real_t v[3])
         cfg->gnss_lever_b_m[0] = v[0];
         cfg->gnss_lever_b_m[1] = v[1];
         cfg->gnss_lever_b_m[2] = v[2];
+        break;
+    case APP_PARAM_UDS_REQUEST_ID:
+        cfg->uds_request_id = (uint16_t)v[0];
+        break;
+    case APP_PARAM_UDS_RESPONSE_ID:
+        cfg->uds_response_id = (uint16_t)v[0];
         break;
     default:
         return -1;

@@ -24,6 +24,9 @@ typedef struct {
     app_param_type_t type;
     uint8_t min_exclusive;  /* the range excludes min */
     uint8_t vehicle_default; /* the default is the vehicle profile's */
+    uint8_t at_reset;       /* apply = "reset": copied at app_init, so a UDS write
+                               needs navigation stopped and is in force after ECUReset */
+    uint8_t uds_read_only;  /* uds_write = false: ReadDataByIdentifier only */
     nav_real_t min_si, max_si; /* range, SI units (enum: 0..values - 1) */
     nav_real_t default_si[3];  /* default, SI (vehicle_default: unused) */
 } app_param_t;
@@ -56,7 +59,9 @@ typedef enum {
     APP_PARAM_GNSS_SACC_MPS = 23,
     APP_PARAM_GNSS_VEL_UP = 24,
     APP_PARAM_GNSS_LEVER_B_M = 25,
-    APP_PARAM_N = 26
+    APP_PARAM_UDS_REQUEST_ID = 26,
+    APP_PARAM_UDS_RESPONSE_ID = 27,
+    APP_PARAM_N = 28
 } app_param_id_t;
 
 extern const app_param_t app_params[APP_PARAM_N];

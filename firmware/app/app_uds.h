@@ -1,0 +1,70 @@
+/*
+ * app_uds.h - the application's diagnostics: the UDS server (firmware/diag/uds.h) over one
+ * ISO-TP channel (firmware/diag/isotp.h) on the configured IDs (app_config_t
+ * uds_request_id / uds_response_id), and the data behind its data identifiers: one DID per
+ * parameter of the table (params.toml), the identification DIDs below.
+ *
+ * Off the navigation path: a frame on the request ID goes to ISO-TP and nowhere else (it
+ * is never counted foreign or rejected); requests are served in app_poll and right after
+ * their last frame; nothing here reads or changes the navigation state except an accepted
+ * WriteDataByIdentifier (the configuration in RAM) and ECUReset (the application
+ * restarted). With no diagnostic traffic it sends nothing, so the output frames are those
+ * of a build without it. docs/can.md, "Diagnostics (UDS)", is the tester's description.
+ */
+#ifndef NAVECU_APP_UDS_H
+#define NAVECU_APP_UDS_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "app_config.h"
+#include "hal.h"
+#include "isotp.h"
+#include "uds.h"
+
+/* identification DIDs (ISO 14229-1 Table C.1; 0xF1A0.. is the manufacturer's
+ * identificationOptionVehicleManufacturerSpecific range) */
+#define APP_UDS_DID_SERIAL 0xF18Cu     /* ECUSerialNumber */
+#define APP_UDS_DID_SW_VERSION 0xF195u /* systemSupplierECUSoftwareVersionNumber */
+#define APP_UDS_DID_VEHICLE 0xF1A0u    /* the build's vehicle profile name (vehicles/NAME) */
+
+/* the strings behind them: build defines (the HAL has no device serial: a placeholder
+ * until the ECU's unique ID is read through the HAL) */
+#ifndef NAVECU_SW_VERSION
+#define NAVECU_SW_VERSION "navecu 0.16.0-dev"
+#endif
+#ifndef NAVECU_ECU_SERIAL
+#define NAVECU_ECU_SERIAL "NAVECU-00000000"
+#endif
+
+/* The diagnostic channel and server with their message buffers (a request is copied out
+ * of the channel to be served; the response stays put while ISO-TP sends it). */
+typedef struct {
+    isotp_t tp;
+    uds_t srv;
+    uint8_t on;                  /* the channel started (app_uds_init succeeded) */
+    uint8_t reset_due;           /* ECUReset accepted: restart once the response left */
+    uint16_t rsp_len;
+    uint8_t req[ISOTP_MAX_LEN];
+    uint8_t rsp[ISOTP_MAX_LEN];
+} app_uds_t;
+
+struct app; /* app.h (its typedef app_t is output.h's) */
+
+/* Start the channel and the server on a->cfg's IDs (app_init calls it; a is otherwise
+ * initialised). 0, or -1 when the channel refuses them (diagnostics then stay off). */
+int app_uds_init(struct app *a);
+
+/* A received frame: 1 if it is the diagnostic channel's (on the request ID: taken by
+ * ISO-TP, a complete request served at once), else 0 (navecu's own dispatch goes on). */
+int app_uds_frame(struct app *a, hal_t *hal, const hal_can_frame_t *f);
+
+/* From app_poll: the channel's frames due, a complete request served, the server's timers
+ * (S3, the security delay), an accepted ECUReset carried out once its response left. */
+void app_uds_poll(struct app *a, hal_t *hal);
+
+/* The receive list of a board's CAN filters: app_rx_ids' and the UDS request ID (written
+ * if it fits max); the number of identifiers there are. */
+size_t app_uds_rx_ids(const app_config_t *cfg, uint32_t *ids, size_t max);
+
+#endif /* NAVECU_APP_UDS_H */

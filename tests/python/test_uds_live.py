@@ -1,0 +1,111 @@
+"""navecu's UDS server (firmware/diag/uds.c in firmware/app/app_uds.c) live on vcan0,
+against udsoncan over can-isotp: independent implementations of ISO 14229-1 and ISO 15765-2
+in Python, configured from docs/can.md ("Diagnostics (UDS)") alone.
+
+tools/vcan/uds_check.py starts build/host/navecu --can vcan0 inside one
+tools/vcan/with_vcan.sh run (the kernel's vcan, or User-Mode Linux's) and plays the tester;
+the verdicts are here. Like tests/python/test_isotp_peer.py: under CI a missing vcan
+fails, elsewhere these tests are skipped loudly.
+"""
+import json
+import math
+import os
+import struct
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from test_vcan_harness import no_vcan, require_vcan
+from tools import gen_params
+
+ROOT = Path(__file__).resolve().parents[2]
+NAVECU = os.environ.get("NAVECU_BIN", str(ROOT / "build" / "host" / "navecu"))
+WITH_VCAN = ROOT / "tools" / "vcan" / "with_vcan.sh"
+TIMEOUT_S = 300
+
+
+@pytest.fixture(scope="module")
+def r():
+    assert Path(NAVECU).exists(), f"{NAVECU} missing: make {os.path.relpath(NAVECU, ROOT)}"
+    env = dict(os.environ, NAVECU_VCAN_TIMEOUT=str(TIMEOUT_S))
+    proc = subprocess.run([str(WITH_VCAN), sys.executable, "-m", "tools.vcan.uds_check",
+                           "--navecu", NAVECU], capture_output=True, text=True, cwd=ROOT,
+                          env=env, timeout=TIMEOUT_S + 60)
+    require_vcan(proc)
+    if proc.returncode == 2 and "NO VCAN" in proc.stderr:
+        no_vcan(proc.stderr.strip().splitlines()[-1])
+    lines = [ln for ln in proc.stdout.splitlines() if ln.startswith("{")]
+    assert lines, proc.stderr[-3000:] + proc.stdout[-3000:]
+    out = json.loads(lines[-1])
+    assert "exception" not in out, out["exception"]
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    return out
+
+
+def f32(x):
+    return struct.unpack(">f", struct.pack(">f", x))[0]
+
+
+def test_every_parameter_did_reads_its_default_in_si(r):
+    params = gen_params.load()
+    assert set(r["params"]) == {p["name"] for p in params}
+    for p in params:
+        got = r["params"][p["name"]]
+        if p["vehicle_default"]:
+            assert got > 0, p["name"]  # the vehicle profile's
+        elif p["type"] == "enum":
+            assert got == p["default_index"], p["name"]
+        elif p["type"] == "u16":
+            assert got == p["default"], p["name"]
+        elif p["type"] == "vec3":
+            assert got == pytest.approx([f32(x * p["factor"]) for x in p["default"]]), p["name"]
+        else:
+            assert math.isclose(got, f32(p["default"] * p["factor"]), rel_tol=1e-6), p["name"]
+    assert r["params"]["uds_request_id"] == 0x7A0
+    assert r["params"]["uds_response_id"] == 0x7A8
+    # every parameter DID and one string in a single request: a multi-frame exchange
+    assert r["many_count"] == len(params) + 1 and r["many_same"]
+
+
+def test_identification_dids(r):
+    assert r["ident"]["sw_version"].startswith("navecu")
+    assert r["ident"]["serial"] == "NAVECU-00000000"
+    assert r["ident"]["vehicle"] == "native"
+
+
+def test_session_timings(r):
+    assert r["session_p2"] == [pytest.approx(0.05), pytest.approx(5.0)]
+
+
+def test_write_refused_without_session_or_security(r):
+    assert r["nrc_write_default"] == 0x7F
+    assert r["nrc_write_locked"] == 0x33
+    assert r["nrc_reset_locked"] == 0x33
+
+
+def test_unlock_write_read_back(r):
+    assert r["seed_when_unlocked"] == "00000000"
+    assert r["nrc_write_range"] == 0x31
+    assert r["nrc_write_uds_id"] == 0x31  # the UDS IDs are read-only over UDS
+    assert r["level_s_back"] == 45
+    assert r["lever_back"] == [1.0, -0.5, 0.25]
+
+
+def test_ecu_reset_restarts_keeping_the_configuration(r):
+    assert r["reset_type"] == 1
+    assert r["nrc_write_after_reset"] == 0x7F  # default session again
+    assert r["level_s_after_reset"] == 45       # the configuration in RAM survives
+
+
+def test_three_wrong_keys_then_delay(r):
+    assert r["nrc_wrong_keys"] == [0x35, 0x35, 0x36]
+    assert r["nrc_in_delay"] == 0x37
+
+
+def test_unknown_service_and_no_foreign_frames(r):
+    assert r["nrc_unknown_service"] == 0x11
+    # the diagnostic frames never reached navecu's own dispatch
+    assert "navecu: foreign frames (not read, not refused): 0" in r["firmware_summary"], \
+        r["firmware_summary"]
