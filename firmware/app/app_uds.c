@@ -163,7 +163,7 @@ int app_uds_init(app_t *a)
 }
 
 /* the application restarted with its configuration as it is now (ECUReset hardReset) */
-static void restart(app_t *a, hal_t *hal)
+static void ecu_restart(app_t *a, hal_t *hal)
 {
     const app_config_t cfg = a->cfg;
     if (app_init(a, &cfg) == NAV_OK) {
@@ -180,7 +180,7 @@ static void serve(app_t *a, hal_t *hal, uint64_t now)
     }
     if (u->reset_due) {
         u->reset_due = 0u;
-        restart(a, hal); /* the response went out (or its transmission ended) */
+        ecu_restart(a, hal); /* the response went out (or its transmission ended) */
         return;
     }
     size_t len = 0u;
@@ -200,7 +200,7 @@ static void serve(app_t *a, hal_t *hal, uint64_t now)
     } else {
         if (u->reset_due) {
             u->reset_due = 0u;
-            restart(a, hal); /* suppressed response: at once */
+            ecu_restart(a, hal); /* suppressed response: at once */
         }
     }
 }
