@@ -149,7 +149,7 @@ int host_options_parse(int argc, char **argv, host_options_t *o, char *err, size
         } else if (strcmp(a, "--test-stall-poll-s") == 0) {
             double x = 0.0;
             bad = parse_double(v, &x) != 0 || x < 0.0 || x > 1e6;
-            o->stall_poll_us = (uint64_t)(x * 1e6);
+            o->stall_poll_us = bad ? 0u : (uint64_t)(x * 1e6); /* no conversion out of range */
             o->stall_poll = 1;
         } else if (param_option(a) != NULL) {
             bad = parse_param(param_option(a), v, &o->cfg) != 0;
