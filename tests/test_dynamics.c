@@ -63,6 +63,19 @@ static void feed(dynamics_t *d, const sins_t *s, const double w_b[3], const doub
     }
 }
 
+/* one output interval of body rate w_b with the specific force of rest, no mounting */
+static dynamics_out_t interval_at_rest_force(const sins_t *s, const double w_b[3])
+{
+    double f_b[3];
+    rest_force_b(s, f_b);
+    dynamics_t d;
+    memset(&d, 0, sizeof d);
+    feed(&d, s, w_b, f_b);
+    dynamics_out_t o;
+    assert_int_equal(dynamics_take(&d, s, NAV_C(0.0), NAV_C(0.0), &o), 0);
+    return o;
+}
+
 static void test_at_rest_no_motion(void **state)
 {
     (void)state;
@@ -70,13 +83,7 @@ static void test_at_rest_no_motion(void **state)
     nav_real_t w_ie[3];
     sins_earth_rate_b(&s, w_ie);
     const double w_b[3] = {(double)w_ie[0], (double)w_ie[1], (double)w_ie[2]};
-    double f_b[3];
-    rest_force_b(&s, f_b);
-    dynamics_t d;
-    memset(&d, 0, sizeof d);
-    feed(&d, &s, w_b, f_b);
-    dynamics_out_t o;
-    assert_int_equal(dynamics_take(&d, &s, NAV_C(0.0), NAV_C(0.0), &o), 0);
+    const dynamics_out_t o = interval_at_rest_force(&s, w_b);
     for (int i = 0; i < 3; i++) {
         assert_true(fabs((double)o.att_rate_rps[i]) < RATE_TOL_RPS);
         assert_true(fabs((double)o.accel_n_mps2[i]) < ACCEL_TOL_MPS2);
@@ -99,13 +106,7 @@ static void test_euler_rates_inverted(void **state)
     const double w_b[3] = {cos(r) * pd + sin(r) * cos(p) * Hd + (double)w_ie[0],
                            rd - sin(p) * Hd + (double)w_ie[1],
                            sin(r) * pd - cos(r) * cos(p) * Hd + (double)w_ie[2]};
-    double f_b[3];
-    rest_force_b(&s, f_b);
-    dynamics_t d;
-    memset(&d, 0, sizeof d);
-    feed(&d, &s, w_b, f_b);
-    dynamics_out_t o;
-    assert_int_equal(dynamics_take(&d, &s, NAV_C(0.0), NAV_C(0.0), &o), 0);
+    const dynamics_out_t o = interval_at_rest_force(&s, w_b);
     assert_true(fabs((double)o.att_rate_rps[0] - rd) < RATE_TOL_RPS);
     assert_true(fabs((double)o.att_rate_rps[1] - pd) < RATE_TOL_RPS);
     assert_true(fabs((double)o.att_rate_rps[2] - Hd) < RATE_TOL_RPS);
