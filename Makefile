@@ -16,7 +16,9 @@ WARN   := -Wall -Wextra -Werror -Wpedantic -Wconversion -Wdouble-promotion -Wflo
 # output frames are identical: make target-test, docs/target.md).
 FPFLAGS := -ffp-contract=off -fno-math-errno
 CFLAGS_BASE := $(CSTD) -O2 -g $(WARN) $(FPFLAGS)
-SAN_FLAGS := -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
+# (gcc leaves float-cast-overflow out of "undefined", clang has it: a double beyond an
+# integer type cast to it is undefined behaviour, named so that gcc checks it too)
+SAN_FLAGS := -fsanitize=address,undefined,float-cast-overflow -fno-sanitize-recover=all -fno-omit-frame-pointer
 
 # firmware/ sees only its own folders and the HAL interface (docs/architecture.md)
 FW_INC := -Ifirmware/nav -Ifirmware/can -Ifirmware/can/gen -Ifirmware/diag -Ifirmware/app -Ifirmware/app/gen -Ifirmware/vehicle -Ihal
@@ -519,11 +521,11 @@ $(foreach f,host asan,$(BUILD)/$(f)/f32/tests/test_fuzz_regressions.o): \
   HOST_INC += -Itests/fuzz -I$(FUZZ)/gen
 $(foreach f,host asan,$(BUILD)/$(f)/f32/tests/test_fuzz_regressions.o): $(FUZZ)/gen/codec_checks.inc
 $(BUILD)/host/tests/test_fuzz_regressions: $(BUILD)/host/f32/tests/test_fuzz_regressions.o \
-		$(BUILD)/host/f32/tests/support/fake_hal.o $(host_LIBS)
+		$(BUILD)/host/f32/tests/support/fake_hal.o $(BUILD)/host/f32/host_sim/options.o $(host_LIBS)
 	@mkdir -p $(@D)
 	$(CC) $^ -lcmocka -lm -o $@
 $(BUILD)/asan/tests/test_fuzz_regressions: $(BUILD)/asan/f32/tests/test_fuzz_regressions.o \
-		$(BUILD)/asan/f32/tests/support/fake_hal.o $(asan_LIBS)
+		$(BUILD)/asan/f32/tests/support/fake_hal.o $(BUILD)/asan/f32/host_sim/options.o $(asan_LIBS)
 	@mkdir -p $(@D)
 	$(CC) $(SAN_FLAGS) $^ -lcmocka -lm -o $@
 test-fuzz-regressions: $(foreach f,host asan,$(BUILD)/$(f)/tests/test_fuzz_regressions)

@@ -17,7 +17,11 @@
  *  - fuzz_options/pitch-beyond-90: with the Kalman filter running, NAV_Attitude.Pitch was
  *    sent as 90.71 deg, outside the DBC range [-90, 90]: emit_navigation subtracted the
  *    filter's mounting pitch from a SINS pitch of 89.7 deg without limiting the result
- *    (default configuration but for --imu-rate-hz 239): the pitch is limited now.
+ *    (default configuration but for --imu-rate-hz 239): the pitch is limited now;
+ *  - fuzz_cmdline/stall-poll-out-of-range: `--test-stall-poll-s 2.4e93` was refused, but
+ *    the value was converted to microseconds first (a double far beyond uint64_t cast:
+ *    undefined behaviour, UBSan in the CI's fuzz run): the conversion now follows the
+ *    range check (host_sim/options.c). Only the ASan+UBSan build of this test can see it.
  */
 #include <dirent.h>
 #include <setjmp.h>
@@ -39,6 +43,9 @@
 #undef LLVMFuzzerTestOneInput
 #define LLVMFuzzerTestOneInput fuzz_options_one
 #include "fuzz/fuzz_options.c"
+#undef LLVMFuzzerTestOneInput
+#define LLVMFuzzerTestOneInput fuzz_cmdline_one
+#include "fuzz/fuzz_cmdline.c"
 #undef LLVMFuzzerTestOneInput
 
 #define CRASH_DIR "tests/fuzz/crashes"
@@ -108,6 +115,7 @@ int main(void)
     static struct CMUnitTest tests[MAX_INPUTS];
     collect("fuzz_codec", fuzz_codec_one);
     collect("fuzz_options", fuzz_options_one);
+    collect("fuzz_cmdline", fuzz_cmdline_one);
     if (n_inputs == 0u) {
         fprintf(stderr, "test_fuzz_regressions: no inputs under %s (run from the repository "
                         "root)\n", CRASH_DIR);

@@ -1,7 +1,7 @@
 /*
  * fuzz_cmdline.c - libFuzzer harness: navecu's command line (host_sim/options.c).
  *
- * Input: the arguments, separated by NUL bytes (at most MAX_ARGS of them; argv[0] is
+ * Input: the arguments, separated by NUL bytes (at most CMDLINE_MAX_ARGS of them; argv[0] is
  * "navecu"). host_options_parse gets them as they are: any bytes, no terminating NUL
  * needed at the end of the input (the harness copies and terminates).
  *
@@ -20,24 +20,24 @@
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
-#define MAX_ARGS 32u
-#define MAX_INPUT 4096u
+#define CMDLINE_MAX_ARGS 32u
+#define CMDLINE_MAX_INPUT 4096u
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
-    static char buf[MAX_INPUT + 1u];
+    static char buf[CMDLINE_MAX_INPUT + 1u];
     static char prog[] = "navecu";
-    static app_t app;
-    char *argv[MAX_ARGS + 2u];
-    if (size > MAX_INPUT) {
-        size = MAX_INPUT;
+    static app_t cmd_app;
+    char *argv[CMDLINE_MAX_ARGS + 2u];
+    if (size > CMDLINE_MAX_INPUT) {
+        size = CMDLINE_MAX_INPUT;
     }
     memcpy(buf, data, size);
     buf[size] = '\0';
     int argc = 0;
     argv[argc++] = prog;
     size_t start = 0u;
-    for (size_t i = 0u; i <= size && argc < (int)MAX_ARGS + 1; i++) {
+    for (size_t i = 0u; i <= size && argc < (int)CMDLINE_MAX_ARGS + 1; i++) {
         if (i == size || buf[i] == '\0') {
             argv[argc++] = &buf[start];
             start = i + 1u;
@@ -69,7 +69,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (live_run && (strlen(o.live_if) == 0u || strlen(o.live_if) > 15u)) {
         fuzz_fail("accepted an interface name of %zu characters", strlen(o.live_if));
     }
-    if (app_init(&app, &o.cfg) != 0) {
+    if (app_init(&cmd_app, &o.cfg) != 0) {
         fuzz_fail("the command line was accepted but app_init refuses its configuration");
     }
     return 0;
