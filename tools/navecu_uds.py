@@ -58,12 +58,10 @@ NRC_NAMES = {
     0x21: "busyRepeatRequest", 0x22: "conditionsNotCorrect", 0x24: "requestSequenceError",
     0x25: "noResponseFromSubnetComponent", 0x26: "failurePreventsExecutionOfRequestedAction",
     0x31: "requestOutOfRange", 0x33: "securityAccessDenied", 0x34: "authenticationRequired",
-    0x35: "invalidKey", 0x36: "exceededNumberOfAttempts", 0x37: "requiredTimeDelayNotExpired",
-    0x38: "secureDataTransmissionRequired", 0x39: "secureDataTransmissionNotAllowed",
-    0x3A: "secureDataVerificationFailed",
+    0x35: "invalidKey", 0x36: "exceedNumberOfAttempts", 0x37: "requiredTimeDelayNotExpired",
     0x70: "uploadDownloadNotAccepted", 0x71: "transferDataSuspended",
     0x72: "generalProgrammingFailure", 0x73: "wrongBlockSequenceCounter",
-    0x78: "requestCorrectlyReceivedResponsePending",
+    0x78: "requestCorrectlyReceived-ResponsePending",
     0x7E: "subFunctionNotSupportedInActiveSession",
     0x7F: "serviceNotSupportedInActiveSession", 0x81: "rpmTooHigh", 0x82: "rpmTooLow",
     0x83: "engineIsRunning", 0x84: "engineIsNotRunning", 0x85: "engineRunTimeTooLow",
@@ -101,6 +99,8 @@ class UsageError(ValueError):
 
 
 def nrc_name(code: int) -> str:
+    if 0x38 <= code <= 0x4F:
+        return "reservedByExtendedDataLinkSecurityDocument"
     if 0x95 <= code <= 0xEF:
         return "reservedForSpecificConditionsNotCorrect"
     return NRC_NAMES.get(code, "ISOSAEReserved")
@@ -247,15 +247,23 @@ def to_toml(values: dict, tab: Optional[dict] = None, header: str = "") -> str:
 
 
 def read_toml(path: str, tab: Optional[dict] = None) -> dict:
-    """A TOML of parameters, every entry checked: {name: value to send}. InputError names
-    the file and what is wrong; nothing is sent from a file with one bad entry."""
-    tab = tab or table()
+    """A TOML file of parameters, every entry checked: {name: value to send}. InputError
+    names the file and what is wrong; nothing is sent from a file with one bad entry."""
     try:
-        doc = tomllib.loads(Path(path).read_text(encoding="utf-8"))
+        text = Path(path).read_text(encoding="utf-8")
     except OSError as e:
         raise InputError(f"{path}: {e.strerror}") from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
+    except UnicodeDecodeError as e:
         raise InputError(f"{path}: not TOML: {e}") from None
+    return read_toml_text(text, tab, str(path))
+
+
+def read_toml_text(text: str, tab: Optional[dict] = None, where: str = "TOML") -> dict:
+    tab = tab or table()
+    try:
+        doc = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        raise InputError(f"{where}: not TOML: {e}") from None
     out, errors = {}, []
     for name, v in doc.items():
         if name not in tab:
@@ -266,7 +274,7 @@ def read_toml(path: str, tab: Optional[dict] = None) -> dict:
         except InputError as e:
             errors.append(str(e))
     if errors:
-        raise InputError(f"{path}: " + "; ".join(errors))
+        raise InputError(f"{where}: " + "; ".join(errors))
     return out
 
 
