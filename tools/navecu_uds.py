@@ -94,6 +94,10 @@ class WireError(ValueError):
     """An answer that does not decode as the table says: exit status 2."""
 
 
+class TransportError(OSError):
+    """No bus, or the log runner failed: exit status 2."""
+
+
 class UsageError(ValueError):
     """Exit status 4."""
 
@@ -316,8 +320,13 @@ def open_client(a, tab: dict):
         bus = LogRunnerBus(navecu=a.navecu, response_id=rsp_id, session=a.session,
                            nvm=a.nvm, navecu_args=a.navecu_arg)
     else:
-        bus = can.Bus(interface=a.interface, channel=a.channel,
-                      can_filters=[{"can_id": rsp_id, "can_mask": 0x7FF, "extended": False}])
+        try:
+            bus = can.Bus(interface=a.interface, channel=a.channel,
+                          can_filters=[{"can_id": rsp_id, "can_mask": 0x7FF,
+                                        "extended": False}])
+        except (OSError, can.CanError, ValueError, ImportError) as e:
+            raise TransportError(f"cannot open {a.interface} channel {a.channel}: {e} "
+                                 "(no such interface? `make vcan`, or --log-runner)") from None
     addr = isotp.Address(isotp.AddressingMode.Normal_11bits, txid=req_id, rxid=rsp_id)
     stack = isotp.CanStack(bus, address=addr,
                            params={"blocking_send": False, "tx_padding": 0xCC, "stmin": 0,
@@ -584,6 +593,9 @@ def _report(e: Exception, err) -> int:
         return EXIT_TRANSPORT
     if isinstance(e, (InvalidResponseException, UnexpectedResponseException, WireError)):
         print(f"navecu_uds: malformed answer: {e}", file=err)
+        return EXIT_TRANSPORT
+    if isinstance(e, TransportError):
+        print(f"navecu_uds: transport: {e}", file=err)
         return EXIT_TRANSPORT
     if isinstance(e, OSError) or type(e).__module__.split(".")[0] in ("can", "isotp",
                                                                       "tools"):

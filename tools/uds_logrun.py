@@ -86,15 +86,20 @@ class LogRunnerBus(can.BusABC):
         self._rx: queue.Queue = queue.Queue()
         self.runs = 0
         self.history = _read_log(self.session)
-        # the answers already given in this session are not handed over again
-        self._seen = len(self._answers(self._replay())) if self.history else 0
+        # the answers already given in this session are not handed over again; with no
+        # history, the run on an empty log checks navecu_args before any request
+        try:
+            self._seen = len(self._answers(self._replay()))
+        except Exception:
+            self.shutdown()
+            raise
 
     # ---------------------------------------------------------------- the replay
     def _replay(self) -> list:
         _write_log(self.session, self.history)
         cmd = [self.navecu, "--can-log", str(self.session), "--out", str(self._out)]
         if self.nvm is not None:
-            if not self._nvm0.exists():  # the session's first frame: its power-on image
+            if not self._nvm0.exists():  # the session's start: its power-on image
                 if self.nvm.exists():
                     shutil.copyfile(self.nvm, self._nvm0)
                 else:

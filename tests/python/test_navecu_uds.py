@@ -190,6 +190,8 @@ def test_exit_status_bad_input_before_the_bus(tmp_path):
 def test_exit_status_transport():
     rc, _, err = run("--log-runner", "--navecu", "/nonexistent/navecu", "info")
     assert rc == nu.EXIT_TRANSPORT and "missing" in err
+    rc, _, err = run("--log-runner", "--navecu", NAVECU, "--navecu-arg=--bogus", "info")
+    assert rc == nu.EXIT_TRANSPORT and "navecu: bad or missing value for --bogus" in err, err
     # python-can's virtual bus: nobody answers
     rc, _, err = run("--interface", "virtual", "--channel", "navecu_uds_test", "--timeout",
                      "0.2", "info")
