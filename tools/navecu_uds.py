@@ -84,6 +84,10 @@ SESSION_EXTENDED = 0x03
 SECURITY_LEVEL = 0x01
 DTC_GROUP_ALL = 0xFFFFFF
 FORMATS = {"u16": ">H", "enum": ">B", "real": ">f", "vec3": ">3f"}
+# the DTC status bits, ISO 14229-1 Annex D.2
+DTC_STATUS_BITS = ("testFailed", "testFailedThisOperationCycle", "pendingDTC", "confirmedDTC",
+                   "testNotCompletedSinceLastClear", "testFailedSinceLastClear",
+                   "testNotCompletedThisOperationCycle", "warningIndicatorRequested")
 
 
 class InputError(ValueError):
@@ -119,6 +123,17 @@ def key_of_seed(seed: int) -> int:
 
 def security_algo(level, seed, params=None):  # udsoncan's signature
     return struct.pack(">I", key_of_seed(struct.unpack(">I", bytes(seed))[0]))
+
+
+def dtc_name(dtc: int) -> str:
+    """A 3-byte DTC (DTCFormatIdentifier 0x00, SAE J2012-DA) as its code and failure type:
+    0xD10187 -> U1101-87 (the high two bits the system P C B U, then four digits)."""
+    hi, mid, ftb = (dtc >> 16) & 0xFF, (dtc >> 8) & 0xFF, dtc & 0xFF
+    return f"{'PCBU'[hi >> 6]}{(hi >> 4) & 0x3}{hi & 0xF:X}{mid:02X}-{ftb:02X}"
+
+
+def dtc_status_names(status: int) -> list:
+    return [n for k, n in enumerate(DTC_STATUS_BITS) if status & (1 << k)]
 
 
 # ---------------------------------------------------------------- the parameter table
@@ -544,7 +559,8 @@ def run(a, tab: dict, out=sys.stdout, client=None) -> int:
             t.say(f"status availability mask 0x{r['status_availability']:02X}, "
                   f"{len(r['dtcs'])} DTC(s)")
             for d in r["dtcs"]:
-                t.say(f"  0x{d['id']:06X} status 0x{d['status']:02X}")
+                t.say(f"  0x{d['id']:06X} {dtc_name(d['id'])} status 0x{d['status']:02X} "
+                      f"({', '.join(dtc_status_names(d['status'])) or 'none'})")
         elif a.cmd == "clear-dtc":
             t.clear_dtc()
             t.say("DTCs cleared (group 0xFFFFFF)")

@@ -150,6 +150,17 @@ def test_nrc_names_are_iso_14229s():
         assert theirs is not None and norm(theirs) == norm(name), (hex(code), theirs, name)
 
 
+def test_dtc_names():
+    # docs/can.md's DTC table (dtc branch): 3 bytes D10187 is U1101-87, 510196 C1101-96
+    assert nu.dtc_name(0xD10187) == "U1101-87"
+    assert nu.dtc_name(0x510196) == "C1101-96"
+    assert nu.dtc_name(0x012345) == "P0123-45"
+    assert nu.dtc_name(0x9ABCDE) == "B1ABC-DE"
+    assert nu.dtc_status_names(0x09) == ["testFailed", "confirmedDTC"]
+    assert nu.dtc_status_names(0x50) == ["testNotCompletedSinceLastClear",
+                                         "testNotCompletedThisOperationCycle"]
+
+
 def test_key_is_the_documented_demonstration_key():
     for seed in (0, 1, 0x12345678, 0xFFFFFFFF, 0x4E415645):
         assert nu.key_of_seed(seed) == uds_check.key_of_seed(seed)
