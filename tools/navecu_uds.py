@@ -414,13 +414,28 @@ class Tool:
         return self.read(list(self.tab))
 
     def write(self, values: dict) -> None:
-        """{name: checked value}: written in the table's order (a rule between parameters,
-        such as the output rates within the IMU rate, is the ECU's to refuse)."""
+        """{name: checked value}, written in the table's order. A rule between parameters
+        (the output rates within the IMU rate: app_config_valid, the ECU's) can refuse a
+        value inside its range with 0x31 until another one is written (lowering the IMU
+        rate below today's output rate): such a write is tried again after the others,
+        pass after pass while one succeeds; then the ECU's refusal is the result."""
+        from udsoncan.exceptions import NegativeResponseException
         self.unlock()
-        for name in [n for n in self.tab if n in values]:
-            p = self.tab[name]
-            did = int(p["did"])
-            self.c.write_data_by_identifier(did, to_wire(p, values[name]))
+        pending = [n for n in self.tab if n in values]
+        while pending:
+            deferred, refusal = [], None
+            for name in pending:
+                p = self.tab[name]
+                try:
+                    self.c.write_data_by_identifier(int(p["did"]), to_wire(p, values[name]))
+                except NegativeResponseException as e:
+                    if e.response.code != 0x31:
+                        raise
+                    deferred.append(name)
+                    refusal = refusal or e
+            if len(deferred) == len(pending):
+                raise refusal
+            pending = deferred
 
     def load(self, values: dict) -> list:
         """Every entry written; a read-only one (uds_write = false) is compared instead and

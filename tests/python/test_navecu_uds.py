@@ -261,6 +261,18 @@ def test_log_runner_dump_edit_load_dump(lr):
     assert out == "imu_mount_rad = 0.0,180.0,-90.0\nlevel_s = 45\n"
 
 
+def test_log_runner_write_order_within_the_ecus_rules(lr):
+    """imu_rate_hz = 20 first is refused while nav_rate_hz is 50 (the output rates within
+    the IMU rate, the ECU's rule): tried again after nav_rate_hz and dyn_rate_hz."""
+    rc, out, err = lr("write", "imu_rate_hz=20", "nav_rate_hz=10", "dyn_rate_hz=20")
+    assert rc == 0, err
+    assert lr("read", "imu_rate_hz", "nav_rate_hz", "dyn_rate_hz")[1] == \
+        "imu_rate_hz = 20\nnav_rate_hz = 10\ndyn_rate_hz = 20\n"
+    # a value no order makes valid: the ECU's 0x31
+    rc, _, err = lr("write", "nav_rate_hz=30")
+    assert rc == nu.EXIT_NRC and "0x31 requestOutOfRange" in err
+
+
 def test_log_runner_load_refuses_a_changed_read_only_id(lr, tmp_path):
     path = tmp_path / "ids.toml"
     path.write_text("level_s = 50\nuds_request_id = 0x7B0\n")
