@@ -15,7 +15,8 @@ Commands:
     defaults                   RoutineControl 0x0202 RestoreDefaults (in RAM; save keeps them)
     reset                      ECUReset hardReset
     adopt-mounting             RoutineControl 0x0204 AdoptMounting
-    dtc [--supported]          ReadDTCInformation 0x02 (status mask 0xFF; --supported 0x0A)
+    dtc [--supported]          ReadDTCInformation 0x02 (status mask 0xFF) and 0x01 (their
+                               number); --supported: 0x0A
     clear-dtc                  ClearDiagnosticInformation, group 0xFFFFFF (all)
     erase-cal                  RoutineControl 0x0201 EraseCalibration
     store-cal                  RoutineControl 0x0203 StoreCalibration
@@ -465,8 +466,12 @@ class Tool:
         else:
             r = self.c.get_dtc_by_status_mask(0xFF)
         sd = r.service_data
-        return {"status_availability": sd.dtc_status_availability_mask,
+        return {"status_availability": sd.status_availability.get_byte_as_int(),
                 "dtcs": [{"id": d.id, "status": d.status.get_byte_as_int()} for d in sd.dtcs]}
+
+    def dtc_count(self) -> int:
+        """ReadDTCInformation 0x01 reportNumberOfDTCByStatusMask, mask 0xFF."""
+        return self.c.get_number_of_dtc_by_status_mask(0xFF).service_data.dtc_count
 
     def clear_dtc(self) -> None:
         self.c.clear_dtc(DTC_GROUP_ALL)
@@ -571,8 +576,10 @@ def run(a, tab: dict, out=sys.stdout, client=None) -> int:
             t.say(f"ECUReset: reset type {t.reset()} accepted")
         elif a.cmd == "dtc":
             r = t.dtc(a.supported)
+            what = "supported" if a.supported else f"with a status bit set ({t.dtc_count()} " \
+                "counted by 0x19 01)"
             t.say(f"status availability mask 0x{r['status_availability']:02X}, "
-                  f"{len(r['dtcs'])} DTC(s)")
+                  f"{len(r['dtcs'])} DTC(s) {what}")
             for d in r["dtcs"]:
                 t.say(f"  0x{d['id']:06X} {dtc_name(d['id'])} status 0x{d['status']:02X} "
                       f"({', '.join(dtc_status_names(d['status'])) or 'none'})")

@@ -11,7 +11,9 @@ history of the session after each frame gives the same answers to the earlier fr
 the new answers after the last one: the ISO-TP flow (FF, the ECU's FC, the CFs; the
 ECU's FF, the tester's FC, its CFs) and the UDS exchange run unchanged in can-isotp and
 udsoncan above this bus. A frame is stamped with the wall clock (strictly increasing),
-so the server's timers (S3, the security delay, the ISO-TP timeouts) see real time.
+so the server's timers (S3, the security delay, the ISO-TP timeouts) see real time;
+advance() lets bus time pass without waiting and inject() adds other nodes' frames (an
+IMU for a while, then silent: a fault to read as a DTC).
 
 Power-on session: the history lives in the `session` log (a temporary one when None),
 so successive tool runs with the same session continue one power-on of the ECU (a
@@ -84,6 +86,7 @@ class LogRunnerBus(can.BusABC):
         self._out = work / "out.log"
         self._nvm_run = work / "nvm.bin"
         self._rx: queue.Queue = queue.Queue()
+        self._offset = 0.0  # bus time ahead of the wall clock (advance, inject)
         self.runs = 0
         self.history = _read_log(self.session)
         # the answers already given in this session are not handed over again; with no
@@ -124,10 +127,33 @@ class LogRunnerBus(can.BusABC):
                 and not m.is_extended_id]
 
     # ---------------------------------------------------------------- python-can
-    def send(self, msg: can.Message, timeout: Optional[float] = None) -> None:
+    def _now(self) -> float:
+        """The next frame's time: the wall clock (plus what advance() added), after the
+        last frame of the history by at least 1 ms."""
         last = self.history[-1].timestamp if self.history else 0.0
-        t = max(time.time(), last + 1e-3)
-        self.history.append(can.Message(timestamp=round(t, 6), arbitration_id=msg.arbitration_id,
+        return round(max(time.time() + self._offset, last + 1e-3), 6)
+
+    def advance(self, seconds: float) -> None:
+        """Let `seconds` of bus time pass before the next frame, without waiting for them
+        (the bus is silent meanwhile: timers run out, a silent sender is seen silent)."""
+        self._offset += seconds
+
+    def inject(self, frames: Sequence[can.Message]) -> None:
+        """Other nodes' frames (an IMU, a GNSS receiver) into the session: each at now plus
+        its own timestamp (seconds from the first), replayed with the tester's from the
+        next one on; the bus time moves on to the last of them."""
+        if not frames:
+            return
+        t0, base = frames[0].timestamp, self._now()
+        for m in frames:
+            self.history.append(can.Message(timestamp=round(base + m.timestamp - t0, 6),
+                                            arbitration_id=m.arbitration_id,
+                                            is_extended_id=m.is_extended_id,
+                                            data=bytes(m.data), dlc=m.dlc))
+        self._offset += max(0.0, self.history[-1].timestamp - time.time() - self._offset)
+
+    def send(self, msg: can.Message, timeout: Optional[float] = None) -> None:
+        self.history.append(can.Message(timestamp=self._now(), arbitration_id=msg.arbitration_id,
                                         is_extended_id=msg.is_extended_id,
                                         data=bytes(msg.data), dlc=msg.dlc))
         answers = self._answers(self._replay())

@@ -4,7 +4,7 @@ with_vcan.sh): the configuration round trip, the security refusals and the DTCs.
     python -m tools.vcan.navecu_uds_check [--navecu build/host/navecu]
 
 Starts build/host/navecu --can vcan0 --nvm NVM (a fresh image in a temporary directory;
-no IMU, GNSS or wheel frames: the IMU is silent), then runs the tool's commands through
+no IMU, GNSS or wheel frames until the DTC step), then runs the tool's commands through
 its main() exactly as on the command line, and a few raw requests through its Tool
 class, and prints one JSON object with what each step gave (exit statuses, the dumps,
 the NRCs) for tests/python/test_navecu_uds_live.py to judge:
@@ -13,8 +13,8 @@ the NRCs) for tests/python/test_navecu_uds_live.py to judge:
               stopped and started again on the same NVM image -> dump
   security    a WriteDataByIdentifier in the extended session without SecurityAccess;
               three wrong keys, then a request in the delay (raw and through the tool)
-  DTCs        ReadDTCInformation after the IMU was silent for longer than its DTC's
-              confirm time, ClearDiagnosticInformation, ReadDTCInformation again
+  DTCs        IMU samples for 1 s, then none: ReadDTCInformation once the silent IMU's
+              DTC is confirmed, ClearDiagnosticInformation, ReadDTCInformation again
 
 Exit status 0 when every step ran (the verdicts are the test's), 1 when one raised, 2 with
 "NO VCAN" when vcan0 is missing.
@@ -32,6 +32,7 @@ import time
 import traceback
 from pathlib import Path
 
+from tools import gen_stationary_log
 from tools import navecu_uds as nu
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -41,13 +42,35 @@ IFACE = "vcan0"
 EDIT = {"level_s": 45, "gnss_lever_b_m": [1.0, -0.5, 0.25], "imu_mount_rad": [0.0, 0.0, 90.0],
         "gyro_arw_rad_rts": 0.42, "gnss_accuracy": "declared"}
 IMU_SILENT_DTC = 0xD10187  # U1101-87 (docs/can.md, "Diagnostic trouble codes"), confirmed
-IMU_SILENT_CONFIRM_S = 2.0  # after 2 s with the IMU stale (0.5 s without IMU data)
+IMU_STALE_S = 0.5           # without an IMU sample: IMU_STALE
+IMU_SILENT_CONFIRM_S = 2.0  # then its DTC is confirmed
+IMU_S = 1.0                 # IMU samples sent before the silence
+
+
+def send_imu(seconds):
+    """IMU pairs of a car at rest at 100 Hz (tools/gen_stationary_log.py's, E2E-valid),
+    paced in real time on vcan0; the number of frames sent."""
+    import can
+    frames = [m for m in gen_stationary_log.generate(duration_s=seconds)
+              if m.arbitration_id in (0x100, 0x101)]
+    with can.Bus(interface="socketcan", channel=IFACE) as tx:
+        t0 = time.monotonic()
+        for m in frames:
+            delay = m.timestamp - frames[0].timestamp - (time.monotonic() - t0)
+            if delay > 0:
+                time.sleep(delay)
+            tx.send(can.Message(arbitration_id=m.arbitration_id, data=m.data,
+                                is_extended_id=False))
+    return len(frames)
 
 
 def tool(*argv):
     """The tool's main() on argv: (exit status, stdout, stderr)."""
     out, err = io.StringIO(), io.StringIO()
-    rc = nu.main(["--channel", IFACE, *map(str, argv)], out=out, err=err)
+    try:
+        rc = nu.main(["--channel", IFACE, *map(str, argv)], out=out, err=err)
+    except Exception:  # noqa: BLE001 - a bug of the tool: reported, the other steps go on
+        return -1, out.getvalue(), err.getvalue() + traceback.format_exc()
     return rc, out.getvalue(), err.getvalue()
 
 
@@ -57,7 +80,7 @@ def start_navecu(binary, nvm):
     line = proc.stderr.readline()
     if "running on" not in line:
         raise RuntimeError(f"navecu did not start: {line}{proc.stderr.read()}")
-    return proc, time.monotonic()
+    return proc
 
 
 def stop_navecu(proc):
@@ -67,12 +90,15 @@ def stop_navecu(proc):
 
 
 def raw(fn):
-    """(None, result) when positive, (the NRC, None) when negative."""
+    """(None, result) when positive, (the NRC, None) when negative, (-1, the traceback)
+    when it raised otherwise."""
     from udsoncan.exceptions import NegativeResponseException
     try:
         return None, fn()
     except NegativeResponseException as e:
         return e.response.code, None
+    except Exception:  # noqa: BLE001 - reported, the other steps go on
+        return -1, traceback.format_exc()
 
 
 def wrong_key(level, seed, params=None):  # udsoncan's security_algo signature
@@ -87,7 +113,7 @@ def run(binary, work: Path):
     r = {}
     tab = nu.table()
     nvm = work / "nvm.bin"
-    proc, t_start = start_navecu(binary, nvm)
+    proc = start_navecu(binary, nvm)
     try:
         r["info"] = tool("info")
         a_toml, b_toml, edited = work / "a.toml", work / "b.toml", work / "edited.toml"
@@ -101,7 +127,7 @@ def run(binary, work: Path):
         r["dump_loaded"] = tool("dump")
         r["save"] = tool("save")
         r["firmware_summary_1"] = stop_navecu(proc)
-        proc, t_start = start_navecu(binary, nvm)
+        proc = start_navecu(binary, nvm)
         r["dump_restarted"] = tool("dump")
         # raw requests: a write without SecurityAccess, then three wrong keys
         client = nu.open_client(client_args(), tab)
@@ -118,14 +144,16 @@ def run(binary, work: Path):
         finally:
             nu.close_client(client)
         r["write_in_delay"] = tool("write", "level_s=46")
-        # the DTC of the silent IMU, once its confirm time has passed since the start
-        time.sleep(max(0.0, t_start + IMU_SILENT_CONFIRM_S + 1.5 - time.monotonic()))
+        # the fault: IMU samples for 1 s, then none; its DTC read after it is confirmed
+        r["imu_frames"] = send_imu(IMU_S)
+        time.sleep(IMU_STALE_S + IMU_SILENT_CONFIRM_S + 1.0)
         r["dtc_cli"] = tool("dtc")
         client = nu.open_client(client_args(), tab)
         try:
             t = nu.Tool(client, tab)
             r["dtc_before"] = raw(lambda: t.dtc())
             r["dtc_supported"] = raw(lambda: t.dtc(supported=True))
+            r["dtc_count"] = raw(lambda: t.dtc_count())
             r["nrc_clear"] = raw(lambda: t.clear_dtc())[0]
             r["dtc_after"] = raw(lambda: t.dtc())
         finally:
