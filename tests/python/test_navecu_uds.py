@@ -7,7 +7,6 @@ import io
 import math
 import os
 import struct
-import time
 from pathlib import Path
 
 import pytest
