@@ -90,6 +90,9 @@ help:
 	@echo "make kingston      the real Kingston 2008 drive (MODE=dr|full, OUTAGES=a-b,c-d|none)"
 	@echo "make drive DATA=data/comma2k19-rav4 VEHICLE=toyota_rav4_2017"
 	@echo "                   the real RAV4's whole bus through the RAV4 build, against its reference"
+	@echo "make uds ARGS=\"dump --toml ecu.toml\" [BUS=vcan0]"
+	@echo "                   the UDS host tool (tools/navecu_uds.py) on the ECU at BUS; BUS=log:"
+	@echo "                   on build/host/navecu replaying a CAN log (docs/diagnostics.md)"
 	@echo "make vcan          set up vcan0 on a normal Linux machine (sudo)"
 	@echo "make bench-latency IMU frame to NAV frame latency over vcan (out/bench/)"
 	@echo "make grades        free-inertial error per IMU grade vs seed 003's Table 2"
@@ -396,6 +399,17 @@ $(BUILD)/%/tests/study_numerics: $(BUILD)/%/f64/tests/study_numerics.o $(BUILD)/
 		$(BUILD)/%/libnavcore_f32.a $(BUILD)/%/libnavcore_f64.a
 	@mkdir -p $(@D)
 	$(CC) $^ -lm -o $@
+
+# ---- the UDS host tool (tools/navecu_uds.py, docs/diagnostics.md): ARGS is its command,
+# e.g. ARGS="dump --toml ecu.toml"; BUS=vcan0 (default; any SocketCAN interface), or
+# BUS=log: build/host/navecu replaying a CAN log (tools/uds_logrun.py), one power-on kept
+# in build/uds/session.log (delete it for a power cycle) with the NVM image build/uds/nvm.bin
+.PHONY: uds
+BUS_UDS = $(if $(BUS),$(BUS),vcan0)
+uds: venv $(if $(filter log,$(BUS_UDS)),$(BUILD)/host/navecu)
+	@mkdir -p $(BUILD)/uds
+	$(PY) -m tools.navecu_uds $(if $(filter log,$(BUS_UDS)),--log-runner --navecu $(BUILD)/host/navecu \
+	  --session $(BUILD)/uds/session.log --nvm $(BUILD)/uds/nvm.bin,--channel $(BUS_UDS)) $(ARGS)
 
 # ---- vcan0 on a normal Linux machine (sudo); without kernel CAN the tests use
 # tools/vcan/with_vcan.sh, which boots User-Mode Linux with real vcan
