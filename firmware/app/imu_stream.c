@@ -231,8 +231,9 @@ imu_verdict_t imu_stream_accel(imu_stream_t *s, imu_link_t *l, uint8_t counter, 
     uint8_t time_reset = 0u;
     if (l->stamped) {
         st = check_stamp(s, l, counter, step);
+        const int own = s->time_valid && s->time_counter == counter;
+        s->time_valid = 0u; /* a stamp serves its own sample or none: never a later one */
         if (st.refuse) {
-            const int own = s->time_valid && s->time_counter == counter;
             if (!own || l->stamp_refused + 1u < APP_IMU_TIME_RESYNC) {
                 l->stamp_refused = (uint8_t)(l->stamp_refused < UINT8_MAX ? l->stamp_refused + 1u
                                                                           : UINT8_MAX);
@@ -247,7 +248,6 @@ imu_verdict_t imu_stream_accel(imu_stream_t *s, imu_link_t *l, uint8_t counter, 
         l->stamp_refused = 0u;
         l->stamp_us = s->time_us;
         l->have_stamp = 1u;
-        s->time_valid = 0u;
     }
     s->resync_valid = 0u;
     l->counter = probe;
