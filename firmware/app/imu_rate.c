@@ -101,8 +101,9 @@ imu_rate_change_t imu_rate_epoch(imu_rate_t *r, uint32_t rate_hz, uint32_t tow_m
     }
     /* stamped: the stamps' time of the samples counted (rounded to ms); a clock going
      * back (modulo the week) is still not measured */
+    const uint64_t stamp_ms = (r->stamp_us + 500u) / 1000u;
     const int64_t ms = r->stamped != 0u && tow_span <= (int64_t)APP_IMU_RATE_MAX_MS
-                           ? (int64_t)((r->stamp_us + 500u) / 1000u)
+                           ? (int64_t)stamp_ms
                            : tow_span;
     /* not measured: too long or a step back, no sample, or a gap the counter could not see
      * among samples in time (most samples after such a gap is the data's rate: measured) */

@@ -276,6 +276,8 @@ imu_verdict_t imu_stream_accel(imu_stream_t *s, imu_link_t *l, uint8_t counter, 
             out->lost += out->lost_by_time;
             out->time_gap = 1u;
         }
+    } else {
+        /* the grid's first sample, or receive time not advancing: no gap to see */
     }
     for (int i = 0; i < 3; i++) {
         out->raw[i] = rate.raw[i];
