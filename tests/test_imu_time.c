@@ -450,6 +450,47 @@ static void test_rate_check_uses_the_stamps(void **state)
     assert_false(imu_rate_mismatch(&r));
 }
 
+/*
+ * GIVEN a 400 Hz IMU (stamps 2.5 ms apart) configured as 100 Hz, stamped
+ * THEN the samples are refused for their interval (a quarter period, below the band) or,
+ *      their counter then running ahead, for the counter, counted; one whose refused
+ *      predecessors bring its interval into the band is taken, the refused ones bridged,
+ *      so the IMU time stays the stamps' (never ahead of the IMU's clock), and the stamps'
+ *      time base is never restarted (no time jump: a clock at another rate is the rate
+ *      check's; measured 233 + 50 refused of 300, 49 samples taken with the bridged);
+ * AND the rate check, counting the refused samples over the epochs' TimeOfWeek, finds
+ *      400 Hz at the third epoch, as on the grid.
+ */
+static void test_wrong_rate_is_the_rate_checks(void **state)
+{
+    (void)state;
+    fresh(IMU_TIME_STAMPED);
+    src_init(0u);
+    start_navigating();
+    for (int k = 0; k < 300; k++) {
+        src_sample(2500u);
+    }
+    print_message("[imu_time] 400 Hz stamps at 100 Hz: %u refused for the stamp, %u for the "
+                  "counter, %llu samples taken\n", app.keep.health.imu_timing,
+                  app.keep.health.bad_counter, (unsigned long long)app_samples(&app));
+    assert_int_equal(app.keep.health.time_jumps, 0u);
+    assert_true(app.keep.health.imu_timing + app.keep.health.bad_counter > 250u);
+    assert_true(app_time_us(&app) <= PERIOD_US + 299u * 2500u);
+
+    imu_rate_t r;
+    imu_rate_init(&r);
+    uint32_t tow = 200000u;
+    (void)imu_rate_epoch(&r, 100u, tow);
+    for (int e = 1; e <= 2; e++) {
+        for (int k = 0; k < 400; k++) {
+            imu_rate_refused(&r);
+        }
+        tow += 1000u;
+        assert_int_equal(imu_rate_epoch(&r, 100u, tow), e == 2 ? IMU_RATE_MISMATCH : IMU_RATE_SAME);
+    }
+    assert_int_equal(imu_rate_measured_chz(&r), 40000u);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -459,6 +500,7 @@ int main(void)
         cmocka_unit_test(test_wrap_of_the_u32_clock),
         cmocka_unit_test(test_stamp_of_another_counter),
         cmocka_unit_test(test_rate_check_uses_the_stamps),
+        cmocka_unit_test(test_wrong_rate_is_the_rate_checks),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -174,6 +174,7 @@ static void on_imu_accel(app_t *a, hal_t *hal, const rx_input_t *in, uint64_t t_
     if (v == IMU_REJ_TIME) {
         app_count(&a->keep.health.imu_timing); /* of bad_value: the IMU_Time stamps */
         reject(a, &a->keep.health.bad_value);
+        imu_rate_refused(&a->keep.rate); /* a sample all the same: the rate check's */
         return;
     }
     if (v != IMU_SAMPLE) {

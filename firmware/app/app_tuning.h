@@ -31,8 +31,9 @@
  * covers, must lie within [1/APP_IMU_TIME_BAND_DIV, APP_IMU_TIME_BAND_MUL/APP_IMU_TIME_BAND_DIV]
  * = [0.5, 1.5] nominal periods (the IMU's clock cannot be 50 % off its rate; a rate that
  * far off is the rate check's, imu_rate.h); a sample outside it, or with a stamp not after
- * the previous one, is refused; APP_IMU_TIME_RESYNC refusals in a row restart the stamps'
- * time base on the next sample, as a gap too long to bridge */
+ * the previous one, is refused; APP_IMU_TIME_RESYNC refusals in a row, the last a stamp
+ * behind the last one taken (the clock jumped back), restart the stamps' time base there,
+ * as a gap too long to bridge (a jump forward is a gap the stamps see) */
 #define APP_IMU_TIME_BAND_DIV 2u
 #define APP_IMU_TIME_BAND_MUL 3u
 #define APP_IMU_TIME_RESYNC 3u

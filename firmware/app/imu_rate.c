@@ -37,11 +37,18 @@ void imu_rate_stamp(imu_rate_t *r, uint32_t dt_us)
     r->stamp_us += dt_us;
 }
 
+void imu_rate_refused(imu_rate_t *r)
+{
+    imu_rate_sample(r, 0u, 0u);
+    r->stamp_gap = 1u;
+}
+
 /* the next interval starts at this epoch */
 static void anchor(imu_rate_t *r, uint32_t tow_ms)
 {
     r->count = 0u;
     r->stamp_us = 0u;
+    r->stamp_gap = 0u;
     r->received = 0u;
     r->gaps = 0u;
     r->tow_ms = tow_ms;
@@ -102,7 +109,8 @@ imu_rate_change_t imu_rate_epoch(imu_rate_t *r, uint32_t rate_hz, uint32_t tow_m
     /* stamped: the stamps' time of the samples counted (rounded to ms); a clock going
      * back (modulo the week) is still not measured */
     const uint64_t stamp_ms = (r->stamp_us + 500u) / 1000u;
-    const int64_t ms = r->stamped != 0u && tow_span <= (int64_t)APP_IMU_RATE_MAX_MS
+    const int64_t ms = r->stamped != 0u && r->stamp_gap == 0u &&
+                               tow_span <= (int64_t)APP_IMU_RATE_MAX_MS
                            ? (int64_t)stamp_ms
                            : tow_span;
     /* not measured: too long or a step back, no sample, or a gap the counter could not see

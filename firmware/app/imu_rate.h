@@ -52,6 +52,8 @@ typedef struct {
     uint64_t stamp_us;   /* imu_time = stamped: the samples' IMU_Time intervals since the
                             anchor, the stamps' own time of the count */
     uint8_t stamped;     /* stamped: the interval is stamp_us, not the TimeOfWeek's */
+    uint8_t stamp_gap;   /* a sample refused for its stamp since the anchor: its time is not
+                            in stamp_us, the interval is the TimeOfWeek's */
     uint8_t anchored;
     /* the run of off-rate intervals that agree on the rate */
     int8_t run_dir;      /* +1 more samples than configured, -1 fewer */
@@ -85,6 +87,12 @@ void imu_rate_sample(imu_rate_t *r, uint64_t counter_lost, uint8_t time_gap);
  * that claim the configured rate for samples coming at another are refused one by one
  * (APP_IMU_TIME_BAND_*) beyond 50 %. */
 void imu_rate_stamp(imu_rate_t *r, uint32_t dt_us);
+
+/* Stamped: a sample refused for its stamp (imu_stream.h, IMU_REJ_TIME): it is data, so it
+ * is counted, and the interval it falls in is measured by TimeOfWeek as on the grid (a
+ * 400 Hz IMU configured as 100 Hz has its stamps refused, 2.5 ms against 5..15 ms, and is
+ * still found off-rate). */
+void imu_rate_refused(imu_rate_t *r);
 
 /* A usable GNSS epoch of TimeOfWeek tow_ms (0 .. one week), against the configured rate
  * (Hz, > 0). */

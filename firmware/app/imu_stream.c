@@ -34,11 +34,13 @@ void imu_stream_time(imu_stream_t *s, const imu_link_t *l, uint8_t counter, uint
     s->time_us = t_us;
 }
 
-/* The stamped interval of a sample whose counter stepped by step: 0 and the whole counter
- * cycles the stamps show beyond the counter (*cycles), or -1 to refuse it (no stamp of
- * its counter, a stamp not after the previous one, an interval outside the band). */
+/* The stamped interval of a sample whose counter stepped by step and the whole counter
+ * cycles the stamps show beyond the counter, or refuse: no stamp of its counter, a stamp
+ * not after the previous one (back: only that restarts the stamps' time base when it
+ * lasts), an interval outside the band. */
 typedef struct {
     int refuse;
+    int back;
     uint32_t dt_us;
     uint64_t cycles;  /* lost samples seen only in the stamps (whole counter cycles) */
 } stamp_check_t;
@@ -46,7 +48,7 @@ typedef struct {
 static stamp_check_t check_stamp(const imu_stream_t *s, const imu_link_t *l, uint8_t counter,
                                  int step)
 {
-    stamp_check_t r = {0, 0u, 0u};
+    stamp_check_t r = {0, 0, 0u, 0u};
     if (!s->time_valid || s->time_counter != counter) {
         r.refuse = 1; /* the sample's own stamp is missing (or another sample's) */
         return r;
@@ -57,6 +59,7 @@ static stamp_check_t check_stamp(const imu_stream_t *s, const imu_link_t *l, uin
     const uint32_t d = s->time_us - l->stamp_us; /* modulo 2^32: the clock wraps */
     if (d == 0u || d >= 0x80000000u) {
         r.refuse = 1; /* the stamp is not after the previous one */
+        r.back = 1;
         return r;
     }
     const uint64_t period_us = 1000000u / l->rate_hz;
@@ -227,20 +230,22 @@ imu_verdict_t imu_stream_accel(imu_stream_t *s, imu_link_t *l, uint8_t counter, 
         s->resync_counter = counter;
         return IMU_REJ_COUNTER;
     }
-    stamp_check_t st = {0, 0u, 0u};
+    stamp_check_t st = {0, 0, 0u, 0u};
     uint8_t time_reset = 0u;
     if (l->stamped) {
         st = check_stamp(s, l, counter, step);
         const int own = s->time_valid && s->time_counter == counter;
         s->time_valid = 0u; /* a stamp serves its own sample or none: never a later one */
         if (st.refuse) {
-            if (!own || l->stamp_refused + 1u < APP_IMU_TIME_RESYNC) {
+            if (!own || !st.back || l->stamp_refused + 1u < APP_IMU_TIME_RESYNC) {
                 l->stamp_refused = (uint8_t)(l->stamp_refused < UINT8_MAX ? l->stamp_refused + 1u
                                                                           : UINT8_MAX);
                 return IMU_REJ_TIME; /* bridged, like a lost sample, by the next one */
             }
-            /* refused APP_IMU_TIME_RESYNC times in a row with stamps of their own: the IMU's
-             * clock jumped; its stamps are the time base again from this sample on */
+            /* refused APP_IMU_TIME_RESYNC times in a row, this one with a stamp of its own
+             * behind the last one taken: the IMU's clock jumped back; its stamps are the
+             * time base again from this sample on. (Intervals outside the band never
+             * restart it: a clock that runs at another rate is the rate check's.) */
             time_reset = 1u;
             st.dt_us = 0u;
             st.cycles = 0u;

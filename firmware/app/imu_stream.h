@@ -95,9 +95,10 @@ typedef struct {
                             one, over the lost + 1 samples it covers (imu_stream_dt_us); 0
                             on the grid, and for the first stamp (no interval yet: the
                             nominal period) */
-    uint8_t time_reset;  /* stamped: the stamps restarted after APP_IMU_TIME_RESYNC refusals
-                            (a clock jump): the time since the previous sample is unknown,
-                            as after a gap too long to bridge */
+    uint8_t time_reset;  /* stamped: the stamps restarted after APP_IMU_TIME_RESYNC refusals,
+                            the last a stamp behind the last one taken (the clock jumped
+                            back): the time since the previous sample is unknown, as after
+                            a gap too long to bridge */
 } imu_sample_t;
 
 /* Boot: the saturation limits from the configured ranges (rad/s, m/s^2) and IMU rate;
