@@ -19,7 +19,8 @@
  * with app_config (what an integrator sets), app_tuning.h (the tuning constants) and
  * app_health (counters and flags).
  *
- * Time base: the IMU sample counter and the configured IMU rate, never the arrival time of
+ * Time base: the IMU sample counter and the configured IMU rate (with imu_time = stamped,
+ * the IMU's own IMU_Time stamps for the time, app_time_us), never the arrival time of
  * frames, so the same input gives the same output frames however fast it arrives. Output
  * frames are produced inside app_handle_frame, right after the IMU sample that is due.
  * Everything rejected is counted in app_health_t and reported in NAV_Status pages 1..6.
@@ -66,6 +67,8 @@ typedef struct {
     imu_rate_t rate;        /* the configured IMU rate against the data: a mismatch holds
                                navigation whatever restarts it (imu_rate.h) */
     uint64_t n_samples;     /* IMU samples processed: the time base, runs on */
+    uint64_t imu_t_us;      /* imu_time = stamped: the IMU time of the last sample, us, the
+                               sum of the samples' stamped intervals (app_time_us) */
     uint64_t last_rx_t_us;  /* latest receive time seen (time jumps) */
     tx_state_t tx;          /* E2E transmit state and what was sent */
     uint64_t last_poll_us;  /* HAL time of the last app_poll (task supervision) */
@@ -146,6 +149,16 @@ int app_tasks_ok(app_t *app, uint64_t now_us);
 /* Read-only views for the board's summary and the tests. */
 static inline app_mode_t app_mode(const app_t *app) { return app->run.mode; }
 static inline uint64_t app_samples(const app_t *app) { return app->keep.n_samples; }
+/* The IMU time now, us: on the grid the sample count over the configured rate; stamped
+ * (imu_time), the sum of the samples' IMU_Time intervals (a sample without one, the first,
+ * counts the nominal period). What GNSS epochs are aligned to and NAV_Height's
+ * TimeOfValidity and NAV_Time carry. */
+static inline uint64_t app_time_us(const app_t *app)
+{
+    return app->cfg.imu_time == IMU_TIME_STAMPED
+               ? app->keep.imu_t_us
+               : app->keep.n_samples * 1000000u / app->cfg.imu_rate_hz;
+}
 static inline const app_health_t *app_health(const app_t *app) { return &app->keep.health; }
 static inline const calib_t *app_calibration(const app_t *app) { return &app->keep.cal; }
 /* Kalman updates applied so far (a board's trace) */

@@ -5,7 +5,7 @@
 
 static app_diag_t diag_of(app_t *a)
 {
-    const app_diag_t d = {&a->keep.health, &a->run.events, a->keep.n_samples};
+    const app_diag_t d = {&a->keep.health, &a->run.events, a->keep.n_samples, app_time_us(a)};
     return d;
 }
 

@@ -61,7 +61,8 @@ typedef enum {
     APP_PARAM_GNSS_LEVER_B_M = 25,
     APP_PARAM_UDS_REQUEST_ID = 26,
     APP_PARAM_UDS_RESPONSE_ID = 27,
-    APP_PARAM_N = 28
+    APP_PARAM_IMU_TIME = 28,
+    APP_PARAM_N = 29
 } app_param_id_t;
 
 extern const app_param_t app_params[APP_PARAM_N];
