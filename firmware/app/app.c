@@ -46,6 +46,7 @@ int app_init(app_t *app, const app_config_t *cfg)
     imu_link_init(&app->keep.imu, cfg->imu_rate_hz, cfg->gyro_range_rps, cfg->accel_range_mps2,
                   cfg->can_ids[NAVECU_MSG_IMU_ACCEL]);
     mounting_init(&app->keep.mount, cfg->imu_mount_rad);
+    dtc_init(&app->keep.dtc); /* as after a clear until app_dtc_load (app_dtc.h) */
     app->run.mode = APP_MODE_WAIT_INIT;
     (void)app_uds_init(app); /* valid IDs (app_config_valid): cannot fail */
     return NAV_OK;

@@ -149,11 +149,52 @@ static uint8_t write_did(void *user, uint16_t did, const uint8_t *data, size_t l
     return UDS_NRC_OK;
 }
 
+/* ---- the fault memory (app_dtc.h): 0x19, 0x14 ---- */
+
+static size_t dtc_count(void *user)
+{
+    (void)user;
+    return (size_t)DTC_N;
+}
+
+static int dtc_get(void *user, size_t index, uint32_t *dtc, uint8_t *status)
+{
+    const app_t *a = (const app_t *)user;
+    if (index >= (size_t)DTC_N) {
+        return -1;
+    }
+    *dtc = dtc_table[index].number;
+    *status = dtc_status(&a->keep.dtc, index);
+    return 0;
+}
+
+static uint8_t dtc_clear_all(void *user, uint32_t group)
+{
+    app_t *a = (app_t *)user;
+    (void)group; /* the server passes all groups only */
+    return app_dtc_clear(a, a->uds.hal);
+}
+
+static uint8_t dtc_availability(void *user)
+{
+    (void)user;
+    return (uint8_t)DTC_AVAILABILITY_MASK;
+}
+
 int app_uds_init(app_t *a)
 {
     isotp_config_t c;
     isotp_config_defaults(&c, a->cfg.uds_request_id, a->cfg.uds_response_id);
-    const uds_if_t itf = {a, read_did, write_did, is_writable};
+    const uds_if_t itf = {
+        .user = a,
+        .read_did = read_did,
+        .write_did = write_did,
+        .is_writable = is_writable,
+        .dtc_count = dtc_count,
+        .dtc_get = dtc_get,
+        .dtc_clear = dtc_clear_all,
+        .dtc_availability = dtc_availability,
+    };
     a->uds.on = 0u;
     if (isotp_init(&a->uds.tp, &c) != 0 || uds_init(&a->uds.srv, &itf, 0u) != 0) {
         return -1;
@@ -187,7 +228,9 @@ static void serve(app_t *a, hal_t *hal, uint64_t now)
     if (isotp_receive(&u->tp, u->req, sizeof u->req, &len) != 0) {
         return;
     }
+    u->hal = hal;
     const size_t n = uds_handle(&u->srv, u->req, len, now, u->rsp, sizeof u->rsp);
+    u->hal = NULL;
     if (uds_take_reset(&u->srv)) {
         u->reset_due = 1u;
     }
