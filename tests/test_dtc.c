@@ -205,13 +205,13 @@ static void test_clear(void **state)
     (void)dtc_update(&d, STALE | NAVECU_HEALTH_NVM_ERROR, 2000u * MS);
     assert_int_equal(dtc_status(&d, DTC_IMU_STALE), 0x2Fu);
     /* every stored byte changed (all were tested): all written */
-    assert_int_equal(dtc_clear(&d), (uint32_t)(BIT(DTC_N) - 1u));
+    assert_int_equal(dtc_clear_all(&d), (uint32_t)(BIT(DTC_N) - 1u));
     for (size_t i = 0u; i < (size_t)DTC_N; i++) {
         assert_int_equal(dtc_status(&d, i), 0x50u);
         assert_int_equal(dtc_stored(&d, i), 0x10u);
     }
     assert_int_equal(d.clears, 1u);
-    assert_int_equal(dtc_clear(&d), 0u); /* a second clear writes nothing */
+    assert_int_equal(dtc_clear_all(&d), 0u); /* a second clear writes nothing */
     /* still failing after the clear: a new failure, its confirm time from now */
     (void)dtc_update(&d, STALE, 2100u * MS);
     assert_int_equal(dtc_status(&d, DTC_IMU_STALE), 0x27u);
@@ -222,7 +222,7 @@ static void test_clear(void **state)
     /* a clear also forgets a pending of the previous cycle */
     const dtc_t prev = d;
     load_from(&prev);
-    (void)dtc_clear(&d);
+    (void)dtc_clear_all(&d);
     (void)dtc_update(&d, STALE, 0u);
     assert_int_equal(dtc_status(&d, DTC_IMU_STALE), 0x27u);
 }

@@ -116,12 +116,11 @@ def load(path: Path = TABLE, flags: dict | None = None) -> list:
 def gen_h(dtcs) -> str:
     L = [HEADER, "#ifndef NAVECU_DTC_TABLE_H", "#define NAVECU_DTC_TABLE_H", "",
          "#include <stdint.h>", "",
-         "/* the DTCs: their index is the status byte's place in the NVM record */",
-         "typedef enum {"]
+         "/* the DTCs: their index is the status byte's place in the NVM record */"]
     for d in dtcs:
-        L.append(f"    DTC_{d['name'].upper()} = {d['index']}, /* {dtc_text(d['number'])} "
+        L.append(f"#define DTC_{d['name'].upper()} {d['index']}u /* {dtc_text(d['number'])} "
                  f"{d['flag']} */")
-    L += [f"    DTC_N = {len(dtcs)}", "} dtc_id_t;", "",
+    L += [f"#define DTC_N {len(dtcs)}u /* DTCs in the table */", "",
           f"#define DTC_MAX {DTC_MAX}u /* status bytes the NVM record holds */", "",
           "typedef struct {",
           "    uint32_t number;      /* the 3-byte DTC: J2012 code (high, middle), FTB (low) */",

@@ -4,6 +4,8 @@
 #include "app.h"
 #include "uds.h"
 
+static int app_dtc_persist(app_t *a, hal_t *hal, size_t index, uint8_t status);
+
 /* the stored bytes in changed (bit i: DTC i) to NVM; 0, or -1 if one write failed */
 static int persist_changed(app_t *a, hal_t *hal, uint32_t changed)
 {
@@ -30,7 +32,7 @@ void app_dtc_cycle(app_t *a, hal_t *hal, uint32_t health_flags)
 
 uint8_t app_dtc_clear(app_t *a, hal_t *hal)
 {
-    const uint32_t changed = dtc_clear(&a->keep.dtc);
+    const uint32_t changed = dtc_clear_all(&a->keep.dtc);
     return persist_changed(a, hal, changed) == 0 ? UDS_NRC_OK
                                                  : UDS_NRC_GENERAL_PROGRAMMING_FAILURE;
 }
@@ -47,7 +49,7 @@ uint8_t app_dtc_clear(app_t *a, hal_t *hal)
  * record is read (nothing, i.e. app_dtc_load(a, NULL, 0), for a missing or refused
  * record). Until then nothing is written: the counts show it (dtc_persist_writes).
  */
-int app_dtc_persist(app_t *a, hal_t *hal, size_t index, uint8_t status)
+static int app_dtc_persist(app_t *a, hal_t *hal, size_t index, uint8_t status)
 {
     (void)hal;
     (void)index;

@@ -5,8 +5,9 @@
  *
  * NVM seam (the nvm branch's record of DTC_MAX status bytes): at boot the board's code
  * passes the record's bytes to app_dtc_load; every change of a stored byte goes to
- * app_dtc_persist. Until that record exists app_dtc_persist writes nothing (a stub, see
- * app_dtc.c) and app_init starts every DTC as after a clear: the fault memory lives in RAM
+ * app_dtc_persist (app_dtc.c: 0, or -1 on an NVM failure, counted in dtc_persist_failed).
+ * Until that record exists app_dtc_persist writes nothing (a stub marked "WIRED TO NVSTORE
+ * AT MERGE" in app_dtc.c) and app_init starts every DTC as after a clear: the fault memory lives in RAM
  * and is lost at ECUReset and at power-down.
  */
 #ifndef NAVECU_APP_DTC_H
@@ -33,9 +34,5 @@ void app_dtc_cycle(struct app *a, hal_t *hal, uint32_t health_flags);
  * generalProgrammingFailure when a stored byte could not be written (the RAM status is
  * cleared all the same; the tester may repeat the request). */
 uint8_t app_dtc_clear(struct app *a, hal_t *hal);
-
-/* Write DTC index's stored byte to NVM: 0, or -1 on an NVM failure (counted in
- * persist_failed). WIRED TO NVSTORE AT MERGE: a stub returning 0 today. */
-int app_dtc_persist(struct app *a, hal_t *hal, size_t index, uint8_t status);
 
 #endif /* NAVECU_APP_DTC_H */

@@ -151,13 +151,13 @@ static uint8_t write_did(void *user, uint16_t did, const uint8_t *data, size_t l
 
 /* ---- the fault memory (app_dtc.h): 0x19, 0x14 ---- */
 
-static size_t dtc_count(void *user)
+static size_t uds_dtc_count(void *user)
 {
     (void)user;
     return (size_t)DTC_N;
 }
 
-static int dtc_get(void *user, size_t index, uint32_t *dtc, uint8_t *status)
+static int uds_dtc_get(void *user, size_t index, uint32_t *dtc, uint8_t *status)
 {
     const app_t *a = (const app_t *)user;
     if (index >= (size_t)DTC_N) {
@@ -168,14 +168,14 @@ static int dtc_get(void *user, size_t index, uint32_t *dtc, uint8_t *status)
     return 0;
 }
 
-static uint8_t dtc_clear_all(void *user, uint32_t group)
+static uint8_t uds_dtc_clear(void *user, uint32_t group)
 {
     app_t *a = (app_t *)user;
     (void)group; /* the server passes all groups only */
     return app_dtc_clear(a, a->uds.hal);
 }
 
-static uint8_t dtc_availability(void *user)
+static uint8_t uds_dtc_availability(void *user)
 {
     (void)user;
     return (uint8_t)DTC_AVAILABILITY_MASK;
@@ -190,10 +190,10 @@ int app_uds_init(app_t *a)
         .read_did = read_did,
         .write_did = write_did,
         .is_writable = is_writable,
-        .dtc_count = dtc_count,
-        .dtc_get = dtc_get,
-        .dtc_clear = dtc_clear_all,
-        .dtc_availability = dtc_availability,
+        .dtc_count = uds_dtc_count,
+        .dtc_get = uds_dtc_get,
+        .dtc_clear = uds_dtc_clear,
+        .dtc_availability = uds_dtc_availability,
     };
     a->uds.on = 0u;
     if (isotp_init(&a->uds.tp, &c) != 0 || uds_init(&a->uds.srv, &itf, 0u) != 0) {

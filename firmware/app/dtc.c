@@ -37,7 +37,7 @@ static void start_cleared(dtc_t *d, size_t i)
 
 void dtc_init(dtc_t *d)
 {
-    memset(d, 0, sizeof *d);
+    (void)memset(d, 0, sizeof *d);
     for (size_t i = 0u; i < (size_t)DTC_N; i++) {
         start_cleared(d, i);
     }
@@ -99,7 +99,7 @@ uint32_t dtc_update(dtc_t *d, uint32_t health_flags, uint64_t now_us)
     return changed;
 }
 
-uint32_t dtc_clear(dtc_t *d)
+uint32_t dtc_clear_all(dtc_t *d)
 {
     uint32_t changed = 0u;
     for (size_t i = 0u; i < (size_t)DTC_N; i++) {

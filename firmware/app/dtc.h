@@ -16,7 +16,7 @@
  *   the start of an operation cycle (dtc_load): testFailed, testFailedThisOperationCycle
  *            clear, testNotCompletedThisOperationCycle set; pendingDTC clear where the last
  *            cycle tested and never failed the DTC;
- *   ClearDiagnosticInformation (dtc_clear): every DTC 0x50 (testNotCompletedSinceLastClear,
+ *   ClearDiagnosticInformation (dtc_clear_all): every DTC 0x50 (testNotCompletedSinceLastClear,
  *            testNotCompletedThisOperationCycle), the confirm timers stopped.
  * confirmedDTC stays until a clear (no aging). Bit 7 (warningIndicatorRequested) is not
  * supported: DTC_AVAILABILITY_MASK.
@@ -24,7 +24,7 @@
  * NVM: the stored byte of a DTC is its bits 2..5 (DTC_STORED_MASK) as the next operation
  * cycle will start from them: pendingDTC as it will be at the end of this cycle if nothing
  * else happens (set if it failed in this cycle, clear if it was tested and never failed,
- * unchanged if not tested yet). dtc_update and dtc_clear return which stored bytes
+ * unchanged if not tested yet). dtc_update and dtc_clear_all return which stored bytes
  * changed, for the caller to write to NVM (firmware/app/app_dtc.c); so the pendingDTC of
  * the previous cycle is known at the next start without an end-of-cycle write (power is
  * cut without warning). At most a few writes per DTC and operation cycle.
@@ -77,7 +77,7 @@ size_t dtc_load(dtc_t *d, const uint8_t *stored, size_t n);
 uint32_t dtc_update(dtc_t *d, uint32_t health_flags, uint64_t now_us);
 
 /* ClearDiagnosticInformation of every DTC. Returns the DTCs whose stored byte changed. */
-uint32_t dtc_clear(dtc_t *d);
+uint32_t dtc_clear_all(dtc_t *d);
 
 /* DTC i's status byte (0 for i >= DTC_N) and its stored byte. */
 uint8_t dtc_status(const dtc_t *d, size_t i);

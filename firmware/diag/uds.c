@@ -363,8 +363,10 @@ size_t uds_handle(uds_t *s, const uint8_t *req, size_t len, uint64_t now_us, uin
     const uint8_t sid = req[0];
     result_t r;
     /* (0x19 has one when the fault memory is there: else it is 0x11 whatever its length) */
-    const int has_sub =
-        (has_subfunction(sid) || (sid == UDS_SID_READ_DTC && has_fault_memory(s))) ? 1 : 0;
+    int has_sub = has_subfunction(sid);
+    if (sid == UDS_SID_READ_DTC && has_fault_memory(s)) {
+        has_sub = 1;
+    }
     /* ISO 14229-1 Figure 5 / 7 order: the service (0x11), the session (0x7F), the minimum
      * length (0x13), the sub-function (0x12), then each service's own checks */
     if (extended_only(sid) && s->session != UDS_SESSION_EXTENDED) {

@@ -7,22 +7,20 @@
 #include <stdint.h>
 
 /* the DTCs: their index is the status byte's place in the NVM record */
-typedef enum {
-    DTC_IMU_STALE = 0, /* U1101-87 IMU_STALE */
-    DTC_IMU_FAULT = 1, /* C1101-96 IMU_FAULT */
-    DTC_NO_GNSS = 2, /* U1102-87 NO_GNSS */
-    DTC_REJECTED = 3, /* U1103-81 REJECTED */
-    DTC_NVM_ERROR = 4, /* C1104-46 NVM_ERROR */
-    DTC_NO_HEADING = 5, /* C1105-00 NO_HEADING */
-    DTC_IMU_GAP = 6, /* U1101-82 IMU_GAP */
-    DTC_FILTER_RESET = 7, /* C1106-64 FILTER_RESET */
-    DTC_IMU_SUSPECT = 8, /* C1101-29 IMU_SUSPECT */
-    DTC_IMU_SATURATED = 9, /* C1101-22 IMU_SATURATED */
-    DTC_ODO_REJECTED = 10, /* C1107-64 ODO_REJECTED */
-    DTC_REACQUIRE = 11, /* C1106-00 REACQUIRE */
-    DTC_IMU_RATE_MISMATCH = 12, /* C1101-38 IMU_RATE_MISMATCH */
-    DTC_N = 13
-} dtc_id_t;
+#define DTC_IMU_STALE 0u /* U1101-87 IMU_STALE */
+#define DTC_IMU_FAULT 1u /* C1101-96 IMU_FAULT */
+#define DTC_NO_GNSS 2u /* U1102-87 NO_GNSS */
+#define DTC_REJECTED 3u /* U1103-81 REJECTED */
+#define DTC_NVM_ERROR 4u /* C1104-46 NVM_ERROR */
+#define DTC_NO_HEADING 5u /* C1105-00 NO_HEADING */
+#define DTC_IMU_GAP 6u /* U1101-82 IMU_GAP */
+#define DTC_FILTER_RESET 7u /* C1106-64 FILTER_RESET */
+#define DTC_IMU_SUSPECT 8u /* C1101-29 IMU_SUSPECT */
+#define DTC_IMU_SATURATED 9u /* C1101-22 IMU_SATURATED */
+#define DTC_ODO_REJECTED 10u /* C1107-64 ODO_REJECTED */
+#define DTC_REACQUIRE 11u /* C1106-00 REACQUIRE */
+#define DTC_IMU_RATE_MISMATCH 12u /* C1101-38 IMU_RATE_MISMATCH */
+#define DTC_N 13u /* DTCs in the table */
 
 #define DTC_MAX 16u /* status bytes the NVM record holds */
 
