@@ -172,7 +172,7 @@ static uint8_t uds_dtc_clear(void *user, uint32_t group)
 {
     app_t *a = (app_t *)user;
     (void)group; /* the server passes all groups only */
-    return app_dtc_clear(a, a->uds.hal);
+    return app_dtc_clear(a, a->uds.hal); /* the HAL of this request (serve) */
 }
 
 static uint8_t uds_dtc_availability(void *user)
@@ -215,6 +215,7 @@ static void ecu_restart(app_t *a, hal_t *hal)
 static void serve(app_t *a, hal_t *hal, uint64_t now)
 {
     app_uds_t *u = &a->uds;
+    u->hal = hal; /* the routines' NVM */
     (void)isotp_poll(&u->tp, now, tx_frame, hal);
     if (isotp_tx_busy(&u->tp)) {
         return; /* the response buffer is in use; a new request waits in the channel */
@@ -228,9 +229,7 @@ static void serve(app_t *a, hal_t *hal, uint64_t now)
     if (isotp_receive(&u->tp, u->req, sizeof u->req, &len) != 0) {
         return;
     }
-    u->hal = hal;
     const size_t n = uds_handle(&u->srv, u->req, len, now, u->rsp, sizeof u->rsp);
-    u->hal = NULL;
     if (uds_take_reset(&u->srv)) {
         u->reset_due = 1u;
     }

@@ -59,9 +59,9 @@
 #define UDS_NRC_SECURITY_ACCESS_DENIED 0x33u
 #define UDS_NRC_INVALID_KEY 0x35u
 #define UDS_NRC_EXCEEDED_ATTEMPTS 0x36u
+#define UDS_NRC_GENERAL_PROGRAMMING_FAILURE 0x72u
 #define UDS_NRC_TIME_DELAY_NOT_EXPIRED 0x37u
 #define UDS_NRC_NOT_IN_ACTIVE_SESSION 0x7Fu   /* serviceNotSupportedInActiveSession */
-#define UDS_NRC_GENERAL_PROGRAMMING_FAILURE 0x72u /* an NVM write failed */
 
 /* sessions (0x10 sub-functions) */
 #define UDS_SESSION_DEFAULT 0x01u
