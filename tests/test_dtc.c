@@ -233,7 +233,7 @@ static void test_load_refuses_impossible_bytes(void **state)
     (void)state;
     uint8_t nvm[DTC_MAX];
     memset(nvm, 0, sizeof nvm);
-    nvm[0] = 0xFFu; /* erased flash */
+    nvm[0] = 0x80u; /* bit 7 is never stored */
     nvm[1] = 0x08u; /* confirmed, never failed since the clear */
     nvm[2] = 0x04u; /* pending, never failed since the clear */
     nvm[3] = 0x30u; /* failed since the clear and never tested since it */
@@ -248,6 +248,14 @@ static void test_load_refuses_impossible_bytes(void **state)
     assert_int_equal(dtc_status(&d, 5), 0x6Cu);
     assert_int_equal(dtc_status(&d, 6), 0x50u);
     assert_int_equal(dtc_status(&d, 7), 0x40u);
+    /* 0xFF: never stored (erased flash, the record's "none"): as after a clear, not refused */
+    memset(nvm, 0xFF, sizeof nvm);
+    nvm[2] = 0x2Cu;
+    assert_int_equal(dtc_load(&d, nvm, sizeof nvm), 0u);
+    assert_int_equal(d.load_rejected, 5u);
+    assert_int_equal(dtc_status(&d, 0), 0x50u);
+    assert_int_equal(dtc_status(&d, 2), 0x6Cu);
+    nvm[5] = 0x2Cu;
     /* a shorter record (an older table): the DTCs beyond it as after a clear */
     assert_int_equal(dtc_load(&d, nvm + 5, 1u), 0u);
     assert_int_equal(dtc_status(&d, 0), 0x6Cu);

@@ -38,16 +38,22 @@ uint8_t app_dtc_clear(app_t *a, hal_t *hal)
 }
 
 /*
- * WIRED TO NVSTORE AT MERGE. The nvm branch's record keeps DTC_MAX status bytes; the
- * coordinator replaces this body with
- *     if (nvstore_put_dtc_status(hal, <the application's store>, index, status) != 0) {
+ * WIRED TO NVSTORE AT MERGE. The nvm branch's record (nvstore.h) keeps CALSTORE_DTC_N (16
+ * = DTC_MAX) status bytes; the coordinator replaces this body with
+ *     app_count(&a->keep.dtc_persist_writes);
+ *     if (hal == NULL ||
+ *         nvstore_put_dtc_status(hal, &a->keep.cal.store, (unsigned)index, status) != 0) {
  *         app_count(&a->keep.dtc_persist_failed);
  *         return -1;
  *     }
  *     return 0;
- * and calls app_dtc_load(a, <the record's DTC bytes>, DTC_MAX) in app_boot after the
- * record is read (nothing, i.e. app_dtc_load(a, NULL, 0), for a missing or refused
- * record). Until then nothing is written: the counts show it (dtc_persist_writes).
+ * and ends app_boot (after calib_boot) with
+ *     uint8_t b[CALSTORE_DTC_N];
+ *     if (nvstore_dtc_status(hal, b) == 0) {
+ *         app_dtc_load(a, b, sizeof b);   (0xFF, "none stored": as after a clear)
+ *     }
+ * (on an error every DTC stays as app_init left it: as after a clear). Until then
+ * nothing is written: dtc_persist_writes counts the bytes that would have been.
  */
 static int app_dtc_persist(app_t *a, hal_t *hal, size_t index, uint8_t status)
 {

@@ -52,6 +52,10 @@ size_t dtc_load(dtc_t *d, const uint8_t *stored, size_t n)
             continue;
         }
         const uint8_t b = stored[i];
+        if (b == DTC_STORED_NONE) {
+            start_cleared(d, i); /* never stored: not a refusal */
+            continue;
+        }
         if (!stored_valid(b)) {
             start_cleared(d, i);
             refused++;

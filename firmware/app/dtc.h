@@ -48,6 +48,8 @@
 #define DTC_AVAILABILITY_MASK 0x7Fu /* bits 0..6 supported */
 #define DTC_STORED_MASK 0x3Cu       /* bits kept in NVM: pending, confirmed, the two SLC */
 #define DTC_STATUS_CLEARED 0x50u    /* after a clear: TNCSLC | TNCTOC */
+#define DTC_STORED_NONE 0xFFu       /* a stored byte never written (erased flash; the NVM
+                                       record's "none stored") */
 
 typedef struct {
     uint8_t status[DTC_N];       /* the Annex D status bytes */
@@ -64,10 +66,11 @@ void dtc_init(dtc_t *d);
 
 /*
  * The start of an operation cycle from the stored bytes of NVM (n of them, the record's;
- * DTCs beyond n start as after a clear, bytes beyond DTC_N are ignored). A byte with bits
- * outside DTC_STORED_MASK, pendingDTC or confirmedDTC without testFailedSinceLastClear, or
- * both "since last clear" bits (an erased 0xFF, a corrupt record) is refused: that DTC
- * starts as after a clear, counted in load_rejected. Returns the number refused.
+ * DTCs beyond n and those stored as DTC_STORED_NONE start as after a clear, bytes beyond
+ * DTC_N are ignored). Any other byte with bits outside DTC_STORED_MASK, pendingDTC or
+ * confirmedDTC without testFailedSinceLastClear, or both "since last clear" bits (a
+ * corrupt record) is refused: that DTC starts as after a clear, counted in load_rejected.
+ * Returns the number refused.
  */
 size_t dtc_load(dtc_t *d, const uint8_t *stored, size_t n);
 
