@@ -45,6 +45,7 @@ CODEC_GEN := firmware/can/gen/navecu_can.c firmware/can/gen/navecu_can.h
 # into the images, kept out of them by --gc-sections until the application calls it
 DIAG_SRC := $(sort $(wildcard firmware/diag/*.c))
 APP_SRC := firmware/can/e2e.c firmware/can/gen/navecu_can.c firmware/app/gen/app_params.c \
+           firmware/app/gen/dtc_table.c \
            $(DIAG_SRC) $(sort $(wildcard firmware/app/*.c))
 # the host executable: its board files (host_sim/)
 HOST_SIM_SRC := host_sim/main.c host_sim/options.c host_sim/report.c host_sim/host_board.c
@@ -59,7 +60,7 @@ SUPPORT_SRC_BOTH := tests/support/nav_run.c
 # tests built once per numeric variant (f32 firmware, f64 reference)
 TESTS_VARIANT := test_nav_math test_earth test_sins test_dr test_ekf test_ekf_rows
 # tests of the float32 firmware only (application, codec, HAL)
-TESTS_F32 := test_e2e test_codec test_trig test_isotp test_uds
+TESTS_F32 := test_e2e test_codec test_trig test_isotp test_uds test_dtc
 # tests that link both variants themselves
 TESTS_BOTH := test_drive
 # tests of application modules against the in-memory HAL (tests/support/fake_hal.c)
@@ -73,7 +74,7 @@ TESTS_M4_HAL := test_bxcan test_stm32_flash test_stm32_iwdg test_stm32_clock tes
 
 .PHONY: grades
 .PHONY: all test test-c test-plain test-asan test-cross test-python codec codec-check params params-check \
-        doc-check venv sim clean help numerics deps
+        doc-check venv sim clean help numerics deps dtc dtc-check
 # keep objects of pattern-built test programs between runs
 .SECONDARY:
 
@@ -97,6 +98,7 @@ help:
 	@echo "make bench-latency IMU frame to NAV frame latency over vcan (out/bench/)"
 	@echo "make grades        free-inertial error per IMU grade vs seed 003's Table 2"
 	@echo "make codec         regenerate the CAN codec from firmware/can/navecu.dbc"
+	@echo "make dtc           regenerate the DTC table from firmware/app/dtc.toml"
 	@echo "make cross         build the firmware for the Cortex-M4F, check: no double math"
 	@echo "make target        the ECU image for an STM32F405: build/target/navecu.elf .hex .bin"
 	@echo "make target-test   the M4F image on QEMU, output frames identical to the host's"
@@ -239,7 +241,7 @@ test-python: venv $(BUILD)/host/navecu $(VEH_TEST_BINS) $(ISOTP_PEER)
 
 test: deps
 	./tools/check_layers.sh
-	$(MAKE) codec-check doc-check params-check
+	$(MAKE) codec-check doc-check params-check dtc-check
 	$(MAKE) test-plain
 	$(MAKE) test-asan
 	$(MAKE) test-python
@@ -280,6 +282,13 @@ params: venv
 	$(PY) -m tools.gen_params
 params-check: venv
 	$(PY) -m tools.gen_params --check
+
+# the DTC table (firmware/app/dtc.toml, docs/can.md "Diagnostic trouble codes"): its
+# generated C table and the docs table
+dtc: venv
+	$(PY) -m tools.gen_dtc
+dtc-check: venv
+	$(PY) -m tools.gen_dtc --check
 
 codec-check: venv
 	@tmp=$$(mktemp -d) && PYTHON=$(PY) ./tools/gen_codec.sh $$tmp && \

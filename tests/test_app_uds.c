@@ -389,6 +389,60 @@ static void test_identifier_rules_and_receive_list(void **state)
     }
 }
 
+/* the IMU silent for 3 s: NAV_Status (app_poll's heartbeat) carries IMU_STALE, its DTC
+ * U1101-87 (0xD10187) is failing at once and confirmed 2 s later; read with 0x19 01 / 02 /
+ * 0A in the default session, cleared with 0x14 FF FF FF, read gone */
+static void silent_imu(uint64_t for_us)
+{
+    for (uint64_t t = 0u; t < for_us; t += 10000u) {
+        hal.t_us += 10000u;
+        app_poll(&app, &hal);
+    }
+}
+
+static void test_dtc_of_a_silent_imu_read_and_cleared(void **state)
+{
+    (void)state;
+    app.keep.imu.have_sample = 1u; /* the IMU was there, and fell silent at t 1 s */
+    app.keep.imu.last_t_us = hal.t_us;
+    /* before any test: every DTC 0x50, none confirmed */
+    size_t n = REQUEST(0x19, 0x01, 0x08);
+    assert_int_equal(n, 6u);
+    assert_memory_equal(rsp, ((const uint8_t[]){0x59, 0x01, 0x7F, 0x00, 0x00, 0x00}), 6u);
+    silent_imu(1500000u); /* stale after 0.5 s: failing for 1 s, not confirmed */
+    n = REQUEST(0x19, 0x02, 0x01);
+    /* and NO_GNSS (U1102-87, no GNSS at all): failing, confirmed only after 60 s */
+    assert_int_equal(n, 11u);
+    assert_memory_equal(rsp, ((const uint8_t[]){0x59, 0x02, 0x7F, 0xD1, 0x01, 0x87, 0x27, 0xD1,
+                                                0x02, 0x87, 0x27}),
+                        11u);
+    silent_imu(1500000u); /* 2.5 s of failure: confirmed */
+    n = REQUEST(0x19, 0x02, 0x08);
+    assert_int_equal(n, 7u);
+    assert_memory_equal(rsp, ((const uint8_t[]){0x59, 0x02, 0x7F, 0xD1, 0x01, 0x87, 0x2F}), 7u);
+    /* every DTC of the table, each with its status */
+    n = REQUEST(0x19, 0x0A);
+    assert_int_equal(n, 3u + 4u * (size_t)DTC_N);
+    for (size_t i = 0u; i < (size_t)DTC_N; i++) {
+        const uint8_t *r = &rsp[3u + 4u * i];
+        const uint32_t num = ((uint32_t)r[0] << 16) | ((uint32_t)r[1] << 8) | r[2];
+        assert_int_equal(num, dtc_table[i].number);
+        assert_int_equal(r[3], dtc_status(&app.keep.dtc, i));
+    }
+    const uint32_t writes = app.keep.dtc_persist_writes;
+    assert_true(writes > 0u); /* the stored bytes went to the NVM seam */
+    n = REQUEST(0x14, 0xFF, 0xFF, 0xFF);
+    assert_int_equal(n, 1u);
+    assert_int_equal(rsp[0], 0x54);
+    assert_true(app.keep.dtc_persist_writes > writes); /* the cleared bytes too */
+    n = REQUEST(0x19, 0x01, 0x2F);
+    assert_memory_equal(rsp, ((const uint8_t[]){0x59, 0x01, 0x7F, 0x00, 0x00, 0x00}), 6u);
+    n = REQUEST(0x14, 0x00, 0x00, 0x00);
+    expect_nrc(n, 0x14, 0x31);
+    /* the frames of the exchange were never navecu's input */
+    assert_int_equal(app.keep.health.foreign, 0u);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -402,6 +456,7 @@ int main(void)
         cmocka_unit_test_setup(test_s3_on_the_hal_clock, setup),
         cmocka_unit_test_setup(test_three_wrong_keys_then_delay_on_the_hal_clock, setup),
         cmocka_unit_test_setup(test_identifier_rules_and_receive_list, setup),
+        cmocka_unit_test_setup(test_dtc_of_a_silent_imu_read_and_cleared, setup),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -47,6 +47,7 @@ int app_init(app_t *app, const app_config_t *cfg)
                   cfg->can_ids[NAVECU_MSG_IMU_ACCEL]);
     imu_link_stamped(&app->keep.imu, cfg->imu_time == IMU_TIME_STAMPED);
     mounting_init(&app->keep.mount, cfg->imu_mount_rad);
+    dtc_init(&app->keep.dtc); /* as after a clear until app_dtc_load (app_dtc.h) */
     app->run.mode = APP_MODE_WAIT_INIT;
     (void)app_uds_init(app); /* valid IDs (app_config_valid): cannot fail */
     return NAV_OK;

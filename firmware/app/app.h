@@ -16,6 +16,7 @@
  *   output       NAV_* frames, HealthFlags, the output mode
  *   app_loop     the main loop's pass, the same on every board
  *   app_uds      diagnostics: the UDS server on its ISO-TP channel, the parameters' DIDs
+ *   app_dtc      the fault memory: the health conditions as DTCs (dtc.h), their NVM seam
  * with app_config (what an integrator sets), app_tuning.h (the tuning constants) and
  * app_health (counters and flags).
  *
@@ -34,6 +35,7 @@
 
 #include "align.h"
 #include "app_config.h"
+#include "app_dtc.h"
 #include "app_health.h"
 #include "app_rx.h"
 #include "app_uds.h"
@@ -78,6 +80,9 @@ typedef struct {
     zbias_t zbias;          /* the z gyro bias learnt at standstill (the IMU's) */
     odo_t odo;              /* the car's odometer */
     mounting_t mount;       /* the IMU's configured rotation into the vehicle's axes */
+    dtc_t dtc;              /* the fault memory: a DTC per health condition (app_dtc.h) */
+    uint32_t dtc_persist_writes; /* stored DTC status bytes handed to NVM (app_dtc_persist) */
+    uint32_t dtc_persist_failed; /* of them, writes that failed */
 } app_keep_t;
 
 /* What restarts with navigation: a reset is one assignment of zeros (app_reset). */

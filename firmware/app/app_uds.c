@@ -149,11 +149,52 @@ static uint8_t write_did(void *user, uint16_t did, const uint8_t *data, size_t l
     return UDS_NRC_OK;
 }
 
+/* ---- the fault memory (app_dtc.h): 0x19, 0x14 ---- */
+
+static size_t uds_dtc_count(void *user)
+{
+    (void)user;
+    return (size_t)DTC_N;
+}
+
+static int uds_dtc_get(void *user, size_t index, uint32_t *dtc, uint8_t *status)
+{
+    const app_t *a = (const app_t *)user;
+    if (index >= (size_t)DTC_N) {
+        return -1;
+    }
+    *dtc = dtc_table[index].number;
+    *status = dtc_status(&a->keep.dtc, index);
+    return 0;
+}
+
+static uint8_t uds_dtc_clear(void *user, uint32_t group)
+{
+    app_t *a = (app_t *)user;
+    (void)group; /* the server passes all groups only */
+    return app_dtc_clear(a, a->uds.hal); /* the HAL of this request (serve) */
+}
+
+static uint8_t uds_dtc_availability(void *user)
+{
+    (void)user;
+    return (uint8_t)DTC_AVAILABILITY_MASK;
+}
+
 int app_uds_init(app_t *a)
 {
     isotp_config_t c;
     isotp_config_defaults(&c, a->cfg.uds_request_id, a->cfg.uds_response_id);
-    const uds_if_t itf = {a, read_did, write_did, is_writable};
+    const uds_if_t itf = {
+        .user = a,
+        .read_did = read_did,
+        .write_did = write_did,
+        .is_writable = is_writable,
+        .dtc_count = uds_dtc_count,
+        .dtc_get = uds_dtc_get,
+        .dtc_clear = uds_dtc_clear,
+        .dtc_availability = uds_dtc_availability,
+    };
     a->uds.on = 0u;
     if (isotp_init(&a->uds.tp, &c) != 0 || uds_init(&a->uds.srv, &itf, 0u) != 0) {
         return -1;
@@ -174,6 +215,7 @@ static void ecu_restart(app_t *a, hal_t *hal)
 static void serve(app_t *a, hal_t *hal, uint64_t now)
 {
     app_uds_t *u = &a->uds;
+    u->hal = hal; /* the routines' NVM */
     (void)isotp_poll(&u->tp, now, tx_frame, hal);
     if (isotp_tx_busy(&u->tp)) {
         return; /* the response buffer is in use; a new request waits in the channel */

@@ -44,6 +44,7 @@ typedef struct {
     uds_t srv;
     uint8_t on;                  /* the channel started (app_uds_init succeeded) */
     uint8_t reset_due;           /* ECUReset accepted: restart once the response left */
+    hal_t *hal;                  /* the HAL of the request being served (its routines) */
     uint16_t rsp_len;
     uint8_t req[ISOTP_MAX_LEN];
     uint8_t rsp[ISOTP_MAX_LEN];

@@ -367,6 +367,7 @@ void output_status(app_t *a, hal_t *hal)
     st.status_page = NAVECU_NAV_STATUS_PAGE_STATE;
     st.mode = output_mode(a);
     st.health_flags = health_flags(a, hal);
+    app_dtc_cycle(a, hal, st.health_flags); /* the DTCs' tests (app_dtc.h) */
     st.horiz_accuracy = NAVECU_NAV_STATUS_HORIZ_ACCURACY_RAW_MAX; /* "unknown" w/o the filter */
     if (ekf != NULL && a->run.mode == APP_MODE_NAVIGATING) {
         st.horiz_accuracy = (uint16_t)accuracy_raw(ekf_sigma_h_m(ekf) * NAV_C(100.0),
