@@ -16,7 +16,7 @@ void calib_boot(calib_t *c, hal_t *hal)
 {
     cal_record_t rec;
     const int rc = calstore_load(hal, &c->store, &rec);
-    if (rc == CALSTORE_OK) {
+    if (rc == CALSTORE_OK && rec.source != (uint8_t)CAL_SRC_NONE) {
         c->dh_rad = (nav_real_t)rec.dh_rad;
         c->mu = (nav_real_t)rec.odo_scale_err;
         c->base_m = (nav_real_t)rec.base_m;
