@@ -15,6 +15,23 @@
 #include "options.h"
 #include "report.h"
 
+/* the command line, the top configuration layer (app_start), at every start and ECUReset */
+typedef struct {
+    int argc;
+    char **argv;
+} cmdline_t;
+
+static int cmdline_layer(void *user, app_config_t *cfg)
+{
+    static host_options_t over;
+    const cmdline_t *c = (const cmdline_t *)user;
+    if (host_options_parse_over(c->argc, c->argv, cfg, &over, NULL, 0u) != 0) {
+        return -1;
+    }
+    *cfg = over.cfg;
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
     static host_options_t o;
@@ -39,7 +56,15 @@ int main(int argc, char **argv)
     if (host_open(&hal, &o) != 0) {
         return 1;
     }
-    app_boot(&app, &hal);
+    /* the layers: defaults, the NVM (--nvm), the command line over both */
+    static cmdline_t cmdline;
+    cmdline.argc = argc;
+    cmdline.argv = argv;
+    if (app_start(&app, &hal, cmdline_layer, &cmdline) != 0) {
+        fprintf(stderr, "navecu: invalid configuration over the NVM's parameters\n");
+        hal_linux_close(&hal);
+        return 2;
+    }
     const int live = o.live_if != NULL;
     unsigned long frames_in = 0;
     uint64_t t_first = UINT64_MAX; /* the first frame's time (--test-stall-poll-s) */

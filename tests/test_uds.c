@@ -91,7 +91,8 @@ static int setup(void **state)
     app.d100[0] = 0x12;
     app.d100[1] = 0x34;
     memcpy(app.d101, "\xA1\xA2\xA3\xA4", 4u);
-    const uds_if_t itf = {&app, fake_read, fake_write, fake_writable};
+    const uds_if_t itf = {.user = &app, .read_did = fake_read, .write_did = fake_write,
+                         .is_writable = fake_writable};
     assert_int_equal(uds_init(&srv, &itf, 12345u), 0);
     return 0;
 }
@@ -389,10 +390,12 @@ static void test_init_refuses_incomplete_interface(void **state)
 {
     (void)state;
     uds_t s;
-    const uds_if_t no_write = {&app, fake_read, NULL, fake_writable};
+    const uds_if_t no_write = {.user = &app, .read_did = fake_read, .write_did = NULL,
+                              .is_writable = fake_writable};
     assert_int_equal(uds_init(&s, &no_write, 0u), -1);
     assert_int_equal(uds_init(NULL, &no_write, 0u), -1);
-    const uds_if_t ok = {&app, fake_read, fake_write, fake_writable};
+    const uds_if_t ok = {.user = &app, .read_did = fake_read, .write_did = fake_write,
+                        .is_writable = fake_writable};
     assert_int_equal(uds_init(&s, &ok, 0u), 0); /* entropy 0 is allowed */
     assert_int_not_equal(s.prng, 0u);
     /* a response buffer under 8 bytes: nothing */

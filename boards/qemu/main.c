@@ -47,7 +47,10 @@ void board_main(void)
         bench_puts("navecu-qemu: cannot open the input, output or trace file\n");
         semihost_exit(1u);
     }
-    app_boot(&app, &hal);
+    /* the layers: defaults, then the NVM's parameters */
+    if (app_start(&app, &hal, NULL, NULL) != 0) {
+        semihost_exit(2u);
+    }
     const app_pass_cfg_t one_frame = {1u, 1u};
     uint64_t frames_in = 0u;
     app_pass_t p;

@@ -56,6 +56,22 @@ void app_boot(app_t *a, hal_t *hal)
     calib_boot(&a->keep.cal, hal);
 }
 
+int app_start(app_t *a, hal_t *hal, app_cfg_layer_fn top, void *user)
+{
+    static app_config_t cfg; /* off the stack, as the boards keep theirs */
+    nvstore_status_t st;
+    (void)nvstore_layer(hal, &cfg, &st); /* any failure leaves valid defaults */
+    if ((top != NULL && top(user, &cfg) != 0) || app_init(a, &cfg) != NAV_OK) {
+        return NAV_EINVAL;
+    }
+    a->nvm = st;
+    a->top = top;
+    a->top_user = user;
+    a->started = 1u;
+    app_boot(a, hal);
+    return NAV_OK;
+}
+
 void app_reset(app_t *a)
 {
     /* a reset restarts navigation, not the ECU: app_keep_t stays (app.h) */

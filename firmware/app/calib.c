@@ -5,6 +5,7 @@
 
 #include "app_tuning.h"
 #include "navecu_can.h"
+#include "nvstore.h"
 
 void calib_init(calib_t *c)
 {
@@ -64,7 +65,8 @@ int calib_store_command(calib_t *c, calib_trip_t *t, hal_t *hal, uint64_t n,
 
 void calib_erase(calib_t *c, hal_t *hal, dr_t *dr)
 {
-    if (calstore_erase(hal, &c->store) != 0) {
+    /* the stored parameters stay (nvstore.h) */
+    if (nvstore_erase_calibration(hal, &c->store) != 0) {
         c->nvm_error = 1u;
         return;
     }

@@ -10,6 +10,8 @@
  *   0x22 ReadDataByIdentifier      1..UDS_MAX_READ_DIDS DIDs per request
  *   0x27 SecurityAccess            0x01 requestSeed / 0x02 sendKey, extended session
  *   0x2E WriteDataByIdentifier     extended session and unlocked
+ *   0x31 RoutineControl            0x01 startRoutine, extended session and unlocked;
+ *                                  0x11 when the application has no start_routine
  *   0x3E TesterPresent             0x00
  * suppressPosRspMsgIndicationBit (bit 7 of the sub-function of 0x10, 0x11, 0x27, 0x3E):
  * a positive response is not sent, a negative one is. Physical addressing only, so every
@@ -33,6 +35,8 @@
 #define UDS_SID_SECURITY 0x27u
 #define UDS_SID_WRITE_DID 0x2Eu
 #define UDS_SID_TESTER_PRESENT 0x3Eu
+#define UDS_SID_ROUTINE 0x31u     /* RoutineControl */
+#define UDS_ROUTINE_START 0x01u   /* its startRoutine sub-function (the only one served) */
 #define UDS_NEGATIVE 0x7Fu        /* a negative response: 7F SID NRC */
 #define UDS_SUPPRESS_POS 0x80u    /* suppressPosRspMsgIndicationBit of a sub-function */
 
@@ -48,6 +52,7 @@
 #define UDS_NRC_SECURITY_ACCESS_DENIED 0x33u
 #define UDS_NRC_INVALID_KEY 0x35u
 #define UDS_NRC_EXCEEDED_ATTEMPTS 0x36u
+#define UDS_NRC_GENERAL_PROGRAMMING_FAILURE 0x72u
 #define UDS_NRC_TIME_DELAY_NOT_EXPIRED 0x37u
 #define UDS_NRC_NOT_IN_ACTIVE_SESSION 0x7Fu   /* serviceNotSupportedInActiveSession */
 
@@ -81,12 +86,18 @@
  *              length, 0x22 not now). Called only in the extended session, unlocked.
  *   is_writable  1 if DID is one write_did may accept, else 0 (0x31 before 0x33: an
  *              unknown DID is out of range whatever the security state).
+ *   start_routine  (optional, NULL: 0x31 is serviceNotSupported) start routine rid with
+ *              its option record data[0..len): UDS_NRC_OK once it is done, or the NRC
+ *              (0x31 an unknown routine, 0x22 not now, 0x72 an NVM failure). Called only
+ *              in the extended session, unlocked.
+ * Functions are appended at the end (applications use designated initialisers).
  */
 typedef struct {
     void *user;
     size_t (*read_did)(void *user, uint16_t did, uint8_t *buf, size_t cap);
     uint8_t (*write_did)(void *user, uint16_t did, const uint8_t *data, size_t len);
     int (*is_writable)(void *user, uint16_t did);
+    uint8_t (*start_routine)(void *user, uint16_t rid, const uint8_t *data, size_t len);
 } uds_if_t;
 
 /* Counted, each saturating (never decreasing). */
