@@ -17,6 +17,7 @@
 #include "app.h"
 #include "app_fixture.h"
 #include "fake_hal.h"
+#include "test_util.h"
 #include "vehicle.h"
 
 #define REQ 0x7A0u
@@ -389,6 +390,168 @@ static void test_identifier_rules_and_receive_list(void **state)
     }
 }
 
+/* the app started as the boards start it (app_start: defaults, NVM, no board layer) */
+static int setup_started(void **state)
+{
+    (void)state;
+    fake_hal_reset(&hal);
+    assert_int_equal(app_start(&app, &hal, NULL, NULL), NAV_OK);
+    hal.t_us = 1000000u;
+    return 0;
+}
+
+#define ROUTINE(rid) REQUEST(0x31, 0x01, (uint8_t)((rid) >> 8), (uint8_t)(rid))
+
+static void expect_routine_ok(size_t n, uint16_t rid)
+{
+    assert_int_equal(n, 4u);
+    assert_int_equal(rsp[0], 0x71);
+    assert_int_equal(rsp[1], 0x01);
+    assert_int_equal(rsp[2], rid >> 8);
+    assert_int_equal(rsp[3], rid & 0xFFu);
+}
+
+/* RoutineControl: the extended session (0x7F), a sub-function other than startRoutine
+ * (0x12), too short or with an option record (0x13), locked (0x33), an unknown routine
+ * (0x31: also 0x0204 AdoptMounting, whose owner is not merged here) */
+static void test_routine_checks(void **state)
+{
+    (void)state;
+    expect_nrc(ROUTINE(0x0200u), 0x31, 0x7F);
+    assert_int_equal(REQUEST(0x10, 0x03), 6u);
+    expect_nrc(REQUEST(0x31, 0x02, 0x02, 0x00), 0x31, 0x12);
+    expect_nrc(REQUEST(0x31, 0x01, 0x02), 0x31, 0x13);
+    expect_nrc(ROUTINE(0x0200u), 0x31, 0x33);
+    assert_int_equal(hal.nvm_units, 0u); /* nothing written */
+    unlock();
+    expect_nrc(REQUEST(0x31, 0x01, 0x02, 0x00, 0x01), 0x31, 0x13);
+    expect_nrc(ROUTINE(0x0204u), 0x31, 0x31);
+    expect_nrc(ROUTINE(0x01FFu), 0x31, 0x31);
+    expect_nrc(ROUTINE(0xFF00u), 0x31, 0x31);
+    assert_int_equal(hal.nvm_units, 0u);
+}
+
+/* GIVEN level_s written (45) WHEN ECUReset without a save THEN the default again (the
+ * layers run again); WHEN written, StoreParameters, ECUReset THEN 45, the NVM status DID
+ * says version 2, source NVM, 26 entries loaded, none refused, seq 1 */
+static void test_store_parameters_and_reset(void **state)
+{
+    (void)state;
+    const uint16_t level0 = app.cfg.level_s;
+    unlock();
+    assert_int_equal(REQUEST(0x2E, 0x02, 0x04, 0x00, 0x2D), 3u);
+    assert_int_equal(REQUEST(0x11, 0x01), 2u);
+    app_poll(&app, &hal);
+    assert_int_equal(app.cfg.level_s, level0);
+    assert_int_equal(REQUEST(0x22, 0xF1, 0xA1), 11u);
+    assert_memory_equal(&rsp[3], "\x00\x00\x00\x00\x00\x00\x00\x00", 8u);
+
+    unlock();
+    assert_int_equal(REQUEST(0x2E, 0x02, 0x04, 0x00, 0x2D), 3u);
+    expect_routine_ok(ROUTINE(0x0200u), 0x0200u);
+    assert_int_equal(REQUEST(0x11, 0x01), 2u);
+    app_poll(&app, &hal);
+    assert_int_equal(app.cfg.level_s, 45u);
+    assert_int_equal(REQUEST(0x22, 0xF1, 0xA1), 11u);
+    size_t writable = 0u;
+    for (int k = 0; k < (int)APP_PARAM_N; k++) {
+        writable += app_params[k].uds_read_only ? 0u : 1u;
+    }
+    const uint8_t want[8] = {2u, NVSTORE_SRC_NVM, (uint8_t)writable, 0u, 0u, 0u, 0u, 1u};
+    assert_memory_equal(&rsp[3], want, 8u);
+    /* RestoreDefaults: in RAM only, the NVM keeps 45 until the next save */
+    unlock();
+    expect_routine_ok(ROUTINE(0x0202u), 0x0202u);
+    assert_int_equal(app.cfg.level_s, level0);
+    assert_int_equal(REQUEST(0x11, 0x01), 2u);
+    app_poll(&app, &hal);
+    assert_int_equal(app.cfg.level_s, 45u);
+}
+
+/* navigating and moving: StoreParameters, StoreCalibration, EraseCalibration and
+ * RestoreDefaults refused (0x22); standing: the save allowed, RestoreDefaults not
+ * (navigation runs on copies of some parameters); an NVM failure: 0x72 */
+static void test_routine_conditions_and_nvm_failure(void **state)
+{
+    (void)state;
+    unlock();
+    app.run.mode = APP_MODE_NAVIGATING;
+    app.keep.odo.standing = 0u;
+    expect_nrc(ROUTINE(0x0200u), 0x31, 0x22);
+    expect_nrc(ROUTINE(0x0201u), 0x31, 0x22);
+    expect_nrc(ROUTINE(0x0202u), 0x31, 0x22);
+    expect_nrc(ROUTINE(0x0203u), 0x31, 0x22);
+    assert_int_equal(hal.nvm_units, 0u);
+    app.keep.odo.standing = 1u;
+    expect_routine_ok(ROUTINE(0x0200u), 0x0200u);
+    expect_nrc(ROUTINE(0x0202u), 0x31, 0x22);
+    hal.nvm_fail = 1;
+    expect_nrc(ROUTINE(0x0200u), 0x31, 0x72);
+    assert_int_equal(app.keep.cal.nvm_error, 1u);
+    hal.nvm_fail = 0;
+    expect_routine_ok(ROUTINE(0x0200u), 0x0200u);
+    assert_int_equal(app.keep.cal.nvm_error, 0u);
+}
+
+/* StoreCalibration: nothing calibrated, 0x22; a calibration in use: stored, with the
+ * stored parameters kept; EraseCalibration: the stored and the used calibration gone,
+ * the parameters kept */
+static void test_calibration_routines(void **state)
+{
+    (void)state;
+    unlock();
+    expect_nrc(ROUTINE(0x0203u), 0x31, 0x22);
+    assert_int_equal(REQUEST(0x2E, 0x02, 0x04, 0x00, 0x2D), 3u);
+    expect_routine_ok(ROUTINE(0x0200u), 0x0200u);
+    app.keep.cal.source = CAL_SRC_KNOWN_POSITION;
+    app.keep.cal.mu = 0.0125f;
+    app.keep.n_samples = 5000u;
+    expect_routine_ok(ROUTINE(0x0203u), 0x0203u);
+    calstore_t cs;
+    cal_record_t rec;
+    assert_int_equal(calstore_load(&hal, &cs, &rec), CALSTORE_OK);
+    assert_near(rec.odo_scale_err, 0.0125f, 0.0);
+    app_config_t c;
+    nvstore_status_t st;
+    (void)nvstore_layer(&hal, &c, &st);
+    assert_int_equal(c.level_s, 45u);
+    expect_routine_ok(ROUTINE(0x0201u), 0x0201u);
+    assert_int_equal(app.keep.cal.source, CAL_SRC_NONE);
+    assert_near(app.keep.cal.mu, 0.0, 0.0);
+    assert_int_equal(calstore_load(&hal, &cs, &rec), CALSTORE_OK);
+    assert_int_equal(rec.source, CAL_SRC_NONE);
+    (void)nvstore_layer(&hal, &c, &st);
+    assert_int_equal(c.level_s, 45u);
+    /* after a reboot: no calibration, the parameters */
+    assert_int_equal(app_start(&app, &hal, NULL, NULL), NAV_OK);
+    assert_int_equal(app.keep.cal.status, NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_NONE_CHOICE);
+    assert_int_equal(app.cfg.level_s, 45u);
+}
+
+/* the board's layer goes over the NVM's, at start and at every ECUReset */
+static int top_level_20(void *user, app_config_t *cfg)
+{
+    (void)user;
+    cfg->level_s = 20u;
+    return 0;
+}
+
+static void test_board_layer_over_nvm(void **state)
+{
+    (void)state;
+    unlock();
+    assert_int_equal(REQUEST(0x2E, 0x02, 0x04, 0x00, 0x2D), 3u);
+    expect_routine_ok(ROUTINE(0x0200u), 0x0200u);
+    assert_int_equal(app_start(&app, &hal, top_level_20, NULL), NAV_OK);
+    assert_int_equal(app.cfg.level_s, 20u);
+    unlock();
+    assert_int_equal(REQUEST(0x2E, 0x02, 0x04, 0x00, 0x2D), 3u);
+    assert_int_equal(REQUEST(0x11, 0x01), 2u);
+    app_poll(&app, &hal);
+    assert_int_equal(app.cfg.level_s, 20u);
+    assert_int_equal(app.top, top_level_20);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -402,6 +565,11 @@ int main(void)
         cmocka_unit_test_setup(test_s3_on_the_hal_clock, setup),
         cmocka_unit_test_setup(test_three_wrong_keys_then_delay_on_the_hal_clock, setup),
         cmocka_unit_test_setup(test_identifier_rules_and_receive_list, setup),
+        cmocka_unit_test_setup(test_routine_checks, setup_started),
+        cmocka_unit_test_setup(test_store_parameters_and_reset, setup_started),
+        cmocka_unit_test_setup(test_routine_conditions_and_nvm_failure, setup_started),
+        cmocka_unit_test_setup(test_calibration_routines, setup_started),
+        cmocka_unit_test_setup(test_board_layer_over_nvm, setup_started),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
