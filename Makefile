@@ -377,7 +377,7 @@ M4_WAIT_HOOK_CALLERS := bxcan_init hal/cortex_m4f/stm32_clock.c:fail stm32_clock
 # data functions, all the application's (firmware/app/app_uds.c)
 M4_UDS := firmware/app/app_uds.c
 M4_UDS_INDIRECT := --indirect isotp_poll=$(M4_UDS):tx_frame \
-  --indirect uds_handle=$(M4_UDS):read_did,$(M4_UDS):write_did,$(M4_UDS):is_writable
+  --indirect uds_handle=$(M4_UDS):read_did,$(M4_UDS):write_did,$(M4_UDS):is_writable,$(M4_UDS):start_routine
 target-budget: deps venv target
 	$(PY) -m tools.target.budget --elf $(TGT)/navecu.elf --objs $(ECU_SRC:%.c=$(TGT)/obj/%.o) \
 	  --entry Reset_Handler --isr CAN1_RX0_IRQHandler --isr CAN1_SCE_IRQHandler \

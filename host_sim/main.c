@@ -15,17 +15,18 @@
 #include "options.h"
 #include "report.h"
 
-/* the command line, the top configuration layer (app_start), at every start and ECUReset */
-typedef struct {
-    int argc;
-    char **argv;
-} cmdline_t;
+/* the command line, the board's configuration layer over the defaults and the NVM
+ * (app_start, app.h), at the start and at every ECUReset */
+static int cmd_argc;
+static char **cmd_argv;
 
-static int cmdline_layer(void *user, app_config_t *cfg)
+int app_board_layer(app_config_t *cfg)
 {
     static host_options_t over;
-    const cmdline_t *c = (const cmdline_t *)user;
-    if (host_options_parse_over(c->argc, c->argv, cfg, &over, NULL, 0u) != 0) {
+    if (cmd_argv == NULL) {
+        return 0;
+    }
+    if (host_options_parse_over(cmd_argc, cmd_argv, cfg, &over, NULL, 0u) != 0) {
         return -1;
     }
     *cfg = over.cfg;
@@ -57,10 +58,9 @@ int main(int argc, char **argv)
         return 1;
     }
     /* the layers: defaults, the NVM (--nvm), the command line over both */
-    static cmdline_t cmdline;
-    cmdline.argc = argc;
-    cmdline.argv = argv;
-    if (app_start(&app, &hal, cmdline_layer, &cmdline) != 0) {
+    cmd_argc = argc;
+    cmd_argv = argv;
+    if (app_start(&app, &hal) != 0) {
         fprintf(stderr, "navecu: invalid configuration over the NVM's parameters\n");
         hal_linux_close(&hal);
         return 2;

@@ -395,7 +395,7 @@ static int setup_started(void **state)
 {
     (void)state;
     fake_hal_reset(&hal);
-    assert_int_equal(app_start(&app, &hal, NULL, NULL), NAV_OK);
+    assert_int_equal(app_start(&app, &hal), NAV_OK);
     hal.t_us = 1000000u;
     return 0;
 }
@@ -523,17 +523,20 @@ static void test_calibration_routines(void **state)
     (void)nvstore_layer(&hal, &c, &st);
     assert_int_equal(c.level_s, 45u);
     /* after a reboot: no calibration, the parameters */
-    assert_int_equal(app_start(&app, &hal, NULL, NULL), NAV_OK);
+    assert_int_equal(app_start(&app, &hal), NAV_OK);
     assert_int_equal(app.keep.cal.status, NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_NONE_CHOICE);
     assert_int_equal(app.cfg.level_s, 45u);
 }
 
-/* the board's layer goes over the NVM's, at start and at every ECUReset */
-static int top_level_20(void *user, app_config_t *cfg)
+/* the board's layer goes over the NVM's, at start and at every ECUReset: this test's
+ * (app_board_layer overrides app.c's weak default) sets level_s 20 when layer_on */
+static int layer_on;
+int app_board_layer(app_config_t *cfg)
 {
-    (void)user;
-    cfg->level_s = 20u;
-    return 0;
+    if (layer_on) {
+        cfg->level_s = 20u;
+    }
+    return layer_on > 1 ? -1 : 0;
 }
 
 static void test_board_layer_over_nvm(void **state)
@@ -542,14 +545,18 @@ static void test_board_layer_over_nvm(void **state)
     unlock();
     assert_int_equal(REQUEST(0x2E, 0x02, 0x04, 0x00, 0x2D), 3u);
     expect_routine_ok(ROUTINE(0x0200u), 0x0200u);
-    assert_int_equal(app_start(&app, &hal, top_level_20, NULL), NAV_OK);
+    layer_on = 1;
+    assert_int_equal(app_start(&app, &hal), NAV_OK);
     assert_int_equal(app.cfg.level_s, 20u);
     unlock();
     assert_int_equal(REQUEST(0x2E, 0x02, 0x04, 0x00, 0x2D), 3u);
     assert_int_equal(REQUEST(0x11, 0x01), 2u);
     app_poll(&app, &hal);
     assert_int_equal(app.cfg.level_s, 20u);
-    assert_int_equal(app.top, top_level_20);
+    /* a layer that refuses: app_start refuses */
+    layer_on = 2;
+    assert_int_equal(app_start(&app, &hal), NAV_EINVAL);
+    layer_on = 0;
 }
 
 int main(void)

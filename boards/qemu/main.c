@@ -68,7 +68,7 @@ void board_main(void)
         semihost_exit(1u);
     }
     /* the layers: defaults, then the NVM's parameters */
-    if (app_start(&app, &hal, NULL, NULL) != 0) {
+    if (app_start(&app, &hal) != 0) {
         semihost_exit(2u);
     }
     const app_pass_cfg_t one_frame = {1u, 1u};

@@ -37,7 +37,7 @@ void board_main(void)
     hal_t *hal = hal_stm32_init(rx_ids, n_ids);
     /* the layers: defaults, then the NVM's parameters (the receive list above is the
      * defaults': the CAN and UDS identifiers are not stored) */
-    (void)app_start(&app, hal, NULL, NULL); /* NVM entries are checked one by one */
+    (void)app_start(&app, hal); /* NVM entries are checked one by one */
 
     const uint32_t hclk = hal->clock.hclk_hz != 0u ? hal->clock.hclk_hz : 16000000u;
     SYST_RVR = hclk / SYSTICK_HZ - 1u;

@@ -56,17 +56,22 @@ void app_boot(app_t *a, hal_t *hal)
     calib_boot(&a->keep.cal, hal);
 }
 
-int app_start(app_t *a, hal_t *hal, app_cfg_layer_fn top, void *user)
+/* the default board layer: nothing over the NVM's (app.h; the host has its own) */
+__attribute__((weak)) int app_board_layer(app_config_t *cfg)
+{
+    (void)cfg;
+    return 0;
+}
+
+int app_start(app_t *a, hal_t *hal)
 {
     static app_config_t cfg; /* off the stack, as the boards keep theirs */
     nvstore_status_t st;
     (void)nvstore_layer(hal, &cfg, &st); /* any failure leaves valid defaults */
-    if ((top != NULL && top(user, &cfg) != 0) || app_init(a, &cfg) != NAV_OK) {
+    if (app_board_layer(&cfg) != 0 || app_init(a, &cfg) != NAV_OK) {
         return NAV_EINVAL;
     }
     a->nvm = st;
-    a->top = top;
-    a->top_user = user;
     a->started = 1u;
     app_boot(a, hal);
     return NAV_OK;

@@ -97,15 +97,9 @@ typedef struct {
     app_mode_t rate_resume; /* WaitInit or Levelling: where it goes on when the rate matches */
 } app_run_t;
 
-/* A board's own configuration layer over the table's defaults and the NVM (app_start):
- * the host's command-line options. 0, or nonzero to refuse the configuration. */
-typedef int (*app_cfg_layer_fn)(void *user, app_config_t *cfg);
-
 struct app {
     app_config_t cfg;
     nvstore_status_t nvm;   /* what app_start loaded from NVM (UDS DID 0xF1A1) */
-    app_cfg_layer_fn top;   /* app_start's board layer (NULL: none) */
-    void *top_user;
     uint8_t started;        /* started by app_start: an ECUReset layers again */
     app_keep_t keep;
     app_run_t run;
@@ -118,12 +112,17 @@ int app_init(app_t *app, const app_config_t *cfg);
 
 /*
  * The boot of every board, in layers: the table's defaults, the parameters stored in NVM
- * over them (nvstore.h), then top (if not NULL) over both; app_init with the result, then
- * app_boot. ECUReset (UDS 0x11) runs it again with the same top, so what was written over
- * UDS and not saved (RoutineControl 0x0200) is gone after it, as on a real ECU.
- * Returns NAV_OK, or NAV_EINVAL when the result is refused (by top or app_init).
+ * over them (nvstore.h), then the board's own layer app_board_layer over both; app_init
+ * with the result, then app_boot. ECUReset (UDS 0x11) runs it again, so what was written
+ * over UDS and not saved (RoutineControl 0x0200) is gone after it, as on a real ECU.
+ * Returns NAV_OK, or NAV_EINVAL when the result is refused (by the layer or app_init).
  */
-int app_start(app_t *app, hal_t *hal, app_cfg_layer_fn top, void *user);
+int app_start(app_t *app, hal_t *hal);
+
+/* The board's configuration layer over the defaults and the NVM (app_start): 0, or
+ * nonzero to refuse the configuration. The default (weak, in app.c) changes nothing; the
+ * host defines its own, its command-line options (host_sim/main.c). */
+int app_board_layer(app_config_t *cfg);
 
 /* Once after app_init: load the stored calibration from NVM (calstore.h) as the starting
  * values. A corrupt store leaves the defaults (0, 0) with CalStatus NvmCorrupt; an NVM

@@ -285,15 +285,11 @@ int app_uds_init(app_t *a)
 static void ecu_restart(app_t *a, hal_t *hal)
 {
     const app_config_t cfg = a->cfg;
-    if (a->started && app_start(a, hal, a->top, a->top_user) == NAV_OK) {
+    const uint8_t started = a->started;
+    if (started && app_start(a, hal) == NAV_OK) {
         return;
     }
-    const app_cfg_layer_fn top = a->top;
-    void *const top_user = a->top_user;
-    const uint8_t started = a->started;
     if (app_init(a, &cfg) == NAV_OK) {
-        a->top = top;
-        a->top_user = top_user;
         a->started = started;
         app_boot(a, hal);
     }
