@@ -462,7 +462,7 @@ drive: deps venv $(BUILD)/host/navecu$(VEH_SUFFIX)
 FUZZ_CC := clang
 FUZZ_SECONDS ?= 60
 FUZZ := $(BUILD)/fuzz
-FUZZ_NAMES := fuzz_codec fuzz_app fuzz_calstore fuzz_candump fuzz_options fuzz_cmdline fuzz_isotp
+FUZZ_NAMES := fuzz_codec fuzz_app fuzz_calstore fuzz_nvstore fuzz_candump fuzz_options fuzz_cmdline fuzz_isotp
 FUZZ_SAN := -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
 FUZZ_CFLAGS := $(CSTD) -O2 -g $(WARN) $(FPFLAGS) -D_DEFAULT_SOURCE $(FUZZ_SAN)
 FUZZ_INC := $(HOST_INC) -Ihost_sim -Itests/fuzz -I$(FUZZ)/gen -I$(VEH_OUT)/native
@@ -476,6 +476,7 @@ fuzz_app_SRC := tests/fuzz/fuzz_app.c $(FUZZ_APP_SRC)
 fuzz_options_SRC := tests/fuzz/fuzz_options.c $(FUZZ_APP_SRC)
 fuzz_calstore_SRC := tests/fuzz/fuzz_calstore.c tests/fuzz/fuzz_fail.c firmware/app/calstore.c \
                      tests/support/fake_hal.c
+fuzz_nvstore_SRC := tests/fuzz/fuzz_nvstore.c $(FUZZ_APP_SRC)
 fuzz_candump_SRC := tests/fuzz/fuzz_candump.c tests/fuzz/fuzz_fail.c $(HAL_LINUX_SRC)
 fuzz_isotp_SRC := tests/fuzz/fuzz_isotp.c tests/fuzz/fuzz_fail.c $(DIAG_SRC)
 fuzz_cmdline_SRC := tests/fuzz/fuzz_cmdline.c tests/fuzz/fuzz_fail.c host_sim/options.c $(APP_SRC) \

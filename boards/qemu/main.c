@@ -42,7 +42,7 @@ void board_main(void)
     const char *all[6];
     const size_t n_all = bench_args(all, 6u);
     /* nvm=FILE taken out; the rest positional */
-    const char *argv[5];
+    const char *argv[5] = {NULL, NULL, NULL, NULL, NULL};
     const char *nvm_path = NULL;
     size_t argc = 0u;
     for (size_t k = 0u; k < n_all; k++) {
@@ -50,7 +50,8 @@ void board_main(void)
         if (k >= 3u && a[0] == 'n' && a[1] == 'v' && a[2] == 'm' && a[3] == '=') {
             nvm_path = &a[4];
         } else if (argc < 5u) {
-            argv[argc++] = a;
+            argv[argc] = a;
+            argc++;
         } else {
             /* more than the usage allows: ignored */
         }

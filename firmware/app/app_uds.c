@@ -12,8 +12,7 @@ static int tx_frame(void *user, const hal_can_frame_t *f)
     return hal_can_send((hal_t *)user, f);
 }
 
-/* the parameter with this DID, or APP_PARAM_N */
-static app_param_id_t param_of_did(uint16_t did)
+app_param_id_t app_uds_param_of_did(uint16_t did)
 {
     for (int k = 0; k < (int)APP_PARAM_N; k++) {
         if (app_params[k].did == did) {
@@ -145,7 +144,7 @@ static size_t read_did(void *user, uint16_t did, uint8_t *buf, size_t cap)
         buf[7] = (uint8_t)a->nvm.seq;
         return 8u;
     }
-    const app_param_id_t id = param_of_did(did);
+    const app_param_id_t id = app_uds_param_of_did(did);
     if (id == APP_PARAM_N) {
         return 0u;
     }
@@ -155,14 +154,14 @@ static size_t read_did(void *user, uint16_t did, uint8_t *buf, size_t cap)
 static int is_writable(void *user, uint16_t did)
 {
     (void)user;
-    const app_param_id_t id = param_of_did(did);
+    const app_param_id_t id = app_uds_param_of_did(did);
     return (id != APP_PARAM_N && !app_params[id].uds_read_only) ? 1 : 0;
 }
 
 static uint8_t write_did(void *user, uint16_t did, const uint8_t *data, size_t len)
 {
     app_t *a = (app_t *)user;
-    const app_param_id_t id = param_of_did(did);
+    const app_param_id_t id = app_uds_param_of_did(did);
     if (id == APP_PARAM_N || app_params[id].uds_read_only) {
         return UDS_NRC_REQUEST_OUT_OF_RANGE;
     }

@@ -46,6 +46,9 @@
 #define NAVECU_ECU_SERIAL "NAVECU-00000000"
 #endif
 
+/* The parameter with this DID, or APP_PARAM_N. */
+app_param_id_t app_uds_param_of_did(uint16_t did);
+
 /* A parameter's value as its DID carries it (docs/can.md: u16 big-endian, enum one byte,
  * reals as big-endian IEEE binary32, vectors three of them): written to buf if it fits
  * cap; its length. The one codec of the UDS DIDs and of the NVM record (nvstore.h). */

@@ -29,10 +29,8 @@ static const uint8_t ext_magic[4] = {'N', 'P', 'A', 'R'};
 #define EXT_OFF_DTC 16u
 #define CHUNK 32u
 
-/* the extension image of a save, and the newest one carried over by calstore_save: off
- * the stack (calstore is not reentrant) */
+/* the extension image of a save or a load: off the stack (calstore is not reentrant) */
 static uint8_t ext_img[CALSTORE_EXT_MAX_BYTES];
-static calstore_ext_t carried;
 
 typedef enum { SLOT_ERASED, SLOT_VALID, SLOT_INVALID } slot_state_t;
 
@@ -391,14 +389,14 @@ int calstore_load_ext(hal_t *hal, calstore_t *cs, cal_record_t *rec, calstore_ex
     }
     ext_clear(ext, (uint8_t)CALSTORE_EXT_NONE, 0u);
     const size_t stride = slot_stride(hal);
-    if (rc == CALSTORE_CORRUPT && stride != 0u) {
+    if (rc == (int)CALSTORE_CORRUPT && stride != 0u) {
         scan_t s;
         if (scan_slots(hal, stride, &s) == 0 && s.n_newer > 0u) {
             ext->status = (uint8_t)CALSTORE_EXT_NEWER;
         }
         return rc;
     }
-    if (rc != CALSTORE_OK || !ext_fits(stride)) {
+    if (rc != (int)CALSTORE_OK || !ext_fits(stride)) {
         return rc;
     }
     const int erc = ext_read(hal, (size_t)(uint8_t)cs->slot * stride, cs->seq, ext);
@@ -486,11 +484,12 @@ int calstore_save(hal_t *hal, calstore_t *cs, const cal_record_t *rec)
     if (hal == NULL || cs == NULL || rec == NULL || !record_ok(rec)) {
         return HAL_EINVAL;
     }
-    /* the newest record's extension goes on with the new calibration */
+    /* the newest record's extension goes on with the new calibration (off the stack) */
+    static calstore_ext_t carried;
     calstore_t now;
     cal_record_t old;
     const int rc = calstore_load_ext(hal, &now, &old, &carried);
-    if (rc == CALSTORE_OK && carried.status == (uint8_t)CALSTORE_EXT_OK) {
+    if (rc == (int)CALSTORE_OK && carried.status == (uint8_t)CALSTORE_EXT_OK) {
         return save_record(hal, cs, rec, &carried);
     }
     return save_record(hal, cs, rec, NULL);

@@ -8,16 +8,6 @@
 /* the record being read or written: off the stack (not reentrant, as calstore) */
 static calstore_ext_t ext;
 
-static app_param_id_t param_of_did(uint16_t did)
-{
-    for (int k = 0; k < (int)APP_PARAM_N; k++) {
-        if (app_params[k].did == did) {
-            return (app_param_id_t)k;
-        }
-    }
-    return APP_PARAM_N;
-}
-
 size_t nvstore_params_encode(const app_config_t *cfg, uint8_t *buf, size_t cap)
 {
     size_t n = 0u;
@@ -62,12 +52,14 @@ void nvstore_params_decode(app_config_t *cfg, const uint8_t *buf, size_t len,
         }
         const uint16_t did = (uint16_t)(((uint16_t)buf[k] << 8) | buf[k + 1u]);
         const size_t n = buf[k + 2u];
-        const app_param_id_t id = param_of_did(did);
+        const app_param_id_t id = app_uds_param_of_did(did);
         if (id == APP_PARAM_N || app_params[id].uds_read_only ||
             app_uds_param_decode(cfg, id, &buf[k + NVSTORE_ENTRY_HEAD], n) != UDS_NRC_OK) {
             count_refused(st);
         } else if (st->loaded < UINT8_MAX) {
             st->loaded++;
+        } else {
+            /* loaded saturated */
         }
         k += NVSTORE_ENTRY_HEAD + n;
     }
@@ -88,7 +80,7 @@ int nvstore_layer(hal_t *hal, app_config_t *cfg, nvstore_status_t *st)
     if (ext.status == (uint8_t)CALSTORE_EXT_NEWER || ext.status == (uint8_t)CALSTORE_EXT_CORRUPT) {
         st->version = ext.version;
         st->source = (uint8_t)NVSTORE_SRC_REFUSED;
-    } else if (rc != CALSTORE_OK) {
+    } else if (rc != (int)CALSTORE_OK) {
         st->source = (uint8_t)NVSTORE_SRC_DEFAULTS;
     } else if (ext.status == (uint8_t)CALSTORE_EXT_NONE) {
         st->version = (uint8_t)CALSTORE_VERSION;
@@ -134,7 +126,7 @@ int nvstore_erase_calibration(hal_t *hal, calstore_t *cs)
     cal_record_t rec;
     calstore_t now;
     const int rc = calstore_load_ext(hal, &now, &rec, &ext);
-    if (rc == CALSTORE_OK && ext.status == (uint8_t)CALSTORE_EXT_OK) {
+    if (rc == (int)CALSTORE_OK && ext.status == (uint8_t)CALSTORE_EXT_OK) {
         const cal_record_t none = {0.0f, 0.0f, 0.0f, (uint8_t)CAL_SRC_NONE};
         return calstore_save_ext(hal, cs, &none, &ext);
     }
@@ -152,7 +144,7 @@ int nvstore_put_dtc_status(hal_t *hal, calstore_t *store, unsigned index, uint8_
     if (rc < 0) {
         return rc;
     }
-    if (rc != CALSTORE_OK) {
+    if (rc != (int)CALSTORE_OK) {
         rec.dh_rad = 0.0f; /* no record: one with no calibration and no parameters */
         rec.odo_scale_err = 0.0f;
         rec.base_m = 0.0f;
