@@ -528,6 +528,36 @@ static void test_calibration_routines(void **state)
     assert_int_equal(app.cfg.level_s, 45u);
 }
 
+/* GIVEN a stored record with one good entry (level_s 45) and one out of range
+ * (gnss_latency_s 1e6 s) WHEN started THEN level_s 45, gnss_latency_s its default, DID
+ * 0xF1A1 says 1 loaded, 1 refused, and NAV_Status's NVM_ERROR is raised */
+static void test_refused_entries_reported(void **state)
+{
+    (void)state;
+    const float big = 1.0e6f;
+    uint32_t u;
+    memcpy(&u, &big, sizeof u);
+    const uint8_t blob[] = {0x02, 0x04, 2, 0, 45,
+                            0x02, 0x40, 4, (uint8_t)(u >> 24), (uint8_t)(u >> 16),
+                            (uint8_t)(u >> 8), (uint8_t)u};
+    static calstore_ext_t ext;
+    memset(&ext, 0, sizeof ext);
+    memset(ext.dtc, 0xFF, sizeof ext.dtc);
+    memcpy(ext.params, blob, sizeof blob);
+    ext.params_len = (uint16_t)sizeof blob;
+    calstore_t cs = {0u, -1};
+    const cal_record_t none = {0.0f, 0.0f, 0.0f, CAL_SRC_NONE};
+    assert_int_equal(calstore_save_ext(&hal, &cs, &none, &ext), 0);
+    assert_int_equal(app_start(&app, &hal), NAV_OK);
+    const app_config_t d = app_default_config();
+    assert_int_equal(app.cfg.level_s, 45u);
+    assert_near(app.cfg.gnss_latency_s, d.gnss_latency_s, 0.0);
+    assert_int_equal(app.keep.cal.nvm_error, 1u);
+    assert_int_equal(REQUEST(0x22, 0xF1, 0xA1), 11u);
+    const uint8_t want[8] = {2u, NVSTORE_SRC_NVM, 1u, 1u, 0u, 0u, 0u, 1u};
+    assert_memory_equal(&rsp[3], want, 8u);
+}
+
 /* the board's layer goes over the NVM's, at start and at every ECUReset: this test's
  * (app_board_layer overrides app.c's weak default) sets level_s 20 when layer_on */
 static int layer_on;
@@ -577,6 +607,7 @@ int main(void)
         cmocka_unit_test_setup(test_routine_conditions_and_nvm_failure, setup_started),
         cmocka_unit_test_setup(test_calibration_routines, setup_started),
         cmocka_unit_test_setup(test_board_layer_over_nvm, setup_started),
+        cmocka_unit_test_setup(test_refused_entries_reported, setup_started),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

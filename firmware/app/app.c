@@ -74,6 +74,9 @@ int app_start(app_t *a, hal_t *hal)
     a->nvm = st;
     a->started = 1u;
     app_boot(a, hal);
+    if (st.source == NVSTORE_SRC_REFUSED || st.refused != 0u) {
+        a->keep.cal.nvm_error = 1u; /* NAV_Status NVM_ERROR: what NVM held was refused */
+    }
     return NAV_OK;
 }
 

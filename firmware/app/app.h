@@ -115,6 +115,8 @@ int app_init(app_t *app, const app_config_t *cfg);
  * over them (nvstore.h), then the board's own layer app_board_layer over both; app_init
  * with the result, then app_boot. ECUReset (UDS 0x11) runs it again, so what was written
  * over UDS and not saved (RoutineControl 0x0200) is gone after it, as on a real ECU.
+ * A refused extension or refused entries raise NAV_Status NVM_ERROR (and DID 0xF1A1 says
+ * which and how many), as a corrupt calibration record does.
  * Returns NAV_OK, or NAV_EINVAL when the result is refused (by the layer or app_init).
  */
 int app_start(app_t *app, hal_t *hal);
