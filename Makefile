@@ -64,7 +64,7 @@ TESTS_F32 := test_e2e test_codec test_trig test_isotp test_uds test_dtc
 # tests that link both variants themselves
 TESTS_BOTH := test_drive
 # tests of application modules against the in-memory HAL (tests/support/fake_hal.c)
-TESTS_FAKE_HAL := test_app test_calstore test_app_rx test_imu_stream test_imu_rate test_gnss_epoch test_gnss_time test_align test_landnav test_calib test_app_health test_app_config test_app_loop test_output test_commands test_fusion test_dynamics test_mounting test_app_uds test_imu_time
+TESTS_FAKE_HAL := test_app test_calstore test_nvstore test_app_rx test_imu_stream test_imu_rate test_gnss_epoch test_gnss_time test_align test_landnav test_calib test_app_health test_app_config test_app_loop test_output test_commands test_fusion test_dynamics test_mounting test_app_uds test_imu_time
 # what they link besides the application: the in-memory HAL, frames as the senders encode
 # them, a fresh application
 FAKE_HAL_SUPPORT := tests/support/fake_hal.c tests/support/can_frames.c tests/support/app_fixture.c
@@ -389,7 +389,7 @@ M4_WAIT_HOOK_CALLERS := bxcan_init hal/cortex_m4f/stm32_clock.c:fail stm32_clock
 # data functions, all the application's (firmware/app/app_uds.c)
 M4_UDS := firmware/app/app_uds.c
 M4_UDS_INDIRECT := --indirect isotp_poll=$(M4_UDS):tx_frame \
-  --indirect uds_handle=$(M4_UDS):read_did,$(M4_UDS):write_did,$(M4_UDS):is_writable
+  --indirect uds_handle=$(M4_UDS):read_did,$(M4_UDS):write_did,$(M4_UDS):is_writable,$(M4_UDS):start_routine,$(M4_UDS):uds_dtc_count,$(M4_UDS):uds_dtc_get,$(M4_UDS):uds_dtc_clear,$(M4_UDS):uds_dtc_availability
 target-budget: deps venv target
 	$(PY) -m tools.target.budget --elf $(TGT)/navecu.elf --objs $(ECU_SRC:%.c=$(TGT)/obj/%.o) \
 	  --entry Reset_Handler --isr CAN1_RX0_IRQHandler --isr CAN1_SCE_IRQHandler \
@@ -485,7 +485,7 @@ drive: deps venv $(BUILD)/host/navecu$(VEH_SUFFIX)
 FUZZ_CC := clang
 FUZZ_SECONDS ?= 60
 FUZZ := $(BUILD)/fuzz
-FUZZ_NAMES := fuzz_codec fuzz_app fuzz_calstore fuzz_candump fuzz_options fuzz_cmdline fuzz_isotp
+FUZZ_NAMES := fuzz_codec fuzz_app fuzz_calstore fuzz_nvstore fuzz_candump fuzz_options fuzz_cmdline fuzz_isotp
 FUZZ_SAN := -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
 FUZZ_CFLAGS := $(CSTD) -O2 -g $(WARN) $(FPFLAGS) -D_DEFAULT_SOURCE $(FUZZ_SAN)
 FUZZ_INC := $(HOST_INC) -Ihost_sim -Itests/fuzz -I$(FUZZ)/gen -I$(VEH_OUT)/native
@@ -499,6 +499,7 @@ fuzz_app_SRC := tests/fuzz/fuzz_app.c $(FUZZ_APP_SRC)
 fuzz_options_SRC := tests/fuzz/fuzz_options.c $(FUZZ_APP_SRC)
 fuzz_calstore_SRC := tests/fuzz/fuzz_calstore.c tests/fuzz/fuzz_fail.c firmware/app/calstore.c \
                      tests/support/fake_hal.c
+fuzz_nvstore_SRC := tests/fuzz/fuzz_nvstore.c $(FUZZ_APP_SRC)
 fuzz_candump_SRC := tests/fuzz/fuzz_candump.c tests/fuzz/fuzz_fail.c $(HAL_LINUX_SRC)
 fuzz_isotp_SRC := tests/fuzz/fuzz_isotp.c tests/fuzz/fuzz_fail.c $(DIAG_SRC)
 fuzz_cmdline_SRC := tests/fuzz/fuzz_cmdline.c tests/fuzz/fuzz_fail.c host_sim/options.c $(APP_SRC) \

@@ -84,6 +84,20 @@ static uint8_t fake_write(void *user, uint16_t did, const uint8_t *data, size_t 
     return UDS_NRC_OK;
 }
 
+/* routine 0x0200 (no option record) succeeds, 0x0201 answers routine_nrc; others 0x31 */
+static uint8_t routine_nrc;
+static int routines;
+static uint8_t fake_routine(void *user, uint16_t rid, const uint8_t *data, size_t len)
+{
+    (void)user;
+    (void)data;
+    routines++;
+    if (rid == 0x0200u) {
+        return len == 0u ? UDS_NRC_OK : UDS_NRC_INCORRECT_LENGTH;
+    }
+    return rid == 0x0201u ? routine_nrc : UDS_NRC_REQUEST_OUT_OF_RANGE;
+}
+
 static int setup(void **state)
 {
     (void)state;
@@ -91,9 +105,11 @@ static int setup(void **state)
     app.d100[0] = 0x12;
     app.d100[1] = 0x34;
     memcpy(app.d101, "\xA1\xA2\xA3\xA4", 4u);
-    const uds_if_t itf = {
-        .user = &app, .read_did = fake_read, .write_did = fake_write, .is_writable = fake_writable};
+    const uds_if_t itf = {.user = &app, .read_did = fake_read, .write_did = fake_write,
+                         .is_writable = fake_writable, .start_routine = fake_routine};
     assert_int_equal(uds_init(&srv, &itf, 12345u), 0);
+    routines = 0;
+    routine_nrc = UDS_NRC_CONDITIONS_NOT_CORRECT;
     return 0;
 }
 
@@ -167,7 +183,7 @@ static void test_session_control_and_timings(void **state)
 static void test_unknown_service_and_empty(void **state)
 {
     (void)state;
-    EXPECT(0, B(0x31, 0x01, 0x02, 0x03), B(0x7F, 0x31, 0x11));
+    EXPECT(0, B(0x34, 0x00, 0x44), B(0x7F, 0x34, 0x11)); /* RequestDownload: not served */
     EXPECT(0, B(0x19, 0x02, 0xFF), B(0x7F, 0x19, 0x11));
     EXPECT(0, B(0x85, 0x02), B(0x7F, 0x85, 0x11));
     const uint8_t none[1] = {0};
@@ -542,6 +558,41 @@ static void test_no_fault_memory_is_service_not_supported(void **state)
     EXPECT(0, B(0x14, 0xFF, 0xFF, 0xFF), B(0x7F, 0x14, 0x11));
 }
 
+/* RoutineControl 0x31: default session 0x7F; no sub-function 0x13; a sub-function other
+ * than startRoutine 0x12; under 4 bytes 0x13; locked 0x33; then the application's answer
+ * (0x31 unknown, 0x22, 0x72) as a negative response, or 71 01 RID; suppressPosRsp; an
+ * application without routines: 0x11 in every session */
+static void test_routine_control(void **state)
+{
+    (void)state;
+    EXPECT(0, B(0x31, 0x01, 0x02, 0x00), B(0x7F, 0x31, 0x7F));
+    EXPECT(0, B(0x10, 0x03), B(0x50, 0x03, 0x00, 0x32, 0x01, 0xF4));
+    EXPECT(0, B(0x31), B(0x7F, 0x31, 0x13));
+    EXPECT(0, B(0x31, 0x02, 0x02, 0x00), B(0x7F, 0x31, 0x12));
+    EXPECT(0, B(0x31, 0x03, 0x02, 0x00), B(0x7F, 0x31, 0x12));
+    EXPECT(0, B(0x31, 0x01, 0x02), B(0x7F, 0x31, 0x13));
+    EXPECT(0, B(0x31, 0x01, 0x02, 0x00), B(0x7F, 0x31, 0x33));
+    assert_int_equal(routines, 0);
+    unlock(0);
+    EXPECT(0, B(0x31, 0x01, 0x02, 0x00), B(0x71, 0x01, 0x02, 0x00));
+    EXPECT(0, B(0x31, 0x01, 0x02, 0x00, 0x55), B(0x7F, 0x31, 0x13));
+    EXPECT(0, B(0x31, 0x01, 0x02, 0x01), B(0x7F, 0x31, 0x22));
+    routine_nrc = UDS_NRC_GENERAL_PROGRAMMING_FAILURE;
+    EXPECT(0, B(0x31, 0x01, 0x02, 0x01), B(0x7F, 0x31, 0x72));
+    EXPECT(0, B(0x31, 0x01, 0x12, 0x34), B(0x7F, 0x31, 0x31));
+    EXPECT_NONE(0, B(0x31, 0x81, 0x02, 0x00));
+    EXPECT(0, B(0x31, 0x81, 0x12, 0x34), B(0x7F, 0x31, 0x31)); /* negative: sent */
+    assert_int_equal(routines, 7);
+
+    uds_t s;
+    const uds_if_t none = {.user = &app, .read_did = fake_read, .write_did = fake_write,
+                           .is_writable = fake_writable};
+    assert_int_equal(uds_init(&s, &none, 1u), 0);
+    const uint8_t rq[] = {0x31, 0x01, 0x02, 0x00};
+    assert_int_equal(uds_handle(&s, rq, sizeof rq, 0, rsp, sizeof rsp), 3u);
+    assert_memory_equal(rsp, "\x7F\x31\x11", 3u);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -565,6 +616,7 @@ int main(void)
         cmocka_unit_test_setup(test_read_dtc_refusals, setup_dtc),
         cmocka_unit_test_setup(test_clear_dtc, setup_dtc),
         cmocka_unit_test_setup(test_no_fault_memory_is_service_not_supported, setup),
+        cmocka_unit_test_setup(test_routine_control, setup),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

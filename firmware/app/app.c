@@ -56,6 +56,39 @@ int app_init(app_t *app, const app_config_t *cfg)
 void app_boot(app_t *a, hal_t *hal)
 {
     calib_boot(&a->keep.cal, hal);
+    uint8_t dtc_bytes[CALSTORE_DTC_N];
+    if (nvstore_dtc_status(hal, dtc_bytes) == 0) {
+        app_dtc_load(a, dtc_bytes, sizeof dtc_bytes); /* 0xFF: none stored, as after a clear */
+    }
+}
+
+int app_nvm_write_allowed(const app_t *a)
+{
+    return (a->run.mode == APP_MODE_WAIT_INIT || a->keep.odo.standing != 0u) ? 1 : 0;
+}
+
+/* the default board layer: nothing over the NVM's (app.h; the host has its own) */
+__attribute__((weak)) int app_board_layer(app_config_t *cfg)
+{
+    (void)cfg;
+    return 0;
+}
+
+int app_start(app_t *a, hal_t *hal)
+{
+    static app_config_t cfg; /* off the stack, as the boards keep theirs */
+    nvstore_status_t st;
+    (void)nvstore_layer(hal, &cfg, &st); /* any failure leaves valid defaults */
+    if (app_board_layer(&cfg) != 0 || app_init(a, &cfg) != NAV_OK) {
+        return NAV_EINVAL;
+    }
+    a->nvm = st;
+    a->started = 1u;
+    app_boot(a, hal);
+    if (st.source == NVSTORE_SRC_REFUSED || st.refused != 0u) {
+        a->keep.cal.nvm_error = 1u; /* NAV_Status NVM_ERROR: what NVM held was refused */
+    }
+    return NAV_OK;
 }
 
 void app_reset(app_t *a)

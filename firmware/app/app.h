@@ -49,6 +49,7 @@
 #include "imu_stream.h"
 #include "landnav.h"
 #include "mounting.h"
+#include "nvstore.h"
 #include "odo.h"
 #include "output.h"
 #include "sins.h"
@@ -81,7 +82,8 @@ typedef struct {
     odo_t odo;              /* the car's odometer */
     mounting_t mount;       /* the IMU's configured rotation into the vehicle's axes */
     dtc_t dtc;              /* the fault memory: a DTC per health condition (app_dtc.h) */
-    uint32_t dtc_persist_writes; /* stored DTC status bytes handed to NVM (app_dtc_persist) */
+    uint32_t dtc_dirty;          /* DTCs whose stored byte changed, not yet in NVM (bit i) */
+    uint32_t dtc_persist_writes; /* NVM record writes of the DTC status bytes (app_dtc.c) */
     uint32_t dtc_persist_failed; /* of them, writes that failed */
 } app_keep_t;
 
@@ -106,6 +108,8 @@ typedef struct {
 
 struct app {
     app_config_t cfg;
+    nvstore_status_t nvm;   /* what app_start loaded from NVM (UDS DID 0xF1A1) */
+    uint8_t started;        /* started by app_start: an ECUReset layers again */
     app_keep_t keep;
     app_run_t run;
     app_uds_t uds;          /* diagnostics: UDS over ISO-TP (app_uds.h), off the navigation
@@ -115,10 +119,31 @@ struct app {
 /* Start in APP_MODE_WAIT_INIT. Returns NAV_OK, or NAV_EINVAL for a config out of range. */
 int app_init(app_t *app, const app_config_t *cfg);
 
+/*
+ * The boot of every board, in layers: the table's defaults, the parameters stored in NVM
+ * over them (nvstore.h), then the board's own layer app_board_layer over both; app_init
+ * with the result, then app_boot. ECUReset (UDS 0x11) runs it again, so what was written
+ * over UDS and not saved (RoutineControl 0x0200) is gone after it, as on a real ECU.
+ * A refused extension or refused entries raise NAV_Status NVM_ERROR (and DID 0xF1A1 says
+ * which and how many), as a corrupt calibration record does.
+ * Returns NAV_OK, or NAV_EINVAL when the result is refused (by the layer or app_init).
+ */
+int app_start(app_t *app, hal_t *hal);
+
+/* The board's configuration layer over the defaults and the NVM (app_start): 0, or
+ * nonzero to refuse the configuration. The default (weak, in app.c) changes nothing; the
+ * host defines its own, its command-line options (host_sim/main.c). */
+int app_board_layer(app_config_t *cfg);
+
 /* Once after app_init: load the stored calibration from NVM (calstore.h) as the starting
  * values. A corrupt store leaves the defaults (0, 0) with CalStatus NvmCorrupt; an NVM
  * read error also sets the NVM_ERROR flag. */
 void app_boot(app_t *app, hal_t *hal);
+
+/* 1 when the application may write NVM now: navigation not started, or the car standing
+ * (a flash erase stalls the CPU for hundreds of ms on a single-bank flash: never while
+ * moving). The UDS routines and the DTC status bytes (app_dtc.c) follow it. */
+int app_nvm_write_allowed(const app_t *a);
 
 /* Process one received frame; may send frames through hal. Never fails: whatever is
  * wrong with the frame is counted in app->keep.health. A frame on the UDS request ID goes

@@ -4,19 +4,36 @@
 #include "app.h"
 #include "uds.h"
 
-static int app_dtc_persist(app_t *a, hal_t *hal, size_t index, uint8_t status);
+#include "calstore.h"
+#include "nvstore.h"
 
-/* the stored bytes in changed (bit i: DTC i) to NVM; 0, or -1 if one write failed */
+_Static_assert(DTC_MAX == CALSTORE_DTC_N, "the NVM record holds a status byte per DTC");
+
+/*
+ * The stored bytes of the DTCs in changed (bit i: DTC i) go to NVM, all in one record
+ * write, when the application may write NVM (app_nvm_write_allowed: a flash erase stalls
+ * the CPU, so never while moving); until then they wait in dtc_dirty. 0, or -1 when the
+ * write failed (counted in dtc_persist_failed; NAV_Status NVM_ERROR; the bytes are not
+ * retried until the next change, so a failing flash is not hammered).
+ */
 static int persist_changed(app_t *a, hal_t *hal, uint32_t changed)
 {
-    int r = 0;
-    for (size_t i = 0u; i < (size_t)DTC_N; i++) {
-        if ((changed & ((uint32_t)1u << i)) != 0u &&
-            app_dtc_persist(a, hal, i, dtc_stored(&a->keep.dtc, i)) != 0) {
-            r = -1;
-        }
+    a->keep.dtc_dirty |= changed;
+    if (a->keep.dtc_dirty == 0u || hal == NULL || !app_nvm_write_allowed(a)) {
+        return 0;
     }
-    return r;
+    uint8_t b[CALSTORE_DTC_N];
+    for (size_t i = 0u; i < (size_t)CALSTORE_DTC_N; i++) {
+        b[i] = i < (size_t)DTC_N ? dtc_stored(&a->keep.dtc, i) : 0xFFu;
+    }
+    a->keep.dtc_dirty = 0u;
+    app_count(&a->keep.dtc_persist_writes);
+    if (nvstore_put_dtc_status(hal, &a->keep.cal.store, b) != 0) {
+        app_count(&a->keep.dtc_persist_failed);
+        a->keep.cal.nvm_error = 1u;
+        return -1;
+    }
+    return 0;
 }
 
 void app_dtc_load(app_t *a, const uint8_t *status, size_t n)
@@ -32,34 +49,10 @@ void app_dtc_cycle(app_t *a, hal_t *hal, uint32_t health_flags)
 
 uint8_t app_dtc_clear(app_t *a, hal_t *hal)
 {
+    if (!app_nvm_write_allowed(a)) {
+        return UDS_NRC_CONDITIONS_NOT_CORRECT; /* the NVM write would stall navigation */
+    }
     const uint32_t changed = dtc_clear_all(&a->keep.dtc);
     return persist_changed(a, hal, changed) == 0 ? UDS_NRC_OK
                                                  : UDS_NRC_GENERAL_PROGRAMMING_FAILURE;
-}
-
-/*
- * WIRED TO NVSTORE AT MERGE. The nvm branch's record (nvstore.h) keeps CALSTORE_DTC_N (16
- * = DTC_MAX) status bytes; the coordinator replaces this body with
- *     app_count(&a->keep.dtc_persist_writes);
- *     if (hal == NULL ||
- *         nvstore_put_dtc_status(hal, &a->keep.cal.store, (unsigned)index, status) != 0) {
- *         app_count(&a->keep.dtc_persist_failed);
- *         return -1;
- *     }
- *     return 0;
- * and ends app_boot (after calib_boot) with
- *     uint8_t b[CALSTORE_DTC_N];
- *     if (nvstore_dtc_status(hal, b) == 0) {
- *         app_dtc_load(a, b, sizeof b);   (0xFF, "none stored": as after a clear)
- *     }
- * (on an error every DTC stays as app_init left it: as after a clear). Until then
- * nothing is written: dtc_persist_writes counts the bytes that would have been.
- */
-static int app_dtc_persist(app_t *a, hal_t *hal, size_t index, uint8_t status)
-{
-    (void)hal;
-    (void)index;
-    (void)status;
-    app_count(&a->keep.dtc_persist_writes);
-    return 0;
 }

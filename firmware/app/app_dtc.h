@@ -3,12 +3,10 @@
  * DTCs, tested with each NAV_Status, served by UDS 0x19 / 0x14 (app_uds.c), their stored
  * status bytes kept in NVM.
  *
- * NVM seam (the nvm branch's record of DTC_MAX status bytes): at boot the board's code
- * passes the record's bytes to app_dtc_load; every change of a stored byte goes to
- * app_dtc_persist (app_dtc.c: 0, or -1 on an NVM failure, counted in dtc_persist_failed).
- * Until that record exists app_dtc_persist writes nothing (a stub marked "WIRED TO NVSTORE
- * AT MERGE" in app_dtc.c) and app_init starts every DTC as after a clear: the fault memory lives in RAM
- * and is lost at ECUReset and at power-down.
+ * NVM: the record's DTC_MAX status bytes (nvstore.h) are passed to app_dtc_load by app_boot
+ * at every start; a change of stored bytes is written in one record write when
+ * app_nvm_write_allowed (app.h), else held in dtc_dirty until then; a failure is counted in
+ * dtc_persist_failed and raises NVM_ERROR.
  */
 #ifndef NAVECU_APP_DTC_H
 #define NAVECU_APP_DTC_H
@@ -27,10 +25,11 @@ struct app; /* app.h */
 void app_dtc_load(struct app *a, const uint8_t *status, size_t n);
 
 /* With each NAV_Status (output.c): the DTCs tested against its HealthFlags at the HAL
- * time now; every stored byte that changed goes to app_dtc_persist. */
+ * time now; the stored bytes that changed go to NVM (above). */
 void app_dtc_cycle(struct app *a, hal_t *hal, uint32_t health_flags);
 
-/* ClearDiagnosticInformation (UDS 0x14, all DTCs): UDS_NRC_OK, or 0x72
+/* ClearDiagnosticInformation (UDS 0x14, all DTCs): UDS_NRC_OK, 0x22 when NVM may not be
+ * written now (moving while navigating; nothing cleared), or 0x72
  * generalProgrammingFailure when a stored byte could not be written (the RAM status is
  * cleared all the same; the tester may repeat the request). */
 uint8_t app_dtc_clear(struct app *a, hal_t *hal);

@@ -331,6 +331,30 @@ static result_t clear_dtc(uds_t *s, const uint8_t *req, size_t len)
     return positive(1u, 0u);
 }
 
+/* 0x31 01 RID [option record]: 71 01 RID (startRoutine only; extended session, unlocked) */
+static result_t routine_control(uds_t *s, const uint8_t *req, size_t len, uint8_t *rsp)
+{
+    const uint8_t sub = (uint8_t)(req[1] & 0x7Fu);
+    if (sub != UDS_ROUTINE_START) {
+        return nrc(UDS_NRC_SUBFUNCTION_NOT_SUPPORTED);
+    }
+    if (len < 4u) {
+        return nrc(UDS_NRC_INCORRECT_LENGTH);
+    }
+    if (!s->unlocked) {
+        return nrc(UDS_NRC_SECURITY_ACCESS_DENIED);
+    }
+    const uint16_t rid = (uint16_t)(((uint32_t)req[2] << 8) | req[3]);
+    const uint8_t code = s->itf.start_routine(s->itf.user, rid, &req[4], len - 4u);
+    if (code != UDS_NRC_OK) {
+        return nrc(code);
+    }
+    rsp[1] = sub;
+    rsp[2] = req[2];
+    rsp[3] = req[3];
+    return positive(4u, req[1] & UDS_SUPPRESS_POS);
+}
+
 /* 1 for the services whose byte 1 is a sub-function */
 static int has_subfunction(uint8_t sid)
 {
@@ -339,6 +363,7 @@ static int has_subfunction(uint8_t sid)
     case UDS_SID_ECU_RESET:
     case UDS_SID_SECURITY:
     case UDS_SID_TESTER_PRESENT:
+    case UDS_SID_ROUTINE:
         return 1;
     default:
         return 0;
@@ -348,7 +373,8 @@ static int has_subfunction(uint8_t sid)
 /* 1 for the services of the extended session only */
 static int extended_only(uint8_t sid)
 {
-    return (sid == UDS_SID_SECURITY || sid == UDS_SID_WRITE_DID) ? 1 : 0;
+    return (sid == UDS_SID_SECURITY || sid == UDS_SID_WRITE_DID || sid == UDS_SID_ROUTINE) ? 1
+                                                                                         : 0;
 }
 
 size_t uds_handle(uds_t *s, const uint8_t *req, size_t len, uint64_t now_us, uint8_t *rsp,
@@ -369,7 +395,9 @@ size_t uds_handle(uds_t *s, const uint8_t *req, size_t len, uint64_t now_us, uin
     }
     /* ISO 14229-1 Figure 5 / 7 order: the service (0x11), the session (0x7F), the minimum
      * length (0x13), the sub-function (0x12), then each service's own checks */
-    if (extended_only(sid) && s->session != UDS_SESSION_EXTENDED) {
+    if (sid == UDS_SID_ROUTINE && s->itf.start_routine == NULL) {
+        r = nrc(UDS_NRC_SERVICE_NOT_SUPPORTED); /* an application without routines */
+    } else if (extended_only(sid) && s->session != UDS_SESSION_EXTENDED) {
         r = nrc(UDS_NRC_NOT_IN_ACTIVE_SESSION);
     } else if (has_sub && len < 2u) {
         r = nrc(UDS_NRC_INCORRECT_LENGTH); /* no sub-function at all */
@@ -399,6 +427,9 @@ size_t uds_handle(uds_t *s, const uint8_t *req, size_t len, uint64_t now_us, uin
             break;
         case UDS_SID_CLEAR_DTC:
             r = has_fault_memory(s) ? clear_dtc(s, req, len) : nrc(UDS_NRC_SERVICE_NOT_SUPPORTED);
+            break;
+        case UDS_SID_ROUTINE:
+            r = routine_control(s, req, len, rsp);
             break;
         default:
             r = nrc(UDS_NRC_SERVICE_NOT_SUPPORTED);

@@ -10,6 +10,8 @@
  *   0x22 ReadDataByIdentifier      1..UDS_MAX_READ_DIDS DIDs per request
  *   0x27 SecurityAccess            0x01 requestSeed / 0x02 sendKey, extended session
  *   0x2E WriteDataByIdentifier     extended session and unlocked
+ *   0x31 RoutineControl            0x01 startRoutine, extended session and unlocked;
+ *                                  0x11 when the application has no start_routine
  *   0x3E TesterPresent             0x00
  *   0x19 ReadDTCInformation        0x01 reportNumberOfDTCByStatusMask, 0x02
  *                                  reportDTCByStatusMask, 0x0A reportSupportedDTC; any session
@@ -44,6 +46,8 @@
 #define UDS_DTC_SUPPORTED 0x0Au        /* 0x19 reportSupportedDTC */
 #define UDS_DTC_GROUP_ALL 0xFFFFFFu    /* 0x14 groupOfDTC: all groups */
 #define UDS_DTC_FORMAT_J2012 0x00u     /* DTCFormatIdentifier SAE_J2012-DA_DTCFormat_00 */
+#define UDS_SID_ROUTINE 0x31u     /* RoutineControl */
+#define UDS_ROUTINE_START 0x01u   /* its startRoutine sub-function (the only one served) */
 #define UDS_NEGATIVE 0x7Fu        /* a negative response: 7F SID NRC */
 #define UDS_SUPPRESS_POS 0x80u    /* suppressPosRspMsgIndicationBit of a sub-function */
 
@@ -101,6 +105,11 @@
  *              only): UDS_NRC_OK, or the NRC that refuses it (0x22 not now, 0x72 the NVM
  *              write failed).
  *   dtc_availability  the DTCStatusAvailabilityMask: the status bits the ECU supports.
+ *   start_routine  (optional, NULL: 0x31 is serviceNotSupported) start routine rid with
+ *              its option record data[0..len): UDS_NRC_OK once it is done, or the NRC
+ *              (0x31 an unknown routine, 0x22 not now, 0x72 an NVM failure). Called only
+ *              in the extended session, unlocked.
+ * Functions are appended at the end (applications use designated initialisers).
  */
 typedef struct {
     void *user;
@@ -111,6 +120,7 @@ typedef struct {
     int (*dtc_get)(void *user, size_t index, uint32_t *dtc, uint8_t *status);
     uint8_t (*dtc_clear)(void *user, uint32_t group);
     uint8_t (*dtc_availability)(void *user);
+    uint8_t (*start_routine)(void *user, uint16_t rid, const uint8_t *data, size_t len);
 } uds_if_t;
 
 /* Counted, each saturating (never decreasing). */

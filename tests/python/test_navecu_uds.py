@@ -19,10 +19,6 @@ from tools.vcan import uds_check
 ROOT = Path(__file__).resolve().parents[2]
 NAVECU = os.environ.get("NAVECU_BIN", str(ROOT / "build" / "host" / "navecu"))
 TAB = nu.table()
-NEEDS_NVM = pytest.mark.xfail(strict=False, reason="needs the nvm branch: RoutineControl "
-                              "0x0200 StoreParameters and the parameters loaded from NVM")
-NEEDS_DTC = pytest.mark.xfail(strict=False, reason="needs the dtc branch: ReadDTCInformation "
-                              "0x19 and ClearDiagnosticInformation 0x14")
 
 
 def f32(x):
@@ -325,7 +321,6 @@ def test_log_runner_security(lr):
     assert rc == nu.EXIT_NRC and "0x37 requiredTimeDelayNotExpired to SecurityAccess" in err
 
 
-@NEEDS_NVM
 def test_log_runner_save_then_power_cycle_keeps_the_parameters(lr, tmp_path):
     assert lr("write", "level_s=45", "gyro_arw_rad_rts=0.42")[0] == 0
     rc, _, err = lr("save")
@@ -340,7 +335,6 @@ IMU_SILENT_DTC = 0xD10187  # U1101-87, IMU_STALE (docs/can.md, "Diagnostic troub
 TEST_FAILED, CONFIRMED = 0x01, 0x08
 
 
-@NEEDS_DTC
 def test_log_runner_dtc_of_the_silent_imu(tmp_path):
     """The fault injected on the log runner: IMU samples for 1 s, then none. Its DTC
     fails once the IMU is stale (0.5 s of bus time without a sample), is confirmed 2 s

@@ -23,10 +23,6 @@ ROOT = Path(__file__).resolve().parents[2]
 NAVECU = os.environ.get("NAVECU_BIN", str(ROOT / "build" / "host" / "navecu"))
 WITH_VCAN = ROOT / "tools" / "vcan" / "with_vcan.sh"
 TIMEOUT_S = 300
-NEEDS_NVM = pytest.mark.xfail(strict=False, reason="needs the nvm branch: RoutineControl "
-                              "0x0200 StoreParameters and the parameters loaded from NVM")
-NEEDS_DTC = pytest.mark.xfail(strict=False, reason="needs the dtc branch: ReadDTCInformation "
-                              "0x19 and ClearDiagnosticInformation 0x14")
 IMU_SILENT_DTC = 0xD10187
 TEST_FAILED, CONFIRMED = 0x01, 0x08
 
@@ -66,7 +62,6 @@ def test_load_then_dump_gives_the_edit(r):
     assert text != r["dump_a_text"]
 
 
-@NEEDS_NVM
 def test_round_trip_save_restart_dump_identical(r):
     rc, out, err = r["save"]
     assert rc == 0, err
@@ -86,7 +81,6 @@ def test_three_wrong_keys_then_the_delay(r):
     assert rc == 1 and "0x37 requiredTimeDelayNotExpired" in err, err
 
 
-@NEEDS_DTC
 def test_dtc_of_the_silent_imu_read_and_cleared(r):
     assert r["imu_frames"] == 200  # 1 s of IMU pairs at 100 Hz, then silence
     rc, out, err = r["dtc_cli"]
