@@ -45,6 +45,7 @@
 #include "imu_rate.h"
 #include "imu_stream.h"
 #include "landnav.h"
+#include "mount_est.h"
 #include "mounting.h"
 #include "odo.h"
 #include "output.h"
@@ -75,7 +76,16 @@ typedef struct {
     zbias_t zbias;          /* the z gyro bias learnt at standstill (the IMU's) */
     odo_t odo;              /* the car's odometer */
     mounting_t mount;       /* the IMU's configured rotation into the vehicle's axes */
+    mount_est_t mest;       /* the automatic mounting estimate (imu_mount_source automatic) */
+    uint8_t mount_state;    /* app_mount_state_t */
 } app_keep_t;
+
+/* The mounting's state (NAV_Calibration MountState, DID 0x0260). */
+typedef enum {
+    APP_MOUNT_FIXED = 0,      /* imu_mount_source fixed: imu_mount_rad */
+    APP_MOUNT_ESTIMATING = 1, /* automatic, not converged: navigation held */
+    APP_MOUNT_ESTIMATED = 2,  /* automatic, converged: the estimate is the mounting */
+} app_mount_state_t;
 
 /* What restarts with navigation: a reset is one assignment of zeros (app_reset). */
 typedef struct {
@@ -94,6 +104,8 @@ typedef struct {
     nav_real_t yaw_rate_rps;/* body z rate of the last IMU sample */
     uint8_t rate_held;      /* mode Fault for an IMU rate mismatch, from rate_resume */
     app_mode_t rate_resume; /* WaitInit or Levelling: where it goes on when the rate matches */
+    uint8_t mount_held;     /* mode Fault: the start waits for the mounting estimate */
+    uint8_t mount_start;    /* the estimate converged: start from GNSS, driving */
 } app_run_t;
 
 struct app {
@@ -142,6 +154,22 @@ void app_poll(app_t *app, hal_t *hal);
 #define APP_STATUS_DEADLINE_PERIODS 3u
 #define APP_PREDICT_DEADLINE_PERIODS 3u
 int app_tasks_ok(app_t *app, uint64_t now_us);
+
+/*
+ * The automatic mounting estimate into the parameters: a converged estimate (mount_state
+ * APP_MOUNT_ESTIMATED) is copied into cfg.imu_mount_rad and imu_mount_source becomes
+ * fixed, so that a parameter save (RoutineControl 0x0200) keeps it and the next start
+ * uses it without estimating again. The mounting in use does not change (it is that
+ * estimate already). Returns 0, or -1 when there is no converged estimate (nothing
+ * changed). RoutineControl 0x0204 AdoptMounting calls it.
+ */
+int app_adopt_mounting(app_t *app);
+
+/* The mounting estimate's state and result (DID 0x0260, NAV_Calibration). */
+static inline const mount_est_result_t *app_mount_estimate(const app_t *app)
+{
+    return &app->keep.mest.res;
+}
 
 /* Read-only views for the board's summary and the tests. */
 static inline app_mode_t app_mode(const app_t *app) { return app->run.mode; }

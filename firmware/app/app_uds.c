@@ -69,6 +69,24 @@ static size_t put_string(uint8_t *buf, size_t cap, const char *s)
     return n; /* > cap: the server answers 0x14 */
 }
 
+static size_t put_mount_est(const app_t *a, uint8_t *buf, size_t cap)
+{
+    if (cap < APP_UDS_MOUNT_EST_LEN) {
+        return APP_UDS_MOUNT_EST_LEN;
+    }
+    const mount_est_result_t *r = app_mount_estimate(a);
+    const nav_real_t v[6] = {r->rpy_rad[0],   r->rpy_rad[1],    r->rpy_rad[2],
+                             r->sigma_rp_rad, r->sigma_yaw_rad, r->excite_m2ps3};
+    buf[0] = a->keep.mount_state;
+    for (size_t i = 0u; i < 6u; i++) {
+        put_f32(&buf[1u + 4u * i], v[i]);
+    }
+    for (size_t i = 0u; i < 4u; i++) {
+        buf[25u + i] = (uint8_t)(r->n_windows >> (24u - 8u * i));
+    }
+    return APP_UDS_MOUNT_EST_LEN;
+}
+
 static size_t read_did(void *user, uint16_t did, uint8_t *buf, size_t cap)
 {
     const app_t *a = (const app_t *)user;
@@ -80,6 +98,9 @@ static size_t read_did(void *user, uint16_t did, uint8_t *buf, size_t cap)
     }
     if (did == APP_UDS_DID_VEHICLE) {
         return put_string(buf, cap, vehicle_profile.name);
+    }
+    if (did == APP_UDS_DID_MOUNT_EST) {
+        return put_mount_est(a, buf, cap);
     }
     const app_param_id_t id = param_of_did(did);
     if (id == APP_PARAM_N) {

@@ -27,6 +27,11 @@
 #define APP_UDS_DID_SERIAL 0xF18Cu     /* ECUSerialNumber */
 #define APP_UDS_DID_SW_VERSION 0xF195u /* systemSupplierECUSoftwareVersionNumber */
 #define APP_UDS_DID_VEHICLE 0xF1A0u    /* the build's vehicle profile name (vehicles/NAME) */
+/* the automatic mounting estimate, read-only, 29 bytes: MountState (1: app_mount_state_t),
+ * roll, pitch, yaw (rad), sigma roll/pitch, sigma yaw (rad), excitation (m^2/s^3), each a
+ * float32 big-endian, then the windows accumulated (uint32 big-endian) */
+#define APP_UDS_DID_MOUNT_EST 0x0260u
+#define APP_UDS_MOUNT_EST_LEN 29u
 
 /* the strings behind them: build defines (the HAL has no device serial: a placeholder
  * until the ECU's unique ID is read through the HAL) */
