@@ -94,11 +94,12 @@ def _frames_with_ids(path, ids):
                 yield msg.arbitration_id, bytes(msg.data)
 
 
-def read_calibration_log(path) -> dict:
+def read_calibration_log(path, page: int = 0) -> dict:
     """NAV_Calibration frames of a candump log as arrays: 't_s' and the signals (raw
     numbers, CalStatus/CalSource as their values). The frame is sent once a second on the
     sample clock and carries no time of its own: 't_s' is that of the last NAV_Height
-    before it (its TimeOfValidity, unwrapped like read_nav_log's), NaN before the first."""
+    before it (its TimeOfValidity, unwrapped like read_nav_log's), NaN before the first.
+    page: CalPage, 0 the calibration, 1 and 2 the automatic mounting estimate."""
     db = nc.load_db()
     cal_id = db.get_message_by_name("NAV_Calibration").frame_id
     height = db.get_message_by_name("NAV_Height")
@@ -115,6 +116,8 @@ def read_calibration_log(path) -> dict:
             t_last = (wraps * (tov_mask + 1) + ms) / 1000.0
         else:
             sig = db.decode_message(cal_id, data, decode_choices=False)
+            if sig.get("CalPage", 0) != page:
+                continue
             sig["t_s"] = t_last
             rows.append(sig)
     keys = rows[0].keys() if rows else ("t_s", "HeadingCorrection", "OdoScaleError", "CalValid",
