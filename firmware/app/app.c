@@ -131,9 +131,9 @@ static void release_for_rate(app_t *a)
 }
 
 /* The automatic mounting estimate (imu_mount_source automatic): every sample in the
- * IMU's axes with the odometer's speed, until it converges; then it is the mounting, and
- * a start held for it goes on from GNSS while driving (the course is the heading; roll
- * and pitch start level, the filter takes them from there). */
+ * IMU's axes with the odometer's speed. When it converges it becomes the mounting, and a
+ * start held for it goes on from GNSS while driving (the course is the heading; roll and
+ * pitch start level, the filter takes them from there). */
 static void mount_auto_sample(app_t *a, const int32_t w_raw[3], const int32_t v_raw[3])
 {
     imu_inc_t inc;
@@ -148,8 +148,9 @@ static void mount_auto_sample(app_t *a, const int32_t w_raw[3], const int32_t v_
         return;
     }
     mount_est_solve(&a->keep.mest);
-    if (!a->keep.mest.res.converged) {
-        return;
+    if (!a->keep.mest.res.converged || a->keep.mount_state != (uint8_t)APP_MOUNT_ESTIMATING) {
+        return; /* after it converged it goes on refining (reported, adoptable); the
+                   mounting in use stays the one navigation started with */
     }
     mounting_init(&a->keep.mount, a->keep.mest.res.rpy_rad);
     a->keep.mount_state = (uint8_t)APP_MOUNT_ESTIMATED;
@@ -182,7 +183,7 @@ int app_adopt_mounting(app_t *a)
 static void process_sample(app_t *a, hal_t *hal, const int32_t w_raw[3], const int32_t v_raw[3])
 {
     a->keep.n_samples++;
-    if (a->keep.mount_state == (uint8_t)APP_MOUNT_ESTIMATING) {
+    if (a->keep.mount_state != (uint8_t)APP_MOUNT_FIXED) {
         mount_auto_sample(a, w_raw, v_raw);
     }
     if (a->run.mode == APP_MODE_LEVELLING) {

@@ -156,12 +156,13 @@ void app_poll(app_t *app, hal_t *hal);
 int app_tasks_ok(app_t *app, uint64_t now_us);
 
 /*
- * The automatic mounting estimate into the parameters: a converged estimate (mount_state
- * APP_MOUNT_ESTIMATED) is copied into cfg.imu_mount_rad and imu_mount_source becomes
- * fixed, so that a parameter save (RoutineControl 0x0200) keeps it and the next start
- * uses it without estimating again. The mounting in use does not change (it is that
- * estimate already). Returns 0, or -1 when there is no converged estimate (nothing
- * changed). RoutineControl 0x0204 AdoptMounting calls it.
+ * The automatic mounting estimate into the parameters: once it has converged (mount_state
+ * APP_MOUNT_ESTIMATED) the latest estimate (it goes on refining after convergence) is
+ * copied into cfg.imu_mount_rad and imu_mount_source becomes fixed, so that a parameter
+ * save (RoutineControl 0x0200) keeps it and the next start uses it without estimating
+ * again. The mounting in use does not change before that restart. Returns 0, or -1 when
+ * there is no converged estimate (nothing changed). RoutineControl 0x0204 AdoptMounting
+ * calls it.
  */
 int app_adopt_mounting(app_t *app);
 

@@ -416,8 +416,8 @@ static void emit_calibration(app_t *a, hal_t *hal)
     send_protected(&a->keep.tx, hal, a->cfg.can_ids[NAVECU_MSG_NAV_CALIBRATION], d);
 }
 
-/* NAV_Calibration pages 1 and 2: the automatic mounting estimate (imu_mount_source
- * automatic only), in degrees */
+/* NAV_Calibration pages 1 and 2: the automatic mounting estimate (a start with
+ * imu_mount_source automatic only), in degrees */
 static void emit_mount(app_t *a, hal_t *hal)
 {
     const mount_est_result_t *r = app_mount_estimate(a);
@@ -474,7 +474,7 @@ void output_due(app_t *a, hal_t *hal)
     }
     if (n % imu == 0u) {
         emit_calibration(a, hal);
-        if (a->cfg.imu_mount_source == MOUNT_SOURCE_AUTOMATIC) {
+        if (a->keep.mount_state != (uint8_t)APP_MOUNT_FIXED) {
             emit_mount(a, hal);
         }
     }

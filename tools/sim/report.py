@@ -26,7 +26,7 @@ from tools import navecu_can as nc
 from tools.geodesy import horizontal_error_m, radii_m
 from tools.sim import scenario, sensors
 
-def read_nav_log(path, db=None) -> dict:
+def read_nav_log(path, db=None, wraps_from_log: bool = False) -> dict:
     """Decode the NAV_* frames of a candump log (every message navecu sends) into arrays
     keyed by message; each has 't_s' and the signal columns.
 
@@ -36,7 +36,10 @@ def read_nav_log(path, db=None) -> dict:
     NAV_Position opens a navigation set (Position, Height, Velocity, Attitude) that takes
     its NAV_Height's time; the others take the time of the last set (NaN before one): at
     the default rates every output of a sample follows its set (docs/can.md). db: the
-    protocol to decode with (default nc.load_db(), the selected vehicle's)."""
+    protocol to decode with (default nc.load_db(), the selected vehicle's).
+    wraps_from_log: the log's timestamps are the IMU time (a --can-log run of the
+    simulator's log): the first NAV_Height's modulus is resolved with them, for a start
+    held beyond 65.536 s (the automatic mounting estimate); later wraps as above."""
     db = db if db is not None else nc.load_db()
     want = {m.frame_id: m.name for m in db.messages if "NAVECU" in m.senders}
     rows = {n: [] for n in want.values()}
@@ -51,6 +54,8 @@ def read_nav_log(path, db=None) -> dict:
                 cycle_rows = []
             if name == "NAV_Height":
                 ms = int(sig["TimeOfValidity"])
+                if last_ms is None and wraps_from_log:
+                    wraps = max(0, round((float(msg.timestamp) - ms / 1000.0) / 65.536))
                 if last_ms is not None and ms < last_ms:
                     wraps += 1
                 last_ms = ms
