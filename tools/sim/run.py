@@ -223,7 +223,7 @@ def main(argv=None) -> int:
                          "configured (--imu-mount-deg, the true angles), automatic "
                          "(--imu-mount-source automatic), none (told nothing)")
     ap.add_argument("--fw-arg", action="append", default=[], metavar="ARG",
-                    help="one more firmware option (repeat), e.g. --fw-arg=--mount-est-sigma-deg=0.5")
+                    help="one more firmware option (repeat), e.g. --fw-arg=--mount-est-sigma-deg --fw-arg=0.5")
     ap.add_argument("--imu-rate-hz", type=int, default=100)
     ap.add_argument("--out", default=None, help="output folder (default out/sim/NAME)")
     ap.add_argument("--navecu", default=None,
