@@ -97,7 +97,10 @@ def accuracy(rep: dict) -> dict:
             "final_error_pct_of_distance": rep.get("final_error_pct_of_distance")}
 
 
-def run_case(scen_name: str, imu: str, mount: str, out: Path, extra: list) -> dict:
+def run_case(scen_name: str, imu: str, mount: str, out: Path, extra: list,
+             reuse: bool = False) -> dict:
+    if reuse and (out / "report.json").exists() and (out / "nav.log").exists():
+        return json.loads((out / "report.json").read_text())
     args = ["--scenario", scen_name, "--imu", imu, "--mount", mount, "--out", str(out)]
     args += [f"--fw-arg={x}" for x in extra]
     rc = sim_run.main(args)
@@ -136,6 +139,8 @@ def main(argv=None) -> int:
     ap.add_argument("--out", default=str(ROOT / "out" / "sim" / "mount_curve"))
     ap.add_argument("--fw-arg", action="append", default=[],
                     help="a firmware option for the automatic runs (repeat)")
+    ap.add_argument("--reuse", action="store_true",
+                    help="take a case's run from its folder when it has one (report.json)")
     ap.add_argument("--cases", default=",".join(CASES),
                     help="comma-separated subset of " + ",".join(CASES))
     a = ap.parse_args(argv)
@@ -155,7 +160,8 @@ def main(argv=None) -> int:
             row = {"truth_deg": {k: truth[k] for k in ("roll_deg", "pitch_deg", "yaw_deg")}}
             for mode in modes:
                 d = out / imu / f"{case}-{mode}"
-                rep = run_case(scen_name, imu, mode, d, a.fw_arg if mode == "automatic" else [])
+                rep = run_case(scen_name, imu, mode, d, a.fw_arg if mode == "automatic" else [],
+                               a.reuse)
                 row[mode] = accuracy(rep)
                 if mode == "automatic":
                     pages = read_mount_pages(d / "nav.log")
