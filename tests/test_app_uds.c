@@ -211,6 +211,28 @@ static void test_identification_dids(void **state)
     expect_nrc(REQUEST(0x2E, 0xF1, 0x95, 0x41), 0x2E, 0x31);
 }
 
+/* the mounting estimate's DID: 29 bytes, read-only; fixed mode: state 0, sigmas pi */
+static void test_mount_estimate_did(void **state)
+{
+    (void)state;
+    size_t n = REQUEST(0x22, 0x02, 0x60);
+    assert_int_equal(n, 3u + 29u);
+    assert_int_equal(rsp[0], 0x62);
+    assert_int_equal(rsp[3], 0u); /* MountState fixed */
+    /* sigma roll/pitch (bytes 13..16 of the value): pi as float32 big-endian */
+    const uint8_t pi_be[4] = {0x40, 0x49, 0x0F, 0xDB};
+    assert_memory_equal(&rsp[3u + 13u], pi_be, 4u);
+    assert_memory_equal(&rsp[3u + 17u], pi_be, 4u);
+    app.keep.mount_state = 2u;
+    app.keep.mest.res.n_windows = 0x01020304u;
+    n = REQUEST(0x22, 0x02, 0x60);
+    assert_int_equal(rsp[3], 2u);
+    const uint8_t win[4] = {1u, 2u, 3u, 4u};
+    assert_memory_equal(&rsp[3u + 25u], win, 4u);
+    unlock();
+    expect_nrc(REQUEST(0x2E, 0x02, 0x60, 0x00), 0x2E, 0x31);
+}
+
 static void test_all_dids_in_one_request(void **state)
 {
     (void)state;
@@ -394,6 +416,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test_setup(test_every_parameter_did_read, setup),
         cmocka_unit_test_setup(test_identification_dids, setup),
+        cmocka_unit_test_setup(test_mount_estimate_did, setup),
         cmocka_unit_test_setup(test_all_dids_in_one_request, setup),
         cmocka_unit_test_setup(test_write_refused_then_accepted_and_read_back, setup),
         cmocka_unit_test_setup(test_reset_parameter_needs_navigation_stopped, setup),

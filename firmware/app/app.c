@@ -46,10 +46,11 @@ int app_init(app_t *app, const app_config_t *cfg)
     imu_link_init(&app->keep.imu, cfg->imu_rate_hz, cfg->gyro_range_rps, cfg->accel_range_mps2,
                   cfg->can_ids[NAVECU_MSG_IMU_ACCEL]);
     mounting_init(&app->keep.mount, cfg->imu_mount_rad);
+    const mount_est_config_t mcfg = {cfg->mount_est_sigma_rad, cfg->mount_est_excite_m2ps3};
+    const int mest_rc = mount_est_init(&app->keep.mest, &mcfg); /* "no estimate" in fixed mode */
     if (cfg->imu_mount_source == MOUNT_SOURCE_AUTOMATIC) {
         const nav_real_t zero[3] = {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)};
-        const mount_est_config_t mcfg = {cfg->mount_est_sigma_rad, cfg->mount_est_excite_m2ps3};
-        if (mount_est_init(&app->keep.mest, &mcfg) != NAV_OK) {
+        if (mest_rc != NAV_OK) {
             return NAV_EINVAL;
         }
         mounting_init(&app->keep.mount, zero); /* the estimate's, when it converges */
