@@ -14,7 +14,7 @@ int mount_est_init(mount_est_t *e, const mount_est_config_t *cfg)
         cfg->sigma_rad <= NAV_C(0.0) || cfg->excite_m2ps3 < NAV_C(0.0)) {
         return NAV_EINVAL;
     }
-    memset(e, 0, sizeof *e);
+    (void)memset(e, 0, sizeof *e);
     e->cfg = *cfg;
     e->res.sigma_rp_rad = NAV_PI;
     e->res.sigma_yaw_rad = NAV_PI;
@@ -38,9 +38,11 @@ static void drop(mount_est_t *e)
 
 static int inc_finite(const imu_inc_t *inc)
 {
-    int ok = nav_isfinite(inc->dt_s) && inc->dt_s > NAV_C(0.0) && inc->dt_s < NAV_C(1.0);
+    int ok = (nav_isfinite(inc->dt_s) && inc->dt_s > NAV_C(0.0) && inc->dt_s < NAV_C(1.0)) ? 1 : 0;
     for (int i = 0; i < 3; i++) {
-        ok = ok && nav_isfinite(inc->dtheta_b_rad[i]) && nav_isfinite(inc->dv_b_mps[i]);
+        if (!nav_isfinite(inc->dtheta_b_rad[i]) || !nav_isfinite(inc->dv_b_mps[i])) {
+            ok = 0;
+        }
     }
     return ok;
 }
@@ -172,7 +174,9 @@ void mount_est_solve(mount_est_t *e)
     if (e->n_windows < MOUNT_EST_MIN_WINDOWS) {
         return;
     }
-    mat3_t Am, im, Xm;
+    mat3_t Am = {{{NAV_C(0.0)}}};
+    mat3_t im = {{{NAV_C(0.0)}}};
+    mat3_t Xm = {{{NAV_C(0.0)}}};
     nav_real_t(*A)[3] = Am.m;
     nav_real_t(*inv)[3] = im.m;
     nav_real_t(*X)[3] = Xm.m;

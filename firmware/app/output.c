@@ -424,7 +424,7 @@ static void emit_mount(app_t *a, hal_t *hal)
     const nav_real_t k = NAV_DEG_PER_RAD;
     uint8_t d[8];
     struct navecu_can_nav_calibration_t m;
-    memset(&m, 0, sizeof m);
+    (void)memset(&m, 0, sizeof m);
     m.cal_page = 1u;
     m.mount_roll = navecu_can_nav_calibration_mount_roll_encode(
         nav_clamp(r->rpy_rad[0] * k, NAVECU_NAV_CALIBRATION_MOUNT_ROLL_MIN,
@@ -436,9 +436,9 @@ static void emit_mount(app_t *a, hal_t *hal)
         nav_clamp(r->rpy_rad[2] * k, NAVECU_NAV_CALIBRATION_MOUNT_YAW_MIN,
                   NAVECU_NAV_CALIBRATION_MOUNT_YAW_MAX));
     m.nav_counter = next_counter(&a->keep.tx, TX_CAL);
-    navecu_can_nav_calibration_pack(d, &m, sizeof d);
+    (void)navecu_can_nav_calibration_pack(d, &m, sizeof d);
     send_protected(&a->keep.tx, hal, a->cfg.can_ids[NAVECU_MSG_NAV_CALIBRATION], d);
-    memset(&m, 0, sizeof m);
+    (void)memset(&m, 0, sizeof m);
     m.cal_page = 2u;
     m.mount_sigma_roll_pitch = navecu_can_nav_calibration_mount_sigma_roll_pitch_encode(
         nav_clamp(r->sigma_rp_rad * k, NAVECU_NAV_CALIBRATION_MOUNT_SIGMA_ROLL_PITCH_MIN,
@@ -451,7 +451,7 @@ static void emit_mount(app_t *a, hal_t *hal)
                   NAVECU_NAV_CALIBRATION_MOUNT_EXCITATION_MAX));
     m.mount_state = a->keep.mount_state;
     m.nav_counter = next_counter(&a->keep.tx, TX_CAL);
-    navecu_can_nav_calibration_pack(d, &m, sizeof d);
+    (void)navecu_can_nav_calibration_pack(d, &m, sizeof d);
     send_protected(&a->keep.tx, hal, a->cfg.can_ids[NAVECU_MSG_NAV_CALIBRATION], d);
 }
 
