@@ -320,8 +320,10 @@ static void on_gnss_status(app_t *a, hal_t *hal, const rx_input_t *in)
     }
     if (a->run.align.reacquire && a->run.mode == APP_MODE_FAULT) {
         /* the start after the mounting estimate: driving, the course is the heading */
-        const int course_ok =
-            (!a->run.mount_start || fix.speed_mps >= APP_GNSS_COURSE_MIN_MPS) ? 1 : 0;
+        int course_ok = 1;
+        if (a->run.mount_start && fix.speed_mps < APP_GNSS_COURSE_MIN_MPS) {
+            course_ok = 0;
+        }
         if (!imu_rate_mismatch(&a->keep.rate) && course_ok && align_reacquire_ready(&fix)) {
             if (align_reacquire(&a->run.align, &fix, &a->run.nav, &a->run.dr, &a->keep.cal) !=
                 NAV_OK) {

@@ -38,7 +38,10 @@ static void drop(mount_est_t *e)
 
 static int inc_finite(const imu_inc_t *inc)
 {
-    int ok = (nav_isfinite(inc->dt_s) && inc->dt_s > NAV_C(0.0) && inc->dt_s < NAV_C(1.0)) ? 1 : 0;
+    int ok = 1;
+    if (!nav_isfinite(inc->dt_s) || !(inc->dt_s > NAV_C(0.0)) || !(inc->dt_s < NAV_C(1.0))) {
+        ok = 0;
+    }
     for (int i = 0; i < 3; i++) {
         if (!nav_isfinite(inc->dtheta_b_rad[i]) || !nav_isfinite(inc->dv_b_mps[i])) {
             ok = 0;
@@ -174,9 +177,10 @@ void mount_est_solve(mount_est_t *e)
     if (e->n_windows < MOUNT_EST_MIN_WINDOWS) {
         return;
     }
-    mat3_t Am = {{{NAV_C(0.0)}}};
-    mat3_t im = {{{NAV_C(0.0)}}};
-    mat3_t Xm = {{{NAV_C(0.0)}}};
+    mat3_t Am, im, Xm;
+    (void)memset(&Am, 0, sizeof Am);
+    (void)memset(&im, 0, sizeof im);
+    (void)memset(&Xm, 0, sizeof Xm);
     nav_real_t(*A)[3] = Am.m;
     nav_real_t(*inv)[3] = im.m;
     nav_real_t(*X)[3] = Xm.m;
