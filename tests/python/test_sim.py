@@ -112,7 +112,7 @@ def decode(db, msg):
 def test_scenario_tables_defaults_and_validation(tmp_path):
     sc = short_scenario(tmp_path)
     assert sc["imu_mounting"] == {"roll_deg": 0.0, "pitch_deg": 0.0, "yaw_deg": 0.0,
-                                 "configured": False}
+                                 "configured": False, "automatic": False}
     assert sc["odometer"] == {} and "calibration" not in sc
     assert sc["initialization"] == {"heading_reference": "car", "heading_error_deg": 0.0}
     for bad in ("[imu_mounting]\nheading_deg = 1\n", "[odometer]\nscale = 0.01\n",
@@ -257,14 +257,19 @@ def test_read_calibration_log_and_report(tmp_path):
         if k % 2 == 0:
             done = t >= 40.0
             msgs.append(tx.encode("NAV_Calibration", {
-                "HeadingCorrection": -0.175 if done else 0.0,
+                "CalPage": 0, "HeadingCorrection": -0.175 if done else 0.0,
                 "OdoScaleError": 0.0119 if done else 0.0,
                 "CalValid": int(done), "CalStored": 0, "CalStatus": 2 if done else 0,
                 "CalSource": 1 if done else 0, "CalCount": int(done)}, t))
+            # the automatic mounting estimate's page: not the calibration's, left out
+            msgs.append(tx.encode("NAV_Calibration", {
+                "CalPage": 1, "MountRoll": 180.0, "MountPitch": 0.0, "MountYaw": 90.0}, t))
     log = tmp_path / "nav.log"
     nc.write_candump(log, msgs)
     cl = report.read_calibration_log(log)
     assert len(cl["t_s"]) == 65 and cl["t_s"][0] == 0.0 and cl["t_s"][-1] == 64.0
+    p1 = report.read_calibration_log(log, page=1)
+    assert len(p1["t_s"]) == 65 and set(p1["MountYaw"]) == {90.0}
     nc.write_candump(tmp_path / "nav.asc", msgs)             # another format: python-can
     for k, v in report.read_calibration_log(tmp_path / "nav.asc").items():
         np.testing.assert_array_equal(v, cl[k])
