@@ -157,8 +157,9 @@ def summarize(out_log: Path, db=None) -> dict:
             elif fid == cal_def.frame_id:
                 # pages 1 and 2 (the automatic mounting estimate) are not the calibration
                 page = _raw(cal_page_sig, word)
-                key = (fid, page)
-                if page == 0:
+                if page != 0:
+                    key = (fid, page)  # left out of "final" (page 0 keeps its place)
+                else:
                     cal = tuple(_raw(s, word) for s in cal_sigs)
                     cal_seen.add(cal[0])
                     if not cal_changes or cal_changes[-1][1] != cal:
