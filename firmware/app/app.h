@@ -12,6 +12,7 @@
  *   fusion       the Kalman filter's schedule, updates and supervision (gnss_time: when
  *                a fix was valid)
  *   calib        the car's calibration (dH, mu, mounting) and its NVM policy
+ *   mount_est    the automatic estimate of the IMU's mounting (imu_mount_source automatic)
  *   commands     CMD_Control, CMD_KnownPosition, CMD_InitialAttitude
  *   output       NAV_* frames, HealthFlags, the output mode
  *   app_loop     the main loop's pass, the same on every board
