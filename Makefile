@@ -45,6 +45,7 @@ CODEC_GEN := firmware/can/gen/navecu_can.c firmware/can/gen/navecu_can.h
 # into the images, kept out of them by --gc-sections until the application calls it
 DIAG_SRC := $(sort $(wildcard firmware/diag/*.c))
 APP_SRC := firmware/can/e2e.c firmware/can/gen/navecu_can.c firmware/app/gen/app_params.c \
+           firmware/app/gen/dtc_table.c \
            $(DIAG_SRC) $(sort $(wildcard firmware/app/*.c))
 # the host executable: its board files (host_sim/)
 HOST_SIM_SRC := host_sim/main.c host_sim/options.c host_sim/report.c host_sim/host_board.c
@@ -59,11 +60,11 @@ SUPPORT_SRC_BOTH := tests/support/nav_run.c
 # tests built once per numeric variant (f32 firmware, f64 reference)
 TESTS_VARIANT := test_nav_math test_earth test_sins test_dr test_ekf test_ekf_rows
 # tests of the float32 firmware only (application, codec, HAL)
-TESTS_F32 := test_e2e test_codec test_trig test_isotp test_uds
+TESTS_F32 := test_e2e test_codec test_trig test_isotp test_uds test_dtc
 # tests that link both variants themselves
 TESTS_BOTH := test_drive
 # tests of application modules against the in-memory HAL (tests/support/fake_hal.c)
-TESTS_FAKE_HAL := test_app test_calstore test_app_rx test_imu_stream test_imu_rate test_gnss_epoch test_gnss_time test_align test_landnav test_calib test_app_health test_app_config test_app_loop test_output test_commands test_fusion test_dynamics test_mounting test_mount_est test_app_mount test_app_uds
+TESTS_FAKE_HAL := test_app test_calstore test_nvstore test_app_rx test_imu_stream test_imu_rate test_gnss_epoch test_gnss_time test_align test_landnav test_calib test_app_health test_app_config test_app_loop test_output test_commands test_fusion test_dynamics test_mounting test_mount_est test_app_mount test_app_uds test_imu_time
 # what they link besides the application: the in-memory HAL, frames as the senders encode
 # them, a fresh application
 FAKE_HAL_SUPPORT := tests/support/fake_hal.c tests/support/can_frames.c tests/support/app_fixture.c
@@ -73,7 +74,7 @@ TESTS_M4_HAL := test_bxcan test_stm32_flash test_stm32_iwdg test_stm32_clock tes
 
 .PHONY: grades
 .PHONY: all test test-c test-plain test-asan test-cross test-python codec codec-check params params-check \
-        doc-check venv sim clean help numerics deps
+        doc-check venv sim clean help numerics deps dtc dtc-check
 # keep objects of pattern-built test programs between runs
 .SECONDARY:
 
@@ -90,10 +91,14 @@ help:
 	@echo "make kingston      the real Kingston 2008 drive (MODE=dr|full, OUTAGES=a-b,c-d|none)"
 	@echo "make drive DATA=data/comma2k19-rav4 VEHICLE=toyota_rav4_2017"
 	@echo "                   the real RAV4's whole bus through the RAV4 build, against its reference"
+	@echo "make uds ARGS=\"dump --toml ecu.toml\" [BUS=vcan0]"
+	@echo "                   the UDS host tool (tools/navecu_uds.py) on the ECU at BUS; BUS=log:"
+	@echo "                   on build/host/navecu replaying a CAN log (docs/diagnostics.md)"
 	@echo "make vcan          set up vcan0 on a normal Linux machine (sudo)"
 	@echo "make bench-latency IMU frame to NAV frame latency over vcan (out/bench/)"
 	@echo "make grades        free-inertial error per IMU grade vs seed 003's Table 2"
 	@echo "make codec         regenerate the CAN codec from firmware/can/navecu.dbc"
+	@echo "make dtc           regenerate the DTC table from firmware/app/dtc.toml"
 	@echo "make cross         build the firmware for the Cortex-M4F, check: no double math"
 	@echo "make target        the ECU image for an STM32F405: build/target/navecu.elf .hex .bin"
 	@echo "make target-test   the M4F image on QEMU, output frames identical to the host's"
@@ -236,7 +241,7 @@ test-python: venv $(BUILD)/host/navecu $(VEH_TEST_BINS) $(ISOTP_PEER)
 
 test: deps
 	./tools/check_layers.sh
-	$(MAKE) codec-check doc-check params-check
+	$(MAKE) codec-check doc-check params-check dtc-check
 	$(MAKE) test-plain
 	$(MAKE) test-asan
 	$(MAKE) test-python
@@ -277,6 +282,13 @@ params: venv
 	$(PY) -m tools.gen_params
 params-check: venv
 	$(PY) -m tools.gen_params --check
+
+# the DTC table (firmware/app/dtc.toml, docs/can.md "Diagnostic trouble codes"): its
+# generated C table and the docs table
+dtc: venv
+	$(PY) -m tools.gen_dtc
+dtc-check: venv
+	$(PY) -m tools.gen_dtc --check
 
 codec-check: venv
 	@tmp=$$(mktemp -d) && PYTHON=$(PY) ./tools/gen_codec.sh $$tmp && \
@@ -377,7 +389,7 @@ M4_WAIT_HOOK_CALLERS := bxcan_init hal/cortex_m4f/stm32_clock.c:fail stm32_clock
 # data functions, all the application's (firmware/app/app_uds.c)
 M4_UDS := firmware/app/app_uds.c
 M4_UDS_INDIRECT := --indirect isotp_poll=$(M4_UDS):tx_frame \
-  --indirect uds_handle=$(M4_UDS):read_did,$(M4_UDS):write_did,$(M4_UDS):is_writable
+  --indirect uds_handle=$(M4_UDS):read_did,$(M4_UDS):write_did,$(M4_UDS):is_writable,$(M4_UDS):start_routine,$(M4_UDS):uds_dtc_count,$(M4_UDS):uds_dtc_get,$(M4_UDS):uds_dtc_clear,$(M4_UDS):uds_dtc_availability
 target-budget: deps venv target
 	$(PY) -m tools.target.budget --elf $(TGT)/navecu.elf --objs $(ECU_SRC:%.c=$(TGT)/obj/%.o) \
 	  --entry Reset_Handler --isr CAN1_RX0_IRQHandler --isr CAN1_SCE_IRQHandler \
@@ -396,6 +408,17 @@ $(BUILD)/%/tests/study_numerics: $(BUILD)/%/f64/tests/study_numerics.o $(BUILD)/
 		$(BUILD)/%/libnavcore_f32.a $(BUILD)/%/libnavcore_f64.a
 	@mkdir -p $(@D)
 	$(CC) $^ -lm -o $@
+
+# ---- the UDS host tool (tools/navecu_uds.py, docs/diagnostics.md): ARGS is its command,
+# e.g. ARGS="dump --toml ecu.toml"; BUS=vcan0 (default; any SocketCAN interface), or
+# BUS=log: build/host/navecu replaying a CAN log (tools/uds_logrun.py), one power-on kept
+# in build/uds/session.log (delete it for a power cycle) with the NVM image build/uds/nvm.bin
+.PHONY: uds
+BUS_UDS = $(if $(BUS),$(BUS),vcan0)
+uds: venv $(if $(filter log,$(BUS_UDS)),$(BUILD)/host/navecu)
+	@mkdir -p $(BUILD)/uds
+	$(PY) -m tools.navecu_uds $(if $(filter log,$(BUS_UDS)),--log-runner --navecu $(BUILD)/host/navecu \
+	  --session $(BUILD)/uds/session.log --nvm $(BUILD)/uds/nvm.bin,--channel $(BUS_UDS)) $(ARGS)
 
 # ---- vcan0 on a normal Linux machine (sudo); without kernel CAN the tests use
 # tools/vcan/with_vcan.sh, which boots User-Mode Linux with real vcan
@@ -462,7 +485,7 @@ drive: deps venv $(BUILD)/host/navecu$(VEH_SUFFIX)
 FUZZ_CC := clang
 FUZZ_SECONDS ?= 60
 FUZZ := $(BUILD)/fuzz
-FUZZ_NAMES := fuzz_codec fuzz_app fuzz_calstore fuzz_candump fuzz_options fuzz_cmdline fuzz_isotp
+FUZZ_NAMES := fuzz_codec fuzz_app fuzz_calstore fuzz_nvstore fuzz_candump fuzz_options fuzz_cmdline fuzz_isotp
 FUZZ_SAN := -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
 FUZZ_CFLAGS := $(CSTD) -O2 -g $(WARN) $(FPFLAGS) -D_DEFAULT_SOURCE $(FUZZ_SAN)
 FUZZ_INC := $(HOST_INC) -Ihost_sim -Itests/fuzz -I$(FUZZ)/gen -I$(VEH_OUT)/native
@@ -476,6 +499,7 @@ fuzz_app_SRC := tests/fuzz/fuzz_app.c $(FUZZ_APP_SRC)
 fuzz_options_SRC := tests/fuzz/fuzz_options.c $(FUZZ_APP_SRC)
 fuzz_calstore_SRC := tests/fuzz/fuzz_calstore.c tests/fuzz/fuzz_fail.c firmware/app/calstore.c \
                      tests/support/fake_hal.c
+fuzz_nvstore_SRC := tests/fuzz/fuzz_nvstore.c $(FUZZ_APP_SRC)
 fuzz_candump_SRC := tests/fuzz/fuzz_candump.c tests/fuzz/fuzz_fail.c $(HAL_LINUX_SRC)
 fuzz_isotp_SRC := tests/fuzz/fuzz_isotp.c tests/fuzz/fuzz_fail.c $(DIAG_SRC)
 fuzz_cmdline_SRC := tests/fuzz/fuzz_cmdline.c tests/fuzz/fuzz_fail.c host_sim/options.c $(APP_SRC) \

@@ -15,6 +15,24 @@
 #include "options.h"
 #include "report.h"
 
+/* the command line, the board's configuration layer over the defaults and the NVM
+ * (app_start, app.h), at the start and at every ECUReset */
+static int cmd_argc;
+static char **cmd_argv;
+
+int app_board_layer(app_config_t *cfg)
+{
+    static host_options_t over;
+    if (cmd_argv == NULL) {
+        return 0;
+    }
+    if (host_options_parse_over(cmd_argc, cmd_argv, cfg, &over, NULL, 0u) != 0) {
+        return -1;
+    }
+    *cfg = over.cfg;
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
     static host_options_t o;
@@ -39,7 +57,14 @@ int main(int argc, char **argv)
     if (host_open(&hal, &o) != 0) {
         return 1;
     }
-    app_boot(&app, &hal);
+    /* the layers: defaults, the NVM (--nvm), the command line over both */
+    cmd_argc = argc;
+    cmd_argv = argv;
+    if (app_start(&app, &hal) != 0) {
+        fprintf(stderr, "navecu: invalid configuration over the NVM's parameters\n");
+        hal_linux_close(&hal);
+        return 2;
+    }
     const int live = o.live_if != NULL;
     unsigned long frames_in = 0;
     uint64_t t_first = UINT64_MAX; /* the first frame's time (--test-stall-poll-s) */

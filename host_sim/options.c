@@ -103,8 +103,14 @@ static const params_cli_t *param_option(const char *name)
 
 int host_options_parse(int argc, char **argv, host_options_t *o, char *err, size_t err_len)
 {
+    return host_options_parse_over(argc, argv, NULL, o, err, err_len);
+}
+
+int host_options_parse_over(int argc, char **argv, const app_config_t *base, host_options_t *o,
+                            char *err, size_t err_len)
+{
     memset(o, 0, sizeof *o);
-    o->cfg = app_default_config();
+    o->cfg = base != NULL ? *base : app_default_config();
     if (err != NULL && err_len > 0u) {
         err[0] = '\0';
     }

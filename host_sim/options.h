@@ -21,7 +21,7 @@ typedef struct {
     int stall_poll;        /* --test-stall-poll-s given: stop calling app_poll ... */
     uint64_t stall_poll_us; /* ... this long after the first frame */
     int help;              /* --help or -h: nothing else was parsed */
-    app_config_t cfg;      /* the defaults with the options applied */
+    app_config_t cfg;      /* the defaults (or the base) with the options applied */
 } host_options_t;
 
 /*
@@ -31,5 +31,11 @@ typedef struct {
  * app_init, which refuses what the application cannot run with.
  */
 int host_options_parse(int argc, char **argv, host_options_t *o, char *err, size_t err_len);
+
+/* host_options_parse with the options applied over *base instead of the defaults (NULL:
+ * the defaults): the command line as the top configuration layer, over the NVM's
+ * (app_start; docs/configuration.md). */
+int host_options_parse_over(int argc, char **argv, const app_config_t *base, host_options_t *o,
+                            char *err, size_t err_len);
 
 #endif /* NAVECU_HOST_OPTIONS_H */

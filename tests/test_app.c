@@ -1086,9 +1086,14 @@ static void test_one_point_calibration_and_nvm(void **state)
     assert_int_equal(app.keep.cal.status, NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_FROM_NVM_CHOICE);
     assert_near(app.keep.cal.dh_rad, dh, 0.0);
     assert_near(app.keep.cal.mu, mu, 0.0);
-    /* erase, reboot: nothing */
+    /* CMD_Control EraseCalibration is refused (a UDS routine now, test_app_uds) */
     cmd_counter = 0u;
+    const uint32_t refused0 = app_health(&app)->cmd_rejected;
     send_command(NAVECU_CAN_CMD_CONTROL_COMMAND_ERASE_CALIBRATION_CHOICE);
+    assert_int_equal(app_health(&app)->cmd_rejected, refused0 + 1u);
+    assert_near(app.keep.cal.dh_rad, dh, 0.0);
+    /* erase (what RoutineControl 0x0201 does), reboot: nothing */
+    calib_erase(&app.keep.cal, &hal, NULL);
     assert_near(app.keep.cal.dh_rad, 0.0, 0.0);
     assert_int_equal(app_init(&app, &cfg), NAV_OK);
     app_boot(&app, &hal);

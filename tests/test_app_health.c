@@ -78,7 +78,7 @@ static void test_diag_reject(void **state)
     app_events_t ev;
     memset(&h, 0, sizeof h);
     memset(&ev, 0, sizeof ev);
-    const app_diag_t d = {&h, &ev, 4242u};
+    const app_diag_t d = {&h, &ev, 4242u, 0u};
     app_diag_reject(&d, &h.bad_crc);
     app_diag_reject(&d, &h.bad_crc);
     app_diag_reject(&d, &h.gnss_rejected);

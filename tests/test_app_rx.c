@@ -83,20 +83,20 @@ static void test_foreign_id_refused(void **state)
     const uint8_t d[8] = {0};
     hal_can_frame_t f = cf_frame(0x555u, d, 0u);
     assert_int_equal(decode(&f), RX_FOREIGN);
-    f = cf_frame(0x102u, d, 0u); /* beside IMU_Accel (0x101): not an input */
+    f = cf_frame(0x103u, d, 0u); /* beside IMU_Time (0x102): not an input */
     assert_int_equal(decode(&f), RX_FOREIGN);
     /* the identifier is checked before the length: a foreign short frame is foreign traffic */
     f.dlc = 3u;
     assert_int_equal(decode(&f), RX_FOREIGN);
 }
 
-/* GIVEN each of navecu's eleven inputs with DLC 7 WHEN decoded THEN bad_dlc. */
+/* GIVEN each of navecu's twelve inputs with DLC 7 WHEN decoded THEN bad_dlc. */
 static void test_dlc_7_refused(void **state)
 {
     (void)state;
     uint32_t ids[16];
     const size_t n = app_rx_ids(STOCK_IDS, ids, 16u);
-    assert_int_equal(n, 11u);
+    assert_int_equal(n, 12u);
     const uint8_t d[8] = {0};
     for (size_t i = 0u; i < n; i++) {
         hal_can_frame_t f = cf_frame(ids[i], d, 0u);
@@ -105,23 +105,23 @@ static void test_dlc_7_refused(void **state)
     }
 }
 
-/* The eleven input identifiers of the DBC, and a short array gets only what fits. */
+/* The twelve input identifiers of the DBC, and a short array gets only what fits. */
 static void test_rx_ids(void **state)
 {
     (void)state;
-    const uint32_t expected[11] = {0x100u, 0x101u, 0x110u, 0x120u, 0x121u, 0x122u,
-                                   0x123u, 0x125u, 0x200u, 0x201u, 0x202u};
-    uint32_t ids[11];
-    assert_int_equal(app_rx_ids(STOCK_IDS, ids, 11u), 11u);
-    for (int i = 0; i < 11; i++) {
+    const uint32_t expected[12] = {0x100u, 0x101u, 0x102u, 0x110u, 0x120u, 0x121u,
+                                   0x122u, 0x123u, 0x125u, 0x200u, 0x201u, 0x202u};
+    uint32_t ids[12];
+    assert_int_equal(app_rx_ids(STOCK_IDS, ids, 12u), 12u);
+    for (int i = 0; i < 12; i++) {
         int found = 0;
-        for (int j = 0; j < 11; j++) {
+        for (int j = 0; j < 12; j++) {
             found |= ids[j] == expected[i];
         }
         assert_true(found);
     }
     uint32_t few[4] = {0u, 0u, 0u, 0xDEADu};
-    assert_int_equal(app_rx_ids(STOCK_IDS, few, 3u), 11u);
+    assert_int_equal(app_rx_ids(STOCK_IDS, few, 3u), 12u);
     assert_int_equal(few[3], 0xDEADu); /* nothing written beyond max */
 }
 

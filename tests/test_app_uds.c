@@ -17,6 +17,7 @@
 #include "app.h"
 #include "app_fixture.h"
 #include "fake_hal.h"
+#include "test_util.h"
 #include "vehicle.h"
 
 #define REQ 0x7A0u
@@ -411,6 +412,280 @@ static void test_identifier_rules_and_receive_list(void **state)
     }
 }
 
+/* the IMU silent for 3 s: NAV_Status (app_poll's heartbeat) carries IMU_STALE, its DTC
+ * U1101-87 (0xD10187) is failing at once and confirmed 2 s later; read with 0x19 01 / 02 /
+ * 0A in the default session, cleared with 0x14 FF FF FF, read gone */
+static void silent_imu(uint64_t for_us)
+{
+    for (uint64_t t = 0u; t < for_us; t += 10000u) {
+        hal.t_us += 10000u;
+        app_poll(&app, &hal);
+    }
+}
+
+static void test_dtc_of_a_silent_imu_read_and_cleared(void **state)
+{
+    (void)state;
+    app.keep.imu.have_sample = 1u; /* the IMU was there, and fell silent at t 1 s */
+    app.keep.imu.last_t_us = hal.t_us;
+    /* before any test: every DTC 0x50, none confirmed */
+    size_t n = REQUEST(0x19, 0x01, 0x08);
+    assert_int_equal(n, 6u);
+    assert_memory_equal(rsp, ((const uint8_t[]){0x59, 0x01, 0x7F, 0x00, 0x00, 0x00}), 6u);
+    silent_imu(1500000u); /* stale after 0.5 s: failing for 1 s, not confirmed */
+    n = REQUEST(0x19, 0x02, 0x01);
+    /* and NO_GNSS (U1102-87, no GNSS at all): failing, confirmed only after 60 s */
+    assert_int_equal(n, 11u);
+    assert_memory_equal(rsp, ((const uint8_t[]){0x59, 0x02, 0x7F, 0xD1, 0x01, 0x87, 0x27, 0xD1,
+                                                0x02, 0x87, 0x27}),
+                        11u);
+    silent_imu(1500000u); /* 2.5 s of failure: confirmed */
+    n = REQUEST(0x19, 0x02, 0x08);
+    assert_int_equal(n, 7u);
+    assert_memory_equal(rsp, ((const uint8_t[]){0x59, 0x02, 0x7F, 0xD1, 0x01, 0x87, 0x2F}), 7u);
+    /* every DTC of the table, each with its status */
+    n = REQUEST(0x19, 0x0A);
+    assert_int_equal(n, 3u + 4u * (size_t)DTC_N);
+    for (size_t i = 0u; i < (size_t)DTC_N; i++) {
+        const uint8_t *r = &rsp[3u + 4u * i];
+        const uint32_t num = ((uint32_t)r[0] << 16) | ((uint32_t)r[1] << 8) | r[2];
+        assert_int_equal(num, dtc_table[i].number);
+        assert_int_equal(r[3], dtc_status(&app.keep.dtc, i));
+    }
+    const uint32_t writes = app.keep.dtc_persist_writes;
+    assert_true(writes > 0u); /* the stored bytes went to NVM (navigation not started) */
+    assert_int_equal(app.keep.dtc_dirty, 0u);
+    uint8_t stored[CALSTORE_DTC_N];
+    assert_int_equal(nvstore_dtc_status(&hal, stored), 0);
+    assert_int_equal(stored[0], dtc_stored(&app.keep.dtc, 0u));
+    assert_true((stored[0] & 0x08u) != 0u); /* confirmedDTC in NVM */
+    /* a power cycle: the fault memory comes back from NVM (confirmed, not failing yet) */
+    assert_int_equal(app_start(&app, &hal), NAV_OK);
+    n = REQUEST(0x19, 0x02, 0x08);
+    assert_int_equal(n, 7u);
+    assert_int_equal(rsp[3], 0xD1);
+    assert_true((rsp[6] & 0x08u) != 0u);
+    /* moving while navigating: the clear (an NVM write) is refused, nothing cleared */
+    app.run.mode = APP_MODE_NAVIGATING;
+    app.keep.odo.standing = 0u;
+    expect_nrc(REQUEST(0x14, 0xFF, 0xFF, 0xFF), 0x14, 0x22);
+    assert_int_equal(REQUEST(0x19, 0x01, 0x08), 6u);
+    assert_int_equal(rsp[5], 1u);
+    app.run.mode = APP_MODE_WAIT_INIT;
+    const uint32_t writes2 = app.keep.dtc_persist_writes;
+    n = REQUEST(0x14, 0xFF, 0xFF, 0xFF);
+    assert_int_equal(n, 1u);
+    assert_int_equal(rsp[0], 0x54);
+    assert_int_equal(app.keep.dtc_persist_writes, writes2 + 1u); /* the clear: one write */
+    assert_int_equal(nvstore_dtc_status(&hal, stored), 0);
+    assert_int_equal(stored[0] & 0x08u, 0u);
+    n = REQUEST(0x19, 0x01, 0x2F);
+    assert_memory_equal(rsp, ((const uint8_t[]){0x59, 0x01, 0x7F, 0x00, 0x00, 0x00}), 6u);
+    n = REQUEST(0x14, 0x00, 0x00, 0x00);
+    expect_nrc(n, 0x14, 0x31);
+    /* the frames of the exchange were never navecu's input */
+    assert_int_equal(app.keep.health.foreign, 0u);
+}
+
+/* the app started as the boards start it (app_start: defaults, NVM, no board layer) */
+static int setup_started(void **state)
+{
+    (void)state;
+    fake_hal_reset(&hal);
+    assert_int_equal(app_start(&app, &hal), NAV_OK);
+    hal.t_us = 1000000u;
+    return 0;
+}
+
+#define ROUTINE(rid) REQUEST(0x31, 0x01, (uint8_t)((rid) >> 8), (uint8_t)(rid))
+
+static void expect_routine_ok(size_t n, uint16_t rid)
+{
+    assert_int_equal(n, 4u);
+    assert_int_equal(rsp[0], 0x71);
+    assert_int_equal(rsp[1], 0x01);
+    assert_int_equal(rsp[2], rid >> 8);
+    assert_int_equal(rsp[3], rid & 0xFFu);
+}
+
+/* RoutineControl: the extended session (0x7F), a sub-function other than startRoutine
+ * (0x12), too short or with an option record (0x13), locked (0x33), an unknown routine
+ * (0x31: also 0x0204 AdoptMounting, whose owner is not merged here) */
+static void test_routine_checks(void **state)
+{
+    (void)state;
+    expect_nrc(ROUTINE(0x0200u), 0x31, 0x7F);
+    assert_int_equal(REQUEST(0x10, 0x03), 6u);
+    expect_nrc(REQUEST(0x31, 0x02, 0x02, 0x00), 0x31, 0x12);
+    expect_nrc(REQUEST(0x31, 0x01, 0x02), 0x31, 0x13);
+    expect_nrc(ROUTINE(0x0200u), 0x31, 0x33);
+    assert_int_equal(hal.nvm_units, 0u); /* nothing written */
+    unlock();
+    expect_nrc(REQUEST(0x31, 0x01, 0x02, 0x00, 0x01), 0x31, 0x13);
+    expect_nrc(ROUTINE(0x0204u), 0x31, 0x31);
+    expect_nrc(ROUTINE(0x01FFu), 0x31, 0x31);
+    expect_nrc(ROUTINE(0xFF00u), 0x31, 0x31);
+    assert_int_equal(hal.nvm_units, 0u);
+}
+
+/* GIVEN level_s written (45) WHEN ECUReset without a save THEN the default again (the
+ * layers run again); WHEN written, StoreParameters, ECUReset THEN 45, the NVM status DID
+ * says version 2, source NVM, 26 entries loaded, none refused, seq 1 */
+static void test_store_parameters_and_reset(void **state)
+{
+    (void)state;
+    const uint16_t level0 = app.cfg.level_s;
+    unlock();
+    assert_int_equal(REQUEST(0x2E, 0x02, 0x04, 0x00, 0x2D), 3u);
+    assert_int_equal(REQUEST(0x11, 0x01), 2u);
+    app_poll(&app, &hal);
+    assert_int_equal(app.cfg.level_s, level0);
+    assert_int_equal(REQUEST(0x22, 0xF1, 0xA1), 11u);
+    assert_memory_equal(&rsp[3], "\x00\x00\x00\x00\x00\x00\x00\x00", 8u);
+
+    unlock();
+    assert_int_equal(REQUEST(0x2E, 0x02, 0x04, 0x00, 0x2D), 3u);
+    expect_routine_ok(ROUTINE(0x0200u), 0x0200u);
+    assert_int_equal(REQUEST(0x11, 0x01), 2u);
+    app_poll(&app, &hal);
+    assert_int_equal(app.cfg.level_s, 45u);
+    assert_int_equal(REQUEST(0x22, 0xF1, 0xA1), 11u);
+    size_t writable = 0u;
+    for (int k = 0; k < (int)APP_PARAM_N; k++) {
+        writable += app_params[k].uds_read_only ? 0u : 1u;
+    }
+    const uint8_t want[8] = {2u, NVSTORE_SRC_NVM, (uint8_t)writable, 0u, 0u, 0u, 0u, 1u};
+    assert_memory_equal(&rsp[3], want, 8u);
+    /* RestoreDefaults: in RAM only, the NVM keeps 45 until the next save */
+    unlock();
+    expect_routine_ok(ROUTINE(0x0202u), 0x0202u);
+    assert_int_equal(app.cfg.level_s, level0);
+    assert_int_equal(REQUEST(0x11, 0x01), 2u);
+    app_poll(&app, &hal);
+    assert_int_equal(app.cfg.level_s, 45u);
+}
+
+/* navigating and moving: StoreParameters, StoreCalibration, EraseCalibration and
+ * RestoreDefaults refused (0x22); standing: the save allowed, RestoreDefaults not
+ * (navigation runs on copies of some parameters); an NVM failure: 0x72 */
+static void test_routine_conditions_and_nvm_failure(void **state)
+{
+    (void)state;
+    unlock();
+    app.run.mode = APP_MODE_NAVIGATING;
+    app.keep.odo.standing = 0u;
+    expect_nrc(ROUTINE(0x0200u), 0x31, 0x22);
+    expect_nrc(ROUTINE(0x0201u), 0x31, 0x22);
+    expect_nrc(ROUTINE(0x0202u), 0x31, 0x22);
+    expect_nrc(ROUTINE(0x0203u), 0x31, 0x22);
+    assert_int_equal(hal.nvm_units, 0u);
+    app.keep.odo.standing = 1u;
+    expect_routine_ok(ROUTINE(0x0200u), 0x0200u);
+    expect_nrc(ROUTINE(0x0202u), 0x31, 0x22);
+    hal.nvm_fail = 1;
+    expect_nrc(ROUTINE(0x0200u), 0x31, 0x72);
+    assert_int_equal(app.keep.cal.nvm_error, 1u);
+    hal.nvm_fail = 0;
+    expect_routine_ok(ROUTINE(0x0200u), 0x0200u);
+    assert_int_equal(app.keep.cal.nvm_error, 0u);
+}
+
+/* StoreCalibration: nothing calibrated, 0x22; a calibration in use: stored, with the
+ * stored parameters kept; EraseCalibration: the stored and the used calibration gone,
+ * the parameters kept */
+static void test_calibration_routines(void **state)
+{
+    (void)state;
+    unlock();
+    expect_nrc(ROUTINE(0x0203u), 0x31, 0x22);
+    assert_int_equal(REQUEST(0x2E, 0x02, 0x04, 0x00, 0x2D), 3u);
+    expect_routine_ok(ROUTINE(0x0200u), 0x0200u);
+    app.keep.cal.source = CAL_SRC_KNOWN_POSITION;
+    app.keep.cal.mu = 0.0125f;
+    app.keep.n_samples = 5000u;
+    expect_routine_ok(ROUTINE(0x0203u), 0x0203u);
+    calstore_t cs;
+    cal_record_t rec;
+    assert_int_equal(calstore_load(&hal, &cs, &rec), CALSTORE_OK);
+    assert_near(rec.odo_scale_err, 0.0125f, 0.0);
+    app_config_t c;
+    nvstore_status_t st;
+    (void)nvstore_layer(&hal, &c, &st);
+    assert_int_equal(c.level_s, 45u);
+    expect_routine_ok(ROUTINE(0x0201u), 0x0201u);
+    assert_int_equal(app.keep.cal.source, CAL_SRC_NONE);
+    assert_near(app.keep.cal.mu, 0.0, 0.0);
+    assert_int_equal(calstore_load(&hal, &cs, &rec), CALSTORE_OK);
+    assert_int_equal(rec.source, CAL_SRC_NONE);
+    (void)nvstore_layer(&hal, &c, &st);
+    assert_int_equal(c.level_s, 45u);
+    /* after a reboot: no calibration, the parameters */
+    assert_int_equal(app_start(&app, &hal), NAV_OK);
+    assert_int_equal(app.keep.cal.status, NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_NONE_CHOICE);
+    assert_int_equal(app.cfg.level_s, 45u);
+}
+
+/* GIVEN a stored record with one good entry (level_s 45) and one out of range
+ * (gnss_latency_s 1e6 s) WHEN started THEN level_s 45, gnss_latency_s its default, DID
+ * 0xF1A1 says 1 loaded, 1 refused, and NAV_Status's NVM_ERROR is raised */
+static void test_refused_entries_reported(void **state)
+{
+    (void)state;
+    const float big = 1.0e6f;
+    uint32_t u;
+    memcpy(&u, &big, sizeof u);
+    const uint8_t blob[] = {0x02, 0x04, 2, 0, 45,
+                            0x02, 0x40, 4, (uint8_t)(u >> 24), (uint8_t)(u >> 16),
+                            (uint8_t)(u >> 8), (uint8_t)u};
+    static calstore_ext_t ext;
+    memset(&ext, 0, sizeof ext);
+    memset(ext.dtc, 0xFF, sizeof ext.dtc);
+    memcpy(ext.params, blob, sizeof blob);
+    ext.params_len = (uint16_t)sizeof blob;
+    calstore_t cs = {0u, -1};
+    const cal_record_t none = {0.0f, 0.0f, 0.0f, CAL_SRC_NONE};
+    assert_int_equal(calstore_save_ext(&hal, &cs, &none, &ext), 0);
+    assert_int_equal(app_start(&app, &hal), NAV_OK);
+    const app_config_t d = app_default_config();
+    assert_int_equal(app.cfg.level_s, 45u);
+    assert_near(app.cfg.gnss_latency_s, d.gnss_latency_s, 0.0);
+    assert_int_equal(app.keep.cal.nvm_error, 1u);
+    assert_int_equal(REQUEST(0x22, 0xF1, 0xA1), 11u);
+    const uint8_t want[8] = {2u, NVSTORE_SRC_NVM, 1u, 1u, 0u, 0u, 0u, 1u};
+    assert_memory_equal(&rsp[3], want, 8u);
+}
+
+/* the board's layer goes over the NVM's, at start and at every ECUReset: this test's
+ * (app_board_layer overrides app.c's weak default) sets level_s 20 when layer_on */
+static int layer_on;
+int app_board_layer(app_config_t *cfg)
+{
+    if (layer_on) {
+        cfg->level_s = 20u;
+    }
+    return layer_on > 1 ? -1 : 0;
+}
+
+static void test_board_layer_over_nvm(void **state)
+{
+    (void)state;
+    unlock();
+    assert_int_equal(REQUEST(0x2E, 0x02, 0x04, 0x00, 0x2D), 3u);
+    expect_routine_ok(ROUTINE(0x0200u), 0x0200u);
+    layer_on = 1;
+    assert_int_equal(app_start(&app, &hal), NAV_OK);
+    assert_int_equal(app.cfg.level_s, 20u);
+    unlock();
+    assert_int_equal(REQUEST(0x2E, 0x02, 0x04, 0x00, 0x2D), 3u);
+    assert_int_equal(REQUEST(0x11, 0x01), 2u);
+    app_poll(&app, &hal);
+    assert_int_equal(app.cfg.level_s, 20u);
+    /* a layer that refuses: app_start refuses */
+    layer_on = 2;
+    assert_int_equal(app_start(&app, &hal), NAV_EINVAL);
+    layer_on = 0;
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -425,6 +700,13 @@ int main(void)
         cmocka_unit_test_setup(test_s3_on_the_hal_clock, setup),
         cmocka_unit_test_setup(test_three_wrong_keys_then_delay_on_the_hal_clock, setup),
         cmocka_unit_test_setup(test_identifier_rules_and_receive_list, setup),
+        cmocka_unit_test_setup(test_dtc_of_a_silent_imu_read_and_cleared, setup),
+        cmocka_unit_test_setup(test_routine_checks, setup_started),
+        cmocka_unit_test_setup(test_store_parameters_and_reset, setup_started),
+        cmocka_unit_test_setup(test_routine_conditions_and_nvm_failure, setup_started),
+        cmocka_unit_test_setup(test_calibration_routines, setup_started),
+        cmocka_unit_test_setup(test_board_layer_over_nvm, setup_started),
+        cmocka_unit_test_setup(test_refused_entries_reported, setup_started),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -52,6 +52,7 @@ static void test_every_message_round_trips(void **state)
     (void)state;
     ROUND_TRIP(imu_rate);
     ROUND_TRIP(imu_accel);
+    ROUND_TRIP(imu_time);
     ROUND_TRIP(wheel_speeds);
     ROUND_TRIP(gnss_position);
     ROUND_TRIP(gnss_velocity);

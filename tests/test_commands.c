@@ -201,9 +201,10 @@ static void test_start_refused_is_fault(void **state)
     assert_int_equal(app_health(&app)->bad_value, 1u);
 }
 
-/* StoreCalibration with nothing calibrated is refused; with a calibration it is stored;
- * EraseCalibration empties the store and the values in use. */
-static void test_store_and_erase(void **state)
+/* StoreCalibration and EraseCalibration (destructive, any node on the bus could send
+ * them) moved to UDS RoutineControl 0x0203 / 0x0201: on CMD_Control each is refused and
+ * counted, with a calibration in use or not, and the store and the values in use stay. */
+static void test_store_and_erase_refused(void **state)
 {
     (void)state;
     app.keep.n_samples = 100u;
@@ -212,17 +213,19 @@ static void test_store_and_erase(void **state)
     app.keep.cal.source = NAVECU_CAN_NAV_CALIBRATION_CAL_SOURCE_KNOWN_POSITION_CHOICE;
     app.keep.cal.mu = 0.015f;
     command(RX_CMD_STORE_CALIBRATION);
-    assert_int_equal(refused(), 1u);
+    assert_int_equal(refused(), 2u);
     calstore_t cs;
     cal_record_t rec;
+    assert_int_equal(calstore_load(&hal, &cs, &rec), CALSTORE_EMPTY);
+    calib_store(&app.keep.cal, &app.run.cal, &hal, 100u);
+    assert_int_equal(calstore_load(&hal, &cs, &rec), CALSTORE_OK);
+    command(RX_CMD_ERASE_CALIBRATION);
+    assert_int_equal(refused(), 3u);
     assert_int_equal(calstore_load(&hal, &cs, &rec), CALSTORE_OK);
     assert_near(rec.odo_scale_err, 0.015f, 0.0);
-    command(RX_CMD_STORE_CALIBRATION); /* again at once: within 10 s */
-    assert_int_equal(refused(), 2u);
-    command(RX_CMD_ERASE_CALIBRATION);
-    assert_int_equal(calstore_load(&hal, &cs, &rec), CALSTORE_EMPTY);
-    assert_near(app.keep.cal.mu, 0.0, 0.0);
-    assert_int_equal(app.keep.cal.source, NAVECU_CAN_NAV_CALIBRATION_CAL_SOURCE_NONE_CHOICE);
+    assert_near(app.keep.cal.mu, 0.015f, 0.0);
+    assert_int_equal(app.keep.cal.source,
+                     NAVECU_CAN_NAV_CALIBRATION_CAL_SOURCE_KNOWN_POSITION_CHOICE);
 }
 
 /* navigating at 45 N 10 E heading north, on the odometer without the filter */
@@ -316,7 +319,7 @@ int main(void)
         cmocka_unit_test_setup(test_reset_keeps_the_ecu_state, setup),
         cmocka_unit_test_setup(test_initial_attitude, setup),
         cmocka_unit_test_setup(test_start_refused_is_fault, setup),
-        cmocka_unit_test_setup(test_store_and_erase, setup),
+        cmocka_unit_test_setup(test_store_and_erase_refused, setup),
         cmocka_unit_test_setup(test_calibrate_here, setup),
         cmocka_unit_test_setup(test_calibrate_at_gnss, setup),
         cmocka_unit_test_setup(test_none_and_unknown, setup),

@@ -43,7 +43,7 @@ static void record_constant(uint32_t n, float e, float north, float up)
 static gnss_when_t epoch(uint64_t n, int32_t late_ms)
 {
     const int64_t tow = (int64_t)n * 10 + 100000 - late_ms;
-    return gnss_time_align(&g, n, RATE_HZ, (uint32_t)tow, LATENCY_S);
+    return gnss_time_align(&g, (uint64_t)(n) * 1000000u / (RATE_HZ), RATE_HZ, (uint32_t)tow, LATENCY_S);
 }
 
 /* GIVEN a first epoch THEN it sets the minimum: back = latency (10 entries); WHEN the next
@@ -153,10 +153,10 @@ static void test_history_reach(void **state)
     assert_int_equal(epoch(1000u, 0).in_history, 1);
     memset(&g, 0, sizeof g);
     record_constant(200u, 0.0f, 0.0f, 0.0f);
-    assert_int_equal(gnss_time_align(&g, 1000u, RATE_HZ, 5000u, 0.625f).in_history, 1); /* 62.5 */
+    assert_int_equal(gnss_time_align(&g, (uint64_t)(1000u) * 1000000u / (RATE_HZ), RATE_HZ, 5000u, 0.625f).in_history, 1); /* 62.5 */
     memset(&g, 0, sizeof g);
     record_constant(200u, 0.0f, 0.0f, 0.0f);
-    assert_int_equal(gnss_time_align(&g, 1000u, RATE_HZ, 5000u, 0.635f).in_history, 0); /* 63.5 */
+    assert_int_equal(gnss_time_align(&g, (uint64_t)(1000u) * 1000000u / (RATE_HZ), RATE_HZ, 5000u, 0.635f).in_history, 0); /* 63.5 */
     /* forgotten: nothing in history */
     gnss_time_forget(&g);
     assert_int_equal(epoch(1020u, 0).in_history, 0);
@@ -177,8 +177,8 @@ static void test_history_decimation(void **state)
         gnss_time_record(&g, n, 400u, v);
     }
     assert_int_equal(g.vhist_n, 5u);
-    assert_near(gnss_time_align(&g, 4000u, 400u, 5000u, 0.1f).entry_s, 0.01, 1e-9);
-    assert_near(gnss_time_align(&g, 3000u, 150u, 15000u, 0.1f).entry_s, 2.0 / 150.0, 1e-9);
+    assert_near(gnss_time_align(&g, (uint64_t)(4000u) * 1000000u / (400u), 400u, 5000u, 0.1f).entry_s, 0.01, 1e-9);
+    assert_near(gnss_time_align(&g, (uint64_t)(3000u) * 1000000u / (150u), 150u, 15000u, 0.1f).entry_s, 2.0 / 150.0, 1e-9);
 }
 
 /* GIVEN a constant velocity (10, -5, 0.5) m/s WHEN the fix is 0.105 s old (10.5 entries)
@@ -187,7 +187,7 @@ static void test_displacement_of_constant_velocity(void **state)
 {
     (void)state;
     record_constant(30u, 10.0f, -5.0f, 0.5f);
-    const gnss_when_t w = gnss_time_align(&g, 1000u, RATE_HZ, 5000u, 0.105f);
+    const gnss_when_t w = gnss_time_align(&g, (uint64_t)(1000u) * 1000000u / (RATE_HZ), RATE_HZ, 5000u, 0.105f);
     assert_int_equal(w.in_history, 1);
     nav_real_t d[3];
     gnss_time_displacement(&g, &w, d);
@@ -207,14 +207,14 @@ static void test_displacement_and_velocity_then(void **state)
         const nav_real_t v[3] = {(nav_real_t)k, 0.0f, 0.0f};
         gnss_time_record(&g, k, RATE_HZ, v);
     }
-    gnss_when_t w = gnss_time_align(&g, 1000u, RATE_HZ, 5000u, 0.025f);
+    gnss_when_t w = gnss_time_align(&g, (uint64_t)(1000u) * 1000000u / (RATE_HZ), RATE_HZ, 5000u, 0.025f);
     nav_real_t d[3];
     gnss_time_displacement(&g, &w, d);
     assert_near(d[0], 0.455, 1e-5);
     assert_near(d[1], 0.0, 0.0);
-    w = gnss_time_align(&g, 1000u, RATE_HZ, 5000u, 0.026f);
+    w = gnss_time_align(&g, (uint64_t)(1000u) * 1000000u / (RATE_HZ), RATE_HZ, 5000u, 0.026f);
     assert_near(gnss_time_velocity_then(&g, &w)[0], 16.0, 0.0);
-    w = gnss_time_align(&g, 1000u, RATE_HZ, 5000u, 0.024f);
+    w = gnss_time_align(&g, (uint64_t)(1000u) * 1000000u / (RATE_HZ), RATE_HZ, 5000u, 0.024f);
     assert_near(gnss_time_velocity_then(&g, &w)[0], 17.0, 0.0);
 }
 

@@ -84,6 +84,20 @@ static uint8_t fake_write(void *user, uint16_t did, const uint8_t *data, size_t 
     return UDS_NRC_OK;
 }
 
+/* routine 0x0200 (no option record) succeeds, 0x0201 answers routine_nrc; others 0x31 */
+static uint8_t routine_nrc;
+static int routines;
+static uint8_t fake_routine(void *user, uint16_t rid, const uint8_t *data, size_t len)
+{
+    (void)user;
+    (void)data;
+    routines++;
+    if (rid == 0x0200u) {
+        return len == 0u ? UDS_NRC_OK : UDS_NRC_INCORRECT_LENGTH;
+    }
+    return rid == 0x0201u ? routine_nrc : UDS_NRC_REQUEST_OUT_OF_RANGE;
+}
+
 static int setup(void **state)
 {
     (void)state;
@@ -91,8 +105,11 @@ static int setup(void **state)
     app.d100[0] = 0x12;
     app.d100[1] = 0x34;
     memcpy(app.d101, "\xA1\xA2\xA3\xA4", 4u);
-    const uds_if_t itf = {&app, fake_read, fake_write, fake_writable};
+    const uds_if_t itf = {.user = &app, .read_did = fake_read, .write_did = fake_write,
+                         .is_writable = fake_writable, .start_routine = fake_routine};
     assert_int_equal(uds_init(&srv, &itf, 12345u), 0);
+    routines = 0;
+    routine_nrc = UDS_NRC_CONDITIONS_NOT_CORRECT;
     return 0;
 }
 
@@ -166,7 +183,7 @@ static void test_session_control_and_timings(void **state)
 static void test_unknown_service_and_empty(void **state)
 {
     (void)state;
-    EXPECT(0, B(0x31, 0x01, 0x02, 0x03), B(0x7F, 0x31, 0x11));
+    EXPECT(0, B(0x34, 0x00, 0x44), B(0x7F, 0x34, 0x11)); /* RequestDownload: not served */
     EXPECT(0, B(0x19, 0x02, 0xFF), B(0x7F, 0x19, 0x11));
     EXPECT(0, B(0x85, 0x02), B(0x7F, 0x85, 0x11));
     const uint8_t none[1] = {0};
@@ -389,16 +406,191 @@ static void test_init_refuses_incomplete_interface(void **state)
 {
     (void)state;
     uds_t s;
-    const uds_if_t no_write = {&app, fake_read, NULL, fake_writable};
+    const uds_if_t no_write = {.user = &app, .read_did = fake_read, .write_did = NULL,
+                              .is_writable = fake_writable};
     assert_int_equal(uds_init(&s, &no_write, 0u), -1);
     assert_int_equal(uds_init(NULL, &no_write, 0u), -1);
-    const uds_if_t ok = {&app, fake_read, fake_write, fake_writable};
+    const uds_if_t ok = {.user = &app, .read_did = fake_read, .write_did = fake_write,
+                        .is_writable = fake_writable};
     assert_int_equal(uds_init(&s, &ok, 0u), 0); /* entropy 0 is allowed */
     assert_int_not_equal(s.prng, 0u);
     /* a response buffer under 8 bytes: nothing */
     const uint8_t rq[] = {0x3E, 0x00};
     uint8_t small[7];
     assert_int_equal(uds_handle(&s, rq, 2u, 0, small, sizeof small), 0u);
+}
+
+/* ---- the fault memory: a fake of 3 DTCs ---- */
+
+static const uint32_t fake_dtc_numbers[3] = {0xD10187u, 0x510196u, 0x123456u};
+static uint8_t fake_dtc_status[3];
+static uint8_t fake_clear_nrc;
+static uint32_t fake_clear_group;
+static int fake_clears;
+
+static size_t fake_dtc_count(void *user)
+{
+    (void)user;
+    return 3u;
+}
+
+static int fake_dtc_get(void *user, size_t i, uint32_t *dtc, uint8_t *status)
+{
+    (void)user;
+    if (i >= 3u) {
+        return -1;
+    }
+    *dtc = fake_dtc_numbers[i];
+    *status = fake_dtc_status[i];
+    return 0;
+}
+
+static uint8_t fake_dtc_clear(void *user, uint32_t group)
+{
+    (void)user;
+    fake_clears++;
+    fake_clear_group = group;
+    if (fake_clear_nrc == 0u) {
+        memset(fake_dtc_status, 0x50, sizeof fake_dtc_status);
+    }
+    return fake_clear_nrc;
+}
+
+static uint8_t fake_dtc_avail(void *user)
+{
+    (void)user;
+    return 0x7Fu;
+}
+
+static int setup_dtc(void **state)
+{
+    (void)state;
+    memset(&app, 0, sizeof app);
+    fake_dtc_status[0] = 0x2F; /* failing now, confirmed */
+    fake_dtc_status[1] = 0x50; /* never tested since the clear */
+    fake_dtc_status[2] = 0xA8; /* confirmed, not failing; bit 7 not supported: 0x28 sent */
+    fake_clear_nrc = 0u;
+    fake_clears = 0;
+    fake_clear_group = 0u;
+    const uds_if_t itf = {.user = &app,
+                          .read_did = fake_read,
+                          .write_did = fake_write,
+                          .is_writable = fake_writable,
+                          .dtc_count = fake_dtc_count,
+                          .dtc_get = fake_dtc_get,
+                          .dtc_clear = fake_dtc_clear,
+                          .dtc_availability = fake_dtc_avail};
+    assert_int_equal(uds_init(&srv, &itf, 1u), 0);
+    return 0;
+}
+
+/* ISO 14229-1 11.3: 19 01 mask -> 59 01 availability format count(2) */
+static void test_read_dtc_number_by_status_mask(void **state)
+{
+    (void)state;
+    EXPECT(0, B(0x19, 0x01, 0x08), B(0x59, 0x01, 0x7F, 0x00, 0x00, 0x02)); /* confirmed */
+    EXPECT(0, B(0x19, 0x01, 0x01), B(0x59, 0x01, 0x7F, 0x00, 0x00, 0x01)); /* failing */
+    EXPECT(0, B(0x19, 0x01, 0x80), B(0x59, 0x01, 0x7F, 0x00, 0x00, 0x00)); /* bit 7: none */
+    EXPECT(0, B(0x19, 0x01, 0xFF), B(0x59, 0x01, 0x7F, 0x00, 0x00, 0x03));
+    EXPECT_NONE(0, B(0x19, 0x81, 0xFF)); /* suppressPosRspMsgIndicationBit */
+}
+
+/* 19 02 mask -> 59 02 availability [DTC(3) status] of the DTCs with status & mask != 0 */
+static void test_read_dtc_by_status_mask(void **state)
+{
+    (void)state;
+    EXPECT(0, B(0x19, 0x02, 0x08),
+           B(0x59, 0x02, 0x7F, 0xD1, 0x01, 0x87, 0x2F, 0x12, 0x34, 0x56, 0x28));
+    EXPECT(0, B(0x19, 0x02, 0x10), B(0x59, 0x02, 0x7F, 0x51, 0x01, 0x96, 0x50));
+    EXPECT(0, B(0x19, 0x02, 0x00), B(0x59, 0x02, 0x7F)); /* no DTC matches: none listed */
+}
+
+/* 19 0A -> 59 0A availability [DTC(3) status] of every DTC */
+static void test_read_supported_dtc(void **state)
+{
+    (void)state;
+    EXPECT(0, B(0x19, 0x0A),
+           B(0x59, 0x0A, 0x7F, 0xD1, 0x01, 0x87, 0x2F, 0x51, 0x01, 0x96, 0x50, 0x12, 0x34, 0x56,
+             0x28));
+}
+
+static void test_read_dtc_refusals(void **state)
+{
+    (void)state;
+    EXPECT(0, B(0x19), B(0x7F, 0x19, 0x13));                 /* no sub-function */
+    EXPECT(0, B(0x19, 0x04, 0x00), B(0x7F, 0x19, 0x12));     /* a sub-function not served */
+    EXPECT(0, B(0x19, 0x01), B(0x7F, 0x19, 0x13));           /* no mask */
+    EXPECT(0, B(0x19, 0x02, 0x08, 0x00), B(0x7F, 0x19, 0x13)); /* one byte too many */
+    EXPECT(0, B(0x19, 0x0A, 0x00), B(0x7F, 0x19, 0x13));
+    /* a response longer than the buffer: 0x14 (3 DTCs need 15 bytes) */
+    const uint8_t rq[] = {0x19, 0x0A};
+    uint8_t small[12];
+    assert_int_equal(uds_handle(&srv, rq, 2u, 0, small, sizeof small), 3u);
+    assert_memory_equal(small, ((const uint8_t[]){0x7F, 0x19, 0x14}), 3u);
+}
+
+/* 14 FF FF FF -> 54, in the default session as ISO 14229-1 allows; another group 0x31 */
+static void test_clear_dtc(void **state)
+{
+    (void)state;
+    EXPECT(0, B(0x14, 0xFF, 0xFF, 0xFF), B(0x54));
+    assert_int_equal(fake_clears, 1);
+    assert_int_equal(fake_clear_group, 0xFFFFFFu);
+    EXPECT(0, B(0x19, 0x01, 0x08), B(0x59, 0x01, 0x7F, 0x00, 0x00, 0x00)); /* gone */
+    EXPECT(0, B(0x14, 0x00, 0x01, 0x00), B(0x7F, 0x14, 0x31)); /* one group: not served */
+    EXPECT(0, B(0x14, 0xFF, 0xFF), B(0x7F, 0x14, 0x13));
+    EXPECT(0, B(0x14, 0xFF, 0xFF, 0xFF, 0x00), B(0x7F, 0x14, 0x13));
+    assert_int_equal(fake_clears, 1); /* none of the refused ones reached the application */
+    fake_clear_nrc = 0x72u;           /* the NVM write fails: generalProgrammingFailure */
+    EXPECT(0, B(0x14, 0xFF, 0xFF, 0xFF), B(0x7F, 0x14, 0x72));
+    /* in the extended session too */
+    EXPECT(0, B(0x10, 0x03), B(0x50, 0x03, 0x00, 0x32, 0x01, 0xF4));
+    fake_clear_nrc = 0u;
+    EXPECT(0, B(0x14, 0xFF, 0xFF, 0xFF), B(0x54));
+}
+
+/* no fault memory in the interface: both services 0x11, whatever their length */
+static void test_no_fault_memory_is_service_not_supported(void **state)
+{
+    (void)state;
+    EXPECT(0, B(0x19, 0x01, 0xFF), B(0x7F, 0x19, 0x11));
+    EXPECT(0, B(0x19), B(0x7F, 0x19, 0x11));
+    EXPECT(0, B(0x14, 0xFF, 0xFF, 0xFF), B(0x7F, 0x14, 0x11));
+}
+
+/* RoutineControl 0x31: default session 0x7F; no sub-function 0x13; a sub-function other
+ * than startRoutine 0x12; under 4 bytes 0x13; locked 0x33; then the application's answer
+ * (0x31 unknown, 0x22, 0x72) as a negative response, or 71 01 RID; suppressPosRsp; an
+ * application without routines: 0x11 in every session */
+static void test_routine_control(void **state)
+{
+    (void)state;
+    EXPECT(0, B(0x31, 0x01, 0x02, 0x00), B(0x7F, 0x31, 0x7F));
+    EXPECT(0, B(0x10, 0x03), B(0x50, 0x03, 0x00, 0x32, 0x01, 0xF4));
+    EXPECT(0, B(0x31), B(0x7F, 0x31, 0x13));
+    EXPECT(0, B(0x31, 0x02, 0x02, 0x00), B(0x7F, 0x31, 0x12));
+    EXPECT(0, B(0x31, 0x03, 0x02, 0x00), B(0x7F, 0x31, 0x12));
+    EXPECT(0, B(0x31, 0x01, 0x02), B(0x7F, 0x31, 0x13));
+    EXPECT(0, B(0x31, 0x01, 0x02, 0x00), B(0x7F, 0x31, 0x33));
+    assert_int_equal(routines, 0);
+    unlock(0);
+    EXPECT(0, B(0x31, 0x01, 0x02, 0x00), B(0x71, 0x01, 0x02, 0x00));
+    EXPECT(0, B(0x31, 0x01, 0x02, 0x00, 0x55), B(0x7F, 0x31, 0x13));
+    EXPECT(0, B(0x31, 0x01, 0x02, 0x01), B(0x7F, 0x31, 0x22));
+    routine_nrc = UDS_NRC_GENERAL_PROGRAMMING_FAILURE;
+    EXPECT(0, B(0x31, 0x01, 0x02, 0x01), B(0x7F, 0x31, 0x72));
+    EXPECT(0, B(0x31, 0x01, 0x12, 0x34), B(0x7F, 0x31, 0x31));
+    EXPECT_NONE(0, B(0x31, 0x81, 0x02, 0x00));
+    EXPECT(0, B(0x31, 0x81, 0x12, 0x34), B(0x7F, 0x31, 0x31)); /* negative: sent */
+    assert_int_equal(routines, 7);
+
+    uds_t s;
+    const uds_if_t none = {.user = &app, .read_did = fake_read, .write_did = fake_write,
+                           .is_writable = fake_writable};
+    assert_int_equal(uds_init(&s, &none, 1u), 0);
+    const uint8_t rq[] = {0x31, 0x01, 0x02, 0x00};
+    assert_int_equal(uds_handle(&s, rq, sizeof rq, 0, rsp, sizeof rsp), 3u);
+    assert_memory_equal(rsp, "\x7F\x31\x11", 3u);
 }
 
 int main(void)
@@ -418,6 +610,13 @@ int main(void)
         cmocka_unit_test_setup(test_write_did_every_refusal_then_accepted, setup),
         cmocka_unit_test_setup(test_ecu_reset, setup),
         cmocka_unit_test_setup(test_init_refuses_incomplete_interface, setup),
+        cmocka_unit_test_setup(test_read_dtc_number_by_status_mask, setup_dtc),
+        cmocka_unit_test_setup(test_read_dtc_by_status_mask, setup_dtc),
+        cmocka_unit_test_setup(test_read_supported_dtc, setup_dtc),
+        cmocka_unit_test_setup(test_read_dtc_refusals, setup_dtc),
+        cmocka_unit_test_setup(test_clear_dtc, setup_dtc),
+        cmocka_unit_test_setup(test_no_fault_memory_is_service_not_supported, setup),
+        cmocka_unit_test_setup(test_routine_control, setup),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -68,6 +68,12 @@ MEANING = {
     "VelIncZ": "velocity increment along body z (up); +g*dt at rest, " + _INC,
     "ImuCounter": "E2E alive counter 0..14; the same value in the IMU_Rate and IMU_Accel "
                   "of one sample",
+    ("IMU_Time", "SampleTime"): "the IMU's clock at the end of the sample interval, 1 us, "
+                                "wrapping at 2^32 (71.6 min): the interval of the sample is "
+                                "this less the previous sample's (imu_time = stamped)",
+    ("IMU_Time", "ImuCounter"): "the ImuCounter of the IMU_Rate/IMU_Accel pair of the same "
+                                "sample (its own E2E alive counter too)",
+    "ImuTimeCrc": _E2E_CRC,
     "ImuFault": "1: the IMU reports a fault in this sample",
     "ImuCrc": _IMU_CRC,
     "WheelSpeedFL": "front-left wheel speed, positive rolling forward, negative backward",
@@ -107,7 +113,8 @@ MEANING = {
     ("NAV_Height", "Height"): "navigated " + _HEIGHT,
     ("NAV_Height", "VertAccuracy"): "estimated vertical accuracy, saturated",
     ("NAV_Height", "TimeOfValidity"): "IMU time of this NAV_* set (samples since the first "
-                                      "IMU sample / IMU rate) in ms, modulo 65536",
+                                      "IMU sample / IMU rate; imu_time = stamped: the sum of "
+                                      "the samples' IMU_Time intervals) in ms, modulo 65536",
     "NavCounter": _NAV_CNT,
     "NavCrc": _E2E_CRC,
     "Roll": "roll, right side down positive",

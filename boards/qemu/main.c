@@ -4,12 +4,16 @@
  *
  *   qemu-system-arm -M netduinoplus2 -nographic -monitor none -serial none \
  *       -semihosting-config enable=on,target=native,arg=navecu,arg=IN.log,arg=OUT.log \
- *       [-icount shift=0 ... arg=TRACE.txt] -kernel build/target/navecu-qemu.elf
+ *       [,arg=nvm=NVM.bin] [-icount shift=0 ... arg=TRACE.txt] \
+ *       -kernel build/target/navecu-qemu.elf
  *
  * The same main-loop pass as every board (app_loop.h) with the host's log settings (one
  * frame per pass) and the default configuration, so OUT.log equals `build/host/navecu
  * --can-log IN.log --out OUT.log` byte for byte (make target-test). A fourth argument
- * writes the instruction-count trace (bench_trace.h, make target-bench).
+ * writes the instruction-count trace (bench_trace.h, make target-bench). An argument
+ * nvm=FILE (anywhere after OUT.log) backs the NVM with that image file, the host's --nvm
+ * format: loaded at start (app_start: defaults, then its parameters), written back at the
+ * end (tests/python/test_nvm_qemu.py).
  */
 #include <stdint.h>
 
@@ -35,19 +39,39 @@ void board_fault(void)
 
 void board_main(void)
 {
-    const char *argv[5];
-    const size_t argc = bench_args(argv, 5u);
+    const char *all[6];
+    const size_t n_all = bench_args(all, 6u);
+    /* nvm=FILE taken out; the rest positional */
+    const char *argv[5] = {NULL, NULL, NULL, NULL, NULL};
+    const char *nvm_path = NULL;
+    size_t argc = 0u;
+    for (size_t k = 0u; k < n_all; k++) {
+        const char *a = all[k];
+        if (k >= 3u && a[0] == 'n' && a[1] == 'v' && a[2] == 'm' && a[3] == '=') {
+            nvm_path = &a[4];
+        } else if (argc < 5u) {
+            argv[argc] = a;
+            argc++;
+        } else {
+            /* more than the usage allows: ignored */
+        }
+    }
     app_config_defaults(&cfg);
     if (argc < 3u || app_init(&app, &cfg) != 0) {
-        bench_puts("usage: navecu-qemu IN.log OUT.log [TRACE.txt] (semihosting arguments)\n");
+        bench_puts("usage: navecu-qemu IN.log OUT.log [TRACE.txt] [nvm=FILE] (semihosting "
+                   "arguments)\n");
         semihost_exit(2u);
     }
     if (hal_semihost_open(&hal, argv[1], argv[2]) != 0 ||
+        (nvm_path != NULL && hal_semihost_nvm_file(&hal, nvm_path) != 0) ||
         (argc >= 4u && bench_trace_open(argv[3]) != 0)) {
-        bench_puts("navecu-qemu: cannot open the input, output or trace file\n");
+        bench_puts("navecu-qemu: cannot open the input, output, NVM or trace file\n");
         semihost_exit(1u);
     }
-    app_boot(&app, &hal);
+    /* the layers: defaults, then the NVM's parameters */
+    if (app_start(&app, &hal) != 0) {
+        semihost_exit(2u);
+    }
     const app_pass_cfg_t one_frame = {1u, 1u};
     uint64_t frames_in = 0u;
     app_pass_t p;

@@ -35,7 +35,9 @@ void board_main(void)
     (void)app_init(&app, &cfg); /* the defaults are valid (test_app) */
     const size_t n_ids = app_uds_rx_ids(&app.cfg, rx_ids, RX_IDS_MAX);
     hal_t *hal = hal_stm32_init(rx_ids, n_ids);
-    app_boot(&app, hal);
+    /* the layers: defaults, then the NVM's parameters (the receive list above is the
+     * defaults': the CAN and UDS identifiers are not stored) */
+    (void)app_start(&app, hal); /* NVM entries are checked one by one */
 
     const uint32_t hclk = hal->clock.hclk_hz != 0u ? hal->clock.hclk_hz : 16000000u;
     SYST_RVR = hclk / SYSTICK_HZ - 1u;

@@ -16,7 +16,7 @@ __attribute__((weak)) void app_trace(uint32_t point, uint32_t end)
 
 static app_diag_t diag_of(app_t *a)
 {
-    const app_diag_t d = {&a->keep.health, &a->run.events, a->keep.n_samples};
+    const app_diag_t d = {&a->keep.health, &a->run.events, a->keep.n_samples, app_time_us(a)};
     return d;
 }
 
@@ -45,6 +45,7 @@ int app_init(app_t *app, const app_config_t *cfg)
     imu_rate_init(&app->keep.rate);
     imu_link_init(&app->keep.imu, cfg->imu_rate_hz, cfg->gyro_range_rps, cfg->accel_range_mps2,
                   cfg->can_ids[NAVECU_MSG_IMU_ACCEL]);
+    imu_link_stamped(&app->keep.imu, cfg->imu_time == IMU_TIME_STAMPED);
     mounting_init(&app->keep.mount, cfg->imu_mount_rad);
     const mount_est_config_t mcfg = {cfg->mount_est_sigma_rad, cfg->mount_est_excite_m2ps3};
     const int mest_rc = mount_est_init(&app->keep.mest, &mcfg); /* "no estimate" in fixed mode */
@@ -56,6 +57,7 @@ int app_init(app_t *app, const app_config_t *cfg)
         mounting_init(&app->keep.mount, zero); /* the estimate's, when it converges */
         app->keep.mount_state = (uint8_t)APP_MOUNT_ESTIMATING;
     }
+    dtc_init(&app->keep.dtc); /* as after a clear until app_dtc_load (app_dtc.h) */
     app->run.mode = APP_MODE_WAIT_INIT;
     (void)app_uds_init(app); /* valid IDs (app_config_valid): cannot fail */
     return NAV_OK;
@@ -64,6 +66,39 @@ int app_init(app_t *app, const app_config_t *cfg)
 void app_boot(app_t *a, hal_t *hal)
 {
     calib_boot(&a->keep.cal, hal);
+    uint8_t dtc_bytes[CALSTORE_DTC_N];
+    if (nvstore_dtc_status(hal, dtc_bytes) == 0) {
+        app_dtc_load(a, dtc_bytes, sizeof dtc_bytes); /* 0xFF: none stored, as after a clear */
+    }
+}
+
+int app_nvm_write_allowed(const app_t *a)
+{
+    return (a->run.mode == APP_MODE_WAIT_INIT || a->keep.odo.standing != 0u) ? 1 : 0;
+}
+
+/* the default board layer: nothing over the NVM's (app.h; the host has its own) */
+__attribute__((weak)) int app_board_layer(app_config_t *cfg)
+{
+    (void)cfg;
+    return 0;
+}
+
+int app_start(app_t *a, hal_t *hal)
+{
+    static app_config_t cfg; /* off the stack, as the boards keep theirs */
+    nvstore_status_t st;
+    (void)nvstore_layer(hal, &cfg, &st); /* any failure leaves valid defaults */
+    if (app_board_layer(&cfg) != 0 || app_init(a, &cfg) != NAV_OK) {
+        return NAV_EINVAL;
+    }
+    a->nvm = st;
+    a->started = 1u;
+    app_boot(a, hal);
+    if (st.source == NVSTORE_SRC_REFUSED || st.refused != 0u) {
+        a->keep.cal.nvm_error = 1u; /* NAV_Status NVM_ERROR: what NVM held was refused */
+    }
+    return NAV_OK;
 }
 
 void app_reset(app_t *a)
@@ -135,10 +170,13 @@ static void release_for_rate(app_t *a)
  * IMU's axes with the odometer's speed. When it converges it becomes the mounting, and a
  * start held for it goes on from GNSS while driving (the course is the heading; roll and
  * pitch start level, the filter takes them from there). */
-static void mount_auto_sample(app_t *a, const int32_t w_raw[3], const int32_t v_raw[3])
+static void mount_auto_sample(app_t *a, const int32_t w_raw[3], const int32_t v_raw[3],
+                              uint32_t dt_us)
 {
     imu_inc_t inc;
-    app_rx_imu_increment(w_raw, v_raw, NAV_C(1.0) / (nav_real_t)a->cfg.imu_rate_hz, &inc);
+    const nav_real_t dt_s = dt_us != 0u ? (nav_real_t)dt_us * NAV_C(1e-6)
+                                        : NAV_C(1.0) / (nav_real_t)a->cfg.imu_rate_hz;
+    app_rx_imu_increment(w_raw, v_raw, dt_s, &inc);
     const odo_t *o = &a->keep.odo;
     const int rc = mount_est_sample(&a->keep.mest, &inc, o->speed_mps, o->valid ? 1 : 0);
     if (rc == NAV_EINVAL) {
@@ -179,13 +217,16 @@ int app_adopt_mounting(app_t *a)
     return 0;
 }
 
-/* One IMU sample (raw LSB): levelling, or a navigation step with or without the filter,
- * then the outputs due. */
-static void process_sample(app_t *a, hal_t *hal, const int32_t w_raw[3], const int32_t v_raw[3])
+/* One IMU sample (raw LSB) of dt_us (stamped; 0: the nominal period): levelling, or a
+ * navigation step with or without the filter, then the outputs due. */
+static void process_sample(app_t *a, hal_t *hal, const int32_t w_raw[3], const int32_t v_raw[3],
+                           uint32_t dt_us)
 {
     a->keep.n_samples++;
+    const uint32_t step_us = dt_us != 0u ? dt_us : 1000000u / a->cfg.imu_rate_hz;
+    a->keep.imu_t_us += step_us;
     if (a->keep.mount_state != (uint8_t)APP_MOUNT_FIXED) {
-        mount_auto_sample(a, w_raw, v_raw);
+        mount_auto_sample(a, w_raw, v_raw, dt_us);
     }
     if (a->run.mode == APP_MODE_LEVELLING) {
         const uint32_t n_total = (uint32_t)a->cfg.level_s * a->cfg.imu_rate_hz;
@@ -196,7 +237,10 @@ static void process_sample(app_t *a, hal_t *hal, const int32_t w_raw[3], const i
         }
     } else if (a->run.mode == APP_MODE_NAVIGATING) {
         imu_inc_t inc;
-        app_rx_imu_increment(w_raw, v_raw, NAV_C(1.0) / (nav_real_t)a->cfg.imu_rate_hz, &inc);
+        /* stamped: the increments over their own interval (no resampling) */
+        const nav_real_t dt_s = dt_us != 0u ? (nav_real_t)dt_us * NAV_C(1e-6)
+                                            : NAV_C(1.0) / (nav_real_t)a->cfg.imu_rate_hz;
+        app_rx_imu_increment(w_raw, v_raw, dt_s, &inc);
         mounting_apply(&a->keep.mount, &inc);
         const app_diag_t d = diag_of(a);
         if (a->run.fusion.on) {
@@ -225,6 +269,12 @@ static void on_imu_accel(app_t *a, hal_t *hal, const rx_input_t *in, uint64_t t_
     const imu_verdict_t v =
         imu_stream_accel(&a->run.imu, &a->keep.imu, in->u.imu_accel.counter, in->u.imu_accel.fault,
                          in->u.imu_accel.raw, in->u.imu_accel.data, t_us, &s);
+    if (v == IMU_REJ_TIME) {
+        app_count(&a->keep.health.imu_timing); /* of bad_value: the IMU_Time stamps */
+        reject(a, &a->keep.health.bad_value);
+        imu_rate_refused(&a->keep.rate); /* a sample all the same: the rate check's */
+        return;
+    }
     if (v != IMU_SAMPLE) {
         app_health_t *h = &a->keep.health;
         reject(a, v == IMU_REJ_PAIR ? &h->imu_pair_broken
@@ -235,6 +285,21 @@ static void on_imu_accel(app_t *a, hal_t *hal, const rx_input_t *in, uint64_t t_
         reject(a, &a->keep.health.imu_pair_broken); /* an IMU_Rate that got no IMU_Accel */
     }
     imu_rate_sample(&a->keep.rate, s.lost - s.lost_by_time, s.time_gap);
+    if (a->cfg.imu_time == IMU_TIME_STAMPED) {
+        imu_rate_stamp(&a->keep.rate, s.time_reset ? 0u : s.dt_us);
+    }
+    if (s.time_reset) {
+        /* the IMU's clock jumped: the time since the last sample is unknown, as after a
+         * gap too long to bridge */
+        app_count(&a->keep.health.time_jumps);
+        a->run.events.gap.seen = 1u;
+        if (a->run.mode == APP_MODE_NAVIGATING) {
+            begin_reacquire(a);
+        } else if (a->run.mode == APP_MODE_LEVELLING) {
+            a->run.mode = APP_MODE_FAULT;
+        }
+        app_stamp(&a->run.events.gap, a->keep.n_samples);
+    }
     if (s.time_gap) {
         app_count(&a->keep.health.time_jumps);
     }
@@ -263,17 +328,18 @@ static void on_imu_accel(app_t *a, hal_t *hal, const rx_input_t *in, uint64_t t_
                 a->run.mode = APP_MODE_FAULT;
             }
             a->keep.n_samples += s.lost;
+            a->keep.imu_t_us += (uint64_t)s.dt_us - imu_stream_dt_us(&s, s.lost);
         } else {
             for (uint64_t k = 0u; k < s.lost; k++) {
                 int32_t w[3];
                 int32_t v3[3];
                 imu_stream_bridge(&s, k, w, v3);
-                process_sample(a, hal, w, v3);
+                process_sample(a, hal, w, v3, imu_stream_dt_us(&s, k));
             }
         }
         app_stamp(&a->run.events.gap, a->keep.n_samples);
     }
-    process_sample(a, hal, &s.raw[0], &s.raw[3]);
+    process_sample(a, hal, &s.raw[0], &s.raw[3], imu_stream_dt_us(&s, s.lost));
 }
 
 /* ---------------------------------------------------------------- GNSS ---- */
@@ -421,6 +487,9 @@ void app_handle_frame(app_t *a, hal_t *hal, const hal_can_frame_t *f)
         break;
     case RX_IMU_ACCEL:
         on_imu_accel(a, hal, &in, f->t_us);
+        break;
+    case RX_IMU_TIME:
+        imu_stream_time(&a->run.imu, &a->keep.imu, in.u.imu_time.counter, in.u.imu_time.t_us);
         break;
     case RX_WHEELS:
         if (odo_wheels(&a->keep.odo, in.u.wheels.mps, a->run.yaw_rate_rps) != NAV_OK) {

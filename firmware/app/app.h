@@ -17,10 +17,12 @@
  *   output       NAV_* frames, HealthFlags, the output mode
  *   app_loop     the main loop's pass, the same on every board
  *   app_uds      diagnostics: the UDS server on its ISO-TP channel, the parameters' DIDs
+ *   app_dtc      the fault memory: the health conditions as DTCs (dtc.h), their NVM seam
  * with app_config (what an integrator sets), app_tuning.h (the tuning constants) and
  * app_health (counters and flags).
  *
- * Time base: the IMU sample counter and the configured IMU rate, never the arrival time of
+ * Time base: the IMU sample counter and the configured IMU rate (with imu_time = stamped,
+ * the IMU's own IMU_Time stamps for the time, app_time_us), never the arrival time of
  * frames, so the same input gives the same output frames however fast it arrives. Output
  * frames are produced inside app_handle_frame, right after the IMU sample that is due.
  * Everything rejected is counted in app_health_t and reported in NAV_Status pages 1..6.
@@ -34,6 +36,7 @@
 
 #include "align.h"
 #include "app_config.h"
+#include "app_dtc.h"
 #include "app_health.h"
 #include "app_rx.h"
 #include "app_uds.h"
@@ -48,6 +51,7 @@
 #include "landnav.h"
 #include "mount_est.h"
 #include "mounting.h"
+#include "nvstore.h"
 #include "odo.h"
 #include "output.h"
 #include "sins.h"
@@ -68,6 +72,8 @@ typedef struct {
     imu_rate_t rate;        /* the configured IMU rate against the data: a mismatch holds
                                navigation whatever restarts it (imu_rate.h) */
     uint64_t n_samples;     /* IMU samples processed: the time base, runs on */
+    uint64_t imu_t_us;      /* imu_time = stamped: the IMU time of the last sample, us, the
+                               sum of the samples' stamped intervals (app_time_us) */
     uint64_t last_rx_t_us;  /* latest receive time seen (time jumps) */
     tx_state_t tx;          /* E2E transmit state and what was sent */
     uint64_t last_poll_us;  /* HAL time of the last app_poll (task supervision) */
@@ -79,6 +85,10 @@ typedef struct {
     mounting_t mount;       /* the IMU's configured rotation into the vehicle's axes */
     mount_est_t mest;       /* the automatic mounting estimate (imu_mount_source automatic) */
     uint8_t mount_state;    /* app_mount_state_t */
+    dtc_t dtc;              /* the fault memory: a DTC per health condition (app_dtc.h) */
+    uint32_t dtc_dirty;          /* DTCs whose stored byte changed, not yet in NVM (bit i) */
+    uint32_t dtc_persist_writes; /* NVM record writes of the DTC status bytes (app_dtc.c) */
+    uint32_t dtc_persist_failed; /* of them, writes that failed */
 } app_keep_t;
 
 /* The mounting's state (NAV_Calibration MountState, DID 0x0260). */
@@ -111,6 +121,8 @@ typedef struct {
 
 struct app {
     app_config_t cfg;
+    nvstore_status_t nvm;   /* what app_start loaded from NVM (UDS DID 0xF1A1) */
+    uint8_t started;        /* started by app_start: an ECUReset layers again */
     app_keep_t keep;
     app_run_t run;
     app_uds_t uds;          /* diagnostics: UDS over ISO-TP (app_uds.h), off the navigation
@@ -120,10 +132,31 @@ struct app {
 /* Start in APP_MODE_WAIT_INIT. Returns NAV_OK, or NAV_EINVAL for a config out of range. */
 int app_init(app_t *app, const app_config_t *cfg);
 
+/*
+ * The boot of every board, in layers: the table's defaults, the parameters stored in NVM
+ * over them (nvstore.h), then the board's own layer app_board_layer over both; app_init
+ * with the result, then app_boot. ECUReset (UDS 0x11) runs it again, so what was written
+ * over UDS and not saved (RoutineControl 0x0200) is gone after it, as on a real ECU.
+ * A refused extension or refused entries raise NAV_Status NVM_ERROR (and DID 0xF1A1 says
+ * which and how many), as a corrupt calibration record does.
+ * Returns NAV_OK, or NAV_EINVAL when the result is refused (by the layer or app_init).
+ */
+int app_start(app_t *app, hal_t *hal);
+
+/* The board's configuration layer over the defaults and the NVM (app_start): 0, or
+ * nonzero to refuse the configuration. The default (weak, in app.c) changes nothing; the
+ * host defines its own, its command-line options (host_sim/main.c). */
+int app_board_layer(app_config_t *cfg);
+
 /* Once after app_init: load the stored calibration from NVM (calstore.h) as the starting
  * values. A corrupt store leaves the defaults (0, 0) with CalStatus NvmCorrupt; an NVM
  * read error also sets the NVM_ERROR flag. */
 void app_boot(app_t *app, hal_t *hal);
+
+/* 1 when the application may write NVM now: navigation not started, or the car standing
+ * (a flash erase stalls the CPU for hundreds of ms on a single-bank flash: never while
+ * moving). The UDS routines and the DTC status bytes (app_dtc.c) follow it. */
+int app_nvm_write_allowed(const app_t *a);
 
 /* Process one received frame; may send frames through hal. Never fails: whatever is
  * wrong with the frame is counted in app->keep.health. A frame on the UDS request ID goes
@@ -176,6 +209,16 @@ static inline const mount_est_result_t *app_mount_estimate(const app_t *app)
 /* Read-only views for the board's summary and the tests. */
 static inline app_mode_t app_mode(const app_t *app) { return app->run.mode; }
 static inline uint64_t app_samples(const app_t *app) { return app->keep.n_samples; }
+/* The IMU time now, us: on the grid the sample count over the configured rate; stamped
+ * (imu_time), the sum of the samples' IMU_Time intervals (a sample without one, the first,
+ * counts the nominal period). What GNSS epochs are aligned to and NAV_Height's
+ * TimeOfValidity and NAV_Time carry. */
+static inline uint64_t app_time_us(const app_t *app)
+{
+    return app->cfg.imu_time == IMU_TIME_STAMPED
+               ? app->keep.imu_t_us
+               : app->keep.n_samples * 1000000u / app->cfg.imu_rate_hz;
+}
 static inline const app_health_t *app_health(const app_t *app) { return &app->keep.health; }
 static inline const calib_t *app_calibration(const app_t *app) { return &app->keep.cal; }
 /* Kalman updates applied so far (a board's trace) */

@@ -36,8 +36,16 @@ typedef enum {
     GNSS_VUP_NONE = 1, /* GNSS_Velocity VelUp is not a measurement: not fused */
 } gnss_vel_up_t;
 
+/* the IMU's sample time (the parameter imu_time) */
+typedef enum {
+    IMU_TIME_GRID = 0,    /* every sample 1/imu_rate_hz long */
+    IMU_TIME_STAMPED = 1, /* each sample from its IMU_Time stamp to the previous one's
+                             (imu_stream.h); imu_rate_hz is the nominal rate */
+} imu_time_t;
+
 typedef struct {
     uint16_t imu_rate_hz;    /* IMU sample rate, 10..400 */
+    imu_time_t imu_time;     /* grid, or stamped by IMU_Time */
     uint16_t nav_rate_hz;    /* NAV_Position/Height/Velocity/Attitude rate, <= imu_rate_hz */
     uint16_t status_rate_hz; /* NAV_Status (and NAV_Accuracy) rate, <= imu_rate_hz */
     uint16_t dyn_rate_hz;    /* NAV_Rates/AttitudeRates/Accel/AccelEnu rate, <= imu_rate_hz;

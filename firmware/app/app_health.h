@@ -34,7 +34,9 @@ typedef struct {
     uint32_t imu_saturated;    /* IMU samples with an axis at its configured range */
     uint32_t imu_stuck;        /* IMU axes found stuck (a raw value repeated for 2 s while
                                   another axis moved) */
-    uint32_t imu_timing;       /* IMU samples received more than half a period off time */
+    uint32_t imu_timing;       /* of bad_value: IMU samples refused for their IMU_Time stamp
+                                  (imu_time = stamped: missing, not after the previous one,
+                                  an interval outside the band; imu_stream.h) */
     uint32_t odo_rejected;     /* odometer updates refused by the filter's gate (wheel
                                   lock, spin, slip) */
     uint32_t imu_rate_mismatch; /* IMU rate mismatches found: the samples counted between
@@ -61,6 +63,7 @@ typedef struct {
     app_health_t *health;
     app_events_t *events;
     uint64_t n_samples; /* the IMU sample count now */
+    uint64_t t_us;      /* the IMU time now, us (app_time_us) */
 } app_diag_t;
 
 /* *c += 1, saturating at UINT32_MAX */

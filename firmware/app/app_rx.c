@@ -40,7 +40,7 @@ static int msg_of(const uint32_t can_ids[NAVECU_MSG_N], uint32_t id)
 static int is_e2e(int msg)
 {
     return msg == NAVECU_MSG_WHEEL_SPEEDS || msg == NAVECU_MSG_GNSS_VELOCITY ||
-           msg == NAVECU_MSG_GNSS_TIME ||
+           msg == NAVECU_MSG_GNSS_TIME || msg == NAVECU_MSG_IMU_TIME ||
            msg == NAVECU_MSG_CMD_CONTROL || msg == NAVECU_MSG_CMD_INITIAL_ATTITUDE;
 }
 
@@ -68,6 +68,17 @@ static rx_command_t command_of(uint8_t raw)
 
 static rx_verdict_t decode_imu(int msg, const uint8_t d[8], rx_input_t *in)
 {
+    if (msg == NAVECU_MSG_IMU_TIME) {
+        struct navecu_can_imu_time_t m;
+        navecu_can_imu_time_unpack(&m, d, 8u);
+        if (m.imu_counter > E2E_COUNTER_MAX) {
+            return RX_BAD_COUNTER;
+        }
+        in->kind = RX_IMU_TIME;
+        in->u.imu_time.counter = m.imu_counter;
+        in->u.imu_time.t_us = m.sample_time;
+        return RX_OK;
+    }
     if (msg == NAVECU_MSG_IMU_RATE) {
         struct navecu_can_imu_rate_t m;
         navecu_can_imu_rate_unpack(&m, d, 8u);
@@ -258,6 +269,7 @@ rx_verdict_t app_rx_decode(rx_state_t *rx, const uint32_t can_ids[NAVECU_MSG_N],
     switch (msg) {
     case NAVECU_MSG_IMU_RATE:
     case NAVECU_MSG_IMU_ACCEL:
+    case NAVECU_MSG_IMU_TIME:
         return decode_imu(msg, f->data, in);
     case NAVECU_MSG_WHEEL_SPEEDS: {
         struct navecu_can_wheel_speeds_t m;

@@ -40,6 +40,7 @@ typedef enum {
     RX_KNOWN_POSITION,
     RX_COMMAND,
     RX_INITIAL_ATTITUDE,
+    RX_IMU_TIME,
 } rx_kind_t;
 
 /* Why a frame was refused (the counter of app_health_t it is counted in). */
@@ -79,6 +80,10 @@ typedef struct {
             int32_t raw[3]; /* velocity increments, x y z, in the signal's LSB */
             uint8_t data[8];
         } imu_accel;
+        struct rx_imu_time { /* IMU_Time: the IMU's own time of one sample */
+            uint8_t counter;  /* the sample's ImuCounter */
+            uint32_t t_us;    /* SampleTime, microseconds, wrapping at 2^32 */
+        } imu_time;
         struct rx_wheels {
             nav_real_t mps[4]; /* FL, FR, RL, RR, signed, reverse negative */
         } wheels;

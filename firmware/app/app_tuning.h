@@ -27,6 +27,16 @@
  * exceeds the counter's step by more than this many periods: half a cycle, so a replay
  * up to ~7x slower than real time is never taken for a gap (docs/can.md, IMU) */
 #define APP_IMU_GAP_SLACK_PERIODS 7u
+/* imu_time = stamped (imu_stream.h): a sample's IMU_Time interval, over the samples it
+ * covers, must lie within [1/APP_IMU_TIME_BAND_DIV, APP_IMU_TIME_BAND_MUL/APP_IMU_TIME_BAND_DIV]
+ * = [0.5, 1.5] nominal periods (the IMU's clock cannot be 50 % off its rate; a rate that
+ * far off is the rate check's, imu_rate.h); a sample outside it, or with a stamp not after
+ * the previous one, is refused; APP_IMU_TIME_RESYNC refusals in a row, the last a stamp
+ * behind the last one taken (the clock jumped back), restart the stamps' time base there,
+ * as a gap too long to bridge (a jump forward is a gap the stamps see) */
+#define APP_IMU_TIME_BAND_DIV 2u
+#define APP_IMU_TIME_BAND_MUL 3u
+#define APP_IMU_TIME_RESYNC 3u
 /* IMU plausibility: an axis repeating its raw value this long while the car moves is
  * stuck; the car moves when a gyro axis spans more than 1 deg/s or a horizontal
  * accelerometer axis more than 0.5 m/s^2 (a MEMS IMU's noise moves the 2^-21 rad LSB

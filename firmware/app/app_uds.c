@@ -12,8 +12,7 @@ static int tx_frame(void *user, const hal_can_frame_t *f)
     return hal_can_send((hal_t *)user, f);
 }
 
-/* the parameter with this DID, or APP_PARAM_N */
-static app_param_id_t param_of_did(uint16_t did)
+app_param_id_t app_uds_param_of_did(uint16_t did)
 {
     for (int k = 0; k < (int)APP_PARAM_N; k++) {
         if (app_params[k].did == did) {
@@ -55,6 +54,56 @@ static nav_real_t get_f32(const uint8_t *p)
     float f;
     memcpy(&f, &u, sizeof f);
     return (nav_real_t)f;
+}
+
+size_t app_uds_param_encode(const app_config_t *cfg, app_param_id_t id, uint8_t *buf,
+                            size_t cap)
+{
+    const app_param_type_t t = app_params[id].type;
+    const size_t n = value_len(t);
+    if (n > cap) {
+        return n;
+    }
+    nav_real_t v[3];
+    app_param_get(cfg, id, v);
+    if (t == APP_PARAM_U16) {
+        const uint16_t u = (uint16_t)v[0];
+        buf[0] = (uint8_t)(u >> 8);
+        buf[1] = (uint8_t)u;
+    } else if (t == APP_PARAM_ENUM) {
+        buf[0] = (uint8_t)v[0];
+    } else {
+        for (size_t i = 0u; i < n / 4u; i++) {
+            put_f32(&buf[4u * i], v[i]);
+        }
+    }
+    return n;
+}
+
+uint8_t app_uds_param_decode(app_config_t *cfg, app_param_id_t id, const uint8_t *data,
+                             size_t len)
+{
+    const app_param_type_t t = app_params[id].type;
+    if (len != value_len(t)) {
+        return UDS_NRC_INCORRECT_LENGTH;
+    }
+    nav_real_t v[3] = {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)};
+    if (t == APP_PARAM_U16) {
+        const uint32_t u = ((uint32_t)data[0] << 8) | data[1];
+        v[0] = (nav_real_t)u;
+    } else if (t == APP_PARAM_ENUM) {
+        v[0] = (nav_real_t)data[0];
+    } else {
+        for (size_t i = 0u; i < len / 4u; i++) {
+            v[i] = get_f32(&data[4u * i]);
+        }
+    }
+    app_config_t next = *cfg;
+    if (app_param_set(&next, id, v) != 0 || !app_config_valid(&next)) {
+        return UDS_NRC_REQUEST_OUT_OF_RANGE; /* its range, or a rule between parameters */
+    }
+    *cfg = next;
+    return UDS_NRC_OK;
 }
 
 /* the string's characters without a terminator (a DID's ASCII value) */
@@ -102,47 +151,42 @@ static size_t read_did(void *user, uint16_t did, uint8_t *buf, size_t cap)
     if (did == APP_UDS_DID_MOUNT_EST) {
         return put_mount_est(a, buf, cap);
     }
-    const app_param_id_t id = param_of_did(did);
+    if (did == APP_UDS_DID_NVM_STATUS) {
+        if (cap < 8u) {
+            return 8u;
+        }
+        buf[0] = a->nvm.version;
+        buf[1] = a->nvm.source;
+        buf[2] = a->nvm.loaded;
+        buf[3] = a->nvm.refused;
+        buf[4] = (uint8_t)(a->nvm.seq >> 24);
+        buf[5] = (uint8_t)(a->nvm.seq >> 16);
+        buf[6] = (uint8_t)(a->nvm.seq >> 8);
+        buf[7] = (uint8_t)a->nvm.seq;
+        return 8u;
+    }
+    const app_param_id_t id = app_uds_param_of_did(did);
     if (id == APP_PARAM_N) {
         return 0u;
     }
-    const app_param_type_t t = app_params[id].type;
-    const size_t n = value_len(t);
-    if (n > cap) {
-        return n;
-    }
-    nav_real_t v[3];
-    app_param_get(&a->cfg, id, v);
-    if (t == APP_PARAM_U16) {
-        const uint16_t u = (uint16_t)v[0];
-        buf[0] = (uint8_t)(u >> 8);
-        buf[1] = (uint8_t)u;
-    } else if (t == APP_PARAM_ENUM) {
-        buf[0] = (uint8_t)v[0];
-    } else {
-        for (size_t i = 0u; i < n / 4u; i++) {
-            put_f32(&buf[4u * i], v[i]);
-        }
-    }
-    return n;
+    return app_uds_param_encode(&a->cfg, id, buf, cap);
 }
 
 static int is_writable(void *user, uint16_t did)
 {
     (void)user;
-    const app_param_id_t id = param_of_did(did);
+    const app_param_id_t id = app_uds_param_of_did(did);
     return (id != APP_PARAM_N && !app_params[id].uds_read_only) ? 1 : 0;
 }
 
 static uint8_t write_did(void *user, uint16_t did, const uint8_t *data, size_t len)
 {
     app_t *a = (app_t *)user;
-    const app_param_id_t id = param_of_did(did);
+    const app_param_id_t id = app_uds_param_of_did(did);
     if (id == APP_PARAM_N || app_params[id].uds_read_only) {
         return UDS_NRC_REQUEST_OUT_OF_RANGE;
     }
-    const app_param_type_t t = app_params[id].type;
-    if (len != value_len(t)) {
+    if (len != value_len(app_params[id].type)) {
         return UDS_NRC_INCORRECT_LENGTH;
     }
     /* a parameter app_init copies into a module changes nothing while navigation (or
@@ -151,30 +195,134 @@ static uint8_t write_did(void *user, uint16_t did, const uint8_t *data, size_t l
     if (app_params[id].at_reset && a->run.mode != APP_MODE_WAIT_INIT) {
         return UDS_NRC_CONDITIONS_NOT_CORRECT;
     }
-    nav_real_t v[3] = {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)};
-    if (t == APP_PARAM_U16) {
-        const uint32_t u = ((uint32_t)data[0] << 8) | data[1];
-        v[0] = (nav_real_t)u;
-    } else if (t == APP_PARAM_ENUM) {
-        v[0] = (nav_real_t)data[0];
-    } else {
-        for (size_t i = 0u; i < len / 4u; i++) {
-            v[i] = get_f32(&data[4u * i]);
+    /* in RAM; RoutineControl StoreParameters (0x0200) saves it in NVM (docs/can.md) */
+    return app_uds_param_decode(&a->cfg, id, data, len);
+}
+
+/* saving or erasing the NVM stalls the CPU (calstore.h): only with navigation not started
+ * or the car standing */
+/* the calibration in use as a record (source None: nothing calibrated) */
+static cal_record_t cal_in_use(const calib_t *c)
+{
+    cal_record_t r = {0.0f, 0.0f, 0.0f, (uint8_t)CAL_SRC_NONE};
+    if (c->source != (uint8_t)CAL_SRC_NONE) {
+        r.dh_rad = (float)c->dh_rad;
+        r.odo_scale_err = (float)c->mu;
+        r.base_m = (float)c->base_m;
+        r.source = c->source;
+    }
+    return r;
+}
+
+/* RestoreDefaults: every UDS-writable parameter to the table's default (the read-only
+ * ones, e.g. the diagnostic IDs, stay) */
+static uint8_t restore_defaults(app_t *a)
+{
+    const app_config_t d = app_default_config();
+    app_config_t next = a->cfg;
+    for (int k = 0; k < (int)APP_PARAM_N; k++) {
+        if (!app_params[k].uds_read_only) {
+            nav_real_t v[3];
+            app_param_get(&d, (app_param_id_t)k, v);
+            (void)app_param_set(&next, (app_param_id_t)k, v);
         }
     }
-    app_config_t next = a->cfg;
-    if (app_param_set(&next, id, v) != 0 || !app_config_valid(&next)) {
-        return UDS_NRC_REQUEST_OUT_OF_RANGE; /* its range, or a rule between parameters */
+    if (!app_config_valid(&next)) {
+        return UDS_NRC_CONDITIONS_NOT_CORRECT;
     }
-    a->cfg = next; /* in RAM: not persisted in NVM (docs/can.md) */
+    a->cfg = next;
     return UDS_NRC_OK;
+}
+
+/* ---- the fault memory (app_dtc.h): 0x19, 0x14 ---- */
+
+static size_t uds_dtc_count(void *user)
+{
+    (void)user;
+    return (size_t)DTC_N;
+}
+
+static int uds_dtc_get(void *user, size_t index, uint32_t *dtc, uint8_t *status)
+{
+    const app_t *a = (const app_t *)user;
+    if (index >= (size_t)DTC_N) {
+        return -1;
+    }
+    *dtc = dtc_table[index].number;
+    *status = dtc_status(&a->keep.dtc, index);
+    return 0;
+}
+
+static uint8_t uds_dtc_clear(void *user, uint32_t group)
+{
+    app_t *a = (app_t *)user;
+    (void)group; /* the server passes all groups only */
+    return app_dtc_clear(a, a->uds.hal); /* the HAL of this request (serve) */
+}
+
+static uint8_t uds_dtc_availability(void *user)
+{
+    (void)user;
+    return (uint8_t)DTC_AVAILABILITY_MASK;
+}
+
+static uint8_t start_routine(void *user, uint16_t rid, const uint8_t *data, size_t len)
+{
+    app_t *a = (app_t *)user;
+    hal_t *hal = a->uds.hal;
+    calib_t *c = &a->keep.cal;
+    (void)data;
+    if (rid < APP_UDS_RID_STORE_PARAMS || rid > APP_UDS_RID_STORE_CALIBRATION) {
+        return UDS_NRC_REQUEST_OUT_OF_RANGE;
+    }
+    if (len != 0u) {
+        return UDS_NRC_INCORRECT_LENGTH; /* no option record */
+    }
+    if (rid == APP_UDS_RID_RESTORE_DEFAULTS) {
+        /* at_reset parameters among them: navigation not started (as a write) */
+        return a->run.mode == APP_MODE_WAIT_INIT ? restore_defaults(a)
+                                                 : UDS_NRC_CONDITIONS_NOT_CORRECT;
+    }
+    if (!app_nvm_write_allowed(a) || hal == NULL) {
+        return UDS_NRC_CONDITIONS_NOT_CORRECT;
+    }
+    if (rid == APP_UDS_RID_STORE_PARAMS) {
+        const cal_record_t r = cal_in_use(c);
+        if (nvstore_save(hal, &c->store, &a->cfg, &r) != 0) {
+            c->nvm_error = 1u;
+            return UDS_NRC_GENERAL_PROGRAMMING_FAILURE;
+        }
+        c->nvm_error = 0u;
+        c->stored = r.source != (uint8_t)CAL_SRC_NONE ? 1u : 0u;
+        return UDS_NRC_OK;
+    }
+    if (rid == APP_UDS_RID_ERASE_CALIBRATION) {
+        calib_erase(c, hal, a->run.mode == APP_MODE_NAVIGATING ? &a->run.dr : NULL);
+        return c->nvm_error ? UDS_NRC_GENERAL_PROGRAMMING_FAILURE : UDS_NRC_OK;
+    }
+    /* StoreCalibration: the values in use */
+    if (c->source == (uint8_t)CAL_SRC_NONE) {
+        return UDS_NRC_CONDITIONS_NOT_CORRECT; /* nothing calibrated */
+    }
+    calib_store(c, &a->run.cal, hal, a->keep.n_samples);
+    return c->nvm_error ? UDS_NRC_GENERAL_PROGRAMMING_FAILURE : UDS_NRC_OK;
 }
 
 int app_uds_init(app_t *a)
 {
     isotp_config_t c;
     isotp_config_defaults(&c, a->cfg.uds_request_id, a->cfg.uds_response_id);
-    const uds_if_t itf = {a, read_did, write_did, is_writable};
+    const uds_if_t itf = {
+        .user = a,
+        .read_did = read_did,
+        .write_did = write_did,
+        .is_writable = is_writable,
+        .dtc_count = uds_dtc_count,
+        .dtc_get = uds_dtc_get,
+        .dtc_clear = uds_dtc_clear,
+        .dtc_availability = uds_dtc_availability,
+        .start_routine = start_routine,
+    };
     a->uds.on = 0u;
     if (isotp_init(&a->uds.tp, &c) != 0 || uds_init(&a->uds.srv, &itf, 0u) != 0) {
         return -1;
@@ -183,11 +331,17 @@ int app_uds_init(app_t *a)
     return 0;
 }
 
-/* the application restarted with its configuration as it is now (ECUReset hardReset) */
+/* ECUReset hardReset: the application restarted as its board started it (app_start's
+ * layers again); one started by app_init alone keeps its configuration in RAM */
 static void ecu_restart(app_t *a, hal_t *hal)
 {
     const app_config_t cfg = a->cfg;
+    const uint8_t started = a->started;
+    if (started && app_start(a, hal) == NAV_OK) {
+        return;
+    }
     if (app_init(a, &cfg) == NAV_OK) {
+        a->started = started;
         app_boot(a, hal);
     }
 }
@@ -195,6 +349,7 @@ static void ecu_restart(app_t *a, hal_t *hal)
 static void serve(app_t *a, hal_t *hal, uint64_t now)
 {
     app_uds_t *u = &a->uds;
+    u->hal = hal; /* the routines' NVM */
     (void)isotp_poll(&u->tp, now, tx_frame, hal);
     if (isotp_tx_busy(&u->tp)) {
         return; /* the response buffer is in use; a new request waits in the channel */

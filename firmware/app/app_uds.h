@@ -7,8 +7,9 @@
  * Off the navigation path: a frame on the request ID goes to ISO-TP and nowhere else (it
  * is never counted foreign or rejected); requests are served in app_poll and right after
  * their last frame; nothing here reads or changes the navigation state except an accepted
- * WriteDataByIdentifier (the configuration in RAM) and ECUReset (the application
- * restarted). With no diagnostic traffic it sends nothing, so the output frames are those
+ * WriteDataByIdentifier (the configuration in RAM), a RoutineControl (0x0200..0x0203: the
+ * NVM record, the calibration, the defaults in RAM; docs/can.md "Routines") and ECUReset
+ * (the application restarted through app_start's layers). With no diagnostic traffic it sends nothing, so the output frames are those
  * of a build without it. docs/can.md, "Diagnostics (UDS)", is the tester's description.
  */
 #ifndef NAVECU_APP_UDS_H
@@ -32,6 +33,15 @@
  * float32 big-endian, then the windows accumulated (uint32 big-endian) */
 #define APP_UDS_DID_MOUNT_EST 0x0260u
 #define APP_UDS_MOUNT_EST_LEN 29u
+/* the NVM record loaded at boot (nvstore.h): version, source (NVSTORE_SRC_*), entries
+ * loaded, entries refused, seq (4 bytes big-endian) */
+#define APP_UDS_DID_NVM_STATUS 0xF1A1u
+
+/* RoutineControl 0x31 startRoutine routine identifiers (extended session, unlocked) */
+#define APP_UDS_RID_STORE_PARAMS 0x0200u       /* parameters + calibration to NVM */
+#define APP_UDS_RID_ERASE_CALIBRATION 0x0201u  /* the stored and the used calibration */
+#define APP_UDS_RID_RESTORE_DEFAULTS 0x0202u   /* parameters to the defaults, in RAM */
+#define APP_UDS_RID_STORE_CALIBRATION 0x0203u  /* the calibration in use to NVM */
 
 /* the strings behind them: build defines (the HAL has no device serial: a placeholder
  * until the ECU's unique ID is read through the HAL) */
@@ -42,6 +52,21 @@
 #define NAVECU_ECU_SERIAL "NAVECU-00000000"
 #endif
 
+/* The parameter with this DID, or APP_PARAM_N. */
+app_param_id_t app_uds_param_of_did(uint16_t did);
+
+/* A parameter's value as its DID carries it (docs/can.md: u16 big-endian, enum one byte,
+ * reals as big-endian IEEE binary32, vectors three of them): written to buf if it fits
+ * cap; its length. The one codec of the UDS DIDs and of the NVM record (nvstore.h). */
+size_t app_uds_param_encode(const app_config_t *cfg, app_param_id_t id, uint8_t *buf,
+                            size_t cap);
+
+/* data[0..len) as parameter id's value into *cfg: UDS_NRC_OK; UDS_NRC_INCORRECT_LENGTH
+ * (not its length); UDS_NRC_REQUEST_OUT_OF_RANGE (out of its range or breaking a rule
+ * between parameters, app_config_valid). *cfg is changed only on UDS_NRC_OK. */
+uint8_t app_uds_param_decode(app_config_t *cfg, app_param_id_t id, const uint8_t *data,
+                             size_t len);
+
 /* The diagnostic channel and server with their message buffers (a request is copied out
  * of the channel to be served; the response stays put while ISO-TP sends it). */
 typedef struct {
@@ -49,6 +74,7 @@ typedef struct {
     uds_t srv;
     uint8_t on;                  /* the channel started (app_uds_init succeeded) */
     uint8_t reset_due;           /* ECUReset accepted: restart once the response left */
+    hal_t *hal;                  /* the HAL of the request being served (its routines) */
     uint16_t rsp_len;
     uint8_t req[ISOTP_MAX_LEN];
     uint8_t rsp[ISOTP_MAX_LEN];

@@ -5,6 +5,7 @@
 
 #include "app_tuning.h"
 #include "navecu_can.h"
+#include "nvstore.h"
 
 void calib_init(calib_t *c)
 {
@@ -16,7 +17,7 @@ void calib_boot(calib_t *c, hal_t *hal)
 {
     cal_record_t rec;
     const int rc = calstore_load(hal, &c->store, &rec);
-    if (rc == CALSTORE_OK) {
+    if (rc == CALSTORE_OK && rec.source != (uint8_t)CAL_SRC_NONE) {
         c->dh_rad = (nav_real_t)rec.dh_rad;
         c->mu = (nav_real_t)rec.odo_scale_err;
         c->base_m = (nav_real_t)rec.base_m;
@@ -64,7 +65,8 @@ int calib_store_command(calib_t *c, calib_trip_t *t, hal_t *hal, uint64_t n,
 
 void calib_erase(calib_t *c, hal_t *hal, dr_t *dr)
 {
-    if (calstore_erase(hal, &c->store) != 0) {
+    /* the stored parameters stay (nvstore.h) */
+    if (nvstore_erase_calibration(hal, &c->store) != 0) {
         c->nvm_error = 1u;
         return;
     }

@@ -20,6 +20,17 @@ _Static_assert(sizeof(float) == 4u, "calstore stores floats as 32-bit IEEE bit p
 
 static const uint8_t magic[4] = {'N', 'C', 'A', 'L'};
 static const uint8_t commit[4] = {'D', 'O', 'N', 'E'};
+static const uint8_t ext_magic[4] = {'N', 'P', 'A', 'R'};
+
+#define EXT_OFF_VERSION 4u
+#define EXT_OFF_LEN 6u
+#define EXT_OFF_SEQ 8u
+#define EXT_OFF_PLEN 12u
+#define EXT_OFF_DTC 16u
+#define CHUNK 32u
+
+/* the extension image of a save or a load: off the stack (calstore is not reentrant) */
+static uint8_t ext_img[CALSTORE_EXT_MAX_BYTES];
 
 typedef enum { SLOT_ERASED, SLOT_VALID, SLOT_INVALID } slot_state_t;
 
@@ -29,6 +40,7 @@ typedef struct {
     uint32_t seq;
     cal_record_t rec;
     unsigned n_erased;
+    unsigned n_newer; /* slots with the magic and commit marker but another version */
 } scan_t;
 
 uint32_t calstore_crc32(const uint8_t *data, size_t len)
@@ -90,11 +102,16 @@ static cal_record_t default_record(void)
 /* 1 if *r may be stored and used (calstore.h: payload range); comparisons fail on NaN */
 static int record_ok(const cal_record_t *r)
 {
+    if (r->source == (uint8_t)CAL_SRC_NONE) {
+        /* no calibration stored (a record that holds parameters only) */
+        return float_bits(r->dh_rad) == 0u && float_bits(r->odo_scale_err) == 0u &&
+               float_bits(r->base_m) == 0u;
+    }
     return bits_finite(float_bits(r->dh_rad)) && bits_finite(float_bits(r->odo_scale_err)) &&
            bits_finite(float_bits(r->base_m)) && r->dh_rad >= -CALSTORE_DH_MAX_RAD &&
            r->dh_rad <= CALSTORE_DH_MAX_RAD && r->odo_scale_err >= -CALSTORE_MU_MAX &&
            r->odo_scale_err <= CALSTORE_MU_MAX && r->base_m >= 0.0f &&
-           r->source >= CAL_SRC_KNOWN_POSITION && r->source <= CAL_SRC_FILTER;
+           r->source <= CAL_SRC_FILTER;
 }
 
 /* The 36-byte slot image of (rec, seq), gap and commit marker included. */
@@ -173,6 +190,46 @@ static int slot_read(hal_t *hal, size_t stride, unsigned slot, uint8_t img[CALST
     return hal_nvm_read(hal, (size_t)slot * stride, img, CALSTORE_SLOT_BYTES);
 }
 
+/* 1 if NVM [off, off + len) is erased, 0 if not, the HAL's error (< 0) */
+static int nvm_erased(hal_t *hal, size_t off, size_t len)
+{
+    uint8_t buf[CHUNK];
+    for (size_t k = 0u; k < len; k += CHUNK) {
+        const size_t n = len - k < CHUNK ? len - k : CHUNK;
+        const int rc = hal_nvm_read(hal, off + k, buf, n);
+        if (rc != 0) {
+            return rc;
+        }
+        if (!all_erased(buf, n)) {
+            return 0;
+        }
+    }
+    return 1;
+}
+
+/* 1 if NVM [off, off + len) reads back as data, 0 if not, the HAL's error (< 0) */
+static int nvm_equal(hal_t *hal, size_t off, const uint8_t *data, size_t len)
+{
+    uint8_t buf[CHUNK];
+    for (size_t k = 0u; k < len; k += CHUNK) {
+        const size_t n = len - k < CHUNK ? len - k : CHUNK;
+        const int rc = hal_nvm_read(hal, off + k, buf, n);
+        if (rc != 0) {
+            return rc;
+        }
+        if (memcmp(buf, data + k, n) != 0) {
+            return 0;
+        }
+    }
+    return 1;
+}
+
+/* the sectors hold an extension */
+static int ext_fits(size_t stride)
+{
+    return stride >= CALSTORE_SLOT_V2_BYTES;
+}
+
 /* Read and classify both slots. 0 or the HAL's error. On a tie (equal seqs, or seqs
  * 2^31 apart: neither is after the other) slot 0 wins, so the choice is deterministic. */
 static int scan_slots(hal_t *hal, size_t stride, scan_t *s)
@@ -181,6 +238,7 @@ static int scan_slots(hal_t *hal, size_t stride, scan_t *s)
     s->seq = 0u;
     s->rec = default_record();
     s->n_erased = 0u;
+    s->n_newer = 0u;
     for (unsigned k = 0u; k < N_SLOTS; k++) {
         uint8_t img[CALSTORE_SLOT_BYTES];
         uint32_t seq = 0u;
@@ -189,7 +247,22 @@ static int scan_slots(hal_t *hal, size_t stride, scan_t *s)
         if (rc != 0) {
             return rc;
         }
-        switch (slot_decode(img, &seq, &rec)) {
+        slot_state_t st = slot_decode(img, &seq, &rec);
+        if (st == SLOT_ERASED && ext_fits(stride)) {
+            /* an interrupted first save may have written only the extension */
+            const int e = nvm_erased(hal, (size_t)k * stride + CALSTORE_EXT_OFFSET,
+                                     CALSTORE_EXT_MAX_BYTES);
+            if (e < 0) {
+                return e;
+            }
+            st = e != 0 ? SLOT_ERASED : SLOT_INVALID;
+        }
+        if (st == SLOT_INVALID && memcmp(img + OFF_MAGIC, magic, sizeof magic) == 0 &&
+            memcmp(img + CALSTORE_COMMIT_OFFSET, commit, sizeof commit) == 0 &&
+            img[OFF_VERSION] != CALSTORE_VERSION) {
+            s->n_newer++;
+        }
+        switch (st) {
         case SLOT_ERASED:
             s->n_erased++;
             break;
@@ -240,13 +313,102 @@ int calstore_load(hal_t *hal, calstore_t *cs, cal_record_t *rec)
     return s.n_erased == N_SLOTS ? CALSTORE_EMPTY : CALSTORE_CORRUPT;
 }
 
-int calstore_save(hal_t *hal, calstore_t *cs, const cal_record_t *rec)
+/* The extension image of *ext with seq into ext_img; its length. */
+static size_t ext_encode(const calstore_ext_t *ext, uint32_t seq)
 {
-    if (hal == NULL || cs == NULL || rec == NULL || !record_ok(rec)) {
+    const size_t body = CALSTORE_EXT_HEAD + (size_t)ext->params_len;
+    memset(ext_img, 0x00, CALSTORE_EXT_HEAD);
+    memcpy(ext_img, ext_magic, sizeof ext_magic);
+    ext_img[EXT_OFF_VERSION] = (uint8_t)CALSTORE_EXT_VERSION;
+    ext_img[EXT_OFF_LEN] = (uint8_t)body;
+    ext_img[EXT_OFF_LEN + 1u] = (uint8_t)(body >> 8);
+    put_u32le(ext_img + EXT_OFF_SEQ, seq);
+    ext_img[EXT_OFF_PLEN] = (uint8_t)ext->params_len;
+    ext_img[EXT_OFF_PLEN + 1u] = (uint8_t)(ext->params_len >> 8);
+    memcpy(ext_img + EXT_OFF_DTC, ext->dtc, CALSTORE_DTC_N);
+    memcpy(ext_img + CALSTORE_EXT_HEAD, ext->params, ext->params_len);
+    put_u32le(ext_img + body, calstore_crc32(ext_img, body));
+    return body + 4u;
+}
+
+static void ext_clear(calstore_ext_t *ext, uint8_t status, uint8_t version)
+{
+    ext->status = status;
+    ext->version = version;
+    ext->params_len = 0u;
+    memset(ext->dtc, 0xFF, sizeof ext->dtc);
+}
+
+/* Read and check the extension of the slot at base (its seq: seq). 0 or the HAL's error. */
+static int ext_read(hal_t *hal, size_t base, uint32_t seq, calstore_ext_t *ext)
+{
+    uint8_t *img = ext_img;
+    int rc = hal_nvm_read(hal, base + CALSTORE_EXT_OFFSET, img, CALSTORE_EXT_HEAD);
+    if (rc != 0) {
+        return rc;
+    }
+    if (all_erased(img, sizeof ext_magic)) {
+        ext_clear(ext, (uint8_t)CALSTORE_EXT_NONE, 0u);
+        return 0;
+    }
+    if (memcmp(img, ext_magic, sizeof ext_magic) == 0 &&
+        img[EXT_OFF_VERSION] != CALSTORE_EXT_VERSION) {
+        ext_clear(ext, (uint8_t)CALSTORE_EXT_NEWER, img[EXT_OFF_VERSION]);
+        return 0;
+    }
+    const size_t body = (size_t)img[EXT_OFF_LEN] | (size_t)img[EXT_OFF_LEN + 1u] << 8;
+    const size_t plen = (size_t)img[EXT_OFF_PLEN] | (size_t)img[EXT_OFF_PLEN + 1u] << 8;
+    ext_clear(ext, (uint8_t)CALSTORE_EXT_CORRUPT, img[EXT_OFF_VERSION]);
+    if (memcmp(img, ext_magic, sizeof ext_magic) != 0 || plen > CALSTORE_PARAMS_MAX ||
+        body != CALSTORE_EXT_HEAD + plen || get_u32le(img + EXT_OFF_SEQ) != seq) {
+        return 0;
+    }
+    rc = hal_nvm_read(hal, base + CALSTORE_EXT_OFFSET + CALSTORE_EXT_HEAD,
+                      img + CALSTORE_EXT_HEAD, plen + 4u);
+    if (rc != 0) {
+        return rc;
+    }
+    if (get_u32le(img + body) != calstore_crc32(img, body)) {
+        return 0;
+    }
+    ext->status = (uint8_t)CALSTORE_EXT_OK;
+    ext->params_len = (uint16_t)plen;
+    memcpy(ext->dtc, img + EXT_OFF_DTC, CALSTORE_DTC_N);
+    memcpy(ext->params, img + CALSTORE_EXT_HEAD, plen);
+    return 0;
+}
+
+int calstore_load_ext(hal_t *hal, calstore_t *cs, cal_record_t *rec, calstore_ext_t *ext)
+{
+    if (ext == NULL) {
         return HAL_EINVAL;
     }
+    const int rc = calstore_load(hal, cs, rec);
+    if (rc == HAL_EINVAL) {
+        return rc;
+    }
+    ext_clear(ext, (uint8_t)CALSTORE_EXT_NONE, 0u);
     const size_t stride = slot_stride(hal);
-    if (stride == 0u) {
+    if (rc == (int)CALSTORE_CORRUPT && stride != 0u) {
+        scan_t s;
+        if (scan_slots(hal, stride, &s) == 0 && s.n_newer > 0u) {
+            ext->status = (uint8_t)CALSTORE_EXT_NEWER;
+        }
+        return rc;
+    }
+    if (rc != (int)CALSTORE_OK || !ext_fits(stride)) {
+        return rc;
+    }
+    const int erc = ext_read(hal, (size_t)(uint8_t)cs->slot * stride, cs->seq, ext);
+    return erc != 0 ? erc : rc;
+}
+
+/* The save of calstore.h: *rec and, if ext is not NULL, its extension. */
+static int save_record(hal_t *hal, calstore_t *cs, const cal_record_t *rec,
+                       const calstore_ext_t *ext)
+{
+    const size_t stride = slot_stride(hal);
+    if (stride == 0u || (ext != NULL && !ext_fits(stride))) {
         return HAL_ENOSPC;
     }
     scan_t s;
@@ -264,6 +426,18 @@ int calstore_save(hal_t *hal, calstore_t *cs, const cal_record_t *rec)
     rc = hal_nvm_erase_sector(hal, target);
     if (rc != 0) {
         return rc;
+    }
+    if (ext != NULL) {
+        /* the extension first: the calibration record's commit marker commits it too */
+        const size_t n = ext_encode(ext, seq);
+        rc = hal_nvm_write(hal, base + CALSTORE_EXT_OFFSET, ext_img, n);
+        if (rc != 0) {
+            return rc;
+        }
+        rc = nvm_equal(hal, base + CALSTORE_EXT_OFFSET, ext_img, n);
+        if (rc <= 0) {
+            return rc < 0 ? rc : HAL_EIO;
+        }
     }
     rc = hal_nvm_write(hal, base, img, CALSTORE_CRC_OFFSET + 4u);
     if (rc != 0) {
@@ -293,6 +467,32 @@ int calstore_save(hal_t *hal, calstore_t *cs, const cal_record_t *rec)
     cs->seq = seq;
     cs->slot = (int8_t)target;
     return 0;
+}
+
+int calstore_save_ext(hal_t *hal, calstore_t *cs, const cal_record_t *rec,
+                      const calstore_ext_t *ext)
+{
+    if (hal == NULL || cs == NULL || rec == NULL || ext == NULL || !record_ok(rec) ||
+        ext->params_len > CALSTORE_PARAMS_MAX) {
+        return HAL_EINVAL;
+    }
+    return save_record(hal, cs, rec, ext);
+}
+
+int calstore_save(hal_t *hal, calstore_t *cs, const cal_record_t *rec)
+{
+    if (hal == NULL || cs == NULL || rec == NULL || !record_ok(rec)) {
+        return HAL_EINVAL;
+    }
+    /* the newest record's extension goes on with the new calibration (off the stack) */
+    static calstore_ext_t carried;
+    calstore_t now;
+    cal_record_t old;
+    const int rc = calstore_load_ext(hal, &now, &old, &carried);
+    if (rc == (int)CALSTORE_OK && carried.status == (uint8_t)CALSTORE_EXT_OK) {
+        return save_record(hal, cs, rec, &carried);
+    }
+    return save_record(hal, cs, rec, NULL);
 }
 
 int calstore_erase(hal_t *hal, calstore_t *cs)

@@ -91,6 +91,74 @@ typedef struct {
 typedef enum { CALSTORE_OK = 0, CALSTORE_EMPTY = 1, CALSTORE_CORRUPT = 2 } calstore_status_t;
 
 /*
+ * The record's extension, format version 2 (the parameters and the DTC status bytes; the
+ * application's codec of the parameters is nvstore.h's). It sits in the same slot as the
+ * 36-byte calibration record above, at CALSTORE_EXT_OFFSET, and is written BEFORE the
+ * calibration record's bytes and its commit marker, so that marker commits both: a power
+ * cut anywhere in a save leaves the slot without its marker (invalid, the other slot is
+ * loaded), never a calibration of one save with the parameters of another. A record
+ * with an extension may hold no calibration: source CAL_SRC_NONE with dh_rad, odo_scale_err
+ * and base_m all +0.0 (a parameters-only save); calstore_load returns it as CALSTORE_OK
+ * with source CAL_SRC_NONE.
+ *
+ * Extension layout (slot offset CALSTORE_EXT_OFFSET + ...; multi-byte fields little-endian):
+ *   offset size field
+ *    0     4   magic: the bytes 'N' 'P' 'A' 'R'
+ *    4     1   format version: CALSTORE_EXT_VERSION (2)
+ *    5     1   0x00
+ *    6     2   extension length L = CALSTORE_EXT_HEAD + P, the bytes the CRC covers
+ *    8     4   seq: the calibration record's seq (the two are one record)
+ *   12     2   P: bytes of parameter entries (<= CALSTORE_PARAMS_MAX)
+ *   14     2   0x0000
+ *   16    16   DTC status bytes 0..15 (CALSTORE_DTC_N; the dtc owner's meaning)
+ *   32     P   parameter entries, opaque here (nvstore.h: DID, length, value)
+ *   32+P   4   CRC-32 (as above) of extension bytes 0..31+P
+ * The rest of the sector stays erased.
+ *
+ * Load, of the newest valid slot (calstore_load_ext):
+ *   no extension (its magic bytes erased): a version 1 record, ext->status CALSTORE_EXT_NONE;
+ *   magic, version 2, length in range, seq equal, CRC right: CALSTORE_EXT_OK;
+ *   magic with another version byte: CALSTORE_EXT_NEWER, refused, its bytes not read;
+ *   anything else: CALSTORE_EXT_CORRUPT (a bit flip: the marker committed it), refused.
+ * A slot whose header version byte is not 1 is not valid (as before); if no slot is valid
+ * and one of them carries the magic with another version, ext->status is CALSTORE_EXT_NEWER.
+ * A refused extension leaves ext->params_len 0 and the DTC bytes 0xFF (none).
+ */
+#define CALSTORE_EXT_OFFSET 64u
+#define CALSTORE_EXT_VERSION 2u
+#define CALSTORE_EXT_HEAD 32u
+#define CALSTORE_DTC_N 16u
+#define CALSTORE_PARAMS_MAX 384u
+#define CALSTORE_EXT_MAX_BYTES (CALSTORE_EXT_HEAD + CALSTORE_PARAMS_MAX + 4u)
+/* the sector size an extension needs (smaller: calstore_save_ext returns HAL_ENOSPC) */
+#define CALSTORE_SLOT_V2_BYTES (CALSTORE_EXT_OFFSET + CALSTORE_EXT_MAX_BYTES)
+
+typedef enum {
+    CALSTORE_EXT_NONE = 0,    /* a version 1 record, or no record */
+    CALSTORE_EXT_OK = 1,
+    CALSTORE_EXT_NEWER = 2,   /* an unknown (newer) version: refused */
+    CALSTORE_EXT_CORRUPT = 3, /* refused */
+} calstore_ext_status_t;
+
+typedef struct {
+    uint8_t status;       /* calstore_ext_status_t, on load */
+    uint8_t version;      /* the version byte read (0: no extension) */
+    uint16_t params_len;  /* bytes in params */
+    uint8_t dtc[CALSTORE_DTC_N];
+    uint8_t params[CALSTORE_PARAMS_MAX];
+} calstore_ext_t;
+
+/* calstore_load, and the newest valid record's extension in *ext (always written, except
+ * on HAL_EINVAL; refused or absent: params_len 0, DTC bytes 0xFF). */
+int calstore_load_ext(hal_t *hal, calstore_t *cs, cal_record_t *rec, calstore_ext_t *ext);
+
+/* calstore_save of *rec with the extension *ext (params_len <= CALSTORE_PARAMS_MAX, else
+ * HAL_EINVAL), power-safe as calstore_save. HAL_ENOSPC when the sectors are smaller than
+ * CALSTORE_SLOT_V2_BYTES. */
+int calstore_save_ext(hal_t *hal, calstore_t *cs, const cal_record_t *rec,
+                      const calstore_ext_t *ext);
+
+/*
  * Read both slots and return the newest valid record.
  *   hal: its NVM region must have >= 2 sectors of >= CALSTORE_SLOT_BYTES bytes.
  *   cs:  out: seq and slot of the record returned, or {0, -1}.
@@ -105,7 +173,10 @@ typedef enum { CALSTORE_OK = 0, CALSTORE_EMPTY = 1, CALSTORE_CORRUPT = 2 } calst
 int calstore_load(hal_t *hal, calstore_t *cs, cal_record_t *rec);
 
 /*
- * Store *rec as the new newest record, power-safe (see above).
+ * Store *rec as the new newest record, power-safe (see above). The newest record's
+ * extension, if it has a valid one, is written again with it (calstore_save_ext), so a
+ * calibration save keeps the stored parameters; without one the slot is the 36-byte
+ * version 1 record only.
  *   cs: in: from calstore_load, calstore_save or calstore_erase. Save does not trust it
  *       to choose the slot: it reads both slots again, so a stale cs (an hal_nvm_erase
  *       behind its back, a save without a load) can never overwrite the newest record.

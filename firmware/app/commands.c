@@ -5,7 +5,7 @@
 
 static app_diag_t diag_of(app_t *a)
 {
-    const app_diag_t d = {&a->keep.health, &a->run.events, a->keep.n_samples};
+    const app_diag_t d = {&a->keep.health, &a->run.events, a->keep.n_samples, app_time_us(a)};
     return d;
 }
 
@@ -73,14 +73,12 @@ static void control(app_t *a, hal_t *hal, const rx_input_t *in)
     case RX_CMD_SET_INITIAL_POSITION:
         set_initial_position(a, in);
         break;
-    case RX_CMD_STORE_CALIBRATION: /* the values in use */
-        if (calib_store_command(&a->keep.cal, &a->run.cal, hal, a->keep.n_samples,
-                                a->cfg.imu_rate_hz) != 0) {
-            refuse(a);
-        }
-        break;
-    case RX_CMD_ERASE_CALIBRATION: /* the store and the values in use */
-        calib_erase(&a->keep.cal, hal, &a->run.dr);
+    case RX_CMD_STORE_CALIBRATION:
+    case RX_CMD_ERASE_CALIBRATION:
+        /* destructive: any node on the bus could send them, so they moved to UDS
+         * RoutineControl 0x0203 / 0x0201 (extended session, SecurityAccess): refused and
+         * counted here (cmd_rejected) */
+        refuse(a);
         break;
     case RX_CMD_CALIBRATE_HERE: /* the last CMD_KnownPosition is where the car is */
         if (!al->known_valid) {

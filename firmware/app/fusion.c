@@ -315,7 +315,7 @@ fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_pr
     const app_config_t *cfg = c->cfg;
     const uint64_t n = c->diag->n_samples;
     *adopt = 0;
-    const gnss_when_t when = gnss_time_align(&fu->time, n, cfg->imu_rate_hz, fix->tow_ms,
+    const gnss_when_t when = gnss_time_align(&fu->time, c->diag->t_us, cfg->imu_rate_hz, fix->tow_ms,
                                              cfg->gnss_latency_s);
     if (when.jumped) {
         app_count(&c->diag->health->time_jumps);

@@ -19,11 +19,11 @@ void gnss_time_record(gnss_time_t *g, uint64_t n_samples, uint32_t imu_rate_hz,
     g->vhist_n++;
 }
 
-gnss_when_t gnss_time_align(gnss_time_t *g, uint64_t n_samples, uint32_t imu_rate_hz,
+gnss_when_t gnss_time_align(gnss_time_t *g, uint64_t imu_t_us, uint32_t imu_rate_hz,
                             uint32_t tow_ms, nav_real_t latency_s)
 {
     gnss_when_t w;
-    const int64_t t_imu_us = (int64_t)(n_samples * 1000000u / imu_rate_hz);
+    const int64_t t_imu_us = (int64_t)imu_t_us;
     const int64_t off = t_imu_us - (int64_t)tow_ms * 1000;
     /* A step earlier by more than 1 s, later by more than 10 s, or later by more than
      * 0.5 s three epochs in a row is a time jump; a late epoch moves the offset once. */
@@ -90,13 +90,13 @@ void gnss_time_week(gnss_time_t *g, uint16_t gps_week)
 
 #define US_PER_WEEK INT64_C(604800000000)
 
-int gnss_time_at(const gnss_time_t *g, uint64_t n_samples, uint32_t imu_rate_hz,
-                 nav_real_t latency_s, uint64_t *tow_us, uint16_t *gps_week)
+int gnss_time_at(const gnss_time_t *g, uint64_t imu_t_us, nav_real_t latency_s,
+                 uint64_t *tow_us, uint16_t *gps_week)
 {
     if (!g->off_valid) {
         return -1;
     }
-    const int64_t t_imu_us = (int64_t)(n_samples * 1000000u / imu_rate_hz);
+    const int64_t t_imu_us = (int64_t)imu_t_us;
     const int64_t latency_us = (int64_t)(latency_s * NAV_C(1e6) + NAV_C(0.5));
     int64_t tow = t_imu_us - g->off_min_us + latency_us;
     int32_t week = g->have_week ? (int32_t)g->gps_week : -1;

@@ -40,8 +40,9 @@ typedef struct {
 void gnss_time_record(gnss_time_t *g, uint64_t n_samples, uint32_t imu_rate_hz,
                       const nav_real_t v_n_mps[3]);
 
-/* The time of validity of an epoch with TimeOfWeek tow_ms, received after sample n. */
-gnss_when_t gnss_time_align(gnss_time_t *g, uint64_t n_samples, uint32_t imu_rate_hz,
+/* The time of validity of an epoch with TimeOfWeek tow_ms, received at IMU time imu_t_us
+ * (app_time_us: the last sample's); imu_rate_hz sets the history's entry spacing. */
+gnss_when_t gnss_time_align(gnss_time_t *g, uint64_t imu_t_us, uint32_t imu_rate_hz,
                             uint32_t tow_ms, nav_real_t latency_s);
 
 /* The navigator's displacement (ENU, m) from then to now: the integral of the velocity
@@ -54,12 +55,12 @@ const nav_real_t *gnss_time_velocity_then(const gnss_time_t *g, const gnss_when_
 /* The GPS week of a usable epoch (GNSS_Time). */
 void gnss_time_week(gnss_time_t *g, uint16_t gps_week);
 
-/* The GNSS time of IMU sample n: the IMU time less the offset to the receiver's clock
+/* The GNSS time of IMU time imu_t_us (app_time_us): the IMU time less the offset to the receiver's clock
  * (its running minimum, an on-time epoch) plus the latency (the epoch's time of validity
  * is that long before its arrival): time of week in microseconds, and the week (65535
  * unknown). 0, or -1 before the first epoch. */
-int gnss_time_at(const gnss_time_t *g, uint64_t n_samples, uint32_t imu_rate_hz,
-                 nav_real_t latency_s, uint64_t *tow_us, uint16_t *gps_week);
+int gnss_time_at(const gnss_time_t *g, uint64_t imu_t_us, nav_real_t latency_s,
+                 uint64_t *tow_us, uint16_t *gps_week);
 
 /* Forget the history (a new navigator: its velocities before are not this one's). */
 void gnss_time_forget(gnss_time_t *g);

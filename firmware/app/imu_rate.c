@@ -23,10 +23,32 @@ void imu_rate_sample(imu_rate_t *r, uint64_t counter_lost, uint8_t time_gap)
     }
 }
 
+void imu_rate_stamp(imu_rate_t *r, uint32_t dt_us)
+{
+    r->stamped = 1u;
+    if (dt_us == 0u) {
+        r->received = 0u; /* no interval known: this one is not measured */
+        r->gaps = 0u;
+        r->count = 0u;
+        r->stamp_us = 0u;
+        r->anchored = 0u;
+        return;
+    }
+    r->stamp_us += dt_us;
+}
+
+void imu_rate_refused(imu_rate_t *r)
+{
+    imu_rate_sample(r, 0u, 0u);
+    r->stamp_gap = 1u;
+}
+
 /* the next interval starts at this epoch */
 static void anchor(imu_rate_t *r, uint32_t tow_ms)
 {
     r->count = 0u;
+    r->stamp_us = 0u;
+    r->stamp_gap = 0u;
     r->received = 0u;
     r->gaps = 0u;
     r->tow_ms = tow_ms;
@@ -79,14 +101,21 @@ imu_rate_change_t imu_rate_epoch(imu_rate_t *r, uint32_t rate_hz, uint32_t tow_m
     }
     /* the TimeOfWeek interval, modulo the week: a step back is close to a week (both
      * below 604,800,000 ms, so the sum stays below 2^32) */
-    const int64_t ms = (int64_t)(tow_ms >= r->tow_ms ? tow_ms - r->tow_ms
-                                                     : tow_ms + MS_PER_WEEK - r->tow_ms);
-    if (ms == 0) {
+    const int64_t tow_span = (int64_t)(tow_ms >= r->tow_ms ? tow_ms - r->tow_ms
+                                                           : tow_ms + MS_PER_WEEK - r->tow_ms);
+    if (tow_span == 0) {
         return IMU_RATE_SAME; /* the same epoch again (a frozen receiver): ignored */
     }
+    /* stamped: the stamps' time of the samples counted (rounded to ms); a clock going
+     * back (modulo the week) is still not measured */
+    const uint64_t stamp_ms = (r->stamp_us + 500u) / 1000u;
+    const int64_t ms = r->stamped != 0u && r->stamp_gap == 0u &&
+                               tow_span <= (int64_t)APP_IMU_RATE_MAX_MS
+                           ? (int64_t)stamp_ms
+                           : tow_span;
     /* not measured: too long or a step back, no sample, or a gap the counter could not see
      * among samples in time (most samples after such a gap is the data's rate: measured) */
-    if (ms > (int64_t)APP_IMU_RATE_MAX_MS || r->received == 0u ||
+    if (ms == 0 || ms > (int64_t)APP_IMU_RATE_MAX_MS || r->received == 0u ||
         (r->gaps > 0u && r->gaps < r->received - r->gaps)) {
         restart(r, tow_ms);
         return IMU_RATE_SAME;

@@ -49,6 +49,11 @@ typedef struct {
     uint32_t received;   /* samples received */
     uint32_t gaps;       /* of them, after a gap the counter could not see */
     uint32_t tow_ms;     /* the anchor's TimeOfWeek */
+    uint64_t stamp_us;   /* imu_time = stamped: the samples' IMU_Time intervals since the
+                            anchor, the stamps' own time of the count */
+    uint8_t stamped;     /* stamped: the interval is stamp_us, not the TimeOfWeek's */
+    uint8_t stamp_gap;   /* a sample refused for its stamp since the anchor: its time is not
+                            in stamp_us, the interval is the TimeOfWeek's */
     uint8_t anchored;
     /* the run of off-rate intervals that agree on the rate */
     int8_t run_dir;      /* +1 more samples than configured, -1 fewer */
@@ -73,6 +78,21 @@ void imu_rate_init(imu_rate_t *r);
  * stream's lost less what only receive time showed); time_gap: a gap the counter could
  * not see came before it (imu_sample_t.time_gap). */
 void imu_rate_sample(imu_rate_t *r, uint64_t counter_lost, uint8_t time_gap);
+
+/* imu_time = stamped: a sample taken with dt_us of IMU_Time interval (0: none, the first
+ * stamp or a restart of the stamps' clock; the measurement restarts at the next epoch).
+ * The check then compares the stamps' rate with the configured rate: the samples
+ * counted over the stamps' time of those samples (exact, no epoch-arrival quantisation;
+ * the TimeOfWeek interval only delimits it), under the same rules as on the grid. Stamps
+ * that claim the configured rate for samples coming at another are refused one by one
+ * (APP_IMU_TIME_BAND_*) beyond 50 %. */
+void imu_rate_stamp(imu_rate_t *r, uint32_t dt_us);
+
+/* Stamped: a sample refused for its stamp (imu_stream.h, IMU_REJ_TIME): it is data, so it
+ * is counted, and the interval it falls in is measured by TimeOfWeek as on the grid (a
+ * 400 Hz IMU configured as 100 Hz has its stamps refused, 2.5 ms against 5..15 ms, and is
+ * still found off-rate). */
+void imu_rate_refused(imu_rate_t *r);
 
 /* A usable GNSS epoch of TimeOfWeek tow_ms (0 .. one week), against the configured rate
  * (Hz, > 0). */

@@ -19,6 +19,68 @@ void imu_link_init(imu_link_t *l, uint32_t rate_hz, nav_real_t gyro_range_rps,
     l->sat_raw[1] = (int32_t)v_lim;
 }
 
+void imu_link_stamped(imu_link_t *l, int stamped)
+{
+    l->stamped = stamped ? 1u : 0u;
+}
+
+void imu_stream_time(imu_stream_t *s, const imu_link_t *l, uint8_t counter, uint32_t t_us)
+{
+    if (l->stamped == 0u) {
+        return;
+    }
+    s->time_valid = 1u;
+    s->time_counter = counter;
+    s->time_us = t_us;
+}
+
+/* The stamped interval of a sample whose counter stepped by step and the whole counter
+ * cycles the stamps show beyond the counter, or refuse: no stamp of its counter, a stamp
+ * not after the previous one (back: only that restarts the stamps' time base when it
+ * lasts), an interval outside the band. */
+typedef struct {
+    int refuse;
+    int back;
+    uint32_t dt_us;
+    uint64_t cycles;  /* lost samples seen only in the stamps (whole counter cycles) */
+} stamp_check_t;
+
+static stamp_check_t check_stamp(const imu_stream_t *s, const imu_link_t *l, uint8_t counter,
+                                 int step)
+{
+    stamp_check_t r = {0, 0, 0u, 0u};
+    if (!s->time_valid || s->time_counter != counter) {
+        r.refuse = 1; /* the sample's own stamp is missing (or another sample's) */
+        return r;
+    }
+    if (!l->have_stamp) {
+        return r; /* the first stamp: no interval yet */
+    }
+    const uint32_t d = s->time_us - l->stamp_us; /* modulo 2^32: the clock wraps */
+    if (d == 0u || d >= 0x80000000u) {
+        r.refuse = 1; /* the stamp is not after the previous one */
+        r.back = 1;
+        return r;
+    }
+    const uint64_t period_us = 1000000u / l->rate_hz;
+    uint64_t n = (uint64_t)step;
+    /* like receive time on the grid, but exact: beyond half a counter cycle more than the
+     * counter's step, the stamps count whole lost cycles of 15 */
+    const uint64_t by_stamp = ((uint64_t)d + period_us / 2u) / period_us;
+    if (by_stamp > n + APP_IMU_GAP_SLACK_PERIODS) {
+        r.cycles = (by_stamp - n + APP_IMU_GAP_SLACK_PERIODS) / 15u * 15u;
+        n += r.cycles;
+    }
+    /* each of the n samples within [0.5, 1.5] nominal periods */
+    const uint64_t dd = (uint64_t)d * APP_IMU_TIME_BAND_DIV;
+    if (dd < n * period_us || dd > n * period_us * APP_IMU_TIME_BAND_MUL) {
+        r.refuse = 1;
+        return r;
+    }
+    r.dt_us = d;
+    return r;
+}
+
 int imu_stream_rate(imu_stream_t *s, uint8_t counter, const int32_t raw[3],
                     const uint8_t data[8])
 {
@@ -168,6 +230,30 @@ imu_verdict_t imu_stream_accel(imu_stream_t *s, imu_link_t *l, uint8_t counter, 
         s->resync_counter = counter;
         return IMU_REJ_COUNTER;
     }
+    stamp_check_t st = {0, 0, 0u, 0u};
+    uint8_t time_reset = 0u;
+    if (l->stamped) {
+        st = check_stamp(s, l, counter, step);
+        const int own = s->time_valid && s->time_counter == counter;
+        s->time_valid = 0u; /* a stamp serves its own sample or none: never a later one */
+        if (st.refuse) {
+            if (!own || !st.back || l->stamp_refused + 1u < APP_IMU_TIME_RESYNC) {
+                l->stamp_refused = (uint8_t)(l->stamp_refused < UINT8_MAX ? l->stamp_refused + 1u
+                                                                          : UINT8_MAX);
+                return IMU_REJ_TIME; /* bridged, like a lost sample, by the next one */
+            }
+            /* refused APP_IMU_TIME_RESYNC times in a row, this one with a stamp of its own
+             * behind the last one taken: the IMU's clock jumped back; its stamps are the
+             * time base again from this sample on. (Intervals outside the band never
+             * restart it: a clock that runs at another rate is the rate check's.) */
+            time_reset = 1u;
+            st.dt_us = 0u;
+            st.cycles = 0u;
+        }
+        l->stamp_refused = 0u;
+        l->stamp_us = s->time_us;
+        l->have_stamp = 1u;
+    }
     s->resync_valid = 0u;
     l->counter = probe;
     l->fault = fault ? 1u : 0u;
@@ -178,7 +264,16 @@ imu_verdict_t imu_stream_accel(imu_stream_t *s, imu_link_t *l, uint8_t counter, 
      * whole cycles it missed. (Time is used only here, for gaps; a replay at any speed
      * that keeps samples less than 7 periods apart gives the same result.) */
     out->lost = (uint64_t)step - 1u;
-    if (l->have_sample && t_us > l->last_t_us) {
+    out->dt_us = st.dt_us;
+    out->time_reset = time_reset;
+    if (l->stamped) {
+        /* the stamps, not receive time, show the gaps the counter cannot see */
+        if (st.cycles > 0u) {
+            out->lost_by_time = st.cycles;
+            out->lost += st.cycles;
+            out->time_gap = 1u;
+        }
+    } else if (l->have_sample && t_us > l->last_t_us) {
         const uint64_t period_us = 1000000u / l->rate_hz;
         const uint64_t by_time = (t_us - l->last_t_us + period_us / 2u) / period_us;
         if (by_time > (uint64_t)step + APP_IMU_GAP_SLACK_PERIODS) {
@@ -186,6 +281,8 @@ imu_verdict_t imu_stream_accel(imu_stream_t *s, imu_link_t *l, uint8_t counter, 
             out->lost += out->lost_by_time;
             out->time_gap = 1u;
         }
+    } else {
+        /* the grid's first sample, or receive time not advancing: no gap to see */
     }
     for (int i = 0; i < 3; i++) {
         out->raw[i] = rate.raw[i];
@@ -216,4 +313,11 @@ void imu_stream_bridge(const imu_sample_t *smp, uint64_t k, int32_t w_raw[3], in
         w_raw[i] = interpolate_raw(smp->prev_raw[i], smp->raw[i], k + 1u, smp->lost + 1u);
         v_raw[i] = interpolate_raw(smp->prev_raw[i + 3], smp->raw[i + 3], k + 1u, smp->lost + 1u);
     }
+}
+
+uint32_t imu_stream_dt_us(const imu_sample_t *smp, uint64_t k)
+{
+    const uint64_t n = smp->lost + 1u;
+    const uint64_t dt = smp->dt_us;
+    return (uint32_t)(dt * (k + 1u) / n - dt * k / n);
 }

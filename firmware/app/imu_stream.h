@@ -27,6 +27,11 @@ typedef struct {
     int32_t sat_raw[2];    /* gyro and accelerometer range in raw LSB per sample */
     uint32_t rate_hz;      /* the configured IMU rate */
     uint32_t accel_id;     /* IMU_Accel's CAN identifier: the pair CRC covers it */
+    /* imu_time = stamped: each sample's interval from the IMU's own IMU_Time stamps */
+    uint8_t stamped;       /* the stamps give the time (imu_link_stamped) */
+    uint8_t have_stamp;    /* stamp_us anchors the next sample's interval */
+    uint8_t stamp_refused; /* samples refused for their stamp in a row */
+    uint32_t stamp_us;     /* the last sample's IMU_Time (us, wrapping at 2^32) */
 } imu_link_t;
 
 /* Plausibility state: per axis (angle x y z, velocity x y z) the repeats of the raw value
@@ -57,6 +62,9 @@ typedef struct {
     uint8_t n_pending;
     uint8_t resync_valid;  /* a sample with a counter jump waits for confirmation */
     uint8_t resync_counter;
+    uint8_t time_valid;    /* stamped: an IMU_Time waits for its sample */
+    uint8_t time_counter;  /* its ImuCounter */
+    uint32_t time_us;      /* its SampleTime */
     imu_plaus_t plaus;
 } imu_stream_t;
 
@@ -66,6 +74,10 @@ typedef enum {
     IMU_REJ_CRC,        /* bad_crc: no waiting IMU_Rate gives the pair CRC (they wait on
                            for the real IMU_Accel) */
     IMU_REJ_COUNTER,    /* bad_counter: repeated, held for confirmation, or old */
+    IMU_REJ_TIME,       /* stamped (imu_time): no IMU_Time of this counter, a stamp not
+                           after the previous sample's, or an interval outside the band
+                           (APP_IMU_TIME_BAND_*): the sample is refused and, like a lost
+                           one, bridged by the next (bad_value, of it imu_timing) */
 } imu_verdict_t;
 
 typedef struct {
@@ -79,12 +91,31 @@ typedef struct {
     uint8_t stuck;       /* an axis repeats while the car moves */
     uint8_t dropped;     /* IMU_Rate frames that waited before the one paired: no IMU_Accel
                             came for them (count imu_pair_broken); a newer one waits on */
+    uint32_t dt_us;      /* stamped: the IMU_Time interval from the previous sample to this
+                            one, over the lost + 1 samples it covers (imu_stream_dt_us); 0
+                            on the grid, and for the first stamp (no interval yet: the
+                            nominal period) */
+    uint8_t time_reset;  /* stamped: the stamps restarted after APP_IMU_TIME_RESYNC refusals,
+                            the last a stamp behind the last one taken (the clock jumped
+                            back): the time since the previous sample is unknown, as after
+                            a gap too long to bridge */
 } imu_sample_t;
 
 /* Boot: the saturation limits from the configured ranges (rad/s, m/s^2) and IMU rate;
  * accel_id: IMU_Accel's identifier. */
 void imu_link_init(imu_link_t *l, uint32_t rate_hz, nav_real_t gyro_range_rps,
                    nav_real_t accel_range_mps2, uint32_t accel_id);
+
+/* After imu_link_init: imu_time = stamped (1) or grid (0). */
+void imu_link_stamped(imu_link_t *l, int stamped);
+
+/* An IMU_Time (its counter checked in range, its CRC passed): the stamp of the sample of
+ * this counter, held for it (a newer one replaces it). Ignored on the grid. Stamped, a
+ * sample is taken only with the stamp of its own counter, and its interval is its stamp
+ * less the previous sample's (u32 wrapping arithmetic: the IMU clock wraps every 71.6
+ * min); lost samples between (the counter's, or whole counter cycles the stamps show,
+ * as receive time does on the grid) share the interval. */
+void imu_stream_time(imu_stream_t *s, const imu_link_t *l, uint8_t counter, uint32_t t_us);
 
 /* An IMU_Rate (its counter already checked in range): held for its IMU_Accel beside the
  * one already waiting. Returns 1 if the oldest of two waiting ones had to go (it got no
@@ -101,5 +132,10 @@ imu_verdict_t imu_stream_accel(imu_stream_t *s, imu_link_t *l, uint8_t counter, 
 /* The k-th (0-based, k < out->lost) bridged sample of a gap: linear between prev_raw and
  * raw, rounded to nearest. */
 void imu_stream_bridge(const imu_sample_t *smp, uint64_t k, int32_t w_raw[3], int32_t v_raw[3]);
+
+/* Stamped: the interval (us) of the k-th sample of a sample's lost + 1 (k < lost: the
+ * bridged ones, k = lost: the sample itself); they add up to dt_us exactly. 0 when the
+ * sample has no interval (dt_us 0). */
+uint32_t imu_stream_dt_us(const imu_sample_t *smp, uint64_t k);
 
 #endif /* NAVECU_IMU_STREAM_H */

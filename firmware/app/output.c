@@ -107,7 +107,7 @@ static void emit_navigation(app_t *a, hal_t *hal)
     /* time of validity on the IMU time base, so that a recorder need not trust arrival
      * times: a vcan recording and a --can-log run carry the same value */
     h.time_of_validity =
-        (uint16_t)((a->keep.n_samples * 1000u / a->cfg.imu_rate_hz) & 0xFFFFu);
+        (uint16_t)((app_time_us(a) / 1000u) & 0xFFFFu);
     h.nav_counter = next_counter(tx, TX_HEIGHT);
     h.nav_crc = 0u;
     navecu_can_nav_height_pack(d, &h, sizeof d);
@@ -143,8 +143,8 @@ static void emit_navigation(app_t *a, hal_t *hal)
     struct navecu_can_nav_time_t nt;
     uint64_t tow_us;
     uint16_t week;
-    if (gnss_time_at(&a->run.fusion.time, a->keep.n_samples, a->cfg.imu_rate_hz,
-                     a->cfg.gnss_latency_s, &tow_us, &week) != 0) {
+    if (gnss_time_at(&a->run.fusion.time, app_time_us(a), a->cfg.gnss_latency_s, &tow_us,
+                     &week) != 0) {
         tow_us = NAVECU_NAV_TIME_TIME_OF_WEEK_RAW_MAX;
         week = NAVECU_NAV_TIME_GPS_WEEK_RAW_MAX;
     }
@@ -367,6 +367,7 @@ void output_status(app_t *a, hal_t *hal)
     st.status_page = NAVECU_NAV_STATUS_PAGE_STATE;
     st.mode = output_mode(a);
     st.health_flags = health_flags(a, hal);
+    app_dtc_cycle(a, hal, st.health_flags); /* the DTCs' tests (app_dtc.h) */
     st.horiz_accuracy = NAVECU_NAV_STATUS_HORIZ_ACCURACY_RAW_MAX; /* "unknown" w/o the filter */
     if (ekf != NULL && a->run.mode == APP_MODE_NAVIGATING) {
         st.horiz_accuracy = (uint16_t)accuracy_raw(ekf_sigma_h_m(ekf) * NAV_C(100.0),

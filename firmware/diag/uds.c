@@ -254,6 +254,107 @@ static result_t write_data(uds_t *s, const uint8_t *req, size_t len, uint8_t *rs
     return positive(3u, 0u);
 }
 
+/* ---- the fault memory: 0x19 ReadDTCInformation, 0x14 ClearDiagnosticInformation ---- */
+
+static int has_fault_memory(const uds_t *s)
+{
+    return (s->itf.dtc_count != NULL && s->itf.dtc_get != NULL && s->itf.dtc_clear != NULL &&
+            s->itf.dtc_availability != NULL) ? 1 : 0;
+}
+
+/* 0x19 01 mask: 59 01 avail 00 nn nn; 0x19 02 mask: 59 02 avail [DTC(3) status]..;
+ * 0x19 0A: 59 0A avail [DTC(3) status].. (every DTC) */
+static result_t read_dtc_info(uds_t *s, const uint8_t *req, size_t len, uint8_t *rsp,
+                              size_t cap)
+{
+    const uint8_t sub = (uint8_t)(req[1] & 0x7Fu);
+    const uint8_t suppress = req[1] & UDS_SUPPRESS_POS;
+    if (sub != UDS_DTC_BY_STATUS_COUNT && sub != UDS_DTC_BY_STATUS && sub != UDS_DTC_SUPPORTED) {
+        return nrc(UDS_NRC_SUBFUNCTION_NOT_SUPPORTED);
+    }
+    if (len != (sub == UDS_DTC_SUPPORTED ? 2u : 3u)) {
+        return nrc(UDS_NRC_INCORRECT_LENGTH);
+    }
+    const uint8_t avail = s->itf.dtc_availability(s->itf.user);
+    /* reportSupportedDTC: every DTC, whatever its status */
+    const uint8_t mask = sub == UDS_DTC_SUPPORTED ? 0xFFu : req[2];
+    const size_t n = s->itf.dtc_count(s->itf.user);
+    rsp[1] = sub;
+    rsp[2] = avail;
+    size_t pos = 3u;
+    uint32_t matched = 0u;
+    for (size_t i = 0u; i < n; i++) {
+        uint32_t dtc = 0u;
+        uint8_t st = 0u;
+        if (s->itf.dtc_get(s->itf.user, i, &dtc, &st) != 0) {
+            continue;
+        }
+        st &= avail; /* only the supported bits are reported */
+        if (sub != UDS_DTC_SUPPORTED && (st & mask) == 0u) {
+            continue;
+        }
+        matched++;
+        if (sub == UDS_DTC_BY_STATUS_COUNT) {
+            continue;
+        }
+        if (pos + 4u > cap) {
+            return nrc(UDS_NRC_RESPONSE_TOO_LONG);
+        }
+        rsp[pos] = (uint8_t)(dtc >> 16);
+        rsp[pos + 1u] = (uint8_t)(dtc >> 8);
+        rsp[pos + 2u] = (uint8_t)dtc;
+        rsp[pos + 3u] = st;
+        pos += 4u;
+    }
+    if (sub == UDS_DTC_BY_STATUS_COUNT) {
+        rsp[3] = UDS_DTC_FORMAT_J2012;
+        put_u16(&rsp[4], matched > 0xFFFFu ? 0xFFFFu : matched);
+        pos = 6u;
+    }
+    return positive(pos, suppress);
+}
+
+/* 0x14 GG GG GG: 54 (groupOfDTC 0xFFFFFF only) */
+static result_t clear_dtc(uds_t *s, const uint8_t *req, size_t len)
+{
+    if (len != 4u) {
+        return nrc(UDS_NRC_INCORRECT_LENGTH);
+    }
+    const uint32_t group = ((uint32_t)req[1] << 16) | ((uint32_t)req[2] << 8) | req[3];
+    if (group != UDS_DTC_GROUP_ALL) {
+        return nrc(UDS_NRC_REQUEST_OUT_OF_RANGE);
+    }
+    const uint8_t code = s->itf.dtc_clear(s->itf.user, group);
+    if (code != UDS_NRC_OK) {
+        return nrc(code);
+    }
+    return positive(1u, 0u);
+}
+
+/* 0x31 01 RID [option record]: 71 01 RID (startRoutine only; extended session, unlocked) */
+static result_t routine_control(uds_t *s, const uint8_t *req, size_t len, uint8_t *rsp)
+{
+    const uint8_t sub = (uint8_t)(req[1] & 0x7Fu);
+    if (sub != UDS_ROUTINE_START) {
+        return nrc(UDS_NRC_SUBFUNCTION_NOT_SUPPORTED);
+    }
+    if (len < 4u) {
+        return nrc(UDS_NRC_INCORRECT_LENGTH);
+    }
+    if (!s->unlocked) {
+        return nrc(UDS_NRC_SECURITY_ACCESS_DENIED);
+    }
+    const uint16_t rid = (uint16_t)(((uint32_t)req[2] << 8) | req[3]);
+    const uint8_t code = s->itf.start_routine(s->itf.user, rid, &req[4], len - 4u);
+    if (code != UDS_NRC_OK) {
+        return nrc(code);
+    }
+    rsp[1] = sub;
+    rsp[2] = req[2];
+    rsp[3] = req[3];
+    return positive(4u, req[1] & UDS_SUPPRESS_POS);
+}
+
 /* 1 for the services whose byte 1 is a sub-function */
 static int has_subfunction(uint8_t sid)
 {
@@ -262,6 +363,7 @@ static int has_subfunction(uint8_t sid)
     case UDS_SID_ECU_RESET:
     case UDS_SID_SECURITY:
     case UDS_SID_TESTER_PRESENT:
+    case UDS_SID_ROUTINE:
         return 1;
     default:
         return 0;
@@ -271,7 +373,8 @@ static int has_subfunction(uint8_t sid)
 /* 1 for the services of the extended session only */
 static int extended_only(uint8_t sid)
 {
-    return (sid == UDS_SID_SECURITY || sid == UDS_SID_WRITE_DID) ? 1 : 0;
+    return (sid == UDS_SID_SECURITY || sid == UDS_SID_WRITE_DID || sid == UDS_SID_ROUTINE) ? 1
+                                                                                         : 0;
 }
 
 size_t uds_handle(uds_t *s, const uint8_t *req, size_t len, uint64_t now_us, uint8_t *rsp,
@@ -285,10 +388,16 @@ size_t uds_handle(uds_t *s, const uint8_t *req, size_t len, uint64_t now_us, uin
     s->last_request_us = now_us; /* S3 restarts with every request */
     const uint8_t sid = req[0];
     result_t r;
-    const int has_sub = has_subfunction(sid);
+    /* (0x19 has one when the fault memory is there: else it is 0x11 whatever its length) */
+    int has_sub = has_subfunction(sid);
+    if (sid == UDS_SID_READ_DTC && has_fault_memory(s)) {
+        has_sub = 1;
+    }
     /* ISO 14229-1 Figure 5 / 7 order: the service (0x11), the session (0x7F), the minimum
      * length (0x13), the sub-function (0x12), then each service's own checks */
-    if (extended_only(sid) && s->session != UDS_SESSION_EXTENDED) {
+    if (sid == UDS_SID_ROUTINE && s->itf.start_routine == NULL) {
+        r = nrc(UDS_NRC_SERVICE_NOT_SUPPORTED); /* an application without routines */
+    } else if (extended_only(sid) && s->session != UDS_SESSION_EXTENDED) {
         r = nrc(UDS_NRC_NOT_IN_ACTIVE_SESSION);
     } else if (has_sub && len < 2u) {
         r = nrc(UDS_NRC_INCORRECT_LENGTH); /* no sub-function at all */
@@ -311,6 +420,16 @@ size_t uds_handle(uds_t *s, const uint8_t *req, size_t len, uint64_t now_us, uin
             break;
         case UDS_SID_TESTER_PRESENT:
             r = tester_present(req, len, rsp);
+            break;
+        case UDS_SID_READ_DTC:
+            r = has_fault_memory(s) ? read_dtc_info(s, req, len, rsp, cap)
+                                    : nrc(UDS_NRC_SERVICE_NOT_SUPPORTED);
+            break;
+        case UDS_SID_CLEAR_DTC:
+            r = has_fault_memory(s) ? clear_dtc(s, req, len) : nrc(UDS_NRC_SERVICE_NOT_SUPPORTED);
+            break;
+        case UDS_SID_ROUTINE:
+            r = routine_control(s, req, len, rsp);
             break;
         default:
             r = nrc(UDS_NRC_SERVICE_NOT_SUPPORTED);

@@ -10,8 +10,13 @@
  *   0x22 ReadDataByIdentifier      1..UDS_MAX_READ_DIDS DIDs per request
  *   0x27 SecurityAccess            0x01 requestSeed / 0x02 sendKey, extended session
  *   0x2E WriteDataByIdentifier     extended session and unlocked
+ *   0x31 RoutineControl            0x01 startRoutine, extended session and unlocked;
+ *                                  0x11 when the application has no start_routine
  *   0x3E TesterPresent             0x00
- * suppressPosRspMsgIndicationBit (bit 7 of the sub-function of 0x10, 0x11, 0x27, 0x3E):
+ *   0x19 ReadDTCInformation        0x01 reportNumberOfDTCByStatusMask, 0x02
+ *                                  reportDTCByStatusMask, 0x0A reportSupportedDTC; any session
+ *   0x14 ClearDiagnosticInformation groupOfDTC 0xFFFFFF (all DTCs); any session
+ * suppressPosRspMsgIndicationBit (bit 7 of the sub-function of 0x10, 0x11, 0x19, 0x27, 0x3E):
  * a positive response is not sent, a negative one is. Physical addressing only, so every
  * negative response is sent.
  *
@@ -33,6 +38,16 @@
 #define UDS_SID_SECURITY 0x27u
 #define UDS_SID_WRITE_DID 0x2Eu
 #define UDS_SID_TESTER_PRESENT 0x3Eu
+/* the fault memory (dtc branch) */
+#define UDS_SID_CLEAR_DTC 0x14u   /* ClearDiagnosticInformation */
+#define UDS_SID_READ_DTC 0x19u    /* ReadDTCInformation */
+#define UDS_DTC_BY_STATUS_COUNT 0x01u  /* 0x19 reportNumberOfDTCByStatusMask */
+#define UDS_DTC_BY_STATUS 0x02u        /* 0x19 reportDTCByStatusMask */
+#define UDS_DTC_SUPPORTED 0x0Au        /* 0x19 reportSupportedDTC */
+#define UDS_DTC_GROUP_ALL 0xFFFFFFu    /* 0x14 groupOfDTC: all groups */
+#define UDS_DTC_FORMAT_J2012 0x00u     /* DTCFormatIdentifier SAE_J2012-DA_DTCFormat_00 */
+#define UDS_SID_ROUTINE 0x31u     /* RoutineControl */
+#define UDS_ROUTINE_START 0x01u   /* its startRoutine sub-function (the only one served) */
 #define UDS_NEGATIVE 0x7Fu        /* a negative response: 7F SID NRC */
 #define UDS_SUPPRESS_POS 0x80u    /* suppressPosRspMsgIndicationBit of a sub-function */
 
@@ -48,6 +63,7 @@
 #define UDS_NRC_SECURITY_ACCESS_DENIED 0x33u
 #define UDS_NRC_INVALID_KEY 0x35u
 #define UDS_NRC_EXCEEDED_ATTEMPTS 0x36u
+#define UDS_NRC_GENERAL_PROGRAMMING_FAILURE 0x72u
 #define UDS_NRC_TIME_DELAY_NOT_EXPIRED 0x37u
 #define UDS_NRC_NOT_IN_ACTIVE_SESSION 0x7Fu   /* serviceNotSupportedInActiveSession */
 
@@ -82,12 +98,30 @@
  *              length, 0x22 not now). Called only in the extended session, unlocked.
  *   is_writable  1 if DID is one write_did may accept, else 0 (0x31 before 0x33: an
  *              unknown DID is out of range whatever the security state).
+ * The fault memory (0x19, 0x14), optional: all four NULL, the services answer 0x11.
+ *   dtc_count  the number of DTCs the ECU supports (their indices 0..count-1).
+ *   dtc_get    DTC index's 3-byte number (bits 23..0) and its status byte: 0, or -1 for
+ *              an index out of range.
+ *   dtc_clear  clear the DTCs of groupOfDTC group (the server passes UDS_DTC_GROUP_ALL
+ *              only): UDS_NRC_OK, or the NRC that refuses it (0x22 not now, 0x72 the NVM
+ *              write failed).
+ *   dtc_availability  the DTCStatusAvailabilityMask: the status bits the ECU supports.
+ *   start_routine  (optional, NULL: 0x31 is serviceNotSupported) start routine rid with
+ *              its option record data[0..len): UDS_NRC_OK once it is done, or the NRC
+ *              (0x31 an unknown routine, 0x22 not now, 0x72 an NVM failure). Called only
+ *              in the extended session, unlocked.
+ * Functions are appended at the end (applications use designated initialisers).
  */
 typedef struct {
     void *user;
     size_t (*read_did)(void *user, uint16_t did, uint8_t *buf, size_t cap);
     uint8_t (*write_did)(void *user, uint16_t did, const uint8_t *data, size_t len);
     int (*is_writable)(void *user, uint16_t did);
+    size_t (*dtc_count)(void *user);
+    int (*dtc_get)(void *user, size_t index, uint32_t *dtc, uint8_t *status);
+    uint8_t (*dtc_clear)(void *user, uint32_t group);
+    uint8_t (*dtc_availability)(void *user);
+    uint8_t (*start_routine)(void *user, uint16_t rid, const uint8_t *data, size_t len);
 } uds_if_t;
 
 /* Counted, each saturating (never decreasing). */

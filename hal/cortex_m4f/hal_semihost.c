@@ -31,6 +31,7 @@ int hal_semihost_open(hal_t *hal, const char *rx_path, const char *tx_path)
     for (size_t k = 0u; k < HAL_SEMIHOST_NVM_SIZE; k++) {
         hal->nvm[k] = 0xFFu;
     }
+    hal->nvm_path = NULL;
     if (rx_path != NULL) {
         hal->rx = semihost_open(rx_path, SEMIHOST_MODE_RB);
         if (hal->rx < 0) {
@@ -58,9 +59,46 @@ static int tx_flush(hal_t *hal)
     return hal->tx_error != 0u ? HAL_EIO : 0;
 }
 
+int hal_semihost_nvm_file(hal_t *hal, const char *path)
+{
+    if (hal == NULL || path == NULL) {
+        return HAL_EINVAL;
+    }
+    const int32_t h = semihost_open(path, SEMIHOST_MODE_RB);
+    if (h >= 0) {
+        size_t got = 0u;
+        int32_t n = 1;
+        while (n > 0 && got < HAL_SEMIHOST_NVM_SIZE) {
+            n = semihost_read(h, &hal->nvm[got], HAL_SEMIHOST_NVM_SIZE - got);
+            got += n > 0 ? (size_t)n : 0u;
+        }
+        uint8_t extra = 0u;
+        const int32_t more = semihost_read(h, &extra, 1u);
+        (void)semihost_close(h);
+        if (got != HAL_SEMIHOST_NVM_SIZE || more != 0) {
+            for (size_t k = 0u; k < HAL_SEMIHOST_NVM_SIZE; k++) {
+                hal->nvm[k] = 0xFFu;
+            }
+            return HAL_EIO;
+        }
+    }
+    hal->nvm_path = path;
+    return 0;
+}
+
 int hal_semihost_close(hal_t *hal)
 {
-    const int rc = tx_flush(hal);
+    int rc = tx_flush(hal);
+    if (hal->nvm_path != NULL) {
+        const int32_t h = semihost_open(hal->nvm_path, SEMIHOST_MODE_WB);
+        if (h < 0 || semihost_write(h, hal->nvm, HAL_SEMIHOST_NVM_SIZE) != 0) {
+            rc = HAL_EIO;
+        }
+        if (h >= 0) {
+            (void)semihost_close(h);
+        }
+        hal->nvm_path = NULL;
+    }
     if (hal->rx >= 0) {
         (void)semihost_close(hal->rx);
         hal->rx = -1;

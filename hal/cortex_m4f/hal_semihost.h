@@ -10,7 +10,8 @@
  * line longer than HAL_SEMIHOST_LINE_MAX); TX lines are stamped hal_time_us() on
  * interface "can0"; the NVM is HAL_SEMIHOST_NVM_SIZE bytes of RAM in two sectors with
  * flash semantics (erased 0xFF, a write stores old AND new, HAL_EIO when that differs),
- * erased at open; the watchdog only counts kicks. Nothing is allocated.
+ * erased at open, or loaded from an NVM image file (hal_semihost_nvm_file) and written back
+ * to it at close; the watchdog only counts kicks. Nothing is allocated.
  */
 #ifndef NAVECU_HAL_SEMIHOST_H
 #define NAVECU_HAL_SEMIHOST_H
@@ -41,13 +42,22 @@ struct hal {
     char tx_buf[HAL_SEMIHOST_TX_BUF];
     char line[HAL_SEMIHOST_LINE_MAX];
     uint8_t nvm[HAL_SEMIHOST_NVM_SIZE];
+    const char *nvm_path;    /* the NVM image file written at close; NULL: none */
 };
 
 /* Open the RX log (NULL: none) and create/truncate the TX log (NULL: discard). Returns 0,
  * HAL_EINVAL (hal NULL) or HAL_EIO (a file could not be opened). */
 int hal_semihost_open(hal_t *hal, const char *rx_path, const char *tx_path);
 
-/* Write out the buffered TX lines and close both files. Returns 0 or HAL_EIO. */
+/* After hal_semihost_open: the NVM backed by the image file at path (exactly
+ * HAL_SEMIHOST_NVM_SIZE bytes, the host's --nvm file format: the region's bytes). A file
+ * that does not exist leaves the NVM erased; it is created at close. Returns 0, HAL_EINVAL
+ * (a NULL argument), HAL_EIO (the file has another size). The image is written back by
+ * hal_semihost_close: the NVM as the run left it (a power cut is not modelled). */
+int hal_semihost_nvm_file(hal_t *hal, const char *path);
+
+/* Write out the buffered TX lines, the NVM image (if any), and close the files. Returns 0
+ * or HAL_EIO. */
 int hal_semihost_close(hal_t *hal);
 
 #endif /* NAVECU_HAL_SEMIHOST_H */

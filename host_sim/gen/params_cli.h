@@ -18,7 +18,7 @@ typedef struct {
     const char *description;
 } params_cli_t;
 
-#define PARAMS_CLI_N 31
+#define PARAMS_CLI_N 32
 
 static const params_cli_t params_cli[PARAMS_CLI_N] = {
     {"--imu-rate-hz", APP_PARAM_IMU_RATE_HZ, "Hz", 10.0, 400.0, 1.0, "", "IMU sample rate: one IMU_Rate + IMU_Accel pair per sample"},
@@ -52,6 +52,7 @@ static const params_cli_t params_cli[PARAMS_CLI_N] = {
     {"--gnss-lever-m", APP_PARAM_GNSS_LEVER_B_M, "m", -10.0, 10.0, 1.0, "", "the GNSS antenna from the IMU, body axes x right, y forward, z up"},
     {"--uds-request-id", APP_PARAM_UDS_REQUEST_ID, "", 1.0, 2047.0, 1.0, "", "the UDS server's physical request ID (11-bit; docs/can.md, Diagnostics (UDS)): frames on it go to ISO-TP, never to navigation; read-only over UDS (the boards set their receive filters at start)"},
     {"--uds-response-id", APP_PARAM_UDS_RESPONSE_ID, "", 1.0, 2047.0, 1.0, "", "the UDS server's response ID (11-bit, by convention request + 8); read-only over UDS"},
+    {"--imu-time", APP_PARAM_IMU_TIME, "", 0.0, 1.0, 1.0, "grid|stamped", "the IMU's sample time: grid, every sample 1/imu_rate_hz long; or stamped, each sample as long as its IMU_Time stamps say (an IMU not on an exact grid, integrated without resampling; imu_rate_hz is then its nominal rate, docs/configuration.md)"},
 };
 
 /* --imu-preset NAME: the presets' descriptions, in app_presets' order */

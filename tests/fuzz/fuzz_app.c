@@ -9,6 +9,7 @@
  *   flags & 0x02: start with SetInitialPosition only (levelling)
  *   flags & 0x04: the NVM holds a stored calibration at boot (flags & 0x08: with one
  *                 byte of it flipped, at the offset given by the flags' high nibble)
+ *   flags & 0x0C == 0x08: imu_time = stamped (IMU_Time before each macro IMU sample)
  * The initialization is the input's choice, so the fuzzer keeps full control.
  */
 #include <stdint.h>
@@ -36,7 +37,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             fake_hal_nvm_corrupt(&hal, (size_t)(flags >> 4) * 2u, 0x10u);
         }
     }
-    const app_config_t cfg = app_default_config();
+    app_config_t cfg = app_default_config();
+    /* flags 0x08 without 0x04 (no stored calibration to corrupt): the IMU's own times */
+    cfg.imu_time = (flags & 0x0Cu) == 0x08u ? IMU_TIME_STAMPED : IMU_TIME_GRID;
     if (app_init(&app, &cfg) != 0) {
         return 0;
     }

@@ -7,13 +7,16 @@
  *   kind 10     raw frame under any 11-bit ID: id(2, little-endian, & 0x7FF) dt_ms dlc? data
  *   kind 11     raw frame under a codec message's ID (outputs too): k(1) dt_ms dlc? data
  *               raw-frame flags: 0x10 fix the E2E CRC (the pair CRC for IMU_Accel),
+ *               (IMU_Time's alive counter is the IMU pair's next one),
  *               0x20 fix the alive counter / GNSS epoch, 0x40 DLC from the input (else 8),
  *               0x80 extended frame
  *   kind 12     IMU samples: n(1) w(3 x int8) v(3 x int8) shifts(1) wheel(1 x int8):
  *               n+1 valid IMU pairs of w << (shifts & 7), v << ((shifts >> 3) & 7) LSB
  *               (+ gravity on z), one sample period apart; op & 0x10: WheelSpeeds
  *               (wheel * 8 LSB on every wheel) with every second sample; op & 0x20: the
- *               ImuFault bit; op & 0x40: every 8th sample is lost (counter step 2)
+ *               ImuFault bit; op & 0x40: every 8th sample is lost (counter step 2);
+ *               with imu_time = stamped each pair follows its IMU_Time, a period apart,
+ *               op & 0x80: (1 + k % 8) quarter periods apart (refused, gaps, accepted)
  *   kind 13     WheelSpeeds: dt_ms(1) speeds(4 x int8, * 8 LSB), valid counter and CRC
  *               (op & 0x10: the counter is repeated, not advanced)
  *   kind 14     GNSS epoch: dlat(2) dlon(2) (int16 * 4 e-7 deg from the prelude's point)
@@ -183,6 +186,13 @@ static void fix_counter(fz_app_t *z, uint32_t id, uint8_t d[8])
         navecu_can_imu_rate_pack(d, &m, 8u);
         break;
     }
+    case NAVECU_CAN_IMU_TIME_FRAME_ID: {
+        struct navecu_can_imu_time_t m;
+        navecu_can_imu_time_unpack(&m, d, 8u);
+        m.imu_counter = z->imu_counter;
+        navecu_can_imu_time_pack(d, &m, 8u);
+        break;
+    }
     case NAVECU_CAN_IMU_ACCEL_FRAME_ID: {
         struct navecu_can_imu_accel_t m;
         navecu_can_imu_accel_unpack(&m, d, 8u);
@@ -243,6 +253,7 @@ static void fix_crc(const fz_app_t *z, uint32_t id, uint8_t d[8])
     case NAVECU_CAN_IMU_ACCEL_FRAME_ID:
         d[7] = e2e_pair_crc(id, z->last_rate, d);
         break;
+    case NAVECU_CAN_IMU_TIME_FRAME_ID:
     case NAVECU_CAN_WHEEL_SPEEDS_FRAME_ID:
     case NAVECU_CAN_GNSS_VELOCITY_FRAME_ID:
     case NAVECU_CAN_CMD_CONTROL_FRAME_ID:
@@ -344,9 +355,11 @@ static void imu_samples(fz_app_t *z, uint8_t op, rd_t *r)
     }
     v[2] += g_lsb;
     const int16_t wr[4] = {ws, ws, ws, ws};
+    const int stamped = z->app->cfg.imu_time == IMU_TIME_STAMPED;
     for (uint32_t k = 0u; k < n && z->samples < FZ_MAX_SAMPLES; k++) {
         z->samples++;
         z->hal->t_us += 1000000u / rate;
+        z->imu_stamp_us += (op & 0x80u) != 0u ? (1u + k % 8u) * (250000u / rate) : 1000000u / rate;
         if ((op & 0x40u) != 0u && k % 8u == 7u) {
             (void)next(&z->imu_counter); /* a lost sample */
             continue;
@@ -361,6 +374,13 @@ static void imu_samples(fz_app_t *z, uint8_t op, rd_t *r)
                                             next(&z->imu_counter), 0u};
         navecu_can_imu_accel_pack(da, &ma, 8u);
         da[7] = e2e_pair_crc(NAVECU_CAN_IMU_ACCEL_FRAME_ID, dr, da);
+        if (stamped) {
+            uint8_t dt[8];
+            struct navecu_can_imu_time_t mt = {z->imu_stamp_us, mr.imu_counter, 0u};
+            navecu_can_imu_time_pack(dt, &mt, 8u);
+            e2e_protect(NAVECU_CAN_IMU_TIME_FRAME_ID, dt);
+            send(z, NAVECU_CAN_IMU_TIME_FRAME_ID, dt);
+        }
         send(z, NAVECU_CAN_IMU_RATE_FRAME_ID, dr);
         send(z, NAVECU_CAN_IMU_ACCEL_FRAME_ID, da);
     }

@@ -42,6 +42,7 @@ typedef struct {
     uint32_t samples;             /* IMU samples sent by macros */
     uint32_t frames;              /* frames fed */
     uint32_t tow_ms;              /* GNSS time of week of the next epoch */
+    uint32_t imu_stamp_us;        /* IMU_Time of the last sample (imu_time = stamped) */
     int32_t lat_e7, lon_e7;       /* where the prelude put the vehicle */
 } fz_app_t;
 

@@ -1,7 +1,9 @@
 /*
  * fuzz_calstore.c - libFuzzer harness: the calibration record store (calstore.h) on
  * arbitrary flash contents, against the in-memory HAL of tests/support/fake_hal.h
- * (2 sectors of 128 bytes, NOR-flash rules, power cuts).
+ * (2 sectors of FAKE_NVM_SECTOR_SIZE bytes, NOR-flash rules, power cuts). The version 2
+ * extension (calstore.h) is checked here as far as calstore_save carries it over; its
+ * contents are fuzz_nvstore.c's.
  *
  * Input: flags(1) record(13: dh, mu, base as float bits, source) cut_units(2, LE)
  * torn(1), then the NVM image (missing bytes read 0xFF: erased).
@@ -64,6 +66,11 @@ static float f32(uint32_t u)
 
 static int rec_in_range(const cal_record_t *r)
 {
+    if (r->source == 0u) { /* no calibration: a record holding the extension only */
+        return memcmp(&r->dh_rad, "\0\0\0\0", 4u) == 0 &&
+               memcmp(&r->odo_scale_err, "\0\0\0\0", 4u) == 0 &&
+               memcmp(&r->base_m, "\0\0\0\0", 4u) == 0;
+    }
     return isfinite(r->dh_rad) && isfinite(r->odo_scale_err) && isfinite(r->base_m) &&
            fabsf(r->dh_rad) <= CALSTORE_DH_MAX_RAD && fabsf(r->odo_scale_err) <= CALSTORE_MU_MAX &&
            r->base_m >= 0.0f && r->source >= 1u && r->source <= 3u;
@@ -78,10 +85,25 @@ static int rec_same(const cal_record_t *a, const cal_record_t *b)
 
 typedef enum { REF_ERASED, REF_VALID, REF_INVALID } ref_slot_t;
 
+/* 1 if the slot's extension is a valid version 2 one of seq (calstore.h's layout) */
+static int ref_ext_ok(const uint8_t *s, uint32_t seq)
+{
+    const uint8_t *e = s + CALSTORE_EXT_OFFSET;
+    const size_t body = (size_t)e[6] | (size_t)e[7] << 8;
+    const size_t plen = (size_t)e[12] | (size_t)e[13] << 8;
+    return memcmp(e, "NPAR", 4u) == 0 && e[4] == 2u && plen <= CALSTORE_PARAMS_MAX &&
+           body == CALSTORE_EXT_HEAD + plen && le32(e + 8) == seq &&
+           le32(e + body) == ref_crc32(e, body);
+}
+
 static ref_slot_t ref_slot(const uint8_t *s, uint32_t *seq, cal_record_t *r)
 {
     int erased = 1;
     for (unsigned k = 0u; k < CALSTORE_SLOT_BYTES; k++) {
+        erased = erased && s[k] == 0xFFu;
+    }
+    /* an extension without its record (an interrupted first save) is not erased */
+    for (unsigned k = CALSTORE_EXT_OFFSET; k < CALSTORE_SLOT_V2_BYTES; k++) {
         erased = erased && s[k] == 0xFFu;
     }
     if (erased) {
@@ -105,11 +127,12 @@ typedef struct {
     uint32_t seq;
     int slot;
     cal_record_t rec;
+    int ext_ok; /* the newest record has a valid extension (calstore_save carries it) */
 } ref_t;
 
 static ref_t ref_load(const uint8_t nvm[FAKE_NVM_SIZE])
 {
-    ref_t out = {CALSTORE_EMPTY, 0u, -1, {0.0f, 0.0f, 0.0f, 0u}};
+    ref_t out = {CALSTORE_EMPTY, 0u, -1, {0.0f, 0.0f, 0.0f, 0u}, 0};
     unsigned n_erased = 0u;
     for (unsigned k = 0u; k < 2u; k++) {
         uint32_t seq = 0u;
@@ -128,6 +151,7 @@ static ref_t ref_load(const uint8_t nvm[FAKE_NVM_SIZE])
         }
     }
     out.status = out.slot >= 0 ? CALSTORE_OK : (n_erased == 2u ? CALSTORE_EMPTY : CALSTORE_CORRUPT);
+    out.ext_ok = out.slot >= 0 && ref_ext_ok(nvm + (size_t)out.slot * FAKE_NVM_SECTOR_SIZE, out.seq);
     return out;
 }
 
@@ -179,12 +203,30 @@ static void save_checked(calstore_t *cs, const cal_record_t *rec, const ref_t *b
     if (memcmp(other, old + (size_t)(1 - target) * FAKE_NVM_SECTOR_SIZE, FAKE_NVM_SECTOR_SIZE) != 0) {
         fuzz_fail("calstore_save touched slot %d, which holds the newest record", 1 - target);
     }
-    for (size_t k = CALSTORE_SLOT_BYTES; k < FAKE_NVM_SECTOR_SIZE; k++) {
-        if (hal.nvm[(size_t)target * FAKE_NVM_SECTOR_SIZE + k] != 0xFFu) {
+    const uint32_t want_seq = before->seq + 1u;
+    const uint8_t *t = hal.nvm + (size_t)target * FAKE_NVM_SECTOR_SIZE;
+    size_t used_to = CALSTORE_SLOT_BYTES;
+    if (before->ext_ok) {
+        /* the newest record's extension, carried over with the new seq */
+        const uint8_t *e = t + CALSTORE_EXT_OFFSET;
+        const uint8_t *o = old + (size_t)before->slot * FAKE_NVM_SECTOR_SIZE + CALSTORE_EXT_OFFSET;
+        const size_t plen = (size_t)o[12] | (size_t)o[13] << 8;
+        if (!ref_ext_ok(t, want_seq) || memcmp(e, o, 8u) != 0 ||
+            memcmp(e + 12, o + 12, CALSTORE_EXT_HEAD - 12u + plen) != 0) {
+            fuzz_fail("calstore_save did not carry the newest record's extension over");
+        }
+        for (size_t k = CALSTORE_SLOT_BYTES; k < CALSTORE_EXT_OFFSET; k++) {
+            if (t[k] != 0xFFu) {
+                fuzz_fail("calstore_save left byte %zu of its sector programmed", k);
+            }
+        }
+        used_to = CALSTORE_EXT_OFFSET + CALSTORE_EXT_HEAD + plen + 4u;
+    }
+    for (size_t k = used_to; k < FAKE_NVM_SECTOR_SIZE; k++) {
+        if (t[k] != 0xFFu) {
             fuzz_fail("calstore_save left byte %zu of its sector programmed", k);
         }
     }
-    const uint32_t want_seq = before->seq + 1u;
     const ref_t after = load_checked("after a save");
     if (after.status != CALSTORE_OK || after.slot != target || after.seq != want_seq ||
         !rec_same(&after.rec, rec) || cs->seq != want_seq || cs->slot != target) {
@@ -219,7 +261,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 
     if ((flags & 0x03u) == 0x03u) {
         /* a power cut in the middle of the save, then a reboot */
-        fake_hal_nvm_cut_after(&hal, cut_units % 64u, torn);
+        fake_hal_nvm_cut_after(&hal, cut_units % 512u, torn);
         (void)calstore_save(&hal, &cs, &rec);
         fake_hal_nvm_power_on(&hal);
         const ref_t after = load_checked("after a cut save");
@@ -232,7 +274,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         if (!is_old && !is_new) {
             fuzz_fail("power cut after %u units (torn 0x%02X%s): load gives status %d seq %u, "
                       "neither the previous record (status %d seq %u) nor the new one",
-                      cut_units % 64u, torn, hal.nvm_program_backwards ? ", backwards" : "",
+                      cut_units % 512u, torn, hal.nvm_program_backwards ? ", backwards" : "",
                       after.status, after.seq, before.status, before.seq);
         }
     } else if ((flags & 0x01u) != 0u) {

@@ -179,7 +179,24 @@ def seeds_options():
 
 
 # ---- fuzz_calstore: flags(1) record(13) cut(2) torn(1) then the NVM image ----
-SECTOR = 128  # tests/support/fake_hal.h: 2 sectors of 128 bytes
+SECTOR = 512  # tests/support/fake_hal.h: 2 sectors of 512 bytes (room for the extension)
+EXT_OFFSET = 64  # calstore.h: the version 2 extension (parameters, DTC bytes) in a slot
+
+
+def ext_image(seq, entries=b"", dtc=b"\xff" * 16, version=2):
+    body = b"NPAR" + bytes([version, 0]) + struct.pack("<HIHH", 32 + len(entries), seq,
+                                                      len(entries), 0) + dtc + entries
+    return body + struct.pack("<I", zlib.crc32(body))
+
+
+def slot_v2(seq, entries=b"", dh=0.0, mu=0.0, base=0.0, source=0, commit=True, version=2):
+    v1 = slot_image(seq, dh, mu, base, source, commit)[:36]
+    img = v1 + b"\xff" * (EXT_OFFSET - 36) + ext_image(seq, entries, version=version)
+    return img + b"\xff" * (SECTOR - len(img))
+
+
+def entry(did, value):
+    return struct.pack(">HB", did, len(value)) + value
 
 
 def slot_image(seq, dh, mu, base, source, commit=True):
@@ -206,6 +223,35 @@ def seeds_calstore():
     write("fuzz_calstore", "torn-cut-backwards", calstore_input(0x07, rec, torn, cut=38, torn=0x00))
     write("fuzz_calstore", "seq-wrap-erase", calstore_input(0x11, rec, wrap))
     write("fuzz_calstore", "bad-record", calstore_input(0x01, (float("nan"), 0.0, 1.0, 1), one))
+    ext = slot_v2(4, entry(0x0204, struct.pack(">H", 20))) + b"\xff" * SECTOR
+    write("fuzz_calstore", "v2-carried", calstore_input(0x09, rec, ext))
+    write("fuzz_calstore", "v2-cut", calstore_input(0x03, rec, ext, cut=40, torn=0xF0))
+
+
+# ---- fuzz_nvstore: flags(1) cut(2) torn(1) level(1) dtc_index(1) dtc_status(1) n(1),
+# n entry bytes, then the NVM image ----
+def nvstore_input(flags, image=b"", entries=b"", cut=0, torn=0, level=20, dtc=(3, 0x09)):
+    return (bytes([flags]) + struct.pack("<HBBBBB", cut, torn, level, dtc[0], dtc[1],
+                                         len(entries)) + entries + image)
+
+
+def seeds_nvstore():
+    good = (entry(0x0204, struct.pack(">H", 45)) + entry(0x0240, struct.pack(">f", 0.08))
+            + entry(0x0213, struct.pack(">3f", 1.0, -0.5, 0.25)) + entry(0x0210, b"\x01"))
+    bad = (entry(0x7FEE, b"\x00\x01") + entry(0x0250, b"\x07\x11")
+           + entry(0x0204, b"\x1e") + entry(0x0240, struct.pack(">f", 1e6)) + b"\x02\x40\x04")
+    v2 = slot_v2(1, good) + b"\xff" * SECTOR
+    v1 = slot_image(5, -0.02, 0.01, 3000.0, 2) + b"\xff" * SECTOR
+    newer = slot_v2(2, good, version=3) + b"\xff" * SECTOR
+    write("fuzz_nvstore", "empty-save", nvstore_input(0x01))
+    write("fuzz_nvstore", "v2-load-save", nvstore_input(0x01, v2))
+    write("fuzz_nvstore", "v1-migrate-save", nvstore_input(0x01, v1))
+    write("fuzz_nvstore", "newer-refused", nvstore_input(0x00, newer))
+    write("fuzz_nvstore", "entries-good", nvstore_input(0x20, entries=good))
+    write("fuzz_nvstore", "entries-bad", nvstore_input(0x20, entries=bad))
+    write("fuzz_nvstore", "cut-save", nvstore_input(0x03, v2, cut=100, torn=0x0F))
+    write("fuzz_nvstore", "cut-backwards", nvstore_input(0x07, v2, cut=200, torn=0x00))
+    write("fuzz_nvstore", "dtc-erase", nvstore_input(0x18, v2))
 
 
 # ---- fuzz_candump: a line, or a whole log ----
@@ -303,6 +349,7 @@ def main():
     seeds_app()
     seeds_options()
     seeds_calstore()
+    seeds_nvstore()
     seeds_candump()
     seeds_isotp()
     for d in sorted(OUT.iterdir()):

@@ -93,10 +93,16 @@ def test_unlock_write_read_back(r):
     assert r["lever_back"] == [1.0, -0.5, 0.25]
 
 
-def test_ecu_reset_restarts_keeping_the_configuration(r):
+def test_store_parameters_then_ecu_reset_loads_them(r):
+    assert r["store_params_rid"] == 0x0200
+    assert r["nrc_unknown_routine"] == 0x31
     assert r["reset_type"] == 1
     assert r["nrc_write_after_reset"] == 0x7F  # default session again
-    assert r["level_s_after_reset"] == 45       # the configuration in RAM survives
+    # the layers again: defaults, the NVM (45 saved), no options; the unsaved 30 is gone
+    assert r["level_s_after_reset"] == 45
+    assert r["lever_after_reset"] == [1.0, -0.5, 0.25]
+    n_writable = sum(1 for p in gen_params.load() if not p["uds_read_only"])
+    assert r["nvm_status"] == [2, 1, n_writable, 0, 1]  # v2, from NVM, loaded, refused, seq
 
 
 def test_three_wrong_keys_then_delay(r):

@@ -3,7 +3,7 @@ merged with the windshield device's IMU and u-blox GNSS encoded as navecu frames
 
     python -m tools.comma2k19.convert OUT.log [--data data/comma2k19-rav4]
         [--vehicle toyota_rav4_2017] [--channels can0,can1,can2,can3] [--no-car-bus]
-        [--outage A-B]
+        [--outage A-B] [--imu-time grid|stamped]
 
 The files are described in data/comma2k19-rav4/README.md; docs/vehicles.md says how they
 are used. What navecu is given beyond the recording (none of it is in the car's frames):
@@ -19,6 +19,11 @@ are used. What navecu is given beyond the recording (none of it is in the car's 
   z down axes and the roll, pitch and yaw measured against the reference, MOUNT_DEG,
   README "Mounting"), the rotation that navecu's own body axes (x right, y forward, z up)
   need.
+  With --imu-time stamped, no resampling: one sample per device sample after the first,
+  its increments the trapezoidal integral over its own interval (the previous stamp to
+  its own), and before its IMU_Rate an IMU_Time with the device's own stamp in
+  microseconds (round(t_s * 1e6) modulo 2^32); the firmware is then run with
+  --imu-time stamped and the nominal rate STAMPED_RATE_HZ (run.py).
 - **GNSS**: the u-blox fixes (9.7 Hz), sent when they were logged (t_s), with their own
   time of validity in TimeOfWeek (gps_tow_s) and the week in GNSS_Time; the latency of the
   earliest-logged fix is the firmware's --gnss-latency-ms (gnss_latency_ms in the meta);
@@ -50,14 +55,17 @@ from tools import vehicle
 ROOT = Path(__file__).resolve().parents[2]
 DATA_DIR = Path(os.environ.get("NAVECU_COMMA2K19_DIR") or ROOT / "data" / "comma2k19-rav4")
 IMU_RATE_HZ = 100
+#: --imu-time stamped: the device's nominal rate, what the firmware is configured with
+#: (104.264 Hz measured, README "IMU"; a u16 parameter)
+STAMPED_RATE_HZ = 104
 GPS_WEEK = 2012
 #: GPS time of week = segment clock + this (README "Time base")
 GPS_TOW_MINUS_T_S = 357697.849502
 #: the device relative to the car, Z-Y-X in FRD (README "Mounting"), deg
 MOUNT_DEG = {"roll": 1.25, "pitch": -3.75, "yaw": -0.90}
 # frame order within one timestamp: commands, then IMU halves, then GNSS epoch
-O_KNOWN, O_SETPOS, O_ATT, O_CAR, O_RATE, O_ACCEL = 0, 1, 2, 3, 4, 5
-O_GPOS, O_GVEL, O_GHGT, O_GTIME, O_GSTAT = 6, 7, 8, 9, 10
+O_KNOWN, O_SETPOS, O_ATT, O_CAR, O_TIME, O_RATE, O_ACCEL = 0, 1, 2, 3, 4, 5, 6
+O_GPOS, O_GVEL, O_GHGT, O_GTIME, O_GSTAT = 7, 8, 9, 10, 11
 
 
 def _csv(path: Path) -> np.ndarray:
@@ -137,6 +145,24 @@ def resample_increments(t_s, w, f, rate_hz: int = IMU_RATE_HZ) -> dict:
             "rate_measured_hz": float((len(t_s) - 1) / (t_s[-1] - t_s[0]))}
 
 
+def stamped_increments(t_s, w, f) -> dict:
+    """Angle and velocity increments at the device's own stamps, no resampling: sample k
+    (k = 1..) covers (t_{k-1}, t_k], the trapezoidal integral of the rates and specific
+    forces over it; the same integral as resample_increments' before its interpolation.
+    stamp_us: the device's stamps in microseconds modulo 2^32 (IMU_Time SampleTime)."""
+    t_s = np.asarray(t_s, dtype=float)
+    if t_s.size < 2 or np.any(np.diff(t_s) <= 0.0):
+        raise ValueError("IMU stamps must increase strictly")
+    dt = np.diff(t_s)
+    out = {}
+    for name, x in (("w", np.asarray(w, float)), ("f", np.asarray(f, float))):
+        out[name] = 0.5 * (x[1:] + x[:-1]) * dt[:, None]
+    stamp_us = np.round(t_s * 1e6).astype(np.int64) % (1 << 32)
+    return {"t_s": t_s, "dtheta": out["w"], "dv": out["f"], "stamp_us": stamp_us[1:],
+            "interval_min_s": float(dt.min()), "interval_max_s": float(dt.max()),
+            "rate_measured_hz": float((len(t_s) - 1) / (t_s[-1] - t_s[0]))}
+
+
 def parse_outage(spec):
     if spec in (None, "", "none"):
         return None
@@ -162,10 +188,13 @@ def car_frames(path: Path) -> list:
 
 
 def build(data_dir=None, vehicle_name="toyota_rav4_2017", channels=None, car_bus=True,
-          outage=None, car_ids=None) -> tuple:
+          outage=None, car_ids=None, imu_time="grid") -> tuple:
     """Every input frame as (t_s, order, can.Message) sorted, and the metadata (a dict,
     JSON-ready): module docstring. channels: the car_bus.log channels taken (None: all);
-    car_ids: only the car's frames with these identifiers (None: all)."""
+    car_ids: only the car's frames with these identifiers (None: all); imu_time: grid
+    (resampled to IMU_RATE_HZ) or stamped (the device's samples with IMU_Time)."""
+    if imu_time not in ("grid", "stamped"):
+        raise ValueError(f"imu_time {imu_time!r}: grid or stamped")
     data = Path(data_dir or DATA_DIR)
     db = nc.select_vehicle(vehicle_name)
     sender = nc.E2ESender(db)
@@ -176,9 +205,14 @@ def build(data_dir=None, vehicle_name="toyota_rav4_2017", channels=None, car_bus
     # IMU: device FRD -> car RFU, resampled
     w_dev = np.column_stack([imu["wx_radps"], imu["wy_radps"], imu["wz_radps"]])
     f_dev = np.column_stack([imu["ax_mps2"], imu["ay_mps2"], imu["az_mps2"]])
-    rs = resample_increments(imu["t_s"], w_dev, f_dev)
-    t0 = float(rs["t_grid_s"][0])
-    t_imu = np.round(rs["t_grid_s"][1:] - t0, 6)
+    if imu_time == "grid":
+        rs = resample_increments(imu["t_s"], w_dev, f_dev)
+        t0 = float(rs["t_grid_s"][0])
+        t_imu = np.round(rs["t_grid_s"][1:] - t0, 6)
+    else:
+        rs = stamped_increments(imu["t_s"], w_dev, f_dev)
+        t0 = float(rs["t_s"][0])
+        t_imu = np.round(rs["t_s"][1:] - t0, 6)
     t_last = float(t_imu[-1])
     out = []
     meta = {"data_dir": str(data), "vehicle": vehicle_name, "t0_segment_s": t0,
@@ -187,7 +221,10 @@ def build(data_dir=None, vehicle_name="toyota_rav4_2017", channels=None, car_bus
             "imu": {"rows": int(len(imu)), "rate_measured_hz": rs["rate_measured_hz"],
                     "interval_min_s": rs["interval_min_s"],
                     "interval_max_s": rs["interval_max_s"],
-                    "resampled_to_hz": IMU_RATE_HZ, "samples_sent": int(len(t_imu)),
+                    "imu_time": imu_time,
+                    "resampled_to_hz": IMU_RATE_HZ if imu_time == "grid" else None,
+                    "configured_rate_hz": IMU_RATE_HZ if imu_time == "grid" else STAMPED_RATE_HZ,
+                    "samples_sent": int(len(t_imu)),
                     "mounting_deg": MOUNT_DEG, "axes": "the device's own (x forward, y right, z down)",
                     "imu_mount_deg_312": list(MOUNT_312_DEG)},
             "last_imu_sample_s": t_last}
@@ -216,6 +253,10 @@ def build(data_dir=None, vehicle_name="toyota_rav4_2017", channels=None, car_bus
     for k in range(len(t_imu)):
         t = float(t_imu[k])
         rate, accel = quant.signals(rs["dtheta"][k], rs["dv"][k])
+        if imu_time == "stamped":
+            out.append((t, O_TIME, sender.encode("IMU_Time", {
+                "SampleTime": int(rs["stamp_us"][k]),
+                "ImuCounter": sender.next_counter("IMU_Rate")}, t)))
         r, a = sender.encode_imu_pair(rate, accel, t)
         out.append((t, O_RATE, r))
         out.append((t, O_ACCEL, a))
@@ -302,11 +343,14 @@ def main(argv=None) -> int:
     ap.add_argument("--channels", default=None, help="car_bus.log channels (default all)")
     ap.add_argument("--no-car-bus", action="store_true", help="without the car's frames")
     ap.add_argument("--outage", default=None, help="GNSS outage A-B, s from the start")
+    ap.add_argument("--imu-time", default="grid", choices=("grid", "stamped"),
+                    help="grid: resampled to IMU_RATE_HZ; stamped: the device's samples with "
+                         "IMU_Time")
     a = ap.parse_args(argv)
     try:
         frames, meta = build(a.data, a.vehicle,
                              None if a.channels is None else set(a.channels.split(",")),
-                             not a.no_car_bus, parse_outage(a.outage))
+                             not a.no_car_bus, parse_outage(a.outage), imu_time=a.imu_time)
     except (OSError, ValueError, vehicle.ProfileError) as e:
         print(f"comma2k19: {e}", file=sys.stderr)
         return 1

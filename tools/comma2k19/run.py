@@ -2,6 +2,11 @@
 
     python -m tools.comma2k19.run [--data data/comma2k19-rav4] [--vehicle toyota_rav4_2017]
         [--outage 28-58] [--out out/drive-rav4] [--navecu build/host/navecu-toyota_rav4_2017]
+        [--imu-time grid|stamped]
+
+--imu-time stamped sends the device's own samples with their IMU_Time stamps (no
+resampling, convert.py) and runs the firmware with --imu-time stamped at the device's
+nominal rate (convert.STAMPED_RATE_HZ); grid (the default) resamples to IMU_RATE_HZ.
 
 Four runs of the same firmware on the same IMU and GNSS frames (tools/comma2k19/convert.py
 says what they carry and what the run is given besides the recording):
@@ -58,6 +63,14 @@ GNSS_OPTIONS = ["--gnss-accuracy", "declared", "--gnss-hacc-m", "3.2", "--gnss-v
                 "--gnss-sacc-mps", "0.2", "--gnss-vel-up", "none"]
 RATES = ["--imu-rate-hz", str(convert.IMU_RATE_HZ), "--nav-rate-hz", "10",
          "--status-rate-hz", "10", "--dyn-rate-hz", "10"]
+
+
+def rate_options(imu_time: str) -> list:
+    """The firmware's rate options for the IMU input variant (grid: RATES)."""
+    if imu_time == "grid":
+        return list(RATES)
+    return ["--imu-time", "stamped", "--imu-rate-hz", str(convert.STAMPED_RATE_HZ),
+            *RATES[2:]]
 
 
 def reference_truth(data: Path, t0: float) -> dict:
@@ -268,6 +281,7 @@ def main(argv=None) -> int:
                          "reported against the reference's")
     ap.add_argument("--fw-arg", action="append", default=[], metavar="ARG",
                     help="one more firmware option (repeat), e.g. --fw-arg=--mount-est-sigma-deg --fw-arg=2")
+    ap.add_argument("--imu-time", default="grid", choices=("grid", "stamped"))
     a = ap.parse_args(argv)
     data, out = Path(a.data), Path(a.out)
     navecu = Path(a.navecu or ROOT / "build" / "host" / f"navecu-{a.vehicle}")
@@ -302,12 +316,13 @@ def main(argv=None) -> int:
     }
     if outage is None:
         del variants["bus-outage"], variants["no-car-outage"]
-    built = {k: convert.build(data, a.vehicle, **kw) for k, kw in variants.items()}
+    built = {k: convert.build(data, a.vehicle, imu_time=a.imu_time, **kw)
+             for k, kw in variants.items()}
     meta = built["bus"][1]
     stages.done(f"{meta['frames']} frames, {meta['car_bus']['frames']} of the car's bus")
     truth = reference_truth(data, meta["t0_segment_s"])
-    opts = [*RATES, "--gnss-latency-ms", str(meta["gnss_latency_ms"]), *IMU_OPTIONS,
-            *GNSS_OPTIONS]
+    opts = [*rate_options(a.imu_time), "--gnss-latency-ms", str(meta["gnss_latency_ms"]),
+            *IMU_OPTIONS, *GNSS_OPTIONS]
     if a.mount == "configured":
         opts += ["--imu-mount-deg", ",".join(f"{x:g}" for x in meta["imu"]["imu_mount_deg_312"])]
     else:

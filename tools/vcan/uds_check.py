@@ -89,6 +89,7 @@ FORMATS = {"u16": ">H", "enum": ">B", "real": ">f", "vec3": ">3f"}
 def codecs(params):
     out = {int(p["did"]): Codec(FORMATS[p["type"]]) for p in params}
     out.update({did: Text() for did in ID_DIDS})
+    out[0xF1A1] = Codec(">BBBBI")  # NVM status: version, source, loaded, refused, seq
     return out
 
 
@@ -157,6 +158,11 @@ def run(binary, params):
             c.write_data_by_identifier(0x0242, [1.0, -0.5, 0.25])
             r["level_s_back"] = c.read_data_by_identifier(0x0204).service_data.values[0x0204]
             r["lever_back"] = c.read_data_by_identifier(0x0242).service_data.values[0x0242]
+            # RoutineControl StoreParameters saves them; a later write stays in RAM only
+            r["store_params_rid"] = \
+                c.start_routine(0x0200).service_data.routine_id_echo
+            r["nrc_unknown_routine"] = nrc_of(lambda: c.start_routine(0x0299))
+            c.write_data_by_identifier(0x0204, 30)
             c.tester_present()
             # ECUReset: the response, then the application restarts (default session)
             r["reset_type"] = c.ecu_reset(1).service_data.reset_type_echo
@@ -164,13 +170,16 @@ def run(binary, params):
             r["nrc_write_after_reset"] = nrc_of(lambda: c.write_data_by_identifier(0x0204, 45))
             r["level_s_after_reset"] = \
                 c.read_data_by_identifier(0x0204).service_data.values[0x0204]
+            r["lever_after_reset"] = \
+                c.read_data_by_identifier(0x0242).service_data.values[0x0242]
+            r["nvm_status"] = c.read_data_by_identifier(0xF1A1).service_data.values[0xF1A1]
             # three wrong keys: 0x35, 0x35, 0x36, then the delay's 0x37
             c.change_session(3)
             c.config["security_algo"] = wrong_algo
             r["nrc_wrong_keys"] = [nrc_of(lambda: c.unlock_security_access(1)) for _ in range(3)]
             r["nrc_in_delay"] = nrc_of(lambda: c.request_seed(1))
             c.config["security_algo"] = security_algo
-            r["nrc_unknown_service"] = nrc_of(lambda: c.routine_control(0x0203, 1))
+            r["nrc_unknown_service"] = nrc_of(lambda: c.communication_control(0, 1))
     finally:
         stack.stop()
         bus.shutdown()

@@ -37,6 +37,7 @@ const app_param_t app_params[APP_PARAM_N] = {
     [APP_PARAM_GNSS_LEVER_B_M] = {"gnss_lever_b_m", 0x0242u, APP_PARAM_VEC3, 0u, 0u, 0u, 0u, NAV_C(-10.0), NAV_C(10.0), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_UDS_REQUEST_ID] = {"uds_request_id", 0x0250u, APP_PARAM_U16, 0u, 0u, 1u, 1u, NAV_C(1.0), NAV_C(2047.0), {NAV_C(1952.0), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_UDS_RESPONSE_ID] = {"uds_response_id", 0x0251u, APP_PARAM_U16, 0u, 0u, 1u, 1u, NAV_C(1.0), NAV_C(2047.0), {NAV_C(1960.0), NAV_C(0.0), NAV_C(0.0)}},
+    [APP_PARAM_IMU_TIME] = {"imu_time", 0x0209u, APP_PARAM_ENUM, 0u, 0u, 1u, 0u, NAV_C(0.0), NAV_C(1.0), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
 };
 
 const app_param_id_t app_preset_params[APP_PRESET_PARAMS] = {
@@ -181,6 +182,14 @@ void app_param_get(const app_config_t *cfg, app_param_id_t id, nav_real_t v[3])
     case APP_PARAM_UDS_RESPONSE_ID:
         v[0] = (nav_real_t)cfg->uds_response_id;
         break;
+    case APP_PARAM_IMU_TIME:
+        if (cfg->imu_time == IMU_TIME_GRID) {
+            v[0] = NAV_C(0.0);
+        }
+        if (cfg->imu_time == IMU_TIME_STAMPED) {
+            v[0] = NAV_C(1.0);
+        }
+        break;
     default:
         break;
     }
@@ -302,6 +311,12 @@ int app_param_set(app_config_t *cfg, app_param_id_t id, const nav_real_t v[3])
         break;
     case APP_PARAM_UDS_RESPONSE_ID:
         cfg->uds_response_id = (uint16_t)v[0];
+        break;
+    case APP_PARAM_IMU_TIME:
+        cfg->imu_time = IMU_TIME_GRID;
+        if (v[0] > NAV_C(0.5)) {
+            cfg->imu_time = IMU_TIME_STAMPED;
+        }
         break;
     default:
         return -1;

@@ -64,7 +64,8 @@ typedef enum {
     APP_PARAM_GNSS_LEVER_B_M = 28,
     APP_PARAM_UDS_REQUEST_ID = 29,
     APP_PARAM_UDS_RESPONSE_ID = 30,
-    APP_PARAM_N = 31
+    APP_PARAM_IMU_TIME = 31,
+    APP_PARAM_N = 32
 } app_param_id_t;
 
 extern const app_param_t app_params[APP_PARAM_N];

@@ -551,6 +551,119 @@ bool navecu_can_imu_accel_imu_crc_is_in_phys_range(float value)
     return ((value >= 0.0f) && (value <= 255.0f));
 }
 
+int navecu_can_imu_time_pack(
+    uint8_t *dst_p,
+    const struct navecu_can_imu_time_t *src_p,
+    size_t size)
+{
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    memset(&dst_p[0], 0, 8);
+
+    dst_p[0] |= pack_left_shift_u32(src_p->sample_time, 0u, 0xffu);
+    dst_p[1] |= pack_right_shift_u32(src_p->sample_time, 8u, 0xffu);
+    dst_p[2] |= pack_right_shift_u32(src_p->sample_time, 16u, 0xffu);
+    dst_p[3] |= pack_right_shift_u32(src_p->sample_time, 24u, 0xffu);
+    dst_p[6] |= pack_left_shift_u8(src_p->imu_counter, 4u, 0xf0u);
+    dst_p[7] |= pack_left_shift_u8(src_p->imu_time_crc, 0u, 0xffu);
+
+    return (8);
+}
+
+int navecu_can_imu_time_unpack(
+    struct navecu_can_imu_time_t *dst_p,
+    const uint8_t *src_p,
+    size_t size)
+{
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    dst_p->sample_time = unpack_right_shift_u32(src_p[0], 0u, 0xffu);
+    dst_p->sample_time |= unpack_left_shift_u32(src_p[1], 8u, 0xffu);
+    dst_p->sample_time |= unpack_left_shift_u32(src_p[2], 16u, 0xffu);
+    dst_p->sample_time |= unpack_left_shift_u32(src_p[3], 24u, 0xffu);
+    dst_p->imu_counter = unpack_right_shift_u8(src_p[6], 4u, 0xf0u);
+    dst_p->imu_time_crc = unpack_right_shift_u8(src_p[7], 0u, 0xffu);
+
+    return (0);
+}
+
+int navecu_can_imu_time_init(struct navecu_can_imu_time_t *msg_p)
+{
+    if (msg_p == NULL) return -1;
+
+    memset(msg_p, 0, sizeof(struct navecu_can_imu_time_t));
+
+    return 0;
+}
+
+uint32_t navecu_can_imu_time_sample_time_encode(float value)
+{
+    return (uint32_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_imu_time_sample_time_decode(uint32_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_imu_time_sample_time_is_in_range(uint32_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_imu_time_sample_time_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 4294967295.0f));
+}
+
+uint8_t navecu_can_imu_time_imu_counter_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_imu_time_imu_counter_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_imu_time_imu_counter_is_in_range(uint8_t value)
+{
+    return (value <= 14u);
+}
+
+bool navecu_can_imu_time_imu_counter_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 14.0f));
+}
+
+uint8_t navecu_can_imu_time_imu_time_crc_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_imu_time_imu_time_crc_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_imu_time_imu_time_crc_is_in_range(uint8_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_imu_time_imu_time_crc_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 255.0f));
+}
+
 int navecu_can_wheel_speeds_pack(
     uint8_t *dst_p,
     const struct navecu_can_wheel_speeds_t *src_p,

@@ -49,6 +49,7 @@ extern "C" {
 /* Frame ids. */
 #define NAVECU_CAN_IMU_RATE_FRAME_ID (0x100u)
 #define NAVECU_CAN_IMU_ACCEL_FRAME_ID (0x101u)
+#define NAVECU_CAN_IMU_TIME_FRAME_ID (0x102u)
 #define NAVECU_CAN_WHEEL_SPEEDS_FRAME_ID (0x110u)
 #define NAVECU_CAN_GNSS_POSITION_FRAME_ID (0x120u)
 #define NAVECU_CAN_GNSS_VELOCITY_FRAME_ID (0x121u)
@@ -74,6 +75,7 @@ extern "C" {
 /* Frame lengths in bytes. */
 #define NAVECU_CAN_IMU_RATE_LENGTH (8u)
 #define NAVECU_CAN_IMU_ACCEL_LENGTH (8u)
+#define NAVECU_CAN_IMU_TIME_LENGTH (8u)
 #define NAVECU_CAN_WHEEL_SPEEDS_LENGTH (8u)
 #define NAVECU_CAN_GNSS_POSITION_LENGTH (8u)
 #define NAVECU_CAN_GNSS_VELOCITY_LENGTH (8u)
@@ -99,6 +101,7 @@ extern "C" {
 /* Extended or standard frame types. */
 #define NAVECU_CAN_IMU_RATE_IS_EXTENDED (0)
 #define NAVECU_CAN_IMU_ACCEL_IS_EXTENDED (0)
+#define NAVECU_CAN_IMU_TIME_IS_EXTENDED (0)
 #define NAVECU_CAN_WHEEL_SPEEDS_IS_EXTENDED (0)
 #define NAVECU_CAN_GNSS_POSITION_IS_EXTENDED (0)
 #define NAVECU_CAN_GNSS_VELOCITY_IS_EXTENDED (0)
@@ -173,6 +176,7 @@ extern "C" {
 /* Frame Names. */
 #define NAVECU_CAN_IMU_RATE_NAME "IMU_Rate"
 #define NAVECU_CAN_IMU_ACCEL_NAME "IMU_Accel"
+#define NAVECU_CAN_IMU_TIME_NAME "IMU_Time"
 #define NAVECU_CAN_WHEEL_SPEEDS_NAME "WheelSpeeds"
 #define NAVECU_CAN_GNSS_POSITION_NAME "GNSS_Position"
 #define NAVECU_CAN_GNSS_VELOCITY_NAME "GNSS_Velocity"
@@ -206,6 +210,9 @@ extern "C" {
 #define NAVECU_CAN_IMU_ACCEL_IMU_FAULT_NAME "ImuFault"
 #define NAVECU_CAN_IMU_ACCEL_IMU_COUNTER_NAME "ImuCounter"
 #define NAVECU_CAN_IMU_ACCEL_IMU_CRC_NAME "ImuCrc"
+#define NAVECU_CAN_IMU_TIME_SAMPLE_TIME_NAME "SampleTime"
+#define NAVECU_CAN_IMU_TIME_IMU_COUNTER_NAME "ImuCounter"
+#define NAVECU_CAN_IMU_TIME_IMU_TIME_CRC_NAME "ImuTimeCrc"
 #define NAVECU_CAN_WHEEL_SPEEDS_WHEEL_SPEED_FL_NAME "WheelSpeedFL"
 #define NAVECU_CAN_WHEEL_SPEEDS_WHEEL_SPEED_FR_NAME "WheelSpeedFR"
 #define NAVECU_CAN_WHEEL_SPEEDS_WHEEL_SPEED_RL_NAME "WheelSpeedRL"
@@ -418,6 +425,36 @@ struct navecu_can_imu_accel_t {
      * Offset: 0
      */
     uint8_t imu_crc;
+};
+
+/**
+ * Signals in message IMU_Time.
+ *
+ * The IMU's own time of one sample, for an IMU not on an exact grid (parameter imu_time = stamped; ignored with grid): SampleTime, the IMU clock in microseconds at the end of the sample interval, wrapping at 2^32 (71.6 min); the sample's increments in IMU_Rate and IMU_Accel are integrated over SampleTime minus the previous sample's. Sent before the IMU_Rate of the same sample, with its ImuCounter; E2E: its own CRC.
+ *
+ * All signal values are as on the CAN bus.
+ */
+struct navecu_can_imu_time_t {
+    /**
+     * Range: 0..4294967295 (0..4294967295 us)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint32_t sample_time;
+
+    /**
+     * Range: 0..14 (0..14 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t imu_counter;
+
+    /**
+     * Range: 0..255 (0..255 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t imu_time_crc;
 };
 
 /**
@@ -1985,6 +2022,163 @@ bool navecu_can_imu_accel_imu_crc_is_in_range(uint8_t value);
  * @return true if in range, false otherwise.
  */
 bool navecu_can_imu_accel_imu_crc_is_in_phys_range(float value);
+
+/**
+ * Pack message IMU_Time.
+ *
+ * @param[out] dst_p Buffer to pack the message into.
+ * @param[in] src_p Data to pack.
+ * @param[in] size Size of dst_p.
+ *
+ * @return Size of packed data, or negative error code.
+ */
+int navecu_can_imu_time_pack(
+    uint8_t *dst_p,
+    const struct navecu_can_imu_time_t *src_p,
+    size_t size);
+
+/**
+ * Unpack message IMU_Time.
+ *
+ * @param[out] dst_p Object to unpack the message into.
+ * @param[in] src_p Message to unpack.
+ * @param[in] size Size of src_p.
+ *
+ * @return zero(0) or negative error code.
+ */
+int navecu_can_imu_time_unpack(
+    struct navecu_can_imu_time_t *dst_p,
+    const uint8_t *src_p,
+    size_t size);
+
+/**
+ * Init message fields to default values from IMU_Time.
+ *
+ * @param[in] msg_p Message to init.
+ *
+ * @return zero(0) on success or (-1) in case of nullptr argument.
+ */
+int navecu_can_imu_time_init(struct navecu_can_imu_time_t *msg_p);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint32_t navecu_can_imu_time_sample_time_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_imu_time_sample_time_decode(uint32_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_imu_time_sample_time_is_in_range(uint32_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_imu_time_sample_time_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_imu_time_imu_counter_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_imu_time_imu_counter_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_imu_time_imu_counter_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_imu_time_imu_counter_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_imu_time_imu_time_crc_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_imu_time_imu_time_crc_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_imu_time_imu_time_crc_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_imu_time_imu_time_crc_is_in_phys_range(float value);
 
 /**
  * Pack message WheelSpeeds.

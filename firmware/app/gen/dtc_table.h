@@ -1,0 +1,35 @@
+/* GENERATED FILE - DO NOT EDIT. Source: firmware/app/dtc.toml.
+ * Regenerate with 'make dtc' (tools/gen_dtc.py); 'make test' fails if stale. */
+
+#ifndef NAVECU_DTC_TABLE_H
+#define NAVECU_DTC_TABLE_H
+
+#include <stdint.h>
+
+/* the DTCs: their index is the status byte's place in the NVM record */
+#define DTC_IMU_STALE 0u /* U1101-87 IMU_STALE */
+#define DTC_IMU_FAULT 1u /* C1101-96 IMU_FAULT */
+#define DTC_NO_GNSS 2u /* U1102-87 NO_GNSS */
+#define DTC_REJECTED 3u /* U1103-81 REJECTED */
+#define DTC_NVM_ERROR 4u /* C1104-46 NVM_ERROR */
+#define DTC_NO_HEADING 5u /* C1105-00 NO_HEADING */
+#define DTC_IMU_GAP 6u /* U1101-82 IMU_GAP */
+#define DTC_FILTER_RESET 7u /* C1106-64 FILTER_RESET */
+#define DTC_IMU_SUSPECT 8u /* C1101-29 IMU_SUSPECT */
+#define DTC_IMU_SATURATED 9u /* C1101-22 IMU_SATURATED */
+#define DTC_ODO_REJECTED 10u /* C1107-64 ODO_REJECTED */
+#define DTC_REACQUIRE 11u /* C1106-00 REACQUIRE */
+#define DTC_IMU_RATE_MISMATCH 12u /* C1101-38 IMU_RATE_MISMATCH */
+#define DTC_N 13u /* DTCs in the table */
+
+#define DTC_MAX 16u /* status bytes the NVM record holds */
+
+typedef struct {
+    uint32_t number;      /* the 3-byte DTC: J2012 code (high, middle), FTB (low) */
+    uint16_t health_mask; /* the NAV_Status HealthFlags bit it mirrors */
+    uint32_t confirm_ms;  /* the condition persisting this long: confirmedDTC */
+} dtc_def_t;
+
+extern const dtc_def_t dtc_table[DTC_N];
+
+#endif /* NAVECU_DTC_TABLE_H */

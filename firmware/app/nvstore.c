@@ -1,0 +1,172 @@
+/* nvstore.c - the parameters in the NVM record (layout and rules in nvstore.h). */
+#include "nvstore.h"
+
+#include <string.h>
+
+#include "app_uds.h"
+
+/* the record being read or written: off the stack (not reentrant, as calstore) */
+static calstore_ext_t ext;
+
+size_t nvstore_params_encode(const app_config_t *cfg, uint8_t *buf, size_t cap)
+{
+    size_t n = 0u;
+    for (int k = 0; k < (int)APP_PARAM_N; k++) {
+        const app_param_t *p = &app_params[k];
+        if (p->uds_read_only) {
+            continue;
+        }
+        if (cap - n < NVSTORE_ENTRY_HEAD) {
+            return 0u;
+        }
+        const size_t len =
+            app_uds_param_encode(cfg, (app_param_id_t)k, &buf[n + NVSTORE_ENTRY_HEAD],
+                                 cap - n - NVSTORE_ENTRY_HEAD);
+        if (len > cap - n - NVSTORE_ENTRY_HEAD) {
+            return 0u;
+        }
+        buf[n] = (uint8_t)(p->did >> 8);
+        buf[n + 1u] = (uint8_t)p->did;
+        buf[n + 2u] = (uint8_t)len;
+        n += NVSTORE_ENTRY_HEAD + len;
+    }
+    return n;
+}
+
+static void count_refused(nvstore_status_t *st)
+{
+    if (st->refused < UINT8_MAX) {
+        st->refused++;
+    }
+}
+
+void nvstore_params_decode(app_config_t *cfg, const uint8_t *buf, size_t len,
+                           nvstore_status_t *st)
+{
+    size_t k = 0u;
+    while (k < len) {
+        if (len - k < NVSTORE_ENTRY_HEAD ||
+            len - k - NVSTORE_ENTRY_HEAD < (size_t)buf[k + 2u]) {
+            count_refused(st); /* a truncated last entry */
+            return;
+        }
+        const uint16_t did = (uint16_t)(((uint16_t)buf[k] << 8) | buf[k + 1u]);
+        const size_t n = buf[k + 2u];
+        const app_param_id_t id = app_uds_param_of_did(did);
+        if (id == APP_PARAM_N || app_params[id].uds_read_only ||
+            app_uds_param_decode(cfg, id, &buf[k + NVSTORE_ENTRY_HEAD], n) != UDS_NRC_OK) {
+            count_refused(st);
+        } else if (st->loaded < UINT8_MAX) {
+            st->loaded++;
+        } else {
+            /* loaded saturated */
+        }
+        k += NVSTORE_ENTRY_HEAD + n;
+    }
+}
+
+int nvstore_layer(hal_t *hal, app_config_t *cfg, nvstore_status_t *st)
+{
+    calstore_t cs;
+    cal_record_t rec;
+    *cfg = app_default_config();
+    memset(st, 0, sizeof *st);
+    const int rc = calstore_load_ext(hal, &cs, &rec, &ext);
+    st->seq = cs.seq;
+    if (rc < 0) {
+        st->source = (uint8_t)NVSTORE_SRC_ERROR;
+        return rc;
+    }
+    if (ext.status == (uint8_t)CALSTORE_EXT_NEWER || ext.status == (uint8_t)CALSTORE_EXT_CORRUPT) {
+        st->version = ext.version;
+        st->source = (uint8_t)NVSTORE_SRC_REFUSED;
+    } else if (rc != (int)CALSTORE_OK) {
+        st->source = (uint8_t)NVSTORE_SRC_DEFAULTS;
+    } else if (ext.status == (uint8_t)CALSTORE_EXT_NONE) {
+        st->version = (uint8_t)CALSTORE_VERSION;
+        st->source = (uint8_t)NVSTORE_SRC_MIGRATED;
+    } else {
+        st->version = (uint8_t)CALSTORE_EXT_VERSION;
+        st->source = (uint8_t)NVSTORE_SRC_NVM;
+        nvstore_params_decode(cfg, ext.params, ext.params_len, st);
+    }
+    return rc;
+}
+
+/* the newest record's DTC bytes into ext.dtc (0xFF: none) */
+static void load_dtc(hal_t *hal)
+{
+    calstore_t cs;
+    cal_record_t rec;
+    (void)calstore_load_ext(hal, &cs, &rec, &ext);
+    if (ext.status != (uint8_t)CALSTORE_EXT_OK) {
+        memset(ext.dtc, 0xFF, sizeof ext.dtc);
+    }
+}
+
+int nvstore_save(hal_t *hal, calstore_t *cs, const app_config_t *cfg, const cal_record_t *cal)
+{
+    if (hal == NULL || cs == NULL || cfg == NULL || cal == NULL) {
+        return HAL_EINVAL;
+    }
+    load_dtc(hal);
+    const size_t n = nvstore_params_encode(cfg, ext.params, sizeof ext.params);
+    if (n == 0u) {
+        return HAL_ENOSPC;
+    }
+    ext.params_len = (uint16_t)n;
+    return calstore_save_ext(hal, cs, cal, &ext);
+}
+
+int nvstore_erase_calibration(hal_t *hal, calstore_t *cs)
+{
+    if (hal == NULL || cs == NULL) {
+        return HAL_EINVAL;
+    }
+    cal_record_t rec;
+    calstore_t now;
+    const int rc = calstore_load_ext(hal, &now, &rec, &ext);
+    if (rc == (int)CALSTORE_OK && ext.status == (uint8_t)CALSTORE_EXT_OK) {
+        const cal_record_t none = {0.0f, 0.0f, 0.0f, (uint8_t)CAL_SRC_NONE};
+        return calstore_save_ext(hal, cs, &none, &ext);
+    }
+    return calstore_erase(hal, cs);
+}
+
+int nvstore_put_dtc_status(hal_t *hal, calstore_t *store, const uint8_t status[CALSTORE_DTC_N])
+{
+    if (hal == NULL || store == NULL || status == NULL) {
+        return HAL_EINVAL;
+    }
+    cal_record_t rec;
+    calstore_t now;
+    const int rc = calstore_load_ext(hal, &now, &rec, &ext);
+    if (rc < 0) {
+        return rc;
+    }
+    if (rc != (int)CALSTORE_OK) {
+        rec.dh_rad = 0.0f; /* no record: one with no calibration and no parameters */
+        rec.odo_scale_err = 0.0f;
+        rec.base_m = 0.0f;
+        rec.source = (uint8_t)CAL_SRC_NONE;
+    }
+    if (ext.status != (uint8_t)CALSTORE_EXT_OK) {
+        memset(ext.dtc, 0xFF, sizeof ext.dtc);
+        ext.params_len = 0u;
+    } else if (memcmp(ext.dtc, status, CALSTORE_DTC_N) == 0) {
+        return 0;
+    } else {
+        /* changed below */
+    }
+    memcpy(ext.dtc, status, CALSTORE_DTC_N);
+    return calstore_save_ext(hal, store, &rec, &ext);
+}
+
+int nvstore_dtc_status(hal_t *hal, uint8_t out[CALSTORE_DTC_N])
+{
+    cal_record_t rec;
+    calstore_t cs;
+    const int rc = calstore_load_ext(hal, &cs, &rec, &ext);
+    memcpy(out, ext.dtc, CALSTORE_DTC_N);
+    return rc < 0 ? rc : 0;
+}
