@@ -510,7 +510,8 @@ static void expect_routine_ok(size_t n, uint16_t rid)
 
 /* RoutineControl: the extended session (0x7F), a sub-function other than startRoutine
  * (0x12), too short or with an option record (0x13), locked (0x33), an unknown routine
- * (0x31: also 0x0204 AdoptMounting, whose owner is not merged here) */
+ * (0x31); 0x0204 AdoptMounting without a converged estimate (0x22), with one: the
+ * parameters take it in RAM, the source becomes fixed */
 static void test_routine_checks(void **state)
 {
     (void)state;
@@ -522,9 +523,20 @@ static void test_routine_checks(void **state)
     assert_int_equal(hal.nvm_units, 0u); /* nothing written */
     unlock();
     expect_nrc(REQUEST(0x31, 0x01, 0x02, 0x00, 0x01), 0x31, 0x13);
-    expect_nrc(ROUTINE(0x0204u), 0x31, 0x31);
+    expect_nrc(ROUTINE(0x0205u), 0x31, 0x31);
     expect_nrc(ROUTINE(0x01FFu), 0x31, 0x31);
     expect_nrc(ROUTINE(0xFF00u), 0x31, 0x31);
+    expect_nrc(ROUTINE(0x0204u), 0x31, 0x22); /* fixed mode: no estimate */
+    app.keep.mount_state = (uint8_t)APP_MOUNT_ESTIMATED;
+    app.keep.mest.res.rpy_rad[0] = 3.0f;
+    app.keep.mest.res.rpy_rad[1] = -0.5f;
+    app.keep.mest.res.rpy_rad[2] = 1.5f;
+    app.cfg.imu_mount_source = MOUNT_SOURCE_AUTOMATIC;
+    expect_routine_ok(ROUTINE(0x0204u), 0x0204u);
+    assert_true(app.cfg.imu_mount_rad[0] > 2.99f && app.cfg.imu_mount_rad[0] < 3.01f);
+    assert_true(app.cfg.imu_mount_rad[1] > -0.51f && app.cfg.imu_mount_rad[1] < -0.49f);
+    assert_true(app.cfg.imu_mount_rad[2] > 1.49f && app.cfg.imu_mount_rad[2] < 1.51f);
+    assert_int_equal(app.cfg.imu_mount_source, MOUNT_SOURCE_FIXED);
     assert_int_equal(hal.nvm_units, 0u);
 }
 

@@ -272,7 +272,7 @@ static uint8_t start_routine(void *user, uint16_t rid, const uint8_t *data, size
     hal_t *hal = a->uds.hal;
     calib_t *c = &a->keep.cal;
     (void)data;
-    if (rid < APP_UDS_RID_STORE_PARAMS || rid > APP_UDS_RID_STORE_CALIBRATION) {
+    if (rid < APP_UDS_RID_STORE_PARAMS || rid > APP_UDS_RID_ADOPT_MOUNTING) {
         return UDS_NRC_REQUEST_OUT_OF_RANGE;
     }
     if (len != 0u) {
@@ -282,6 +282,10 @@ static uint8_t start_routine(void *user, uint16_t rid, const uint8_t *data, size
         /* at_reset parameters among them: navigation not started (as a write) */
         return a->run.mode == APP_MODE_WAIT_INIT ? restore_defaults(a)
                                                  : UDS_NRC_CONDITIONS_NOT_CORRECT;
+    }
+    if (rid == APP_UDS_RID_ADOPT_MOUNTING) {
+        /* in RAM, as RestoreDefaults (0x0200 saves it); no converged estimate: 0x22 */
+        return app_adopt_mounting(a) == 0 ? UDS_NRC_OK : UDS_NRC_CONDITIONS_NOT_CORRECT;
     }
     if (!app_nvm_write_allowed(a) || hal == NULL) {
         return UDS_NRC_CONDITIONS_NOT_CORRECT;

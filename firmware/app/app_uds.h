@@ -42,6 +42,7 @@
 #define APP_UDS_RID_ERASE_CALIBRATION 0x0201u  /* the stored and the used calibration */
 #define APP_UDS_RID_RESTORE_DEFAULTS 0x0202u   /* parameters to the defaults, in RAM */
 #define APP_UDS_RID_STORE_CALIBRATION 0x0203u  /* the calibration in use to NVM */
+#define APP_UDS_RID_ADOPT_MOUNTING 0x0204u     /* the mounting estimate -> imu_mount_rad, in RAM */
 
 /* the strings behind them: build defines (the HAL has no device serial: a placeholder
  * until the ECU's unique ID is read through the HAL) */
