@@ -180,8 +180,9 @@ def _middle_signals(msg, counter_and_crc=False, page=0):
     names = dict(_pages(msg)).get(page if any(s.is_multiplexer for s in msg.signals) else None)
     values = {n: _value_sets(msg.get_signal_by_name(n))["middle"] for n in names
               if n not in skip}
-    if any(s.is_multiplexer for s in msg.signals):
-        values["StatusPage"] = page
+    mux = next((s for s in msg.signals if s.is_multiplexer), None)
+    if mux is not None:  # StatusPage, CalPage
+        values[mux.name] = page
     return values
 
 
