@@ -212,6 +212,28 @@ static void test_identification_dids(void **state)
     expect_nrc(REQUEST(0x2E, 0xF1, 0x95, 0x41), 0x2E, 0x31);
 }
 
+/* the mounting estimate's DID: 29 bytes, read-only; fixed mode: state 0, sigmas pi */
+static void test_mount_estimate_did(void **state)
+{
+    (void)state;
+    size_t n = REQUEST(0x22, 0x02, 0x60);
+    assert_int_equal(n, 3u + 29u);
+    assert_int_equal(rsp[0], 0x62);
+    assert_int_equal(rsp[3], 0u); /* MountState fixed */
+    /* sigma roll/pitch (bytes 13..16 of the value): pi as float32 big-endian */
+    const uint8_t pi_be[4] = {0x40, 0x49, 0x0F, 0xDB};
+    assert_memory_equal(&rsp[3u + 13u], pi_be, 4u);
+    assert_memory_equal(&rsp[3u + 17u], pi_be, 4u);
+    app.keep.mount_state = 2u;
+    app.keep.mest.res.n_windows = 0x01020304u;
+    n = REQUEST(0x22, 0x02, 0x60);
+    assert_int_equal(rsp[3], 2u);
+    const uint8_t win[4] = {1u, 2u, 3u, 4u};
+    assert_memory_equal(&rsp[3u + 25u], win, 4u);
+    unlock();
+    expect_nrc(REQUEST(0x2E, 0x02, 0x60, 0x00), 0x2E, 0x31);
+}
+
 static void test_all_dids_in_one_request(void **state)
 {
     (void)state;
@@ -488,7 +510,8 @@ static void expect_routine_ok(size_t n, uint16_t rid)
 
 /* RoutineControl: the extended session (0x7F), a sub-function other than startRoutine
  * (0x12), too short or with an option record (0x13), locked (0x33), an unknown routine
- * (0x31: also 0x0204 AdoptMounting, whose owner is not merged here) */
+ * (0x31); 0x0204 AdoptMounting without a converged estimate (0x22), with one: the
+ * parameters take it in RAM, the source becomes fixed */
 static void test_routine_checks(void **state)
 {
     (void)state;
@@ -500,9 +523,20 @@ static void test_routine_checks(void **state)
     assert_int_equal(hal.nvm_units, 0u); /* nothing written */
     unlock();
     expect_nrc(REQUEST(0x31, 0x01, 0x02, 0x00, 0x01), 0x31, 0x13);
-    expect_nrc(ROUTINE(0x0204u), 0x31, 0x31);
+    expect_nrc(ROUTINE(0x0205u), 0x31, 0x31);
     expect_nrc(ROUTINE(0x01FFu), 0x31, 0x31);
     expect_nrc(ROUTINE(0xFF00u), 0x31, 0x31);
+    expect_nrc(ROUTINE(0x0204u), 0x31, 0x22); /* fixed mode: no estimate */
+    app.keep.mount_state = (uint8_t)APP_MOUNT_ESTIMATED;
+    app.keep.mest.res.rpy_rad[0] = 3.0f;
+    app.keep.mest.res.rpy_rad[1] = -0.5f;
+    app.keep.mest.res.rpy_rad[2] = 1.5f;
+    app.cfg.imu_mount_source = MOUNT_SOURCE_AUTOMATIC;
+    expect_routine_ok(ROUTINE(0x0204u), 0x0204u);
+    assert_true(app.cfg.imu_mount_rad[0] > 2.99f && app.cfg.imu_mount_rad[0] < 3.01f);
+    assert_true(app.cfg.imu_mount_rad[1] > -0.51f && app.cfg.imu_mount_rad[1] < -0.49f);
+    assert_true(app.cfg.imu_mount_rad[2] > 1.49f && app.cfg.imu_mount_rad[2] < 1.51f);
+    assert_int_equal(app.cfg.imu_mount_source, MOUNT_SOURCE_FIXED);
     assert_int_equal(hal.nvm_units, 0u);
 }
 
@@ -669,6 +703,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test_setup(test_every_parameter_did_read, setup),
         cmocka_unit_test_setup(test_identification_dids, setup),
+        cmocka_unit_test_setup(test_mount_estimate_did, setup),
         cmocka_unit_test_setup(test_all_dids_in_one_request, setup),
         cmocka_unit_test_setup(test_write_refused_then_accepted_and_read_back, setup),
         cmocka_unit_test_setup(test_reset_parameter_needs_navigation_stopped, setup),

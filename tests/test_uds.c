@@ -253,14 +253,14 @@ static void test_read_did_count_limit_and_response_too_long(void **state)
         req[2u + 2u * i] = 0x00;
     }
     uint8_t big[256];
-    /* 32 DIDs: allowed, 1 + 32 * 4 bytes */
+    /* UDS_MAX_READ_DIDS DIDs: allowed, 4 bytes each */
     assert_int_equal(uds_handle(&srv, req, 1u + 2u * UDS_MAX_READ_DIDS, 0, big, sizeof big),
                      1u + 4u * UDS_MAX_READ_DIDS);
     assert_int_equal(big[0], 0x62);
-    /* 33: 0x13 */
+    /* one more: 0x13 */
     assert_int_equal(uds_handle(&srv, req, sizeof req, 0, big, sizeof big), 3u);
     assert_int_equal(big[2], 0x13);
-    /* 32 DIDs into a 64-byte buffer: 0x14 */
+    /* as many into a 64-byte buffer: 0x14 */
     assert_int_equal(uds_handle(&srv, req, 1u + 2u * UDS_MAX_READ_DIDS, 0, rsp, sizeof rsp), 3u);
     assert_memory_equal(rsp, "\x7F\x22\x14", 3u);
 }

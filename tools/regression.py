@@ -128,6 +128,7 @@ def summarize(out_log: Path, db=None) -> dict:
                                      for n in ("StatusPage", "Mode", "HealthFlags"))
     cal_sigs = [cal_def.get_signal_by_name(n)
                 for n in ("CalStatus", "CalSource", "CalCount", "CalStored")]
+    cal_page_sig = cal_def.get_signal_by_name("CalPage")
     counts, last, modes = Counter(), {}, Counter()
     flags_seen, cal_seen = 0, set()
     t_first_nav = t_last = None
@@ -154,10 +155,15 @@ def summarize(out_log: Path, db=None) -> dict:
                     if not mode_changes or mode_changes[-1][1] != mode:
                         mode_changes.append((t, mode))
             elif fid == cal_def.frame_id:
-                cal = tuple(_raw(s, word) for s in cal_sigs)
-                cal_seen.add(cal[0])
-                if not cal_changes or cal_changes[-1][1] != cal:
-                    cal_changes.append((t, cal))
+                # pages 1 and 2 (the automatic mounting estimate) are not the calibration
+                page = _raw(cal_page_sig, word)
+                if page != 0:
+                    key = (fid, page)  # left out of "final" (page 0 keeps its place)
+                else:
+                    cal = tuple(_raw(s, word) for s in cal_sigs)
+                    cal_seen.add(cal[0])
+                    if not cal_changes or cal_changes[-1][1] != cal:
+                        cal_changes.append((t, cal))
             elif fid == pos_id and t_first_nav is None:
                 t_first_nav = t
             last[key] = data
@@ -174,6 +180,8 @@ def summarize(out_log: Path, db=None) -> dict:
         if fid == st_def.frame_id:
             values["HealthFlags"] = _flag_names(bits, _raw(flags_sig,
                                                            int.from_bytes(data, "little")))
+        if fid == cal_def.frame_id:
+            values.pop("CalPage", None)  # page 0, the frame of before the pages
         final[defs[fid].name] = values
     counters = {}
     pages = nc.status_signals(db)

@@ -47,6 +47,16 @@ int app_init(app_t *app, const app_config_t *cfg)
                   cfg->can_ids[NAVECU_MSG_IMU_ACCEL]);
     imu_link_stamped(&app->keep.imu, cfg->imu_time == IMU_TIME_STAMPED);
     mounting_init(&app->keep.mount, cfg->imu_mount_rad);
+    const mount_est_config_t mcfg = {cfg->mount_est_sigma_rad, cfg->mount_est_excite_m2ps3};
+    const int mest_rc = mount_est_init(&app->keep.mest, &mcfg); /* "no estimate" in fixed mode */
+    if (cfg->imu_mount_source == MOUNT_SOURCE_AUTOMATIC) {
+        const nav_real_t zero[3] = {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)};
+        if (mest_rc != NAV_OK) {
+            return NAV_EINVAL;
+        }
+        mounting_init(&app->keep.mount, zero); /* the estimate's, when it converges */
+        app->keep.mount_state = (uint8_t)APP_MOUNT_ESTIMATING;
+    }
     dtc_init(&app->keep.dtc); /* as after a clear until app_dtc_load (app_dtc.h) */
     app->run.mode = APP_MODE_WAIT_INIT;
     (void)app_uds_init(app); /* valid IDs (app_config_valid): cannot fail */
@@ -156,6 +166,57 @@ static void release_for_rate(app_t *a)
     a->run.rate_held = 0u;
 }
 
+/* The automatic mounting estimate (imu_mount_source automatic): every sample in the
+ * IMU's axes with the odometer's speed. When it converges it becomes the mounting, and a
+ * start held for it goes on from GNSS while driving (the course is the heading; roll and
+ * pitch start level, the filter takes them from there). */
+static void mount_auto_sample(app_t *a, const int32_t w_raw[3], const int32_t v_raw[3],
+                              uint32_t dt_us)
+{
+    imu_inc_t inc;
+    const nav_real_t dt_s = dt_us != 0u ? (nav_real_t)dt_us * NAV_C(1e-6)
+                                        : NAV_C(1.0) / (nav_real_t)a->cfg.imu_rate_hz;
+    app_rx_imu_increment(w_raw, v_raw, dt_s, &inc);
+    const odo_t *o = &a->keep.odo;
+    const int rc = mount_est_sample(&a->keep.mest, &inc, o->speed_mps, o->valid ? 1 : 0);
+    if (rc == NAV_EINVAL) {
+        reject(a, &a->keep.health.bad_value);
+        return;
+    }
+    if (rc != 1) {
+        return;
+    }
+    mount_est_solve(&a->keep.mest);
+    if (!a->keep.mest.res.converged || a->keep.mount_state != (uint8_t)APP_MOUNT_ESTIMATING) {
+        return; /* after it converged it goes on refining (reported, adoptable); the
+                   mounting in use stays the one navigation started with */
+    }
+    mounting_init(&a->keep.mount, a->keep.mest.res.rpy_rad);
+    a->keep.mount_state = (uint8_t)APP_MOUNT_ESTIMATED;
+    if (a->run.mount_held && a->run.mode == APP_MODE_FAULT) {
+        align_t *al = &a->run.align;
+        al->reacq_roll_rad = NAV_C(0.0);
+        al->reacq_pitch_rad = NAV_C(0.0);
+        al->reacq_heading_rad = NAV_C(0.0);
+        al->reacq_mount_rad = NAV_C(0.0);
+        al->reacquire = 1u;
+        a->run.mount_start = 1u;
+    }
+    a->run.mount_held = 0u;
+}
+
+int app_adopt_mounting(app_t *a)
+{
+    if (a->keep.mount_state != (uint8_t)APP_MOUNT_ESTIMATED) {
+        return -1;
+    }
+    for (int i = 0; i < 3; i++) {
+        a->cfg.imu_mount_rad[i] = a->keep.mest.res.rpy_rad[i];
+    }
+    a->cfg.imu_mount_source = MOUNT_SOURCE_FIXED;
+    return 0;
+}
+
 /* One IMU sample (raw LSB) of dt_us (stamped; 0: the nominal period): levelling, or a
  * navigation step with or without the filter, then the outputs due. */
 static void process_sample(app_t *a, hal_t *hal, const int32_t w_raw[3], const int32_t v_raw[3],
@@ -164,6 +225,9 @@ static void process_sample(app_t *a, hal_t *hal, const int32_t w_raw[3], const i
     a->keep.n_samples++;
     const uint32_t step_us = dt_us != 0u ? dt_us : 1000000u / a->cfg.imu_rate_hz;
     a->keep.imu_t_us += step_us;
+    if (a->keep.mount_state != (uint8_t)APP_MOUNT_FIXED) {
+        mount_auto_sample(a, w_raw, v_raw, dt_us);
+    }
     if (a->run.mode == APP_MODE_LEVELLING) {
         const uint32_t n_total = (uint32_t)a->cfg.level_s * a->cfg.imu_rate_hz;
         if (align_level_sample(&a->run.align, v_raw, n_total)) {
@@ -321,7 +385,12 @@ static void on_gnss_status(app_t *a, hal_t *hal, const rx_input_t *in)
         return;
     }
     if (a->run.align.reacquire && a->run.mode == APP_MODE_FAULT) {
-        if (!imu_rate_mismatch(&a->keep.rate) && align_reacquire_ready(&fix)) {
+        /* the start after the mounting estimate: driving, the course is the heading */
+        int course_ok = 1;
+        if (a->run.mount_start && fix.speed_mps < APP_GNSS_COURSE_MIN_MPS) {
+            course_ok = 0;
+        }
+        if (!imu_rate_mismatch(&a->keep.rate) && course_ok && align_reacquire_ready(&fix)) {
             if (align_reacquire(&a->run.align, &fix, &a->run.nav, &a->run.dr, &a->keep.cal) !=
                 NAV_OK) {
                 reject(a, &a->keep.health.gnss_rejected);
@@ -330,6 +399,7 @@ static void on_gnss_status(app_t *a, hal_t *hal, const rx_input_t *in)
             landnav_restart(&a->run.land);
             gnss_time_forget(&a->run.fusion.time); /* the velocities before the gap */
             a->run.mode = APP_MODE_NAVIGATING;
+            a->run.mount_start = 0u;
         }
         return; /* between 0.3 and 5 m/s the course is not a heading, or the IMU rate
                    disagrees with the data: wait */

@@ -12,6 +12,7 @@
  *   fusion       the Kalman filter's schedule, updates and supervision (gnss_time: when
  *                a fix was valid)
  *   calib        the car's calibration (dH, mu, mounting) and its NVM policy
+ *   mount_est    the automatic estimate of the IMU's mounting (imu_mount_source automatic)
  *   commands     CMD_Control, CMD_KnownPosition, CMD_InitialAttitude
  *   output       NAV_* frames, HealthFlags, the output mode
  *   app_loop     the main loop's pass, the same on every board
@@ -48,6 +49,7 @@
 #include "imu_rate.h"
 #include "imu_stream.h"
 #include "landnav.h"
+#include "mount_est.h"
 #include "mounting.h"
 #include "nvstore.h"
 #include "odo.h"
@@ -81,11 +83,20 @@ typedef struct {
     zbias_t zbias;          /* the z gyro bias learnt at standstill (the IMU's) */
     odo_t odo;              /* the car's odometer */
     mounting_t mount;       /* the IMU's configured rotation into the vehicle's axes */
+    mount_est_t mest;       /* the automatic mounting estimate (imu_mount_source automatic) */
+    uint8_t mount_state;    /* app_mount_state_t */
     dtc_t dtc;              /* the fault memory: a DTC per health condition (app_dtc.h) */
     uint32_t dtc_dirty;          /* DTCs whose stored byte changed, not yet in NVM (bit i) */
     uint32_t dtc_persist_writes; /* NVM record writes of the DTC status bytes (app_dtc.c) */
     uint32_t dtc_persist_failed; /* of them, writes that failed */
 } app_keep_t;
+
+/* The mounting's state (NAV_Calibration MountState, DID 0x0260). */
+typedef enum {
+    APP_MOUNT_FIXED = 0,      /* imu_mount_source fixed: imu_mount_rad */
+    APP_MOUNT_ESTIMATING = 1, /* automatic, not converged: navigation held */
+    APP_MOUNT_ESTIMATED = 2,  /* automatic, converged: the estimate is the mounting */
+} app_mount_state_t;
 
 /* What restarts with navigation: a reset is one assignment of zeros (app_reset). */
 typedef struct {
@@ -104,6 +115,8 @@ typedef struct {
     nav_real_t yaw_rate_rps;/* body z rate of the last IMU sample */
     uint8_t rate_held;      /* mode Fault for an IMU rate mismatch, from rate_resume */
     app_mode_t rate_resume; /* WaitInit or Levelling: where it goes on when the rate matches */
+    uint8_t mount_held;     /* mode Fault: the start waits for the mounting estimate */
+    uint8_t mount_start;    /* the estimate converged: start from GNSS, driving */
 } app_run_t;
 
 struct app {
@@ -175,6 +188,23 @@ void app_poll(app_t *app, hal_t *hal);
 #define APP_STATUS_DEADLINE_PERIODS 3u
 #define APP_PREDICT_DEADLINE_PERIODS 3u
 int app_tasks_ok(app_t *app, uint64_t now_us);
+
+/*
+ * The automatic mounting estimate into the parameters: once it has converged (mount_state
+ * APP_MOUNT_ESTIMATED) the latest estimate (it goes on refining after convergence) is
+ * copied into cfg.imu_mount_rad and imu_mount_source becomes fixed, so that a parameter
+ * save (RoutineControl 0x0200) keeps it and the next start uses it without estimating
+ * again. The mounting in use does not change before that restart. Returns 0, or -1 when
+ * there is no converged estimate (nothing changed). RoutineControl 0x0204 AdoptMounting
+ * calls it.
+ */
+int app_adopt_mounting(app_t *app);
+
+/* The mounting estimate's state and result (DID 0x0260, NAV_Calibration). */
+static inline const mount_est_result_t *app_mount_estimate(const app_t *app)
+{
+    return &app->keep.mest.res;
+}
 
 /* Read-only views for the board's summary and the tests. */
 static inline app_mode_t app_mode(const app_t *app) { return app->run.mode; }

@@ -24,6 +24,12 @@ typedef enum {
                               gnss_sacc_mps (its datasheet's figures) */
 } gnss_acc_source_t;
 
+/* where the IMU's mounting comes from (the parameter imu_mount_source) */
+typedef enum {
+    MOUNT_SOURCE_FIXED = 0,     /* imu_mount_rad */
+    MOUNT_SOURCE_AUTOMATIC = 1, /* estimated from the data (mount_est.h) */
+} mount_source_t;
+
 /* whether the receiver measures the vertical velocity (the parameter gnss_vel_up) */
 typedef enum {
     GNSS_VUP_MEASURED = 0,
@@ -69,6 +75,9 @@ typedef struct {
                                      the IMU, body axes, m */
     nav_real_t imu_mount_rad[3];  /* the IMU's attitude in the vehicle: roll, pitch, yaw
                                      (mounting.h) */
+    mount_source_t imu_mount_source; /* imu_mount_rad, or the automatic estimate */
+    nav_real_t mount_est_sigma_rad;  /* the automatic estimate's convergence sigma */
+    nav_real_t mount_est_excite_m2ps3; /* and its excitation */
     nav_real_t gyro_range_rps;    /* the IMU's measurement range: a rate at or beyond it is */
     nav_real_t accel_range_mps2;  /* saturated (counted, flagged) */
     uint16_t uds_request_id;      /* the UDS server's physical request ID (11-bit) */

@@ -118,6 +118,24 @@ static size_t put_string(uint8_t *buf, size_t cap, const char *s)
     return n; /* > cap: the server answers 0x14 */
 }
 
+static size_t put_mount_est(const app_t *a, uint8_t *buf, size_t cap)
+{
+    if (cap < APP_UDS_MOUNT_EST_LEN) {
+        return APP_UDS_MOUNT_EST_LEN;
+    }
+    const mount_est_result_t *r = app_mount_estimate(a);
+    const nav_real_t v[6] = {r->rpy_rad[0],   r->rpy_rad[1],    r->rpy_rad[2],
+                             r->sigma_rp_rad, r->sigma_yaw_rad, r->excite_m2ps3};
+    buf[0] = a->keep.mount_state;
+    for (size_t i = 0u; i < 6u; i++) {
+        put_f32(&buf[1u + 4u * i], v[i]);
+    }
+    for (size_t i = 0u; i < 4u; i++) {
+        buf[25u + i] = (uint8_t)(r->n_windows >> (24u - 8u * i));
+    }
+    return APP_UDS_MOUNT_EST_LEN;
+}
+
 static size_t read_did(void *user, uint16_t did, uint8_t *buf, size_t cap)
 {
     const app_t *a = (const app_t *)user;
@@ -129,6 +147,9 @@ static size_t read_did(void *user, uint16_t did, uint8_t *buf, size_t cap)
     }
     if (did == APP_UDS_DID_VEHICLE) {
         return put_string(buf, cap, vehicle_profile.name);
+    }
+    if (did == APP_UDS_DID_MOUNT_EST) {
+        return put_mount_est(a, buf, cap);
     }
     if (did == APP_UDS_DID_NVM_STATUS) {
         if (cap < 8u) {
@@ -251,7 +272,7 @@ static uint8_t start_routine(void *user, uint16_t rid, const uint8_t *data, size
     hal_t *hal = a->uds.hal;
     calib_t *c = &a->keep.cal;
     (void)data;
-    if (rid < APP_UDS_RID_STORE_PARAMS || rid > APP_UDS_RID_STORE_CALIBRATION) {
+    if (rid < APP_UDS_RID_STORE_PARAMS || rid > APP_UDS_RID_ADOPT_MOUNTING) {
         return UDS_NRC_REQUEST_OUT_OF_RANGE;
     }
     if (len != 0u) {
@@ -261,6 +282,10 @@ static uint8_t start_routine(void *user, uint16_t rid, const uint8_t *data, size
         /* at_reset parameters among them: navigation not started (as a write) */
         return a->run.mode == APP_MODE_WAIT_INIT ? restore_defaults(a)
                                                  : UDS_NRC_CONDITIONS_NOT_CORRECT;
+    }
+    if (rid == APP_UDS_RID_ADOPT_MOUNTING) {
+        /* in RAM, as RestoreDefaults (0x0200 saves it); no converged estimate: 0x22 */
+        return app_adopt_mounting(a) == 0 ? UDS_NRC_OK : UDS_NRC_CONDITIONS_NOT_CORRECT;
     }
     if (!app_nvm_write_allowed(a) || hal == NULL) {
         return UDS_NRC_CONDITIONS_NOT_CORRECT;

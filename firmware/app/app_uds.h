@@ -28,6 +28,11 @@
 #define APP_UDS_DID_SERIAL 0xF18Cu     /* ECUSerialNumber */
 #define APP_UDS_DID_SW_VERSION 0xF195u /* systemSupplierECUSoftwareVersionNumber */
 #define APP_UDS_DID_VEHICLE 0xF1A0u    /* the build's vehicle profile name (vehicles/NAME) */
+/* the automatic mounting estimate, read-only, 29 bytes: MountState (1: app_mount_state_t),
+ * roll, pitch, yaw (rad), sigma roll/pitch, sigma yaw (rad), excitation (m^2/s^3), each a
+ * float32 big-endian, then the windows accumulated (uint32 big-endian) */
+#define APP_UDS_DID_MOUNT_EST 0x0260u
+#define APP_UDS_MOUNT_EST_LEN 29u
 /* the NVM record loaded at boot (nvstore.h): version, source (NVSTORE_SRC_*), entries
  * loaded, entries refused, seq (4 bytes big-endian) */
 #define APP_UDS_DID_NVM_STATUS 0xF1A1u
@@ -37,6 +42,7 @@
 #define APP_UDS_RID_ERASE_CALIBRATION 0x0201u  /* the stored and the used calibration */
 #define APP_UDS_RID_RESTORE_DEFAULTS 0x0202u   /* parameters to the defaults, in RAM */
 #define APP_UDS_RID_STORE_CALIBRATION 0x0203u  /* the calibration in use to NVM */
+#define APP_UDS_RID_ADOPT_MOUNTING 0x0204u     /* the mounting estimate -> imu_mount_rad, in RAM */
 
 /* the strings behind them: build defines (the HAL has no device serial: a placeholder
  * until the ECU's unique ID is read through the HAL) */

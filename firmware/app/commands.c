@@ -17,6 +17,11 @@ static void refuse(app_t *a)
 
 void commands_start_navigation(app_t *a, nav_real_t roll_rad, nav_real_t pitch_rad)
 {
+    if (a->keep.mount_state == (uint8_t)APP_MOUNT_ESTIMATING) {
+        a->run.mount_held = 1u; /* no navigation before the mounting is known (app.c) */
+        a->run.mode = APP_MODE_FAULT;
+        return;
+    }
     if (align_start(&a->run.align, roll_rad, pitch_rad, &a->run.nav, &a->run.dr,
                     &a->keep.cal) != NAV_OK) {
         const app_diag_t d = diag_of(a);

@@ -417,6 +417,45 @@ static void emit_calibration(app_t *a, hal_t *hal)
     send_protected(&a->keep.tx, hal, a->cfg.can_ids[NAVECU_MSG_NAV_CALIBRATION], d);
 }
 
+/* NAV_Calibration pages 1 and 2: the automatic mounting estimate (a start with
+ * imu_mount_source automatic only), in degrees */
+static void emit_mount(app_t *a, hal_t *hal)
+{
+    const mount_est_result_t *r = app_mount_estimate(a);
+    const nav_real_t k = NAV_DEG_PER_RAD;
+    uint8_t d[8];
+    struct navecu_can_nav_calibration_t m;
+    (void)memset(&m, 0, sizeof m);
+    m.cal_page = 1u;
+    m.mount_roll = navecu_can_nav_calibration_mount_roll_encode(
+        nav_clamp(r->rpy_rad[0] * k, NAVECU_NAV_CALIBRATION_MOUNT_ROLL_MIN,
+                  NAVECU_NAV_CALIBRATION_MOUNT_ROLL_MAX));
+    m.mount_pitch = navecu_can_nav_calibration_mount_pitch_encode(
+        nav_clamp(r->rpy_rad[1] * k, NAVECU_NAV_CALIBRATION_MOUNT_PITCH_MIN,
+                  NAVECU_NAV_CALIBRATION_MOUNT_PITCH_MAX));
+    m.mount_yaw = navecu_can_nav_calibration_mount_yaw_encode(
+        nav_clamp(r->rpy_rad[2] * k, NAVECU_NAV_CALIBRATION_MOUNT_YAW_MIN,
+                  NAVECU_NAV_CALIBRATION_MOUNT_YAW_MAX));
+    m.nav_counter = next_counter(&a->keep.tx, TX_CAL);
+    (void)navecu_can_nav_calibration_pack(d, &m, sizeof d);
+    send_protected(&a->keep.tx, hal, a->cfg.can_ids[NAVECU_MSG_NAV_CALIBRATION], d);
+    (void)memset(&m, 0, sizeof m);
+    m.cal_page = 2u;
+    m.mount_sigma_roll_pitch = navecu_can_nav_calibration_mount_sigma_roll_pitch_encode(
+        nav_clamp(r->sigma_rp_rad * k, NAVECU_NAV_CALIBRATION_MOUNT_SIGMA_ROLL_PITCH_MIN,
+                  NAVECU_NAV_CALIBRATION_MOUNT_SIGMA_ROLL_PITCH_MAX));
+    m.mount_sigma_yaw = navecu_can_nav_calibration_mount_sigma_yaw_encode(
+        nav_clamp(r->sigma_yaw_rad * k, NAVECU_NAV_CALIBRATION_MOUNT_SIGMA_YAW_MIN,
+                  NAVECU_NAV_CALIBRATION_MOUNT_SIGMA_YAW_MAX));
+    m.mount_excitation = navecu_can_nav_calibration_mount_excitation_encode(
+        nav_clamp(r->excite_m2ps3, NAVECU_NAV_CALIBRATION_MOUNT_EXCITATION_MIN,
+                  NAVECU_NAV_CALIBRATION_MOUNT_EXCITATION_MAX));
+    m.mount_state = a->keep.mount_state;
+    m.nav_counter = next_counter(&a->keep.tx, TX_CAL);
+    (void)navecu_can_nav_calibration_pack(d, &m, sizeof d);
+    send_protected(&a->keep.tx, hal, a->cfg.can_ids[NAVECU_MSG_NAV_CALIBRATION], d);
+}
+
 void output_due(app_t *a, hal_t *hal)
 {
     const uint64_t n = a->keep.n_samples;
@@ -436,5 +475,8 @@ void output_due(app_t *a, hal_t *hal)
     }
     if (n % imu == 0u) {
         emit_calibration(a, hal);
+        if (a->keep.mount_state != (uint8_t)APP_MOUNT_FIXED) {
+            emit_mount(a, hal);
+        }
     }
 }

@@ -18,7 +18,7 @@ typedef struct {
     const char *description;
 } params_cli_t;
 
-#define PARAMS_CLI_N 29
+#define PARAMS_CLI_N 32
 
 static const params_cli_t params_cli[PARAMS_CLI_N] = {
     {"--imu-rate-hz", APP_PARAM_IMU_RATE_HZ, "Hz", 10.0, 400.0, 1.0, "", "IMU sample rate: one IMU_Rate + IMU_Accel pair per sample"},
@@ -32,6 +32,9 @@ static const params_cli_t params_cli[PARAMS_CLI_N] = {
     {"--odo-lever-m", APP_PARAM_ODO_LEVER_B_M, "m", -10.0, 10.0, 1.0, "", "the odometer's reference point (middle of the measuring axle) from the IMU, body axes x right, y forward, z up"},
     {"--cal-min-base-m", APP_PARAM_CAL_MIN_BASE_M, "m", 0.0, 100000.0, 1.0, "", "a one-point calibration closer than this to its base is refused: a point's error e gives about e / base in dH (rad) and in mu"},
     {"--imu-mount-deg", APP_PARAM_IMU_MOUNT_RAD, "deg", -180.0, 180.0, 0.017453292519943295, "", "the IMU's attitude in the vehicle, roll, pitch, yaw (firmware/app/mounting.h: 3-1-2 as the navigation attitude; yaw clockwise, pitch nose up, roll right side down): any rotation, e.g. 0,0,90 turned right, 180,0,0 upside down; the filter estimates the small residual yaw and pitch"},
+    {"--imu-mount-source", APP_PARAM_IMU_MOUNT_SOURCE, "", 0.0, 1.0, 1.0, "fixed|automatic", "fixed: imu_mount_deg is the mounting; automatic: navecu estimates it from the data (firmware/app/mount_est.h: gravity at rest, the accelerations and turns against the wheel speeds) and holds navigation (mode Fault, NAV_Calibration MountState estimating) until the estimate converges, then starts from GNSS while driving with it; app_adopt_mounting (RoutineControl 0x0204) copies it into imu_mount_deg"},
+    {"--mount-est-sigma-deg", APP_PARAM_MOUNT_EST_SIGMA_RAD, "deg", 0.01, 10.0, 0.017453292519943295, "", "the automatic mounting estimate is converged when its roll/pitch and its yaw 1-sigma are below this (and the excitation reached mount_est_excite_m2ps3)"},
+    {"--mount-est-excite-m2ps3", APP_PARAM_MOUNT_EST_EXCITE_M2PS3, "m^2/s^3", 0.0, 100000.0, 1.0, "", "the excitation the automatic mounting estimate needs before it converges: the sum of (forward acceleration^2 + lateral acceleration^2) x time of the drive (50: about 50 s of 1 m/s^2, a few minutes of ordinary driving)"},
     {"--gyro-arw-dpsh", APP_PARAM_GYRO_ARW_RAD_RTS, "deg/sqrt(h)", 1e-06, 100.0, 0.0002908882086657216, "", "gyro angle random walk"},
     {"--gyro-bias-dph", APP_PARAM_GYRO_BIAS_RPS, "deg/h", 1e-06, 10000.0, 4.84813681109536e-06, "", "gyro turn-on bias, 1 sigma: weighs the bias estimate at standstill and in the filter"},
     {"--accel-bias-mg", APP_PARAM_ACCEL_BIAS_MPS2, "mg", 0.0001, 1000.0, 0.00980665, "", "accelerometer turn-on bias, 1 sigma"},

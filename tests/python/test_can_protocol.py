@@ -110,6 +110,8 @@ def test_every_message_round_trips(db):
         pages = _pages(msg)
         if msg.name == "NAV_Status":
             assert [p for p, _ in pages] == [0, 1, 2, 3, 4, 5, 6]
+        if msg.name == "NAV_Calibration":
+            assert [p for p, _ in pages] == [0, 1, 2]
         for page, names in pages:
             for case in ("min", "max", "zero", "middle"):
                 values = {}
@@ -128,7 +130,8 @@ def test_every_message_round_trips(db):
                     assert back[name] == pytest.approx(value, abs=scale * 1e-6), \
                         (msg.name, page, case, name)
                 n_checked += 1
-    assert n_checked == 4 * (len(db.messages) - 1 + 7)  # NAV_Status: 7 pages
+    # NAV_Status: 7 pages, NAV_Calibration: 3
+    assert n_checked == 4 * (len(db.messages) - 2 + 7 + 3)
 
 
 def test_encode_rounds_to_nearest(db):
@@ -177,8 +180,9 @@ def _middle_signals(msg, counter_and_crc=False, page=0):
     names = dict(_pages(msg)).get(page if any(s.is_multiplexer for s in msg.signals) else None)
     values = {n: _value_sets(msg.get_signal_by_name(n))["middle"] for n in names
               if n not in skip}
-    if any(s.is_multiplexer for s in msg.signals):
-        values["StatusPage"] = page
+    mux = next((s for s in msg.signals if s.is_multiplexer), None)
+    if mux is not None:  # StatusPage, CalPage
+        values[mux.name] = page
     return values
 
 

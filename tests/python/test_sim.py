@@ -112,7 +112,7 @@ def decode(db, msg):
 def test_scenario_tables_defaults_and_validation(tmp_path):
     sc = short_scenario(tmp_path)
     assert sc["imu_mounting"] == {"roll_deg": 0.0, "pitch_deg": 0.0, "yaw_deg": 0.0,
-                                 "configured": False}
+                                 "configured": False, "automatic": False}
     assert sc["odometer"] == {} and "calibration" not in sc
     assert sc["initialization"] == {"heading_reference": "car", "heading_error_deg": 0.0}
     for bad in ("[imu_mounting]\nheading_deg = 1\n", "[odometer]\nscale = 0.01\n",
@@ -257,14 +257,19 @@ def test_read_calibration_log_and_report(tmp_path):
         if k % 2 == 0:
             done = t >= 40.0
             msgs.append(tx.encode("NAV_Calibration", {
-                "HeadingCorrection": -0.175 if done else 0.0,
+                "CalPage": 0, "HeadingCorrection": -0.175 if done else 0.0,
                 "OdoScaleError": 0.0119 if done else 0.0,
                 "CalValid": int(done), "CalStored": 0, "CalStatus": 2 if done else 0,
                 "CalSource": 1 if done else 0, "CalCount": int(done)}, t))
+            # the automatic mounting estimate's page: not the calibration's, left out
+            msgs.append(tx.encode("NAV_Calibration", {
+                "CalPage": 1, "MountRoll": 180.0, "MountPitch": 0.0, "MountYaw": 90.0}, t))
     log = tmp_path / "nav.log"
     nc.write_candump(log, msgs)
     cl = report.read_calibration_log(log)
     assert len(cl["t_s"]) == 65 and cl["t_s"][0] == 0.0 and cl["t_s"][-1] == 64.0
+    p1 = report.read_calibration_log(log, page=1)
+    assert len(p1["t_s"]) == 65 and set(p1["MountYaw"]) == {90.0}
     nc.write_candump(tmp_path / "nav.asc", msgs)             # another format: python-can
     for k, v in report.read_calibration_log(tmp_path / "nav.asc").items():
         np.testing.assert_array_equal(v, cl[k])
@@ -299,3 +304,31 @@ def test_read_calibration_log_and_report(tmp_path):
                                  "heading_error_deg": {"rms": 0.1, "max": 0.1}, "outages": [],
                                  "calibration": rep})
     assert "NOT performed" in line and "0.99 % of distance before it" in line
+
+
+def test_mount_curve_pages_and_errors(tmp_path):
+    """tools/sim/mount_curve.py: NAV_Calibration pages 1 and 2 paired on the log's time;
+    the errors wrapped (roll -179.9 of a roll-180 install is 0.1 deg off)."""
+    from tools.sim import mount_curve
+    db = nc.load_db()
+    tx = nc.E2ESender(db)
+    msgs = []
+    for k in range(1, 4):
+        t = float(k)
+        msgs.append(tx.encode("NAV_Calibration", {
+            "CalPage": 0, "HeadingCorrection": 0.0, "OdoScaleError": 0.0, "CalValid": 0,
+            "CalStored": 0, "CalStatus": 0, "CalSource": 0, "CalCount": 0}, t))
+        msgs.append(tx.encode("NAV_Calibration", {
+            "CalPage": 1, "MountRoll": -179.9, "MountPitch": 0.5, "MountYaw": 89.0 + k}, t))
+        msgs.append(tx.encode("NAV_Calibration", {
+            "CalPage": 2, "MountSigmaRollPitch": 0.01, "MountSigmaYaw": 0.2,
+            "MountExcitation": 10.0 * k, "MountState": 1 if k < 3 else 2}, t))
+    log = tmp_path / "nav.log"
+    nc.write_candump(log, msgs)
+    pages = mount_curve.read_mount_pages(log)
+    np.testing.assert_array_equal(pages["t_s"], [1.0, 2.0, 3.0])
+    np.testing.assert_array_equal(pages["state"], [1, 1, 2])
+    err = mount_curve.estimate_errors(pages, {"roll_deg": 180.0, "pitch_deg": 0.0,
+                                              "yaw_deg": 90.0})
+    np.testing.assert_allclose(err["roll"], [0.1, 0.1, 0.1], atol=1e-9)
+    np.testing.assert_allclose(err["yaw"], [0.0, 1.0, 2.0], atol=1e-9)

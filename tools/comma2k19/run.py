@@ -171,6 +171,70 @@ def nav_time_check(nav: dict, meta: dict) -> dict:
                     "come, it is early by that epoch's extra delay"}
 
 
+def _c312(roll_deg, pitch_deg, yaw_deg) -> np.ndarray:
+    """C = Rz(-yaw) Rx(pitch) Ry(roll) (vehicle <- IMU, firmware/app/mounting.h)."""
+    r, p, y = map(math.radians, (roll_deg, pitch_deg, yaw_deg))
+    rz = np.array([[math.cos(y), math.sin(y), 0.0], [-math.sin(y), math.cos(y), 0.0],
+                   [0.0, 0.0, 1.0]])
+    rx = np.array([[1.0, 0.0, 0.0], [0.0, math.cos(p), -math.sin(p)],
+                   [0.0, math.sin(p), math.cos(p)]])
+    ry = np.array([[math.cos(r), 0.0, math.sin(r)], [0.0, 1.0, 0.0],
+                   [-math.sin(r), 0.0, math.cos(r)]])
+    return rz @ rx @ ry
+
+
+def device_angles_deg(rpy_312) -> dict:
+    """The README's mounting angles (the device's Z-Y-X roll, pitch, yaw against the car,
+    convert.MOUNT_DEG) of a firmware mounting (3-1-2, the device's FRD axes)."""
+    z = convert.P_SWAP @ _c312(*rpy_312)
+    return {"roll": math.degrees(math.atan2(z[2, 1], z[2, 2])),
+            "pitch": math.degrees(-math.asin(max(-1.0, min(1.0, z[2, 0])))),
+            "yaw": math.degrees(math.atan2(z[1, 0], z[0, 0]))}
+
+
+def mount_estimate(path, db) -> dict | None:
+    """The automatic mounting estimate (NAV_Calibration pages 1 and 2) of a run: when it
+    converged (log time), the last estimate in the firmware's 3-1-2 angles and as the
+    README's device angles against the reference's (convert.MOUNT_DEG); None when the run
+    sent no page 1 (a configured mounting)."""
+    cal_id = db.get_message_by_name("NAV_Calibration").frame_id
+    last1 = last2 = at_conv = None
+    conv_t = None
+    for m in nc.read_log(path):
+        if m.arbitration_id != cal_id:
+            continue
+        sig = db.decode_message(cal_id, bytes(m.data), decode_choices=False)
+        if sig["CalPage"] == 1:
+            last1 = sig
+        elif sig["CalPage"] == 2:
+            last2 = sig
+            if conv_t is None and sig["MountState"] >= 2:
+                conv_t = float(m.timestamp)
+                at_conv = (last1, sig)
+    if last1 is None or last2 is None:
+        return None
+    rpy = (last1["MountRoll"], last1["MountPitch"], last1["MountYaw"])
+    dev = device_angles_deg(rpy)
+    conv = None
+    if at_conv is not None:  # the mounting navigation ran with
+        c1, c2 = at_conv
+        crpy = (c1["MountRoll"], c1["MountPitch"], c1["MountYaw"])
+        cdev = device_angles_deg(crpy)
+        conv = {"estimate_device_deg": {k: round(v, 3) for k, v in cdev.items()},
+                "error_device_deg": {k: round(cdev[k] - convert.MOUNT_DEG[k], 3) for k in cdev},
+                "sigma_roll_pitch_deg": c2["MountSigmaRollPitch"],
+                "sigma_yaw_deg": c2["MountSigmaYaw"]}
+    return {"converged_at_log_s": conv_t, "state": int(last2["MountState"]),
+            "at_convergence": conv,
+            "estimate_312_deg": rpy, "reference_312_deg": list(convert.MOUNT_312_DEG),
+            "estimate_device_deg": {k: round(v, 3) for k, v in dev.items()},
+            "reference_device_deg": convert.MOUNT_DEG,
+            "error_device_deg": {k: round(dev[k] - convert.MOUNT_DEG[k], 3) for k in dev},
+            "sigma_roll_pitch_deg": last2["MountSigmaRollPitch"],
+            "sigma_yaw_deg": last2["MountSigmaYaw"],
+            "excitation_m2ps3": last2["MountExcitation"]}
+
+
 def _output_frames(path, exclude_status_page1: bool, status_id: int) -> list:
     out = []
     for m in nc.read_log(path):
@@ -197,6 +261,7 @@ def run_one(stages, navecu, name, frames, meta, out: Path, opts, db, truth, outa
     _, cnt = report.status_page(nav.get("NAV_Status"), 1, "CntForeign")
     rep["cnt_foreign_last"] = int(cnt[-1]) if cnt.size else None
     rep["nav_time"] = nav_time_check(nav, meta)
+    rep["mount_estimate"] = mount_estimate(d / "nav.log", db)
     rep["input_frames"] = meta["frames"]
     rep["car_frames"] = meta["car_bus"]["frames"]
     return rep, series, d
@@ -209,6 +274,13 @@ def main(argv=None) -> int:
     ap.add_argument("--outage", default=DEFAULT_OUTAGE, help="GNSS outage A-B s, or none")
     ap.add_argument("--out", default="out/drive-rav4")
     ap.add_argument("--navecu", default=None)
+    ap.add_argument("--mount", choices=("configured", "automatic"), default="configured",
+                    help="configured: --imu-mount-deg, the device's axes and the angles "
+                         "measured against the reference; automatic: --imu-mount-source "
+                         "automatic, no angle given (firmware/app/mount_est.h), the estimate "
+                         "reported against the reference's")
+    ap.add_argument("--fw-arg", action="append", default=[], metavar="ARG",
+                    help="one more firmware option (repeat), e.g. --fw-arg=--mount-est-sigma-deg --fw-arg=2")
     ap.add_argument("--imu-time", default="grid", choices=("grid", "stamped"))
     a = ap.parse_args(argv)
     data, out = Path(a.data), Path(a.out)
@@ -249,9 +321,13 @@ def main(argv=None) -> int:
     meta = built["bus"][1]
     stages.done(f"{meta['frames']} frames, {meta['car_bus']['frames']} of the car's bus")
     truth = reference_truth(data, meta["t0_segment_s"])
-    opts = [*rate_options(a.imu_time), "--gnss-latency-ms", str(meta["gnss_latency_ms"]), *IMU_OPTIONS,
-            *GNSS_OPTIONS,
-            "--imu-mount-deg", ",".join(f"{x:g}" for x in meta["imu"]["imu_mount_deg_312"])]
+    opts = [*rate_options(a.imu_time), "--gnss-latency-ms", str(meta["gnss_latency_ms"]),
+            *IMU_OPTIONS, *GNSS_OPTIONS]
+    if a.mount == "configured":
+        opts += ["--imu-mount-deg", ",".join(f"{x:g}" for x in meta["imu"]["imu_mount_deg_312"])]
+    else:
+        opts += ["--imu-mount-source", "automatic"]
+    opts += list(a.fw_arg)
     reps, series = {}, {}
     for k, (frames, m) in built.items():
         reps[k], series[k], _ = run_one(stages, navecu, k, frames, m, out, opts, db, truth,
@@ -312,7 +388,8 @@ def summary(rep: dict) -> str:
     L.append(f"car messages read: {cr}; foreign frames {b['foreign_frames']} "
              f"(NAV_Status CntForeign {b['cnt_foreign_last']})")
     wd = rep["wheel_distance"]
-    L.append(f"odometer: filter's scale error {b['filter_odometer_scale_error']:+.4f}, "
+    fse = b["filter_odometer_scale_error"]
+    L.append(f"odometer: filter's scale error {'none' if fse is None else format(fse, '+.4f')}, "
              f"wheels/reference {wd['scale_error']:+.4f} ({wd['wheels_m']:.1f} m / "
              f"{wd['reference_m']:.1f} m)")
     L.append(f"health flags: bus {b['health_flags_raised'] or 'none'}, quiet "
@@ -334,6 +411,21 @@ def summary(rep: dict) -> str:
             line += (f"; outage {o['start_s']:.0f}-{o['end_s']:.0f} s ({o['distance_m']:.0f} m):"
                      f" end {o['end_error_m']:.2f} m, max {o['max_error_m']:.2f} m")
         L.append(line)
+        me = x.get("mount_estimate")
+        if me:
+            e, ref = me["estimate_device_deg"], me["reference_device_deg"]
+            L.append(f"{'':>14}  mounting estimate (state {me['state']}, converged at "
+                     f"{me['converged_at_log_s']} s): roll {e['roll']:+.2f} pitch "
+                     f"{e['pitch']:+.2f} yaw {e['yaw']:+.2f} deg vs the reference's "
+                     f"{ref['roll']:+.2f} {ref['pitch']:+.2f} {ref['yaw']:+.2f}; sigma "
+                     f"{me['sigma_roll_pitch_deg']:.3f}/{me['sigma_yaw_deg']:.3f} deg, "
+                     f"excitation {me['excitation_m2ps3']:.0f} m^2/s^3")
+            ac = me.get("at_convergence")
+            if ac:
+                ce = ac["error_device_deg"]
+                L.append(f"{'':>14}  at convergence (the mounting in use): error roll "
+                         f"{ce['roll']:+.2f} pitch {ce['pitch']:+.2f} yaw {ce['yaw']:+.2f} deg, "
+                         f"sigma {ac['sigma_roll_pitch_deg']:.3f}/{ac['sigma_yaw_deg']:.3f}")
     nt = b["nav_time"]
     if nt.get("frames"):
         o, s = nt["offset_us"], nt["offset_us_after_settling"] or nt["offset_us"]

@@ -85,6 +85,8 @@ def read_calibration_log(path) -> dict:
                 t_now = (wraps * 65536 + ms) / 1000.0
             elif msg.arbitration_id == cal_id:
                 sig = db.decode_message(cal_id, bytes(msg.data), decode_choices=False)
+                if sig.get("CalPage", 0) != 0:
+                    continue  # the automatic mounting estimate's pages
                 sig["t_s"] = t_now if t_now is not None else float(msg.timestamp)
                 rows.append(sig)
     if not rows:

@@ -26,7 +26,7 @@ from tools import navecu_can as nc
 from tools.geodesy import horizontal_error_m, radii_m
 from tools.sim import scenario, sensors
 
-def read_nav_log(path, db=None) -> dict:
+def read_nav_log(path, db=None, wraps_from_log: bool = False) -> dict:
     """Decode the NAV_* frames of a candump log (every message navecu sends) into arrays
     keyed by message; each has 't_s' and the signal columns.
 
@@ -36,7 +36,10 @@ def read_nav_log(path, db=None) -> dict:
     NAV_Position opens a navigation set (Position, Height, Velocity, Attitude) that takes
     its NAV_Height's time; the others take the time of the last set (NaN before one): at
     the default rates every output of a sample follows its set (docs/can.md). db: the
-    protocol to decode with (default nc.load_db(), the selected vehicle's)."""
+    protocol to decode with (default nc.load_db(), the selected vehicle's).
+    wraps_from_log: the log's timestamps are the IMU time (a --can-log run of the
+    simulator's log): the first NAV_Height's modulus is resolved with them, for a start
+    held beyond 65.536 s (the automatic mounting estimate); later wraps as above."""
     db = db if db is not None else nc.load_db()
     want = {m.frame_id: m.name for m in db.messages if "NAVECU" in m.senders}
     rows = {n: [] for n in want.values()}
@@ -51,6 +54,8 @@ def read_nav_log(path, db=None) -> dict:
                 cycle_rows = []
             if name == "NAV_Height":
                 ms = int(sig["TimeOfValidity"])
+                if last_ms is None and wraps_from_log:
+                    wraps = max(0, round((float(msg.timestamp) - ms / 1000.0) / 65.536))
                 if last_ms is not None and ms < last_ms:
                     wraps += 1
                 last_ms = ms
@@ -94,11 +99,12 @@ def _frames_with_ids(path, ids):
                 yield msg.arbitration_id, bytes(msg.data)
 
 
-def read_calibration_log(path) -> dict:
+def read_calibration_log(path, page: int = 0) -> dict:
     """NAV_Calibration frames of a candump log as arrays: 't_s' and the signals (raw
     numbers, CalStatus/CalSource as their values). The frame is sent once a second on the
     sample clock and carries no time of its own: 't_s' is that of the last NAV_Height
-    before it (its TimeOfValidity, unwrapped like read_nav_log's), NaN before the first."""
+    before it (its TimeOfValidity, unwrapped like read_nav_log's), NaN before the first.
+    page: CalPage, 0 the calibration, 1 and 2 the automatic mounting estimate."""
     db = nc.load_db()
     cal_id = db.get_message_by_name("NAV_Calibration").frame_id
     height = db.get_message_by_name("NAV_Height")
@@ -115,6 +121,8 @@ def read_calibration_log(path) -> dict:
             t_last = (wraps * (tov_mask + 1) + ms) / 1000.0
         else:
             sig = db.decode_message(cal_id, data, decode_choices=False)
+            if sig.get("CalPage", 0) != page:
+                continue
             sig["t_s"] = t_last
             rows.append(sig)
     keys = rows[0].keys() if rows else ("t_s", "HeadingCorrection", "OdoScaleError", "CalValid",

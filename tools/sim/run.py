@@ -217,6 +217,13 @@ def main(argv=None) -> int:
     ap.add_argument("--imu", default=None, help="IMU preset (default: the scenario's, else mid-grade)")
     ap.add_argument("--gnss", default=None, help="GNSS preset (default: the scenario's, else standalone)")
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--mount", choices=("scenario", "configured", "automatic", "none"),
+                    default="scenario",
+                    help="the firmware's IMU mounting: as the scenario's [imu_mounting] says, "
+                         "configured (--imu-mount-deg, the true angles), automatic "
+                         "(--imu-mount-source automatic), none (told nothing)")
+    ap.add_argument("--fw-arg", action="append", default=[], metavar="ARG",
+                    help="one more firmware option (repeat), e.g. --fw-arg=--mount-est-sigma-deg --fw-arg=0.5")
     ap.add_argument("--imu-rate-hz", type=int, default=100)
     ap.add_argument("--out", default=None, help="output folder (default out/sim/NAME)")
     ap.add_argument("--navecu", default=None,
@@ -265,9 +272,16 @@ def main(argv=None) -> int:
     gnss = sensors.gnss_epochs(truth, sensors.GNSS_PRESETS[gnss_name], 3 * a.seed + 2)
     fw_args = firmware_args(sensors.PRESETS[imu_name], sensors.GNSS_PRESETS[gnss_name])
     mnt = scen["imu_mounting"]
-    if mnt.get("configured"):  # the installer configured the IMU's mounting
+    mount = a.mount
+    if mount == "scenario":
+        mount = ("configured" if mnt.get("configured") else
+                 "automatic" if mnt.get("automatic") else "none")
+    if mount == "configured":  # the installer configured the IMU's mounting
         fw_args += ["--imu-mount-deg",
                     f"{mnt['roll_deg']:.6g},{mnt['pitch_deg']:.6g},{mnt['yaw_deg']:.6g}"]
+    elif mount == "automatic":  # navecu estimates it (firmware/app/mount_est.h)
+        fw_args += ["--imu-mount-source", "automatic"]
+    fw_args += list(a.fw_arg)
     fault_log = []
     if scen.get("gnss_faults"):
         gnss, fault_log = sensors.apply_gnss_faults(gnss, scen["gnss_faults"])
@@ -321,7 +335,7 @@ def main(argv=None) -> int:
             return 1
 
     st.start("report")
-    nav = report.read_nav_log(nav_log)
+    nav = report.read_nav_log(nav_log, wraps_from_log=not a.bus)
     truth_r = {"t_s": truth.t_s, "lat_rad": truth.lat_rad, "lon_rad": truth.lon_rad,
                "heading_rad": truth.heading_rad, "dist_m": truth.dist_m}
     rep, series = report.compute(truth_r, nav, truth.outages)

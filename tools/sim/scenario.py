@@ -67,6 +67,8 @@ Scenario file (TOML, read by :func:`load_scenario`)
     pitch_deg = 0.0               # with any IMU preset: the sensor's forward axis points
     yaw_deg = 0.0                 # along heading + yaw_deg
     configured = false            # true: the firmware is told (--imu-mount-deg R,P,Y)
+    automatic = false             # true: the firmware estimates it (--imu-mount-source
+                                  # automatic, firmware/app/mount_est.h); not with configured
 
     [odometer]                    # OdoSpec fields (tools/sim/sensors.py), e.g.
     mu = 0.012                    # scale error: wheel speeds read (1 + mu) x true
@@ -137,7 +139,8 @@ _SEG_KEYS = {
 }
 
 
-MOUNTING_DEFAULTS = {"roll_deg": 0.0, "pitch_deg": 0.0, "yaw_deg": 0.0, "configured": False}
+MOUNTING_DEFAULTS = {"roll_deg": 0.0, "pitch_deg": 0.0, "yaw_deg": 0.0, "configured": False,
+                     "automatic": False}
 INITIALIZATION_DEFAULTS = {"heading_reference": "car", "heading_error_deg": 0.0}
 _OPTIONAL_TABLES = {
     "sim": {"imu", "gnss"},
@@ -274,7 +277,7 @@ def load_scenario(path) -> dict:
         if unknown:
             raise ValueError(f"{path}: unknown [{table}] keys {sorted(unknown)}")
     mnt = dict(MOUNTING_DEFAULTS)
-    mnt.update({k: (bool(v) if k == "configured" else float(v))
+    mnt.update({k: (bool(v) if k in ("configured", "automatic") else float(v))
                 for k, v in sc.get("imu_mounting", {}).items()})
     sc["imu_mounting"] = mnt
     sc["odometer"] = dict(sc.get("odometer", {}))

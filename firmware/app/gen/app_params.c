@@ -17,6 +17,9 @@ const app_param_t app_params[APP_PARAM_N] = {
     [APP_PARAM_ODO_LEVER_B_M] = {"odo_lever_b_m", 0x0213u, APP_PARAM_VEC3, 0u, 0u, 0u, 0u, NAV_C(-10.0), NAV_C(10.0), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_CAL_MIN_BASE_M] = {"cal_min_base_m", 0x0220u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(100000.0), {NAV_C(2000.0), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_IMU_MOUNT_RAD] = {"imu_mount_rad", 0x0205u, APP_PARAM_VEC3, 0u, 0u, 1u, 0u, NAV_C(-3.141592653589793), NAV_C(3.141592653589793), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
+    [APP_PARAM_IMU_MOUNT_SOURCE] = {"imu_mount_source", 0x0206u, APP_PARAM_ENUM, 0u, 0u, 1u, 0u, NAV_C(0.0), NAV_C(1.0), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
+    [APP_PARAM_MOUNT_EST_SIGMA_RAD] = {"mount_est_sigma_rad", 0x0207u, APP_PARAM_REAL, 0u, 0u, 1u, 0u, NAV_C(0.00017453292519943296), NAV_C(0.17453292519943295), {NAV_C(0.017453292519943295), NAV_C(0.0), NAV_C(0.0)}},
+    [APP_PARAM_MOUNT_EST_EXCITE_M2PS3] = {"mount_est_excite_m2ps3", 0x0208u, APP_PARAM_REAL, 0u, 0u, 1u, 0u, NAV_C(0.0), NAV_C(100000.0), {NAV_C(50.0), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_GYRO_ARW_RAD_RTS] = {"gyro_arw_rad_rts", 0x0230u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(2.908882086657216e-10), NAV_C(0.02908882086657216), {NAV_C(0.0005817764173314432), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_GYRO_BIAS_RPS] = {"gyro_bias_rps", 0x0231u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(4.84813681109536e-12), NAV_C(0.0484813681109536), {NAV_C(0.0009999999697132222), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_ACCEL_BIAS_MPS2] = {"accel_bias_mps2", 0x0232u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(9.80665e-07), NAV_C(9.80665), {NAV_C(0.199999762095), NAV_C(0.0), NAV_C(0.0)}},
@@ -101,6 +104,20 @@ void app_param_get(const app_config_t *cfg, app_param_id_t id, nav_real_t v[3])
         v[0] = cfg->imu_mount_rad[0];
         v[1] = cfg->imu_mount_rad[1];
         v[2] = cfg->imu_mount_rad[2];
+        break;
+    case APP_PARAM_IMU_MOUNT_SOURCE:
+        if (cfg->imu_mount_source == MOUNT_SOURCE_FIXED) {
+            v[0] = NAV_C(0.0);
+        }
+        if (cfg->imu_mount_source == MOUNT_SOURCE_AUTOMATIC) {
+            v[0] = NAV_C(1.0);
+        }
+        break;
+    case APP_PARAM_MOUNT_EST_SIGMA_RAD:
+        v[0] = cfg->mount_est_sigma_rad;
+        break;
+    case APP_PARAM_MOUNT_EST_EXCITE_M2PS3:
+        v[0] = cfg->mount_est_excite_m2ps3;
         break;
     case APP_PARAM_GYRO_ARW_RAD_RTS:
         v[0] = cfg->gyro_arw_rad_rts;
@@ -223,6 +240,18 @@ int app_param_set(app_config_t *cfg, app_param_id_t id, const nav_real_t v[3])
         cfg->imu_mount_rad[0] = v[0];
         cfg->imu_mount_rad[1] = v[1];
         cfg->imu_mount_rad[2] = v[2];
+        break;
+    case APP_PARAM_IMU_MOUNT_SOURCE:
+        cfg->imu_mount_source = MOUNT_SOURCE_FIXED;
+        if (v[0] > NAV_C(0.5)) {
+            cfg->imu_mount_source = MOUNT_SOURCE_AUTOMATIC;
+        }
+        break;
+    case APP_PARAM_MOUNT_EST_SIGMA_RAD:
+        cfg->mount_est_sigma_rad = v[0];
+        break;
+    case APP_PARAM_MOUNT_EST_EXCITE_M2PS3:
+        cfg->mount_est_excite_m2ps3 = v[0];
         break;
     case APP_PARAM_GYRO_ARW_RAD_RTS:
         cfg->gyro_arw_rad_rts = v[0];

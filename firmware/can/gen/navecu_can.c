@@ -4345,6 +4345,9 @@ int navecu_can_nav_calibration_pack(
     size_t size)
 {
     uint16_t heading_correction;
+    uint16_t mount_pitch;
+    uint16_t mount_roll;
+    uint16_t mount_yaw;
     uint16_t odo_scale_error;
 
     if (size < 8u) {
@@ -4353,19 +4356,51 @@ int navecu_can_nav_calibration_pack(
 
     memset(&dst_p[0], 0, 8);
 
-    heading_correction = (uint16_t)src_p->heading_correction;
-    dst_p[0] |= pack_left_shift_u16(heading_correction, 0u, 0xffu);
-    dst_p[1] |= pack_right_shift_u16(heading_correction, 8u, 0xffu);
-    odo_scale_error = (uint16_t)src_p->odo_scale_error;
-    dst_p[2] |= pack_left_shift_u16(odo_scale_error, 0u, 0xffu);
-    dst_p[3] |= pack_right_shift_u16(odo_scale_error, 8u, 0xffu);
-    dst_p[4] |= pack_left_shift_u8(src_p->cal_valid, 0u, 0x01u);
-    dst_p[4] |= pack_left_shift_u8(src_p->cal_stored, 1u, 0x02u);
-    dst_p[4] |= pack_left_shift_u8(src_p->cal_status, 2u, 0x3cu);
-    dst_p[4] |= pack_left_shift_u8(src_p->cal_source, 6u, 0xc0u);
-    dst_p[5] |= pack_left_shift_u8(src_p->cal_count, 0u, 0xffu);
     dst_p[6] |= pack_left_shift_u8(src_p->nav_counter, 0u, 0x0fu);
+    dst_p[6] |= pack_left_shift_u8(src_p->cal_page, 4u, 0xf0u);
     dst_p[7] |= pack_left_shift_u8(src_p->nav_crc, 0u, 0xffu);
+
+    switch (src_p->cal_page) {
+
+    case 0:
+        heading_correction = (uint16_t)src_p->heading_correction;
+        dst_p[0] |= pack_left_shift_u16(heading_correction, 0u, 0xffu);
+        dst_p[1] |= pack_right_shift_u16(heading_correction, 8u, 0xffu);
+        odo_scale_error = (uint16_t)src_p->odo_scale_error;
+        dst_p[2] |= pack_left_shift_u16(odo_scale_error, 0u, 0xffu);
+        dst_p[3] |= pack_right_shift_u16(odo_scale_error, 8u, 0xffu);
+        dst_p[4] |= pack_left_shift_u8(src_p->cal_valid, 0u, 0x01u);
+        dst_p[4] |= pack_left_shift_u8(src_p->cal_stored, 1u, 0x02u);
+        dst_p[4] |= pack_left_shift_u8(src_p->cal_status, 2u, 0x3cu);
+        dst_p[4] |= pack_left_shift_u8(src_p->cal_source, 6u, 0xc0u);
+        dst_p[5] |= pack_left_shift_u8(src_p->cal_count, 0u, 0xffu);
+        break;
+
+    case 1:
+        mount_roll = (uint16_t)src_p->mount_roll;
+        dst_p[0] |= pack_left_shift_u16(mount_roll, 0u, 0xffu);
+        dst_p[1] |= pack_right_shift_u16(mount_roll, 8u, 0xffu);
+        mount_pitch = (uint16_t)src_p->mount_pitch;
+        dst_p[2] |= pack_left_shift_u16(mount_pitch, 0u, 0xffu);
+        dst_p[3] |= pack_right_shift_u16(mount_pitch, 8u, 0xffu);
+        mount_yaw = (uint16_t)src_p->mount_yaw;
+        dst_p[4] |= pack_left_shift_u16(mount_yaw, 0u, 0xffu);
+        dst_p[5] |= pack_right_shift_u16(mount_yaw, 8u, 0xffu);
+        break;
+
+    case 2:
+        dst_p[0] |= pack_left_shift_u16(src_p->mount_sigma_roll_pitch, 0u, 0xffu);
+        dst_p[1] |= pack_right_shift_u16(src_p->mount_sigma_roll_pitch, 8u, 0xffu);
+        dst_p[2] |= pack_left_shift_u16(src_p->mount_sigma_yaw, 0u, 0xffu);
+        dst_p[3] |= pack_right_shift_u16(src_p->mount_sigma_yaw, 8u, 0xffu);
+        dst_p[4] |= pack_left_shift_u16(src_p->mount_excitation, 0u, 0xffu);
+        dst_p[5] |= pack_right_shift_u16(src_p->mount_excitation, 8u, 0x0fu);
+        dst_p[5] |= pack_left_shift_u8(src_p->mount_state, 4u, 0x30u);
+        break;
+
+    default:
+        break;
+    }
 
     return (8);
 }
@@ -4376,25 +4411,60 @@ int navecu_can_nav_calibration_unpack(
     size_t size)
 {
     uint16_t heading_correction;
+    uint16_t mount_pitch;
+    uint16_t mount_roll;
+    uint16_t mount_yaw;
     uint16_t odo_scale_error;
 
     if (size < 8u) {
         return (-EINVAL);
     }
 
-    heading_correction = unpack_right_shift_u16(src_p[0], 0u, 0xffu);
-    heading_correction |= unpack_left_shift_u16(src_p[1], 8u, 0xffu);
-    dst_p->heading_correction = (int16_t)heading_correction;
-    odo_scale_error = unpack_right_shift_u16(src_p[2], 0u, 0xffu);
-    odo_scale_error |= unpack_left_shift_u16(src_p[3], 8u, 0xffu);
-    dst_p->odo_scale_error = (int16_t)odo_scale_error;
-    dst_p->cal_valid = unpack_right_shift_u8(src_p[4], 0u, 0x01u);
-    dst_p->cal_stored = unpack_right_shift_u8(src_p[4], 1u, 0x02u);
-    dst_p->cal_status = unpack_right_shift_u8(src_p[4], 2u, 0x3cu);
-    dst_p->cal_source = unpack_right_shift_u8(src_p[4], 6u, 0xc0u);
-    dst_p->cal_count = unpack_right_shift_u8(src_p[5], 0u, 0xffu);
     dst_p->nav_counter = unpack_right_shift_u8(src_p[6], 0u, 0x0fu);
+    dst_p->cal_page = unpack_right_shift_u8(src_p[6], 4u, 0xf0u);
     dst_p->nav_crc = unpack_right_shift_u8(src_p[7], 0u, 0xffu);
+
+    switch (dst_p->cal_page) {
+
+    case 0:
+        heading_correction = unpack_right_shift_u16(src_p[0], 0u, 0xffu);
+        heading_correction |= unpack_left_shift_u16(src_p[1], 8u, 0xffu);
+        dst_p->heading_correction = (int16_t)heading_correction;
+        odo_scale_error = unpack_right_shift_u16(src_p[2], 0u, 0xffu);
+        odo_scale_error |= unpack_left_shift_u16(src_p[3], 8u, 0xffu);
+        dst_p->odo_scale_error = (int16_t)odo_scale_error;
+        dst_p->cal_valid = unpack_right_shift_u8(src_p[4], 0u, 0x01u);
+        dst_p->cal_stored = unpack_right_shift_u8(src_p[4], 1u, 0x02u);
+        dst_p->cal_status = unpack_right_shift_u8(src_p[4], 2u, 0x3cu);
+        dst_p->cal_source = unpack_right_shift_u8(src_p[4], 6u, 0xc0u);
+        dst_p->cal_count = unpack_right_shift_u8(src_p[5], 0u, 0xffu);
+        break;
+
+    case 1:
+        mount_roll = unpack_right_shift_u16(src_p[0], 0u, 0xffu);
+        mount_roll |= unpack_left_shift_u16(src_p[1], 8u, 0xffu);
+        dst_p->mount_roll = (int16_t)mount_roll;
+        mount_pitch = unpack_right_shift_u16(src_p[2], 0u, 0xffu);
+        mount_pitch |= unpack_left_shift_u16(src_p[3], 8u, 0xffu);
+        dst_p->mount_pitch = (int16_t)mount_pitch;
+        mount_yaw = unpack_right_shift_u16(src_p[4], 0u, 0xffu);
+        mount_yaw |= unpack_left_shift_u16(src_p[5], 8u, 0xffu);
+        dst_p->mount_yaw = (int16_t)mount_yaw;
+        break;
+
+    case 2:
+        dst_p->mount_sigma_roll_pitch = unpack_right_shift_u16(src_p[0], 0u, 0xffu);
+        dst_p->mount_sigma_roll_pitch |= unpack_left_shift_u16(src_p[1], 8u, 0xffu);
+        dst_p->mount_sigma_yaw = unpack_right_shift_u16(src_p[2], 0u, 0xffu);
+        dst_p->mount_sigma_yaw |= unpack_left_shift_u16(src_p[3], 8u, 0xffu);
+        dst_p->mount_excitation = unpack_right_shift_u16(src_p[4], 0u, 0xffu);
+        dst_p->mount_excitation |= unpack_left_shift_u16(src_p[5], 8u, 0x0fu);
+        dst_p->mount_state = unpack_right_shift_u8(src_p[5], 4u, 0x30u);
+        break;
+
+    default:
+        break;
+    }
 
     return (0);
 }
@@ -4430,6 +4500,48 @@ bool navecu_can_nav_calibration_heading_correction_is_in_phys_range(float value)
     return ((value >= -32.768f) && (value <= 32.767f));
 }
 
+int16_t navecu_can_nav_calibration_mount_roll_encode(float value)
+{
+    return (int16_t)(roundf(value / 0.01f));
+}
+
+float navecu_can_nav_calibration_mount_roll_decode(int16_t value)
+{
+    return ((float)value * 0.01f);
+}
+
+bool navecu_can_nav_calibration_mount_roll_is_in_range(int16_t value)
+{
+    return ((value >= -18000) && (value <= 18000));
+}
+
+bool navecu_can_nav_calibration_mount_roll_is_in_phys_range(float value)
+{
+    return ((value >= -180.0f) && (value <= 180.0f));
+}
+
+uint16_t navecu_can_nav_calibration_mount_sigma_roll_pitch_encode(float value)
+{
+    return (uint16_t)(cantools_unsigned_from_double(roundf(value / 0.001f)));
+}
+
+float navecu_can_nav_calibration_mount_sigma_roll_pitch_decode(uint16_t value)
+{
+    return ((float)value * 0.001f);
+}
+
+bool navecu_can_nav_calibration_mount_sigma_roll_pitch_is_in_range(uint16_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_nav_calibration_mount_sigma_roll_pitch_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 65.535f));
+}
+
 int16_t navecu_can_nav_calibration_odo_scale_error_encode(float value)
 {
     return (int16_t)(roundf(value / 1e-05f));
@@ -4452,6 +4564,48 @@ bool navecu_can_nav_calibration_odo_scale_error_is_in_phys_range(float value)
     return ((value >= -0.32768f) && (value <= 0.32767f));
 }
 
+int16_t navecu_can_nav_calibration_mount_pitch_encode(float value)
+{
+    return (int16_t)(roundf(value / 0.01f));
+}
+
+float navecu_can_nav_calibration_mount_pitch_decode(int16_t value)
+{
+    return ((float)value * 0.01f);
+}
+
+bool navecu_can_nav_calibration_mount_pitch_is_in_range(int16_t value)
+{
+    return ((value >= -9000) && (value <= 9000));
+}
+
+bool navecu_can_nav_calibration_mount_pitch_is_in_phys_range(float value)
+{
+    return ((value >= -90.0f) && (value <= 90.0f));
+}
+
+uint16_t navecu_can_nav_calibration_mount_sigma_yaw_encode(float value)
+{
+    return (uint16_t)(cantools_unsigned_from_double(roundf(value / 0.001f)));
+}
+
+float navecu_can_nav_calibration_mount_sigma_yaw_decode(uint16_t value)
+{
+    return ((float)value * 0.001f);
+}
+
+bool navecu_can_nav_calibration_mount_sigma_yaw_is_in_range(uint16_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_nav_calibration_mount_sigma_yaw_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 65.535f));
+}
+
 uint8_t navecu_can_nav_calibration_cal_valid_encode(float value)
 {
     return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
@@ -4470,6 +4624,46 @@ bool navecu_can_nav_calibration_cal_valid_is_in_range(uint8_t value)
 bool navecu_can_nav_calibration_cal_valid_is_in_phys_range(float value)
 {
     return ((value >= 0.0f) && (value <= 1.0f));
+}
+
+int16_t navecu_can_nav_calibration_mount_yaw_encode(float value)
+{
+    return (int16_t)(roundf(value / 0.01f));
+}
+
+float navecu_can_nav_calibration_mount_yaw_decode(int16_t value)
+{
+    return ((float)value * 0.01f);
+}
+
+bool navecu_can_nav_calibration_mount_yaw_is_in_range(int16_t value)
+{
+    return ((value >= -18000) && (value <= 18000));
+}
+
+bool navecu_can_nav_calibration_mount_yaw_is_in_phys_range(float value)
+{
+    return ((value >= -180.0f) && (value <= 180.0f));
+}
+
+uint16_t navecu_can_nav_calibration_mount_excitation_encode(float value)
+{
+    return (uint16_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_nav_calibration_mount_excitation_decode(uint16_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_nav_calibration_mount_excitation_is_in_range(uint16_t value)
+{
+    return (value <= 4095u);
+}
+
+bool navecu_can_nav_calibration_mount_excitation_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 4095.0f));
 }
 
 uint8_t navecu_can_nav_calibration_cal_stored_encode(float value)
@@ -4554,6 +4748,26 @@ bool navecu_can_nav_calibration_cal_count_is_in_phys_range(float value)
     return ((value >= 0.0f) && (value <= 255.0f));
 }
 
+uint8_t navecu_can_nav_calibration_mount_state_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_nav_calibration_mount_state_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_nav_calibration_mount_state_is_in_range(uint8_t value)
+{
+    return (value <= 3u);
+}
+
+bool navecu_can_nav_calibration_mount_state_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 3.0f));
+}
+
 uint8_t navecu_can_nav_calibration_nav_counter_encode(float value)
 {
     return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
@@ -4572,6 +4786,26 @@ bool navecu_can_nav_calibration_nav_counter_is_in_range(uint8_t value)
 bool navecu_can_nav_calibration_nav_counter_is_in_phys_range(float value)
 {
     return ((value >= 0.0f) && (value <= 14.0f));
+}
+
+uint8_t navecu_can_nav_calibration_cal_page_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_nav_calibration_cal_page_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_nav_calibration_cal_page_is_in_range(uint8_t value)
+{
+    return (value <= 15u);
+}
+
+bool navecu_can_nav_calibration_cal_page_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 15.0f));
 }
 
 uint8_t navecu_can_nav_calibration_nav_crc_encode(float value)

@@ -169,6 +169,10 @@ extern "C" {
 #define NAVECU_CAN_NAV_CALIBRATION_CAL_SOURCE_GNSS_CHOICE (2u)
 #define NAVECU_CAN_NAV_CALIBRATION_CAL_SOURCE_FILTER_CHOICE (3u)
 
+#define NAVECU_CAN_NAV_CALIBRATION_MOUNT_STATE_FIXED_CHOICE (0u)
+#define NAVECU_CAN_NAV_CALIBRATION_MOUNT_STATE_ESTIMATING_CHOICE (1u)
+#define NAVECU_CAN_NAV_CALIBRATION_MOUNT_STATE_ESTIMATED_CHOICE (2u)
+
 /* Frame Names. */
 #define NAVECU_CAN_IMU_RATE_NAME "IMU_Rate"
 #define NAVECU_CAN_IMU_ACCEL_NAME "IMU_Accel"
@@ -318,13 +322,21 @@ extern "C" {
 #define NAVECU_CAN_NAV_TIME_GPS_WEEK_NAME "GpsWeek"
 #define NAVECU_CAN_NAV_TIME_NAV_CRC_NAME "NavCrc"
 #define NAVECU_CAN_NAV_CALIBRATION_HEADING_CORRECTION_NAME "HeadingCorrection"
+#define NAVECU_CAN_NAV_CALIBRATION_MOUNT_ROLL_NAME "MountRoll"
+#define NAVECU_CAN_NAV_CALIBRATION_MOUNT_SIGMA_ROLL_PITCH_NAME "MountSigmaRollPitch"
 #define NAVECU_CAN_NAV_CALIBRATION_ODO_SCALE_ERROR_NAME "OdoScaleError"
+#define NAVECU_CAN_NAV_CALIBRATION_MOUNT_PITCH_NAME "MountPitch"
+#define NAVECU_CAN_NAV_CALIBRATION_MOUNT_SIGMA_YAW_NAME "MountSigmaYaw"
 #define NAVECU_CAN_NAV_CALIBRATION_CAL_VALID_NAME "CalValid"
+#define NAVECU_CAN_NAV_CALIBRATION_MOUNT_YAW_NAME "MountYaw"
+#define NAVECU_CAN_NAV_CALIBRATION_MOUNT_EXCITATION_NAME "MountExcitation"
 #define NAVECU_CAN_NAV_CALIBRATION_CAL_STORED_NAME "CalStored"
 #define NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_NAME "CalStatus"
 #define NAVECU_CAN_NAV_CALIBRATION_CAL_SOURCE_NAME "CalSource"
 #define NAVECU_CAN_NAV_CALIBRATION_CAL_COUNT_NAME "CalCount"
+#define NAVECU_CAN_NAV_CALIBRATION_MOUNT_STATE_NAME "MountState"
 #define NAVECU_CAN_NAV_CALIBRATION_NAV_COUNTER_NAME "NavCounter"
+#define NAVECU_CAN_NAV_CALIBRATION_CAL_PAGE_NAME "CalPage"
 #define NAVECU_CAN_NAV_CALIBRATION_NAV_CRC_NAME "NavCrc"
 
 /**
@@ -1403,6 +1415,24 @@ struct navecu_can_nav_calibration_t {
     int16_t heading_correction;
 
     /**
+     * The automatic mounting estimate: the IMU's roll in the vehicle (firmware/app/mounting.h, as the parameter imu_mount_deg); 0 before it is valid.
+     *
+     * Range: -18000..18000 (-180..180 deg)
+     * Scale: 0.01
+     * Offset: 0
+     */
+    int16_t mount_roll;
+
+    /**
+     * 1 sigma of the estimate's roll and pitch (its up axis); 65.535: not estimated yet or beyond.
+     *
+     * Range: 0..65535 (0..65.535 deg)
+     * Scale: 0.001
+     * Offset: 0
+     */
+    uint16_t mount_sigma_roll_pitch;
+
+    /**
      * Range: -32768..32767 (-0.32768..0.32767 -)
      * Scale: 1e-05
      * Offset: 0
@@ -1410,11 +1440,47 @@ struct navecu_can_nav_calibration_t {
     int16_t odo_scale_error;
 
     /**
+     * The automatic mounting estimate: the IMU's pitch in the vehicle.
+     *
+     * Range: -9000..9000 (-90..90 deg)
+     * Scale: 0.01
+     * Offset: 0
+     */
+    int16_t mount_pitch;
+
+    /**
+     * 1 sigma of the estimate's yaw; 65.535: not observed yet or beyond.
+     *
+     * Range: 0..65535 (0..65.535 deg)
+     * Scale: 0.001
+     * Offset: 0
+     */
+    uint16_t mount_sigma_yaw;
+
+    /**
      * Range: 0..1 (0..1 -)
      * Scale: 1
      * Offset: 0
      */
     uint8_t cal_valid;
+
+    /**
+     * The automatic mounting estimate: the IMU's yaw in the vehicle (0 while the yaw is not observed: MountSigmaYaw 65.535).
+     *
+     * Range: -18000..18000 (-180..180 deg)
+     * Scale: 0.01
+     * Offset: 0
+     */
+    int16_t mount_yaw;
+
+    /**
+     * The excitation so far: the sum of (forward acceleration^2 + lateral acceleration^2) x time (saturates), against mount_est_excite_m2ps3.
+     *
+     * Range: 0..4095 (0..4095 m2/s3)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint16_t mount_excitation;
 
     /**
      * Range: 0..1 (0..1 -)
@@ -1451,11 +1517,29 @@ struct navecu_can_nav_calibration_t {
     uint8_t cal_count;
 
     /**
+     * 0 Fixed (imu_mount_deg), 1 Estimating (navigation held until it converges), 2 Estimated (the estimate is the mounting in use).
+     *
+     * Range: 0..3 (0..3 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t mount_state;
+
+    /**
      * Range: 0..14 (0..14 -)
      * Scale: 1
      * Offset: 0
      */
     uint8_t nav_counter;
+
+    /**
+     * Page multiplexor: 0 the calibration (every second, always; byte for byte the frame of before the pages); 1 and 2 the automatic IMU mounting estimate, sent after page 0 only with imu_mount_source automatic.
+     *
+     * Range: 0..15 (0..15 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t cal_page;
 
     /**
      * Range: 0..255 (0..255 -)
@@ -7240,6 +7324,86 @@ bool navecu_can_nav_calibration_heading_correction_is_in_phys_range(float value)
  *
  * @return Encoded signal.
  */
+int16_t navecu_can_nav_calibration_mount_roll_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_calibration_mount_roll_decode(int16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_calibration_mount_roll_is_in_range(int16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_calibration_mount_roll_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint16_t navecu_can_nav_calibration_mount_sigma_roll_pitch_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_calibration_mount_sigma_roll_pitch_decode(uint16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_calibration_mount_sigma_roll_pitch_is_in_range(uint16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_calibration_mount_sigma_roll_pitch_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
 int16_t navecu_can_nav_calibration_odo_scale_error_encode(float value);
 
 /**
@@ -7280,6 +7444,86 @@ bool navecu_can_nav_calibration_odo_scale_error_is_in_phys_range(float value);
  *
  * @return Encoded signal.
  */
+int16_t navecu_can_nav_calibration_mount_pitch_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_calibration_mount_pitch_decode(int16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_calibration_mount_pitch_is_in_range(int16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_calibration_mount_pitch_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint16_t navecu_can_nav_calibration_mount_sigma_yaw_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_calibration_mount_sigma_yaw_decode(uint16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_calibration_mount_sigma_yaw_is_in_range(uint16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_calibration_mount_sigma_yaw_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
 uint8_t navecu_can_nav_calibration_cal_valid_encode(float value);
 
 /**
@@ -7312,6 +7556,86 @@ bool navecu_can_nav_calibration_cal_valid_is_in_range(uint8_t value);
  * @return true if in range, false otherwise.
  */
 bool navecu_can_nav_calibration_cal_valid_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+int16_t navecu_can_nav_calibration_mount_yaw_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_calibration_mount_yaw_decode(int16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_calibration_mount_yaw_is_in_range(int16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_calibration_mount_yaw_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint16_t navecu_can_nav_calibration_mount_excitation_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_calibration_mount_excitation_decode(uint16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_calibration_mount_excitation_is_in_range(uint16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_calibration_mount_excitation_is_in_phys_range(float value);
 
 /**
  * Encode given signal by applying scaling and offset.
@@ -7480,6 +7804,46 @@ bool navecu_can_nav_calibration_cal_count_is_in_phys_range(float value);
  *
  * @return Encoded signal.
  */
+uint8_t navecu_can_nav_calibration_mount_state_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_calibration_mount_state_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_calibration_mount_state_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_calibration_mount_state_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
 uint8_t navecu_can_nav_calibration_nav_counter_encode(float value);
 
 /**
@@ -7512,6 +7876,46 @@ bool navecu_can_nav_calibration_nav_counter_is_in_range(uint8_t value);
  * @return true if in range, false otherwise.
  */
 bool navecu_can_nav_calibration_nav_counter_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_nav_calibration_cal_page_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_calibration_cal_page_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_calibration_cal_page_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_calibration_cal_page_is_in_phys_range(float value);
 
 /**
  * Encode given signal by applying scaling and offset.
