@@ -8,41 +8,19 @@ tests/python/test_uds_live.py: under CI a missing vcan fails, elsewhere these te
 skipped loudly. The expected numbers come from firmware/app/dtc.toml (through
 tools/gen_dtc.py) and ISO 14229-1 Annex D, not from the firmware.
 """
-import json
-import os
-import subprocess
-import sys
-from pathlib import Path
 
 import pytest
 
-from test_vcan_harness import no_vcan, require_vcan
+from test_vcan_harness import live_check
 from tools import gen_dtc
 
-ROOT = Path(__file__).resolve().parents[2]
-NAVECU = os.environ.get("NAVECU_BIN", str(ROOT / "build" / "host" / "navecu"))
-WITH_VCAN = ROOT / "tools" / "vcan" / "with_vcan.sh"
-TIMEOUT_S = 300
 IMU_STALE = "D10187"  # U1101-87
 NO_GNSS = "D10287"    # U1102-87
 
 
 @pytest.fixture(scope="module")
 def r():
-    assert Path(NAVECU).exists(), f"{NAVECU} missing: make {os.path.relpath(NAVECU, ROOT)}"
-    env = dict(os.environ, NAVECU_VCAN_TIMEOUT=str(TIMEOUT_S))
-    proc = subprocess.run([str(WITH_VCAN), sys.executable, "-m", "tools.vcan.dtc_check",
-                           "--navecu", NAVECU], capture_output=True, text=True, cwd=ROOT,
-                          env=env, timeout=TIMEOUT_S + 60)
-    require_vcan(proc)
-    if proc.returncode == 2 and "NO VCAN" in proc.stderr:
-        no_vcan(proc.stderr.strip().splitlines()[-1])
-    lines = [ln for ln in proc.stdout.splitlines() if ln.startswith("{")]
-    assert lines, proc.stderr[-3000:] + proc.stdout[-3000:]
-    out = json.loads(lines[-1])
-    assert "exception" not in out, out["exception"]
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    return out
+    return live_check("tools.vcan.dtc_check")
 
 
 def test_the_table_is_the_generated_one():

@@ -6,43 +6,21 @@ the delay; DTCs for an injected fault (the IMU silent) read and cleared".
 tools/vcan/navecu_uds_check.py runs inside one tools/vcan/with_vcan.sh run (the kernel's
 vcan, or User-Mode Linux's) and reports; the verdicts are here. Like test_uds_live.py:
 under CI a missing vcan fails, elsewhere these tests are skipped loudly. The steps that
-need the nvm branch (RoutineControl 0x0200, parameters loaded from NVM at start) and the
-dtc branch (0x19, 0x14) are xfail(strict=False) until those are merged.
+need NVM (RoutineControl 0x0200, parameters loaded from NVM at start) and the fault memory
+(0x19, 0x14) are tested the same way.
 """
-import json
-import os
-import subprocess
-import sys
-from pathlib import Path
 
 import pytest
 
-from test_vcan_harness import no_vcan, require_vcan
+from test_vcan_harness import live_check
 
-ROOT = Path(__file__).resolve().parents[2]
-NAVECU = os.environ.get("NAVECU_BIN", str(ROOT / "build" / "host" / "navecu"))
-WITH_VCAN = ROOT / "tools" / "vcan" / "with_vcan.sh"
-TIMEOUT_S = 300
 IMU_SILENT_DTC = 0xD10187
 TEST_FAILED, CONFIRMED = 0x01, 0x08
 
 
 @pytest.fixture(scope="module")
 def r():
-    assert Path(NAVECU).exists(), f"{NAVECU} missing: make {os.path.relpath(NAVECU, ROOT)}"
-    env = dict(os.environ, NAVECU_VCAN_TIMEOUT=str(TIMEOUT_S))
-    proc = subprocess.run([str(WITH_VCAN), sys.executable, "-m", "tools.vcan.navecu_uds_check",
-                           "--navecu", NAVECU], capture_output=True, text=True, cwd=ROOT,
-                          env=env, timeout=TIMEOUT_S + 60)
-    require_vcan(proc)
-    if proc.returncode == 2 and "NO VCAN" in proc.stderr:
-        no_vcan(proc.stderr.strip().splitlines()[-1])
-    lines = [ln for ln in proc.stdout.splitlines() if ln.startswith("{")]
-    assert lines, proc.stderr[-3000:] + proc.stdout[-3000:]
-    out = json.loads(lines[-1])
-    assert "exception" not in out, out["exception"]
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    return out
+    return live_check("tools.vcan.navecu_uds_check")
 
 
 def test_info_and_dump(r):

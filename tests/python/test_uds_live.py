@@ -7,41 +7,19 @@ tools/vcan/with_vcan.sh run (the kernel's vcan, or User-Mode Linux's) and plays 
 the verdicts are here. Like tests/python/test_isotp_peer.py: under CI a missing vcan
 fails, elsewhere these tests are skipped loudly.
 """
-import json
 import math
-import os
 import struct
-import subprocess
-import sys
-from pathlib import Path
 
 import pytest
 
-from test_vcan_harness import no_vcan, require_vcan
+from test_vcan_harness import live_check
 from tools import gen_params
 
-ROOT = Path(__file__).resolve().parents[2]
-NAVECU = os.environ.get("NAVECU_BIN", str(ROOT / "build" / "host" / "navecu"))
-WITH_VCAN = ROOT / "tools" / "vcan" / "with_vcan.sh"
-TIMEOUT_S = 300
 
 
 @pytest.fixture(scope="module")
 def r():
-    assert Path(NAVECU).exists(), f"{NAVECU} missing: make {os.path.relpath(NAVECU, ROOT)}"
-    env = dict(os.environ, NAVECU_VCAN_TIMEOUT=str(TIMEOUT_S))
-    proc = subprocess.run([str(WITH_VCAN), sys.executable, "-m", "tools.vcan.uds_check",
-                           "--navecu", NAVECU], capture_output=True, text=True, cwd=ROOT,
-                          env=env, timeout=TIMEOUT_S + 60)
-    require_vcan(proc)
-    if proc.returncode == 2 and "NO VCAN" in proc.stderr:
-        no_vcan(proc.stderr.strip().splitlines()[-1])
-    lines = [ln for ln in proc.stdout.splitlines() if ln.startswith("{")]
-    assert lines, proc.stderr[-3000:] + proc.stdout[-3000:]
-    out = json.loads(lines[-1])
-    assert "exception" not in out, out["exception"]
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    return out
+    return live_check("tools.vcan.uds_check")
 
 
 def f32(x):

@@ -44,6 +44,27 @@ def require_vcan(proc):
         no_vcan((lines or proc.stderr.strip().splitlines() or ["exit 77"])[-1])
 
 
+def live_check(module, timeout_s=300):
+    """Run `python -m MODULE --navecu NAVECU` (a tools/vcan check that starts the host
+    navecu on vcan0 and plays the tester) inside one with_vcan.sh run; its last JSON line,
+    the results the tests judge. A missing vcan: no_vcan (fail under CI, else skip)."""
+    navecu = os.environ.get("NAVECU_BIN", str(ROOT / "build" / "host" / "navecu"))
+    assert Path(navecu).exists(), f"{navecu} missing: make {os.path.relpath(navecu, ROOT)}"
+    env = dict(os.environ, NAVECU_VCAN_TIMEOUT=str(timeout_s))
+    proc = subprocess.run([str(WITH_VCAN), sys.executable, "-m", module, "--navecu", navecu],
+                          capture_output=True, text=True, cwd=ROOT, env=env,
+                          timeout=timeout_s + 60)
+    require_vcan(proc)
+    if proc.returncode == 2 and "NO VCAN" in proc.stderr:
+        no_vcan(proc.stderr.strip().splitlines()[-1])
+    lines = [ln for ln in proc.stdout.splitlines() if ln.startswith("{")]
+    assert lines, proc.stderr[-3000:] + proc.stdout[-3000:]
+    out = json.loads(lines[-1])
+    assert "exception" not in out, out["exception"]
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    return out
+
+
 @pytest.fixture(scope="module")
 def selftest():
     """One harness run of tools/vcan/vcan_selftest.py: {check name: result dict}."""
