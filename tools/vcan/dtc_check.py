@@ -12,13 +12,8 @@ reads it gone. Prints one JSON object of what every step answered, for
 tests/python/test_dtc_live.py to judge (the DTC numbers and status bytes as integers).
 Exit status 0 when every step ran, 1 when one raised, 2 with "NO VCAN" when vcan0 is missing.
 """
-import argparse
-import json
-import os
 import sys
 import time
-import traceback
-from pathlib import Path
 
 import can
 import isotp
@@ -27,9 +22,8 @@ from udsoncan.client import Client
 from udsoncan.connections import PythonIsoTpConnection
 
 from tools import gen_stationary_log
-from tools.vcan.uds_check import IFACE, start_navecu, stop_navecu
+from tools.vcan.uds_check import IFACE, check_main, start_navecu, stop_navecu
 
-ROOT = Path(__file__).resolve().parents[2]
 IMU_S = 1.0        # IMU samples sent before the silence
 CONFIRM_WAIT_S = 3.5  # 0.5 s until stale + 2 s confirm time + margin
 
@@ -92,20 +86,7 @@ def run(binary):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--navecu", default=os.environ.get("NAVECU_BIN",
-                                                       str(ROOT / "build/host/navecu")))
-    a = ap.parse_args(argv)
-    if not Path("/sys/class/net/" + IFACE).exists():
-        print(f"NO VCAN: {IFACE} missing", file=sys.stderr)
-        return 2
-    try:
-        r = run(a.navecu)
-    except Exception:  # noqa: BLE001 - reported to the test
-        print(json.dumps({"exception": traceback.format_exc()}))
-        return 1
-    print(json.dumps(r))
-    return 0
+    return check_main(__doc__, run, argv)
 
 
 if __name__ == "__main__":

@@ -19,13 +19,8 @@ the NRCs) for tests/python/test_navecu_uds_live.py to judge:
 Exit status 0 when every step ran (the verdicts are the test's), 1 when one raised, 2 with
 "NO VCAN" when vcan0 is missing.
 """
-import argparse
 import io
-import json
-import os
-import signal
 import struct
-import subprocess
 import sys
 import tempfile
 import time
@@ -34,9 +29,8 @@ from pathlib import Path
 
 from tools import gen_stationary_log
 from tools import navecu_uds as nu
+from tools.vcan.uds_check import IFACE, check_main, start_navecu, stop_navecu
 
-ROOT = Path(__file__).resolve().parents[2]
-IFACE = "vcan0"
 # the edit of the round trip: a u16, two vec3 (one in degrees), a real in deg/sqrt(h) and
 # an enum, each away from its default
 EDIT = {"level_s": 45, "gnss_lever_b_m": [1.0, -0.5, 0.25], "imu_mount_rad": [0.0, 0.0, 90.0],
@@ -74,21 +68,6 @@ def tool(*argv):
     return rc, out.getvalue(), err.getvalue()
 
 
-def start_navecu(binary, nvm):
-    proc = subprocess.Popen([binary, "--can", IFACE, "--nvm", str(nvm)], stderr=subprocess.PIPE,
-                            text=True)
-    line = proc.stderr.readline()
-    if "running on" not in line:
-        raise RuntimeError(f"navecu did not start: {line}{proc.stderr.read()}")
-    return proc
-
-
-def stop_navecu(proc):
-    proc.send_signal(signal.SIGINT)
-    _, err = proc.communicate(timeout=20)
-    return err.strip()
-
-
 def raw(fn):
     """(None, result) when positive, (the NRC, None) when negative, (-1, the traceback)
     when it raised otherwise."""
@@ -113,7 +92,7 @@ def run(binary, work: Path):
     r = {}
     tab = nu.table()
     nvm = work / "nvm.bin"
-    proc = start_navecu(binary, nvm)
+    proc = start_navecu(binary, "--nvm", nvm)
     try:
         r["info"] = tool("info")
         a_toml, b_toml, edited = work / "a.toml", work / "b.toml", work / "edited.toml"
@@ -127,7 +106,7 @@ def run(binary, work: Path):
         r["dump_loaded"] = tool("dump")
         r["save"] = tool("save")
         r["firmware_summary_1"] = stop_navecu(proc)
-        proc = start_navecu(binary, nvm)
+        proc = start_navecu(binary, "--nvm", nvm)
         r["dump_restarted"] = tool("dump")
         # raw requests: a write without SecurityAccess, then three wrong keys
         client = nu.open_client(client_args(), tab)
@@ -164,22 +143,13 @@ def run(binary, work: Path):
     return r
 
 
+def run_in_tmp(binary):
+    with tempfile.TemporaryDirectory(prefix="navecu_uds_check_") as d:
+        return run(binary, Path(d))
+
+
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--navecu", default=os.environ.get("NAVECU_BIN",
-                                                       str(ROOT / "build/host/navecu")))
-    a = ap.parse_args(argv)
-    if not Path("/sys/class/net/" + IFACE).exists():
-        print(f"NO VCAN: {IFACE} missing", file=sys.stderr)
-        return 2
-    try:
-        with tempfile.TemporaryDirectory(prefix="navecu_uds_check_") as d:
-            r = run(a.navecu, Path(d))
-    except Exception:  # noqa: BLE001 - reported to the test
-        print(json.dumps({"exception": traceback.format_exc()}))
-        return 1
-    print(json.dumps(r))
-    return 0
+    return check_main(__doc__, run_in_tmp, argv)
 
 
 if __name__ == "__main__":

@@ -102,8 +102,10 @@ def nrc_of(fn):
         return e.response.code
 
 
-def start_navecu(binary):
-    proc = subprocess.Popen([binary, "--can", IFACE], stderr=subprocess.PIPE, text=True)
+def start_navecu(binary, *args):
+    """navecu --can vcan0 [args], once it said it runs"""
+    proc = subprocess.Popen([binary, "--can", IFACE, *map(str, args)], stderr=subprocess.PIPE,
+                            text=True)
     line = proc.stderr.readline()
     if "running on" not in line:
         raise RuntimeError(f"navecu did not start: {line}{proc.stderr.read()}")
@@ -187,8 +189,11 @@ def run(binary, params):
     return r
 
 
-def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+def check_main(doc, run_check, argv=None):
+    """The main of a live check (this one, dtc_check, navecu_uds_check): --navecu BINARY;
+    exit 2 "NO VCAN" without vcan0; run_check(binary)'s dict printed as one JSON line
+    (exit 0), or its exception's traceback as {"exception": ...} (exit 1)."""
+    ap = argparse.ArgumentParser(description=doc.split("\n")[0])
     ap.add_argument("--navecu", default=os.environ.get("NAVECU_BIN",
                                                        str(ROOT / "build/host/navecu")))
     a = ap.parse_args(argv)
@@ -196,12 +201,16 @@ def main(argv=None):
         print(f"NO VCAN: {IFACE} missing", file=sys.stderr)
         return 2
     try:
-        r = run(a.navecu, gen_params.load())
+        r = run_check(a.navecu)
     except Exception:  # noqa: BLE001 - reported to the test
         print(json.dumps({"exception": traceback.format_exc()}))
         return 1
     print(json.dumps(r))
     return 0
+
+
+def main(argv=None):
+    return check_main(__doc__, lambda binary: run(binary, gen_params.load()), argv)
 
 
 if __name__ == "__main__":
