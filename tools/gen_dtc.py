@@ -18,6 +18,8 @@ import sys
 import tomllib
 from pathlib import Path
 
+from tools import gen_params
+
 ROOT = Path(__file__).resolve().parent.parent
 TABLE = ROOT / "firmware" / "app" / "dtc.toml"
 DBC = ROOT / "firmware" / "can" / "navecu.dbc"
@@ -178,22 +180,7 @@ def main(argv=None) -> int:
     except (TableError, OSError) as e:
         print(f"gen_dtc: {e}", file=sys.stderr)
         return 1
-    base = Path(a.out_dir) if a.out_dir else ROOT
-    stale = []
-    for rel, text in files.items():
-        path = base / rel
-        if a.check:
-            if not path.exists() or path.read_text(encoding="utf-8") != text:
-                stale.append(str(rel))
-            continue
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(text, encoding="utf-8")
-    if stale:
-        print(f"gen_dtc: stale, run 'make dtc': {', '.join(stale)}", file=sys.stderr)
-        return 1
-    print("gen_dtc: " + ("the generated files match firmware/app/dtc.toml" if a.check
-                         else f"wrote {', '.join(str(r) for r in files)}"))
-    return 0
+    return gen_params.emit("gen_dtc", "dtc", "firmware/app/dtc.toml", files, a.out_dir, a.check)
 
 
 if __name__ == "__main__":

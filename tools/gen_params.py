@@ -423,21 +423,28 @@ def main(argv=None) -> int:
     except (TableError, OSError) as e:
         print(f"gen_params: {e}", file=sys.stderr)
         return 1
-    base = Path(a.out_dir) if a.out_dir else ROOT
+    return emit("gen_params", "params", "firmware/app/params.toml", files, a.out_dir, a.check)
+
+
+def emit(tool, make_target, source, files, out_dir=None, check=False) -> int:
+    """Write files ({path relative to the repository: text}) under out_dir (default: the
+    repository), or with check compare them and name the stale ones. 0, or 1 when stale.
+    Shared by the generators of the repository's tables (this one, gen_dtc.py)."""
+    base = Path(out_dir) if out_dir else ROOT
     stale = []
     for rel, text in files.items():
         path = base / rel
-        if a.check:
+        if check:
             if not path.exists() or path.read_text(encoding="utf-8") != text:
                 stale.append(str(rel))
             continue
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text(text, encoding="utf-8")
     if stale:
-        print(f"gen_params: stale, run 'make params': {', '.join(stale)}", file=sys.stderr)
+        print(f"{tool}: stale, run 'make {make_target}': {', '.join(stale)}", file=sys.stderr)
         return 1
-    print("gen_params: " + ("the generated files match firmware/app/params.toml" if a.check
-                            else f"wrote {', '.join(str(r) for r in files)}"))
+    print(f"{tool}: " + (f"the generated files match {source}" if check
+                         else f"wrote {', '.join(str(r) for r in files)}"))
     return 0
 
 
