@@ -206,6 +206,9 @@ static void test_identification_dids(void **state)
     n = REQUEST(0x22, 0xF1, 0xA0);
     assert_int_equal(n, 3u + strlen(vehicle_profile.name));
     assert_memory_equal(&rsp[3], "native", 6u);
+    n = REQUEST(0x22, 0xF1, 0xA2);
+    assert_int_equal(n, 3u + strlen(NAVECU_BUILD));
+    assert_memory_equal(&rsp[3], "host f32 ", 9u); /* this test's build */
     expect_nrc(REQUEST(0x22, 0xF1, 0x90), 0x22, 0x31); /* no VIN */
     /* identification DIDs are read-only */
     unlock();
@@ -237,15 +240,15 @@ static void test_mount_estimate_did(void **state)
 static void test_all_dids_in_one_request(void **state)
 {
     (void)state;
-    uint8_t req[1 + 2 * (APP_PARAM_N + 3)];
+    uint8_t req[1 + 2 * (APP_PARAM_N + 4)];
     size_t m = 0u;
     req[m++] = 0x22;
     for (int k = 0; k < (int)APP_PARAM_N; k++) {
         req[m++] = (uint8_t)(app_params[k].did >> 8);
         req[m++] = (uint8_t)app_params[k].did;
     }
-    const uint16_t ident[3] = {0xF18Cu, 0xF195u, 0xF1A0u};
-    for (int i = 0; i < 3; i++) {
+    const uint16_t ident[4] = {0xF18Cu, 0xF195u, 0xF1A0u, 0xF1A2u};
+    for (int i = 0; i < 4; i++) {
         req[m++] = (uint8_t)(ident[i] >> 8);
         req[m++] = (uint8_t)ident[i];
     }
@@ -258,7 +261,7 @@ static void test_all_dids_in_one_request(void **state)
         pos += 2u + check_param_value(k, &rsp[pos + 2u]);
     }
     pos += 2u + strlen(NAVECU_ECU_SERIAL) + 2u + strlen(NAVECU_SW_VERSION) + 2u +
-           strlen(vehicle_profile.name);
+           strlen(vehicle_profile.name) + 2u + strlen(NAVECU_BUILD);
     assert_int_equal(n, pos);
     /* docs/can.md and the ECU's 512-byte ISO-TP buffer: every DID at once fits */
     assert_true(n < 300u);

@@ -75,7 +75,7 @@ NRC_NAMES = {
 }
 
 # identification DIDs (firmware/app/app_uds.h) and the NVM status DID (nvm branch)
-ID_DIDS = {0xF195: "sw_version", 0xF18C: "serial", 0xF1A0: "vehicle"}
+ID_DIDS = {0xF195: "sw_version", 0xF18C: "serial", 0xF1A0: "vehicle", 0xF1A2: "build"}
 DID_NVM_STATUS = 0xF1A1
 # RoutineControl 0x31 startRoutine identifiers (docs/can.md, "Diagnostics (UDS)")
 ROUTINES = {"save": (0x0200, "StoreParameters"), "erase-cal": (0x0201, "EraseCalibration"),

@@ -148,6 +148,9 @@ static size_t read_did(void *user, uint16_t did, uint8_t *buf, size_t cap)
     if (did == APP_UDS_DID_VEHICLE) {
         return put_string(buf, cap, vehicle_profile.name);
     }
+    if (did == APP_UDS_DID_BUILD) {
+        return put_string(buf, cap, NAVECU_BUILD);
+    }
     if (did == APP_UDS_DID_MOUNT_EST) {
         return put_mount_est(a, buf, cap);
     }

@@ -28,6 +28,7 @@
 #define APP_UDS_DID_SERIAL 0xF18Cu     /* ECUSerialNumber */
 #define APP_UDS_DID_SW_VERSION 0xF195u /* systemSupplierECUSoftwareVersionNumber */
 #define APP_UDS_DID_VEHICLE 0xF1A0u    /* the build's vehicle profile name (vehicles/NAME) */
+#define APP_UDS_DID_BUILD 0xF1A2u      /* the build: target, number type, compiler (below) */
 /* the automatic mounting estimate, read-only, 29 bytes: MountState (1: app_mount_state_t),
  * roll, pitch, yaw (rad), sigma roll/pitch, sigma yaw (rad), excitation (m^2/s^3), each a
  * float32 big-endian, then the windows accumulated (uint32 big-endian) */
@@ -49,6 +50,27 @@
 #ifndef NAVECU_SW_VERSION
 #define NAVECU_SW_VERSION "navecu 0.16.0-dev"
 #endif
+/* The build as the compiler saw it (never stale, unlike a stamp a build script writes):
+ * the target, the navigation core's number type and the compiler's version, e.g.
+ * "cortex-m4f f32 gcc 12.2.1 20221205" or "host f32 gcc 12.2.0". */
+#if defined(__ARM_ARCH_7EM__)
+#define NAVECU_BUILD_TARGET "cortex-m4f"
+#else
+#define NAVECU_BUILD_TARGET "host"
+#endif
+#if defined(NAV_REAL_DOUBLE)
+#define NAVECU_BUILD_REAL " f64"
+#else
+#define NAVECU_BUILD_REAL " f32"
+#endif
+#if defined(__clang__)
+#define NAVECU_BUILD_CC " clang " __clang_version__
+#elif defined(__GNUC__)
+#define NAVECU_BUILD_CC " gcc " __VERSION__
+#else
+#define NAVECU_BUILD_CC " cc"
+#endif
+#define NAVECU_BUILD NAVECU_BUILD_TARGET NAVECU_BUILD_REAL NAVECU_BUILD_CC
 #ifndef NAVECU_ECU_SERIAL
 #define NAVECU_ECU_SERIAL "NAVECU-00000000"
 #endif

@@ -222,7 +222,7 @@ def test_log_runner_info_and_dump_defaults(lr):
     rc, out, err = lr("info")
     assert rc == 0, err
     assert "sw_version: navecu 0.16.0-dev" in out and "serial: NAVECU-00000000" in out
-    assert "vehicle: native" in out
+    assert "vehicle: native" in out and "build: host f32 " in out
     rc, text, err = lr("dump")
     assert rc == 0, err
     vals = nu.read_toml_text(text, TAB)

@@ -51,6 +51,7 @@ def test_identification_dids(r):
     assert r["ident"]["sw_version"].startswith("navecu")
     assert r["ident"]["serial"] == "NAVECU-00000000"
     assert r["ident"]["vehicle"] == "native"
+    assert r["ident"]["build"].startswith("host f32 ")
 
 
 def test_session_timings(r):

@@ -31,10 +31,10 @@ from udsoncan.connections import PythonIsoTpConnection
 from udsoncan.exceptions import NegativeResponseException
 
 from tools import gen_params
+from tools.navecu_uds import ID_DIDS
 
 ROOT = Path(__file__).resolve().parents[2]
 IFACE = "vcan0"
-ID_DIDS = {0xF18C: "serial", 0xF195: "sw_version", 0xF1A0: "vehicle"}
 
 
 def key_of_seed(seed: int) -> int:
