@@ -22,6 +22,10 @@ ROOT = Path(__file__).resolve().parents[2]
 PEER = os.environ.get("ISOTP_PEER_BIN", str(ROOT / "build" / "host" / "tests" / "isotp_peer"))
 WITH_VCAN = ROOT / "tools" / "vcan" / "with_vcan.sh"
 TIMEOUT_S = 300
+# how much later than the ECU's own clock read a frame's kernel receive timestamp may be:
+# 0.38 ms seen on an idle machine, 2.7 ms with both cores busy with other builds (User-Mode
+# Linux schedules the ECU and the tester on the same CPUs)
+TIMESTAMP_DELAY_MS = 5.0
 
 
 @pytest.fixture(scope="module")
@@ -93,9 +97,11 @@ def test_ecu_sends_as_can_isotp_asks(run):
     """can-isotp announces BS 3 / STmin 10 ms, BS 0 / 0xF5 (500 us), BS 1 / 0: the ECU waits
     for an FC after every block and spaces its CFs by STmin. On the bus the kernel's receive
     timestamp of a frame comes a little after the ECU's clock read that let it go (more when
-    the machine is busy: 0.38 ms was seen), which shortens one gap and lengthens the next;
+    the machine is busy: 0.38 ms was seen idle, 2.7 ms with both cores loaded by other
+    builds), which shortens one gap and lengthens the next;
     so the check is cumulative: the k-th CF of a block at least k x STmin after the block's
-    first, within 2 ms (the first frame's own delay)"""
+    first, within 5 ms (the first frame's own delay; a missing STmin falls short by
+    about 10 ms per CF)"""
     r = scenario(run, "tester_flow_control")
     for k in ("ms", "us", "bs1"):
         assert r[k]["ok"] and r[k]["errors"] == [], (k, r[k])
@@ -105,10 +111,10 @@ def test_ecu_sends_as_can_isotp_asks(run):
           f"at 500 us: {us['gaps']}, shortfall {us['shortfall_ms']} ms")
     assert ms["tester_fc"] == ["30030a"]
     assert ms["blocks"] == [3] * 9 + [1]          # 200 B: 28 CFs
-    assert ms["shortfall_ms"] <= 2.0 and ms["gaps"]["median_ms"] >= 9.5
+    assert ms["shortfall_ms"] <= TIMESTAMP_DELAY_MS and ms["gaps"]["median_ms"] >= 9.5
     assert us["tester_fc"] == ["3000f5"]
     assert us["blocks"] == [42]
-    assert us["gaps"]["sum_ms"] >= 41 * 0.5 and us["shortfall_ms"] <= 2.0
+    assert us["gaps"]["sum_ms"] >= 41 * 0.5 and us["shortfall_ms"] <= TIMESTAMP_DELAY_MS
     assert bs1["tester_fc"] == ["300100"]
     assert bs1["blocks"] == [1] * 14              # 100 B: 14 CFs, an FC before each
 
@@ -167,7 +173,8 @@ def test_timeout_n_bs(run):
     r = scenario(run, "timeout_bs")
     print(f"\nN_Bs reported {r['after_ff_s']:.3f} s after the ECU's FF")
     assert r["ff"] == "1064000102030405"
-    assert 1.0 <= r["after_ff_s"] <= 1.5
+    # from the FF's bus timestamp, which comes after the ECU's clock read that started N_Bs
+    assert 1.0 - TIMESTAMP_DELAY_MS / 1000 <= r["after_ff_s"] <= 1.5
     assert r["ecu_after"] is None
     assert r["summary"]["tx_timeout_bs"] == 1 and r["summary"]["tx_msgs"] == 0
 
