@@ -49,6 +49,8 @@ static void tester_frame(const uint8_t *d, uint8_t n)
 }
 
 /* one request (SF, or FF + CFs) and its response reassembled: its length, 0 for none */
+static int pendings; /* 7F SID 78 responsePending seen by request() */
+
 static size_t request(const uint8_t *req, size_t n)
 {
     const uint32_t mark = hal.tx_n;
@@ -90,6 +92,11 @@ static size_t request(const uint8_t *req, size_t n)
         if (pci == 0u) {
             len = f->data[0] & 0xFu;
             memcpy(rsp, &f->data[1], len);
+            if (len == 3u && rsp[0] == 0x7F && rsp[2] == 0x78) {
+                pendings++; /* responsePending: the final response follows */
+                len = 0u;
+                continue;
+            }
             return len;
         }
         if (pci == 1u) {
@@ -560,7 +567,11 @@ static void test_store_parameters_and_reset(void **state)
 
     unlock();
     assert_int_equal(REQUEST(0x2E, 0x02, 0x04, 0x00, 0x2D), 3u);
+    pendings = 0;
     expect_routine_ok(ROUTINE(0x0200u), 0x0200u);
+    /* the NVM write is announced with 7F 31 78 responsePending before the final 71 */
+    assert_int_equal(pendings, 1);
+    assert_int_equal(app.uds.pending_sent, 1u);
     assert_int_equal(REQUEST(0x11, 0x01), 2u);
     app_poll(&app, &hal);
     assert_int_equal(app.cfg.level_s, 45u);
@@ -594,6 +605,7 @@ static void test_routine_conditions_and_nvm_failure(void **state)
     expect_nrc(ROUTINE(0x0202u), 0x31, 0x22);
     expect_nrc(ROUTINE(0x0203u), 0x31, 0x22);
     assert_int_equal(hal.nvm_units, 0u);
+    assert_int_equal(app.uds.pending_sent, 0u); /* refused at once: no responsePending */
     app.keep.odo.standing = 1u;
     expect_routine_ok(ROUTINE(0x0200u), 0x0200u);
     expect_nrc(ROUTINE(0x0202u), 0x31, 0x22);

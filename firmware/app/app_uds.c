@@ -12,6 +12,24 @@ static int tx_frame(void *user, const hal_can_frame_t *f)
     return hal_can_send((hal_t *)user, f);
 }
 
+/* ISO 14229-1 responsePending (7F SID 78), sent at once before an NVM erase and write: one
+ * may take longer than the P2 the ECU announces (UDS_P2_MS, 50 ms; a 16 KiB sector erase
+ * of the STM32F405 takes up to about 0.5 s and stalls the CPU); the final response then
+ * follows within P2* (UDS_P2_STAR_MS). A single frame: it leaves before the work starts. */
+static void send_pending(app_t *a, uint8_t sid)
+{
+    hal_t *hal = a->uds.hal;
+    if (hal == NULL) {
+        return;
+    }
+    const uint8_t p[3] = {UDS_NEGATIVE, sid, UDS_NRC_RESPONSE_PENDING};
+    const uint64_t now = hal_time_us(hal);
+    if (isotp_send(&a->uds.tp, p, sizeof p, now) == 0) {
+        (void)isotp_poll(&a->uds.tp, now, tx_frame, hal);
+        app_count(&a->uds.pending_sent);
+    }
+}
+
 app_param_id_t app_uds_param_of_did(uint16_t did)
 {
     for (int k = 0; k < (int)APP_PARAM_N; k++) {
@@ -260,6 +278,9 @@ static uint8_t uds_dtc_clear(void *user, uint32_t group)
 {
     app_t *a = (app_t *)user;
     (void)group; /* the server passes all groups only */
+    if (app_nvm_write_allowed(a)) {
+        send_pending(a, UDS_SID_CLEAR_DTC); /* the status bytes' NVM write follows */
+    }
     return app_dtc_clear(a, a->uds.hal); /* the HAL of this request (serve) */
 }
 
@@ -294,6 +315,7 @@ static uint8_t start_routine(void *user, uint16_t rid, const uint8_t *data, size
         return UDS_NRC_CONDITIONS_NOT_CORRECT;
     }
     if (rid == APP_UDS_RID_STORE_PARAMS) {
+        send_pending(a, UDS_SID_ROUTINE);
         const cal_record_t r = cal_in_use(c);
         if (nvstore_save(hal, &c->store, &a->cfg, &r) != 0) {
             c->nvm_error = 1u;
@@ -304,6 +326,7 @@ static uint8_t start_routine(void *user, uint16_t rid, const uint8_t *data, size
         return UDS_NRC_OK;
     }
     if (rid == APP_UDS_RID_ERASE_CALIBRATION) {
+        send_pending(a, UDS_SID_ROUTINE);
         calib_erase(c, hal, a->run.mode == APP_MODE_NAVIGATING ? &a->run.dr : NULL);
         return c->nvm_error ? UDS_NRC_GENERAL_PROGRAMMING_FAILURE : UDS_NRC_OK;
     }
@@ -311,6 +334,7 @@ static uint8_t start_routine(void *user, uint16_t rid, const uint8_t *data, size
     if (c->source == (uint8_t)CAL_SRC_NONE) {
         return UDS_NRC_CONDITIONS_NOT_CORRECT; /* nothing calibrated */
     }
+    send_pending(a, UDS_SID_ROUTINE);
     calib_store(c, &a->run.cal, hal, a->keep.n_samples);
     return c->nvm_error ? UDS_NRC_GENERAL_PROGRAMMING_FAILURE : UDS_NRC_OK;
 }

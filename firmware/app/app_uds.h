@@ -98,6 +98,7 @@ typedef struct {
     uint8_t on;                  /* the channel started (app_uds_init succeeded) */
     uint8_t reset_due;           /* ECUReset accepted: restart once the response left */
     hal_t *hal;                  /* the HAL of the request being served (its routines) */
+    uint32_t pending_sent;       /* 7F SID 78 responsePending sent before an NVM write */
     uint16_t rsp_len;
     uint8_t req[ISOTP_MAX_LEN];
     uint8_t rsp[ISOTP_MAX_LEN];

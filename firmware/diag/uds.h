@@ -65,6 +65,7 @@
 #define UDS_NRC_EXCEEDED_ATTEMPTS 0x36u
 #define UDS_NRC_GENERAL_PROGRAMMING_FAILURE 0x72u
 #define UDS_NRC_TIME_DELAY_NOT_EXPIRED 0x37u
+#define UDS_NRC_RESPONSE_PENDING 0x78u  /* requestCorrectlyReceived-ResponsePending */
 #define UDS_NRC_NOT_IN_ACTIVE_SESSION 0x7Fu   /* serviceNotSupportedInActiveSession */
 
 /* sessions (0x10 sub-functions) */
@@ -73,7 +74,7 @@
 
 /* timing: P2 and P2* announced in the 0x10 response, S3 enforced */
 #define UDS_P2_MS 50u         /* the server answers within 50 ms (sent in 1 ms units) */
-#define UDS_P2_STAR_MS 5000u  /* after a 0x78 response pending (never sent; 10 ms units) */
+#define UDS_P2_STAR_MS 5000u  /* after a 0x78 responsePending (sent in 10 ms units) */
 #define UDS_S3_US 5000000u    /* S3server: 5 s without a request -> default session */
 
 /* SecurityAccess: attempts and the delay after them */

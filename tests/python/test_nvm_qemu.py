@@ -188,8 +188,10 @@ def test_parameters_saved_over_uds_on_qemu_load_and_match_the_host(tmp_path):
     # 1. the ECU image: written and saved over UDS, the NVM image kept
     qemu(uds, tmp_path / "q1.out", tmp_path / "qemu.nvm")
     rsp = responses(tmp_path / "q1.out")
-    assert [r[0] for r in rsp] == [0x50, 0x67, 0x67] + [0x6E] * n_writes + [0x71, 0x62], \
+    # StoreParameters: 7F 31 78 responsePending before its NVM write, then 71
+    assert [r[0] for r in rsp] == [0x50, 0x67, 0x67] + [0x6E] * n_writes + [0x7F, 0x71, 0x62], \
         [r.hex() for r in rsp]
+    assert rsp[-3] == b"\x7F\x31\x78"
     assert rsp[-2] == b"\x71\x01\x02\x00"
     assert rsp[-1] == b"\x62\xF1\xA1" + bytes(8)  # this boot loaded nothing
     host(uds, tmp_path / "h1.out", "--nvm", tmp_path / "host.nvm")
