@@ -23,6 +23,7 @@
 
 #include "app.h"
 #include "can_frames.h"
+#include "commands.h"
 #include "e2e.h"
 #include "fake_hal.h"
 #include "navecu_can.h"
@@ -38,6 +39,7 @@ static double carry_v[3], speed, nose_rad, north_m, east_m;
 static uint8_t imu_counter, wheel_counter, cmd_counter, gnss_epoch;
 static uint32_t k_sample, n_position;
 static struct navecu_can_nav_status_t last_status; /* the last page 0 */
+static uint32_t n_levelling_moving; /* NAV_Status page 0 saying Levelling while moving */
 
 static const double LAT0_DEG = 45.0, LON0_DEG = 10.0, H0_M = 100.0;
 
@@ -56,6 +58,9 @@ static void drain(void)
             assert_int_equal(navecu_can_nav_status_unpack(&m, hal.tx[i].data, 8u), 0);
             if (m.status_page == 0u) {
                 last_status = m;
+                if (m.mode == NAVECU_CAN_NAV_STATUS_MODE_LEVELLING_CHOICE && fabs(speed) > 0.1) {
+                    n_levelling_moving++;
+                }
             }
         }
     }
@@ -74,7 +79,7 @@ static int setup(void **state)
     nose_rad = 30.0 * DEG;
     north_m = east_m = 0.0;
     imu_counter = wheel_counter = cmd_counter = gnss_epoch = 0u;
-    k_sample = n_position = 0u;
+    k_sample = n_position = n_levelling_moving = 0u;
     memset(&last_status, 0, sizeof last_status);
     hal.t_us = 1000000u;
     return 0;
@@ -286,6 +291,87 @@ static void test_reversing_heading_is_the_course_reversed(void **state)
     assert_navigator(2.0); /* course sigma 0.2 / 6: about 2 deg */
 }
 
+static void send_known_position(void)
+{
+    const hal_can_frame_t f = cf_known_position((int32_t)lround(lat_deg() * 1e7),
+                                                (int32_t)lround(lon_deg() * 1e7), hal.t_us);
+    feed(&f);
+}
+
+/* the issue's case: a Reset at 15 m/s, then CMD_KnownPosition + SetInitialPosition:
+ * refused (Moving, counted), never Levelling while driving, the in-motion alignment
+ * navigates within 2 s of the reset */
+static void test_set_initial_position_while_driving_refused(void **state)
+{
+    (void)state;
+    speed = 15.0;
+    assert_true(drive_until_navigating(10.0, 15.0) > 0.0);
+    drive(2.0, 15.0);
+    send_control(1u, 0u); /* Reset */
+    send_known_position();
+    const uint32_t before = app.keep.health.cmd_rejected;
+    send_control(2u, 1u); /* SetInitialPosition with a heading */
+    assert_int_equal(app.keep.health.cmd_rejected, before + 1u);
+    assert_int_equal(app.keep.health.cmd_refusal, CMD_REFUSAL_MOVING);
+    assert_int_equal(app_mode(&app), APP_MODE_WAIT_INIT);
+    const double t = drive_until_navigating(10.0, 15.0);
+    assert_true(t > 0.0 && t <= 2.0);
+    drive(5.0, 15.0);
+    assert_navigator(0.5);
+    assert_int_equal(n_levelling_moving, 0u);
+}
+
+/* a CMD_KnownPosition the car has driven away from: SetInitialPosition at the next stop
+ * is refused (StalePosition), nothing starts from the old point */
+static void test_stale_known_position_refused(void **state)
+{
+    (void)state;
+    drive(1.0, 0.0);
+    send_known_position();
+    for (int k = 0; k < 2 * RATE_HZ; k++) {
+        sample(1.0, 2.0);
+    }
+    for (int k = 0; k < 3 * RATE_HZ; k++) {
+        sample(-1.0, 0.0);
+    }
+    drive(1.0, 0.0);
+    assert_true(fabs(speed) < 1e-9);
+    const uint32_t before = app.keep.health.cmd_rejected;
+    send_control(2u, 1u);
+    assert_int_equal(app.keep.health.cmd_rejected, before + 1u);
+    assert_int_equal(app.keep.health.cmd_refusal, CMD_REFUSAL_STALE_POSITION);
+    assert_int_equal(app_mode(&app), APP_MODE_WAIT_INIT);
+    assert_false(app.run.align.pos_valid);
+}
+
+/* SetInitialPosition at rest, then the car drives off before levelling ends: the point is
+ * dropped (StalePosition, counted), the status leaves Levelling, and the in-motion
+ * alignment starts once at speed */
+static void test_drive_off_during_levelling_drops_the_point(void **state)
+{
+    (void)state;
+    drive(1.0, 0.0);
+    send_known_position();
+    send_control(2u, 1u);
+    assert_int_equal(app_mode(&app), APP_MODE_LEVELLING);
+    drive(0.5, 0.0);
+    const uint32_t before = app.keep.health.cmd_rejected;
+    sample(1.5, 15.0);
+    sample(1.5, 15.0);
+    sample(1.5, 15.0);
+    assert_int_equal(app_mode(&app), APP_MODE_WAIT_INIT);
+    assert_int_equal(app.keep.health.cmd_rejected, before + 1u);
+    assert_int_equal(app.keep.health.cmd_refusal, CMD_REFUSAL_STALE_POSITION);
+    while (speed < 15.0) {
+        sample(1.5, 15.0);
+    }
+    const double t = app_mode(&app) == APP_MODE_NAVIGATING ? 0.0 : drive_until_navigating(10.0, 15.0);
+    assert_true(t >= 0.0 && t <= 2.0);
+    drive(5.0, 15.0);
+    assert_navigator(0.5);
+    assert_int_equal(n_levelling_moving, 0u);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -294,6 +380,9 @@ int main(void)
         cmocka_unit_test_setup(test_set_initial_position_without_heading, setup),
         cmocka_unit_test_setup(test_gnss_only_at_rest_says_no_heading, setup),
         cmocka_unit_test_setup(test_reversing_heading_is_the_course_reversed, setup),
+        cmocka_unit_test_setup(test_set_initial_position_while_driving_refused, setup),
+        cmocka_unit_test_setup(test_stale_known_position_refused, setup),
+        cmocka_unit_test_setup(test_drive_off_during_levelling_drops_the_point, setup),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

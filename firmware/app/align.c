@@ -182,9 +182,13 @@ int align_motion_epoch(align_t *al, const gnss_fix_t *fix, const align_odo_t *od
         return 0; /* the window goes on to the next epoch */
     }
     /* the along-track change of speed: the odometer's when it was valid throughout */
-    const int use_odo = al->mot_odo_valid && odo->valid;
-    const nav_real_t dv_along = use_odo ? odo->speed_mps - al->mot_v0_odo_mps
-                                        : v - al->mot_v0_gnss_mps;
+    const int use_odo = (al->mot_odo_valid != 0u && odo->valid != 0u) ? 1 : 0;
+    nav_real_t dv_along = v - al->mot_v0_gnss_mps;
+    nav_real_t sv = fix->sacc_mps > APP_GNSS_SACC_MIN_MPS ? fix->sacc_mps : APP_GNSS_SACC_MIN_MPS;
+    if (use_odo != 0) {
+        dv_along = odo->speed_mps - al->mot_v0_odo_mps;
+        sv = APP_INMOTION_ODO_SIGMA_MPS;
+    }
     const nav_real_t v_mean = NAV_C(0.5) * (v + al->mot_v0_gnss_mps);
     /* gravity's share of the summed specific force: f less (-v w_z, dv/dt, 0) */
     const nav_real_t gx = al->mot_dv_mps[0] + al->mot_dv_lo_mps[0] + v_mean * al->mot_dyaw_rad;
@@ -202,7 +206,6 @@ int align_motion_epoch(align_t *al, const gnss_fix_t *fix, const align_odo_t *od
     const nav_real_t sh = sacc / fix->speed_mps;
     al->mot_heading_sigma_rad =
         sh > APP_INMOTION_HEADING_SIGMA_MIN_RAD ? sh : APP_INMOTION_HEADING_SIGMA_MIN_RAD;
-    const nav_real_t sv = use_odo ? APP_INMOTION_ODO_SIGMA_MPS : sacc;
     const nav_real_t st = NAV_C(1.4142) * sv / (T * NAV_C(9.8)); /* a / g: the tilt's error */
     al->mot_tilt_sigma_rad =
         st > APP_INMOTION_TILT_SIGMA_MIN_RAD ? st : APP_INMOTION_TILT_SIGMA_MIN_RAD;

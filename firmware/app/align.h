@@ -25,6 +25,7 @@
 typedef struct {
     /* CMD_KnownPosition: where the car is (SetInitialPosition, CalibrateHere) */
     uint8_t known_valid;
+    uint8_t known_moved; /* the car moved since it was given (commands.h) */
     int32_t known_lat_e7, known_lon_e7;
     /* the initial state navigation starts from */
     uint8_t pos_valid, heading_valid;

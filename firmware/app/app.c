@@ -222,8 +222,10 @@ int app_adopt_mounting(app_t *a)
  * known (in automatic mode the start held for its estimate is the same from GNSS). */
 static int motion_align_waits(const app_t *a)
 {
-    return a->run.mode == APP_MODE_WAIT_INIT && !a->run.align.heading_valid &&
-           a->keep.mount_state != (uint8_t)APP_MOUNT_ESTIMATING;
+    return (a->run.mode == APP_MODE_WAIT_INIT && !a->run.align.heading_valid &&
+            a->keep.mount_state != (uint8_t)APP_MOUNT_ESTIMATING)
+               ? 1
+               : 0;
 }
 
 /* A GNSS epoch while the in-motion alignment waits: navigation starts from the fix when
@@ -400,6 +402,9 @@ static void on_gnss_status(app_t *a, hal_t *hal, const rx_input_t *in)
     }
     if (r.has_course) {
         fusion_note_course(&a->run.fusion, fix.speed_mps, fix.course_rad);
+        if (fix.speed_mps > APP_CMD_MOVING_GNSS_MPS) {
+            commands_motion_seen(a); /* a commanded point is where the car was */
+        }
     }
     if (!r.usable) {
         return;
@@ -538,8 +543,8 @@ void app_handle_frame(app_t *a, hal_t *hal, const hal_can_frame_t *f)
     case RX_WHEELS:
         if (odo_wheels(&a->keep.odo, in.u.wheels.mps, a->run.yaw_rate_rps) != NAV_OK) {
             reject(a, &a->keep.health.bad_value); /* a locked or spinning wheel, or range */
-        } else if (a->run.mode == APP_MODE_LEVELLING && !a->keep.odo.zero) {
-            align_level_restart(&a->run.align); /* levelling assumes the vehicle is still */
+        } else if (!a->keep.odo.zero) {
+            commands_motion_seen(a); /* a commanded point is where the car was (commands.h) */
         }
         break;
     case RX_GNSS_POSITION:

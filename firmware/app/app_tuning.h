@@ -77,6 +77,10 @@
  * beyond the longest; driving means a speed of this many sigmas (course sigma ~ 0.1 rad at
  * most); the heading sigma is sigma_v / v, not below the floor (the course's own lag and
  * the GNSS velocity's time of validity); the odometer's speed sigma for the acceleration */
+/* a GNSS speed above this is motion for the commands (commands.h): 5 sigma of a poor
+ * receiver's speed at rest (0.2 m/s); between APP_GNSS_STILL_MPS and this, levelling
+ * restarts */
+#define APP_CMD_MOVING_GNSS_MPS NAV_C(1.0)
 #define APP_INMOTION_WINDOW_S NAV_C(1.0)
 #define APP_INMOTION_WINDOW_MAX_S NAV_C(3.0)
 #define APP_INMOTION_SPEED_SIGMAS NAV_C(10.0)
