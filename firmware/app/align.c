@@ -182,10 +182,9 @@ int align_motion_epoch(align_t *al, const gnss_fix_t *fix, const align_odo_t *od
         return 0; /* the window goes on to the next epoch */
     }
     /* the along-track change of speed: the odometer's when it was valid throughout */
-    const int use_odo = (al->mot_odo_valid != 0u && odo->valid != 0u) ? 1 : 0;
     nav_real_t dv_along = v - al->mot_v0_gnss_mps;
     nav_real_t sv = fix->sacc_mps > APP_GNSS_SACC_MIN_MPS ? fix->sacc_mps : APP_GNSS_SACC_MIN_MPS;
-    if (use_odo != 0) {
+    if (al->mot_odo_valid != 0u && odo->valid != 0u) {
         dv_along = odo->speed_mps - al->mot_v0_odo_mps;
         sv = APP_INMOTION_ODO_SIGMA_MPS;
     }

@@ -270,12 +270,9 @@ static uint16_t health_flags(const app_t *a, const hal_t *hal)
     }
     /* the heading unknown: commanded without one, or the GNSS-only start (usable epochs,
      * no initial state: the course while driving gives it, docs/kalman.md) */
-    const int gnss_only = (r->mode == APP_MODE_WAIT_INIT && !r->align.heading_valid &&
-                           app_stamp_within(&r->gnss, n, APP_NO_GNSS_S * second))
-                              ? 1
-                              : 0;
     if ((r->mode != APP_MODE_NAVIGATING && r->align.pos_valid && !r->align.heading_valid) ||
-        gnss_only) {
+        (r->mode == APP_MODE_WAIT_INIT && !r->align.heading_valid &&
+         app_stamp_within(&r->gnss, n, APP_NO_GNSS_S * second))) {
         fl |= NAVECU_HEALTH_NO_HEADING;
     }
     if (app_stamp_within(&r->events.gap, n, APP_FLAG_HOLD_S * second)) {
