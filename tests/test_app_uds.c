@@ -668,12 +668,12 @@ static void test_refused_entries_reported(void **state)
     assert_memory_equal(&rsp[3], want, 8u);
 }
 
-/* 0xF1A2, the commands' status: the last refusal's reason and the count (commands.h):
+/* 0xF1A3, the commands' status: the last refusal's reason and the count (commands.h):
  * SetInitialPosition without a CMD_KnownPosition is refused with reason 1 */
 static void test_command_status_did(void **state)
 {
     (void)state;
-    assert_int_equal(REQUEST(0x22, 0xF1, 0xA2), 8u);
+    assert_int_equal(REQUEST(0x22, 0xF1, 0xA3), 8u);
     const uint8_t none[5] = {0u, 0u, 0u, 0u, 0u};
     assert_memory_equal(&rsp[3], none, 5u);
     struct navecu_can_cmd_control_t c;
@@ -681,7 +681,7 @@ static void test_command_status_did(void **state)
     c.command = 2u; /* SetInitialPosition, no CMD_KnownPosition before */
     const hal_can_frame_t f = cf_control(&c, hal.t_us);
     app_handle_frame(&app, &hal, &f);
-    assert_int_equal(REQUEST(0x22, 0xF1, 0xA2), 8u);
+    assert_int_equal(REQUEST(0x22, 0xF1, 0xA3), 8u);
     const uint8_t want[5] = {1u, 0u, 0u, 0u, 1u};
     assert_memory_equal(&rsp[3], want, 5u);
 }
