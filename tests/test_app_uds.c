@@ -16,6 +16,7 @@
 
 #include "app.h"
 #include "app_fixture.h"
+#include "can_frames.h"
 #include "fake_hal.h"
 #include "test_util.h"
 #include "vehicle.h"
@@ -682,6 +683,24 @@ static void test_refused_entries_reported(void **state)
     assert_memory_equal(&rsp[3], want, 8u);
 }
 
+/* 0xF1A3, the commands' status: the last refusal's reason and the count (commands.h):
+ * SetInitialPosition without a CMD_KnownPosition is refused with reason 1 */
+static void test_command_status_did(void **state)
+{
+    (void)state;
+    assert_int_equal(REQUEST(0x22, 0xF1, 0xA3), 8u);
+    const uint8_t none[5] = {0u, 0u, 0u, 0u, 0u};
+    assert_memory_equal(&rsp[3], none, 5u);
+    struct navecu_can_cmd_control_t c;
+    memset(&c, 0, sizeof c);
+    c.command = 2u; /* SetInitialPosition, no CMD_KnownPosition before */
+    const hal_can_frame_t f = cf_control(&c, hal.t_us);
+    app_handle_frame(&app, &hal, &f);
+    assert_int_equal(REQUEST(0x22, 0xF1, 0xA3), 8u);
+    const uint8_t want[5] = {1u, 0u, 0u, 0u, 1u};
+    assert_memory_equal(&rsp[3], want, 5u);
+}
+
 /* the board's layer goes over the NVM's, at start and at every ECUReset: this test's
  * (app_board_layer overrides app.c's weak default) sets level_s 20 when layer_on */
 static int layer_on;
@@ -719,6 +738,7 @@ int main(void)
         cmocka_unit_test_setup(test_every_parameter_did_read, setup),
         cmocka_unit_test_setup(test_identification_dids, setup),
         cmocka_unit_test_setup(test_mount_estimate_did, setup),
+        cmocka_unit_test_setup(test_command_status_did, setup),
         cmocka_unit_test_setup(test_all_dids_in_one_request, setup),
         cmocka_unit_test_setup(test_write_refused_then_accepted_and_read_back, setup),
         cmocka_unit_test_setup(test_reset_parameter_needs_navigation_stopped, setup),

@@ -84,6 +84,7 @@ static void test_flags_at_power_on(void **state)
 static void check_hold(app_stamp_t *s, uint16_t bit, uint64_t hold)
 {
     setup(NULL);
+    app.run.align.heading_valid = 1u; /* not the GNSS-only start's NO_HEADING */
     app_stamp(s, 1000u);
     const uint64_t at[3] = {1000u, 1000u + hold, 1000u + hold + 1u};
     for (int i = 0; i < 3; i++) {
@@ -113,6 +114,7 @@ static void test_flags_held_for_their_time(void **state)
 static void test_flag_no_gnss(void **state)
 {
     (void)state;
+    app.run.align.heading_valid = 1u; /* not the GNSS-only start's NO_HEADING */
     app_stamp(&app.run.gnss, 1000u);
     app.keep.n_samples = 1200u;
     assert_int_equal(flags_now(), 0u);
@@ -135,17 +137,20 @@ static void test_flag_imu_stale(void **state)
 }
 
 /* The flags of a state: IMU_FAULT, NVM_ERROR, NO_HEADING (a position without heading,
- * before navigating), REACQUIRE. */
+ * before navigating; or GNSS only, waiting with no initial state), REACQUIRE. */
 static void test_state_flags(void **state)
 {
     (void)state;
     app_stamp(&app.run.gnss, 0u);
+    assert_int_equal(flags_now(), NAVECU_HEALTH_NO_HEADING); /* GNSS only, no heading */
+    app.run.align.heading_valid = 1u;
     app.keep.imu.fault = 1u;
     assert_int_equal(flags_now(), NAVECU_HEALTH_IMU_FAULT);
     app.keep.imu.fault = 0u;
     app.keep.cal.nvm_error = 1u;
     assert_int_equal(flags_now(), NAVECU_HEALTH_NVM_ERROR);
     app.keep.cal.nvm_error = 0u;
+    app.run.align.heading_valid = 0u;
     app.run.align.pos_valid = 1u;
     assert_int_equal(flags_now(), NAVECU_HEALTH_NO_HEADING);
     app.run.align.heading_valid = 1u;
@@ -163,6 +168,7 @@ static void test_state_flags(void **state)
 static void test_imu_rate_mismatch_flag(void **state)
 {
     (void)state;
+    app.run.align.heading_valid = 1u; /* not the GNSS-only start's NO_HEADING */
     app_stamp(&app.run.gnss, 0u);
     app.keep.rate.measured_chz = 40000u;
     assert_int_equal(flags_now(), 0u);

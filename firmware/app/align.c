@@ -124,3 +124,104 @@ int align_reacquire(align_t *al, const gnss_fix_t *fix, sins_t *nav, dr_t *dr,
     al->reacquire = 0u;
     return NAV_OK;
 }
+
+void align_motion_sample(align_t *al, const imu_inc_t *inc)
+{
+    if (!al->mot_open) {
+        return;
+    }
+    for (int i = 0; i < 3; i++) {
+        nav_acc_add(&al->mot_dv_mps[i], &al->mot_dv_lo_mps[i], inc->dv_b_mps[i]);
+    }
+    al->mot_dyaw_rad += inc->dtheta_b_rad[2];
+    al->mot_t_s += inc->dt_s;
+}
+
+/* the epoch's forward speed (signed: the wheels say reversing) if it is a driving one */
+static int motion_speed(const gnss_fix_t *fix, const align_odo_t *odo, nav_real_t *v_mps)
+{
+    const nav_real_t sacc = fix->sacc_mps > APP_GNSS_SACC_MIN_MPS ? fix->sacc_mps
+                                                                  : APP_GNSS_SACC_MIN_MPS;
+    if (!fix->has_vel || !fix->has_h || fix->speed_mps < APP_GNSS_COURSE_MIN_MPS ||
+        fix->speed_mps < APP_INMOTION_SPEED_SIGMAS * sacc) {
+        return 0;
+    }
+    *v_mps = (odo->valid && odo->speed_mps < NAV_C(0.0)) ? -fix->speed_mps : fix->speed_mps;
+    return 1;
+}
+
+static void motion_open(align_t *al, nav_real_t v_mps, const align_odo_t *odo)
+{
+    for (int i = 0; i < 3; i++) {
+        al->mot_dv_mps[i] = NAV_C(0.0);
+        al->mot_dv_lo_mps[i] = NAV_C(0.0);
+    }
+    al->mot_dyaw_rad = NAV_C(0.0);
+    al->mot_t_s = NAV_C(0.0);
+    al->mot_v0_gnss_mps = v_mps;
+    al->mot_odo_valid = odo->valid;
+    al->mot_v0_odo_mps = odo->speed_mps;
+    al->mot_open = 1u;
+}
+
+int align_motion_epoch(align_t *al, const gnss_fix_t *fix, const align_odo_t *odo,
+                       nav_real_t *roll_rad, nav_real_t *pitch_rad, nav_real_t *heading_rad)
+{
+    nav_real_t v = NAV_C(0.0);
+    if (!motion_speed(fix, odo, &v)) {
+        al->mot_open = 0u;
+        return 0;
+    }
+    const nav_real_t T = al->mot_t_s;
+    if (!al->mot_open || T > APP_INMOTION_WINDOW_MAX_S ||
+        (al->mot_v0_gnss_mps < NAV_C(0.0)) != (v < NAV_C(0.0))) {
+        motion_open(al, v, odo);
+        return 0;
+    }
+    if (T < APP_INMOTION_WINDOW_S) {
+        return 0; /* the window goes on to the next epoch */
+    }
+    /* the along-track change of speed: the odometer's when it was valid throughout */
+    nav_real_t dv_along = v - al->mot_v0_gnss_mps;
+    nav_real_t sv = fix->sacc_mps > APP_GNSS_SACC_MIN_MPS ? fix->sacc_mps : APP_GNSS_SACC_MIN_MPS;
+    if (al->mot_odo_valid != 0u && odo->valid != 0u) {
+        dv_along = odo->speed_mps - al->mot_v0_odo_mps;
+        sv = APP_INMOTION_ODO_SIGMA_MPS;
+    }
+    const nav_real_t v_mean = NAV_C(0.5) * (v + al->mot_v0_gnss_mps);
+    /* gravity's share of the summed specific force: f less (-v w_z, dv/dt, 0) */
+    const nav_real_t gx = al->mot_dv_mps[0] + al->mot_dv_lo_mps[0] + v_mean * al->mot_dyaw_rad;
+    const nav_real_t gy = al->mot_dv_mps[1] + al->mot_dv_lo_mps[1] - dv_along;
+    const nav_real_t gz = al->mot_dv_mps[2] + al->mot_dv_lo_mps[2];
+    *roll_rad = nav_atan2(-gx, gz);
+    *pitch_rad = nav_atan2(gy, nav_sqrt(gx * gx + gz * gz));
+    nav_real_t h = fix->course_rad + (v < NAV_C(0.0) ? NAV_PI : NAV_C(0.0));
+    if (h >= NAV_C(2.0) * NAV_PI) {
+        h -= NAV_C(2.0) * NAV_PI;
+    }
+    *heading_rad = h;
+    const nav_real_t sacc = fix->sacc_mps > APP_GNSS_SACC_MIN_MPS ? fix->sacc_mps
+                                                                  : APP_GNSS_SACC_MIN_MPS;
+    const nav_real_t sh = sacc / fix->speed_mps;
+    al->mot_heading_sigma_rad =
+        sh > APP_INMOTION_HEADING_SIGMA_MIN_RAD ? sh : APP_INMOTION_HEADING_SIGMA_MIN_RAD;
+    const nav_real_t st = NAV_C(1.4142) * sv / (T * NAV_C(9.8)); /* a / g: the tilt's error */
+    al->mot_tilt_sigma_rad =
+        st > APP_INMOTION_TILT_SIGMA_MIN_RAD ? st : APP_INMOTION_TILT_SIGMA_MIN_RAD;
+    al->mot_open = 0u;
+    return 1;
+}
+
+int align_motion_start(const gnss_fix_t *fix, nav_real_t roll_rad, nav_real_t pitch_rad,
+                       nav_real_t heading_rad, sins_t *nav, dr_t *dr, const calib_t *cal)
+{
+    nav_real_t q[4];
+    quat_from_euler(roll_rad, pitch_rad, heading_rad, q);
+    const sins_config_t scfg = sins_default_config();
+    if (sins_init(nav, &scfg, &fix->pos, fix->v_enu_mps, q) != NAV_OK ||
+        calib_start_dr(cal, dr, &fix->pos) != NAV_OK) {
+        return NAV_EINVAL;
+    }
+    sins_set_height_ref(nav, (nav_real_t)fix->h_cm * NAV_C(0.01));
+    return NAV_OK;
+}

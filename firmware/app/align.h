@@ -25,6 +25,7 @@
 typedef struct {
     /* CMD_KnownPosition: where the car is (SetInitialPosition, CalibrateHere) */
     uint8_t known_valid;
+    uint8_t known_moved; /* the car moved since it was given (commands.h) */
     int32_t known_lat_e7, known_lon_e7;
     /* the initial state navigation starts from */
     uint8_t pos_valid, heading_valid;
@@ -40,7 +41,24 @@ typedef struct {
     /* re-acquisition: the attitude before the gap, the mounting yaw in use */
     uint8_t reacquire;
     nav_real_t reacq_roll_rad, reacq_pitch_rad, reacq_heading_rad, reacq_mount_rad;
+    /* in-motion alignment: the window since a GNSS epoch (align_motion_*) */
+    uint8_t mot_open;                 /* a window runs */
+    uint8_t mot_odo_valid;            /* the odometer was valid at the window's start */
+    nav_real_t mot_dv_mps[3];         /* sum of the velocity increments, vehicle axes */
+    nav_real_t mot_dv_lo_mps[3];
+    nav_real_t mot_dyaw_rad;          /* sum of the yaw increments (vehicle up axis) */
+    nav_real_t mot_t_s;               /* the window's length */
+    nav_real_t mot_v0_gnss_mps;       /* signed forward GNSS speed at the window's start */
+    nav_real_t mot_v0_odo_mps;        /* the odometer's speed at the window's start */
+    /* what the in-motion start found, for the filter's initial sigmas */
+    nav_real_t mot_heading_sigma_rad, mot_tilt_sigma_rad;
 } align_t;
+
+/* The odometer as the in-motion alignment sees it: forward speed (reverse negative). */
+typedef struct {
+    uint8_t valid;
+    nav_real_t speed_mps;
+} align_odo_t;
 
 /* The initial state (SetInitialPosition, or the GNSS-only start). */
 void align_set_initial(align_t *al, const geo_pos_t *pos, int32_t h_cm, int heading_valid,
@@ -86,5 +104,29 @@ int align_reacquire_ready(const gnss_fix_t *fix);
 /* Resume at this epoch. NAV_OK, or the core's error (the epoch is refused). */
 int align_reacquire(align_t *al, const gnss_fix_t *fix, sins_t *nav, dr_t *dr,
                     const calib_t *cal);
+
+/* In-motion alignment (docs/kalman.md, Initialisation), while waiting for an initial
+ * state with no heading: a car that powers on or is reset while driving. Between two GNSS
+ * epochs at least APP_INMOTION_WINDOW_S apart, both driving (speed at least
+ * APP_GNSS_COURSE_MIN_MPS and APP_INMOTION_SPEED_SIGMAS x its sigma), the specific force
+ * f_b (vehicle axes) summed over the window less the vehicle's own acceleration: along
+ * track (y) the change of speed (the odometer's, else GNSS's), across (x) the centripetal
+ * -v w_z (v the window's mean speed, w_z the yaw increments' sum); what is left is gravity,
+ * whose direction is roll and pitch (as levelling). The heading is the GNSS course (plus
+ * pi when the wheels say reversing), position, height and velocity are the fix's. */
+
+/* One sample (vehicle axes, after the mounting) into the window, if one runs. */
+void align_motion_sample(align_t *al, const imu_inc_t *inc);
+
+/* A GNSS epoch: 1 when the window it closes gives an in-motion start (then roll, pitch
+ * and heading (rad) are set, and mot_heading_sigma_rad / mot_tilt_sigma_rad); otherwise a
+ * new window starts at this epoch when it is a driving one, and 0. */
+int align_motion_epoch(align_t *al, const gnss_fix_t *fix, const align_odo_t *odo,
+                       nav_real_t *roll_rad, nav_real_t *pitch_rad, nav_real_t *heading_rad);
+
+/* Navigate from the fix with that attitude (as align_reacquire). NAV_OK or the core's
+ * error. */
+int align_motion_start(const gnss_fix_t *fix, nav_real_t roll_rad, nav_real_t pitch_rad,
+                       nav_real_t heading_rad, sins_t *nav, dr_t *dr, const calib_t *cal);
 
 #endif /* NAVECU_ALIGN_H */

@@ -217,6 +217,40 @@ int app_adopt_mounting(app_t *a)
     return 0;
 }
 
+/* The in-motion alignment may start navigation (align.h): waiting for an initial state
+ * with no heading (none at all, or SetInitialPosition with HeadingValid 0), the mounting
+ * known (in automatic mode the start held for its estimate is the same from GNSS). */
+static int motion_align_waits(const app_t *a)
+{
+    return (a->run.mode == APP_MODE_WAIT_INIT && !a->run.align.heading_valid &&
+            a->keep.mount_state != (uint8_t)APP_MOUNT_ESTIMATING)
+               ? 1
+               : 0;
+}
+
+/* A GNSS epoch while the in-motion alignment waits: navigation starts from the fix when
+ * the window it closes gives roll, pitch and heading. Returns 1 if it started. */
+static int motion_align_epoch(app_t *a, const gnss_fix_t *fix)
+{
+    const align_odo_t odo = {a->keep.odo.valid ? 1u : 0u, a->keep.odo.speed_mps};
+    nav_real_t roll, pitch, heading;
+    if (!align_motion_epoch(&a->run.align, fix, &odo, &roll, &pitch, &heading)) {
+        return 0;
+    }
+    /* the navigator's heading is the IMU's: the car's plus the mounting yaw in use */
+    if (align_motion_start(fix, roll, pitch, heading + a->keep.cal.dh_rad, &a->run.nav,
+                           &a->run.dr, &a->keep.cal) != NAV_OK) {
+        reject(a, &a->keep.health.gnss_rejected);
+        return 0;
+    }
+    landnav_restart(&a->run.land);
+    gnss_time_forget(&a->run.fusion.time);
+    a->run.fusion.init_heading_sigma_rad = a->run.align.mot_heading_sigma_rad;
+    a->run.fusion.init_tilt_sigma_rad = a->run.align.mot_tilt_sigma_rad;
+    a->run.mode = APP_MODE_NAVIGATING;
+    return 1;
+}
+
 /* One IMU sample (raw LSB) of dt_us (stamped; 0: the nominal period): levelling, or a
  * navigation step with or without the filter, then the outputs due. */
 static void process_sample(app_t *a, hal_t *hal, const int32_t w_raw[3], const int32_t v_raw[3],
@@ -227,6 +261,14 @@ static void process_sample(app_t *a, hal_t *hal, const int32_t w_raw[3], const i
     a->keep.imu_t_us += step_us;
     if (a->keep.mount_state != (uint8_t)APP_MOUNT_FIXED) {
         mount_auto_sample(a, w_raw, v_raw, dt_us);
+    }
+    if (motion_align_waits(a)) {
+        imu_inc_t inc;
+        const nav_real_t dt_s = dt_us != 0u ? (nav_real_t)dt_us * NAV_C(1e-6)
+                                            : NAV_C(1.0) / (nav_real_t)a->cfg.imu_rate_hz;
+        app_rx_imu_increment(w_raw, v_raw, dt_s, &inc);
+        mounting_apply(&a->keep.mount, &inc);
+        align_motion_sample(&a->run.align, &inc);
     }
     if (a->run.mode == APP_MODE_LEVELLING) {
         const uint32_t n_total = (uint32_t)a->cfg.level_s * a->cfg.imu_rate_hz;
@@ -360,6 +402,9 @@ static void on_gnss_status(app_t *a, hal_t *hal, const rx_input_t *in)
     }
     if (r.has_course) {
         fusion_note_course(&a->run.fusion, fix.speed_mps, fix.course_rad);
+        if (fix.speed_mps > APP_CMD_MOVING_GNSS_MPS) {
+            commands_motion_seen(a); /* a commanded point is where the car was */
+        }
     }
     if (!r.usable) {
         return;
@@ -403,6 +448,10 @@ static void on_gnss_status(app_t *a, hal_t *hal, const rx_input_t *in)
         }
         return; /* between 0.3 and 5 m/s the course is not a heading, or the IMU rate
                    disagrees with the data: wait */
+    }
+    if (motion_align_waits(a) && !imu_rate_mismatch(&a->keep.rate) &&
+        motion_align_epoch(a, &fix)) {
+        return; /* the filter starts at the next epoch */
     }
     if (a->run.mode == APP_MODE_NAVIGATING) {
         const app_diag_t d = diag_of(a);
@@ -494,8 +543,8 @@ void app_handle_frame(app_t *a, hal_t *hal, const hal_can_frame_t *f)
     case RX_WHEELS:
         if (odo_wheels(&a->keep.odo, in.u.wheels.mps, a->run.yaw_rate_rps) != NAV_OK) {
             reject(a, &a->keep.health.bad_value); /* a locked or spinning wheel, or range */
-        } else if (a->run.mode == APP_MODE_LEVELLING && !a->keep.odo.zero) {
-            align_level_restart(&a->run.align); /* levelling assumes the vehicle is still */
+        } else if (!a->keep.odo.zero) {
+            commands_motion_seen(a); /* a commanded point is where the car was (commands.h) */
         }
         break;
     case RX_GNSS_POSITION:

@@ -72,6 +72,21 @@
 #define APP_GNSS_COURSE_MIN_MPS NAV_C(5.0)
 /* below this GNSS speed the vehicle may be still (levelling, GNSS-only initialisation) */
 #define APP_GNSS_STILL_MPS NAV_C(0.3)
+/* in-motion alignment (align.h): a window of at least this long between two driving
+ * epochs (the along-track acceleration's error is ~ sqrt(2) sigma_v / window), restarted
+ * beyond the longest; driving means a speed of this many sigmas (course sigma ~ 0.1 rad at
+ * most); the heading sigma is sigma_v / v, not below the floor (the course's own lag and
+ * the GNSS velocity's time of validity); the odometer's speed sigma for the acceleration */
+/* a GNSS speed above this is motion for the commands (commands.h): 5 sigma of a poor
+ * receiver's speed at rest (0.2 m/s); between APP_GNSS_STILL_MPS and this, levelling
+ * restarts */
+#define APP_CMD_MOVING_GNSS_MPS NAV_C(1.0)
+#define APP_INMOTION_WINDOW_S NAV_C(1.0)
+#define APP_INMOTION_WINDOW_MAX_S NAV_C(3.0)
+#define APP_INMOTION_SPEED_SIGMAS NAV_C(10.0)
+#define APP_INMOTION_HEADING_SIGMA_MIN_RAD NAV_C(0.008727) /* 0.5 deg */
+#define APP_INMOTION_TILT_SIGMA_MIN_RAD NAV_C(0.008727)    /* 0.5 deg, the filter's default */
+#define APP_INMOTION_ODO_SIGMA_MPS NAV_C(0.05)
 /* the receiver's horizontal accuracy is a 2-D figure: per axis 1/sqrt(2) of it */
 #define APP_GNSS_HACC_PER_AXIS NAV_C(0.7071)
 #define APP_GNSS_SIGMA_MAX_M NAV_C(100.0)  /* larger declared sigmas are clamped */

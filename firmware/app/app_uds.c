@@ -186,6 +186,18 @@ static size_t read_did(void *user, uint16_t did, uint8_t *buf, size_t cap)
         buf[7] = (uint8_t)a->nvm.seq;
         return 8u;
     }
+    if (did == APP_UDS_DID_CMD_STATUS) {
+        if (cap < 5u) {
+            return 5u;
+        }
+        const uint32_t n = a->keep.health.cmd_rejected;
+        buf[0] = a->keep.health.cmd_refusal;
+        buf[1] = (uint8_t)(n >> 24);
+        buf[2] = (uint8_t)(n >> 16);
+        buf[3] = (uint8_t)(n >> 8);
+        buf[4] = (uint8_t)n;
+        return 5u;
+    }
     const app_param_id_t id = app_uds_param_of_did(did);
     if (id == APP_PARAM_N) {
         return 0u;

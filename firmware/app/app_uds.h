@@ -37,6 +37,9 @@
 /* the NVM record loaded at boot (nvstore.h): version, source (NVSTORE_SRC_*), entries
  * loaded, entries refused, seq (4 bytes big-endian) */
 #define APP_UDS_DID_NVM_STATUS 0xF1A1u
+/* the commands' status (commands.h): why the last refused command was refused
+ * (cmd_refusal_t), then the commands refused (CntCmdRejected; uint32 big-endian) */
+#define APP_UDS_DID_CMD_STATUS 0xF1A3u
 
 /* RoutineControl 0x31 startRoutine routine identifiers (extended session, unlocked) */
 #define APP_UDS_RID_STORE_PARAMS 0x0200u       /* parameters + calibration to NVM */

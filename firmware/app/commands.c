@@ -1,6 +1,7 @@
 /* commands.c - what the operator's commands do; see commands.h. */
 #include "commands.h"
 
+#include "app_tuning.h"
 #include "navecu_can.h"
 
 static app_diag_t diag_of(app_t *a)
@@ -9,10 +10,41 @@ static app_diag_t diag_of(app_t *a)
     return d;
 }
 
-static void refuse(app_t *a)
+static void refuse(app_t *a, cmd_refusal_t why)
 {
     const app_diag_t d = diag_of(a);
+    a->keep.health.cmd_refusal = (uint8_t)why;
     app_diag_reject(&d, &a->keep.health.cmd_rejected);
+}
+
+int commands_car_moving(const app_t *a)
+{
+    const odo_t *o = &a->keep.odo;
+    const uint64_t fresh = (uint64_t)APP_NO_GNSS_S * a->cfg.imu_rate_hz;
+    return ((o->valid && !o->zero) ||
+            (app_stamp_within(&a->run.gnss, a->keep.n_samples, fresh) &&
+             a->run.fusion.speed_mps > APP_CMD_MOVING_GNSS_MPS))
+               ? 1
+               : 0;
+}
+
+void commands_motion_seen(app_t *a)
+{
+    align_t *al = &a->run.align;
+    if (al->known_valid) {
+        al->known_moved = 1u;
+    }
+    if (a->run.mode == APP_MODE_LEVELLING) {
+        /* the commanded point is where the car was: never applied after it moved */
+        const uint8_t kv = al->known_valid, km = al->known_moved;
+        const int32_t klat = al->known_lat_e7, klon = al->known_lon_e7;
+        app_reset(a);
+        a->run.align.known_valid = kv;
+        a->run.align.known_moved = km;
+        a->run.align.known_lat_e7 = klat;
+        a->run.align.known_lon_e7 = klon;
+        refuse(a, CMD_REFUSAL_STALE_POSITION);
+    }
 }
 
 void commands_start_navigation(app_t *a, nav_real_t roll_rad, nav_real_t pitch_rad)
@@ -39,16 +71,28 @@ void commands_calibrate_at(app_t *a, hal_t *hal, const geo_pos_t *point, uint8_t
                       !a->run.fusion.on;
     if (calib_one_point(&a->keep.cal, &a->run.cal, hal, a->keep.n_samples, ready, &a->run.dr,
                         &a->run.nav, point, source, a->cfg.cal_min_base_m) != 0) {
-        refuse(a);
+        refuse(a, CMD_REFUSAL_NOT_NOW);
     }
 }
 
 static void set_initial_position(app_t *a, const rx_input_t *in)
 {
     const align_t *al = &a->run.align;
-    if (!al->known_valid || !in->u.command.height_in_range ||
+    if (!al->known_valid) {
+        refuse(a, CMD_REFUSAL_NO_KNOWN_POSITION);
+        return;
+    }
+    if (!in->u.command.height_in_range ||
         (in->u.command.heading_valid && !in->u.command.heading_in_range)) {
-        refuse(a);
+        refuse(a, CMD_REFUSAL_OUT_OF_RANGE);
+        return;
+    }
+    if (commands_car_moving(a)) {
+        refuse(a, CMD_REFUSAL_MOVING); /* docs/can.md: at standstill */
+        return;
+    }
+    if (al->known_moved) {
+        refuse(a, CMD_REFUSAL_STALE_POSITION); /* where the car was, not where it is */
         return;
     }
     const geo_pos_t pos = align_pos_of(al->known_lat_e7, al->known_lon_e7, in->u.command.h_cm);
@@ -78,12 +122,12 @@ static void control(app_t *a, hal_t *hal, const rx_input_t *in)
         /* destructive: any node on the bus could send them, so they moved to UDS
          * RoutineControl 0x0203 / 0x0201 (extended session, SecurityAccess): refused and
          * counted here (cmd_rejected) */
-        refuse(a);
+        refuse(a, CMD_REFUSAL_MOVED_TO_UDS);
         break;
     case RX_CMD_CALIBRATE_HERE: /* the last CMD_KnownPosition is where the car is */
         if (!al->known_valid) {
             calib_not_ready(&a->keep.cal);
-            refuse(a);
+            refuse(a, CMD_REFUSAL_NO_KNOWN_POSITION);
             break;
         }
         al->known_valid = 0u; /* a point is used once: the next needs its own */
@@ -94,13 +138,13 @@ static void control(app_t *a, hal_t *hal, const rx_input_t *in)
     case RX_CMD_CALIBRATE_AT_GNSS: /* at the next accepted fix */
         if (a->run.mode != APP_MODE_NAVIGATING) {
             calib_not_ready(&a->keep.cal);
-            refuse(a);
+            refuse(a, CMD_REFUSAL_NOT_NOW);
             break;
         }
         a->run.cal.at_gnss = 1u;
         break;
     default:
-        refuse(a);
+        refuse(a, CMD_REFUSAL_UNDEFINED);
         break;
     }
 }
@@ -111,10 +155,11 @@ void commands_handle(app_t *a, hal_t *hal, const rx_input_t *in)
         a->run.align.known_lat_e7 = in->u.position.lat_e7;
         a->run.align.known_lon_e7 = in->u.position.lon_e7;
         a->run.align.known_valid = 1u;
+        a->run.align.known_moved = commands_car_moving(a) ? 1u : 0u;
     } else if (in->kind == RX_INITIAL_ATTITUDE) {
         /* roll and pitch from another source end levelling at once (a perfect start) */
         if (a->run.mode != APP_MODE_LEVELLING) {
-            refuse(a); /* only between SetInitialPosition and navigating */
+            refuse(a, CMD_REFUSAL_NOT_NOW); /* only between SetInitialPosition and navigating */
             return;
         }
         commands_start_navigation(a, in->u.attitude.roll_rad, in->u.attitude.pitch_rad);

@@ -235,7 +235,13 @@ static int start(fusion_t *fu, const fusion_ctx_t *c, const fusion_prior_t *prio
     ec.bg_rw_rps_rts = cfg->gyro_bias_rw_rps_rts;
     ec.ba_rw_mps2_rts = cfg->accel_bias_rw_mps2_rts;
     ec.pos_m = hacc_m > APP_EKF_POS_SIGMA_MIN_M ? hacc_m : APP_EKF_POS_SIGMA_MIN_M;
-    if (ekf_init(&fu->ekf, &ec, NAV_C(0.0)) != NAV_OK) {
+    if (fu->init_tilt_sigma_rad > NAV_C(0.0)) {
+        ec.tilt_rad = fu->init_tilt_sigma_rad;
+    }
+    const nav_real_t heading_sigma_rad = fu->init_heading_sigma_rad; /* 0: the default */
+    fu->init_heading_sigma_rad = NAV_C(0.0);
+    fu->init_tilt_sigma_rad = NAV_C(0.0);
+    if (ekf_init(&fu->ekf, &ec, heading_sigma_rad) != NAV_OK) {
         app_diag_reject(c->diag, &c->diag->health->nav_rejected);
         return 0;
     }

@@ -53,6 +53,9 @@ typedef struct {
     uint8_t state_lost;         /* the filter's state was found not finite at a feedback */
     nav_real_t course_rad, speed_mps; /* of the latest GNSS epoch with a velocity */
     gnss_time_t time;           /* velocity history and receiver latency */
+    /* the next start's heading and tilt sigmas (rad) when the start knows them (the
+     * in-motion alignment, align.h); 0: the filter's defaults. Used once. */
+    nav_real_t init_heading_sigma_rad, init_tilt_sigma_rad;
 } fusion_t;
 
 /* What the caller does after a fusion step. */

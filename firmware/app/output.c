@@ -268,7 +268,11 @@ static uint16_t health_flags(const app_t *a, const hal_t *hal)
     if (k->cal.nvm_error) {
         fl |= NAVECU_HEALTH_NVM_ERROR;
     }
-    if (r->mode != APP_MODE_NAVIGATING && r->align.pos_valid && !r->align.heading_valid) {
+    /* the heading unknown: commanded without one, or the GNSS-only start (usable epochs,
+     * no initial state: the course while driving gives it, docs/kalman.md) */
+    if ((r->mode != APP_MODE_NAVIGATING && r->align.pos_valid && !r->align.heading_valid) ||
+        (r->mode == APP_MODE_WAIT_INIT && !r->align.heading_valid &&
+         app_stamp_within(&r->gnss, n, APP_NO_GNSS_S * second))) {
         fl |= NAVECU_HEALTH_NO_HEADING;
     }
     if (app_stamp_within(&r->events.gap, n, APP_FLAG_HOLD_S * second)) {

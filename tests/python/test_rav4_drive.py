@@ -104,3 +104,22 @@ def test_stamped_run_takes_every_device_sample_and_meets_the_issue_figures(stamp
     assert "IMU_RATE_MISMATCH" not in bus["health_flags_raised"]
     assert bus["horizontal_error_m"]["rms"] <= 2.5
     assert rep["runs"]["bus-outage"]["outages"][0]["end_error_m"] <= 8.0
+
+
+def test_self_start_without_a_reference_initial_state(tmp_path):
+    """--init none: no initialization command (no reference-derived initial state); the car
+    never stops, the in-motion alignment (firmware/app/align.h) starts it from GNSS. Before
+    it the firmware never navigated on this segment."""
+    if not NAVECU.exists():
+        pytest.fail(f"{NAVECU} missing: make VEHICLE=toyota_rav4_2017 (make test builds it)")
+    rc = run.main(["--outage", "none", "--init", "none", "--out", str(tmp_path),
+                   "--navecu", str(NAVECU)])
+    rep = json.loads((tmp_path / "report.json").read_text())
+    bus = rep["runs"]["bus"]
+    print(f"RAV4 self-start: first output {bus.get('navigation_start_s')} s, horizontal rms "
+          f"{bus['horizontal_error_m']['rms']} m")
+    assert rc == 0 and rep["given"]["init"]["sent"] is False
+    assert bus["navigating"]
+    assert bus["navigation_start_s"] <= 15.0
+    # the u-blox fixes alone are 2.09 m rms against the reference on this segment
+    assert bus["horizontal_error_m"]["rms"] <= 3.0

@@ -33,7 +33,8 @@ are used. What navecu is given beyond the recording (none of it is in the car's 
   --gnss-vel-up none).
 - **Initial state**: the car never stops, so it cannot level: the reference pose at t0
   (position, height, the car's heading, roll and pitch) in CMD_KnownPosition,
-  SetInitialPosition and CMD_InitialAttitude (issue #17 brings a start while moving).
+  SetInitialPosition and CMD_InitialAttitude; or (init_state none, run.py --init none) no
+  command at all: the firmware's in-motion alignment starts it from GNSS.
 - **The car's bus**: every frame of car_bus.log (all four channels on navecu's bus, as if a
   gateway bridged them: 2,258 frames/s), untouched, at its recorded time.
 """
@@ -188,13 +189,17 @@ def car_frames(path: Path) -> list:
 
 
 def build(data_dir=None, vehicle_name="toyota_rav4_2017", channels=None, car_bus=True,
-          outage=None, car_ids=None, imu_time="grid") -> tuple:
+          outage=None, car_ids=None, imu_time="grid", init_state="reference") -> tuple:
     """Every input frame as (t_s, order, can.Message) sorted, and the metadata (a dict,
     JSON-ready): module docstring. channels: the car_bus.log channels taken (None: all);
     car_ids: only the car's frames with these identifiers (None: all); imu_time: grid
-    (resampled to IMU_RATE_HZ) or stamped (the device's samples with IMU_Time)."""
+    (resampled to IMU_RATE_HZ) or stamped (the device's samples with IMU_Time);
+    init_state: reference (the reference pose at t0 in the initialization commands) or none
+    (no command: the firmware starts by itself, the in-motion alignment)."""
     if imu_time not in ("grid", "stamped"):
         raise ValueError(f"imu_time {imu_time!r}: grid or stamped")
+    if init_state not in ("reference", "none"):
+        raise ValueError(f"init_state {init_state!r}: reference or none")
     data = Path(data_dir or DATA_DIR)
     db = nc.select_vehicle(vehicle_name)
     sender = nc.E2ESender(db)
@@ -240,14 +245,16 @@ def build(data_dir=None, vehicle_name="toyota_rav4_2017", channels=None, car_bus
             "pitch_deg": pitch, "speed_mps": math.hypot(ref_at("ve_mps"), ref_at("vn_mps")),
             "source": "reference.csv at t0 (interpolated), the car's attitude from the "
                       "device's and the mounting"}
+    init["sent"] = init_state == "reference"  # none: the firmware starts by itself
     meta["init"] = init
-    out.append((0.0, O_KNOWN, sender.encode("CMD_KnownPosition", {
-        "Latitude": init["lat_deg"], "Longitude": init["lon_deg"]}, 0.0)))
-    out.append((0.0, O_SETPOS, sender.encode("CMD_Control", {
-        "Command": 2, "HeadingValid": 1, "Heading": hdg_cmd, "Height": init["height_m"]},
-        0.0)))
-    out.append((0.0, O_ATT, sender.encode("CMD_InitialAttitude", {
-        "InitRoll": math.radians(roll), "InitPitch": math.radians(pitch)}, 0.0)))
+    if init_state == "reference":
+        out.append((0.0, O_KNOWN, sender.encode("CMD_KnownPosition", {
+            "Latitude": init["lat_deg"], "Longitude": init["lon_deg"]}, 0.0)))
+        out.append((0.0, O_SETPOS, sender.encode("CMD_Control", {
+            "Command": 2, "HeadingValid": 1, "Heading": hdg_cmd, "Height": init["height_m"]},
+            0.0)))
+        out.append((0.0, O_ATT, sender.encode("CMD_InitialAttitude", {
+            "InitRoll": math.radians(roll), "InitPitch": math.radians(pitch)}, 0.0)))
 
     quant = nc.ImuQuantizer()
     for k in range(len(t_imu)):

@@ -282,6 +282,10 @@ def main(argv=None) -> int:
     ap.add_argument("--fw-arg", action="append", default=[], metavar="ARG",
                     help="one more firmware option (repeat), e.g. --fw-arg=--mount-est-sigma-deg --fw-arg=2")
     ap.add_argument("--imu-time", default="grid", choices=("grid", "stamped"))
+    ap.add_argument("--init", default="reference", choices=("reference", "none"),
+                    help="reference: the reference pose at t0 in the initialization "
+                         "commands; none: no command, the firmware self-starts (in-motion "
+                         "alignment from GNSS)")
     a = ap.parse_args(argv)
     data, out = Path(a.data), Path(a.out)
     navecu = Path(a.navecu or ROOT / "build" / "host" / f"navecu-{a.vehicle}")
@@ -316,7 +320,7 @@ def main(argv=None) -> int:
     }
     if outage is None:
         del variants["bus-outage"], variants["no-car-outage"]
-    built = {k: convert.build(data, a.vehicle, imu_time=a.imu_time, **kw)
+    built = {k: convert.build(data, a.vehicle, imu_time=a.imu_time, init_state=a.init, **kw)
              for k, kw in variants.items()}
     meta = built["bus"][1]
     stages.done(f"{meta['frames']} frames, {meta['car_bus']['frames']} of the car's bus")
@@ -407,6 +411,8 @@ def summary(rep: dict) -> str:
             continue
         line = f"{k:>14}: horizontal error rms {h['rms']:.2f} m, p95 {h['p95']:.2f} m, " \
                f"max {h['max']:.2f} m"
+        if not rep["given"]["init"].get("sent", True):
+            line += f" (self-started: first output at {x['navigation_start_s']:.2f} s)"
         for o in x.get("outages", []):
             line += (f"; outage {o['start_s']:.0f}-{o['end_s']:.0f} s ({o['distance_m']:.0f} m):"
                      f" end {o['end_error_m']:.2f} m, max {o['max_error_m']:.2f} m")

@@ -496,6 +496,27 @@ def compute(truth: dict, nav: dict, outages) -> tuple[dict, dict]:
     return rep, series
 
 
+def power_on_report(truth: dict, series: dict, t_on_s: float) -> dict:
+    """A start at t_on_s (run.py --power-on-s): the time from it to the first NAV_Position,
+    the largest horizontal error from 30 s after power-on to the end (m) and the largest
+    heading error from 60 s on (deg), and the truth's speed at power-on (m/s)."""
+    speed = float(np.interp(t_on_s, truth["t_s"][1:], np.diff(truth["dist_m"])
+                            / np.diff(truth["t_s"])))
+    rep = {"speed_mps": speed, "first_output_s": None, "max_error_from_30s_m": None,
+           "max_heading_error_from_60s_deg": None}
+    if "t" not in series or len(series["t"]) == 0:
+        return rep
+    t, herr = series["t"], series["herr"]
+    rep["first_output_s"] = float(t[0] - t_on_s)
+    sel = t >= t_on_s + 30.0
+    rep["max_error_from_30s_m"] = float(herr[sel].max()) if sel.any() else None
+    if "heading" in series:
+        th, dh = series["heading"]
+        sel = th >= t_on_s + 60.0
+        rep["max_heading_error_from_60s_deg"] = float(np.abs(dh[sel]).max()) if sel.any() else None
+    return rep
+
+
 def plot(truth: dict, series: dict, gnss, outages, out_dir: Path, title: str,
          marks=()) -> list:
     """Track map, horizontal error and heading error PNGs; returns their paths. marks:

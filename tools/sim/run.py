@@ -122,7 +122,7 @@ def calibration_frames(sender, truth, cal: dict) -> list:
 
 
 def frames(truth, dtheta, dv, wheels, gnss, db, initial_attitude=False, heading_deg=None,
-           calibration=None, car=None):
+           calibration=None, car=None, power_on_s=None):
     """Every input frame of the drive as (t_s, order, can.Message), unsorted. With
     initial_attitude, a CMD_InitialAttitude with the true roll and pitch follows the
     initialization commands: a perfect start, no levelling. heading_deg: the Heading of
@@ -130,18 +130,21 @@ def frames(truth, dtheta, dv, wheels, gnss, db, initial_attitude=False, heading_
     calibration: a scenario's [calibration] table (calibration_frames), with an optional
     "gnss_epoch" (calibration_epoch) sent among the GNSS epochs. car: a vehicle profile's
     tools.vehicle.CarEncoder: the wheel speeds (and gear) in the car's own messages instead
-    of navecu's WheelSpeeds."""
+    of navecu's WheelSpeeds. power_on_s: the ECU powers on at this time of the drive (maybe
+    driving): no frame before it and no initialization commands (the firmware starts on
+    its own: the in-motion alignment, or GNSS alone)."""
     sender = nc.E2ESender(db)
     out = []
     lat0, lon0 = math.degrees(truth.lat_rad[0]), math.degrees(truth.lon_rad[0])
     hdg0 = (scenario.heading_command_deg(truth.heading_rad[0]) if heading_deg is None
             else heading_deg)
-    out.append((0.0, 0, sender.encode("CMD_KnownPosition",
-                                      {"Latitude": lat0, "Longitude": lon0}, 0.0)))
-    out.append((0.0, 1, sender.encode("CMD_Control", {"Command": 2, "HeadingValid": 1,
-                                                      "Heading": hdg0,
-                                                      "Height": float(truth.h_m[0])}, 0.0)))
-    if initial_attitude:
+    if power_on_s is None:
+        out.append((0.0, 0, sender.encode("CMD_KnownPosition",
+                                          {"Latitude": lat0, "Longitude": lon0}, 0.0)))
+        out.append((0.0, 1, sender.encode("CMD_Control", {"Command": 2, "HeadingValid": 1,
+                                                          "Heading": hdg0,
+                                                          "Height": float(truth.h_m[0])}, 0.0)))
+    if initial_attitude and power_on_s is None:
         out.append((0.0, 1, sender.encode("CMD_InitialAttitude", {
             "InitRoll": float(truth.roll_rad[0]), "InitPitch": float(truth.pitch_rad[0])}, 0.0)))
     quant = nc.ImuQuantizer()
@@ -181,6 +184,8 @@ def frames(truth, dtheta, dv, wheels, gnss, db, initial_attitude=False, heading_
             "HorizAccuracy": float(min(gnss["hacc_m"][i], 102.3)),
             "VertAccuracy": float(min(gnss["vacc_m"][i], 102.3)), "GnssEpoch": epoch,
             "TimeOfWeek": round((GPS_TOW0_S + float(gnss["t_meas_s"][i])) % 604800.0, 3)}, t)))
+    if power_on_s is not None:
+        out = [x for x in out if x[0] >= power_on_s]
     return out
 
 
@@ -238,6 +243,10 @@ def main(argv=None) -> int:
                          "and its output recorded to nav.log; also runs --can-log into "
                          "nav_file.log and checks that the two are identical "
                          "(tools/vcan/bus_run.py)")
+    ap.add_argument("--power-on-s", type=float, default=None, metavar="T",
+                    help="the ECU powers on at T s into the drive (maybe driving): no frame "
+                         "before T and no initialization commands; report.json's power_on "
+                         "gives the time to the first output and the errors 30 and 60 s on")
     a = ap.parse_args(argv)
     car = None
     if a.vehicle not in (None, "native"):
@@ -296,7 +305,7 @@ def main(argv=None) -> int:
     db = nc.load_db()
     hdg_cmd = scenario.heading_command_deg(truth.heading_rad[0], scen)
     fr = frames(truth, dtheta, dv, wheels, gnss, db, heading_deg=hdg_cmd, calibration=cal,
-                car=car)
+                car=car, power_on_s=a.power_on_s)
     fr.sort(key=lambda x: (x[0], x[1]))
     can_in = out / "can_in.log"
     n = nc.write_candump(can_in, (m for _, _, m in fr))
@@ -335,7 +344,11 @@ def main(argv=None) -> int:
             return 1
 
     st.start("report")
-    nav = report.read_nav_log(nav_log, wraps_from_log=not a.bus)
+    # the firmware's times count from its power-on: the log's timestamps are the drive's
+    nav = report.read_nav_log(nav_log, wraps_from_log=not a.bus and a.power_on_s is None)
+    if a.power_on_s is not None:
+        for cols in nav.values():
+            cols["t_s"] = cols["t_s"] + a.power_on_s
     truth_r = {"t_s": truth.t_s, "lat_rad": truth.lat_rad, "lon_rad": truth.lon_rad,
                "heading_rad": truth.heading_rad, "dist_m": truth.dist_m}
     rep, series = report.compute(truth_r, nav, truth.outages)
@@ -352,6 +365,8 @@ def main(argv=None) -> int:
     rep["filter_calibration"] = report.filter_calibration(cal_log, rep["truth"], t_gnss)
     rep["gnss_faults"] = (report.gnss_fault_report(series, nav.get("NAV_Status"), fault_log,
                                                    truth.outages) if fault_log else None)
+    if a.power_on_s is not None:
+        rep["power_on"] = report.power_on_report(truth_r, series, a.power_on_s)
     (out / "report.json").write_text(json.dumps(rep, indent=2))
     truth_d = {"t_s": truth.t_s, "lat_rad": truth.lat_rad, "lon_rad": truth.lon_rad}
     pngs = report.plot(truth_d, series, gnss, truth.outages, out, f"{name} ({imu_name} IMU)",
@@ -360,6 +375,8 @@ def main(argv=None) -> int:
     st.done(f"{out / 'report.json'} and {len(pngs)} plots")
     print()
     print(report.summary_table(rep))
+    if rep.get("power_on"):
+        print(f"power-on at {a.power_on_s:g} s: {json.dumps(rep['power_on'])}")
     if "GnssIns" not in (rep.get("modes_seen") or {}):
         print("note: the firmware never reported Mode GnssIns: no GNSS fusion in this run "
               "(the Kalman filter, #7).")
