@@ -315,10 +315,17 @@ fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_pr
     const app_config_t *cfg = c->cfg;
     const uint64_t n = c->diag->n_samples;
     *adopt = 0;
-    const gnss_when_t when = gnss_time_align(&fu->time, c->diag->t_us, cfg->imu_rate_hz, fix->tow_ms,
-                                             cfg->gnss_latency_s);
+    gnss_when_t when = gnss_time_align(&fu->time, c->diag->t_us, cfg->imu_rate_hz, fix->tow_ms,
+                                       gnss_time_latency(&fu->time, cfg->gnss_latency_s));
     if (when.jumped) {
         app_count(&c->diag->health->time_jumps);
+    }
+    /* a receiver that reports no accuracy: its declared figures (docs/configuration.md) */
+    const int declared = cfg->gnss_accuracy == GNSS_ACC_DECLARED;
+    const nav_real_t sacc = declared ? cfg->gnss_sacc_mps : fix->sacc_mps;
+    const nav_real_t ss = nav_clamp(sacc, APP_GNSS_SACC_MIN_MPS, APP_GNSS_SACC_MAX_MPS);
+    if (fix->has_vel) {
+        (void)gnss_time_learn(&fu->time, &when, fix->v_enu_mps, ss, cfg->gnss_latency_s);
     }
     if (!when.in_history) {
         app_diag_reject(c->diag, &c->diag->health->gnss_rejected); /* older than the history */
@@ -336,11 +343,8 @@ fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_pr
         app_diag_reject(c->diag, &c->diag->health->gnss_rejected);
         return FUSION_GO_ON;
     }
-    /* a receiver that reports no accuracy: its declared figures (docs/configuration.md) */
-    const int declared = cfg->gnss_accuracy == GNSS_ACC_DECLARED;
     const nav_real_t hacc = declared ? cfg->gnss_hacc_m : fix->hacc_m;
     const nav_real_t vacc = declared ? cfg->gnss_vacc_m : fix->vacc_m;
-    const nav_real_t sacc = declared ? cfg->gnss_sacc_mps : fix->sacc_mps;
     const nav_real_t sh = nav_clamp(hacc * APP_GNSS_HACC_PER_AXIS, APP_GNSS_SIGMA_FLOOR_M,
                                  APP_GNSS_SIGMA_MAX_M);
     const nav_real_t sv = nav_clamp(vacc, APP_GNSS_SIGMA_V_MIN_M, APP_GNSS_SIGMA_MAX_M);
@@ -363,7 +367,6 @@ fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_pr
     int rv = 1;
     if (fix->has_vel) {
         const nav_real_t *vthen = gnss_time_velocity_then(&fu->time, &when);
-        const nav_real_t ss = nav_clamp(sacc, APP_GNSS_SACC_MIN_MPS, APP_GNSS_SACC_MAX_MPS);
         rv = cfg->gnss_vel_up == GNSS_VUP_NONE
                  ? ekf_gnss_velocity_horizontal(&fu->ekf, vthen, fix->v_enu_mps, ss,
                                                 APP_GNSS_GATE_SIGMA)
