@@ -70,6 +70,10 @@
 #define APP_GNSS_MIN_SATS 4u
 /* GNSS course is a heading only when moving this fast (course noise ~ sigma_v / v) */
 #define APP_GNSS_COURSE_MIN_MPS NAV_C(5.0)
+/* a GNSS fix updates the heading only beyond this many speed sigmas (its course sigma is
+ * speed sigma / speed: 0.1 rad here, the sigma of a commanded heading; 0.5 m/s at the
+ * 0.05 m/s floor of the speed sigma) */
+#define APP_GNSS_HEADING_SPEED_SIGMAS NAV_C(10.0)
 /* below this GNSS speed the vehicle may be still (levelling, GNSS-only initialisation) */
 #define APP_GNSS_STILL_MPS NAV_C(0.3)
 /* the receiver's horizontal accuracy is a 2-D figure: per axis 1/sqrt(2) of it */
