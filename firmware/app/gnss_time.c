@@ -1,6 +1,11 @@
 /* gnss_time.c - GNSS time of validity on the IMU time base; see gnss_time.h. */
 #include "gnss_time.h"
 
+static void gnss_time_unlearn(gnss_time_t *g);
+
+/* the last latency candidate */
+static const uint32_t lat_last = APP_GNSS_LAT_BINS - 1u;
+
 /* IMU samples per history entry: at most APP_VHIST_MAX_HZ entries per second */
 static uint32_t vhist_div(uint32_t imu_rate_hz)
 {
@@ -71,7 +76,8 @@ void gnss_time_reach(const gnss_time_t *g, gnss_when_t *w, nav_real_t latency_s)
     w->in_history = reaches(g, w->back) ? 1u : 0u;
 }
 
-void gnss_time_unlearn(gnss_time_t *g)
+/* Forget the latency learnt (a receiver reset). */
+static void gnss_time_unlearn(gnss_time_t *g)
 {
     for (uint32_t k = 0u; k < APP_GNSS_LAT_BINS; k++) {
         g->lat_cost[k] = NAV_C(0.0);
@@ -88,13 +94,13 @@ static uint32_t bin_of(nav_real_t latency_s)
     if (!(k > NAV_C(0.0))) {
         return 0u;
     }
-    return k < (nav_real_t)(APP_GNSS_LAT_BINS - 1u) ? (uint32_t)k : APP_GNSS_LAT_BINS - 1u;
+    return k < (nav_real_t)lat_last ? (uint32_t)k : lat_last;
 }
 
 int gnss_time_learn(gnss_time_t *g, gnss_when_t *w, const nav_real_t v_enu_mps[3],
                     nav_real_t sigma_mps, nav_real_t latency_cfg_s)
 {
-    const nav_real_t far_s = APP_GNSS_LAT_STEP_S * (nav_real_t)(APP_GNSS_LAT_BINS - 1u);
+    const nav_real_t far_s = APP_GNSS_LAT_STEP_S * (nav_real_t)lat_last;
     /* on time (late by less than a history entry), every candidate in the history */
     if (!(w->late_s < w->entry_s) || !reaches(g, far_s / w->entry_s) || !(sigma_mps > NAV_C(0.0))) {
         return 0;

@@ -64,9 +64,6 @@ void gnss_time_reach(const gnss_time_t *g, gnss_when_t *w, nav_real_t latency_s)
 int gnss_time_learn(gnss_time_t *g, gnss_when_t *w, const nav_real_t v_enu_mps[3],
                     nav_real_t sigma_mps, nav_real_t latency_cfg_s);
 
-/* Forget the latency learnt (a receiver reset: gnss_time_align does it on a time jump). */
-void gnss_time_unlearn(gnss_time_t *g);
-
 /* The latency in use: the learnt one, else latency_cfg_s. */
 nav_real_t gnss_time_latency(const gnss_time_t *g, nav_real_t latency_cfg_s);
 
