@@ -411,6 +411,48 @@ static void test_standstill_updates(void **state)
     assert_near(s.v_n_mps[1], 8.0, 1e-6);
 }
 
+/* The heading held (ekf_t.hold_heading: a zero-velocity update at standstill, a GNSS fix
+ * below 10 speed sigmas): GIVEN the north velocity error correlated with the heading
+ * (correlation 0.5, as a drive-off's acceleration makes it) WHEN a zero-velocity update
+ * sees 0.01 m/s north THEN without the hold the heading moves (0.5 x 5 deg / 0.02 m/s x
+ * 0.01 m/s ~ 0.6 deg: the drive-off jump), with it the heading, its variance and its
+ * covariances' other side stay exactly, the velocity is still corrected, and P stays
+ * symmetric. */
+static void test_hold_heading(void **state)
+{
+    (void)state;
+    const double v[3] = {0.0, 0.01, 0.0};
+    double sd[EKF_N];
+    for (int i = 0; i < EKF_N; i++) {
+        sd[i] = 1e-6;
+    }
+    sd[EKF_DV] = sd[EKF_DV + 1] = sd[EKF_DV + 2] = 0.02;
+    sd[EKF_PSI + 2] = 5.0 * DEG;
+    for (int hold = 0; hold < 2; hold++) {
+        sins_t s;
+        nav_at(&s, 0.0, 0.0, 0.0, v);
+        ekf_t f;
+        filter_with(&f, sd);
+        const nav_real_t c = (nav_real_t)(0.5 * 0.02 * 5.0 * DEG);
+        f.P[EKF_DV + 1][EKF_PSI + 2] = f.P[EKF_PSI + 2][EKF_DV + 1] = c;
+        const nav_real_t p_psi = f.P[EKF_PSI + 2][EKF_PSI + 2];
+        f.hold_heading = (uint8_t)hold;
+        assert_int_equal(ekf_zero_velocity(&f, &s, NAV_C(0.012), NAV_C(0.0)), 3);
+        if (hold) {
+            assert_near(f.x[EKF_PSI + 2], 0.0, 0.0);
+            assert_near(f.P[EKF_PSI + 2][EKF_PSI + 2], p_psi, 0.0);
+        } else {
+            assert_true(fabs((double)f.x[EKF_PSI + 2]) > 0.3 * DEG);
+        }
+        assert_true(f.x[EKF_DV + 1] > NAV_C(0.005)); /* the velocity error seen */
+        for (int i = 0; i < EKF_N; i++) {
+            for (int j = 0; j < EKF_N; j++) {
+                assert_near(f.P[i][j], f.P[j][i], 0.0);
+            }
+        }
+    }
+}
+
 /* Covariance health: a NaN is reset and counted; a negative variance is floored. */
 static void test_covariance_health(void **state)
 {
@@ -437,6 +479,7 @@ int main(void)
         cmocka_unit_test(test_odometer_scale_and_mounting),
         cmocka_unit_test(test_odometer_lever_arm_in_a_turn),
         cmocka_unit_test(test_standstill_updates),
+        cmocka_unit_test(test_hold_heading),
         cmocka_unit_test(test_covariance_health),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -218,6 +218,63 @@ static void test_displacement_and_velocity_then(void **state)
     assert_near(gnss_time_velocity_then(&g, &w)[0], 17.0, 0.0);
 }
 
+/* A drive accelerating at 2 m/s^2 east from sample 1, the receiver's epochs (5 Hz) true
+ * latency_s before their arrival: the velocity history is the navigator's, exact. Returns
+ * the latency in use after `epochs` epochs, learnt with the parameter at cfg_s. */
+static float learn_ramp(float latency_s, float cfg_s, uint32_t epochs, float accel_mps2)
+{
+    const float dt = 1.0f / (float)RATE_HZ;
+    uint64_t n = 0u;
+    for (uint32_t e = 0u; e < epochs; e++) {
+        for (uint32_t k = 0u; k < RATE_HZ / 5u; k++) {
+            n++;
+            const nav_real_t v[3] = {accel_mps2 * dt * (float)n, 0.0f, 0.0f};
+            gnss_time_record(&g, n, RATE_HZ, v);
+        }
+        /* the fix's time of validity is latency_s before the arrival */
+        const float t_valid_s = dt * (float)n - latency_s;
+        const int64_t tow_ms = 100000 + (int64_t)(t_valid_s * 1000.0f + (t_valid_s >= 0.0f ? 0.5f : -0.5f));
+        gnss_when_t w = gnss_time_align(&g, n * 1000000u / RATE_HZ, RATE_HZ, (uint32_t)tow_ms,
+                                         gnss_time_latency(&g, cfg_s));
+        const nav_real_t vg[3] = {accel_mps2 * t_valid_s, 0.0f, 0.0f};
+        (void)gnss_time_learn(&g, &w, vg, 0.05f, cfg_s);
+    }
+    return gnss_time_latency(&g, cfg_s);
+}
+
+/* GIVEN fixes on time (latency 0) or 0.3 s late, the parameter saying 0.1 s WHEN the car
+ * accelerates THEN the latency in use is the true one within the 10 ms grid after 10
+ * epochs (2 s); the parameter's own 0.1 s is kept when it is right. Before the fix the
+ * parameter was always used (0.1 s: a 0.1 or 0.2 s error, 2 m/s^2 x that in velocity). */
+static void test_latency_learnt_from_acceleration(void **state)
+{
+    (void)state;
+    assert_near(learn_ramp(0.0f, 0.1f, 10u, 2.0f), 0.0, 0.0051);
+    memset(&g, 0, sizeof g);
+    assert_near(learn_ramp(0.3f, 0.1f, 10u, 2.0f), 0.3, 0.0051);
+    memset(&g, 0, sizeof g);
+    assert_near(learn_ramp(0.1f, 0.1f, 50u, 2.0f), 0.1f, 0.0);
+    assert_int_equal(g.lat_learnt, 0); /* never contradicted: the parameter stays */
+}
+
+/* GIVEN a constant velocity (no information on the latency) THEN the parameter stays. */
+static void test_latency_not_learnt_without_dynamics(void **state)
+{
+    (void)state;
+    assert_near(learn_ramp(0.0f, 0.1f, 100u, 0.0f), 0.1f, 0.0);
+    assert_int_equal(g.lat_learnt, 0);
+}
+
+/* GIVEN a learnt latency WHEN the receiver's clock jumps THEN it is forgotten. */
+static void test_latency_forgotten_at_time_jump(void **state)
+{
+    (void)state;
+    assert_near(learn_ramp(0.0f, 0.1f, 10u, 2.0f), 0.0, 0.0051);
+    gnss_when_t w = gnss_time_align(&g, 1000000000u, RATE_HZ, 10u, 0.0f); /* 1000 s later, TOW back */
+    assert_int_equal(w.jumped, 1);
+    assert_near(gnss_time_latency(&g, 0.1f), 0.1f, 0.0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -230,6 +287,9 @@ int main(void)
         cmocka_unit_test_setup(test_history_decimation, setup),
         cmocka_unit_test_setup(test_displacement_of_constant_velocity, setup),
         cmocka_unit_test_setup(test_displacement_and_velocity_then, setup),
+        cmocka_unit_test_setup(test_latency_learnt_from_acceleration, setup),
+        cmocka_unit_test_setup(test_latency_not_learnt_without_dynamics, setup),
+        cmocka_unit_test_setup(test_latency_forgotten_at_time_jump, setup),
     };
     return cmocka_run_group_tests_name("gnss_time", tests, NULL, NULL);
 }

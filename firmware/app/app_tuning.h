@@ -70,6 +70,10 @@
 #define APP_GNSS_MIN_SATS 4u
 /* GNSS course is a heading only when moving this fast (course noise ~ sigma_v / v) */
 #define APP_GNSS_COURSE_MIN_MPS NAV_C(5.0)
+/* a GNSS fix updates the heading only beyond this many speed sigmas (its course sigma is
+ * speed sigma / speed: 0.1 rad here, the sigma of a commanded heading; 0.5 m/s at the
+ * 0.05 m/s floor of the speed sigma) */
+#define APP_GNSS_HEADING_SPEED_SIGMAS NAV_C(10.0)
 /* below this GNSS speed the vehicle may be still (levelling, GNSS-only initialisation) */
 #define APP_GNSS_STILL_MPS NAV_C(0.3)
 /* in-motion alignment (align.h): a window of at least this long between two driving
@@ -110,6 +114,18 @@
  * cover 0.64 s: the latency allowed (0.5 s) plus lateness */
 #define APP_VHIST 64u
 #define APP_VHIST_MAX_HZ 100u
+/* the receiver's latency estimated from the data (gnss_time_learn): candidates 0..0.5 s
+ * (the parameter's range) every 10 ms; each on-time epoch adds, per candidate, the squared
+ * horizontal difference of its velocity from the navigator's that long before its
+ * arrival, in units of the speed sigma, at most 25 (5 sigma: one bad epoch cannot decide);
+ * the sums fade by 1/200 an epoch (40 s at 5 Hz: a changed receiver is learnt anew). A
+ * candidate replaces the one in use (the parameter's at first) when its sum is lower by
+ * 20: a log-likelihood ratio of 10, noise alone almost never reaches it */
+#define APP_GNSS_LAT_BINS 51u
+#define APP_GNSS_LAT_STEP_S NAV_C(0.01)
+#define APP_GNSS_LAT_TERM_MAX NAV_C(25.0)
+#define APP_GNSS_LAT_FADE NAV_C(0.995)
+#define APP_GNSS_LAT_EVIDENCE NAV_C(20.0)
 
 /* ---- Kalman filter scheduling and measurement noise (docs/kalman.md) ---- */
 #define APP_EKF_PRED_HZ 10u /* covariance propagation and odometer updates */

@@ -141,9 +141,16 @@ static void odometer_updates(fusion_t *fu, const fusion_ctx_t *c, nav_real_t T)
     acc = nav_sqrt(acc) / T;
     const nav_real_t per = odo->period_s;
     if (odo->valid && odo->standing) {
-        if (ekf_zero_velocity(&fu->ekf, c->nav,
-                              APP_ZUPT_SIGMA_MPS + APP_ZUPT_SIGMA_PER_PERIOD_MPS * per,
-                              APP_ODO_GATE_SIGMA) == 0) {
+        /* Standing wheels say |v| < half a step, not which way the car would go: no heading
+         * information (the heading's 5 deg sigma would otherwise take the first centimetres
+         * of a drive-off, the IMU's acceleration before a wheel reads a step, as a heading
+         * error: 0.2 deg in 0.4 s, every heading but east) */
+        fu->ekf.hold_heading = 1u;
+        const int zv = ekf_zero_velocity(&fu->ekf, c->nav,
+                                         APP_ZUPT_SIGMA_MPS + APP_ZUPT_SIGMA_PER_PERIOD_MPS * per,
+                                         APP_ODO_GATE_SIGMA);
+        fu->ekf.hold_heading = 0u;
+        if (zv == 0) {
             odo_refused(c); /* "standing" wheels while the car moves: a locked wheel */
         }
         nav_real_t w_ie_b[3];
@@ -321,10 +328,17 @@ fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_pr
     const app_config_t *cfg = c->cfg;
     const uint64_t n = c->diag->n_samples;
     *adopt = 0;
-    const gnss_when_t when = gnss_time_align(&fu->time, c->diag->t_us, cfg->imu_rate_hz, fix->tow_ms,
-                                             cfg->gnss_latency_s);
+    gnss_when_t when = gnss_time_align(&fu->time, c->diag->t_us, cfg->imu_rate_hz, fix->tow_ms,
+                                       gnss_time_latency(&fu->time, cfg->gnss_latency_s));
     if (when.jumped) {
         app_count(&c->diag->health->time_jumps);
+    }
+    /* a receiver that reports no accuracy: its declared figures (docs/configuration.md) */
+    const int declared = cfg->gnss_accuracy == GNSS_ACC_DECLARED;
+    const nav_real_t sacc = declared ? cfg->gnss_sacc_mps : fix->sacc_mps;
+    const nav_real_t ss = nav_clamp(sacc, APP_GNSS_SACC_MIN_MPS, APP_GNSS_SACC_MAX_MPS);
+    if (fix->has_vel) {
+        (void)gnss_time_learn(&fu->time, &when, fix->v_enu_mps, ss, cfg->gnss_latency_s);
     }
     if (!when.in_history) {
         app_diag_reject(c->diag, &c->diag->health->gnss_rejected); /* older than the history */
@@ -342,11 +356,8 @@ fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_pr
         app_diag_reject(c->diag, &c->diag->health->gnss_rejected);
         return FUSION_GO_ON;
     }
-    /* a receiver that reports no accuracy: its declared figures (docs/configuration.md) */
-    const int declared = cfg->gnss_accuracy == GNSS_ACC_DECLARED;
     const nav_real_t hacc = declared ? cfg->gnss_hacc_m : fix->hacc_m;
     const nav_real_t vacc = declared ? cfg->gnss_vacc_m : fix->vacc_m;
-    const nav_real_t sacc = declared ? cfg->gnss_sacc_mps : fix->sacc_mps;
     const nav_real_t sh = nav_clamp(hacc * APP_GNSS_HACC_PER_AXIS, APP_GNSS_SIGMA_FLOOR_M,
                                  APP_GNSS_SIGMA_MAX_M);
     const nav_real_t sv = nav_clamp(vacc, APP_GNSS_SIGMA_V_MIN_M, APP_GNSS_SIGMA_MAX_M);
@@ -364,12 +375,21 @@ fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_pr
     if (!fu->on && !start_at_fix(fu, c, prior, fix, d, sh, &then)) {
         return FUSION_GO_ON;
     }
+    /* The fix's heading information is its course, sigma ss / speed: below
+     * APP_GNSS_HEADING_SPEED_SIGMAS speed sigmas (a course sigma above 1/that rad) it is
+     * the receiver's noise and quantisation, and at drive-off it moved a good heading by
+     * 0.2 deg; the fix updates everything but the heading then (the odometer, the course
+     * at speed and the turns observe it) */
+    const nav_real_t v2 = fix->has_vel ? fix->v_enu_mps[0] * fix->v_enu_mps[0] +
+                                             fix->v_enu_mps[1] * fix->v_enu_mps[1]
+                                       : NAV_C(0.0);
+    const nav_real_t v_min = APP_GNSS_HEADING_SPEED_SIGMAS * ss;
+    fu->ekf.hold_heading = v2 < v_min * v_min ? 1u : 0u;
     const int rp = ekf_gnss_position(&fu->ekf, c->nav, &then, &fix->pos, cfg->gnss_lever_b_m,
                                      sh, sv, APP_GNSS_GATE_SIGMA, r_scale, fix->has_h);
     int rv = 1;
     if (fix->has_vel) {
         const nav_real_t *vthen = gnss_time_velocity_then(&fu->time, &when);
-        const nav_real_t ss = nav_clamp(sacc, APP_GNSS_SACC_MIN_MPS, APP_GNSS_SACC_MAX_MPS);
         rv = cfg->gnss_vel_up == GNSS_VUP_NONE
                  ? ekf_gnss_velocity_horizontal(&fu->ekf, vthen, fix->v_enu_mps, ss,
                                                 APP_GNSS_GATE_SIGMA)
@@ -379,6 +399,7 @@ fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_pr
     if (rp < 2 || rv == 0) {
         app_diag_reject(c->diag, &c->diag->health->gnss_rejected); /* beyond the gate */
     }
+    fu->ekf.hold_heading = 0u;
     gate_run(fu, c, rp >= 2, sh); /* rp >= 2: the horizontal fix was taken */
     feed_back(fu, c);
     int was_reset;

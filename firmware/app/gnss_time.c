@@ -1,6 +1,11 @@
 /* gnss_time.c - GNSS time of validity on the IMU time base; see gnss_time.h. */
 #include "gnss_time.h"
 
+static void gnss_time_unlearn(gnss_time_t *g);
+
+/* the last latency candidate */
+static const uint32_t lat_last = APP_GNSS_LAT_BINS - 1u;
+
 /* IMU samples per history entry: at most APP_VHIST_MAX_HZ entries per second */
 static uint32_t vhist_div(uint32_t imu_rate_hz)
 {
@@ -49,13 +54,92 @@ gnss_when_t gnss_time_align(gnss_time_t *g, uint64_t imu_t_us, uint32_t imu_rate
         }
     }
     g->prev_t_us = t_imu_us;
-    const nav_real_t late_s = (nav_real_t)(off - g->off_min_us) * NAV_C(1e-6);
-    const nav_real_t tau = latency_s + late_s;
+    if (jumped) {
+        gnss_time_unlearn(g); /* a receiver reset: its latency may be another */
+    }
+    w.late_s = (nav_real_t)(off - g->off_min_us) * NAV_C(1e-6);
     w.entry_s = (nav_real_t)vhist_div(imu_rate_hz) / (nav_real_t)imu_rate_hz;
-    w.back = tau / w.entry_s;
-    const uint32_t m = (uint32_t)w.back;
-    w.in_history = (m + 1u < APP_VHIST && m + 1u < g->vhist_n) ? 1u : 0u;
+    gnss_time_reach(g, &w, latency_s);
     return w;
+}
+
+/* does the history reach back entries back (one more for the interpolation)? */
+static int reaches(const gnss_time_t *g, nav_real_t back)
+{
+    const uint32_t m = (uint32_t)back;
+    return m + 1u < APP_VHIST && m + 1u < g->vhist_n;
+}
+
+void gnss_time_reach(const gnss_time_t *g, gnss_when_t *w, nav_real_t latency_s)
+{
+    w->back = (latency_s + w->late_s) / w->entry_s;
+    w->in_history = reaches(g, w->back) ? 1u : 0u;
+}
+
+/* Forget the latency learnt (a receiver reset). */
+static void gnss_time_unlearn(gnss_time_t *g)
+{
+    for (uint32_t k = 0u; k < APP_GNSS_LAT_BINS; k++) {
+        g->lat_cost[k] = NAV_C(0.0);
+    }
+    g->lat_learnt = 0u;
+    g->lat_bin = 0u;
+    g->lat_epochs = 0u;
+}
+
+/* the candidate nearest a latency (the parameter's), within the range */
+static uint32_t bin_of(nav_real_t latency_s)
+{
+    const nav_real_t k = latency_s / APP_GNSS_LAT_STEP_S + NAV_C(0.5);
+    if (!(k > NAV_C(0.0))) {
+        return 0u;
+    }
+    return k < (nav_real_t)lat_last ? (uint32_t)k : lat_last;
+}
+
+int gnss_time_learn(gnss_time_t *g, gnss_when_t *w, const nav_real_t v_enu_mps[3],
+                    nav_real_t sigma_mps, nav_real_t latency_cfg_s)
+{
+    const nav_real_t far_s = APP_GNSS_LAT_STEP_S * (nav_real_t)lat_last;
+    /* on time (late by less than a history entry), every candidate in the history */
+    if (!(w->late_s < w->entry_s) || !reaches(g, far_s / w->entry_s) || !(sigma_mps > NAV_C(0.0))) {
+        return 0;
+    }
+    const nav_real_t inv_var = NAV_C(1.0) / (sigma_mps * sigma_mps);
+    uint32_t best = 0u;
+    for (uint32_t k = 0u; k < APP_GNSS_LAT_BINS; k++) {
+        /* the navigator's velocity tau_k before the arrival, interpolated in the history */
+        const nav_real_t back = APP_GNSS_LAT_STEP_S * (nav_real_t)k / w->entry_s;
+        const uint32_t m = (uint32_t)back;
+        const nav_real_t f = back - (nav_real_t)m;
+        const nav_real_t *a = g->vhist[(g->vhist_n - 1u - m) % APP_VHIST];
+        const nav_real_t *b = g->vhist[(g->vhist_n - 2u - m) % APP_VHIST];
+        nav_real_t e2 = NAV_C(0.0);
+        for (int i = 0; i < 2; i++) {
+            const nav_real_t e = v_enu_mps[i] - (a[i] + f * (b[i] - a[i]));
+            e2 += e * e;
+        }
+        e2 *= inv_var;
+        g->lat_cost[k] = APP_GNSS_LAT_FADE * g->lat_cost[k] +
+                         (e2 < APP_GNSS_LAT_TERM_MAX ? e2 : APP_GNSS_LAT_TERM_MAX);
+        if (g->lat_cost[k] < g->lat_cost[best]) {
+            best = k;
+        }
+    }
+    g->lat_epochs++;
+    const uint32_t used = g->lat_learnt ? (uint32_t)g->lat_bin : bin_of(latency_cfg_s);
+    if (best == used || !(g->lat_cost[used] - g->lat_cost[best] > APP_GNSS_LAT_EVIDENCE)) {
+        return 0;
+    }
+    g->lat_bin = (uint8_t)best;
+    g->lat_learnt = 1u;
+    gnss_time_reach(g, w, gnss_time_latency(g, latency_cfg_s));
+    return 1;
+}
+
+nav_real_t gnss_time_latency(const gnss_time_t *g, nav_real_t latency_cfg_s)
+{
+    return g->lat_learnt ? APP_GNSS_LAT_STEP_S * (nav_real_t)g->lat_bin : latency_cfg_s;
 }
 
 void gnss_time_displacement(const gnss_time_t *g, const gnss_when_t *w, nav_real_t d_n_m[3])

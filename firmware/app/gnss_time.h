@@ -8,6 +8,10 @@
  * The navigator's velocity history (entries at most 10 ms apart) gives its position and
  * velocity at that time. Decisions come from the data (sample count, TimeOfWeek), never
  * from arrival times.
+ * The latency itself (on-time epochs) is estimated from the data: the IMU and receiver
+ * clocks' offset is unknown, so it is the one that best fits the receiver's velocities to
+ * the navigator's history (gnss_time_learn); gnss_latency_s is used until the data has
+ * decided (on a first acceleration, docs/kalman.md).
  */
 #ifndef NAVECU_GNSS_TIME_H
 #define NAVECU_GNSS_TIME_H
@@ -26,12 +30,17 @@ typedef struct {
     int64_t prev_t_us;              /* IMU time of the previous epoch (drift allowance) */
     uint16_t gps_week;              /* GPS week of the latest epoch that had one */
     uint8_t have_week;
+    nav_real_t lat_cost[APP_GNSS_LAT_BINS]; /* faded misfit per latency candidate */
+    uint8_t lat_learnt;             /* the data decided: lat_bin is in use */
+    uint8_t lat_bin;                /* the latency in use, APP_GNSS_LAT_STEP_S units */
+    uint32_t lat_epochs;            /* epochs learnt from */
 } gnss_time_t;
 
 /* How far back a fix's time of validity lies. */
 typedef struct {
     nav_real_t back;    /* history entries back from the latest (fractional) */
     nav_real_t entry_s; /* time between entries */
+    nav_real_t late_s;  /* lateness beyond the on-time epochs' offset */
     uint8_t jumped;     /* the receiver's clock jumped: count time_jumps */
     uint8_t in_history; /* the velocity history reaches that far */
 } gnss_when_t;
@@ -44,6 +53,19 @@ void gnss_time_record(gnss_time_t *g, uint64_t n_samples, uint32_t imu_rate_hz,
  * (app_time_us: the last sample's); imu_rate_hz sets the history's entry spacing. */
 gnss_when_t gnss_time_align(gnss_time_t *g, uint64_t imu_t_us, uint32_t imu_rate_hz,
                             uint32_t tow_ms, nav_real_t latency_s);
+
+/* Set w's reach back for a latency latency_s (w from gnss_time_align). */
+void gnss_time_reach(const gnss_time_t *g, gnss_when_t *w, nav_real_t latency_s);
+
+/* Learn the latency from an epoch's velocity (ENU m/s, horizontal used; sigma_mps its
+ * speed sigma) and w (gnss_time_align's); latency_cfg_s: the parameter, the first in use.
+ * Only on-time epochs with the whole candidate range in the history count. Returns 1 when
+ * the latency in use changed (w's reach is then that of the new latency). */
+int gnss_time_learn(gnss_time_t *g, gnss_when_t *w, const nav_real_t v_enu_mps[3],
+                    nav_real_t sigma_mps, nav_real_t latency_cfg_s);
+
+/* The latency in use: the learnt one, else latency_cfg_s. */
+nav_real_t gnss_time_latency(const gnss_time_t *g, nav_real_t latency_cfg_s);
 
 /* The navigator's displacement (ENU, m) from then to now: the integral of the velocity
  * history over w.back entries (w.in_history must hold). */

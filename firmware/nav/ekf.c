@@ -84,6 +84,7 @@ int ekf_init(ekf_t *k, const ekf_config_t *cfg, nav_real_t heading_sigma_rad)
     k->n_nonfinite = 0u;
     k->n_negative_var = 0u;
     k->n_reopened = 0u;
+    k->hold_heading = 0u;
     reset_cov(k, heading_sigma_rad > NAV_C(0.0) ? heading_sigma_rad : cfg->heading_rad);
     return NAV_OK;
 }
@@ -227,10 +228,18 @@ int ekf_update(ekf_t *k, const nav_real_t h[EKF_N], nav_real_t z, nav_real_t r,
     nav_real_t K[EKF_N];
     for (int i = 0; i < EKF_N; i++) {
         K[i] = u[i] / S;
+    }
+    if (k->hold_heading) {
+        K[EKF_PSI + 2] = NAV_C(0.0);
+        K[EKF_BG + 2] = NAV_C(0.0);
+        K[EKF_MY] = NAV_C(0.0);
+    }
+    for (int i = 0; i < EKF_N; i++) {
         k->x[i] += K[i] * innov;
     }
     /* Joseph form (I - K h) P (I - K h)^T + K r K^T, expanded for a scalar measurement:
-     * P - K u^T - u K^T + S K K^T, evaluated term by term and kept symmetric */
+     * P - K u^T - u K^T + S K K^T, evaluated term by term and kept symmetric (it holds for
+     * any gain, the held states' zeros included) */
     for (int i = 0; i < EKF_N; i++) {
         for (int j = i; j < EKF_N; j++) {
             const nav_real_t v = k->P[i][j] - K[i] * u[j] - u[i] * K[j] + S * K[i] * K[j];

@@ -67,6 +67,10 @@ typedef struct {
     uint32_t n_nonfinite;        /* of which: a non-finite covariance, reset (divergence) */
     uint32_t n_negative_var;     /* of which: a negative variance (divergence) */
     uint32_t n_reopened;         /* ekf_reopen calls */
+    uint8_t hold_heading;        /* updates leave the heading, the z gyro bias and the
+                                    mounting yaw alone (a Schmidt "consider" update: their
+                                    gains are 0, the Joseph form keeps P right): set while
+                                    a measurement's heading information is below its noise */
     nav_real_t fp[EKF_N][EKF_N]; /* scratch for F P in ekf_predict: too large for an ECU's
                                     stack, and the core keeps no globals */
 } ekf_t;
