@@ -1204,6 +1204,55 @@ static void test_filter_with_gnss(void **state)
 }
 
 
+/*
+ * Longitude -180 deg, within the DBC's range (issue #17: 89 of 89 fixes there were refused,
+ * and the known position too).
+ * GIVEN a known position at longitude -180 deg, SetInitialPosition and the attitude
+ * WHEN the car stands there with GNSS fixes at -180 deg for 10 s
+ * THEN nothing is refused, the filter runs on them, and NAV_Position is on that meridian
+ *      (+180 deg, the same one, inside the DBC's [-180, 180]) within 0.1 m.
+ */
+static void test_longitude_minus_180(void **state)
+{
+    (void)state;
+    wheel_counter = 0u;
+    att_counter = 0u;
+    fix_epoch = 0u;
+    const int32_t lat0 = (int32_t)lround(LAT0_DEG * 1e7), lon0 = -1800000000;
+    hal_can_frame_t f = cf_known_position(lat0, lon0, hal.t_us);
+    feed(&f);
+    struct navecu_can_cmd_control_t c;
+    memset(&c, 0, sizeof c);
+    c.command = 2u;
+    c.heading_valid = 1u;
+    c.heading = 3000u;
+    c.height = (int32_t)lround(H0_M * 10.0);
+    c.cmd_counter = cmd_counter;
+    cmd_counter = e2e_counter_next(cmd_counter);
+    f = cf_control(&c, hal.t_us);
+    feed(&f);
+    send_initial_attitude(STILL.roll, STILL.pitch);
+    assert_int_equal(app.run.mode, APP_MODE_NAVIGATING);
+    uint32_t tow = 100000u;
+    for (int k = 0; k < 50; k++) {
+        run_wheels(RATE_HZ / 5, 0.0, 0);
+        tow += 200u;
+        send_fix(lat0, lon0, tow);
+    }
+    run_wheels(RATE_HZ / 5, 0.0, 0);
+    assert_int_equal(app.keep.health.gnss_rejected, 0u);
+    assert_int_equal(app.keep.health.bad_value, 0u);
+    assert_true(app.run.fusion.on);
+    struct navecu_can_nav_position_t pos;
+    navecu_can_nav_position_unpack(&pos, last_tx(NAVECU_CAN_NAV_POSITION_FRAME_ID)->data, 8u);
+    assert_true(navecu_can_nav_position_longitude_is_in_range(pos.longitude));
+    /* 1e-7 deg of longitude at 45 deg is 7.9 mm: 0.1 m is 13 LSB */
+    const int64_t off = pos.longitude > 0 ? 1800000000LL - pos.longitude
+                                          : (int64_t)pos.longitude + 1800000000LL;
+    assert_true(off >= -13 && off <= 13);
+    assert_true(pos.latitude - lat0 <= 9 && lat0 - pos.latitude <= 9); /* 1e-7 deg: 11 mm */
+}
+
 /* the filter running on fixes at the start point, car standing: returns the next tow */
 static uint32_t run_filter_on_fixes(int n_fixes, uint32_t tow)
 {
@@ -1474,6 +1523,7 @@ int main(void)
         cmocka_unit_test_setup(test_task_supervision, setup),
         cmocka_unit_test_setup(test_calibrate_at_gnss, setup),
         cmocka_unit_test_setup(test_filter_with_gnss, setup),
+        cmocka_unit_test_setup(test_longitude_minus_180, setup),
         cmocka_unit_test_setup(test_imu_rate_mismatch_holds_levelling, setup),
         cmocka_unit_test_setup(test_imu_rate_mismatch_reacquires, setup),
     };

@@ -238,16 +238,20 @@ static void test_lat_lon_range(void **state)
     assert_int_equal(in.u.position.lon_e7, -1799999999);
 }
 
-/* Longitude exactly -180 deg is within the DBC's range but refused: it is the meridian of
- * +180 deg, which the core's wrap (-180, 180] calls +180. A documented exception of
- * app_rx.c, to be revisited by issue #17: this tests the current behaviour. */
-static void test_longitude_minus_180_refused(void **state)
+/* Longitude exactly -180 deg is within the DBC's range (issue #17): accepted, and handed on
+ * as +180 deg, the same meridian, because the core wraps longitude to (-180, 180]. */
+static void test_longitude_minus_180_accepted(void **state)
 {
     (void)state;
     hal_can_frame_t f = cf_gnss_position(0, -1800000000, 0u);
-    assert_int_equal(decode(&f), RX_GNSS_BAD);
-    f = cf_known_position(0, -1800000000, 0u);
-    assert_int_equal(decode(&f), RX_BAD_VALUE);
+    assert_int_equal(decode(&f), RX_OK);
+    assert_int_equal(in.kind, RX_GNSS_POSITION);
+    assert_int_equal(in.u.position.lon_e7, 1800000000);
+    f = cf_known_position(-450000000, -1800000000, 0u);
+    assert_int_equal(decode(&f), RX_OK);
+    assert_int_equal(in.kind, RX_KNOWN_POSITION);
+    assert_int_equal(in.u.position.lat_e7, -450000000);
+    assert_int_equal(in.u.position.lon_e7, 1800000000);
 }
 
 /* ---- decoded values ---- */
@@ -454,7 +458,7 @@ int main(void)
         cmocka_unit_test_setup(test_repeated_counter_refused, setup),
         cmocka_unit_test_setup(test_command_counter_window, setup),
         cmocka_unit_test_setup(test_lat_lon_range, setup),
-        cmocka_unit_test_setup(test_longitude_minus_180_refused, setup),
+        cmocka_unit_test_setup(test_longitude_minus_180_accepted, setup),
         cmocka_unit_test_setup(test_imu_frames_decoded, setup),
         cmocka_unit_test_setup(test_imu_increment_si, setup),
         cmocka_unit_test_setup(test_wheels_decoded, setup),
