@@ -746,10 +746,14 @@ static void send_gnss(const gnss_epoch_t *g)
     feed(&f);
 }
 
+/* the epochs' TimeOfWeek: 200 ms apart */
+static uint32_t epoch_tow_ms;
+
 static void send_gnss_epoch(uint8_t vel_epoch, uint8_t status_epoch, double speed_north)
 {
+    epoch_tow_ms += 200u;
     const gnss_epoch_t g = {450000000, 100000000, speed_north, 100.0, vel_epoch, status_epoch,
-                            0u, 0u, 0u, 0u};
+                            0u, 0u, 0u, epoch_tow_ms};
     send_gnss(&g);
 }
 
@@ -770,7 +774,8 @@ static void test_gnss_init_and_epochs(void **state)
     assert_int_equal(app.run.mode, APP_MODE_LEVELLING);
     assert_near(app.run.align.heading_rad, 0.0, 1e-6);
     assert_int_equal(app.run.align.h_cm, 10000);
-    send_gnss_epoch(2u, 2u, 0.0); /* the same velocity epoch again: a repeat */
+    epoch_tow_ms -= 200u; /* the same epoch again (its TimeOfWeek): a repeat */
+    send_gnss_epoch(2u, 2u, 0.0);
     assert_int_equal(app.keep.health.bad_counter, 1);
 }
 
@@ -1282,6 +1287,53 @@ static int all_nav_outputs_finite(void)
 }
 
 /*
+ * The GnssEpoch counter (0..14) comes round over an outage (issue #17: the first fix after
+ * it was dropped as a repeat). A repeat is decided from the data, the TimeOfWeek.
+ * GIVEN the filter running on 5 Hz fixes (car standing)
+ * WHEN 14 epochs are missed, so that the next epoch carries the counter of the last one
+ *      received, with its own TimeOfWeek 3 s later
+ * THEN that epoch is taken whole: nothing counted, as many filter updates (position and
+ *      velocity) as from any other fix;
+ * WHEN then the same epoch comes again (counter and TimeOfWeek)
+ * THEN it is a repeat: dropped and counted (CntBadCounter), no filter update.
+ */
+static void test_gnss_epoch_counter_round_an_outage(void **state)
+{
+    (void)state;
+    start_perfect();
+    fix_epoch = 0u;
+    const int32_t lat0 = (int32_t)lround(LAT0_DEG * 1e7), lon0 = (int32_t)lround(LON0_DEG * 1e7);
+    uint32_t tow = run_filter_on_fixes(50, 100000u);
+    assert_true(app.run.fusion.on);
+    run_wheels(RATE_HZ / 5, 0.0, 0);
+    uint32_t u0 = app.run.fusion.ekf.n_updates;
+    tow += 200u;
+    send_fix(lat0, lon0, tow);
+    const uint32_t per_fix = app.run.fusion.ekf.n_updates - u0;
+    assert_true(per_fix >= 4u); /* position and velocity */
+    const app_health_t before = app.keep.health;
+    for (int k = 0; k < 14; k++) { /* the outage: 14 epochs never sent */
+        run_wheels(RATE_HZ / 5, 0.0, 0);
+        tow += 200u;
+        fix_epoch = e2e_counter_next(fix_epoch);
+    }
+    run_wheels(RATE_HZ / 5, 0.0, 0);
+    tow += 200u;
+    u0 = app.run.fusion.ekf.n_updates;
+    const uint8_t again = fix_epoch;
+    send_fix(lat0, lon0, tow);
+    assert_int_equal(app.run.fusion.ekf.n_updates - u0, per_fix);
+    assert_int_equal(app.keep.health.bad_counter, before.bad_counter);
+    assert_int_equal(app.keep.health.gnss_rejected, before.gnss_rejected);
+    /* the same epoch repeated */
+    u0 = app.run.fusion.ekf.n_updates;
+    fix_epoch = again;
+    send_fix(lat0, lon0, tow);
+    assert_int_equal(app.run.fusion.ekf.n_updates, u0);
+    assert_int_equal(app.keep.health.bad_counter, before.bad_counter + 1u);
+}
+
+/*
  * GIVEN the filter running on GNSS fixes (car standing)
  * WHEN its covariance becomes non-finite (a NaN in P, as a numerical blow-up leaves it)
  * THEN at the next prediction it is found diverged and reset: CntFilterResets 1 on
@@ -1524,6 +1576,7 @@ int main(void)
         cmocka_unit_test_setup(test_calibrate_at_gnss, setup),
         cmocka_unit_test_setup(test_filter_with_gnss, setup),
         cmocka_unit_test_setup(test_longitude_minus_180, setup),
+        cmocka_unit_test_setup(test_gnss_epoch_counter_round_an_outage, setup),
         cmocka_unit_test_setup(test_imu_rate_mismatch_holds_levelling, setup),
         cmocka_unit_test_setup(test_imu_rate_mismatch_reacquires, setup),
     };

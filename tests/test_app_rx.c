@@ -177,12 +177,54 @@ static void test_repeated_counter_refused(void **state)
     assert_int_equal(decode(&f), RX_BAD_COUNTER);
     f = wheels(0, 5u);
     assert_int_equal(decode(&f), RX_OK);
-    /* GNSS_Velocity's epoch number is its counter */
+    /* GNSS_Velocity's epoch number is its counter: 15 is invalid; a repeated number is
+     * no repeat by itself (it comes round over an outage), the status's TimeOfWeek
+     * decides (test_gnss_status_repeat) */
     f = velocity(0, 0, 0, 7u, 0u);
     assert_int_equal(decode(&f), RX_OK);
-    assert_int_equal(decode(&f), RX_BAD_COUNTER);
+    assert_int_equal(decode(&f), RX_OK);
     f = velocity(0, 0, 0, 15u, 0u);
     assert_int_equal(decode(&f), RX_BAD_COUNTER);
+}
+
+static hal_can_frame_t gnss_status(uint8_t epoch, uint8_t fix_type, uint32_t tow_ms)
+{
+    struct navecu_can_gnss_status_t m;
+    memset(&m, 0, sizeof m);
+    m.gnss_epoch = epoch;
+    m.fix_type = fix_type;
+    m.num_satellites = 9u;
+    m.time_of_week = tow_ms;
+    return cf_gnss_status(&m, 0u);
+}
+
+/* GIVEN a GNSS_Status with a fix at TimeOfWeek t WHEN a fix at t comes again THEN it is
+ * marked a repeat, whatever its epoch number; a fix at another time is not, even with the
+ * same epoch number (the counter came round); statuses without a fix are never repeats
+ * and do not move the time compared with. */
+static void test_gnss_status_repeat(void **state)
+{
+    (void)state;
+    hal_can_frame_t f = gnss_status(4u, 3u, 1000u);
+    assert_int_equal(decode(&f), RX_OK);
+    assert_int_equal(in.u.status.repeat, 0u);
+    assert_int_equal(decode(&f), RX_OK);
+    assert_int_equal(in.u.status.repeat, 1u);
+    f = gnss_status(5u, 3u, 1000u);
+    assert_int_equal(decode(&f), RX_OK);
+    assert_int_equal(in.u.status.repeat, 1u);
+    f = gnss_status(4u, 3u, 4000u); /* 15 epochs of 200 ms later: the same number */
+    assert_int_equal(decode(&f), RX_OK);
+    assert_int_equal(in.u.status.repeat, 0u);
+    f = gnss_status(5u, 0u, 4000u); /* no fix */
+    assert_int_equal(decode(&f), RX_OK);
+    assert_int_equal(in.u.status.repeat, 0u);
+    f = gnss_status(5u, 0u, 4000u);
+    assert_int_equal(decode(&f), RX_OK);
+    assert_int_equal(in.u.status.repeat, 0u);
+    f = gnss_status(6u, 3u, 4000u);
+    assert_int_equal(decode(&f), RX_OK);
+    assert_int_equal(in.u.status.repeat, 1u);
 }
 
 /* GIVEN CMD_Control counter 0 WHEN the next one steps by 4 (3 lost, more than
@@ -456,6 +498,7 @@ int main(void)
         cmocka_unit_test_setup(test_own_outputs_ignored, setup),
         cmocka_unit_test_setup(test_bad_crc_refused, setup),
         cmocka_unit_test_setup(test_repeated_counter_refused, setup),
+        cmocka_unit_test_setup(test_gnss_status_repeat, setup),
         cmocka_unit_test_setup(test_command_counter_window, setup),
         cmocka_unit_test_setup(test_lat_lon_range, setup),
         cmocka_unit_test_setup(test_longitude_minus_180_accepted, setup),

@@ -221,6 +221,25 @@ static void test_height_kept_across_epochs(void **state)
     assert_true(fix.pos.h == -50000LL * 16777216LL);
 }
 
+/* A status app_rx marked a repeat (the previous fix's TimeOfWeek): nothing usable, no
+ * course, and the frames in assembly are consumed. */
+static void test_repeat_consumes(void **state)
+{
+    (void)state;
+    gnss_epoch_position(&g, 451234567, -1234567);
+    velocity(3u, 1.0f, 2.0f, -0.5f);
+    rx_input_t st = status(3u, 1u, 9u);
+    st.u.status.repeat = 1u;
+    gnss_close_t r = gnss_epoch_close(&g, &st, &fix);
+    assert_int_equal(r.repeat, 1);
+    assert_int_equal(r.usable, 0);
+    assert_int_equal(r.has_course, 0);
+    st.u.status.repeat = 0u;
+    r = gnss_epoch_close(&g, &st, &fix);
+    assert_int_equal(r.no_position, 1);
+    assert_int_equal(r.has_course, 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -231,6 +250,7 @@ int main(void)
         cmocka_unit_test_setup(test_undefined_status_consumes, setup),
         cmocka_unit_test_setup(test_course_and_speed, setup),
         cmocka_unit_test_setup(test_height_kept_across_epochs, setup),
+        cmocka_unit_test_setup(test_repeat_consumes, setup),
     };
     return cmocka_run_group_tests_name("gnss_epoch", tests, NULL, NULL);
 }

@@ -352,6 +352,10 @@ static void on_gnss_status(app_t *a, hal_t *hal, const rx_input_t *in)
         reject(a, &a->keep.health.bad_value); /* values the protocol does not define */
         return;
     }
+    if (r.repeat) {
+        reject(a, &a->keep.health.bad_counter); /* the previous fix's epoch again */
+        return;
+    }
     if (r.mismatch) {
         reject(a, &a->keep.health.gnss_rejected); /* frames of another epoch dropped */
     }

@@ -124,8 +124,9 @@ static rx_verdict_t decode_gnss(rx_state_t *rx, int msg, const uint8_t d[8], rx_
     if (msg == NAVECU_MSG_GNSS_VELOCITY) {
         struct navecu_can_gnss_velocity_t m;
         navecu_can_gnss_velocity_unpack(&m, d, 8u);
-        if (e2e_counter_step(&rx->gnss_vel, m.gnss_epoch) <= 0) {
-            return RX_BAD_COUNTER; /* repeated epoch or the invalid 15 */
+        if (m.gnss_epoch > E2E_COUNTER_MAX) {
+            return RX_BAD_COUNTER; /* the invalid 15; a repeated epoch is the status's to
+                                      tell, from its TimeOfWeek */
         }
         in->kind = RX_GNSS_VELOCITY;
         in->u.velocity.epoch = m.gnss_epoch;
@@ -168,6 +169,16 @@ static rx_verdict_t decode_gnss(rx_state_t *rx, int msg, const uint8_t d[8], rx_
     in->u.status.hacc_m = navecu_can_gnss_status_horiz_accuracy_decode(m.horiz_accuracy);
     in->u.status.vacc_m = navecu_can_gnss_status_vert_accuracy_decode(m.vert_accuracy);
     in->u.status.tow_ms = m.time_of_week;
+    /* a repeat: a fix at the TimeOfWeek of the previous fix (the epoch number alone cannot
+     * tell, it comes round over an outage); statuses without a fix do not count */
+    const int fix = in->u.status.defined && in->u.status.fix_3d &&
+                    in->u.status.n_sats >= APP_GNSS_MIN_SATS;
+    in->u.status.repeat =
+        (uint8_t)(fix && rx->have_gnss_tow && rx->gnss_tow_ms == m.time_of_week ? 1u : 0u);
+    if (fix) {
+        rx->gnss_tow_ms = m.time_of_week;
+        rx->have_gnss_tow = 1u;
+    }
     return RX_OK;
 }
 

@@ -43,7 +43,7 @@ void gnss_epoch_week(gnss_asm_t *g, uint8_t epoch, uint16_t gps_week)
 
 gnss_close_t gnss_epoch_close(gnss_asm_t *g, const rx_input_t *status, gnss_fix_t *fix)
 {
-    gnss_close_t r = {0u, 0u, 0u, 0u, 0u, 0u};
+    gnss_close_t r = {0u, 0u, 0u, 0u, 0u, 0u, 0u};
     const int have_pos = g->pos_pending;
     int have_vel = g->vel_pending;
     int have_h = g->h_pending;
@@ -53,6 +53,10 @@ gnss_close_t gnss_epoch_close(gnss_asm_t *g, const rx_input_t *status, gnss_fix_
     g->pos_refused = 0u;
     if (!status->u.status.defined) {
         r.undefined = 1u;
+        return r;
+    }
+    if (status->u.status.repeat) {
+        r.repeat = 1u; /* the previous fix again: nothing of it is new */
         return r;
     }
     const uint8_t epoch = status->u.status.epoch;

@@ -40,6 +40,7 @@ typedef struct {
 typedef struct {
     uint8_t undefined;       /* bad_value: the status frame's epoch or fix type is undefined */
     uint8_t mismatch;        /* gnss_rejected: frames of another epoch were dropped */
+    uint8_t repeat;          /* bad_counter: the previous fix's epoch again, all dropped */
     uint8_t no_fix;          /* the receiver has no usable fix: not an error */
     uint8_t no_position;     /* gnss_rejected: a fix reported without its position */
     uint8_t usable;          /* *fix holds a usable epoch */
