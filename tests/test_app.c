@@ -654,10 +654,11 @@ static void feed_raw_sample(const int32_t w[3], const int32_t v[3])
 }
 
 /*
- * IMU plausibility. A z gyro whose raw increment repeats for 2 s while the x gyro swings
- * by several deg/s is stuck: counted once, flagged (bit 8); a vehicle standing with an
- * ideal IMU, every axis repeating, is not. A rate at the configured range is saturated:
- * counted per sample and flagged (bit 9) for a second.
+ * IMU plausibility. Gyro axes whose raw increments repeat for 2 s while the x gyro shows
+ * the noise of the configured preset (automotive: 2 deg/sqrt(h), a sigma of 122 LSB per
+ * sample at 100 Hz; here uniform noise of +-250 LSB, sigma 144) are stuck: counted once
+ * each, flagged (bit 8); a vehicle standing with an ideal IMU is not. A rate at the
+ * configured range is saturated: counted per sample and flagged (bit 9) for a second.
  */
 static void test_imu_stuck_and_saturated(void **state)
 {
@@ -665,10 +666,12 @@ static void test_imu_stuck_and_saturated(void **state)
     send_init_commands(30.0);
     run_still(31); /* an ideal IMU standing: every axis repeats, nothing flagged */
     assert_int_equal(app.keep.health.imu_stuck, 0u);
+    uint32_t rng = 4711u;
     for (int k = 0; k < 3 * RATE_HZ; k++) {
-        /* x gyro: +-5 deg/s square wave (0.05 deg per sample = 416 LSB of 2^-21 rad); the
-         * accelerometer noisy in its last bits; y and z gyro frozen */
-        const int32_t w[3] = {(k / 25) % 2 ? 416 : -416, 0, 1234};
+        /* x gyro: noise of +-250 LSB; the accelerometer noisy in its last bits; y and z
+         * gyro frozen */
+        rng = rng * 1103515245u + 12345u;
+        const int32_t w[3] = {(int32_t)((rng >> 16) % 501u) - 250, 0, 1234};
         const int32_t vk[3] = {k % 2, -(k % 3), 2048 + k % 2};
         feed_raw_sample(w, vk);
     }

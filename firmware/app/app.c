@@ -46,6 +46,7 @@ int app_init(app_t *app, const app_config_t *cfg)
     imu_link_init(&app->keep.imu, cfg->imu_rate_hz, cfg->gyro_range_rps, cfg->accel_range_mps2,
                   cfg->can_ids[NAVECU_MSG_IMU_ACCEL]);
     imu_link_stamped(&app->keep.imu, cfg->imu_time == IMU_TIME_STAMPED);
+    imu_link_noise(&app->keep.imu, cfg->gyro_arw_rad_rts);
     mounting_init(&app->keep.mount, cfg->imu_mount_rad);
     const mount_est_config_t mcfg = {cfg->mount_est_sigma_rad, cfg->mount_est_excite_m2ps3};
     const int mest_rc = mount_est_init(&app->keep.mest, &mcfg); /* "no estimate" in fixed mode */
@@ -546,8 +547,7 @@ void app_poll(app_t *a, hal_t *hal)
      * poll): the heartbeat on the HAL clock, the only clock there is without data */
     const uint64_t imu_since =
         a->keep.imu.have_sample ? a->keep.imu.last_t_us : a->keep.first_poll_us;
-    const int silent = now > imu_since + APP_IMU_STALE_US;
-    if (silent && now > last && now - last >= period_us) {
+    if (now > imu_since + APP_IMU_STALE_US && now > last && now - last >= period_us) {
         output_status(a, hal);
     }
 }
