@@ -507,8 +507,10 @@ void app_handle_frame(app_t *a, hal_t *hal, const hal_can_frame_t *f)
         gnss_epoch_position(&a->run.gnss_asm, in.u.position.lat_e7, in.u.position.lon_e7);
         break;
     case RX_GNSS_VELOCITY:
-        gnss_epoch_velocity(&a->run.gnss_asm, in.u.velocity.epoch, in.u.velocity.v_enu_mps,
-                            in.u.velocity.sacc_mps);
+        if (gnss_epoch_velocity(&a->run.gnss_asm, in.u.velocity.epoch, in.u.velocity.v_enu_mps,
+                                in.u.velocity.sacc_mps) != 0) {
+            reject(a, &a->keep.health.bad_counter); /* a repeated frame within the epoch */
+        }
         break;
     case RX_GNSS_HEIGHT:
         gnss_epoch_height(&a->run.gnss_asm, in.u.height.epoch, in.u.height.h_cm);

@@ -16,15 +16,19 @@ void gnss_epoch_position_refused(gnss_asm_t *g)
     g->pos_refused = 1u;
 }
 
-void gnss_epoch_velocity(gnss_asm_t *g, uint8_t epoch, const nav_real_t v_enu_mps[3],
-                         nav_real_t sacc_mps)
+int gnss_epoch_velocity(gnss_asm_t *g, uint8_t epoch, const nav_real_t v_enu_mps[3],
+                        nav_real_t sacc_mps)
 {
+    if (g->vel_pending && g->vel_epoch == epoch) {
+        return 1; /* this epoch's velocity again: a repeated frame, the first one stays */
+    }
     g->vel_epoch = epoch;
     for (int i = 0; i < 3; i++) {
         g->v_enu_mps[i] = v_enu_mps[i];
     }
     g->sacc_mps = sacc_mps;
     g->vel_pending = 1u;
+    return 0;
 }
 
 void gnss_epoch_height(gnss_asm_t *g, uint8_t epoch, int32_t h_cm)

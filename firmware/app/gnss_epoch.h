@@ -50,8 +50,10 @@ typedef struct {
 void gnss_epoch_position(gnss_asm_t *g, int32_t lat_e7, int32_t lon_e7);
 /* this epoch's position was refused as impossible */
 void gnss_epoch_position_refused(gnss_asm_t *g);
-void gnss_epoch_velocity(gnss_asm_t *g, uint8_t epoch, const nav_real_t v_enu_mps[3],
-                         nav_real_t sacc_mps);
+/* 1 for a repeated frame (a velocity of this epoch number already in assembly: dropped,
+ * the first one stays), else 0 */
+int gnss_epoch_velocity(gnss_asm_t *g, uint8_t epoch, const nav_real_t v_enu_mps[3],
+                        nav_real_t sacc_mps);
 void gnss_epoch_height(gnss_asm_t *g, uint8_t epoch, int32_t h_cm);
 void gnss_epoch_week(gnss_asm_t *g, uint8_t epoch, uint16_t gps_week);
 
