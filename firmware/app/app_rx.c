@@ -171,11 +171,12 @@ static rx_verdict_t decode_gnss(rx_state_t *rx, int msg, const uint8_t d[8], rx_
     in->u.status.tow_ms = m.time_of_week;
     /* a repeat: a fix at the TimeOfWeek of the previous fix (the epoch number alone cannot
      * tell, it comes round over an outage); statuses without a fix do not count */
-    const int fix = (in->u.status.defined && in->u.status.fix_3d &&
-                     in->u.status.n_sats >= APP_GNSS_MIN_SATS) ? 1 : 0;
-    in->u.status.repeat =
-        (uint8_t)(fix && rx->have_gnss_tow && rx->gnss_tow_ms == m.time_of_week ? 1u : 0u);
-    if (fix) {
+    in->u.status.repeat = 0u;
+    if (in->u.status.defined != 0u && in->u.status.fix_3d != 0u &&
+        in->u.status.n_sats >= APP_GNSS_MIN_SATS) {
+        if (rx->have_gnss_tow != 0u && rx->gnss_tow_ms == m.time_of_week) {
+            in->u.status.repeat = 1u;
+        }
         rx->gnss_tow_ms = m.time_of_week;
         rx->have_gnss_tow = 1u;
     }
