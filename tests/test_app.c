@@ -654,10 +654,11 @@ static void feed_raw_sample(const int32_t w[3], const int32_t v[3])
 }
 
 /*
- * IMU plausibility. A z gyro whose raw increment repeats for 2 s while the x gyro swings
- * by several deg/s is stuck: counted once, flagged (bit 8); a vehicle standing with an
- * ideal IMU, every axis repeating, is not. A rate at the configured range is saturated:
- * counted per sample and flagged (bit 9) for a second.
+ * IMU plausibility. Gyro axes whose raw increments repeat for 2 s while the x gyro shows
+ * the noise of the configured preset (automotive: 2 deg/sqrt(h), a sigma of 122 LSB per
+ * sample at 100 Hz; here uniform noise of +-250 LSB, sigma 144) are stuck: counted once
+ * each, flagged (bit 8); a vehicle standing with an ideal IMU is not. A rate at the
+ * configured range is saturated: counted per sample and flagged (bit 9) for a second.
  */
 static void test_imu_stuck_and_saturated(void **state)
 {
@@ -665,10 +666,12 @@ static void test_imu_stuck_and_saturated(void **state)
     send_init_commands(30.0);
     run_still(31); /* an ideal IMU standing: every axis repeats, nothing flagged */
     assert_int_equal(app.keep.health.imu_stuck, 0u);
+    uint32_t rng = 4711u;
     for (int k = 0; k < 3 * RATE_HZ; k++) {
-        /* x gyro: +-5 deg/s square wave (0.05 deg per sample = 416 LSB of 2^-21 rad); the
-         * accelerometer noisy in its last bits; y and z gyro frozen */
-        const int32_t w[3] = {(k / 25) % 2 ? 416 : -416, 0, 1234};
+        /* x gyro: noise of +-250 LSB; the accelerometer noisy in its last bits; y and z
+         * gyro frozen */
+        rng = rng * 1103515245u + 12345u;
+        const int32_t w[3] = {(int32_t)((rng >> 16) % 501u) - 250, 0, 1234};
         const int32_t vk[3] = {k % 2, -(k % 3), 2048 + k % 2};
         feed_raw_sample(w, vk);
     }
@@ -746,10 +749,14 @@ static void send_gnss(const gnss_epoch_t *g)
     feed(&f);
 }
 
+/* the epochs' TimeOfWeek: 200 ms apart */
+static uint32_t epoch_tow_ms;
+
 static void send_gnss_epoch(uint8_t vel_epoch, uint8_t status_epoch, double speed_north)
 {
+    epoch_tow_ms += 200u;
     const gnss_epoch_t g = {450000000, 100000000, speed_north, 100.0, vel_epoch, status_epoch,
-                            0u, 0u, 0u, 0u};
+                            0u, 0u, 0u, epoch_tow_ms};
     send_gnss(&g);
 }
 
@@ -770,7 +777,8 @@ static void test_gnss_init_and_epochs(void **state)
     assert_int_equal(app.run.mode, APP_MODE_LEVELLING);
     assert_near(app.run.align.heading_rad, 0.0, 1e-6);
     assert_int_equal(app.run.align.h_cm, 10000);
-    send_gnss_epoch(2u, 2u, 0.0); /* the same velocity epoch again: a repeat */
+    epoch_tow_ms -= 200u; /* the same epoch again (its TimeOfWeek): a repeat */
+    send_gnss_epoch(2u, 2u, 0.0);
     assert_int_equal(app.keep.health.bad_counter, 1);
 }
 
@@ -1204,6 +1212,55 @@ static void test_filter_with_gnss(void **state)
 }
 
 
+/*
+ * Longitude -180 deg, within the DBC's range (issue #17: 89 of 89 fixes there were refused,
+ * and the known position too).
+ * GIVEN a known position at longitude -180 deg, SetInitialPosition and the attitude
+ * WHEN the car stands there with GNSS fixes at -180 deg for 10 s
+ * THEN nothing is refused, the filter runs on them, and NAV_Position is on that meridian
+ *      (+180 deg, the same one, inside the DBC's [-180, 180]) within 0.1 m.
+ */
+static void test_longitude_minus_180(void **state)
+{
+    (void)state;
+    wheel_counter = 0u;
+    att_counter = 0u;
+    fix_epoch = 0u;
+    const int32_t lat0 = (int32_t)lround(LAT0_DEG * 1e7), lon0 = -1800000000;
+    hal_can_frame_t f = cf_known_position(lat0, lon0, hal.t_us);
+    feed(&f);
+    struct navecu_can_cmd_control_t c;
+    memset(&c, 0, sizeof c);
+    c.command = 2u;
+    c.heading_valid = 1u;
+    c.heading = 3000u;
+    c.height = (int32_t)lround(H0_M * 10.0);
+    c.cmd_counter = cmd_counter;
+    cmd_counter = e2e_counter_next(cmd_counter);
+    f = cf_control(&c, hal.t_us);
+    feed(&f);
+    send_initial_attitude(STILL.roll, STILL.pitch);
+    assert_int_equal(app.run.mode, APP_MODE_NAVIGATING);
+    uint32_t tow = 100000u;
+    for (int k = 0; k < 50; k++) {
+        run_wheels(RATE_HZ / 5, 0.0, 0);
+        tow += 200u;
+        send_fix(lat0, lon0, tow);
+    }
+    run_wheels(RATE_HZ / 5, 0.0, 0);
+    assert_int_equal(app.keep.health.gnss_rejected, 0u);
+    assert_int_equal(app.keep.health.bad_value, 0u);
+    assert_true(app.run.fusion.on);
+    struct navecu_can_nav_position_t pos;
+    navecu_can_nav_position_unpack(&pos, last_tx(NAVECU_CAN_NAV_POSITION_FRAME_ID)->data, 8u);
+    assert_true(navecu_can_nav_position_longitude_is_in_range(pos.longitude));
+    /* 1e-7 deg of longitude at 45 deg is 7.9 mm: 0.1 m is 13 LSB */
+    const int64_t off = pos.longitude > 0 ? 1800000000LL - pos.longitude
+                                          : (int64_t)pos.longitude + 1800000000LL;
+    assert_true(off >= -13 && off <= 13);
+    assert_true(pos.latitude - lat0 <= 9 && lat0 - pos.latitude <= 9); /* 1e-7 deg: 11 mm */
+}
+
 /* the filter running on fixes at the start point, car standing: returns the next tow */
 static uint32_t run_filter_on_fixes(int n_fixes, uint32_t tow)
 {
@@ -1230,6 +1287,53 @@ static int all_nav_outputs_finite(void)
     return isfinite(navecu_can_nav_velocity_vel_east_decode(v.vel_east)) &&
            isfinite(navecu_can_nav_attitude_heading_decode(at.heading)) &&
            fabs(navecu_can_nav_velocity_vel_east_decode(v.vel_east)) < 0.5;
+}
+
+/*
+ * The GnssEpoch counter (0..14) comes round over an outage (issue #17: the first fix after
+ * it was dropped as a repeat). A repeat is decided from the data, the TimeOfWeek.
+ * GIVEN the filter running on 5 Hz fixes (car standing)
+ * WHEN 14 epochs are missed, so that the next epoch carries the counter of the last one
+ *      received, with its own TimeOfWeek 3 s later
+ * THEN that epoch is taken whole: nothing counted, as many filter updates (position and
+ *      velocity) as from any other fix;
+ * WHEN then the same epoch comes again (counter and TimeOfWeek)
+ * THEN it is a repeat: dropped and counted (CntBadCounter), no filter update.
+ */
+static void test_gnss_epoch_counter_round_an_outage(void **state)
+{
+    (void)state;
+    start_perfect();
+    fix_epoch = 0u;
+    const int32_t lat0 = (int32_t)lround(LAT0_DEG * 1e7), lon0 = (int32_t)lround(LON0_DEG * 1e7);
+    uint32_t tow = run_filter_on_fixes(50, 100000u);
+    assert_true(app.run.fusion.on);
+    run_wheels(RATE_HZ / 5, 0.0, 0);
+    uint32_t u0 = app.run.fusion.ekf.n_updates;
+    tow += 200u;
+    send_fix(lat0, lon0, tow);
+    const uint32_t per_fix = app.run.fusion.ekf.n_updates - u0;
+    assert_true(per_fix >= 4u); /* position and velocity */
+    const app_health_t before = app.keep.health;
+    for (int k = 0; k < 14; k++) { /* the outage: 14 epochs never sent */
+        run_wheels(RATE_HZ / 5, 0.0, 0);
+        tow += 200u;
+        fix_epoch = e2e_counter_next(fix_epoch);
+    }
+    run_wheels(RATE_HZ / 5, 0.0, 0);
+    tow += 200u;
+    u0 = app.run.fusion.ekf.n_updates;
+    const uint8_t again = fix_epoch;
+    send_fix(lat0, lon0, tow);
+    assert_int_equal(app.run.fusion.ekf.n_updates - u0, per_fix);
+    assert_int_equal(app.keep.health.bad_counter, before.bad_counter);
+    assert_int_equal(app.keep.health.gnss_rejected, before.gnss_rejected);
+    /* the same epoch repeated */
+    u0 = app.run.fusion.ekf.n_updates;
+    fix_epoch = again;
+    send_fix(lat0, lon0, tow);
+    assert_int_equal(app.run.fusion.ekf.n_updates, u0);
+    assert_int_equal(app.keep.health.bad_counter, before.bad_counter + 1u);
 }
 
 /*
@@ -1474,6 +1578,8 @@ int main(void)
         cmocka_unit_test_setup(test_task_supervision, setup),
         cmocka_unit_test_setup(test_calibrate_at_gnss, setup),
         cmocka_unit_test_setup(test_filter_with_gnss, setup),
+        cmocka_unit_test_setup(test_longitude_minus_180, setup),
+        cmocka_unit_test_setup(test_gnss_epoch_counter_round_an_outage, setup),
         cmocka_unit_test_setup(test_imu_rate_mismatch_holds_levelling, setup),
         cmocka_unit_test_setup(test_imu_rate_mismatch_reacquires, setup),
     };

@@ -177,12 +177,54 @@ static void test_repeated_counter_refused(void **state)
     assert_int_equal(decode(&f), RX_BAD_COUNTER);
     f = wheels(0, 5u);
     assert_int_equal(decode(&f), RX_OK);
-    /* GNSS_Velocity's epoch number is its counter */
+    /* GNSS_Velocity's epoch number is its counter: 15 is invalid; a repeated number is
+     * no repeat by itself (it comes round over an outage), the status's TimeOfWeek
+     * decides (test_gnss_status_repeat) */
     f = velocity(0, 0, 0, 7u, 0u);
     assert_int_equal(decode(&f), RX_OK);
-    assert_int_equal(decode(&f), RX_BAD_COUNTER);
+    assert_int_equal(decode(&f), RX_OK);
     f = velocity(0, 0, 0, 15u, 0u);
     assert_int_equal(decode(&f), RX_BAD_COUNTER);
+}
+
+static hal_can_frame_t gnss_status(uint8_t epoch, uint8_t fix_type, uint32_t tow_ms)
+{
+    struct navecu_can_gnss_status_t m;
+    memset(&m, 0, sizeof m);
+    m.gnss_epoch = epoch;
+    m.fix_type = fix_type;
+    m.num_satellites = 9u;
+    m.time_of_week = tow_ms;
+    return cf_gnss_status(&m, 0u);
+}
+
+/* GIVEN a GNSS_Status with a fix at TimeOfWeek t WHEN a fix at t comes again THEN it is
+ * marked a repeat, whatever its epoch number; a fix at another time is not, even with the
+ * same epoch number (the counter came round); statuses without a fix are never repeats
+ * and do not move the time compared with. */
+static void test_gnss_status_repeat(void **state)
+{
+    (void)state;
+    hal_can_frame_t f = gnss_status(4u, 3u, 1000u);
+    assert_int_equal(decode(&f), RX_OK);
+    assert_int_equal(in.u.status.repeat, 0u);
+    assert_int_equal(decode(&f), RX_OK);
+    assert_int_equal(in.u.status.repeat, 1u);
+    f = gnss_status(5u, 3u, 1000u);
+    assert_int_equal(decode(&f), RX_OK);
+    assert_int_equal(in.u.status.repeat, 1u);
+    f = gnss_status(4u, 3u, 4000u); /* 15 epochs of 200 ms later: the same number */
+    assert_int_equal(decode(&f), RX_OK);
+    assert_int_equal(in.u.status.repeat, 0u);
+    f = gnss_status(5u, 0u, 4000u); /* no fix */
+    assert_int_equal(decode(&f), RX_OK);
+    assert_int_equal(in.u.status.repeat, 0u);
+    f = gnss_status(5u, 0u, 4000u);
+    assert_int_equal(decode(&f), RX_OK);
+    assert_int_equal(in.u.status.repeat, 0u);
+    f = gnss_status(6u, 3u, 4000u);
+    assert_int_equal(decode(&f), RX_OK);
+    assert_int_equal(in.u.status.repeat, 1u);
 }
 
 /* GIVEN CMD_Control counter 0 WHEN the next one steps by 4 (3 lost, more than
@@ -238,16 +280,20 @@ static void test_lat_lon_range(void **state)
     assert_int_equal(in.u.position.lon_e7, -1799999999);
 }
 
-/* Longitude exactly -180 deg is within the DBC's range but refused: it is the meridian of
- * +180 deg, which the core's wrap (-180, 180] calls +180. A documented exception of
- * app_rx.c, to be revisited by issue #17: this tests the current behaviour. */
-static void test_longitude_minus_180_refused(void **state)
+/* Longitude exactly -180 deg is within the DBC's range (issue #17): accepted, and handed on
+ * as +180 deg, the same meridian, because the core wraps longitude to (-180, 180]. */
+static void test_longitude_minus_180_accepted(void **state)
 {
     (void)state;
     hal_can_frame_t f = cf_gnss_position(0, -1800000000, 0u);
-    assert_int_equal(decode(&f), RX_GNSS_BAD);
-    f = cf_known_position(0, -1800000000, 0u);
-    assert_int_equal(decode(&f), RX_BAD_VALUE);
+    assert_int_equal(decode(&f), RX_OK);
+    assert_int_equal(in.kind, RX_GNSS_POSITION);
+    assert_int_equal(in.u.position.lon_e7, 1800000000);
+    f = cf_known_position(-450000000, -1800000000, 0u);
+    assert_int_equal(decode(&f), RX_OK);
+    assert_int_equal(in.kind, RX_KNOWN_POSITION);
+    assert_int_equal(in.u.position.lat_e7, -450000000);
+    assert_int_equal(in.u.position.lon_e7, 1800000000);
 }
 
 /* ---- decoded values ---- */
@@ -452,9 +498,10 @@ int main(void)
         cmocka_unit_test_setup(test_own_outputs_ignored, setup),
         cmocka_unit_test_setup(test_bad_crc_refused, setup),
         cmocka_unit_test_setup(test_repeated_counter_refused, setup),
+        cmocka_unit_test_setup(test_gnss_status_repeat, setup),
         cmocka_unit_test_setup(test_command_counter_window, setup),
         cmocka_unit_test_setup(test_lat_lon_range, setup),
-        cmocka_unit_test_setup(test_longitude_minus_180_refused, setup),
+        cmocka_unit_test_setup(test_longitude_minus_180_accepted, setup),
         cmocka_unit_test_setup(test_imu_frames_decoded, setup),
         cmocka_unit_test_setup(test_imu_increment_si, setup),
         cmocka_unit_test_setup(test_wheels_decoded, setup),

@@ -46,7 +46,7 @@ static rx_input_t status(uint8_t epoch, uint8_t fix_3d, uint8_t n_sats)
 static void velocity(uint8_t epoch, float east, float north, float up)
 {
     const nav_real_t v[3] = {east, north, up};
-    gnss_epoch_velocity(&g, epoch, v, 0.3f);
+    (void)gnss_epoch_velocity(&g, epoch, v, 0.3f);
 }
 
 /* GIVEN position, velocity and height of epoch 3 and the status of epoch 3 THEN one usable
@@ -221,6 +221,45 @@ static void test_height_kept_across_epochs(void **state)
     assert_true(fix.pos.h == -50000LL * 16777216LL);
 }
 
+/* A status app_rx marked a repeat (the previous fix's TimeOfWeek): nothing usable, no
+ * course, and the frames in assembly are consumed. */
+static void test_repeat_consumes(void **state)
+{
+    (void)state;
+    gnss_epoch_position(&g, 451234567, -1234567);
+    velocity(3u, 1.0f, 2.0f, -0.5f);
+    rx_input_t st = status(3u, 1u, 9u);
+    st.u.status.repeat = 1u;
+    gnss_close_t r = gnss_epoch_close(&g, &st, &fix);
+    assert_int_equal(r.repeat, 1);
+    assert_int_equal(r.usable, 0);
+    assert_int_equal(r.has_course, 0);
+    st.u.status.repeat = 0u;
+    r = gnss_epoch_close(&g, &st, &fix);
+    assert_int_equal(r.no_position, 1);
+    assert_int_equal(r.has_course, 0);
+}
+
+/* A second GNSS_Velocity of the same number within one epoch is a repeated frame: 1, and
+ * the first one stays; after the status closes the epoch the same number is a new epoch's
+ * (the counter comes round over an outage). */
+static void test_velocity_repeat_within_epoch(void **state)
+{
+    (void)state;
+    const nav_real_t v1[3] = {1.0f, 0.0f, 0.0f}, v2[3] = {5.0f, 0.0f, 0.0f};
+    gnss_epoch_position(&g, 451234567, -1234567);
+    assert_int_equal(gnss_epoch_velocity(&g, 3u, v1, 0.3f), 0);
+    assert_int_equal(gnss_epoch_velocity(&g, 3u, v2, 0.3f), 1);
+    const rx_input_t st = status(3u, 1u, 9u);
+    gnss_close_t r = gnss_epoch_close(&g, &st, &fix);
+    assert_int_equal(r.usable, 1);
+    assert_near(fix.v_enu_mps[0], 1.0, 0.0);
+    gnss_epoch_position(&g, 451234567, -1234567);
+    assert_int_equal(gnss_epoch_velocity(&g, 3u, v2, 0.3f), 0);
+    r = gnss_epoch_close(&g, &st, &fix);
+    assert_near(fix.v_enu_mps[0], 5.0, 0.0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -231,6 +270,8 @@ int main(void)
         cmocka_unit_test_setup(test_undefined_status_consumes, setup),
         cmocka_unit_test_setup(test_course_and_speed, setup),
         cmocka_unit_test_setup(test_height_kept_across_epochs, setup),
+        cmocka_unit_test_setup(test_repeat_consumes, setup),
+        cmocka_unit_test_setup(test_velocity_repeat_within_epoch, setup),
     };
     return cmocka_run_group_tests_name("gnss_epoch", tests, NULL, NULL);
 }

@@ -10,6 +10,7 @@
  *   accel 78.4532  * 0.01 * 0.999 / 2^-12 =   3210.2 ->   3210 LSB.
  * A moving car: a gyro axis spanning more than 1 deg/s * 0.01 s / 2^-21 = 366.0 LSB.
  */
+#include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -432,19 +433,96 @@ static void test_stuck_axis_while_another_moves(void **state)
     assert_int_equal(counted, 2u);
 }
 
-/* GIVEN a car standing still (gyro x repeating, the others within a few LSB: far below
- * 1 deg/s and 0.5 m/s^2) THEN after 5 s no axis is stuck: a quiet sensor repeats. */
+/* GIVEN a car standing still, a quiet sensor (gyro x repeating, the others moving by
+ * their last bit only: a second difference of 2 LSB, below APP_IMU_NOISE_MIN_LSB) THEN
+ * after 5 s no axis is stuck: a quiet sensor may repeat. */
 static void test_not_stuck_while_still(void **state)
 {
     (void)state;
     for (uint32_t k = 1u; k <= 500u; k++) {
         const int32_t b = (int32_t)(k % 2u);
-        const int32_t w[3] = {1234, 5 + b, 300 * b}; /* 300 LSB < 366: not turning */
-        const int32_t v[3] = {b, 20 * b, 401};       /* 20 LSB < 20.48: not accelerating */
+        const int32_t w[3] = {1234, 5 + b, 300 + b};
+        const int32_t v[3] = {b, 20 + b, 401};
         assert_int_equal(pair((uint8_t)(k % 15u), w, v, k * PERIOD_US), IMU_SAMPLE);
         assert_int_equal(out.stuck, 0);
         assert_int_equal(out.stuck_new, 0);
     }
+}
+
+/* the raw increment of a smooth signal (LSB per sample, real), quantized with its
+ * remainder carried, as an ideal simulation sends it */
+static int32_t carried(double value, double *carry)
+{
+    const double x = value + *carry;
+    const int32_t q = (int32_t)lround(x);
+    *carry = x - q;
+    return q;
+}
+
+/*
+ * Ideal, noiseless data (issue #17: IMU_STUCK counted 2-8 times on every clean drive).
+ * GIVEN a car braking in a straight line on a flat road for 4 s (deceleration rising to
+ * 3 m/s^2: the forward accelerometer spans far more than 0.5 m/s^2), then turning for 4 s
+ * (yaw rate rising to 20 deg/s, the centripetal acceleration with it), every gyro axis but
+ * the yaw exactly 0 and the lateral accelerometer exactly 0 while braking, each signal
+ * quantized with its remainder carried
+ * THEN no axis is stuck: values repeating on ideal data are the motion's, not a fault.
+ */
+static void test_not_stuck_on_ideal_data(void **state)
+{
+    (void)state;
+    const double dt = 1.0 / RATE_HZ;
+    const double v_lsb = 1.0 / 4096.0, w_lsb = 1.0 / 2097152.0;
+    double c[6] = {0};
+    uint32_t stuck = 0u;
+    for (uint32_t k = 1u; k <= 800u; k++) {
+        const double t = k * dt;
+        double a_fwd = 0.0, a_lat = 0.0, yaw = 0.0;
+        if (t < 4.0) {
+            a_fwd = -3.0 * (t / 4.0);
+        } else {
+            yaw = 20.0 * 3.14159265358979 / 180.0 * ((t - 4.0) / 4.0);
+            a_lat = -yaw * 10.0; /* at 10 m/s */
+        }
+        const int32_t w[3] = {carried(0.0, &c[0]), carried(0.0, &c[1]),
+                              carried(yaw * dt / w_lsb, &c[2])};
+        const int32_t v[3] = {carried(a_lat * dt / v_lsb, &c[3]),
+                              carried(a_fwd * dt / v_lsb, &c[4]),
+                              carried(9.80665 * dt / v_lsb, &c[5])};
+        assert_int_equal(pair((uint8_t)(k % 15u), w, v, k * PERIOD_US), IMU_SAMPLE);
+        stuck += out.stuck;
+    }
+    assert_int_equal(stuck, 0u);
+}
+
+/*
+ * GIVEN a car standing, a noisy gyro (y and z: uniform noise of +-20 LSB, sigma 11.5 LSB,
+ * a mean |second difference| near 22 LSB, above APP_IMU_NOISE_MIN_LSB 4) whose x axis
+ * repeats 1234
+ * THEN x is stuck from its 200th repeat (sample 201), counted once; the accelerometer
+ * (quiet, repeating) is not.
+ */
+static void test_stuck_axis_of_a_noisy_sensor(void **state)
+{
+    (void)state;
+    uint32_t rng = 12345u;
+    uint32_t counted = 0u, first = 0u;
+    for (uint32_t k = 1u; k <= 400u; k++) {
+        int32_t n[2];
+        for (int i = 0; i < 2; i++) {
+            rng = rng * 1103515245u + 12345u;
+            n[i] = (int32_t)((rng >> 16) % 41u) - 20;
+        }
+        const int32_t w[3] = {1234, 50 + n[0], -70 + n[1]};
+        const int32_t v[3] = {0, 0, 401};
+        assert_int_equal(pair((uint8_t)(k % 15u), w, v, k * PERIOD_US), IMU_SAMPLE);
+        counted += out.stuck_new;
+        if (out.stuck && first == 0u) {
+            first = k;
+        }
+    }
+    assert_int_equal(first, 201u);
+    assert_int_equal(counted, 1u);
 }
 
 int main(void)
@@ -466,6 +544,8 @@ int main(void)
         cmocka_unit_test_setup(test_saturation_at_configured_range, setup),
         cmocka_unit_test_setup(test_stuck_axis_while_another_moves, setup),
         cmocka_unit_test_setup(test_not_stuck_while_still, setup),
+        cmocka_unit_test_setup(test_not_stuck_on_ideal_data, setup),
+        cmocka_unit_test_setup(test_stuck_axis_of_a_noisy_sensor, setup),
     };
     return cmocka_run_group_tests_name("imu_stream", tests, NULL, NULL);
 }

@@ -141,7 +141,7 @@ MEANING = {
     "CntNonFinite": "navigation outputs not finite, not sent",
     "CntImuSaturated": "IMU samples with an axis at its configured range",
     "CntOdoRejected": "odometer/standstill updates refused by the filter's gate",
-    "CntImuStuck": "IMU axes found stuck (a raw value repeated 2 s while another axis moved)",
+    "CntImuStuck": "IMU axes found stuck (a raw value repeated 2 s while another axis of the sensor showed its noise)",
     "CntLogLineBad": "unreadable lines of a replayed candump log (host build)",
     "HeadingCorrection": "heading correction from the calibration at a known point",
     "OdoScaleError": "odometer scale factor error (relative)",

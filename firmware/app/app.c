@@ -46,6 +46,7 @@ int app_init(app_t *app, const app_config_t *cfg)
     imu_link_init(&app->keep.imu, cfg->imu_rate_hz, cfg->gyro_range_rps, cfg->accel_range_mps2,
                   cfg->can_ids[NAVECU_MSG_IMU_ACCEL]);
     imu_link_stamped(&app->keep.imu, cfg->imu_time == IMU_TIME_STAMPED);
+    imu_link_noise(&app->keep.imu, cfg->gyro_arw_rad_rts);
     mounting_init(&app->keep.mount, cfg->imu_mount_rad);
     const mount_est_config_t mcfg = {cfg->mount_est_sigma_rad, cfg->mount_est_excite_m2ps3};
     const int mest_rc = mount_est_init(&app->keep.mest, &mcfg); /* "no estimate" in fixed mode */
@@ -394,6 +395,10 @@ static void on_gnss_status(app_t *a, hal_t *hal, const rx_input_t *in)
         reject(a, &a->keep.health.bad_value); /* values the protocol does not define */
         return;
     }
+    if (r.repeat) {
+        reject(a, &a->keep.health.bad_counter); /* the previous fix's epoch again */
+        return;
+    }
     if (r.mismatch) {
         reject(a, &a->keep.health.gnss_rejected); /* frames of another epoch dropped */
     }
@@ -551,8 +556,10 @@ void app_handle_frame(app_t *a, hal_t *hal, const hal_can_frame_t *f)
         gnss_epoch_position(&a->run.gnss_asm, in.u.position.lat_e7, in.u.position.lon_e7);
         break;
     case RX_GNSS_VELOCITY:
-        gnss_epoch_velocity(&a->run.gnss_asm, in.u.velocity.epoch, in.u.velocity.v_enu_mps,
-                            in.u.velocity.sacc_mps);
+        if (gnss_epoch_velocity(&a->run.gnss_asm, in.u.velocity.epoch, in.u.velocity.v_enu_mps,
+                                in.u.velocity.sacc_mps) != 0) {
+            reject(a, &a->keep.health.bad_counter); /* a repeated frame within the epoch */
+        }
         break;
     case RX_GNSS_HEIGHT:
         gnss_epoch_height(&a->run.gnss_asm, in.u.height.epoch, in.u.height.h_cm);
@@ -580,12 +587,18 @@ void app_poll(app_t *a, hal_t *hal)
 {
     app_uds_poll(a, hal); /* first: an ECUReset restarts the application */
     const uint64_t now = hal_time_us(hal);
+    if (!a->keep.have_poll) {
+        a->keep.first_poll_us = now;
+    }
     a->keep.last_poll_us = now;
     a->keep.have_poll = 1u;
-    const uint64_t stale_since = a->keep.imu.last_t_us + APP_IMU_STALE_US;
     const uint64_t period_us = 1000000u / a->cfg.status_rate_hz;
     const uint64_t last = a->keep.tx.last_status_t_us;
-    if (a->keep.imu.have_sample && now > stale_since && now > last && now - last >= period_us) {
+    /* no IMU sample for APP_IMU_STALE_US, since the last one or since boot (the first
+     * poll): the heartbeat on the HAL clock, the only clock there is without data */
+    const uint64_t imu_since =
+        a->keep.imu.have_sample ? a->keep.imu.last_t_us : a->keep.first_poll_us;
+    if (now > imu_since + APP_IMU_STALE_US && now > last && now - last >= period_us) {
         output_status(a, hal);
     }
 }

@@ -44,12 +44,18 @@ static int is_e2e(int msg)
            msg == NAVECU_MSG_CMD_CONTROL || msg == NAVECU_MSG_CMD_INITIAL_ATTITUDE;
 }
 
-/* GNSS and known positions: the DBC's ranges, except that longitude -180 deg is refused
- * (the same meridian as +180) */
+/* GNSS and known positions: the DBC's ranges, -180 deg included */
 static int lat_lon_ok(int32_t lat_e7, int32_t lon_e7)
 {
-    return navecu_can_gnss_position_latitude_is_in_range(lat_e7) && lon_e7 > -1800000000 &&
+    return navecu_can_gnss_position_latitude_is_in_range(lat_e7) &&
            navecu_can_gnss_position_longitude_is_in_range(lon_e7);
+}
+
+/* longitude -180 deg is the meridian of +180 deg: handed on as +180, the core's
+ * longitudes being (-180, 180] (earth.h) */
+static int32_t lon_wrapped_e7(int32_t lon_e7)
+{
+    return lon_e7 == -1800000000 ? 1800000000 : lon_e7;
 }
 
 /* A command's alive counter: APP_CMD_MAX_DELTA - 1 lost frames are tolerated; a larger
@@ -112,14 +118,15 @@ static rx_verdict_t decode_gnss(rx_state_t *rx, int msg, const uint8_t d[8], rx_
         navecu_can_gnss_position_unpack(&m, d, 8u);
         in->kind = RX_GNSS_POSITION;
         in->u.position.lat_e7 = m.latitude;
-        in->u.position.lon_e7 = m.longitude;
+        in->u.position.lon_e7 = lon_wrapped_e7(m.longitude);
         return lat_lon_ok(m.latitude, m.longitude) ? RX_OK : RX_GNSS_BAD;
     }
     if (msg == NAVECU_MSG_GNSS_VELOCITY) {
         struct navecu_can_gnss_velocity_t m;
         navecu_can_gnss_velocity_unpack(&m, d, 8u);
-        if (e2e_counter_step(&rx->gnss_vel, m.gnss_epoch) <= 0) {
-            return RX_BAD_COUNTER; /* repeated epoch or the invalid 15 */
+        if (m.gnss_epoch > E2E_COUNTER_MAX) {
+            return RX_BAD_COUNTER; /* the invalid 15; a repeated epoch is the status's to
+                                      tell, from its TimeOfWeek */
         }
         in->kind = RX_GNSS_VELOCITY;
         in->u.velocity.epoch = m.gnss_epoch;
@@ -162,6 +169,17 @@ static rx_verdict_t decode_gnss(rx_state_t *rx, int msg, const uint8_t d[8], rx_
     in->u.status.hacc_m = navecu_can_gnss_status_horiz_accuracy_decode(m.horiz_accuracy);
     in->u.status.vacc_m = navecu_can_gnss_status_vert_accuracy_decode(m.vert_accuracy);
     in->u.status.tow_ms = m.time_of_week;
+    /* a repeat: a fix at the TimeOfWeek of the previous fix (the epoch number alone cannot
+     * tell, it comes round over an outage); statuses without a fix do not count */
+    in->u.status.repeat = 0u;
+    if (in->u.status.defined != 0u && in->u.status.fix_3d != 0u &&
+        in->u.status.n_sats >= APP_GNSS_MIN_SATS) {
+        if (rx->have_gnss_tow != 0u && rx->gnss_tow_ms == m.time_of_week) {
+            in->u.status.repeat = 1u;
+        }
+        rx->gnss_tow_ms = m.time_of_week;
+        rx->have_gnss_tow = 1u;
+    }
     return RX_OK;
 }
 
@@ -176,7 +194,7 @@ static rx_verdict_t decode_command(rx_state_t *rx, int msg, const uint8_t d[8],
         }
         in->kind = RX_KNOWN_POSITION;
         in->u.position.lat_e7 = m.latitude;
-        in->u.position.lon_e7 = m.longitude;
+        in->u.position.lon_e7 = lon_wrapped_e7(m.longitude);
         return RX_OK;
     }
     if (msg == NAVECU_MSG_CMD_INITIAL_ATTITUDE) {

@@ -110,6 +110,7 @@ typedef struct {
             uint8_t n_sats;
             nav_real_t hacc_m, vacc_m; /* the receiver's accuracies */
             uint32_t tow_ms;  /* GPS time of week of the epoch */
+            uint8_t repeat;   /* a fix with the TimeOfWeek of the previous fix: a repeat */
         } status;
         struct rx_command_in { /* CMD_Control */
             rx_command_t command;
@@ -128,7 +129,11 @@ typedef struct {
  * that a replayed old frame is never taken for a first one; and what the car's own
  * messages said last (vehicle.h): the gear's direction and the ESP's yaw rate. */
 typedef struct {
-    e2e_counter_t wheel, cmd, gnss_vel, att;
+    e2e_counter_t wheel, cmd, att;
+    /* the TimeOfWeek of the last GNSS_Status reporting a fix (a repeat is decided from it:
+     * the 4-bit GnssEpoch comes round over an outage of 15 epochs) */
+    uint32_t gnss_tow_ms;
+    uint8_t have_gnss_tow;
     int8_t gear_direction;  /* +1 forward, -1 reverse, 0 park/neutral (the car's gear) */
     uint8_t have_gear;
     nav_real_t esp_yaw_rate_rps; /* the car's ESP, left positive */

@@ -37,13 +37,15 @@
 #define APP_IMU_TIME_BAND_DIV 2u
 #define APP_IMU_TIME_BAND_MUL 3u
 #define APP_IMU_TIME_RESYNC 3u
-/* IMU plausibility: an axis repeating its raw value this long while the car moves is
- * stuck; the car moves when a gyro axis spans more than 1 deg/s or a horizontal
- * accelerometer axis more than 0.5 m/s^2 (a MEMS IMU's noise moves the 2^-21 rad LSB
- * every sample); saturation at 99.9 % of the configured range (the sensor clips there) */
+/* IMU plausibility (imu_stream.c): an axis repeating its raw value this long while
+ * another axis of the same sensor shows the sensor's noise is stuck. The noise shown: the
+ * mean |second difference| of the raw increments over the last one to two half-windows
+ * at least the preset's per-sample noise sigma (gyro: gyro_arw * sqrt(1/imu_rate), in
+ * LSB; white noise gives 1.95 sigma), and never less than APP_IMU_NOISE_MIN_LSB: a
+ * smooth motion quantized with its remainder carried gives at most 2 LSB (ideal data).
+ * Saturation at 99.9 % of the configured range (the sensor clips there). */
 #define APP_IMU_STUCK_S 2u
-#define APP_IMU_MOVE_RATE_RPS NAV_C(0.017453)
-#define APP_IMU_MOVE_ACCEL_MPS2 NAV_C(0.5)
+#define APP_IMU_NOISE_MIN_LSB 4u
 #define APP_IMU_SAT_FRACTION NAV_C(0.999)
 
 /* the IMU rate against the data (imu_rate.h): an interval between GNSS epochs is off-rate

@@ -16,15 +16,19 @@ void gnss_epoch_position_refused(gnss_asm_t *g)
     g->pos_refused = 1u;
 }
 
-void gnss_epoch_velocity(gnss_asm_t *g, uint8_t epoch, const nav_real_t v_enu_mps[3],
-                         nav_real_t sacc_mps)
+int gnss_epoch_velocity(gnss_asm_t *g, uint8_t epoch, const nav_real_t v_enu_mps[3],
+                        nav_real_t sacc_mps)
 {
+    if (g->vel_pending && g->vel_epoch == epoch) {
+        return 1; /* this epoch's velocity again: a repeated frame, the first one stays */
+    }
     g->vel_epoch = epoch;
     for (int i = 0; i < 3; i++) {
         g->v_enu_mps[i] = v_enu_mps[i];
     }
     g->sacc_mps = sacc_mps;
     g->vel_pending = 1u;
+    return 0;
 }
 
 void gnss_epoch_height(gnss_asm_t *g, uint8_t epoch, int32_t h_cm)
@@ -43,7 +47,7 @@ void gnss_epoch_week(gnss_asm_t *g, uint8_t epoch, uint16_t gps_week)
 
 gnss_close_t gnss_epoch_close(gnss_asm_t *g, const rx_input_t *status, gnss_fix_t *fix)
 {
-    gnss_close_t r = {0u, 0u, 0u, 0u, 0u, 0u};
+    gnss_close_t r = {0u, 0u, 0u, 0u, 0u, 0u, 0u};
     const int have_pos = g->pos_pending;
     int have_vel = g->vel_pending;
     int have_h = g->h_pending;
@@ -53,6 +57,10 @@ gnss_close_t gnss_epoch_close(gnss_asm_t *g, const rx_input_t *status, gnss_fix_
     g->pos_refused = 0u;
     if (!status->u.status.defined) {
         r.undefined = 1u;
+        return r;
+    }
+    if (status->u.status.repeat) {
+        r.repeat = 1u; /* the previous fix again: nothing of it is new */
         return r;
     }
     const uint8_t epoch = status->u.status.epoch;

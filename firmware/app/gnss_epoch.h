@@ -40,6 +40,7 @@ typedef struct {
 typedef struct {
     uint8_t undefined;       /* bad_value: the status frame's epoch or fix type is undefined */
     uint8_t mismatch;        /* gnss_rejected: frames of another epoch were dropped */
+    uint8_t repeat;          /* bad_counter: the previous fix's epoch again, all dropped */
     uint8_t no_fix;          /* the receiver has no usable fix: not an error */
     uint8_t no_position;     /* gnss_rejected: a fix reported without its position */
     uint8_t usable;          /* *fix holds a usable epoch */
@@ -49,8 +50,10 @@ typedef struct {
 void gnss_epoch_position(gnss_asm_t *g, int32_t lat_e7, int32_t lon_e7);
 /* this epoch's position was refused as impossible */
 void gnss_epoch_position_refused(gnss_asm_t *g);
-void gnss_epoch_velocity(gnss_asm_t *g, uint8_t epoch, const nav_real_t v_enu_mps[3],
-                         nav_real_t sacc_mps);
+/* 1 for a repeated frame (a velocity of this epoch number already in assembly: dropped,
+ * the first one stays), else 0 */
+int gnss_epoch_velocity(gnss_asm_t *g, uint8_t epoch, const nav_real_t v_enu_mps[3],
+                        nav_real_t sacc_mps);
 void gnss_epoch_height(gnss_asm_t *g, uint8_t epoch, int32_t h_cm);
 void gnss_epoch_week(gnss_asm_t *g, uint8_t epoch, uint16_t gps_week);
 

@@ -17,6 +17,18 @@ void imu_link_init(imu_link_t *l, uint32_t rate_hz, nav_real_t gyro_range_rps,
     const nav_real_t v_lim = accel_range_mps2 * dt * APP_IMU_SAT_FRACTION / app_rx_vel_lsb_mps();
     l->sat_raw[0] = (int32_t)w_lim;
     l->sat_raw[1] = (int32_t)v_lim;
+    l->noise_lsb[0] = APP_IMU_NOISE_MIN_LSB;
+    l->noise_lsb[1] = APP_IMU_NOISE_MIN_LSB;
+}
+
+void imu_link_noise(imu_link_t *l, nav_real_t gyro_arw_rad_rts)
+{
+    const nav_real_t sigma_lsb = gyro_arw_rad_rts * nav_sqrt(NAV_C(1.0) / (nav_real_t)l->rate_hz) /
+                                 app_rx_angle_lsb_rad();
+    /* at most 0.03 rad/sqrt(s) (the parameter's range) at 1 Hz: 6e4 LSB, within uint32 */
+    if (sigma_lsb > (nav_real_t)APP_IMU_NOISE_MIN_LSB) {
+        l->noise_lsb[0] = (uint32_t)sigma_lsb;
+    }
 }
 
 void imu_link_stamped(imu_link_t *l, int stamped)
@@ -102,13 +114,17 @@ int imu_stream_rate(imu_stream_t *s, uint8_t counter, const int32_t raw[3],
 /* ---- plausibility (docs/reliability.md) ----
  * Saturation: a rate or specific force at the configured range of the IMU (the sensor
  * clips there, so what it reports is not the motion). A stuck axis: its raw increment
- * repeats exactly for APP_IMU_STUCK_S or longer while the vehicle moves (another axis
- * spans more than APP_IMU_MOVE_*): counted once per episode, flagged while it lasts.
- * The samples are still used, since neither says what the true value was. */
+ * repeats exactly for APP_IMU_STUCK_S or longer while another axis of the same sensor
+ * shows the sensor's noise (app_tuning.h): a working axis of a sensor that noisy cannot
+ * repeat its value that long (at a noise sigma of 4 LSB a value repeats the previous one
+ * with probability 0.07, 20 times in a row at 10 Hz below 1e-22). An axis that repeats
+ * on ideal, noiseless data (a rate exactly 0 on a flat road, a lateral acceleration
+ * exactly 0 in a straight line) is not stuck: the other axes show no noise either. Counted
+ * once per episode, flagged while it lasts. The samples are still used, since neither
+ * says what the true value was. */
 static void plausibility(imu_plaus_t *p, const imu_link_t *l, const int32_t raw[6],
                          imu_sample_t *out)
 {
-    const nav_real_t dt = NAV_C(1.0) / (nav_real_t)l->rate_hz;
     int saturated = 0;
     for (int i = 0; i < 6; i++) {
         const int32_t lim = l->sat_raw[i < 3 ? 0 : 1];
@@ -120,27 +136,28 @@ static void plausibility(imu_plaus_t *p, const imu_link_t *l, const int32_t raw[
      * n_stuck samples, i.e. within the time the stuck axis has been repeating */
     if (p->blk_n == 0u || p->blk_n >= n_stuck / 2u) {
         for (int i = 0; i < 6; i++) {
-            p->prev_min[i] = p->blk_n == 0u ? raw[i] : p->blk_min[i];
-            p->prev_max[i] = p->blk_n == 0u ? raw[i] : p->blk_max[i];
-            p->blk_min[i] = p->blk_max[i] = raw[i];
+            p->prev_jit[i] = p->blk_jit[i];
+            p->blk_jit[i] = 0u;
         }
+        p->prev_n = p->blk_n;
         p->blk_n = 0u;
     }
     p->blk_n++;
     for (int i = 0; i < 6; i++) {
+        if (p->hist >= 2u) {
+            const int64_t e = (int64_t)raw[i] - 2 * (int64_t)p->last_raw[i] + (int64_t)p->last2_raw[i];
+            const int64_t m = e < 0 ? -e : e;
+            /* capped at 2^21 (a 20-bit value's most): a block of up to 1000 samples
+             * stays within uint32 */
+            p->blk_jit[i] += (uint32_t)(m < (int64_t)2097152 ? m : (int64_t)2097152);
+        }
+        p->last2_raw[i] = p->last_raw[i];
         p->same_n[i] = (l->have_sample && raw[i] == p->last_raw[i])
                            ? (p->same_n[i] < UINT32_MAX ? p->same_n[i] + 1u : UINT32_MAX)
                            : 0u;
         p->last_raw[i] = raw[i];
-        p->blk_min[i] = raw[i] < p->blk_min[i] ? raw[i] : p->blk_min[i];
-        p->blk_max[i] = raw[i] > p->blk_max[i] ? raw[i] : p->blk_max[i];
     }
-    /* the vehicle moves: a gyro axis spans more than 1 deg/s, or a horizontal
-     * accelerometer axis more than 0.5 m/s^2, over the last one to two blocks (turning,
-     * braking, accelerating), while an axis repeats: a working sensor's noise would have
-     * moved its last bits (the gyro's 2^-21 rad LSB is far below a MEMS gyro's noise per
-     * sample). An ideal, noiseless simulated IMU can repeat while the car accelerates in a
-     * straight line and is then flagged too: the flag only informs. */
+    p->hist = (uint8_t)(p->hist < 2u ? p->hist + 1u : 2u);
     int repeating = 0;
     for (int i = 0; i < 6; i++) {
         repeating |= p->same_n[i] >= n_stuck;
@@ -151,23 +168,22 @@ static void plausibility(imu_plaus_t *p, const imu_link_t *l, const int32_t raw[
     if (!repeating) {
         return; /* the usual case: nothing more to look at */
     }
-    const nav_real_t w_move = APP_IMU_MOVE_RATE_RPS * dt / app_rx_angle_lsb_rad();
-    const nav_real_t v_move = APP_IMU_MOVE_ACCEL_MPS2 * dt / app_rx_vel_lsb_mps();
-    int moving = 0;
-    for (int j = 0; j < 5; j++) { /* the three gyro axes, accelerometer x and y */
-        const int32_t lo = p->blk_min[j] < p->prev_min[j] ? p->blk_min[j] : p->prev_min[j];
-        const int32_t hi = p->blk_max[j] > p->prev_max[j] ? p->blk_max[j] : p->prev_max[j];
-        moving |= (nav_real_t)((int64_t)hi - (int64_t)lo) > (j < 3 ? w_move : v_move) &&
-                  p->same_n[j] < n_stuck;
+    /* the sensors (gyro, accelerometer) with an axis showing the noise */
+    const uint64_t n_jit = (uint64_t)p->blk_n + p->prev_n;
+    int noisy[2] = {0, 0};
+    for (int j = 0; j < 6; j++) {
+        const uint64_t sum = (uint64_t)p->blk_jit[j] + p->prev_jit[j];
+        if (p->same_n[j] < n_stuck && sum >= (uint64_t)l->noise_lsb[j / 3] * n_jit) {
+            noisy[j / 3] = 1;
+        }
     }
-    if (!moving) {
-        return;
-    }
-    out->stuck = 1u;
     for (int i = 0; i < 6; i++) {
-        if (p->same_n[i] >= n_stuck && (p->stuck_seen & (1u << i)) == 0u) {
-            p->stuck_seen |= (uint8_t)(1u << i); /* counted once per episode */
-            out->stuck_new++;
+        if (p->same_n[i] >= n_stuck && noisy[i / 3]) {
+            out->stuck = 1u;
+            if ((p->stuck_seen & (1u << i)) == 0u) {
+                p->stuck_seen |= (uint8_t)(1u << i); /* counted once per episode */
+                out->stuck_new++;
+            }
         }
     }
 }

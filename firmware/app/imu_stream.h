@@ -25,6 +25,7 @@ typedef struct {
     uint64_t last_t_us;    /* HAL time of the last sample (staleness, time gaps) */
     uint8_t fault;         /* the last sample's ImuFault bit */
     int32_t sat_raw[2];    /* gyro and accelerometer range in raw LSB per sample */
+    uint32_t noise_lsb[2]; /* gyro and accelerometer noise shown (APP_IMU_NOISE_MIN_LSB) */
     uint32_t rate_hz;      /* the configured IMU rate */
     uint32_t accel_id;     /* IMU_Accel's CAN identifier: the pair CRC covers it */
     /* imu_time = stamped: each sample's interval from the IMU's own IMU_Time stamps */
@@ -35,13 +36,15 @@ typedef struct {
 } imu_link_t;
 
 /* Plausibility state: per axis (angle x y z, velocity x y z) the repeats of the raw value
- * and its range over the current and the previous half-window block. */
+ * and its noise (|second difference| sums) over the current and the previous half-window
+ * block. */
 typedef struct {
     int32_t last_raw[6];
     uint32_t same_n[6];
-    int32_t blk_min[6], blk_max[6];
-    int32_t prev_min[6], prev_max[6];
-    uint32_t blk_n;
+    int32_t last2_raw[6];            /* the raw value before last_raw */
+    uint32_t blk_jit[6], prev_jit[6]; /* sums of |second difference| over the blocks */
+    uint32_t blk_n, prev_n;
+    uint8_t hist;                    /* samples seen, up to 2 (the second difference) */
     uint8_t stuck_seen; /* axes whose current stuck episode was counted (bits) */
 } imu_plaus_t;
 
@@ -105,6 +108,10 @@ typedef struct {
  * accel_id: IMU_Accel's identifier. */
 void imu_link_init(imu_link_t *l, uint32_t rate_hz, nav_real_t gyro_range_rps,
                    nav_real_t accel_range_mps2, uint32_t accel_id);
+
+/* After imu_link_init: the gyro's angle random walk (rad/sqrt(s)), whose per-sample sigma
+ * is the noise another gyro axis must show for a repeating one to be stuck. */
+void imu_link_noise(imu_link_t *l, nav_real_t gyro_arw_rad_rts);
 
 /* After imu_link_init: imu_time = stamped (1) or grid (0). */
 void imu_link_stamped(imu_link_t *l, int stamped);

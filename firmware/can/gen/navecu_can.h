@@ -1297,7 +1297,7 @@ struct navecu_can_nav_status_t {
     uint8_t cnt_non_finite;
 
     /**
-     * IMU axes found stuck: a raw increment repeated for 2 s while another axis of the same sensor moved.
+     * IMU axes found stuck: a raw increment repeated for 2 s while another axis of the same sensor showed its noise.
      *
      * Range: 0..255 (0..255 -)
      * Scale: 1
