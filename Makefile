@@ -236,7 +236,7 @@ $(ISOTP_PEER): $(BUILD)/host/f32/tests/tools/isotp_peer.o $(BUILD)/host/libnavap
 # the VW's on its generated frames) and its decoder.
 VEH_TEST_BINS := $(foreach v,$(filter-out native,$(VEHICLES_BUILT)),$(BUILD)/host/navecu-$(v)) \
                  $(foreach v,$(VEHICLES_BUILT),$(BUILD)/host/tests/vehicle_decode-$(v))
-test-python: venv $(BUILD)/host/navecu $(VEH_TEST_BINS) $(ISOTP_PEER) $(TGT)/navecu-qemu.elf
+test-python: venv $(BUILD)/host/navecu $(VEH_TEST_BINS) $(ISOTP_PEER) $(BUILD)/target$(VEH_SUFFIX)/navecu-qemu.elf
 	NAVECU_BIN=$(BUILD)/host/navecu ISOTP_PEER_BIN=$(ISOTP_PEER) $(PY) -m pytest -q -rs tests/python
 
 test: deps
