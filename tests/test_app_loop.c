@@ -94,31 +94,6 @@ static void test_poll_after_each_frame(void **state)
     assert_int_equal(app.keep.have_poll, 0);
 }
 
-/* Powered on with no IMU frames ever (issue #17: nothing at all was sent). GIVEN a fresh
- * ECU on a silent bus WHEN the main loop passes every 10 ms for 1 s of HAL time THEN the
- * NAV_Status heartbeat runs as after any IMU silence: from APP_IMU_STALE_US (0.5 s) after
- * boot (the first pass, 10 ms) at status_rate_hz (10 Hz: a pair every 100 ms: at 0.52,
- * 0.62, ... 0.92 s) and says what is missing: mode WaitInit, IMU_STALE and NO_GNSS; no
- * navigation output. */
-static void test_heartbeat_from_boot(void **state)
-{
-    (void)state;
-    hal.rx_empty_rc = HAL_EAGAIN;
-    for (int k = 1; k <= 100; k++) {
-        hal.t_us = (uint64_t)k * 10000u;
-        (void)pass(10u, 1u);
-    }
-    const uint32_t pairs = cf_tx_count(&hal, NAVECU_CAN_NAV_STATUS_FRAME_ID) / 2u;
-    assert_int_equal(pairs, 5u);
-    assert_int_equal(hal.tx[0].t_us, 520000u);
-    const struct navecu_can_nav_status_t st = cf_last_status_page0(&hal);
-    assert_int_equal(st.mode, NAVECU_CAN_NAV_STATUS_MODE_WAIT_INIT_CHOICE);
-    assert_true(st.health_flags & NAVECU_HEALTH_IMU_STALE);
-    assert_true(st.health_flags & NAVECU_HEALTH_NO_GNSS);
-    assert_int_equal(cf_tx_count(&hal, NAVECU_CAN_NAV_POSITION_FRAME_ID), 0u);
-    assert_int_equal(hal.kicks, 100u);
-}
-
 /* A silent bus (HAL_EAGAIN at once): app_poll once, then the kick. */
 static void test_silent_bus_polls_once(void **state)
 {
@@ -209,7 +184,6 @@ int main(void)
         cmocka_unit_test_setup(test_kick_only_when_tasks_ok, setup),
         cmocka_unit_test_setup(test_no_kick_when_prediction_late, setup),
         cmocka_unit_test_setup(test_end_of_input_no_kick, setup),
-        cmocka_unit_test_setup(test_heartbeat_from_boot, setup),
     };
     return cmocka_run_group_tests_name("app_loop", tests, NULL, NULL);
 }

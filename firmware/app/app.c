@@ -587,18 +587,12 @@ void app_poll(app_t *a, hal_t *hal)
 {
     app_uds_poll(a, hal); /* first: an ECUReset restarts the application */
     const uint64_t now = hal_time_us(hal);
-    if (!a->keep.have_poll) {
-        a->keep.first_poll_us = now;
-    }
     a->keep.last_poll_us = now;
     a->keep.have_poll = 1u;
+    const uint64_t stale_since = a->keep.imu.last_t_us + APP_IMU_STALE_US;
     const uint64_t period_us = 1000000u / a->cfg.status_rate_hz;
     const uint64_t last = a->keep.tx.last_status_t_us;
-    /* no IMU sample for APP_IMU_STALE_US, since the last one or since boot (the first
-     * poll): the heartbeat on the HAL clock, the only clock there is without data */
-    const uint64_t imu_since =
-        a->keep.imu.have_sample ? a->keep.imu.last_t_us : a->keep.first_poll_us;
-    if (now > imu_since + APP_IMU_STALE_US && now > last && now - last >= period_us) {
+    if (a->keep.imu.have_sample && now > stale_since && now > last && now - last >= period_us) {
         output_status(a, hal);
     }
 }

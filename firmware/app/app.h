@@ -77,8 +77,6 @@ typedef struct {
     uint64_t last_rx_t_us;  /* latest receive time seen (time jumps) */
     tx_state_t tx;          /* E2E transmit state and what was sent */
     uint64_t last_poll_us;  /* HAL time of the last app_poll (task supervision) */
-    uint64_t first_poll_us; /* HAL time of the first app_poll: the boot, for IMU_STALE
-                               before any IMU sample */
     uint8_t have_poll;
     app_stamp_t filter_reset; /* the flag outlives the reset it caused */
     calib_t cal;            /* the car's calibration and the NVM */

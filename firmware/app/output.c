@@ -254,9 +254,7 @@ static uint16_t health_flags(const app_t *a, const hal_t *hal)
     const uint64_t second = a->cfg.imu_rate_hz;
     uint32_t fl = 0u;
     const uint64_t now = hal_time_us(hal);
-    /* no IMU sample for APP_IMU_STALE_US, since the last one or since boot */
-    const uint64_t imu_since = k->imu.have_sample ? k->imu.last_t_us : k->first_poll_us;
-    if ((k->imu.have_sample || k->have_poll) && now > imu_since + APP_IMU_STALE_US) {
+    if (k->imu.have_sample && now > k->imu.last_t_us && now - k->imu.last_t_us > APP_IMU_STALE_US) {
         fl |= NAVECU_HEALTH_IMU_STALE;
     }
     if (k->imu.fault) {
@@ -374,12 +372,7 @@ void output_status(app_t *a, hal_t *hal)
     st.status_page = NAVECU_NAV_STATUS_PAGE_STATE;
     st.mode = output_mode(a);
     st.health_flags = health_flags(a, hal);
-    if (a->keep.imu.have_sample) {
-        /* the DTCs' tests (app_dtc.h) run from the first IMU sample: the heartbeat before
-         * it says what is missing in HealthFlags without writing the fault memory (NVM)
-         * at every power-up */
-        app_dtc_cycle(a, hal, st.health_flags);
-    }
+    app_dtc_cycle(a, hal, st.health_flags); /* the DTCs' tests (app_dtc.h) */
     st.horiz_accuracy = NAVECU_NAV_STATUS_HORIZ_ACCURACY_RAW_MAX; /* "unknown" w/o the filter */
     if (ekf != NULL && a->run.mode == APP_MODE_NAVIGATING) {
         st.horiz_accuracy = (uint16_t)accuracy_raw(ekf_sigma_h_m(ekf) * NAV_C(100.0),
