@@ -312,7 +312,7 @@ static void test_set_initial_position_while_driving_refused(void **state)
     const uint32_t before = app.keep.health.cmd_rejected;
     send_control(2u, 1u); /* SetInitialPosition with a heading */
     assert_int_equal(app.keep.health.cmd_rejected, before + 1u);
-    assert_int_equal(app.keep.health.cmd_refusal, CMD_REFUSAL_MOVING);
+    assert_int_equal(app.keep.cmd_refusal, CMD_REFUSAL_MOVING);
     assert_int_equal(app_mode(&app), APP_MODE_WAIT_INIT);
     const double t = drive_until_navigating(10.0, 15.0);
     assert_true(t > 0.0 && t <= 2.0);
@@ -339,7 +339,7 @@ static void test_stale_known_position_refused(void **state)
     const uint32_t before = app.keep.health.cmd_rejected;
     send_control(2u, 1u);
     assert_int_equal(app.keep.health.cmd_rejected, before + 1u);
-    assert_int_equal(app.keep.health.cmd_refusal, CMD_REFUSAL_STALE_POSITION);
+    assert_int_equal(app.keep.cmd_refusal, CMD_REFUSAL_STALE_POSITION);
     assert_int_equal(app_mode(&app), APP_MODE_WAIT_INIT);
     assert_false(app.run.align.pos_valid);
 }
@@ -361,7 +361,7 @@ static void test_drive_off_during_levelling_drops_the_point(void **state)
     sample(1.5, 15.0);
     assert_int_equal(app_mode(&app), APP_MODE_WAIT_INIT);
     assert_int_equal(app.keep.health.cmd_rejected, before + 1u);
-    assert_int_equal(app.keep.health.cmd_refusal, CMD_REFUSAL_STALE_POSITION);
+    assert_int_equal(app.keep.cmd_refusal, CMD_REFUSAL_STALE_POSITION);
     while (speed < 15.0) {
         sample(1.5, 15.0);
     }

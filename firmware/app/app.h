@@ -86,6 +86,8 @@ typedef struct {
     mount_est_t mest;       /* the automatic mounting estimate (imu_mount_source automatic) */
     uint8_t mount_state;    /* app_mount_state_t */
     dtc_t dtc;              /* the fault memory: a DTC per health condition (app_dtc.h) */
+    uint8_t cmd_refusal;         /* why the last command was refused (cmd_refusal_t; not a
+                                    counter, so not in app_health_t, whose fields all are) */
     uint32_t dtc_dirty;          /* DTCs whose stored byte changed, not yet in NVM (bit i) */
     uint32_t dtc_persist_writes; /* NVM record writes of the DTC status bytes (app_dtc.c) */
     uint32_t dtc_persist_failed; /* of them, writes that failed */

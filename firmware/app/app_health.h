@@ -25,8 +25,6 @@ typedef struct {
     uint32_t gnss_rejected;    /* GNSS epochs refused (impossible position, bad fix) */
     uint32_t log_line_bad;     /* malformed source frames skipped by the HAL */
     uint32_t cmd_rejected;     /* commands refused (missing known position, bad state) */
-    uint8_t cmd_refusal;       /* why the last one was (app_cmd_refusal_t; NAV_Status
-                                  page 4 CmdRefusal) */
     uint32_t nav_rejected;     /* IMU samples the strapdown core refused */
     uint32_t time_jumps;       /* receive time going backwards; IMU gaps seen only in time;
                                   GNSS receiver clock jumps */

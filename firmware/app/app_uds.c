@@ -191,7 +191,7 @@ static size_t read_did(void *user, uint16_t did, uint8_t *buf, size_t cap)
             return 5u;
         }
         const uint32_t n = a->keep.health.cmd_rejected;
-        buf[0] = a->keep.health.cmd_refusal;
+        buf[0] = a->keep.cmd_refusal;
         buf[1] = (uint8_t)(n >> 24);
         buf[2] = (uint8_t)(n >> 16);
         buf[3] = (uint8_t)(n >> 8);

@@ -13,7 +13,7 @@ static app_diag_t diag_of(app_t *a)
 static void refuse(app_t *a, cmd_refusal_t why)
 {
     const app_diag_t d = diag_of(a);
-    a->keep.health.cmd_refusal = (uint8_t)why;
+    a->keep.cmd_refusal = (uint8_t)why;
     app_diag_reject(&d, &a->keep.health.cmd_rejected);
 }
 

@@ -11,7 +11,7 @@
 
 #include "app.h"
 
-/* Why a command was refused (app_health_t cmd_refusal, NAV_Status page 4 CmdRefusal,
+/* Why a command was refused (app_keep_t cmd_refusal, NAV_Status page 4 CmdRefusal,
  * docs/can.md). A commanded position is tied to the time it was given: it is never
  * applied to a car that has moved since (refused, not carried forward). */
 typedef enum {
