@@ -529,9 +529,9 @@ $(FUZZ)/obj/firmware/can/gen/navecu_can.o: FUZZ_EXTRA := -Wno-double-promotion
 $(patsubst %.c,$(FUZZ)/obj/%.o,$(CORE_SRC) firmware/can/e2e.c tests/fuzz/codec_check.c): \
   FUZZ_EXTRA := -fno-sanitize-coverage=trace-cmp
 # the codec checks are generated from the codec header, so they follow the DBC
-$(FUZZ)/gen/codec_checks.inc: firmware/can/gen/navecu_can.h tests/fuzz/gen_codec_checks.py
+$(FUZZ)/gen/codec_checks.inc: firmware/can/gen/navecu_can.h firmware/can/gen/navecu_can.c tests/fuzz/gen_codec_checks.py
 	@mkdir -p $(@D)
-	python3 tests/fuzz/gen_codec_checks.py $< $@
+	python3 tests/fuzz/gen_codec_checks.py $< $@ firmware hal boards host_sim
 $(FUZZ)/obj/tests/fuzz/codec_check.o: $(FUZZ)/gen/codec_checks.inc
 
 define FUZZ_HARNESS

@@ -15,6 +15,7 @@
  *  - for a physical value x from the fuzz input with is_in_phys_range(x) (the codec's
  *    documented precondition of encode): encode(x) is in range and decode(encode(x)) is
  *    within half an LSB of x (plus float32 rounding).
+ * Raw-only signals (CODEC_SIG_RAW_ONLY) get only the range check.
  * Per message: unpack of 8 bytes returns 0, unpack(pack(unpack(d))) == unpack(d), and an
  * unpack of fewer than 8 bytes returns -EINVAL without reading them (ASan checks that).
  *
@@ -97,6 +98,16 @@ int codec_phys_roundtrip_ok(double x, double back, double lsb);
                 codec_fail(c, sig, "decode(encode(x)) more than half an LSB from x",         \
                            (double)y_, back_);                                               \
             }                                                                                \
+        }                                                                                    \
+    } while (0)
+
+/* A 32-bit integer signal of scale 1 (tests/fuzz/gen_codec_checks.py, "raw-only"): the
+ * firmware reads it raw, never through the float32 API, which cannot hold it; only the
+ * DBC range is checked here (the pack/unpack identity is checked per message). */
+#define CODEC_SIG_RAW_ONLY(c, sig, raw, pfx)                                                 \
+    do {                                                                                     \
+        if (((c)->flags & CODEC_REQUIRE_RANGE) != 0u && !pfx##_is_in_range(raw)) {           \
+            codec_fail(c, sig, "raw value outside the DBC range", (double)(raw), 0.0);       \
         }                                                                                    \
     } while (0)
 

@@ -10,17 +10,49 @@ unpack gives the same struct; and a table of them by frame ID.
 Run by the Makefile into build/fuzz/gen/ (never committed, so it cannot go stale when
 the DBC changes). Standard library only.
 
-    gen_codec_checks.py firmware/can/gen/navecu_can.h OUT.inc
+Raw-only signals: a 32-bit signal of scale 1 (IMU_Time.SampleTime, a free-running
+microsecond counter) cannot go through cantools' float32 API: decode rounds raw values
+within 128 of 2^32 up to 2^32, which encode cannot give back (it wraps to 0). The firmware
+reads such signals from the unpacked struct as integers; the generator checks that no
+source under SRC_DIRS calls their float encode/decode (and fails the build if one does),
+and for them checks only the integer pack/unpack identity, not the float round trips.
+
+    gen_codec_checks.py firmware/can/gen/navecu_can.h OUT.inc [SRC_DIR...]
 """
+import os
 import re
 import sys
 
+# signals whose raw value does not fit float32's 24-bit significand with room to spare
+RAW_ONLY_MIN_BITS = 32
+
+
+def float_api_users(src_dirs, names):
+    """Source files under src_dirs (generated code excepted) that call any of names."""
+    users = {}
+    for top in src_dirs:
+        for root, _dirs, files in os.walk(top):
+            if os.path.basename(root) == "gen":
+                continue
+            for f in files:
+                if not f.endswith((".c", ".h")):
+                    continue
+                path = os.path.join(root, f)
+                text = open(path, encoding="utf-8", errors="replace").read()
+                for n in names:
+                    if re.search(rf"\b{n}\s*\(", text):
+                        users.setdefault(n, []).append(path)
+    return users
+
 
 def main() -> int:
-    if len(sys.argv) != 3:
+    if len(sys.argv) < 3:
         print(__doc__, file=sys.stderr)
         return 2
     header = open(sys.argv[1], encoding="utf-8").read()
+    src_dirs = sys.argv[3:]
+    cpath = os.path.splitext(sys.argv[1])[0] + ".c"
+    cfile = open(cpath, encoding="utf-8").read() if os.path.exists(cpath) else ""
     structs = re.findall(r"^struct navecu_can_(\w+)_t \{(.*?)^\};", header, re.S | re.M)
     if not structs:
         print("gen_codec_checks: no message structs found", file=sys.stderr)
@@ -48,13 +80,26 @@ def main() -> int:
         out.append(f"    if (navecu_can_{msg}_unpack(&m, d, 8u) != 0) {{")
         out.append('        codec_fail(c, "", "unpack of 8 bytes failed", 0.0, 0.0);')
         out.append("    }")
-        for _typ, sig in fields:
+        for typ, sig in fields:
             pfx = f"navecu_can_{msg}_{sig}"
             for suffix in ("encode", "decode", "is_in_range", "is_in_phys_range"):
                 if f"{pfx}_{suffix}(" not in header:
                     print(f"gen_codec_checks: {pfx}_{suffix} missing", file=sys.stderr)
                     return 1
-            out.append(f'    CODEC_SIG(c, "{sig}", m.{sig}, {pfx});')
+            bits = int(re.search(r"\d+", typ).group(0))
+            raw_only = bits >= RAW_ONLY_MIN_BITS and re.search(
+                rf"{pfx}_decode\(\w+ value\)\s*\{{\s*return \(\(float\)value\);", cfile)
+            if raw_only:
+                api = [f"{pfx}_encode", f"{pfx}_decode"]
+                users = float_api_users(src_dirs, api)
+                if users:
+                    print(f"gen_codec_checks: {sig} of {mname} is a {bits}-bit integer that "
+                          f"float32 cannot hold; read it raw, not through {users}",
+                          file=sys.stderr)
+                    return 1
+                out.append(f'    CODEC_SIG_RAW_ONLY(c, "{sig}", m.{sig}, {pfx});')
+            else:
+                out.append(f'    CODEC_SIG(c, "{sig}", m.{sig}, {pfx});')
         out.append(f"    if (navecu_can_{msg}_pack(re, &m, 8u) != 8 ||")
         out.append(f"        navecu_can_{msg}_unpack(&m2, re, 8u) != 0) {{")
         out.append('        codec_fail(c, "", "pack of an unpacked frame failed", 0.0, 0.0);')
