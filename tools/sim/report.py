@@ -39,17 +39,20 @@ def read_nav_log(path, db=None, wraps_from_log: bool = False) -> dict:
     protocol to decode with (default nc.load_db(), the selected vehicle's).
     wraps_from_log: the log's timestamps are the IMU time (a --can-log run of the
     simulator's log): the first NAV_Height's modulus is resolved with them, for a start
-    held beyond 65.536 s (the automatic mounting estimate); later wraps as above."""
+    held beyond 65.536 s (the automatic mounting estimate); later wraps as above.
+    Each row also has 'seq', the frame's index in the log: what a receiver had seen before
+    it (transition_check)."""
     db = db if db is not None else nc.load_db()
     want = {m.frame_id: m.name for m in db.messages if "NAVECU" in m.senders}
     rows = {n: [] for n in want.values()}
     cycle_rows, t_cycle, last_ms, wraps = [], math.nan, None, 0
     with can.LogReader(str(path)) as reader:
-        for msg in reader:
+        for seq, msg in enumerate(reader):
             name = want.get(msg.arbitration_id)
             if name is None:
                 continue
             sig = db.decode_message(msg.arbitration_id, bytes(msg.data), decode_choices=False)
+            sig["seq"] = seq
             if name == "NAV_Position":
                 cycle_rows = []
             if name == "NAV_Height":
@@ -496,18 +499,29 @@ def compute(truth: dict, nav: dict, outages) -> tuple[dict, dict]:
     return rep, series
 
 
-def power_on_report(truth: dict, series: dict, t_on_s: float) -> dict:
-    """A start at t_on_s (run.py --power-on-s): the time from it to the first NAV_Position,
-    the largest horizontal error from 30 s after power-on to the end (m) and the largest
-    heading error from 60 s on (deg), and the truth's speed at power-on (m/s)."""
+def power_on_report(truth: dict, series: dict, t_on_s: float, restart: bool = False) -> dict:
+    """A start at t_on_s (run.py --power-on-s; with restart, a CMD_Control Reset at t_on_s,
+    run.py --reset-s): the time from it to the first NAV_Position after it, the largest
+    horizontal error from 30 s after it to the end (m) and the largest heading error from
+    60 s on (deg), and the truth's speed at t_on_s (m/s). With restart, output_stopped says
+    whether the output paused after the reset (no NAV_Position within 0.5 s of it), as it
+    must when navigation starts again."""
     speed = float(np.interp(t_on_s, truth["t_s"][1:], np.diff(truth["dist_m"])
                             / np.diff(truth["t_s"])))
     rep = {"speed_mps": speed, "first_output_s": None, "max_error_from_30s_m": None,
            "max_heading_error_from_60s_deg": None}
+    if restart:
+        rep["output_stopped"] = None
     if "t" not in series or len(series["t"]) == 0:
         return rep
     t, herr = series["t"], series["herr"]
+    after = t > t_on_s
+    if not after.any():
+        return rep
+    t, herr = t[after], herr[after]
     rep["first_output_s"] = float(t[0] - t_on_s)
+    if restart:
+        rep["output_stopped"] = bool(t[0] - t_on_s > 0.5)
     sel = t >= t_on_s + 30.0
     rep["max_error_from_30s_m"] = float(herr[sel].max()) if sel.any() else None
     if "heading" in series:
@@ -515,6 +529,82 @@ def power_on_report(truth: dict, series: dict, t_on_s: float) -> dict:
         sel = th >= t_on_s + 60.0
         rep["max_heading_error_from_60s_deg"] = float(np.abs(dh[sel]).max()) if sel.any() else None
     return rep
+
+
+NAVIGATING_MODES = ("Inertial", "DeadReckoning", "GnssIns")   # VAL_ 784 Mode
+TRANSITION_WINDOW_S = 60.0
+
+
+def transition_check(series: dict, nav: dict, events, window_s=TRANSITION_WINDOW_S) -> dict:
+    """Issue #17's rule for every transition, as a receiver of the output sees it: for each
+    NAV_Position, the NAV_Status page 0 received last before it in the log (read_nav_log's
+    'seq'): the position's horizontal error against 3 x that status's HorizAccuracy, and
+    whether its Mode is a navigating one (no position may follow a status that says
+    WaitInit, Levelling or Fault). Over the whole run and in the window_s after each event
+    (power-on, the first navigation, a reset). max_error_over_sigma must stay <= 3 and
+    positions_not_navigating at 0. A sigma of 655.35 m ("unknown") passes any error; such
+    epochs are counted."""
+    out = {"rule": "error <= 3 x NAV_Status HorizAccuracy; no NAV_Position unless the last "
+                   "NAV_Status before it says " + "/".join(NAVIGATING_MODES),
+           "window_s": window_s, "events_s": [float(e) for e in events], "epochs": 0,
+           "epochs_in_windows": 0, "max_error_over_sigma": None,
+           "max_error_over_sigma_in_windows": None, "worst_epoch_s": None,
+           "epochs_over_3_sigma": 0, "epochs_sigma_unknown": 0,
+           "positions_not_navigating": 0, "positions_without_status": 0}
+    pos, status = nav.get("NAV_Position"), nav.get("NAV_Status")
+    if "t" not in series or len(series["t"]) == 0 or pos is None:
+        return out
+    t, herr = series["t"], series["herr"]
+    p_seq = pos["seq"]
+    if status is not None:
+        sel = status["StatusPage"] == 0
+        s_seq, s_sig, s_mode = status["seq"][sel], status["HorizAccuracy"][sel], status["Mode"][sel]
+    else:
+        s_seq = s_sig = s_mode = np.zeros(0)
+    k = np.searchsorted(s_seq, p_seq, side="left") - 1
+    have = k >= 0
+    kk = np.clip(k, 0, None)
+    sig = np.where(have, s_sig[kk] if s_sig.size else np.nan, np.nan)
+    md = np.where(have, s_mode[kk] if s_mode.size else np.nan, np.nan)
+    names = nc.load_db().get_message_by_name("NAV_Status").get_signal_by_name("Mode").choices or {}
+    nav_codes = [int(c) for c, v in names.items() if str(v) in NAVIGATING_MODES]
+    not_nav = have & ~np.isin(np.nan_to_num(md, nan=-1.0), nav_codes)
+    unknown = have & (sig >= HORIZ_ACCURACY_UNKNOWN_M - 0.005)
+    ok = have & ~unknown & (sig > 0.0)
+    ratio = np.full(t.shape, np.nan)
+    ratio[ok] = herr[ok] / sig[ok]
+    ratio[have & (sig <= 0.0)] = np.inf   # a zero sigma claims exactness
+    win = np.zeros(t.shape, dtype=bool)
+    for e in events:
+        win |= (t >= e) & (t <= e + window_s)
+    fin = ~np.isnan(ratio)
+    out.update({"epochs": int(t.size), "epochs_in_windows": int(win.sum()),
+                "epochs_over_3_sigma": int(np.sum(fin & (ratio > 3.0))),
+                "epochs_sigma_unknown": int(unknown.sum()),
+                "positions_not_navigating": int(not_nav.sum()),
+                "positions_without_status": int((~have).sum())})
+    if fin.any():
+        j = int(np.argmax(np.where(fin, ratio, -1.0)))
+        out["max_error_over_sigma"] = float(ratio[j])
+        out["worst_epoch_s"] = float(t[j])
+    if (fin & win).any():
+        out["max_error_over_sigma_in_windows"] = float(np.max(ratio[fin & win]))
+    if not_nav.any():
+        out["first_not_navigating_s"] = float(t[not_nav][0])
+    return out
+
+
+def transition_line(tr: dict) -> str:
+    """One line for a run's summary: transition_check's result."""
+    m = tr.get("max_error_over_sigma")
+    mw = tr.get("max_error_over_sigma_in_windows")
+    return (f"transitions (error vs 3 x HorizAccuracy, {tr['window_s']:g} s after "
+            f"{', '.join(f'{e:g}' for e in tr['events_s'])} s): max error/sigma "
+            f"{'-' if mw is None else f'{mw:.2f}'} in the windows, "
+            f"{'-' if m is None else f'{m:.2f}'} over the run (at {tr['worst_epoch_s']} s), "
+            f"{tr['epochs_over_3_sigma']} epochs over 3 sigma; "
+            f"{tr['positions_not_navigating']} positions output while not navigating, "
+            f"{tr['positions_without_status']} without a status")
 
 
 def plot(truth: dict, series: dict, gnss, outages, out_dir: Path, title: str,

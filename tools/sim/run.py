@@ -122,7 +122,7 @@ def calibration_frames(sender, truth, cal: dict) -> list:
 
 
 def frames(truth, dtheta, dv, wheels, gnss, db, initial_attitude=False, heading_deg=None,
-           calibration=None, car=None, power_on_s=None):
+           calibration=None, car=None, power_on_s=None, reset_s=()):
     """Every input frame of the drive as (t_s, order, can.Message), unsorted. With
     initial_attitude, a CMD_InitialAttitude with the true roll and pitch follows the
     initialization commands: a perfect start, no levelling. heading_deg: the Heading of
@@ -132,7 +132,9 @@ def frames(truth, dtheta, dv, wheels, gnss, db, initial_attitude=False, heading_
     tools.vehicle.CarEncoder: the wheel speeds (and gear) in the car's own messages instead
     of navecu's WheelSpeeds. power_on_s: the ECU powers on at this time of the drive (maybe
     driving): no frame before it and no initialization commands (the firmware starts on
-    its own: the in-motion alignment, or GNSS alone)."""
+    its own: the in-motion alignment, or GNSS alone). reset_s: times of the drive at which a
+    CMD_Control Reset is sent (maybe driving; no command follows: the firmware starts again
+    on its own)."""
     sender = nc.E2ESender(db)
     out = []
     lat0, lon0 = math.degrees(truth.lat_rad[0]), math.degrees(truth.lon_rad[0])
@@ -184,6 +186,8 @@ def frames(truth, dtheta, dv, wheels, gnss, db, initial_attitude=False, heading_
             "HorizAccuracy": float(min(gnss["hacc_m"][i], 102.3)),
             "VertAccuracy": float(min(gnss["vacc_m"][i], 102.3)), "GnssEpoch": epoch,
             "TimeOfWeek": round((GPS_TOW0_S + float(gnss["t_meas_s"][i])) % 604800.0, 3)}, t)))
+    for t in reset_s:
+        out.append((float(t), 1, sender.encode("CMD_Control", {"Command": 1, "HeadingValid": 0, "Heading": 0.0, "Height": 0.0}, float(t))))
     if power_on_s is not None:
         out = [x for x in out if x[0] >= power_on_s]
     return out
@@ -247,6 +251,10 @@ def main(argv=None) -> int:
                     help="the ECU powers on at T s into the drive (maybe driving): no frame "
                          "before T and no initialization commands; report.json's power_on "
                          "gives the time to the first output and the errors 30 and 60 s on")
+    ap.add_argument("--reset-s", type=float, action="append", default=[], metavar="T",
+                    help="send CMD_Control Reset at T s into the drive (repeat for more); "
+                         "report.json's resets give, for each, the time to the first output "
+                         "after it and the errors 30 and 60 s on")
     a = ap.parse_args(argv)
     car = None
     if a.vehicle not in (None, "native"):
@@ -305,7 +313,7 @@ def main(argv=None) -> int:
     db = nc.load_db()
     hdg_cmd = scenario.heading_command_deg(truth.heading_rad[0], scen)
     fr = frames(truth, dtheta, dv, wheels, gnss, db, heading_deg=hdg_cmd, calibration=cal,
-                car=car, power_on_s=a.power_on_s)
+                car=car, power_on_s=a.power_on_s, reset_s=a.reset_s)
     fr.sort(key=lambda x: (x[0], x[1]))
     can_in = out / "can_in.log"
     n = nc.write_candump(can_in, (m for _, _, m in fr))
@@ -367,6 +375,11 @@ def main(argv=None) -> int:
                                                    truth.outages) if fault_log else None)
     if a.power_on_s is not None:
         rep["power_on"] = report.power_on_report(truth_r, series, a.power_on_s)
+    rep["resets"] = [report.power_on_report(truth_r, series, t_r, restart=True)
+                     for t_r in sorted(a.reset_s)]
+    events = ([a.power_on_s] if a.power_on_s is not None
+              else [rep.get("navigation_start_s", 0.0)]) + sorted(a.reset_s)
+    rep["transitions"] = report.transition_check(series, nav, events)
     (out / "report.json").write_text(json.dumps(rep, indent=2))
     truth_d = {"t_s": truth.t_s, "lat_rad": truth.lat_rad, "lon_rad": truth.lon_rad}
     pngs = report.plot(truth_d, series, gnss, truth.outages, out, f"{name} ({imu_name} IMU)",
@@ -377,6 +390,9 @@ def main(argv=None) -> int:
     print(report.summary_table(rep))
     if rep.get("power_on"):
         print(f"power-on at {a.power_on_s:g} s: {json.dumps(rep['power_on'])}")
+    for t_r, r in zip(sorted(a.reset_s), rep["resets"]):
+        print(f"reset at {t_r:g} s: {json.dumps(r)}")
+    print(report.transition_line(rep["transitions"]))
     if "GnssIns" not in (rep.get("modes_seen") or {}):
         print("note: the firmware never reported Mode GnssIns: no GNSS fusion in this run "
               "(the Kalman filter, #7).")
