@@ -392,9 +392,11 @@ static void test_position_height_velocity(void **state)
 }
 
 /* Over 100 samples (1 s at 100 Hz) navigating: 50 of each navigation frame and of
- * NAV_Time, 10 NAV_Status pairs and NAV_Accuracy, 1 NAV_Calibration; no dynamics frame, as
- * no IMU sample came (dynamics_take has nothing to average); not navigating: only status,
- * accuracy and calibration. */
+ * NAV_Time, 10 NAV_Status pairs and NAV_Accuracy, 1 NAV_Calibration, and one more status
+ * pair and NAV_Accuracy at the first sample for the change of Mode (WaitInit to
+ * navigating); no dynamics frame, as no IMU sample came (dynamics_take has nothing to
+ * average); not navigating: only status (again one more pair for the change), accuracy
+ * and calibration. */
 static void test_output_rates(void **state)
 {
     (void)state;
@@ -407,12 +409,12 @@ static void test_output_rates(void **state)
     assert_int_equal(cf_tx_count(&hal, NAVECU_CAN_NAV_HEIGHT_FRAME_ID), 50u);
     assert_int_equal(cf_tx_count(&hal, NAVECU_CAN_NAV_VELOCITY_FRAME_ID), 50u);
     assert_int_equal(cf_tx_count(&hal, NAVECU_CAN_NAV_ATTITUDE_FRAME_ID), 50u);
-    assert_int_equal(cf_tx_count(&hal, NAVECU_CAN_NAV_STATUS_FRAME_ID), 20u);
+    assert_int_equal(cf_tx_count(&hal, NAVECU_CAN_NAV_STATUS_FRAME_ID), 22u);
     assert_int_equal(cf_tx_count(&hal, NAVECU_CAN_NAV_CALIBRATION_FRAME_ID), 1u);
     assert_int_equal(cf_tx_count(&hal, NAVECU_CAN_NAV_TIME_FRAME_ID), 50u);
-    assert_int_equal(cf_tx_count(&hal, NAVECU_CAN_NAV_ACCURACY_FRAME_ID), 10u);
+    assert_int_equal(cf_tx_count(&hal, NAVECU_CAN_NAV_ACCURACY_FRAME_ID), 11u);
     assert_int_equal(cf_tx_count(&hal, NAVECU_CAN_NAV_RATES_FRAME_ID), 0u);
-    assert_int_equal(app.keep.tx.frames_sent, 281u);
+    assert_int_equal(app.keep.tx.frames_sent, 284u);
     hal.tx_n = 0u;
     app.run.mode = APP_MODE_LEVELLING;
     for (uint64_t n = 101u; n <= 200u; n++) {
@@ -420,7 +422,62 @@ static void test_output_rates(void **state)
         output_due(&app, &hal);
     }
     assert_int_equal(cf_tx_count(&hal, NAVECU_CAN_NAV_POSITION_FRAME_ID), 0u);
-    assert_int_equal(hal.tx_n, 31u);
+    assert_int_equal(hal.tx_n, 34u);
+}
+
+/* the Mode of NAV_Status page 0 frame k of the transmit log, or -1 if k is another frame */
+static int status_mode_at(uint32_t k)
+{
+    const hal_can_frame_t *f = &hal.tx[k];
+    struct navecu_can_nav_status_t st;
+    if (f->id != NAVECU_CAN_NAV_STATUS_FRAME_ID) {
+        return -1;
+    }
+    navecu_can_nav_status_unpack(&st, f->data, 8u);
+    return st.status_page == NAVECU_NAV_STATUS_PAGE_STATE ? (int)st.mode : -1;
+}
+
+/*
+ * GIVEN the application going from WaitInit to navigating at a sample between two
+ *       NAV_Status cycles, and later out of navigation (a reset)
+ * WHEN the outputs of those samples go out
+ * THEN a receiver reading the frames in order never has a NAV_Position after a status
+ *      that says WaitInit (issue #17: the first 100 ms of every start did), and learns of
+ *      the end of navigation at once, not at the next cycle.
+ */
+static void test_status_on_mode_change(void **state)
+{
+    (void)state;
+    hal.tx_n = 0u;
+    app.keep.n_samples = 10u; /* a status cycle in WaitInit */
+    output_due(&app, &hal);
+    assert_int_equal(status_mode_at(0u), NAVECU_CAN_NAV_STATUS_MODE_WAIT_INIT_CHOICE);
+    navigate(10.0);
+    int last_mode = -1;
+    for (uint64_t n = 12u; n <= 30u; n += 2u) { /* navigation sets at even samples */
+        app.keep.n_samples = n;
+        output_due(&app, &hal);
+    }
+    app.run.mode = APP_MODE_WAIT_INIT;
+    app.keep.n_samples = 33u; /* between cycles */
+    const uint32_t before_reset = hal.tx_n;
+    output_due(&app, &hal);
+    uint32_t positions = 0u;
+    for (uint32_t k = 0u; k < hal.tx_n; k++) {
+        const int m = status_mode_at(k);
+        if (m >= 0) {
+            last_mode = m;
+        }
+        if (hal.tx[k].id == NAVECU_CAN_NAV_POSITION_FRAME_ID) {
+            positions++;
+            assert_true(last_mode == NAVECU_CAN_NAV_STATUS_MODE_INERTIAL_CHOICE ||
+                        last_mode == NAVECU_CAN_NAV_STATUS_MODE_DEAD_RECKONING_CHOICE);
+        }
+    }
+    assert_int_equal(positions, 10u);
+    /* the reset's sample: its status says WaitInit although no cycle is due */
+    assert_int_equal(status_mode_at(before_reset), NAVECU_CAN_NAV_STATUS_MODE_WAIT_INIT_CHOICE);
+    assert_int_equal(last_mode, NAVECU_CAN_NAV_STATUS_MODE_WAIT_INIT_CHOICE);
 }
 
 /* A navigator that is not finite is never on the bus: counted instead. */
@@ -492,6 +549,7 @@ int main(void)
         cmocka_unit_test_setup(test_heading_wrap, setup),
         cmocka_unit_test_setup(test_position_height_velocity, setup),
         cmocka_unit_test_setup(test_output_rates, setup),
+        cmocka_unit_test_setup(test_status_on_mode_change, setup),
         cmocka_unit_test_setup(test_nonfinite_not_sent, setup),
         cmocka_unit_test_setup(test_calibration_frame, setup),
         cmocka_unit_test_setup(test_send_error_counted, setup),

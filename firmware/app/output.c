@@ -371,6 +371,7 @@ void output_status(app_t *a, hal_t *hal)
     memset(&st, 0, sizeof st);
     st.status_page = NAVECU_NAV_STATUS_PAGE_STATE;
     st.mode = output_mode(a);
+    tx->last_mode = st.mode;
     st.health_flags = health_flags(a, hal);
     app_dtc_cycle(a, hal, st.health_flags); /* the DTCs' tests (app_dtc.h) */
     st.horiz_accuracy = NAVECU_NAV_STATUS_HORIZ_ACCURACY_RAW_MAX; /* "unknown" w/o the filter */
@@ -467,6 +468,11 @@ void output_due(app_t *a, hal_t *hal)
     const uint32_t imu = a->cfg.imu_rate_hz;
     const uint32_t nav_div = a->cfg.nav_rate_hz >= imu ? 1u : imu / a->cfg.nav_rate_hz;
     const uint32_t st_div = a->cfg.status_rate_hz >= imu ? 1u : imu / a->cfg.status_rate_hz;
+    const int mode_changed = output_mode(a) != a->keep.tx.last_mode;
+    if (mode_changed) { /* the new Mode before the first (or after the last) set in it */
+        output_status(a, hal);
+        emit_accuracy(a, hal);
+    }
     if (a->run.mode == APP_MODE_NAVIGATING && n % nav_div == 0u) {
         emit_navigation(a, hal);
     }
@@ -474,7 +480,7 @@ void output_due(app_t *a, hal_t *hal)
         n % (a->cfg.dyn_rate_hz >= imu ? 1u : imu / a->cfg.dyn_rate_hz) == 0u) {
         emit_dynamics(a, hal);
     }
-    if (n % st_div == 0u) {
+    if (n % st_div == 0u && !mode_changed) {
         output_status(a, hal);
         emit_accuracy(a, hal);
     }

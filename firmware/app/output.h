@@ -17,12 +17,15 @@ typedef struct {
     uint32_t frames_sent;
     uint32_t send_errors;
     uint64_t last_status_t_us;  /* HAL time of the last NAV_Status (app_poll) */
+    uint8_t last_mode;          /* Mode of the last NAV_Status page 0 (0 WaitInit at boot) */
 } tx_state_t;
 
 typedef struct app app_t; /* app.h */
 
 /* The outputs due after the current IMU sample (the application's time base): the
- * navigation frames at the NAV rate while navigating, NAV_Status at its rate,
+ * navigation frames at the NAV rate while navigating, NAV_Status at its rate and on a
+ * change of Mode (before the navigation set of that sample, so a receiver never gets a
+ * position after a status saying the ECU is not navigating, nor a WaitInit/Fault late),
  * NAV_Calibration at 1 Hz. */
 void output_due(app_t *a, hal_t *hal);
 
