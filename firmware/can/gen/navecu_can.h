@@ -1119,7 +1119,7 @@ struct navecu_can_nav_accel_enu_t {
 /**
  * Signals in message NAV_Status.
  *
- * Multiplexed: every 100 ms two frames, page 0 and one of the counter pages 1..6 in rotation (counters saturate), hence a 50 ms mean cycle.
+ * Multiplexed: every 100 ms two frames, page 0 and one of the counter pages 1..6 in rotation (counters saturate), hence a 50 ms mean cycle; the pair also at once on a change of Mode, before the navigation set of that sample.
  *
  * All signal values are as on the CAN bus.
  */
