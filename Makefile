@@ -104,6 +104,8 @@ help:
 	@echo "make target-test   the M4F image on QEMU, output frames identical to the host's"
 	@echo "make target-bench  instruction counts on QEMU -> out/target-bench.json, CPU load"
 	@echo "make target-budget flash, RAM, stack, no heap, no double -> out/target-budget.json"
+	@echo "make init-paths    every initialisation path (power-on, commands, Reset at speed)"
+	@echo "                   measured on the simulator: time to navigate, errors, 3-sigma check"
 	@echo "make regression    the firmware's output on committed CAN logs vs tests/regression/"
 	@echo "                   expected.json (docs/regression.md); make regression-update after"
 	@echo "                   an intended change, committed with it"
@@ -587,6 +589,15 @@ lint: deps
 .PHONY: faults
 faults: deps venv $(BUILD)/host/navecu
 	$(PY) -m tools.sim.faults --doc docs/reliability.md
+
+# Every initialisation path of issue #17 (tools/sim/init_paths.py): power-on at rest and
+# while driving, the start commands, a Reset at 15 and 30 m/s straight and in a turn, with
+# two IMU grades; the time to the first output, the errors at 30/60 s, the heading, and the
+# transition check (error <= 3 x HorizAccuracy, no position while not navigating). The
+# table goes to out/sim/init_paths/init_paths.md (docs/kalman.md quotes it). About 3 min.
+.PHONY: init-paths
+init-paths: deps venv $(BUILD)/host/navecu
+	$(PY) -m tools.sim.init_paths --md out/sim/init_paths/init_paths.md
 
 clean:
 	rm -rf $(BUILD)

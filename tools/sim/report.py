@@ -502,14 +502,16 @@ def compute(truth: dict, nav: dict, outages) -> tuple[dict, dict]:
 def power_on_report(truth: dict, series: dict, t_on_s: float, restart: bool = False) -> dict:
     """A start at t_on_s (run.py --power-on-s; with restart, a CMD_Control Reset at t_on_s,
     run.py --reset-s): the time from it to the first NAV_Position after it, the largest
-    horizontal error from 30 s after it to the end (m) and the largest heading error from
-    60 s on (deg), and the truth's speed at t_on_s (m/s). With restart, output_stopped says
+    horizontal error from 30 s after it to the end (m), the error 30 s and 60 s after it
+    (None if not navigating then),
+    the largest heading error from 60 s on (deg), and the truth's speed at t_on_s (m/s). With restart, output_stopped says
     whether the output paused after the reset (no NAV_Position within 0.5 s of it), as it
     must when navigation starts again."""
     speed = float(np.interp(t_on_s, truth["t_s"][1:], np.diff(truth["dist_m"])
                             / np.diff(truth["t_s"])))
     rep = {"speed_mps": speed, "first_output_s": None, "max_error_from_30s_m": None,
-           "max_heading_error_from_60s_deg": None}
+           "max_heading_error_from_60s_deg": None, "error_at_30s_m": None,
+           "error_at_60s_m": None}
     if restart:
         rep["output_stopped"] = None
     if "t" not in series or len(series["t"]) == 0:
@@ -524,6 +526,10 @@ def power_on_report(truth: dict, series: dict, t_on_s: float, restart: bool = Fa
         rep["output_stopped"] = bool(t[0] - t_on_s > 0.5)
     sel = t >= t_on_s + 30.0
     rep["max_error_from_30s_m"] = float(herr[sel].max()) if sel.any() else None
+    for at in (30.0, 60.0):   # the epoch then (None: not navigating then)
+        k = int(np.searchsorted(t, t_on_s + at))
+        ok = k < t.size and t[k] - (t_on_s + at) <= 0.5
+        rep[f"error_at_{at:.0f}s_m"] = float(herr[k]) if ok else None
     if "heading" in series:
         th, dh = series["heading"]
         sel = th >= t_on_s + 60.0

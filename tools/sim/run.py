@@ -122,7 +122,7 @@ def calibration_frames(sender, truth, cal: dict) -> list:
 
 
 def frames(truth, dtheta, dv, wheels, gnss, db, initial_attitude=False, heading_deg=None,
-           calibration=None, car=None, power_on_s=None, reset_s=()):
+           calibration=None, car=None, power_on_s=None, reset_s=(), heading_valid=True):
     """Every input frame of the drive as (t_s, order, can.Message), unsorted. With
     initial_attitude, a CMD_InitialAttitude with the true roll and pitch follows the
     initialization commands: a perfect start, no levelling. heading_deg: the Heading of
@@ -134,7 +134,8 @@ def frames(truth, dtheta, dv, wheels, gnss, db, initial_attitude=False, heading_
     driving): no frame before it and no initialization commands (the firmware starts on
     its own: the in-motion alignment, or GNSS alone). reset_s: times of the drive at which a
     CMD_Control Reset is sent (maybe driving; no command follows: the firmware starts again
-    on its own)."""
+    on its own). heading_valid False: the SetInitialPosition says HeadingValid 0 (the
+    heading then comes from the in-motion alignment)."""
     sender = nc.E2ESender(db)
     out = []
     lat0, lon0 = math.degrees(truth.lat_rad[0]), math.degrees(truth.lon_rad[0])
@@ -143,7 +144,8 @@ def frames(truth, dtheta, dv, wheels, gnss, db, initial_attitude=False, heading_
     if power_on_s is None:
         out.append((0.0, 0, sender.encode("CMD_KnownPosition",
                                           {"Latitude": lat0, "Longitude": lon0}, 0.0)))
-        out.append((0.0, 1, sender.encode("CMD_Control", {"Command": 2, "HeadingValid": 1,
+        out.append((0.0, 1, sender.encode("CMD_Control", {"Command": 2,
+                                                          "HeadingValid": int(heading_valid),
                                                           "Heading": hdg0,
                                                           "Height": float(truth.h_m[0])}, 0.0)))
     if initial_attitude and power_on_s is None:
@@ -251,6 +253,8 @@ def main(argv=None) -> int:
                     help="the ECU powers on at T s into the drive (maybe driving): no frame "
                          "before T and no initialization commands; report.json's power_on "
                          "gives the time to the first output and the errors 30 and 60 s on")
+    ap.add_argument("--no-heading", action="store_true",
+                    help="the SetInitialPosition at the start says HeadingValid 0")
     ap.add_argument("--reset-s", type=float, action="append", default=[], metavar="T",
                     help="send CMD_Control Reset at T s into the drive (repeat for more); "
                          "report.json's resets give, for each, the time to the first output "
@@ -313,7 +317,8 @@ def main(argv=None) -> int:
     db = nc.load_db()
     hdg_cmd = scenario.heading_command_deg(truth.heading_rad[0], scen)
     fr = frames(truth, dtheta, dv, wheels, gnss, db, heading_deg=hdg_cmd, calibration=cal,
-                car=car, power_on_s=a.power_on_s, reset_s=a.reset_s)
+                car=car, power_on_s=a.power_on_s, reset_s=a.reset_s,
+                heading_valid=not a.no_heading)
     fr.sort(key=lambda x: (x[0], x[1]))
     can_in = out / "can_in.log"
     n = nc.write_candump(can_in, (m for _, _, m in fr))
