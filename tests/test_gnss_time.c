@@ -142,12 +142,17 @@ static void test_50_ppm_creep(void **state)
 }
 
 /* in_history: the history must hold the entry before the one back reaches (m + 1 entries
- * with m = floor(back)) and stay within its 64 entries. */
+ * with m = floor(back)) and stay within its 64 entries; before_history: only the first
+ * fails (the epoch is valid before the navigation's history starts: the independent
+ * client's finding that a correct epoch at each navigation start counted as rejected). */
 static void test_history_reach(void **state)
 {
     (void)state;
     record_constant(11u, 0.0f, 0.0f, 0.0f);
-    assert_int_equal(epoch(1000u, 0).in_history, 0); /* back 10: 11 < 11 fails */
+    gnss_when_t young = epoch(1000u, 0);
+    assert_int_equal(young.in_history, 0); /* back 10: 11 < 11 fails */
+    /* valid before the history began (navigation started 0.11 s ago): not a late fix */
+    assert_int_equal(young.before_history, 1);
     memset(&g, 0, sizeof g);
     record_constant(12u, 0.0f, 0.0f, 0.0f);
     assert_int_equal(epoch(1000u, 0).in_history, 1);
@@ -156,7 +161,10 @@ static void test_history_reach(void **state)
     assert_int_equal(gnss_time_align(&g, (uint64_t)(1000u) * 1000000u / (RATE_HZ), RATE_HZ, 5000u, 0.625f).in_history, 1); /* 62.5 */
     memset(&g, 0, sizeof g);
     record_constant(200u, 0.0f, 0.0f, 0.0f);
-    assert_int_equal(gnss_time_align(&g, (uint64_t)(1000u) * 1000000u / (RATE_HZ), RATE_HZ, 5000u, 0.635f).in_history, 0); /* 63.5 */
+    const gnss_when_t late =
+        gnss_time_align(&g, (uint64_t)(1000u) * 1000000u / (RATE_HZ), RATE_HZ, 5000u, 0.635f);
+    assert_int_equal(late.in_history, 0); /* 63.5: beyond the 64 entries */
+    assert_int_equal(late.before_history, 0); /* too late for any history: a refusal */
     /* forgotten: nothing in history */
     gnss_time_forget(&g);
     assert_int_equal(epoch(1020u, 0).in_history, 0);

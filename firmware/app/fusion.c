@@ -341,7 +341,12 @@ fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_pr
         (void)gnss_time_learn(&fu->time, &when, fix->v_enu_mps, ss, cfg->gnss_latency_s);
     }
     if (!when.in_history) {
-        app_diag_reject(c->diag, &c->diag->health->gnss_rejected); /* older than the history */
+        /* later than the history can hold: refused; valid before the navigation started
+         * (the history is younger than the epoch's latency): nothing to compare it with,
+         * not a fault of the fix, so not counted (the next epoch is used) */
+        if (!when.before_history) {
+            app_diag_reject(c->diag, &c->diag->health->gnss_rejected);
+        }
         return FUSION_GO_ON;
     }
     nav_real_t d[3];

@@ -74,6 +74,8 @@ void gnss_time_reach(const gnss_time_t *g, gnss_when_t *w, nav_real_t latency_s)
 {
     w->back = (latency_s + w->late_s) / w->entry_s;
     w->in_history = reaches(g, w->back) ? 1u : 0u;
+    const uint32_t m = (uint32_t)w->back;
+    w->before_history = !w->in_history && m + 1u < APP_VHIST ? 1u : 0u;
 }
 
 /* Forget the latency learnt (a receiver reset). */

@@ -43,6 +43,8 @@ typedef struct {
     nav_real_t late_s;  /* lateness beyond the on-time epochs' offset */
     uint8_t jumped;     /* the receiver's clock jumped: count time_jumps */
     uint8_t in_history; /* the velocity history reaches that far */
+    uint8_t before_history; /* not in_history only because the history is younger: the
+                             * epoch is valid before navigation (re)started, not late */
 } gnss_when_t;
 
 /* Record the navigator's velocity after IMU sample n (every entry_s). */
