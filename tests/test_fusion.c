@@ -156,9 +156,11 @@ static void test_start_at_fix_east(void **state)
     assert_near(north, 0.0, 0.01);
 }
 
-/* A fix older than the velocity history reaches (nothing recorded): refused, counted, the
- * filter stays off. */
-static void test_fix_beyond_history_refused(void **state)
+/* A fix valid before the velocity history began (nothing recorded: navigation has just
+ * (re)started): nothing to compare it with, skipped without a count (the independent
+ * client's finding: a correct epoch counted as rejected at every start); the filter stays
+ * off until the next one. */
+static void test_fix_before_history_skipped(void **state)
 {
     (void)state;
     gnss_time_forget(&fu.time);
@@ -166,6 +168,28 @@ static void test_fix_beyond_history_refused(void **state)
     const gnss_fix_t f = fix_at(450000000, 100000000, v0);
     int adopt = 1;
     assert_int_equal(fusion_gnss(&fu, &ctx, &PRIOR, &f, &adopt), FUSION_GO_ON);
+    assert_int_equal(fu.on, 0);
+    assert_int_equal(adopt, 0);
+    assert_int_equal(health.gnss_rejected, 0u);
+    assert_int_equal(events.reject.seen, 0);
+}
+
+/* A fix later than the whole history holds (64 entries, 0.64 s at 100 Hz; a latency of
+ * 0.7 s): refused, counted, the filter stays off. */
+static void test_fix_beyond_history_refused(void **state)
+{
+    (void)state;
+    const nav_real_t v_rest[3] = {0.0f, 0.0f, 0.0f};
+    for (uint64_t n = N0 - 100u; n < N0; n++) { /* a full history */
+        gnss_time_record(&fu.time, n, cfg.imu_rate_hz, v_rest);
+    }
+    const float latency_s = cfg.gnss_latency_s;
+    cfg.gnss_latency_s = 0.7f;
+    const nav_real_t v0[3] = {0.0f, 0.0f, 0.0f};
+    const gnss_fix_t f = fix_at(450000000, 100000000, v0);
+    int adopt = 1;
+    assert_int_equal(fusion_gnss(&fu, &ctx, &PRIOR, &f, &adopt), FUSION_GO_ON);
+    cfg.gnss_latency_s = latency_s;
     assert_int_equal(fu.on, 0);
     assert_int_equal(adopt, 0);
     assert_int_equal(health.gnss_rejected, 1u);
@@ -436,6 +460,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test_setup(test_start_at_fix_north, setup),
         cmocka_unit_test_setup(test_start_at_fix_east, setup),
+        cmocka_unit_test_setup(test_fix_before_history_skipped, setup),
         cmocka_unit_test_setup(test_fix_beyond_history_refused, setup),
         cmocka_unit_test_setup(test_prediction_every_tenth_sample, setup),
         cmocka_unit_test_setup(test_diverged_with_gnss_reacquires, setup),

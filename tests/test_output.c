@@ -89,7 +89,7 @@ static void check_hold(app_stamp_t *s, uint16_t bit, uint64_t hold)
     const uint64_t at[3] = {1000u, 1000u + hold, 1000u + hold + 1u};
     for (int i = 0; i < 3; i++) {
         app.keep.n_samples = at[i];
-        app_stamp(&app.run.gnss, at[i]);
+        app_stamp(&app.keep.gnss, at[i]);
         const uint16_t got = flags_now();
         const uint16_t want = i < 2 ? bit : 0u;
         if (got != want) {
@@ -115,11 +115,24 @@ static void test_flag_no_gnss(void **state)
 {
     (void)state;
     app.run.align.heading_valid = 1u; /* not the GNSS-only start's NO_HEADING */
-    app_stamp(&app.run.gnss, 1000u);
+    app_stamp(&app.keep.gnss, 1000u);
     app.keep.n_samples = 1200u;
     assert_int_equal(flags_now(), 0u);
     app.keep.n_samples = 1201u;
     assert_int_equal(flags_now(), NAVECU_HEALTH_NO_GNSS);
+}
+
+/* A Reset (or SetInitialPosition) restarts navigation, not the receiver: the epoch of 0.1 s
+ * ago still counts (the independent client found NO_GNSS 10 ms after each, with epochs
+ * arriving at 5 Hz: the stamp lived in the state a reset clears). */
+static void test_no_gnss_survives_reset(void **state)
+{
+    (void)state;
+    app_stamp(&app.keep.gnss, 1000u);
+    app.keep.n_samples = 1010u;
+    app_reset(&app);
+    app.run.align.heading_valid = 1u; /* not the GNSS-only start's NO_HEADING */
+    assert_int_equal(flags_now() & NAVECU_HEALTH_NO_GNSS, 0u);
 }
 
 /* IMU_STALE: more than 0.5 s of HAL time since the last sample (not at 0.5 s). */
@@ -141,7 +154,7 @@ static void test_flag_imu_stale(void **state)
 static void test_state_flags(void **state)
 {
     (void)state;
-    app_stamp(&app.run.gnss, 0u);
+    app_stamp(&app.keep.gnss, 0u);
     assert_int_equal(flags_now(), NAVECU_HEALTH_NO_HEADING); /* GNSS only, no heading */
     app.run.align.heading_valid = 1u;
     app.keep.imu.fault = 1u;
@@ -169,7 +182,7 @@ static void test_imu_rate_mismatch_flag(void **state)
 {
     (void)state;
     app.run.align.heading_valid = 1u; /* not the GNSS-only start's NO_HEADING */
-    app_stamp(&app.run.gnss, 0u);
+    app_stamp(&app.keep.gnss, 0u);
     app.keep.rate.measured_chz = 40000u;
     assert_int_equal(flags_now(), 0u);
     assert_int_equal(cf_last_status_page0(&hal).imu_rate_measured, 0u);
@@ -539,6 +552,7 @@ int main(void)
         cmocka_unit_test_setup(test_flags_at_power_on, setup),
         cmocka_unit_test_setup(test_flags_held_for_their_time, setup),
         cmocka_unit_test_setup(test_flag_no_gnss, setup),
+        cmocka_unit_test_setup(test_no_gnss_survives_reset, setup),
         cmocka_unit_test_setup(test_flag_imu_stale, setup),
         cmocka_unit_test_setup(test_state_flags, setup),
         cmocka_unit_test_setup(test_imu_rate_mismatch_flag, setup),

@@ -115,7 +115,7 @@ static fusion_ctx_t fusion_ctx(app_t *a, const app_diag_t *d)
 {
     const fusion_ctx_t c = {&a->run.nav,          &a->run.dr,  &a->keep.odo, &a->run.land,
                             &a->cfg,              d,           &a->keep.filter_reset,
-                            &a->run.gnss};
+                            &a->keep.gnss};
     return c;
 }
 
@@ -414,7 +414,7 @@ static void on_gnss_status(app_t *a, hal_t *hal, const rx_input_t *in)
     if (!r.usable) {
         return;
     }
-    app_stamp(&a->run.gnss, a->keep.n_samples);
+    app_stamp(&a->keep.gnss, a->keep.n_samples);
     const imu_rate_change_t rate = imu_rate_epoch(&a->keep.rate, a->cfg.imu_rate_hz, fix.tow_ms);
     if (rate == IMU_RATE_MISMATCH) {
         app_count(&a->keep.health.imu_rate_mismatch);

@@ -79,6 +79,8 @@ typedef struct {
     uint64_t last_poll_us;  /* HAL time of the last app_poll (task supervision) */
     uint8_t have_poll;
     app_stamp_t filter_reset; /* the flag outlives the reset it caused */
+    app_stamp_t gnss;       /* the latest usable GNSS epoch (NO_GNSS): the receiver's state,
+                               so a Reset or SetInitialPosition does not say NO_GNSS */
     calib_t cal;            /* the car's calibration and the NVM */
     zbias_t zbias;          /* the z gyro bias learnt at standstill (the IMU's) */
     odo_t odo;              /* the car's odometer */
@@ -104,7 +106,6 @@ typedef enum {
 typedef struct {
     app_mode_t mode;
     app_events_t events;    /* stamps behind the HealthFlags that hold for a while */
-    app_stamp_t gnss;       /* the latest usable GNSS epoch (NO_GNSS) */
     imu_stream_t imu;       /* the IMU pair in assembly, the plausibility checks */
     gnss_asm_t gnss_asm;    /* the GNSS epoch in assembly */
     align_t align;          /* initial state, levelling, re-acquisition */

@@ -22,7 +22,7 @@ int commands_car_moving(const app_t *a)
     const odo_t *o = &a->keep.odo;
     const uint64_t fresh = (uint64_t)APP_NO_GNSS_S * a->cfg.imu_rate_hz;
     return ((o->valid && !o->zero) ||
-            (app_stamp_within(&a->run.gnss, a->keep.n_samples, fresh) &&
+            (app_stamp_within(&a->keep.gnss, a->keep.n_samples, fresh) &&
              a->run.fusion.speed_mps > APP_CMD_MOVING_GNSS_MPS))
                ? 1
                : 0;

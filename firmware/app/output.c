@@ -260,7 +260,7 @@ static uint16_t health_flags(const app_t *a, const hal_t *hal)
     if (k->imu.fault) {
         fl |= NAVECU_HEALTH_IMU_FAULT;
     }
-    if (!app_stamp_within(&r->gnss, n, APP_NO_GNSS_S * second)) {
+    if (!app_stamp_within(&k->gnss, n, APP_NO_GNSS_S * second)) {
         fl |= NAVECU_HEALTH_NO_GNSS;
     }
     if (app_stamp_within(&r->events.reject, n, APP_FLAG_HOLD_S * second)) {
@@ -273,7 +273,7 @@ static uint16_t health_flags(const app_t *a, const hal_t *hal)
      * no initial state: the course while driving gives it, docs/kalman.md) */
     if ((r->mode != APP_MODE_NAVIGATING && r->align.pos_valid && !r->align.heading_valid) ||
         (r->mode == APP_MODE_WAIT_INIT && !r->align.heading_valid &&
-         app_stamp_within(&r->gnss, n, APP_NO_GNSS_S * second))) {
+         app_stamp_within(&k->gnss, n, APP_NO_GNSS_S * second))) {
         fl |= NAVECU_HEALTH_NO_HEADING;
     }
     if (app_stamp_within(&r->events.gap, n, APP_FLAG_HOLD_S * second)) {
