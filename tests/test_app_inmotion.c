@@ -38,6 +38,8 @@ static app_t app;
 static double carry_v[3], speed, nose_rad, north_m, east_m;
 static uint8_t imu_counter, wheel_counter, cmd_counter, gnss_epoch;
 static uint32_t k_sample, n_position;
+static uint32_t gnss_late_samples;
+static int first_nav_time_known; /* -1: no NAV_Time yet; else whether the first was known */ /* the fixes' time of validity this many samples back */
 static struct navecu_can_nav_status_t last_status; /* the last page 0 */
 static uint32_t n_levelling_moving; /* NAV_Status page 0 saying Levelling while moving */
 
@@ -53,6 +55,11 @@ static void drain(void)
     for (uint32_t i = 0u; i < hal.tx_n; i++) {
         if (hal.tx[i].id == app.cfg.can_ids[NAVECU_MSG_NAV_POSITION]) {
             n_position++;
+        } else if (hal.tx[i].id == app.cfg.can_ids[NAVECU_MSG_NAV_TIME] &&
+                   first_nav_time_known < 0) {
+            struct navecu_can_nav_time_t m;
+            assert_int_equal(navecu_can_nav_time_unpack(&m, hal.tx[i].data, 8u), 0);
+            first_nav_time_known = m.time_of_week != NAVECU_NAV_TIME_TIME_OF_WEEK_RAW_MAX;
         } else if (hal.tx[i].id == app.cfg.can_ids[NAVECU_MSG_NAV_STATUS]) {
             struct navecu_can_nav_status_t m;
             assert_int_equal(navecu_can_nav_status_unpack(&m, hal.tx[i].data, 8u), 0);
@@ -73,6 +80,9 @@ static int setup(void **state)
     fake_hal_reset(&hal);
     app_config_t cfg = app_default_config();
     cfg.level_s = 2u;
+    cfg.gnss_latency_s = 0.0f; /* the fixes here are valid when they arrive (but one test) */
+    gnss_late_samples = 0u;
+    first_nav_time_known = -1;
     assert_int_equal(app_init(&app, &cfg), NAV_OK);
     memset(carry_v, 0, sizeof carry_v);
     speed = 0.0;
@@ -98,8 +108,12 @@ static double lon_deg(void)
 static void send_gnss(void)
 {
     const double vn = speed * cos(nose_rad), ve = speed * sin(nose_rad);
-    hal_can_frame_t f = cf_gnss_position((int32_t)lround(lat_deg() * 1e7),
-                                         (int32_t)lround(lon_deg() * 1e7), hal.t_us);
+    /* where the car was gnss_late_samples ago (at constant speed and heading) */
+    const double back_m = speed * (double)gnss_late_samples / RATE_HZ;
+    const double lat = lat_deg() - back_m * cos(nose_rad) / R_EARTH_M / DEG;
+    const double lon = lon_deg() - back_m * sin(nose_rad) / (R_EARTH_M * cos(LAT0_DEG * DEG)) / DEG;
+    hal_can_frame_t f = cf_gnss_position((int32_t)lround(lat * 1e7), (int32_t)lround(lon * 1e7),
+                                         hal.t_us);
     feed(&f);
     struct navecu_can_gnss_velocity_t gv;
     memset(&gv, 0, sizeof gv);
@@ -118,7 +132,7 @@ static void send_gnss(void)
     gs.horiz_accuracy = navecu_can_gnss_status_horiz_accuracy_encode(1.0f);
     gs.vert_accuracy = navecu_can_gnss_status_vert_accuracy_encode(1.5f);
     gs.gnss_epoch = gnss_epoch;
-    gs.time_of_week = 100000u + k_sample * (1000u / RATE_HZ);
+    gs.time_of_week = 100000u + (k_sample - gnss_late_samples) * (1000u / RATE_HZ);
     f = cf_gnss_status(&gs, hal.t_us);
     feed(&f);
     gnss_epoch = (uint8_t)((gnss_epoch + 1u) % 15u);
@@ -235,17 +249,56 @@ static void test_power_on_while_driving(void **state)
     assert_false(health_flags() & NAVECU_HEALTH_NO_HEADING);
 }
 
+/* the navigator's horizontal distance from the truth now (m) */
+static double position_error_m(void)
+{
+    const double dn = ((double)geo_lat_rad(&app.run.nav.pos) / DEG - lat_deg()) * DEG * R_EARTH_M;
+    const double de = ((double)geo_lon_rad(&app.run.nav.pos) / DEG - lon_deg()) * DEG * R_EARTH_M *
+                      cos(LAT0_DEG * DEG);
+    return hypot(dn, de);
+}
+
+/* GIVEN fixes valid 100 ms before they arrive (the latency configured as such) at 15 m/s
+ * WHEN the in-motion alignment starts navigation from one
+ * THEN the navigator starts as close to the car as with fixes on time, not 1.5 m behind,
+ *      where the car was when the fix was valid (the independent client's finding: speed x latency behind until the
+ *      filter's first update) */
+static void test_inmotion_start_carries_the_fix_to_now(void **state)
+{
+    (void)state;
+    speed = 15.0;
+    assert_true(drive_until_navigating(10.0, 15.0) > 0.0);
+    const double on_time_m = position_error_m(); /* the start's own error, fixes on time */
+    setup(NULL);
+    app.cfg.gnss_latency_s = 0.1f;
+    gnss_late_samples = 10u;
+    speed = 15.0;
+    assert_true(drive_until_navigating(10.0, 15.0) > 0.0);
+    const double late_m = position_error_m();
+    print_message("in-motion start at 15 m/s: %.3f m from the truth with fixes on time, "
+                  "%.3f m with fixes 100 ms late\n", on_time_m, late_m);
+    assert_true(fabs(late_m - on_time_m) < 0.05); /* 1.5 m more before: 15 m/s x 0.1 s */
+}
+
 static void test_reset_at_speed(void **state)
 {
     (void)state;
     speed = 15.0;
     assert_true(drive_until_navigating(10.0, 15.0) > 0.0);
-    drive(3.0, 15.0);
+    drive(0.1, 15.0);
+    /* the GNSS time from the first output set (the receiver's clock is known from the
+     * epochs before the start; the independent client found 0.1-0.2 s of 'unknown'
+     * TimeOfWeek after every start) */
+    assert_int_equal(first_nav_time_known, 1);
+    drive(2.9, 15.0);
     send_control(1u, 0u); /* Reset */
+    first_nav_time_known = -1;
     assert_int_equal(app_mode(&app), APP_MODE_WAIT_INIT);
     const double t = drive_until_navigating(10.0, 15.0);
     assert_true(t > 0.0 && t <= 2.0);
-    drive(5.0, 15.0);
+    drive(0.1, 15.0);
+    assert_int_equal(first_nav_time_known, 1); /* the Reset kept the receiver's clock */
+    drive(4.9, 15.0);
     assert_navigator(0.5);
 }
 
@@ -376,6 +429,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test_setup(test_power_on_while_driving, setup),
+        cmocka_unit_test_setup(test_inmotion_start_carries_the_fix_to_now, setup),
         cmocka_unit_test_setup(test_reset_at_speed, setup),
         cmocka_unit_test_setup(test_set_initial_position_without_heading, setup),
         cmocka_unit_test_setup(test_gnss_only_at_rest_says_no_heading, setup),

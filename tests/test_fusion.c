@@ -27,6 +27,7 @@
 #define N0 1000u        /* the sample count when the first fix comes */
 
 static fusion_t fu;
+static gnss_time_t gtime; /* app_keep_t holds it in the application */
 static sins_t nav;
 static dr_t dr;
 static odo_t odo;
@@ -45,6 +46,7 @@ static const geo_pos_t P0 = {450000000LL * GEO_LSB_PER_DEG_E7, 100000000LL * GEO
 static void start_at(double heading_deg, const nav_real_t v[3])
 {
     memset(&fu, 0, sizeof fu);
+    memset(&gtime, 0, sizeof gtime);
     memset(&land, 0, sizeof land);
     memset(&health, 0, sizeof health);
     memset(&events, 0, sizeof events);
@@ -62,10 +64,10 @@ static void start_at(double heading_deg, const nav_real_t v[3])
     diag.health = &health;
     diag.events = &events;
     diag.n_samples = N0;
-    const fusion_ctx_t c = {&nav, &dr, &odo, &land, &cfg, &diag, &filter_reset, &gnss};
+    const fusion_ctx_t c = {&nav, &dr, &odo, &land, &cfg, &diag, &filter_reset, &gnss, &gtime};
     ctx = c;
     for (uint64_t n = N0 - 50u; n < N0; n++) {
-        gnss_time_record(&fu.time, n, cfg.imu_rate_hz, v);
+        gnss_time_record(&gtime, n, cfg.imu_rate_hz, v);
     }
 }
 
@@ -163,7 +165,7 @@ static void test_start_at_fix_east(void **state)
 static void test_fix_before_history_skipped(void **state)
 {
     (void)state;
-    gnss_time_forget(&fu.time);
+    gnss_time_forget(&gtime);
     const nav_real_t v0[3] = {0.0f, 0.0f, 0.0f};
     const gnss_fix_t f = fix_at(450000000, 100000000, v0);
     int adopt = 1;
@@ -181,7 +183,7 @@ static void test_fix_beyond_history_refused(void **state)
     (void)state;
     const nav_real_t v_rest[3] = {0.0f, 0.0f, 0.0f};
     for (uint64_t n = N0 - 100u; n < N0; n++) { /* a full history */
-        gnss_time_record(&fu.time, n, cfg.imu_rate_hz, v_rest);
+        gnss_time_record(&gtime, n, cfg.imu_rate_hz, v_rest);
     }
     const float latency_s = cfg.gnss_latency_s;
     cfg.gnss_latency_s = 0.7f;

@@ -106,6 +106,7 @@ void app_reset(app_t *a)
 {
     /* a reset restarts navigation, not the ECU: app_keep_t stays (app.h) */
     memset(&a->run, 0, sizeof a->run);
+    gnss_time_forget(&a->keep.gnss_time); /* the receiver's clock and latency stay */
     a->run.mode = APP_MODE_WAIT_INIT;
 }
 
@@ -115,7 +116,7 @@ static fusion_ctx_t fusion_ctx(app_t *a, const app_diag_t *d)
 {
     const fusion_ctx_t c = {&a->run.nav,          &a->run.dr,  &a->keep.odo, &a->run.land,
                             &a->cfg,              d,           &a->keep.filter_reset,
-                            &a->keep.gnss};
+                            &a->keep.gnss,        &a->keep.gnss_time};
     return c;
 }
 
@@ -229,8 +230,33 @@ static int motion_align_waits(const app_t *a)
                : 0;
 }
 
-/* A GNSS epoch while the in-motion alignment waits: navigation starts from the fix when
- * the window it closes gives roll, pitch and heading. Returns 1 if it started. */
+/* The fix carried from its time of validity to now, the frames' arrival: its position
+ * moved by its velocity times the receiver's latency (the learnt one, else the parameter);
+ * a navigator started from the fix as it is would lag by speed x latency (1.2 m at 12 m/s
+ * and 100 ms: the independent client's finding) until the filter's first update. */
+static gnss_fix_t fix_now(const app_t *a, const gnss_fix_t *fix)
+{
+    gnss_fix_t f = *fix;
+    if (!fix->has_vel) {
+        return f;
+    }
+    const nav_real_t dt_s = gnss_time_latency(&a->keep.gnss_time, a->cfg.gnss_latency_s);
+    const nav_real_t lat = geo_lat_rad(&f.pos);
+    const nav_real_t h = geo_h_m(&f.pos);
+    nav_real_t R_M, R_N;
+    earth_radii(nav_sin(lat), &R_M, &R_N);
+    geo_pos_t p = f.pos;
+    if (geo_pos_add(&p, fix->v_enu_mps[1] * dt_s / (R_M + h),
+                    fix->v_enu_mps[0] * dt_s / ((R_N + h) * nav_cos(lat)),
+                    fix->v_enu_mps[2] * dt_s) == NAV_OK) {
+        f.pos = p;
+    }
+    return f;
+}
+
+/* A GNSS epoch while the in-motion alignment waits: navigation starts from the fix (as it
+ * is now, fix_now) when the window it closes gives roll, pitch and heading. Returns 1 if
+ * it started. */
 static int motion_align_epoch(app_t *a, const gnss_fix_t *fix)
 {
     const align_odo_t odo = {a->keep.odo.valid ? 1u : 0u, a->keep.odo.speed_mps};
@@ -239,13 +265,14 @@ static int motion_align_epoch(app_t *a, const gnss_fix_t *fix)
         return 0;
     }
     /* the navigator's heading is the IMU's: the car's plus the mounting yaw in use */
-    if (align_motion_start(fix, roll, pitch, heading + a->keep.cal.dh_rad, &a->run.nav,
+    const gnss_fix_t now = fix_now(a, fix);
+    if (align_motion_start(&now, roll, pitch, heading + a->keep.cal.dh_rad, &a->run.nav,
                            &a->run.dr, &a->keep.cal) != NAV_OK) {
         reject(a, &a->keep.health.gnss_rejected);
         return 0;
     }
     landnav_restart(&a->run.land);
-    gnss_time_forget(&a->run.fusion.time);
+    gnss_time_forget(&a->keep.gnss_time);
     a->run.fusion.init_heading_sigma_rad = a->run.align.mot_heading_sigma_rad;
     a->run.fusion.init_tilt_sigma_rad = a->run.align.mot_tilt_sigma_rad;
     a->run.mode = APP_MODE_NAVIGATING;
@@ -296,7 +323,7 @@ static void process_sample(app_t *a, hal_t *hal, const int32_t w_raw[3], const i
             for (int i = 0; i < refused; i++) {
                 reject(a, &a->keep.health.nav_rejected);
             }
-            gnss_time_record(&a->run.fusion.time, a->keep.n_samples, a->cfg.imu_rate_hz,
+            gnss_time_record(&a->keep.gnss_time, a->keep.n_samples, a->cfg.imu_rate_hz,
                              a->run.nav.v_n_mps);
         }
         if (a->run.mode == APP_MODE_NAVIGATING) {
@@ -425,7 +452,18 @@ static void on_gnss_status(app_t *a, hal_t *hal, const rx_input_t *in)
         /* no change */
     }
     if (fix.has_week) {
-        gnss_time_week(&a->run.fusion.time, fix.gps_week);
+        gnss_time_week(&a->keep.gnss_time, fix.gps_week);
+    }
+    if (a->run.mode != APP_MODE_NAVIGATING) {
+        /* the receiver's clock against the IMU's from every usable epoch, so NAV_Time is
+         * known from a start's first sample (while navigating fusion_gnss does it) */
+        const gnss_when_t w = gnss_time_align(&a->keep.gnss_time, app_time_us(a),
+                                              a->cfg.imu_rate_hz, fix.tow_ms,
+                                              gnss_time_latency(&a->keep.gnss_time,
+                                                                a->cfg.gnss_latency_s));
+        if (w.jumped) {
+            app_count(&a->keep.health.time_jumps);
+        }
     }
     if (a->run.cal.at_gnss) {
         /* the fix marked as the calibration point is that and nothing else: it neither
@@ -441,13 +479,14 @@ static void on_gnss_status(app_t *a, hal_t *hal, const rx_input_t *in)
             course_ok = 0;
         }
         if (!imu_rate_mismatch(&a->keep.rate) && course_ok && align_reacquire_ready(&fix)) {
-            if (align_reacquire(&a->run.align, &fix, &a->run.nav, &a->run.dr, &a->keep.cal) !=
+            const gnss_fix_t now = fix_now(a, &fix);
+            if (align_reacquire(&a->run.align, &now, &a->run.nav, &a->run.dr, &a->keep.cal) !=
                 NAV_OK) {
                 reject(a, &a->keep.health.gnss_rejected);
                 return;
             }
             landnav_restart(&a->run.land);
-            gnss_time_forget(&a->run.fusion.time); /* the velocities before the gap */
+            gnss_time_forget(&a->keep.gnss_time); /* the velocities before the gap */
             a->run.mode = APP_MODE_NAVIGATING;
             a->run.mount_start = 0u;
         }

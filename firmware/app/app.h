@@ -81,6 +81,10 @@ typedef struct {
     app_stamp_t filter_reset; /* the flag outlives the reset it caused */
     app_stamp_t gnss;       /* the latest usable GNSS epoch (NO_GNSS): the receiver's state,
                                so a Reset or SetInitialPosition does not say NO_GNSS */
+    gnss_time_t gnss_time;  /* the receiver's clock against the IMU's, its GPS week and
+                               latency, from every usable epoch (NAV_Time from the first
+                               sample of a start); the navigator's velocity history in it
+                               is forgotten at each navigation (re)start */
     calib_t cal;            /* the car's calibration and the NVM */
     zbias_t zbias;          /* the z gyro bias learnt at standstill (the IMU's) */
     odo_t odo;              /* the car's odometer */

@@ -199,7 +199,7 @@ fusion_action_t fusion_imu_step(fusion_t *fu, const fusion_ctx_t *c, imu_inc_t *
     for (int i = 0; i < 3; i++) {
         fu->f_sum_n[i] += dv_n[i];
     }
-    gnss_time_record(&fu->time, c->diag->n_samples, c->cfg->imu_rate_hz, c->nav->v_n_mps);
+    gnss_time_record(c->time, c->diag->n_samples, c->cfg->imu_rate_hz, c->nav->v_n_mps);
     for (int i = 0; i < 3; i++) {
         fu->w_sum_rad[i] += inc->dtheta_b_rad[i];
     }
@@ -328,8 +328,8 @@ fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_pr
     const app_config_t *cfg = c->cfg;
     const uint64_t n = c->diag->n_samples;
     *adopt = 0;
-    gnss_when_t when = gnss_time_align(&fu->time, c->diag->t_us, cfg->imu_rate_hz, fix->tow_ms,
-                                       gnss_time_latency(&fu->time, cfg->gnss_latency_s));
+    gnss_when_t when = gnss_time_align(c->time, c->diag->t_us, cfg->imu_rate_hz, fix->tow_ms,
+                                       gnss_time_latency(c->time, cfg->gnss_latency_s));
     if (when.jumped) {
         app_count(&c->diag->health->time_jumps);
     }
@@ -338,7 +338,7 @@ fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_pr
     const nav_real_t sacc = declared ? cfg->gnss_sacc_mps : fix->sacc_mps;
     const nav_real_t ss = nav_clamp(sacc, APP_GNSS_SACC_MIN_MPS, APP_GNSS_SACC_MAX_MPS);
     if (fix->has_vel) {
-        (void)gnss_time_learn(&fu->time, &when, fix->v_enu_mps, ss, cfg->gnss_latency_s);
+        (void)gnss_time_learn(c->time, &when, fix->v_enu_mps, ss, cfg->gnss_latency_s);
     }
     if (!when.in_history) {
         /* later than the history can hold: refused; valid before the navigation started
@@ -350,7 +350,7 @@ fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_pr
         return FUSION_GO_ON;
     }
     nav_real_t d[3];
-    gnss_time_displacement(&fu->time, &when, d);
+    gnss_time_displacement(c->time, &when, d);
     geo_pos_t then = c->nav->pos;
     const nav_real_t lat = geo_lat_rad(&then);
     const nav_real_t h = geo_h_m(&then);
@@ -394,7 +394,7 @@ fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_pr
                                      sh, sv, APP_GNSS_GATE_SIGMA, r_scale, fix->has_h);
     int rv = 1;
     if (fix->has_vel) {
-        const nav_real_t *vthen = gnss_time_velocity_then(&fu->time, &when);
+        const nav_real_t *vthen = gnss_time_velocity_then(c->time, &when);
         rv = cfg->gnss_vel_up == GNSS_VUP_NONE
                  ? ekf_gnss_velocity_horizontal(&fu->ekf, vthen, fix->v_enu_mps, ss,
                                                 APP_GNSS_GATE_SIGMA)

@@ -52,7 +52,6 @@ typedef struct {
     uint32_t nonfinite_seen, negative_seen; /* ekf counters at the last check */
     uint8_t state_lost;         /* the filter's state was found not finite at a feedback */
     nav_real_t course_rad, speed_mps; /* of the latest GNSS epoch with a velocity */
-    gnss_time_t time;           /* velocity history and receiver latency */
     /* the next start's heading and tilt sigmas (rad) when the start knows them (the
      * in-motion alignment, align.h); 0: the filter's defaults. Used once. */
     nav_real_t init_heading_sigma_rad, init_tilt_sigma_rad;
@@ -76,6 +75,8 @@ typedef struct {
     const app_diag_t *diag;
     app_stamp_t *filter_reset;  /* stamped at a reset (FILTER_RESET flag) */
     const app_stamp_t *gnss;    /* the latest usable GNSS epoch */
+    gnss_time_t *time;          /* the receiver's clock and latency, the velocity history
+                                   (app_keep_t: the receiver outlives a navigation reset) */
 } fusion_ctx_t;
 
 /* The estimates the filter starts from: what standstill and calibration already know. */

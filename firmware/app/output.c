@@ -143,8 +143,8 @@ static void emit_navigation(app_t *a, hal_t *hal)
     struct navecu_can_nav_time_t nt;
     uint64_t tow_us;
     uint16_t week;
-    if (gnss_time_at(&a->run.fusion.time, app_time_us(a),
-                     gnss_time_latency(&a->run.fusion.time, a->cfg.gnss_latency_s), &tow_us,
+    if (gnss_time_at(&a->keep.gnss_time, app_time_us(a),
+                     gnss_time_latency(&a->keep.gnss_time, a->cfg.gnss_latency_s), &tow_us,
                      &week) != 0) {
         tow_us = NAVECU_NAV_TIME_TIME_OF_WEEK_RAW_MAX;
         week = NAVECU_NAV_TIME_GPS_WEEK_RAW_MAX;
