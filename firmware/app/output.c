@@ -468,8 +468,9 @@ void output_due(app_t *a, hal_t *hal)
     const uint32_t imu = a->cfg.imu_rate_hz;
     const uint32_t nav_div = a->cfg.nav_rate_hz >= imu ? 1u : imu / a->cfg.nav_rate_hz;
     const uint32_t st_div = a->cfg.status_rate_hz >= imu ? 1u : imu / a->cfg.status_rate_hz;
-    const int mode_changed = output_mode(a) != a->keep.tx.last_mode;
-    if (mode_changed) { /* the new Mode before the first (or after the last) set in it */
+    const uint8_t mode_now = output_mode(a);
+    const uint8_t mode_changed = (mode_now != a->keep.tx.last_mode) ? 1u : 0u;
+    if (mode_changed != 0u) { /* the new Mode before the first (or after the last) set in it */
         output_status(a, hal);
         emit_accuracy(a, hal);
     }
@@ -480,7 +481,7 @@ void output_due(app_t *a, hal_t *hal)
         n % (a->cfg.dyn_rate_hz >= imu ? 1u : imu / a->cfg.dyn_rate_hz) == 0u) {
         emit_dynamics(a, hal);
     }
-    if (n % st_div == 0u && !mode_changed) {
+    if (n % st_div == 0u && mode_changed == 0u) {
         output_status(a, hal);
         emit_accuracy(a, hal);
     }
