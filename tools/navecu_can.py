@@ -454,9 +454,11 @@ def time_driven_ids(db=None) -> frozenset:
     return frozenset(db.get_message_by_name(n).frame_id for n in TIME_DRIVEN)
 
 
-def _frame_id(item: str):
-    """The identifier of a candump -L line ('(t) can0 ID#DATA') or an 'ID#DATA' string;
-    None for anything else."""
+def _frame_id(item):
+    """The identifier of a can.Message, a candump -L line ('(t) can0 ID#DATA') or an
+    'ID#DATA' string; None for anything else."""
+    if hasattr(item, "arbitration_id"):
+        return item.arbitration_id
     token = next((t for t in item.split() if "#" in t), None)
     if token is None:
         return None
@@ -466,8 +468,8 @@ def _frame_id(item: str):
         return None
 
 
-def data_driven(items: Iterable[str], db=None) -> list:
-    """items (candump -L lines or 'ID#DATA' strings, in order) without the frames of the
+def data_driven(items: Iterable, db=None) -> list:
+    """items (can.Message, candump -L lines or 'ID#DATA' strings, in order) without the frames of the
     time-driven outputs (TIME_DRIVEN): what must be identical between a file run, a live
     run and the target for the same input."""
     ids = time_driven_ids(db)
