@@ -14,6 +14,7 @@
 #include "app_loop.h"
 #include "can_frames.h"
 #include "app_fixture.h"
+#include "e2e.h"
 #include "fake_hal.h"
 
 static hal_t hal;
@@ -92,6 +93,82 @@ static void test_poll_after_each_frame(void **state)
     assert_int_equal(p.frames, 3u);
     assert_int_equal(cf_tx_count(&hal, NAVECU_CAN_NAV_STATUS_FRAME_ID), 0u);
     assert_int_equal(app.keep.have_poll, 0);
+}
+
+/* The NAV_Heartbeat frames sent so far, decoded, each E2E-checked (CRC; the counter one
+ * up from the previous one's), with their HAL send times; returns how many. */
+static uint32_t heartbeats(struct navecu_can_nav_heartbeat_t *hb, uint64_t *t_us, uint32_t max)
+{
+    uint32_t n = 0u;
+    for (uint32_t i = 0u; i < hal.tx_n && n < max; i++) {
+        const hal_can_frame_t *f = &hal.tx[i];
+        if (f->id != NAVECU_CAN_NAV_HEARTBEAT_FRAME_ID) {
+            continue;
+        }
+        assert_int_equal(f->dlc, 8u);
+        assert_true(e2e_crc_ok(f->id, f->data));
+        assert_int_equal(navecu_can_nav_heartbeat_unpack(&hb[n], f->data, 8u), 0);
+        if (n > 0u) {
+            assert_int_equal(hb[n].nav_counter, e2e_counter_next(hb[n - 1u].nav_counter));
+        }
+        t_us[n] = f->t_us;
+        n++;
+    }
+    return n;
+}
+
+/* Powered on with no input at all (issue #17: nothing at all was sent, so a live ECU
+ * without sensors looked dead). GIVEN a fresh ECU on a silent bus WHEN the main loop
+ * passes every 10 ms for 3 s of HAL time THEN NAV_Heartbeat goes out at 1 Hz from the
+ * first pass (10 ms, 1.01 s, 2.01 s: uptime 0, 1, 2 s), counter 0, 1, 2, saying no IMU,
+ * no GNSS, no wheels, Mode WaitInit, and no other frame is sent (the data-driven outputs
+ * wait for data). THEN WHEN IMU samples come at 100 Hz for 1.1 s more, the heartbeat's "no
+ * IMU" clears (at 4.01 s; GNSS and wheels still missing), at the same 1 Hz. */
+static void test_heartbeat_from_boot(void **state)
+{
+    (void)state;
+    hal.rx_empty_rc = HAL_EAGAIN;
+    for (uint64_t k = 1u; k <= 300u; k++) {
+        hal.t_us = k * 10000u;
+        (void)pass(10u, 1u);
+    }
+    struct navecu_can_nav_heartbeat_t hb[8];
+    uint64_t t[8];
+    assert_int_equal(heartbeats(hb, t, 8u), 3u);
+    assert_int_equal(hal.tx_n, 3u); /* nothing but the heartbeat */
+    for (uint32_t i = 0u; i < 3u; i++) {
+        assert_int_equal(t[i], 10000u + i * 1000000u);
+        assert_int_equal(hb[i].uptime, i);
+        assert_int_equal(hb[i].nav_counter, i);
+        assert_int_equal(hb[i].mode, NAVECU_CAN_NAV_HEARTBEAT_MODE_WAIT_INIT_CHOICE);
+        assert_int_equal(hb[i].imu_missing, 1u);
+        assert_int_equal(hb[i].gnss_missing, 1u);
+        assert_int_equal(hb[i].wheels_missing, 1u);
+    }
+
+    uint8_t counter = 0u;
+    for (uint64_t k = 301u; k <= 410u; k++) {
+        const int32_t w[3] = {0, 0, 0};
+        const int32_t v[3] = {0, 0, 402}; /* standing: g x 10 ms in 2^-12 m/s */
+        hal_can_frame_t fr, fa;
+        cf_imu_pair(w, v, counter, 0u, k * 10000u, &fr, &fa);
+        counter = e2e_counter_next(counter);
+        hal.rx_head = hal.rx_n = 0u; /* the queue is drained each pass: reuse it */
+        assert_int_equal(fake_hal_rx_push(&hal, &fr), 0);
+        assert_int_equal(fake_hal_rx_push(&hal, &fa), 0);
+        (void)pass(10u, 1u);
+    }
+    assert_int_equal(app_samples(&app), 110u);
+    assert_int_equal(heartbeats(hb, t, 8u), 5u);
+    /* 3.01 s: sent at the poll after the first IMU_Rate, before its sample was complete */
+    assert_int_equal(t[3], 3010000u);
+    assert_int_equal(hb[3].uptime, 3u);
+    assert_int_equal(t[4], 4010000u);
+    assert_int_equal(hb[4].uptime, 4u);
+    assert_int_equal(hb[4].imu_missing, 0u);
+    assert_int_equal(hb[4].gnss_missing, 1u);
+    assert_int_equal(hb[4].wheels_missing, 1u);
+    assert_int_equal(hb[4].mode, NAVECU_CAN_NAV_HEARTBEAT_MODE_WAIT_INIT_CHOICE);
 }
 
 /* A silent bus (HAL_EAGAIN at once): app_poll once, then the kick. */
@@ -184,6 +261,7 @@ int main(void)
         cmocka_unit_test_setup(test_kick_only_when_tasks_ok, setup),
         cmocka_unit_test_setup(test_no_kick_when_prediction_late, setup),
         cmocka_unit_test_setup(test_end_of_input_no_kick, setup),
+        cmocka_unit_test_setup(test_heartbeat_from_boot, setup),
     };
     return cmocka_run_group_tests_name("app_loop", tests, NULL, NULL);
 }

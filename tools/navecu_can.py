@@ -438,6 +438,44 @@ def read_log(path) -> list:
     return list(can.LogReader(str(path)))
 
 
+# ---------------------------------------------------------------- the time-driven output
+#: The ECU's one time-driven output (docs/can.md "NAV_Heartbeat"): sent every second of its
+#: own uptime from power-on, whatever the input. Every other output is driven by the data,
+#: so the same input gives the same frames from a file, over vcan and on the target; the
+#: heartbeat differs between them by design (a live ECU sends it before the replay starts)
+#: and every identity comparison of outputs leaves it out, through data_driven().
+TIME_DRIVEN = ("NAV_Heartbeat",)
+
+
+def time_driven_ids(db=None) -> frozenset:
+    """The identifiers of the time-driven outputs in db (default: load_db(), the DBC's or
+    the vehicle profile's chosen by select_vehicle)."""
+    db = db if db is not None else load_db()
+    return frozenset(db.get_message_by_name(n).frame_id for n in TIME_DRIVEN)
+
+
+def _frame_id(item):
+    """The identifier of a can.Message, a candump -L line ('(t) can0 ID#DATA') or an
+    'ID#DATA' string; None for anything else."""
+    if hasattr(item, "arbitration_id"):
+        return item.arbitration_id
+    token = next((t for t in item.split() if "#" in t), None)
+    if token is None:
+        return None
+    try:
+        return int(token.split("#", 1)[0], 16)
+    except ValueError:
+        return None
+
+
+def data_driven(items: Iterable, db=None) -> list:
+    """items (can.Message, candump -L lines or 'ID#DATA' strings, in order) without the frames of the
+    time-driven outputs (TIME_DRIVEN): what must be identical between a file run, a live
+    run and the target for the same input."""
+    ids = time_driven_ids(db)
+    return [x for x in items if _frame_id(x) not in ids]
+
+
 # ---------------------------------------------------------------- NAV_Status, read back
 def counter_max(db) -> dict:
     """NAV_Status: {signal: the largest value it can carry} of every Cnt* signal."""

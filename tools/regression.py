@@ -12,7 +12,10 @@ copied first, since the firmware writes into it). Each case is run as
     navecu --can-log IN --out OUT [--nvm NVM] OPTIONS
 
 and recorded: the input's SHA-256, the options, the exit status, the SHA-256 of the output
-log and of the NVM afterwards, and a summary decoded from the output through the DBC
+log, of the output log without the time-driven NAV_Heartbeat (the data-driven frames alone:
+deterministic in a file run too, the heartbeat's HAL time being the log's timestamps, but
+left out there so that a change to it is told from one to the navigation outputs) and of
+the NVM afterwards, and a summary decoded from the output through the DBC
 (frames per message, NAV_Status page-0 frames per Mode, when Mode and the calibration
 state changed, the HealthFlags and CalStatus values seen, the last values of every output
 message, the last value of every NAV_Status counter) with navecu's stderr summary.
@@ -53,6 +56,13 @@ UPDATE_HINT = ("If the change is intended: make regression-update, and commit "
 
 def sha256(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def data_sha256(out_log: Path) -> str:
+    """The SHA-256 of the output log without the time-driven NAV_Heartbeat lines
+    (navecu_can.data_driven): the data-driven outputs alone, which no heartbeat changes."""
+    lines = out_log.read_text().splitlines(keepends=True)
+    return hashlib.sha256("".join(nc.data_driven(lines)).encode()).hexdigest()
 
 
 def load_cases(cases_dir: Path) -> list:
@@ -241,6 +251,7 @@ def run_case(case: dict, navecu: Path, cases_dir: Path, work: Path, tag: str = "
     rec = {"input": case["input"], "input_sha256": sha256(log),
            "args": case["args"], "nvm": case.get("nvm"), "exit_status": res.returncode,
            "output_sha256": sha256(out) if out.exists() else None,
+           "data_output_sha256": data_sha256(out) if out.exists() else None,
            "nvm_sha256": sha256(nvm) if nvm is not None and nvm.exists() else None}
     summary = summarize(out) if out.exists() else {}
     summary["navecu"] = [ln.removeprefix("navecu: ") for ln in res.stderr.strip().splitlines()]
@@ -266,6 +277,7 @@ def differences(expected: dict, got: dict) -> list:
                        "file if the case was changed on purpose")
     for key, what in (("exit_status", "navecu's exit status"),
                       ("output_sha256", "the output log (sha256)"),
+                      ("data_output_sha256", "the output log without NAV_Heartbeat (sha256)"),
                       ("nvm_sha256", "the NVM after the run (sha256)")):
         if expected.get(key) != got.get(key):
             out.append(f"  {what}: expected {expected.get(key)}, now {got.get(key)}")
@@ -282,7 +294,7 @@ def differences(expected: dict, got: dict) -> list:
     other = sorted(k for k in set(expected) | set(got)
                    if expected.get(k) != got.get(k) and k not in (
                        "input_sha256", "args", "nvm", "exit_status", "output_sha256",
-                       "nvm_sha256", "summary"))
+                       "data_output_sha256", "nvm_sha256", "summary"))
     if other:
         out.append(f"  also differs: {', '.join(other)}")
     return out

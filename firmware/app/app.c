@@ -628,6 +628,7 @@ void app_poll(app_t *a, hal_t *hal)
     const uint64_t now = hal_time_us(hal);
     a->keep.last_poll_us = now;
     a->keep.have_poll = 1u;
+    output_heartbeat(a, hal); /* time-driven, from boot; no other output depends on it */
     const uint64_t stale_since = a->keep.imu.last_t_us + APP_IMU_STALE_US;
     const uint64_t period_us = 1000000u / a->cfg.status_rate_hz;
     const uint64_t last = a->keep.tx.last_status_t_us;

@@ -10,7 +10,7 @@
 #include "navecu_protocol.h"
 
 enum { TX_HEIGHT = 0, TX_VEL, TX_ATT, TX_STATUS, TX_CAL, TX_RATES, TX_ATT_RATES, TX_ACCEL,
-       TX_ACCEL_ENU, TX_ACCURACY };
+       TX_ACCEL_ENU, TX_ACCURACY, TX_HEARTBEAT };
 
 static void send(tx_state_t *tx, hal_t *hal, uint32_t id, const uint8_t data[8])
 {
@@ -246,6 +246,21 @@ static uint8_t sat8(uint32_t x)
     return x > UINT8_MAX ? (uint8_t)UINT8_MAX : (uint8_t)x;
 }
 
+/* IMU_STALE: an IMU sample was taken, none for APP_IMU_STALE_US of the HAL clock */
+static int imu_stale(const app_t *a, const hal_t *hal)
+{
+    const uint64_t now = hal_time_us(hal);
+    const imu_link_t *l = &a->keep.imu;
+    return l->have_sample && now > l->last_t_us && now - l->last_t_us > APP_IMU_STALE_US;
+}
+
+/* NO_GNSS: no usable GNSS epoch for APP_NO_GNSS_S of IMU time (or none since power-on) */
+static int no_gnss(const app_t *a)
+{
+    return !app_stamp_within(&a->keep.gnss, a->keep.n_samples,
+                             (uint64_t)APP_NO_GNSS_S * a->cfg.imu_rate_hz);
+}
+
 static uint16_t health_flags(const app_t *a, const hal_t *hal)
 {
     const app_keep_t *k = &a->keep;
@@ -253,14 +268,13 @@ static uint16_t health_flags(const app_t *a, const hal_t *hal)
     const uint64_t n = k->n_samples;
     const uint64_t second = a->cfg.imu_rate_hz;
     uint32_t fl = 0u;
-    const uint64_t now = hal_time_us(hal);
-    if (k->imu.have_sample && now > k->imu.last_t_us && now - k->imu.last_t_us > APP_IMU_STALE_US) {
+    if (imu_stale(a, hal)) {
         fl |= NAVECU_HEALTH_IMU_STALE;
     }
     if (k->imu.fault) {
         fl |= NAVECU_HEALTH_IMU_FAULT;
     }
-    if (!app_stamp_within(&k->gnss, n, APP_NO_GNSS_S * second)) {
+    if (no_gnss(a)) {
         fl |= NAVECU_HEALTH_NO_GNSS;
     }
     if (app_stamp_within(&r->events.reject, n, APP_FLAG_HOLD_S * second)) {
@@ -273,7 +287,7 @@ static uint16_t health_flags(const app_t *a, const hal_t *hal)
      * no initial state: the course while driving gives it, docs/kalman.md) */
     if ((r->mode != APP_MODE_NAVIGATING && r->align.pos_valid && !r->align.heading_valid) ||
         (r->mode == APP_MODE_WAIT_INIT && !r->align.heading_valid &&
-         app_stamp_within(&k->gnss, n, APP_NO_GNSS_S * second))) {
+         !no_gnss(a))) {
         fl |= NAVECU_HEALTH_NO_HEADING;
     }
     if (app_stamp_within(&r->events.gap, n, APP_FLAG_HOLD_S * second)) {
@@ -399,6 +413,35 @@ void output_status(app_t *a, hal_t *hal)
     st.nav_counter = next_counter(tx, TX_STATUS);
     navecu_can_nav_status_pack(d, &st, sizeof d);
     send_protected(tx, hal, a->cfg.can_ids[NAVECU_MSG_NAV_STATUS], d);
+}
+
+void output_heartbeat(app_t *a, hal_t *hal)
+{
+    tx_state_t *tx = &a->keep.tx;
+    const uint64_t now = hal_time_us(hal);
+    if (!tx->hb_sent) {
+        tx->boot_us = now;
+    }
+    const uint64_t up_s = now > tx->boot_us ? (now - tx->boot_us) / 1000000u : 0u;
+    const uint32_t uptime_s = up_s > UINT32_MAX ? (uint32_t)UINT32_MAX : (uint32_t)up_s;
+    if (tx->hb_sent && uptime_s == tx->hb_uptime_s) {
+        return; /* one a second: at each whole second of uptime (a clock going back too) */
+    }
+    tx->hb_sent = 1u;
+    tx->hb_uptime_s = uptime_s;
+    struct navecu_can_nav_heartbeat_t m;
+    (void)memset(&m, 0, sizeof m);
+    m.mode = output_mode(a);
+    m.imu_missing = (uint8_t)((!a->keep.imu.have_sample || imu_stale(a, hal)) ? 1u : 0u);
+    m.gnss_missing = (uint8_t)(no_gnss(a) ? 1u : 0u);
+    m.wheels_missing = (uint8_t)(a->keep.odo.valid != 0u ? 0u : 1u);
+    m.uptime = uptime_s > NAVECU_NAV_HEARTBEAT_UPTIME_RAW_MAX ? NAVECU_NAV_HEARTBEAT_UPTIME_RAW_MAX
+                                                                : uptime_s;
+    m.nav_counter = next_counter(tx, TX_HEARTBEAT);
+    m.nav_crc = 0u;
+    uint8_t d[8];
+    (void)navecu_can_nav_heartbeat_pack(d, &m, sizeof d);
+    send_protected(tx, hal, a->cfg.can_ids[NAVECU_MSG_NAV_HEARTBEAT], d);
 }
 
 static void emit_calibration(app_t *a, hal_t *hal)

@@ -12,12 +12,17 @@
 
 /* E2E transmit state and what was sent: survives a navigation reset. */
 typedef struct {
-    uint8_t counter[10];        /* alive counters of the E2E-protected outputs */
+    uint8_t counter[11];        /* alive counters of the E2E-protected outputs */
     uint8_t status_page;        /* next counter page of NAV_Status */
     uint32_t frames_sent;
     uint32_t send_errors;
     uint64_t last_status_t_us;  /* HAL time of the last NAV_Status (app_poll) */
     uint8_t last_mode;          /* Mode of the last NAV_Status page 0 (0 WaitInit at boot) */
+    /* NAV_Heartbeat, the one time-driven output (output_heartbeat): nothing of it is read
+     * by the data-driven outputs */
+    uint64_t boot_us;           /* HAL time of the first heartbeat: uptime 0 */
+    uint32_t hb_uptime_s;       /* the uptime, whole seconds, of the last heartbeat */
+    uint8_t hb_sent;            /* a heartbeat has been sent */
 } tx_state_t;
 
 typedef struct app app_t; /* app.h */
@@ -31,5 +36,12 @@ void output_due(app_t *a, hal_t *hal);
 
 /* NAV_Status now (app_poll: the heartbeat while no IMU data arrives). */
 void output_status(app_t *a, hal_t *hal);
+
+/* NAV_Heartbeat when due (app_poll, every main-loop pass): the first at the first call
+ * (uptime 0, the boot), then one at each whole second of uptime on the HAL clock, whatever
+ * the input. Mode as NAV_Status page 0; the inputs missing now (IMU_STALE or no IMU
+ * sample since boot, NO_GNSS, the odometer not valid); the uptime; its own E2E counter.
+ * The one output driven by time: every other frame is the same with or without it. */
+void output_heartbeat(app_t *a, hal_t *hal);
 
 #endif /* NAVECU_OUTPUT_H */

@@ -24,7 +24,7 @@ VEL_LSB = 2.0**-12
 E2E_MESSAGES = {"IMU_Rate", "IMU_Accel", "IMU_Time", "WheelSpeeds", "GNSS_Velocity", "GNSS_Time", "CMD_Control",
                 "CMD_InitialAttitude", "NAV_Height", "NAV_Velocity", "NAV_Attitude", "NAV_Rates",
                 "NAV_AttitudeRates", "NAV_Accel", "NAV_AccelEnu", "NAV_Status", "NAV_Accuracy",
-                "NAV_Calibration", "NAV_Time"}
+                "NAV_Calibration", "NAV_Time", "NAV_Heartbeat"}
 
 
 @pytest.fixture(scope="module")
@@ -35,7 +35,7 @@ def db():
 # ------------------------------------------------------------------------------ DBC ----
 
 def test_dbc_loads_strict(db):
-    assert len(db.messages) == 24
+    assert len(db.messages) == 25
     for msg in db.messages:
         assert msg.length == 8 and not msg.is_extended_frame and not msg.is_fd, msg.name
         assert msg.frame_id <= 0x7FF
@@ -52,6 +52,9 @@ def test_dbc_loads_strict(db):
             if sig.name.endswith(("Counter", "Epoch")) and sig.length == 4:
                 assert (sig.minimum, sig.maximum) == (0, 14), (msg.name, sig.name)
     assert db.get_message_by_name("NAV_Status").cycle_time == 50
+    # the one time-driven output: 1 s of the ECU's uptime, left out of identity comparisons
+    assert db.get_message_by_name("NAV_Heartbeat").cycle_time == 1000
+    assert nc.time_driven_ids(db) == {db.get_message_by_name("NAV_Heartbeat").frame_id}
 
 
 def test_strict_load_rejects_overlapping_signals(tmp_path):

@@ -236,8 +236,10 @@ def mount_estimate(path, db) -> dict | None:
 
 
 def _output_frames(path, exclude_status_page1: bool, status_id: int) -> list:
+    """The data-driven output frames (all but the time-driven NAV_Heartbeat: the car's
+    traffic adds main-loop passes, so it may go out at another frame) as (id, data)."""
     out = []
-    for m in nc.read_log(path):
+    for m in nc.data_driven(nc.read_log(path)):
         if exclude_status_page1 and m.arbitration_id == status_id and (m.data[0] & 0x7) == 1:
             continue
         out.append((m.arbitration_id, bytes(m.data)))

@@ -4829,3 +4829,200 @@ bool navecu_can_nav_calibration_nav_crc_is_in_phys_range(float value)
 {
     return ((value >= 0.0f) && (value <= 255.0f));
 }
+
+int navecu_can_nav_heartbeat_pack(
+    uint8_t *dst_p,
+    const struct navecu_can_nav_heartbeat_t *src_p,
+    size_t size)
+{
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    memset(&dst_p[0], 0, 8);
+
+    dst_p[0] |= pack_left_shift_u8(src_p->mode, 0u, 0x0fu);
+    dst_p[0] |= pack_left_shift_u8(src_p->imu_missing, 4u, 0x10u);
+    dst_p[0] |= pack_left_shift_u8(src_p->gnss_missing, 5u, 0x20u);
+    dst_p[0] |= pack_left_shift_u8(src_p->wheels_missing, 6u, 0x40u);
+    dst_p[1] |= pack_left_shift_u32(src_p->uptime, 0u, 0xffu);
+    dst_p[2] |= pack_right_shift_u32(src_p->uptime, 8u, 0xffu);
+    dst_p[3] |= pack_right_shift_u32(src_p->uptime, 16u, 0xffu);
+    dst_p[6] |= pack_left_shift_u8(src_p->nav_counter, 0u, 0x0fu);
+    dst_p[7] |= pack_left_shift_u8(src_p->nav_crc, 0u, 0xffu);
+
+    return (8);
+}
+
+int navecu_can_nav_heartbeat_unpack(
+    struct navecu_can_nav_heartbeat_t *dst_p,
+    const uint8_t *src_p,
+    size_t size)
+{
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    dst_p->mode = unpack_right_shift_u8(src_p[0], 0u, 0x0fu);
+    dst_p->imu_missing = unpack_right_shift_u8(src_p[0], 4u, 0x10u);
+    dst_p->gnss_missing = unpack_right_shift_u8(src_p[0], 5u, 0x20u);
+    dst_p->wheels_missing = unpack_right_shift_u8(src_p[0], 6u, 0x40u);
+    dst_p->uptime = unpack_right_shift_u32(src_p[1], 0u, 0xffu);
+    dst_p->uptime |= unpack_left_shift_u32(src_p[2], 8u, 0xffu);
+    dst_p->uptime |= unpack_left_shift_u32(src_p[3], 16u, 0xffu);
+    dst_p->nav_counter = unpack_right_shift_u8(src_p[6], 0u, 0x0fu);
+    dst_p->nav_crc = unpack_right_shift_u8(src_p[7], 0u, 0xffu);
+
+    return (0);
+}
+
+int navecu_can_nav_heartbeat_init(struct navecu_can_nav_heartbeat_t *msg_p)
+{
+    if (msg_p == NULL) return -1;
+
+    memset(msg_p, 0, sizeof(struct navecu_can_nav_heartbeat_t));
+
+    return 0;
+}
+
+uint8_t navecu_can_nav_heartbeat_mode_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_nav_heartbeat_mode_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_nav_heartbeat_mode_is_in_range(uint8_t value)
+{
+    return (value <= 15u);
+}
+
+bool navecu_can_nav_heartbeat_mode_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 15.0f));
+}
+
+uint8_t navecu_can_nav_heartbeat_imu_missing_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_nav_heartbeat_imu_missing_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_nav_heartbeat_imu_missing_is_in_range(uint8_t value)
+{
+    return (value <= 1u);
+}
+
+bool navecu_can_nav_heartbeat_imu_missing_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 1.0f));
+}
+
+uint8_t navecu_can_nav_heartbeat_gnss_missing_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_nav_heartbeat_gnss_missing_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_nav_heartbeat_gnss_missing_is_in_range(uint8_t value)
+{
+    return (value <= 1u);
+}
+
+bool navecu_can_nav_heartbeat_gnss_missing_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 1.0f));
+}
+
+uint8_t navecu_can_nav_heartbeat_wheels_missing_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_nav_heartbeat_wheels_missing_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_nav_heartbeat_wheels_missing_is_in_range(uint8_t value)
+{
+    return (value <= 1u);
+}
+
+bool navecu_can_nav_heartbeat_wheels_missing_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 1.0f));
+}
+
+uint32_t navecu_can_nav_heartbeat_uptime_encode(float value)
+{
+    return (uint32_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_nav_heartbeat_uptime_decode(uint32_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_nav_heartbeat_uptime_is_in_range(uint32_t value)
+{
+    return (value <= 16777215u);
+}
+
+bool navecu_can_nav_heartbeat_uptime_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 16777215.0f));
+}
+
+uint8_t navecu_can_nav_heartbeat_nav_counter_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_nav_heartbeat_nav_counter_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_nav_heartbeat_nav_counter_is_in_range(uint8_t value)
+{
+    return (value <= 14u);
+}
+
+bool navecu_can_nav_heartbeat_nav_counter_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 14.0f));
+}
+
+uint8_t navecu_can_nav_heartbeat_nav_crc_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_nav_heartbeat_nav_crc_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_nav_heartbeat_nav_crc_is_in_range(uint8_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_nav_heartbeat_nav_crc_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 255.0f));
+}

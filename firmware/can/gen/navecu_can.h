@@ -71,6 +71,7 @@ extern "C" {
 #define NAVECU_CAN_NAV_ACCURACY_FRAME_ID (0x312u)
 #define NAVECU_CAN_NAV_TIME_FRAME_ID (0x313u)
 #define NAVECU_CAN_NAV_CALIBRATION_FRAME_ID (0x311u)
+#define NAVECU_CAN_NAV_HEARTBEAT_FRAME_ID (0x314u)
 
 /* Frame lengths in bytes. */
 #define NAVECU_CAN_IMU_RATE_LENGTH (8u)
@@ -97,6 +98,7 @@ extern "C" {
 #define NAVECU_CAN_NAV_ACCURACY_LENGTH (8u)
 #define NAVECU_CAN_NAV_TIME_LENGTH (8u)
 #define NAVECU_CAN_NAV_CALIBRATION_LENGTH (8u)
+#define NAVECU_CAN_NAV_HEARTBEAT_LENGTH (8u)
 
 /* Extended or standard frame types. */
 #define NAVECU_CAN_IMU_RATE_IS_EXTENDED (0)
@@ -123,6 +125,7 @@ extern "C" {
 #define NAVECU_CAN_NAV_ACCURACY_IS_EXTENDED (0)
 #define NAVECU_CAN_NAV_TIME_IS_EXTENDED (0)
 #define NAVECU_CAN_NAV_CALIBRATION_IS_EXTENDED (0)
+#define NAVECU_CAN_NAV_HEARTBEAT_IS_EXTENDED (0)
 
 /* Frame cycle times in milliseconds. */
 #define NAVECU_CAN_WHEEL_SPEEDS_CYCLE_TIME_MS (20u)
@@ -132,6 +135,7 @@ extern "C" {
 #define NAVECU_CAN_NAV_ATTITUDE_CYCLE_TIME_MS (20u)
 #define NAVECU_CAN_NAV_STATUS_CYCLE_TIME_MS (50u)
 #define NAVECU_CAN_NAV_CALIBRATION_CYCLE_TIME_MS (1000u)
+#define NAVECU_CAN_NAV_HEARTBEAT_CYCLE_TIME_MS (1000u)
 
 /* Signal choices. */
 #define NAVECU_CAN_GNSS_STATUS_FIX_TYPE_NO_FIX_CHOICE (0u)
@@ -173,6 +177,13 @@ extern "C" {
 #define NAVECU_CAN_NAV_CALIBRATION_MOUNT_STATE_ESTIMATING_CHOICE (1u)
 #define NAVECU_CAN_NAV_CALIBRATION_MOUNT_STATE_ESTIMATED_CHOICE (2u)
 
+#define NAVECU_CAN_NAV_HEARTBEAT_MODE_WAIT_INIT_CHOICE (0u)
+#define NAVECU_CAN_NAV_HEARTBEAT_MODE_LEVELLING_CHOICE (1u)
+#define NAVECU_CAN_NAV_HEARTBEAT_MODE_INERTIAL_CHOICE (2u)
+#define NAVECU_CAN_NAV_HEARTBEAT_MODE_FAULT_CHOICE (3u)
+#define NAVECU_CAN_NAV_HEARTBEAT_MODE_DEAD_RECKONING_CHOICE (4u)
+#define NAVECU_CAN_NAV_HEARTBEAT_MODE_GNSS_INS_CHOICE (5u)
+
 /* Frame Names. */
 #define NAVECU_CAN_IMU_RATE_NAME "IMU_Rate"
 #define NAVECU_CAN_IMU_ACCEL_NAME "IMU_Accel"
@@ -198,6 +209,7 @@ extern "C" {
 #define NAVECU_CAN_NAV_ACCURACY_NAME "NAV_Accuracy"
 #define NAVECU_CAN_NAV_TIME_NAME "NAV_Time"
 #define NAVECU_CAN_NAV_CALIBRATION_NAME "NAV_Calibration"
+#define NAVECU_CAN_NAV_HEARTBEAT_NAME "NAV_Heartbeat"
 
 /* Signal Names. */
 #define NAVECU_CAN_IMU_RATE_ANGLE_INC_X_NAME "AngleIncX"
@@ -338,6 +350,13 @@ extern "C" {
 #define NAVECU_CAN_NAV_CALIBRATION_NAV_COUNTER_NAME "NavCounter"
 #define NAVECU_CAN_NAV_CALIBRATION_CAL_PAGE_NAME "CalPage"
 #define NAVECU_CAN_NAV_CALIBRATION_NAV_CRC_NAME "NavCrc"
+#define NAVECU_CAN_NAV_HEARTBEAT_MODE_NAME "Mode"
+#define NAVECU_CAN_NAV_HEARTBEAT_IMU_MISSING_NAME "ImuMissing"
+#define NAVECU_CAN_NAV_HEARTBEAT_GNSS_MISSING_NAME "GnssMissing"
+#define NAVECU_CAN_NAV_HEARTBEAT_WHEELS_MISSING_NAME "WheelsMissing"
+#define NAVECU_CAN_NAV_HEARTBEAT_UPTIME_NAME "Uptime"
+#define NAVECU_CAN_NAV_HEARTBEAT_NAV_COUNTER_NAME "NavCounter"
+#define NAVECU_CAN_NAV_HEARTBEAT_NAV_CRC_NAME "NavCrc"
 
 /**
  * Signals in message IMU_Rate.
@@ -1540,6 +1559,74 @@ struct navecu_can_nav_calibration_t {
      * Offset: 0
      */
     uint8_t cal_page;
+
+    /**
+     * Range: 0..255 (0..255 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t nav_crc;
+};
+
+/**
+ * Signals in message NAV_Heartbeat.
+ *
+ * The ECU's status heartbeat, its one time-driven output: every second of the ECU's own uptime (HAL clock) from power-on, the first at the first main-loop pass, whatever the input (before any, while navigating, during a sensor loss). Every other NAV_* frame is driven by the data and independent of it; live and file runs, host and target are compared without it (docs/can.md).
+ *
+ * All signal values are as on the CAN bus.
+ */
+struct navecu_can_nav_heartbeat_t {
+    /**
+     * The output mode, as NAV_Status page 0 Mode.
+     *
+     * Range: 0..15 (0..15 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t mode;
+
+    /**
+     * 1: no IMU sample for 0.5 s of the HAL clock, or none since power-on (NAV_Status HealthFlags IMU_STALE).
+     *
+     * Range: 0..1 (0..1 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t imu_missing;
+
+    /**
+     * 1: no usable GNSS epoch for 2 s of IMU time, or none since power-on (NAV_Status HealthFlags NO_GNSS). Measured in IMU time: while the IMU is missing it keeps its last value.
+     *
+     * Range: 0..1 (0..1 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t gnss_missing;
+
+    /**
+     * 1: no accepted wheel speeds within the odometer's timeout (1.5 s of IMU time), or none since power-on: the odometer is not valid. Measured in IMU time: while the IMU is missing it keeps its last value.
+     *
+     * Range: 0..1 (0..1 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t wheels_missing;
+
+    /**
+     * Seconds since power-on (the first main-loop pass), whole seconds, saturating at 16777215 (194 days).
+     *
+     * Range: 0..16777215 (0..16777215 s)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint32_t uptime;
+
+    /**
+     * Range: 0..14 (0..14 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t nav_counter;
 
     /**
      * Range: 0..255 (0..255 -)
@@ -7956,6 +8043,323 @@ bool navecu_can_nav_calibration_nav_crc_is_in_range(uint8_t value);
  * @return true if in range, false otherwise.
  */
 bool navecu_can_nav_calibration_nav_crc_is_in_phys_range(float value);
+
+/**
+ * Pack message NAV_Heartbeat.
+ *
+ * @param[out] dst_p Buffer to pack the message into.
+ * @param[in] src_p Data to pack.
+ * @param[in] size Size of dst_p.
+ *
+ * @return Size of packed data, or negative error code.
+ */
+int navecu_can_nav_heartbeat_pack(
+    uint8_t *dst_p,
+    const struct navecu_can_nav_heartbeat_t *src_p,
+    size_t size);
+
+/**
+ * Unpack message NAV_Heartbeat.
+ *
+ * @param[out] dst_p Object to unpack the message into.
+ * @param[in] src_p Message to unpack.
+ * @param[in] size Size of src_p.
+ *
+ * @return zero(0) or negative error code.
+ */
+int navecu_can_nav_heartbeat_unpack(
+    struct navecu_can_nav_heartbeat_t *dst_p,
+    const uint8_t *src_p,
+    size_t size);
+
+/**
+ * Init message fields to default values from NAV_Heartbeat.
+ *
+ * @param[in] msg_p Message to init.
+ *
+ * @return zero(0) on success or (-1) in case of nullptr argument.
+ */
+int navecu_can_nav_heartbeat_init(struct navecu_can_nav_heartbeat_t *msg_p);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_nav_heartbeat_mode_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_heartbeat_mode_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_heartbeat_mode_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_heartbeat_mode_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_nav_heartbeat_imu_missing_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_heartbeat_imu_missing_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_heartbeat_imu_missing_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_heartbeat_imu_missing_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_nav_heartbeat_gnss_missing_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_heartbeat_gnss_missing_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_heartbeat_gnss_missing_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_heartbeat_gnss_missing_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_nav_heartbeat_wheels_missing_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_heartbeat_wheels_missing_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_heartbeat_wheels_missing_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_heartbeat_wheels_missing_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint32_t navecu_can_nav_heartbeat_uptime_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_heartbeat_uptime_decode(uint32_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_heartbeat_uptime_is_in_range(uint32_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_heartbeat_uptime_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_nav_heartbeat_nav_counter_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_heartbeat_nav_counter_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_heartbeat_nav_counter_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_heartbeat_nav_counter_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_nav_heartbeat_nav_crc_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_nav_heartbeat_nav_crc_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_heartbeat_nav_crc_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_nav_heartbeat_nav_crc_is_in_phys_range(float value);
 
 
 #ifdef __cplusplus
