@@ -530,7 +530,7 @@ struct navecu_can_wheel_speeds_t {
 /**
  * Signals in message GNSS_Position.
  *
- * GNSS fix position (WGS-84). One epoch is the GNSS_Position, GNSS_Velocity and GNSS_Height frames received before the GNSS_Status that closes it.
+ * GNSS fix position (WGS-84). One epoch is the GNSS_Position, GNSS_Velocity, GNSS_Height and GNSS_Time frames received before the GNSS_Status that closes it (GNSS_Status last). This frame has no GnssEpoch: the latest one before the GNSS_Status is the epoch's, one sent after it belongs to the next epoch.
  *
  * All signal values are as on the CAN bus.
  */
@@ -585,6 +585,8 @@ struct navecu_can_gnss_velocity_t {
     uint8_t gnss_epoch;
 
     /**
+     * The receiver's 1-sigma of each horizontal velocity component (VelUp's: 1.5 times it), saturated at 1.5 m/s, clamped to 0.05..2 m/s (0 gives the floor; gnss_accuracy declared replaces it by gnss_sacc_mps).
+     *
      * Range: 0..15 (0..1.5 m/s)
      * Scale: 0.1
      * Offset: 0
@@ -602,7 +604,7 @@ struct navecu_can_gnss_velocity_t {
 /**
  * Signals in message GNSS_Status.
  *
- * Closes a GNSS epoch. FixType: 0 none, 1 dead reckoning, 2 2D, 3 3D, 4 differential, 5 RTK float, 6 RTK fixed.
+ * Closes a GNSS epoch: sent after the epoch's other frames. FixType: 0 none, 1 dead reckoning, 2 2D, 3 3D, 4 differential, 5 RTK float, 6 RTK fixed. The epoch is used only with FixType 3 or more, NumSatellites 4 or more and its GNSS_Position; other epochs are ignored, counted nowhere. TimeOfWeek is the fix's time of validity (the frames arrive the receiver's latency later).
  *
  * All signal values are as on the CAN bus.
  */
@@ -622,6 +624,8 @@ struct navecu_can_gnss_status_t {
     uint8_t num_satellites;
 
     /**
+     * The receiver's horizontal accuracy, read as the radial 1-sigma sqrt(sigmaE^2 + sigmaN^2): per axis HorizAccuracy / sqrt(2), clamped to 1..100 m (0 is no 'unknown': it gives the 1 m floor; gnss_accuracy declared replaces it by gnss_hacc_m).
+     *
      * Range: 0..1023 (0..102.3 m)
      * Scale: 0.1
      * Offset: 0
@@ -629,6 +633,8 @@ struct navecu_can_gnss_status_t {
     uint16_t horiz_accuracy;
 
     /**
+     * The receiver's vertical 1-sigma, clamped to 0.5..100 m (0 gives the floor; gnss_accuracy declared replaces it by gnss_vacc_m).
+     *
      * Range: 0..1023 (0..102.3 m)
      * Scale: 0.1
      * Offset: 0
@@ -674,7 +680,7 @@ struct navecu_can_gnss_height_t {
 /**
  * Signals in message GNSS_Time.
  *
- * The GPS week of the epoch (optional; with it NAV_Time carries the week). Belongs to the epoch the GNSS_Status with the same GnssEpoch closes.
+ * The GPS week of the epoch (optional; with it NAV_Time carries the week). Sent before the GNSS_Status of its epoch, with the same GnssEpoch: one received after its GNSS_Status, or with another number, is ignored. E2E: its own CRC; GnssEpoch 15 or GpsWeek 65535 refused.
  *
  * All signal values are as on the CAN bus.
  */
@@ -847,6 +853,8 @@ struct navecu_can_nav_height_t {
     int32_t height;
 
     /**
+     * The filter's height 1-sigma; 25.5 (raw 255) unknown (the filter not running), a known value saturates at 25.4.
+     *
      * Range: 0..255 (0..25.5 m)
      * Scale: 0.1
      * Offset: 0
@@ -1217,6 +1225,8 @@ struct navecu_can_nav_status_t {
     uint16_t cnt_imu_saturated;
 
     /**
+     * Page 0: the filter's horizontal accuracy sqrt(sigmaE^2 + sigmaN^2); 655.35 (raw 65535) unknown (the filter not running), a known value saturates at 655.34.
+     *
      * Range: 0..65535 (0..655.35 m)
      * Scale: 0.01
      * Offset: 0
