@@ -280,6 +280,25 @@ static void test_inmotion_start_carries_the_fix_to_now(void **state)
     assert_true(fabs(late_m - on_time_m) < 0.05); /* 1.5 m more before: 15 m/s x 0.1 s */
 }
 
+/* GIVEN a receiver configured as reporting no accuracy (gnss_accuracy = declared, its
+ *       declared speed accuracy 1.0 m/s), whose fixes say 0.2 m/s
+ * WHEN the in-motion alignment starts navigation at 15 m/s
+ * THEN the start's heading sigma is the declared speed sigma over the speed (1/15 rad),
+ *      as the filter takes that fix, not the frames' 0.2/15 (before, the alignment read the
+ *      frames' field whatever the configuration said) */
+static void test_inmotion_start_takes_the_declared_accuracy(void **state)
+{
+    (void)state;
+    app.cfg.gnss_accuracy = GNSS_ACC_DECLARED;
+    app.cfg.gnss_sacc_mps = 1.0f;
+    speed = 15.0;
+    assert_true(drive_until_navigating(10.0, 15.0) > 0.0);
+    const double sigma = (double)app.run.align.mot_heading_sigma_rad;
+    print_message("in-motion start, declared 1.0 m/s at 15 m/s: heading sigma %.3f deg\n",
+                  sigma / DEG);
+    assert_true(fabs(sigma - 1.0 / 15.0) < 1e-4); /* float32 of 0.0667 rad */
+}
+
 static void test_reset_at_speed(void **state)
 {
     (void)state;
@@ -430,6 +449,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test_setup(test_power_on_while_driving, setup),
         cmocka_unit_test_setup(test_inmotion_start_carries_the_fix_to_now, setup),
+        cmocka_unit_test_setup(test_inmotion_start_takes_the_declared_accuracy, setup),
         cmocka_unit_test_setup(test_reset_at_speed, setup),
         cmocka_unit_test_setup(test_set_initial_position_without_heading, setup),
         cmocka_unit_test_setup(test_gnss_only_at_rest_says_no_heading, setup),

@@ -441,6 +441,13 @@ static void on_gnss_status(app_t *a, hal_t *hal, const rx_input_t *in)
     if (!r.usable) {
         return;
     }
+    if (a->cfg.gnss_accuracy == GNSS_ACC_DECLARED) {
+        /* a receiver that reports no accuracy: its declared figures, for every user of the
+         * fix (the filter, the in-motion alignment, the re-acquisition; docs/configuration.md) */
+        fix.hacc_m = a->cfg.gnss_hacc_m;
+        fix.vacc_m = a->cfg.gnss_vacc_m;
+        fix.sacc_mps = a->cfg.gnss_sacc_mps;
+    }
     app_stamp(&a->keep.gnss, a->keep.n_samples);
     const imu_rate_change_t rate = imu_rate_epoch(&a->keep.rate, a->cfg.imu_rate_hz, fix.tow_ms);
     if (rate == IMU_RATE_MISMATCH) {

@@ -333,10 +333,9 @@ fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_pr
     if (when.jumped) {
         app_count(&c->diag->health->time_jumps);
     }
-    /* a receiver that reports no accuracy: its declared figures (docs/configuration.md) */
-    const int declared = cfg->gnss_accuracy == GNSS_ACC_DECLARED;
-    const nav_real_t sacc = declared ? cfg->gnss_sacc_mps : fix->sacc_mps;
-    const nav_real_t ss = nav_clamp(sacc, APP_GNSS_SACC_MIN_MPS, APP_GNSS_SACC_MAX_MPS);
+    /* the accuracies are the receiver's or, with gnss_accuracy = declared, the declared
+     * figures (app.c puts them into the fix) */
+    const nav_real_t ss = nav_clamp(fix->sacc_mps, APP_GNSS_SACC_MIN_MPS, APP_GNSS_SACC_MAX_MPS);
     if (fix->has_vel) {
         (void)gnss_time_learn(c->time, &when, fix->v_enu_mps, ss, cfg->gnss_latency_s);
     }
@@ -361,11 +360,9 @@ fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_pr
         app_diag_reject(c->diag, &c->diag->health->gnss_rejected);
         return FUSION_GO_ON;
     }
-    const nav_real_t hacc = declared ? cfg->gnss_hacc_m : fix->hacc_m;
-    const nav_real_t vacc = declared ? cfg->gnss_vacc_m : fix->vacc_m;
-    const nav_real_t sh = nav_clamp(hacc * APP_GNSS_HACC_PER_AXIS, APP_GNSS_SIGMA_FLOOR_M,
+    const nav_real_t sh = nav_clamp(fix->hacc_m * APP_GNSS_HACC_PER_AXIS, APP_GNSS_SIGMA_FLOOR_M,
                                  APP_GNSS_SIGMA_MAX_M);
-    const nav_real_t sv = nav_clamp(vacc, APP_GNSS_SIGMA_V_MIN_M, APP_GNSS_SIGMA_MAX_M);
+    const nav_real_t sv = nav_clamp(fix->vacc_m, APP_GNSS_SIGMA_V_MIN_M, APP_GNSS_SIGMA_MAX_M);
     /* A receiver's position errors are correlated over tens of seconds (multipath,
      * atmosphere, orbits), the filter's noise model is white: N fixes within the
      * correlation time carry the information of about one. Each fix's variance is
