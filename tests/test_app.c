@@ -786,6 +786,30 @@ static uint8_t att_counter;
 
 
 /*
+ * GIVEN levelling after SetInitialPosition, 10 s into its 30 s
+ * WHEN 2 s of IMU samples are lost (beyond the 200 ms that are bridged)
+ * THEN the levelling starts over (its average would span an unknown interval), it does
+ *      not stop in Fault waiting for a command: the gap flagged, navigation 30 s after
+ *      the gap and not before.
+ */
+static void test_imu_gap_restarts_levelling(void **state)
+{
+    (void)state;
+    send_init_commands(30.0);
+    run_still(10);
+    assert_int_equal(app.run.mode, APP_MODE_LEVELLING);
+    skip_samples(200);
+    run_still(1);
+    assert_true(app.keep.health.imu_lost >= 200u); /* 201: as in test_imu_gaps */
+    assert_int_equal(app.run.mode, APP_MODE_LEVELLING);
+    assert_true(health_flags_now() & NAVECU_HEALTH_IMU_GAP);
+    run_still(28); /* 29 s after the gap: still levelling (20 s would have ended it) */
+    assert_int_equal(app.run.mode, APP_MODE_LEVELLING);
+    run_still(2);
+    assert_int_equal(app.run.mode, APP_MODE_NAVIGATING);
+}
+
+/*
  * GIVEN navigation interrupted by an IMU gap of 2 s (beyond bridging): mode Fault,
  *       HealthFlags REACQUIRE
  * WHEN a GNSS epoch at 2 m/s arrives (its course is no heading yet)
@@ -1564,6 +1588,7 @@ int main(void)
         cmocka_unit_test_setup(test_rejected_frames_change_nothing, setup),
         cmocka_unit_test_setup(test_replayed_command_rejected, setup),
         cmocka_unit_test_setup(test_imu_gaps, setup),
+        cmocka_unit_test_setup(test_imu_gap_restarts_levelling, setup),
         cmocka_unit_test_setup(test_corrupt_imu_counter_is_not_a_gap, setup),
         cmocka_unit_test_setup(test_imu_stuck_and_saturated, setup),
         cmocka_unit_test_setup(test_reacquire_after_long_gap, setup),

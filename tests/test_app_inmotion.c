@@ -444,6 +444,34 @@ static void test_drive_off_during_levelling_drops_the_point(void **state)
     assert_int_equal(n_levelling_moving, 0u);
 }
 
+/* GIVEN the GNSS-only start: a course seen briefly above 5 m/s (too short a window for the
+ *       in-motion alignment), then the car stops and the firmware levels on its own
+ *       (level_s 2 s here)
+ * WHEN the car drives off during that levelling
+ * THEN the levelling stops (WaitInit, never Levelling while driving), but no command is
+ *      counted refused: none was sent (before, CntCmdRejected +1 and REJECTED for a
+ *      StalePosition nobody commanded) */
+static void test_drive_off_during_gnss_only_levelling_refuses_nothing(void **state)
+{
+    (void)state;
+    drive(1.0, 0.0);
+    while (speed < 6.0) {
+        sample(3.0, 6.0);
+    }
+    while (speed > 0.0) {
+        sample(-3.0, 0.0);
+    }
+    drive(1.0, 0.0); /* half the levelling (level_s 2 here) */
+    assert_int_equal(app_mode(&app), APP_MODE_LEVELLING);
+    const uint32_t before = app.keep.health.cmd_rejected;
+    for (int k = 0; k < RATE_HZ; k++) {
+        sample(1.5, 15.0);
+    }
+    assert_int_equal(app_mode(&app), APP_MODE_WAIT_INIT);
+    assert_int_equal(app.keep.health.cmd_rejected, before);
+    assert_int_equal(n_levelling_moving, 0u);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -457,6 +485,7 @@ int main(void)
         cmocka_unit_test_setup(test_set_initial_position_while_driving_refused, setup),
         cmocka_unit_test_setup(test_stale_known_position_refused, setup),
         cmocka_unit_test_setup(test_drive_off_during_levelling_drops_the_point, setup),
+        cmocka_unit_test_setup(test_drive_off_during_gnss_only_levelling_refuses_nothing, setup),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

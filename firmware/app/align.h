@@ -29,6 +29,7 @@ typedef struct {
     int32_t known_lat_e7, known_lon_e7;
     /* the initial state navigation starts from */
     uint8_t pos_valid, heading_valid;
+    uint8_t commanded;      /* set by SetInitialPosition (not by the GNSS-only start) */
     geo_pos_t pos;          /* position, height from h_cm */
     int32_t h_cm;           /* height above the ellipsoid */
     nav_real_t heading_rad;

@@ -153,7 +153,22 @@ static void hold_for_rate(app_t *a)
         a->run.rate_held = 1u;
         a->run.mode = APP_MODE_FAULT;
     } else {
-        /* Fault already (re-acquiring, or levelling stopped by a gap): it stays */
+        /* Fault already (re-acquiring, or held by a rate mismatch): it stays */
+    }
+}
+
+/* An IMU gap the firmware cannot bridge (too long, or the IMU's clock jumped): navigating,
+ * the solution re-acquires from GNSS; levelling, the average so far is of an unknown
+ * interval: the levelling starts over (the car still stands, or the wheels and GNSS
+ * will say it moved and stop it, docs/can.md) */
+static void gap_unbridged(app_t *a)
+{
+    if (a->run.mode == APP_MODE_NAVIGATING) {
+        begin_reacquire(a);
+    } else if (a->run.mode == APP_MODE_LEVELLING) {
+        align_level_restart(&a->run.align);
+    } else {
+        /* waiting or in Fault: nothing accumulated to lose */
     }
 }
 
@@ -363,11 +378,7 @@ static void on_imu_accel(app_t *a, hal_t *hal, const rx_input_t *in, uint64_t t_
          * gap too long to bridge */
         app_count(&a->keep.health.time_jumps);
         a->run.events.gap.seen = 1u;
-        if (a->run.mode == APP_MODE_NAVIGATING) {
-            begin_reacquire(a);
-        } else if (a->run.mode == APP_MODE_LEVELLING) {
-            a->run.mode = APP_MODE_FAULT;
-        }
+        gap_unbridged(a);
         app_stamp(&a->run.events.gap, a->keep.n_samples);
     }
     if (s.time_gap) {
@@ -392,11 +403,7 @@ static void on_imu_accel(app_t *a, hal_t *hal, const rx_input_t *in, uint64_t t_
         app_count_n(&a->keep.health.imu_lost, s.lost);
         a->run.events.gap.seen = 1u;
         if (s.lost > (uint64_t)APP_MAX_BRIDGE_MS * a->cfg.imu_rate_hz / 1000u) {
-            if (a->run.mode == APP_MODE_NAVIGATING) {
-                begin_reacquire(a);
-            } else if (a->run.mode == APP_MODE_LEVELLING) {
-                a->run.mode = APP_MODE_FAULT;
-            }
+            gap_unbridged(a);
             a->keep.n_samples += s.lost;
             a->keep.imu_t_us += (uint64_t)s.dt_us - imu_stream_dt_us(&s, s.lost);
         } else {

@@ -35,7 +35,10 @@ void commands_motion_seen(app_t *a)
         al->known_moved = 1u;
     }
     if (a->run.mode == APP_MODE_LEVELLING) {
-        /* the commanded point is where the car was: never applied after it moved */
+        /* the commanded point is where the car was: never applied after it moved; a
+         * levelling the GNSS-only start began is stopped alike, but no command was
+         * refused (the in-motion alignment takes over) */
+        const uint8_t commanded = al->commanded;
         const uint8_t kv = al->known_valid, km = al->known_moved;
         const int32_t klat = al->known_lat_e7, klon = al->known_lon_e7;
         app_reset(a);
@@ -43,7 +46,9 @@ void commands_motion_seen(app_t *a)
         a->run.align.known_moved = km;
         a->run.align.known_lat_e7 = klat;
         a->run.align.known_lon_e7 = klon;
-        refuse(a, CMD_REFUSAL_STALE_POSITION);
+        if (commanded != 0u) {
+            refuse(a, CMD_REFUSAL_STALE_POSITION);
+        }
     }
 }
 
@@ -99,6 +104,7 @@ static void set_initial_position(app_t *a, const rx_input_t *in)
     app_reset(a);
     align_set_initial(&a->run.align, &pos, in->u.command.h_cm, in->u.command.heading_valid,
                       in->u.command.heading_rad);
+    a->run.align.commanded = 1u;
     if (align_ready(&a->run.align)) {
         a->run.mode = APP_MODE_LEVELLING;
         align_level_restart(&a->run.align);
