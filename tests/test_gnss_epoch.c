@@ -109,6 +109,14 @@ static void test_mismatching_epoch(void **state)
     assert_int_equal(fix.has_vel, 1);
     assert_int_equal(fix.has_h, 0);
     assert_int_equal(r4.usable, 1);
+    /* a GNSS_Time of another epoch likewise: dropped and counted (it was dropped alone) */
+    gnss_epoch_position(&g, 450000000, 100000000);
+    gnss_epoch_week(&g, 5u, 2012u);
+    const rx_input_t st6 = status(6u, 1u, 9u);
+    const gnss_close_t r6 = gnss_epoch_close(&g, &st6, &fix);
+    assert_int_equal(r6.mismatch, 1);
+    assert_int_equal(fix.has_week, 0);
+    assert_int_equal(r6.usable, 1);
 }
 
 /* GIVEN velocity and height but no GNSS_Position, with a 3D fix THEN no_position (a

@@ -64,8 +64,9 @@ gnss_close_t gnss_epoch_close(gnss_asm_t *g, const rx_input_t *status, gnss_fix_
         return r;
     }
     const uint8_t epoch = status->u.status.epoch;
-    if ((have_vel && g->vel_epoch != epoch) || (have_h && g->h_epoch != epoch)) {
-        r.mismatch = 1u; /* frames of another epoch: drop them */
+    if ((have_vel && g->vel_epoch != epoch) || (have_h && g->h_epoch != epoch) ||
+        (have_week && g->week_epoch != epoch)) {
+        r.mismatch = 1u; /* frames of another epoch: drop them (a GNSS_Time too) */
         have_vel = have_vel && g->vel_epoch == epoch;
         have_h = have_h && g->h_epoch == epoch;
     }

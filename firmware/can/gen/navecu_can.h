@@ -680,7 +680,7 @@ struct navecu_can_gnss_height_t {
 /**
  * Signals in message GNSS_Time.
  *
- * The GPS week of the epoch (optional; with it NAV_Time carries the week). Sent before the GNSS_Status of its epoch, with the same GnssEpoch: one received after its GNSS_Status, or with another number, is ignored. E2E: its own CRC; GnssEpoch 15 or GpsWeek 65535 refused.
+ * The GPS week of the epoch (optional; with it NAV_Time carries the week). Sent before the GNSS_Status of its epoch, with the same GnssEpoch: one received after its GNSS_Status, or with another number, is dropped and counted (CntGnssRejected). E2E: its own CRC; GnssEpoch 15 or GpsWeek 65535 refused.
  *
  * All signal values are as on the CAN bus.
  */
