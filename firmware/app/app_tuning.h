@@ -138,6 +138,8 @@
 #define APP_ODO_SIGMA_SPEED_FRAC NAV_C(0.01) /* plus 1 % of speed */
 /* a slow source's speed is late and averaged: noise grows with acceleration x period */
 #define APP_ODO_SIGMA_ACC_PERIOD NAV_C(0.5)
+/* the horizontal specific force beyond which zero wheels are not a standstill (fusion.c) */
+#define APP_STILL_ACC_MPS2 NAV_C(0.3)
 #define APP_NHC_SIGMA_MPS NAV_C(0.1)     /* side slip in turns, suspension motion */
 #define APP_ODO_MIN_SPEED_MPS NAV_C(0.5) /* below this the speed rows are not used */
 #define APP_ODO_GATE_SIGMA NAV_C(5.0)    /* odometer and standstill innovation gate */

@@ -129,7 +129,8 @@ static void odo_refused(const fusion_ctx_t *c)
 /* The odometer or standstill updates of one prediction interval T (s) with the mean body
  * rate over it: a slow wheel-speed source is a late, averaged speed, its noise grows with
  * the acceleration times its period, and its zero hides a car creeping below one step. */
-static void odometer_updates(fusion_t *fu, const fusion_ctx_t *c, nav_real_t T)
+static void odometer_updates(fusion_t *fu, const fusion_ctx_t *c, nav_real_t T,
+                             const nav_real_t f_mean_n[3])
 {
     const odo_t *odo = c->odo;
     nav_real_t acc = NAV_C(0.0);
@@ -140,7 +141,18 @@ static void odometer_updates(fusion_t *fu, const fusion_ctx_t *c, nav_real_t T)
     }
     acc = nav_sqrt(acc) / T;
     const nav_real_t per = odo->period_s;
-    if (odo->valid && odo->standing) {
+    /* Zero wheels say the car stood when they were read, up to a period plus the source's
+     * latency ago (1 s for an OBD-II speed): a car accelerating away or braking to its stop
+     * meanwhile is not standing. The interval's mean horizontal specific force is the
+     * evidence: at rest it is the tilt error times g (0.02 m/s^2 at 0.1 deg) and the
+     * accelerometer's noise over the interval; a drive-off or a braking is 0.5..3 m/s^2.
+     * Measured on the Kingston drive (1 Hz speed): a ZUPT through each drive-off held the
+     * solution behind by 0.3 m along track (docs/odometry.md). */
+    const nav_real_t a_h_mps2 =
+        nav_sqrt(f_mean_n[0] * f_mean_n[0] + f_mean_n[1] * f_mean_n[1]);
+    if (odo->valid && odo->standing && a_h_mps2 > APP_STILL_ACC_MPS2) {
+        /* moving while the wheels still read zero: no update of either kind */
+    } else if (odo->valid && odo->standing) {
         /* Standing wheels say |v| < half a step, not which way the car would go: no heading
          * information (the heading's 5 deg sigma would otherwise take the first centimetres
          * of a drive-off, the IMU's acceleration before a wheel reads a step, as a heading
@@ -223,7 +235,7 @@ fusion_action_t fusion_imu_step(fusion_t *fu, const fusion_ctx_t *c, imu_inc_t *
     app_trace(APP_TRACE_PREDICTION, 0u);
     ekf_predict(&fu->ekf, c->nav, f_mean, T);
     app_trace(APP_TRACE_PREDICTION, 1u);
-    odometer_updates(fu, c, T);
+    odometer_updates(fu, c, T, f_mean);
     feed_back(fu, c);
     int was_reset;
     const fusion_action_t act = supervise(fu, c, &was_reset);
