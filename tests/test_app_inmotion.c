@@ -42,6 +42,8 @@ static uint32_t gnss_late_samples;
 static int first_nav_time_known; /* -1: no NAV_Time yet; else whether the first was known */ /* the fixes' time of validity this many samples back */
 static struct navecu_can_nav_status_t last_status; /* the last page 0 */
 static uint32_t n_levelling_moving; /* NAV_Status page 0 saying Levelling while moving */
+static int wheels_read_zero; /* the wheel-speed source lags: it still says 0 */
+static uint32_t wheel_every; /* samples between WheelSpeeds frames (2: 50 Hz) */
 
 static const double LAT0_DEG = 45.0, LON0_DEG = 10.0, H0_M = 100.0;
 
@@ -90,6 +92,8 @@ static int setup(void **state)
     north_m = east_m = 0.0;
     imu_counter = wheel_counter = cmd_counter = gnss_epoch = 0u;
     k_sample = n_position = n_levelling_moving = 0u;
+    wheels_read_zero = 0;
+    wheel_every = 2u;
     memset(&last_status, 0, sizeof last_status);
     hal.t_us = 1000000u;
     return 0;
@@ -165,8 +169,8 @@ static void sample(double a, double v_max)
     imu_counter = e2e_counter_next(imu_counter);
     feed(&fr);
     feed(&fa);
-    if (k_sample % 2u == 0u) {
-        const int16_t raw = (int16_t)lround(speed / 0.02);
+    if (k_sample % wheel_every == 0u) {
+        const int16_t raw = wheels_read_zero ? (int16_t)0 : (int16_t)lround(speed / 0.02);
         const int16_t four[4] = {raw, raw, raw, raw};
         const hal_can_frame_t fw = cf_wheels(four, wheel_counter, hal.t_us);
         wheel_counter = e2e_counter_next(wheel_counter);
@@ -472,6 +476,34 @@ static void test_drive_off_during_gnss_only_levelling_refuses_nothing(void **sta
     assert_int_equal(n_levelling_moving, 0u);
 }
 
+/* GIVEN navigation with a 1 Hz wheel-speed source (an OBD-II speed), the car stopped for
+ *       3 s (zero wheels: a standstill)
+ * WHEN it drives off at 1.5 m/s^2 while the wheel speeds still read 0 for 1 s (the
+ *      source's reading is up to a second old)
+ * THEN the filter does not hold it at zero velocity: after that second the navigator's
+ *      speed is within 0.03 m/s of the true 1.5 m/s (exact IMU data here: the IMU's
+ *      acceleration integrated; before, zero-velocity updates took the first tenths of a
+ *      second until their gate refused them: 1.419 m/s) */
+static void test_drive_off_with_lagging_zero_wheels(void **state)
+{
+    (void)state;
+    wheel_every = RATE_HZ;
+    speed = 15.0;
+    assert_true(drive_until_navigating(10.0, 15.0) > 0.0);
+    drive(20.0, 15.0);
+    while (speed > 0.0) {
+        sample(-3.0, 0.0);
+    }
+    drive(3.0, 0.0);
+    wheels_read_zero = 1;
+    for (int k = 0; k < RATE_HZ; k++) {
+        sample(1.5, 15.0);
+    }
+    const double v_nav = hypot((double)app.run.nav.v_n_mps[0], (double)app.run.nav.v_n_mps[1]);
+    print_message("drive-off, wheels reading 0: navigator %.3f m/s, true %.3f m/s\n", v_nav, speed);
+    assert_true(fabs(v_nav - speed) < 0.03);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -486,6 +518,7 @@ int main(void)
         cmocka_unit_test_setup(test_stale_known_position_refused, setup),
         cmocka_unit_test_setup(test_drive_off_during_levelling_drops_the_point, setup),
         cmocka_unit_test_setup(test_drive_off_during_gnss_only_levelling_refuses_nothing, setup),
+        cmocka_unit_test_setup(test_drive_off_with_lagging_zero_wheels, setup),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
