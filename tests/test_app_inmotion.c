@@ -44,6 +44,7 @@ static struct navecu_can_nav_status_t last_status; /* the last page 0 */
 static uint32_t n_levelling_moving; /* NAV_Status page 0 saying Levelling while moving */
 static int wheels_read_zero; /* the wheel-speed source lags: it still says 0 */
 static uint32_t wheel_every; /* samples between WheelSpeeds frames (2: 50 Hz) */
+static float gnss_hacc_m; /* the fixes' HorizAccuracy */
 
 static const double LAT0_DEG = 45.0, LON0_DEG = 10.0, H0_M = 100.0;
 
@@ -94,6 +95,7 @@ static int setup(void **state)
     k_sample = n_position = n_levelling_moving = 0u;
     wheels_read_zero = 0;
     wheel_every = 2u;
+    gnss_hacc_m = 1.0f;
     memset(&last_status, 0, sizeof last_status);
     hal.t_us = 1000000u;
     return 0;
@@ -133,7 +135,7 @@ static void send_gnss(void)
     memset(&gs, 0, sizeof gs);
     gs.fix_type = 3u;
     gs.num_satellites = 9u;
-    gs.horiz_accuracy = navecu_can_gnss_status_horiz_accuracy_encode(1.0f);
+    gs.horiz_accuracy = navecu_can_gnss_status_horiz_accuracy_encode(gnss_hacc_m);
     gs.vert_accuracy = navecu_can_gnss_status_vert_accuracy_encode(1.5f);
     gs.gnss_epoch = gnss_epoch;
     gs.time_of_week = 100000u + (k_sample - gnss_late_samples) * (1000u / RATE_HZ);
@@ -301,6 +303,24 @@ static void test_inmotion_start_takes_the_declared_accuracy(void **state)
     print_message("in-motion start, declared 1.0 m/s at 15 m/s: heading sigma %.3f deg\n",
                   sigma / DEG);
     assert_true(fabs(sigma - 1.0 / 15.0) < 1e-4); /* float32 of 0.0667 rad */
+}
+
+/* GIVEN fixes whose HorizAccuracy says 30 m (a poor geometry: the receiver's first fixes
+ *       after its own outage) while their SpeedAccuracy still says 0.2 m/s
+ * WHEN the in-motion alignment starts navigation at 15 m/s
+ * THEN the speed sigma taken is the one the geometry implies, 0.03/s x 30 m = 0.9 m/s,
+ *      and the start's heading sigma 0.9/15 rad (before: 0.2/15, the velocity of a 30 m
+ *      fix trusted to 0.2 m/s; on the Kingston drive such fixes are 1 m/s off) */
+static void test_poor_fix_velocity_is_not_trusted_beyond_its_geometry(void **state)
+{
+    (void)state;
+    gnss_hacc_m = 30.0f;
+    speed = 15.0;
+    assert_true(drive_until_navigating(10.0, 15.0) > 0.0);
+    const double sigma = (double)app.run.align.mot_heading_sigma_rad;
+    print_message("in-motion start, HorizAccuracy 30 m, SpeedAccuracy 0.2 m/s: heading sigma %.3f deg\n",
+                  sigma / DEG);
+    assert_true(fabs(sigma - 0.9 / 15.0) < 1e-4);
 }
 
 static void test_reset_at_speed(void **state)
@@ -510,6 +530,7 @@ int main(void)
         cmocka_unit_test_setup(test_power_on_while_driving, setup),
         cmocka_unit_test_setup(test_inmotion_start_carries_the_fix_to_now, setup),
         cmocka_unit_test_setup(test_inmotion_start_takes_the_declared_accuracy, setup),
+        cmocka_unit_test_setup(test_poor_fix_velocity_is_not_trusted_beyond_its_geometry, setup),
         cmocka_unit_test_setup(test_reset_at_speed, setup),
         cmocka_unit_test_setup(test_set_initial_position_without_heading, setup),
         cmocka_unit_test_setup(test_gnss_only_at_rest_says_no_heading, setup),

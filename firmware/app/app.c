@@ -455,6 +455,16 @@ static void on_gnss_status(app_t *a, hal_t *hal, const rx_input_t *in)
         fix.vacc_m = a->cfg.gnss_vacc_m;
         fix.sacc_mps = a->cfg.gnss_sacc_mps;
     }
+    /* A fix's velocity is no better than its geometry allows: the Doppler velocity's and
+     * the code position's errors both scale with the same dilution of precision, in the
+     * ratio of the range-rate to the range noise (APP_GNSS_SACC_PER_HACC). A receiver
+     * whose speed accuracy ignores a degraded fix (or a declared constant) is floored by
+     * its horizontal accuracy: on the Kingston drive the first fixes after the receiver's
+     * own outages say 37 m and their velocities are 1 m/s off (docs/kalman.md). */
+    const nav_real_t sacc_geom = APP_GNSS_SACC_PER_HACC * fix.hacc_m;
+    if (fix.sacc_mps < sacc_geom) {
+        fix.sacc_mps = sacc_geom;
+    }
     app_stamp(&a->keep.gnss, a->keep.n_samples);
     const imu_rate_change_t rate = imu_rate_epoch(&a->keep.rate, a->cfg.imu_rate_hz, fix.tow_ms);
     if (rate == IMU_RATE_MISMATCH) {

@@ -95,6 +95,9 @@
 #define APP_INMOTION_ODO_SIGMA_MPS NAV_C(0.05)
 /* the receiver's horizontal accuracy is a 2-D figure: per axis 1/sqrt(2) of it */
 #define APP_GNSS_HACC_PER_AXIS NAV_C(0.7071)
+/* the speed sigma a fix's horizontal accuracy implies (1/s): range-rate noise over range
+ * noise, both multiplied by the same DOP (0.05 m/s Doppler, 1.5 m code: 0.03) */
+#define APP_GNSS_SACC_PER_HACC NAV_C(0.03)
 #define APP_GNSS_SIGMA_MAX_M NAV_C(100.0)  /* larger declared sigmas are clamped */
 #define APP_GNSS_SIGMA_V_MIN_M NAV_C(0.5)  /* vertical sigma floor */
 #ifndef APP_GNSS_SIGMA_FLOOR_M
