@@ -73,6 +73,7 @@ typedef struct {
     gnss_vel_up_t gnss_vel_up;    /* the receiver measures VelUp, or not */
     nav_real_t odo_lever_b_m[3];  /* the odometer's reference point (rear axle middle) from
                                      the IMU, body axes, m */
+    nav_real_t odo_lever_sigma_m; /* its 1-sigma uncertainty, m */
     nav_real_t imu_mount_rad[3];  /* the IMU's attitude in the vehicle: roll, pitch, yaw
                                      (mounting.h) */
     mount_source_t imu_mount_source; /* imu_mount_rad, or the automatic estimate */

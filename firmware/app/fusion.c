@@ -176,9 +176,14 @@ static void odometer_updates(fusion_t *fu, const fusion_ctx_t *c, nav_real_t T,
                               APP_ODO_SIGMA_ACC_PERIOD * acc * per;
         const nav_real_t w_b[3] = {fu->w_sum_rad[0] / T, fu->w_sum_rad[1] / T,
                                    fu->w_sum_rad[2] / T};
+        /* the car's lateral and vertical velocity are zero at the measuring axle, which is
+         * where odo_lever_b_m says to within odo_lever_sigma_m: in a turn the IMU moves
+         * sideways by the yaw rate times the error of that lever arm (Kingston, lever arm
+         * unknown: without this term the full fusion was worse than GNSS alone) */
+        const nav_real_t s_nhc = APP_NHC_SIGMA_MPS + c->cfg->odo_lever_sigma_m * nav_fabs(w_b[2]);
         app_trace(APP_TRACE_ODOMETER_UPDATE, 0u);
         const int n_used = ekf_odometer(&fu->ekf, c->nav, w_b, c->cfg->odo_lever_b_m,
-                                        odo->speed_mps, sf, APP_NHC_SIGMA_MPS, APP_ODO_GATE_SIGMA);
+                                        odo->speed_mps, sf, s_nhc, APP_ODO_GATE_SIGMA);
         app_trace(APP_TRACE_ODOMETER_UPDATE, 1u);
         if (n_used == 0) {
             odo_refused(c); /* the odometer disagrees beyond its gate */

@@ -207,7 +207,10 @@ def firmware_args(imu: "sensors.ImuSpec", gnss: "sensors.GnssSpec") -> list:
             "--accel-bias-mg", f"{max(imu.accel_bias_turnon_mps2 / g * 1e3, 1e-3):.6g}",
             "--gyro-instability-dph", f"{max(imu.gyro_bias_instability_rps / rad_dph, 1e-4):.6g}",
             "--accel-instability-mg",
-            f"{max(imu.accel_bias_instability_mps2 / g * 1e3, 1e-4):.6g}"]
+            f"{max(imu.accel_bias_instability_mps2 / g * 1e3, 1e-4):.6g}",
+            # the simulated car measures its speed at the IMU (no lever arm), and the
+            # installation is measured: to a tape measure's 0.1 m
+            "--odo-lever-sigma-m", "0.1"]
     if gnss.enabled:
         args += ["--gnss-latency-ms", f"{gnss.latency_s * 1e3:.6g}",
                  "--gnss-corr-s", f"{min(gnss.pos_gm_corr_time_s, 600.0):.6g}"]
