@@ -124,14 +124,15 @@ void host_summary(FILE *out, const app_t *app, const hal_t *hal, unsigned long f
     if (ekf != NULL) {
         fprintf(out,
                 "navecu: filter: %lu updates, %lu gated, %lu covariance corrections; odometer "
-                "scale %.5f, mounting yaw %.4f deg, pitch %.4f deg\n",
+                "scale %.5f (sigma %.5f), mounting yaw %.4f deg (sigma %.4f), pitch %.4f deg\n",
                 (unsigned long)ekf->n_updates, (unsigned long)ekf->n_gated,
                 (unsigned long)ekf->n_health_fixes, (double)ekf->k,
-                (double)ekf->mount_yaw_rad / RAD_PER_DEG,
+                (double)ekf_state_sigma(ekf, EKF_K), (double)ekf->mount_yaw_rad / RAD_PER_DEG,
+                (double)ekf_state_sigma(ekf, EKF_MY) / RAD_PER_DEG,
                 (double)ekf->mount_pitch_rad / RAD_PER_DEG);
     }
     fprintf(out,
-            "navecu: calibration: %s, %u one-point, dH %.4f deg, mu %.5f, stored %u; "
+            "navecu: calibration: %s, %u adopted, dH %.4f deg, mu %.5f, stored %u; "
             "gyro z bias at standstill %.4f deg/h from %.0f s\n",
             cal->status < 6u ? cal_names[cal->status] : "?", (unsigned)cal->count,
             (double)cal->dh_rad / RAD_PER_DEG, (double)cal->mu, (unsigned)cal->stored,

@@ -323,6 +323,25 @@ static void test_poor_fix_velocity_is_not_trusted_beyond_its_geometry(void **sta
     assert_true(fabs(sigma - 0.9 / 15.0) < 1e-4);
 }
 
+/* GIVEN gnss_accuracy declared with 10 m, the fixes saying 1 m
+ * WHEN the filter starts (the epoch after the in-motion alignment)
+ * THEN its horizontal sigma is the declared 10 m's (7.1 m per axis), not the 1 m's: the
+ *      declared figures are the fix's for every user (app.c) */
+static void test_filter_takes_the_declared_accuracy(void **state)
+{
+    (void)state;
+    app.cfg.gnss_accuracy = GNSS_ACC_DECLARED;
+    app.cfg.gnss_hacc_m = 10.0f;
+    speed = 15.0;
+    assert_true(drive_until_navigating(10.0, 15.0) > 0.0);
+    while (!app.run.fusion.on) {
+        sample(0.0, 15.0);
+    }
+    const double s_e = (double)ekf_state_sigma(&app.run.fusion.ekf, EKF_DR);
+    print_message("filter start, declared 10 m, fixes 1 m: east sigma %.2f m\n", s_e);
+    assert_true(s_e > 5.0 && s_e < 7.2);
+}
+
 static void test_reset_at_speed(void **state)
 {
     (void)state;
@@ -531,6 +550,7 @@ int main(void)
         cmocka_unit_test_setup(test_inmotion_start_carries_the_fix_to_now, setup),
         cmocka_unit_test_setup(test_inmotion_start_takes_the_declared_accuracy, setup),
         cmocka_unit_test_setup(test_poor_fix_velocity_is_not_trusted_beyond_its_geometry, setup),
+        cmocka_unit_test_setup(test_filter_takes_the_declared_accuracy, setup),
         cmocka_unit_test_setup(test_reset_at_speed, setup),
         cmocka_unit_test_setup(test_set_initial_position_without_heading, setup),
         cmocka_unit_test_setup(test_gnss_only_at_rest_says_no_heading, setup),

@@ -297,19 +297,20 @@ static float stored_mu(void)
     return stored(&rec) == CALSTORE_OK ? rec.odo_scale_err : -1.0f;
 }
 
-/* GIVEN sigma(k) 0.0006 (above 0.0005) THEN nothing is adopted; GIVEN 0.0004 both THEN
- * k and the mounting yaw are the calibration in use (CalSource Filter) and the dead
- * reckoning's, but stored only at a standstill. */
+/* GIVEN sigma(k) 0.0012 (above APP_CAL_ADOPT_SIGMA, 0.001: 0.1 % of distance) THEN nothing
+ * is adopted; GIVEN 0.0004 both THEN k and the mounting yaw are the calibration in use
+ * (CalSource Filter) and the dead reckoning's, but stored only at a standstill, and the
+ * store counts (CalCount). */
 static void test_filter_adoption(void **state)
 {
     (void)state;
     const ekf_config_t ec = ekf_default_config();
     assert_int_equal(ekf_init(&ekf, &ec, 0.0f), NAV_OK);
-    filter_says(0.01f, 0.0006f, 0.02f, 0.0004f);
+    filter_says(0.01f, 0.0012f, 0.02f, 0.0004f);
     calib_adopt_filter(&c, &trip, &hal, 1000u, RATE_HZ, &ekf, &dr, 1);
     assert_int_equal(c.source, CAL_SRC_NONE);
     assert_near(c.mu, 0.0, 0.0);
-    filter_says(0.01f, 0.0004f, 0.02f, 0.0006f);
+    filter_says(0.01f, 0.0004f, 0.02f, 0.0012f);
     calib_adopt_filter(&c, &trip, &hal, 1000u, RATE_HZ, &ekf, &dr, 1);
     assert_int_equal(c.source, CAL_SRC_NONE);
 
@@ -322,8 +323,10 @@ static void test_filter_adoption(void **state)
     assert_near(dr.dh_rad, 0.02f, 0.0);
     assert_int_equal(c.stored, 0);
     assert_near(stored_mu(), -1.0, 0.0); /* moving: not written */
+    assert_int_equal(c.count, 0);
     calib_adopt_filter(&c, &trip, &hal, 1100u, RATE_HZ, &ekf, &dr, 1);
     assert_int_equal(c.stored, 1);
+    assert_int_equal(c.count, 1);
     assert_near(stored_mu(), 0.01f, 0.0);
     cal_record_t rec;
     (void)stored(&rec);

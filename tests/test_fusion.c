@@ -387,26 +387,24 @@ static void test_vel_up_none_not_fused(void **state)
     cfg.gnss_vel_up = GNSS_VUP_MEASURED;
 }
 
-/* GIVEN gnss_accuracy declared WHEN the filter starts at a fix that reports HorizAccuracy
- * 0 (a receiver that sends none) THEN the declared figure weighs it: the filter's
- * horizontal sigma is the declared accuracy's, not the floor a reported 0 gives. */
-static void test_declared_accuracy_used(void **state)
+/* GIVEN a fix whose HorizAccuracy is 0 (a receiver that sends none) and one saying 5 m
+ * WHEN the filter starts at each THEN the fix's figure weighs it: 5 m as a 68 % radius
+ * is 3.5 m per axis, the floor a 0 gives is a fraction of that. (With gnss_accuracy =
+ * declared, app.c puts the declared figures into the fix before any user sees it:
+ * test_app_inmotion.) */
+static void test_fix_accuracy_weighs_the_start(void **state)
 {
     nav_real_t sig[2];
-    for (int declared = 0; declared < 2; declared++) {
+    for (int five = 0; five < 2; five++) {
         assert_int_equal(setup(state), 0);
-        cfg.gnss_accuracy = declared ? GNSS_ACC_DECLARED : GNSS_ACC_REPORTED;
-        cfg.gnss_hacc_m = 5.0f;
         const nav_real_t v0[3] = {0.0f, 0.0f, 0.0f};
         gnss_fix_t f = fix_at(450000000, 100000000, v0);
-        f.hacc_m = 0.0f;
+        f.hacc_m = five ? 5.0f : 0.0f;
         int adopt = 0;
         assert_int_equal(fusion_gnss(&fu, &ctx, &PRIOR, &f, &adopt), FUSION_GO_ON);
         assert_int_equal(fu.on, 1);
-        sig[declared] = ekf_state_sigma(&fu.ekf, EKF_DR);
+        sig[five] = ekf_state_sigma(&fu.ekf, EKF_DR);
     }
-    cfg.gnss_accuracy = GNSS_ACC_REPORTED;
-    /* 5 m as a 68 % radius is 3.3 m per axis; the floor is a fraction of that */
     assert_true(sig[1] > 2.0f * sig[0]);
 }
 
@@ -471,7 +469,7 @@ int main(void)
         cmocka_unit_test_setup(test_nan_measurement_noise_refused, setup),
         cmocka_unit_test_setup(test_nan_state_found_at_gnss_update, setup),
         cmocka_unit_test_setup(test_vel_up_none_not_fused, setup),
-        cmocka_unit_test_setup(test_declared_accuracy_used, setup),
+        cmocka_unit_test_setup(test_fix_accuracy_weighs_the_start, setup),
         cmocka_unit_test_setup(test_note_course_and_stop, setup),
         cmocka_unit_test_setup(test_outlier_fix_refused, setup),
     };

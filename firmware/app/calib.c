@@ -142,6 +142,9 @@ void calib_adopt_filter(calib_t *c, calib_trip_t *t, hal_t *hal, uint64_t n,
     if (changed && standing && (!t->filter_stored || n - t->last_save_sample >= min_gap)) {
         t->filter_stored = 1u;
         c->base_m = NAV_C(0.0);
+        if (c->count < UINT8_MAX) {
+            c->count++; /* a calibration adopted: CalCount, CalSource Filter */
+        }
         calib_store(c, t, hal, n);
     }
 }

@@ -134,7 +134,10 @@ def calibration_block(cal_meta, cal_log, status, t, herr, dist_at) -> dict:
     if not later.size:
         out["status"] = "not performed: no NAV_Calibration frame after the command"
         return out
-    done = [i for i in later if int(cal_log["CalCount"][i]) > count_before]
+    # a calibration by the command: CalCount up with a source other than the filter's
+    # (the filter's own adoptions count too: filter_adoptions)
+    done = [i for i in later if int(cal_log["CalCount"][i]) > count_before
+            and int(cal_log["CalSource"][i]) != FILTER_SOURCE]
     # what the command counter page says right after the command
     rej = None
     if status is not None and "CntCmdRejected" in status:
@@ -164,6 +167,25 @@ def calibration_block(cal_meta, cal_log, status, t, herr, dist_at) -> dict:
             why += f", CntCmdRejected +{rej} (the firmware refused the command)"
         out["status"] = f"not performed: {why}"
         out["cal_status"] = st
+    return out
+
+
+_CAL_SOURCES = nc.DEFAULT_DB.get_message_by_name("NAV_Calibration").get_signal_by_name(
+    "CalSource").choices
+FILTER_SOURCE = next(int(k) for k, v in _CAL_SOURCES.items() if str(v) == "Filter")
+
+
+def filter_adoptions(cal_log) -> list:
+    """Each store of the filter's calibration (NAV_Calibration: CalCount up, CalSource
+    Filter): time, odometer scale error and heading (mounting yaw) correction."""
+    if not cal_log:
+        return []
+    out, prev = [], None
+    for i, n in enumerate(cal_log["CalCount"]):
+        if prev is not None and n > prev and int(cal_log["CalSource"][i]) == FILTER_SOURCE:
+            out.append({"t_s": float(cal_log["t_s"][i]), "mu": float(cal_log["OdoScaleError"][i]),
+                        "dH_deg": float(cal_log["HeadingCorrection"][i])})
+        prev = n
     return out
 
 
@@ -273,6 +295,7 @@ def compute(drive, meta, nav, cal_log) -> tuple:
     rep["median_error_at_outage_end_m"] = median_outage_end_error(rep["outages"])
     rep["sigma_consistency"] = report.sigma_consistency(t, herr, st)
     rep["calibration"] = calibration_block(meta["calibration"], cal_log, st, t, herr, dist_at)
+    rep["filter_calibration_adopted"] = filter_adoptions(cal_log)
     return rep, series
 
 
@@ -388,6 +411,12 @@ def summary(rep: dict) -> str:
                      f"{f(c['error_before_pct'], '%', 3)} of the distance before; max after "
                      f"{f(c.get('max_error_after_m'))} = {f(c['error_after_pct'], '%', 3)} of "
                      "the distance since")
+    ad = rep.get("filter_calibration_adopted", [])
+    lines.append("filter's calibration adopted: " + (
+        f"{len(ad)} time(s), first at {ad[0]['t_s']:.0f} s (mu {ad[0]['mu']:.5f}, dH "
+        f"{ad[0]['dH_deg']:.3f} deg), last at {ad[-1]['t_s']:.0f} s (mu {ad[-1]['mu']:.5f}, "
+        f"dH {ad[-1]['dH_deg']:.3f} deg)" if ad else "never (NAV_Calibration CalSource "
+        "Filter not seen)"))
     g = rep["gnss_only_horizontal_error_m"]
     lines.append(f"GNSS fixes alone vs reference: rms {f(g['rms'])}, p95 {f(g['p95'])} "
                  f"({g['n']} epochs)")

@@ -133,6 +133,12 @@ def read_calibration_log(path, page: int = 0) -> dict:
     return {k: np.array([r[k] for r in rows], dtype=float) for k in keys}
 
 
+def _code(signal: str, name: str) -> int:
+    """The value of a NAV_Calibration enumeration name (VAL_ 785)."""
+    sig = nc.load_db().get_message_by_name("NAV_Calibration").get_signal_by_name(signal)
+    return next(int(k) for k, v in (sig.choices or {}).items() if str(v) == name)
+
+
 def _choice(signal: str, value) -> str | None:
     """The DBC's name of a NAV_Calibration enumeration value (VAL_ 785)."""
     if value is None or not np.isfinite(value):
@@ -145,7 +151,8 @@ def calibration_report(truth: dict, series: dict, cal_log: dict, cal: dict, trut
     """report.json's "calibration": the one-point calibration requested at cal["at_s"]
     (a scenario's [calibration]) as the firmware did it, against the scenario's truths.
 
-    performed: NAV_Calibration's CalCount rose above its first value; time_s, dH_deg, mu:
+    performed: NAV_Calibration's CalCount rose above its first value with a source other
+    than Filter (the filter's adoptions count too); time_s, dH_deg, mu:
     that frame's time, HeadingCorrection and OdoScaleError. error_before_*: the horizontal
     error of the last NAV_Position at or before at_s over the distance travelled from the
     start of navigation to at_s; error_after_*: the largest error after the calibration
@@ -163,7 +170,10 @@ def calibration_report(truth: dict, series: dict, cal_log: dict, cal: dict, trut
     n = len(cal_log.get("t_s", ()))
     if n:
         count = cal_log["CalCount"]
-        done = np.nonzero(count > count[0])[0]
+        # the one-point calibration: CalCount up from another source than the filter's
+        # own adoptions (CalSource Filter), which count too
+        src = np.asarray(cal_log["CalSource"], dtype=float)
+        done = np.nonzero((count > count[0]) & (src != _code("CalSource", "Filter")))[0]
         i = int(done[0]) if len(done) else n - 1
         rep.update({"cal_count": int(count[i]),
                     "cal_status": _choice("CalStatus", cal_log["CalStatus"][i]),
