@@ -21,6 +21,9 @@ truth.npz over the same epochs as the sigma consistency):
                 none: None)
   hacc_cv_ratio the sigma's coefficient of variation over the error's (std/mean of each):
                 0 for a constant sigma whatever the error
+and across the seeds of a scenario (across_seeds): the range of the seeds' mean
+HorizAccuracy beside that of their RMS errors, and the ratio of the two coefficients of
+variation over the seeds: 0 when every seed reports the same sigma whatever its error.
 For each scenario the median and the worst (largest error, smallest share or correlation)
 over the seeds, beside issue #18's limits with PASS / FAIL. Writes OUT/seeds.json and prints
 the tables (also to --md). It is a benchmark: the exit status is 0 when a limit is not met,
@@ -114,6 +117,7 @@ def sigma_follows_error(sigma, herr) -> dict:
     ratio = cv_s / cv_e if np.isfinite(cv_s) and np.isfinite(cv_e) and cv_e > 0 else None
     return {"epochs": int(sigma.size), "hacc_spearman": spearman(sigma, herr),
             "hacc_cv_ratio": ratio,
+            "sigma_mean_m": float(sigma.mean()) if sigma.size else None,
             "sigma_min_m": float(sigma.min()) if sigma.size else None,
             "sigma_max_m": float(sigma.max()) if sigma.size else None,
             "error_min_m": float(herr.min()) if herr.size else None,
@@ -176,6 +180,22 @@ def run_one(scen: str, seed: int, out: Path, navecu: str) -> dict:
     return row
 
 
+def across_seeds(rows: list) -> dict:
+    """Does the reported accuracy differ between seeds as their errors do: the range of each
+    seed's mean HorizAccuracy and of its RMS error, and the ratio of their coefficients of
+    variation over the seeds (0: the same sigma whatever the seed's error)."""
+    ok = [r for r in rows if r.get("sigma_mean_m") is not None and r.get("rms_m") is not None]
+    sig = np.array([r["sigma_mean_m"] for r in ok])
+    rms = np.array([r["rms_m"] for r in ok])
+    out = {"seeds": len(ok), "sigma_mean_m": None, "rms_m": None, "cv_ratio": None}
+    if len(ok) >= 2:
+        out.update({"sigma_mean_m": [float(sig.min()), float(sig.max())],
+                    "rms_m": [float(rms.min()), float(rms.max())]})
+        if _cv(rms) > 0:
+            out["cv_ratio"] = _cv(sig) / _cv(rms)
+    return out
+
+
 def _check(op: str, v, lim: float) -> bool:
     return v is not None and (v <= lim if op == "<=" else v >= lim)
 
@@ -226,6 +246,14 @@ def tables(result: dict) -> str:
                          f"| {_f(s['median'], fmt)}{u}{_lim(s, 'median')} "
                          f"| {_f(s['worst'], fmt)}{u} (seed {s['worst_seed']}){_lim(s, 'worst')} "
                          f"| {s['result'] or '-'} |")
+    lines += ["", "| scenario | mean HorizAccuracy over the seeds | RMS error over the seeds "
+              "| CV(sigma) / CV(RMS) across seeds |", "|---|---|---|---|"]
+    for name, sc in result["scenarios"].items():
+        a = sc["across_seeds"]
+        if a["sigma_mean_m"] is None:
+            continue
+        lines.append(f"| {name} | {a['sigma_mean_m'][0]:.3f}-{a['sigma_mean_m'][1]:.3f} m "
+                     f"| {a['rms_m'][0]:.2f}-{a['rms_m'][1]:.2f} m | {_f(a['cv_ratio'], '.4f')} |")
     lines += ["", "| scenario | seed | RMS | outage end | within 2 sigma | Spearman(sigma, error) "
               "| CV ratio | sigma min-max | error min-max | run |",
               "|---|---|---|---|---|---|---|---|---|---|"]
@@ -297,7 +325,8 @@ def main(argv=None) -> int:
     for name in names:
         srows = [rows[(name, s)] for s in seeds]
         result["scenarios"][name] = {"seeds": srows,
-                                     "summary": summarise(srows, LIMITS.get(name, {}))}
+                                     "summary": summarise(srows, LIMITS.get(name, {})),
+                                     "across_seeds": across_seeds(srows)}
     result["wall_s"] = round(time.monotonic() - t0, 1)
     out.mkdir(parents=True, exist_ok=True)
     (out / "seeds.json").write_text(json.dumps(result, indent=2))
