@@ -267,7 +267,8 @@ def test_report_outage_table():
                               {"start_s": 200.0, "end_s": 260.0}])
     assert [set(r) for r in rows] == [{"start_s", "end_s", "distance_m", "start_error_m",
                                        "max_error_m", "end_error_m",
-                                       "end_error_pct_of_distance"}] * 3
+                                       "end_error_pct_of_distance", "max_error_after_m",
+                                       "after_within_end_plus_1m"}] * 3
     a, b, c = rows
     assert a["distance_m"] == pytest.approx(100.0) and b["distance_m"] == pytest.approx(200.0)
     assert a["end_error_m"] == pytest.approx(10.0) and a["max_error_m"] == pytest.approx(10.0)
@@ -275,5 +276,13 @@ def test_report_outage_table():
     assert a["end_error_pct_of_distance"] == pytest.approx(10.0)
     assert b["end_error_m"] == pytest.approx(30.0)
     assert c["end_error_m"] is None and c["end_error_pct_of_distance"] is None  # after the end
+    # after an outage: the largest error within AFTER_OUTAGE_S (30 s) of its end
+    assert a["max_error_after_m"] == pytest.approx(25.0, abs=0.06)  # grows: above end + 1
+    assert a["after_within_end_plus_1m"] is False
+    flat = krun.outage_table(t, np.where(t > 20.0, 10.5, herr), ref_t, ref_dist,
+                             [{"start_s": 10.0, "end_s": 20.0}])
+    assert flat[0]["max_error_after_m"] == pytest.approx(10.5)
+    assert flat[0]["after_within_end_plus_1m"] is True
+    assert c["max_error_after_m"] is None and c["after_within_end_plus_1m"] is None
     assert krun.median_outage_end_error(rows) == pytest.approx(20.0)
     assert krun.median_outage_end_error([]) is None

@@ -3,6 +3,7 @@
     python -m tools.kingston.convert --out out/kingston/can_in.log [--data DIR]
         [--no-gnss] [--outages "a-b,c-d" | every:PERIOD:LENGTH | default | none]
         [--calibrate-at-km 5 | none] [--imu-rule rect|trapezoid] [--no-odometer] [--level]
+        [--no-gnss-velocity]
 
 Writes the log and a sidecar JSON next to it (can_in.json): the time base, what was
 converted, dropped or found irregular, the initialization and the calibration point.
@@ -56,7 +57,8 @@ docs/kingston.md explains every rule; in short:
   time, immediately followed by CMD_Control CalibrateHere (Command 5). Both frames are
   sent right after that IMU sample, so the firmware's state is valid at the frame time.
 - --no-gnss: no GNSS frame at all (dead reckoning); --no-odometer: no WheelSpeeds frame
-  (with --no-gnss the firmware runs free-inertial). --outages: GNSS epochs with
+  (with --no-gnss the firmware runs free-inertial); --no-gnss-velocity: no GNSS_Velocity
+  frame (position-only GNSS). --outages: GNSS epochs with
   a <= t < b (seconds from t = 0) are dropped, for each a-b; "every:P:L" is the outages
   [kP, kP + L) for k = 1, 2, ... that end within the data; "default" = every:240:60.
 """
@@ -287,7 +289,8 @@ def _timing_1hz(t_gps) -> dict:
 
 def build(drive: Drive, *, gnss: bool = True, outages=(), calibrate_at_km=DEFAULT_CAL_KM,
           speed_accuracy_mps: float = SPEED_ACCURACY_MPS, imu_rule: str = "rect",
-          initial_attitude: bool = True, odometer: bool = True, db=None) -> tuple:
+          initial_attitude: bool = True, odometer: bool = True, gnss_velocity: bool = True,
+          db=None) -> tuple:
     """Every input frame of the drive as (t_s, order, can.Message), sorted, and the sidecar
     metadata (a dict, JSON-ready)."""
     db = db if db is not None else nc.DEFAULT_DB
@@ -376,9 +379,10 @@ def build(drive: Drive, *, gnss: bool = True, outages=(), calibrate_at_km=DEFAUL
         epoch = sender.next_counter("GNSS_Velocity")
         out.append((t, O_GPOS, sender.encode("GNSS_Position", {
             "Latitude": float(row["lat_deg"]), "Longitude": float(row["lon_deg"])}, t)))
-        out.append((t, O_GVEL, sender.encode("GNSS_Velocity", {
-            "VelEast": float(row["ve_mps"]), "VelNorth": float(row["vn_mps"]),
-            "VelUp": float(row["vu_mps"]), "SpeedAccuracy": speed_accuracy_mps}, t)))
+        if gnss_velocity:
+            out.append((t, O_GVEL, sender.encode("GNSS_Velocity", {
+                "VelEast": float(row["ve_mps"]), "VelNorth": float(row["vn_mps"]),
+                "VelUp": float(row["vu_mps"]), "SpeedAccuracy": speed_accuracy_mps}, t)))
         out.append((t, O_GHGT, sender.encode("GNSS_Height", {
             "Height": float(row["height_m"]) - GNSS_HEIGHT_ABOVE_REF_M, "GnssEpoch": epoch},
             t)))
@@ -389,7 +393,8 @@ def build(drive: Drive, *, gnss: bool = True, outages=(), calibrate_at_km=DEFAUL
             "TimeOfWeek": round(float(row["time_s"]) % 604800.0, 3)}, t)))
         n_epochs += 1
     meta["gnss"] = dict(
-        _timing_1hz(g["time_s"]), enabled=bool(gnss), epochs_sent=n_epochs,
+        _timing_1hz(g["time_s"]), enabled=bool(gnss), velocity_sent=bool(gnss_velocity),
+        epochs_sent=n_epochs,
         before_start=int(before.sum()), after_end=int(after.sum()),
         epochs_below_4_satellites_sent=int(n_below4),
         horiz_accuracy_saturated=int(n_hacc_sat), vert_accuracy_saturated=int(n_vacc_sat),
@@ -493,6 +498,8 @@ def main(argv=None) -> int:
                     help="no CMD_InitialAttitude: the firmware levels on its own (30 s)")
     ap.add_argument("--no-odometer", action="store_true",
                     help="omit every WheelSpeeds frame (with --no-gnss: free inertial)")
+    ap.add_argument("--no-gnss-velocity", action="store_true",
+                    help="omit every GNSS_Velocity frame (GNSS position only)")
     a = ap.parse_args(argv)
     drive = load(a.data)
     t_end = float(drive.imu["time_s"][-1] - drive.t0_gps)
@@ -502,7 +509,8 @@ def main(argv=None) -> int:
         ap.error(str(e))
     meta = convert(a.out, a.data, gnss=not a.no_gnss, outages=outages,
                    calibrate_at_km=a.calibrate_at_km, imu_rule=a.imu_rule,
-                   initial_attitude=not a.level, odometer=not a.no_odometer)
+                   initial_attitude=not a.level, odometer=not a.no_odometer,
+                   gnss_velocity=not a.no_gnss_velocity)
     print(summary(meta))
     print(f"wrote {a.out} and {sidecar_path(a.out)}")
     return 0

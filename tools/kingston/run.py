@@ -222,17 +222,28 @@ def sent_gnss_times(can_log) -> np.ndarray:
     return np.array(out)
 
 
+AFTER_OUTAGE_S = 30.0  # the window after an outage's end checked for a transient
+
+
 def outage_table(t, herr, ref_t, ref_dist, outages) -> list:
     """One row per GNSS outage [start_s, end_s): the distance driven in it (reference
     polyline), the horizontal error of the first and of the last NAV set inside it (its end
-    error, also as % of that distance when the car moved more than 1 m) and the largest."""
+    error, also as % of that distance when the car moved more than 1 m) and the largest;
+    after it, the largest error in the AFTER_OUTAGE_S that follow (GNSS back: the filter's
+    transient) and whether it stays within the end error + 1 m."""
     rows = []
     for o in outages:
         a, b = o["start_s"], o["end_s"]
         s3 = (t >= a) & (t <= b)
         d0, d1 = np.interp([a, b], ref_t, ref_dist)
         end = float(herr[s3][-1]) if s3.any() else None
+        s4 = (t > b) & (t <= b + AFTER_OUTAGE_S)
+        after = float(herr[s4].max()) if s4.any() else None
         rows.append({"start_s": a, "end_s": b, "distance_m": float(d1 - d0),
+                     "max_error_after_m": after,
+                     "after_within_end_plus_1m": (after <= end + 1.0
+                                                  if after is not None and end is not None
+                                                  else None),
                      "start_error_m": float(herr[s3][0]) if s3.any() else None,
                      "max_error_m": float(herr[s3].max()) if s3.any() else None,
                      "end_error_m": end,
@@ -394,7 +405,13 @@ def summary(rep: dict) -> str:
             lines.append(f"  outage {o['start_s']:7.1f}-{o['end_s']:7.1f} s "
                          f"{o['distance_m']:7.0f} m: at its end {f(o['end_error_m'])}"
                          + (f" ({pct:.2f} %)" if pct is not None else "")
-                         + f", max {f(o['max_error_m'])}")
+                         + f", max {f(o['max_error_m'])}; "
+                         f"{AFTER_OUTAGE_S:.0f} s after: max {f(o['max_error_after_m'])}"
+                         + ("" if o["after_within_end_plus_1m"] is not False
+                            else " (above its end + 1 m)"))
+        over = [o for o in rep["outages"] if o["after_within_end_plus_1m"] is False]
+        lines.append(f"after the outages: {len(over)} of {len(rep['outages'])} with an error "
+                     f"above their end's + 1 m within {AFTER_OUTAGE_S:.0f} s")
     sc = rep.get("sigma_consistency")
     if sc:
         lines.append("sigma consistency: " + (
@@ -438,6 +455,8 @@ def main(argv=None) -> int:
                     help="no CMD_InitialAttitude: the firmware levels on its own (30 s)")
     ap.add_argument("--no-odometer", action="store_true",
                     help="omit the WheelSpeeds frames (with --mode dr: free inertial)")
+    ap.add_argument("--no-gnss-velocity", action="store_true",
+                    help="omit the GNSS_Velocity frames (GNSS position only)")
     ap.add_argument("--data", default=None, help=f"data folder (default {convert.DATA_DIR})")
     ap.add_argument("--out", default=None,
                     help="output folder (default out/kingston-dr or out/kingston)")
@@ -460,7 +479,8 @@ def main(argv=None) -> int:
     can_in = out / "can_in.log"
     frames, meta = convert.build(drive, gnss=gnss, outages=outages,
                                  calibrate_at_km=a.calibrate_at_km, imu_rule=a.imu_rule,
-                                 initial_attitude=not a.level, odometer=not a.no_odometer)
+                                 initial_attitude=not a.level, odometer=not a.no_odometer,
+                                 gnss_velocity=not a.no_gnss_velocity)
     nc.write_candump(can_in, (m for _, _, m in frames))
     meta["log"] = str(can_in)
     meta["mode"] = a.mode
