@@ -462,7 +462,9 @@ static void on_gnss_status(app_t *a, hal_t *hal, const rx_input_t *in)
      * its horizontal accuracy: on the Kingston drive the first fixes after the receiver's
      * own outages say 37 m and their velocities are 1 m/s off (docs/kalman.md). */
     const nav_real_t sacc_geom = APP_GNSS_SACC_PER_HACC * fix.hacc_m;
-    if (fix.sacc_mps < sacc_geom) {
+    if (fix.has_vel != 0u && fix.sacc_mps < sacc_geom) {
+        /* of the 2-D radius, not per axis: conservative by sqrt(2), on purpose (a poor
+         * fix's velocity errors are far from Gaussian: Kingston, 2.9 m/s RMS beyond 20 m) */
         fix.sacc_mps = sacc_geom;
     }
     app_stamp(&a->keep.gnss, a->keep.n_samples);

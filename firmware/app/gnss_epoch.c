@@ -76,6 +76,10 @@ gnss_close_t gnss_epoch_close(gnss_asm_t *g, const rx_input_t *status, gnss_fix_
     fix->has_h = have_h ? 1u : 0u;
     fix->speed_mps = NAV_C(-1.0);
     fix->course_rad = NAV_C(0.0);
+    fix->sacc_mps = NAV_C(0.0); /* no velocity: no speed accuracy either */
+    for (int i = 0; i < 3; i++) {
+        fix->v_enu_mps[i] = NAV_C(0.0);
+    }
     if (have_vel) {
         const nav_real_t ve = g->v_enu_mps[0];
         const nav_real_t vn = g->v_enu_mps[1];
