@@ -168,7 +168,9 @@ static void gap_unbridged(app_t *a)
     } else if (a->run.mode == APP_MODE_LEVELLING) {
         align_level_restart(&a->run.align);
     } else {
-        /* waiting or in Fault: nothing accumulated to lose */
+        /* waiting: an in-motion alignment window sums the samples since its epoch, which
+         * the gap's are missing from: it starts again at the next epoch (review) */
+        a->run.align.mot_open = 0u;
     }
 }
 
