@@ -93,6 +93,13 @@ def _axis_format(db, message: str, names: tuple) -> tuple:
 
 #: The DBC at DBC_PATH, loaded once; the default wherever a `db` argument is omitted.
 DEFAULT_DB = load_db()
+
+
+def choice_value(message: str, signal: str, name: str, db=None) -> int:
+    """The value of the DBC's enumeration name (VAL_) of a signal, e.g.
+    choice_value("NAV_Calibration", "CalSource", "Filter")."""
+    sig = (db or DEFAULT_DB).get_message_by_name(message).get_signal_by_name(signal)
+    return next(int(k) for k, v in (sig.choices or {}).items() if str(v) == name)
 #: IMU quantisation steps and physical ranges per sample, read from the DBC
 #: (IMU_Rate AngleInc*, IMU_Accel VelInc*).
 ANGLE_LSB_RAD, ANGLE_MIN_RAD, ANGLE_MAX_RAD = _axis_format(DEFAULT_DB, IMU_PAIR[0], ANGLE_SIGNALS)

@@ -170,9 +170,7 @@ def calibration_block(cal_meta, cal_log, status, t, herr, dist_at) -> dict:
     return out
 
 
-_CAL_SOURCES = nc.DEFAULT_DB.get_message_by_name("NAV_Calibration").get_signal_by_name(
-    "CalSource").choices
-FILTER_SOURCE = next(int(k) for k, v in _CAL_SOURCES.items() if str(v) == "Filter")
+FILTER_SOURCE = report.FILTER_CAL_SOURCE  # NAV_Calibration CalSource "Filter"
 
 
 def filter_adoptions(cal_log) -> list:

@@ -133,12 +133,6 @@ def read_calibration_log(path, page: int = 0) -> dict:
     return {k: np.array([r[k] for r in rows], dtype=float) for k in keys}
 
 
-def _code(signal: str, name: str) -> int:
-    """The value of a NAV_Calibration enumeration name (VAL_ 785)."""
-    sig = nc.load_db().get_message_by_name("NAV_Calibration").get_signal_by_name(signal)
-    return next(int(k) for k, v in (sig.choices or {}).items() if str(v) == name)
-
-
 def _choice(signal: str, value) -> str | None:
     """The DBC's name of a NAV_Calibration enumeration value (VAL_ 785)."""
     if value is None or not np.isfinite(value):
@@ -173,7 +167,7 @@ def calibration_report(truth: dict, series: dict, cal_log: dict, cal: dict, trut
         # the one-point calibration: CalCount up from another source than the filter's
         # own adoptions (CalSource Filter), which count too
         src = np.asarray(cal_log["CalSource"], dtype=float)
-        done = np.nonzero((count > count[0]) & (src != _code("CalSource", "Filter")))[0]
+        done = np.nonzero((count > count[0]) & (src != FILTER_CAL_SOURCE))[0]
         i = int(done[0]) if len(done) else n - 1
         rep.update({"cal_count": int(count[i]),
                     "cal_status": _choice("CalStatus", cal_log["CalStatus"][i]),
@@ -313,7 +307,7 @@ def modes_seen(status) -> dict:
             for m in np.unique(mode)}
 
 
-FILTER_CAL_SOURCE = 3          # NAV_Calibration CalSource "Filter" (VAL_ 785)
+FILTER_CAL_SOURCE = nc.choice_value("NAV_Calibration", "CalSource", "Filter")  # VAL_ 785
 FILTER_CAL_GNSS_DRIVING_S = 600.0
 MOVING_MPS = 0.1
 GNSS_FRESH_S = 1.0

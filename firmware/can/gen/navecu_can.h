@@ -585,7 +585,7 @@ struct navecu_can_gnss_velocity_t {
     uint8_t gnss_epoch;
 
     /**
-     * The receiver's 1-sigma of each horizontal velocity component (VelUp's: 1.5 times it), saturated at 1.5 m/s, clamped to 0.05..2 m/s (0 gives the floor; gnss_accuracy declared replaces it by gnss_sacc_mps).
+     * The receiver's 1-sigma of each horizontal velocity component (VelUp's: 1.5 times it), saturated at 1.5 m/s, taken as at least 0.03/s times the epoch's HorizAccuracy, clamped to 0.05..2 m/s (0 gives the floor; gnss_accuracy declared replaces it by gnss_sacc_mps).
      *
      * Range: 0..15 (0..1.5 m/s)
      * Scale: 0.1
