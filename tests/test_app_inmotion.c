@@ -290,6 +290,16 @@ static void test_inmotion_start_carries_the_fix_to_now(void **state)
     assert_true(fabs(late_m - on_time_m) < 0.05); /* 1.5 m more before: 15 m/s x 0.1 s */
 }
 
+/* the in-motion start's heading sigma (rad) at 15 m/s, printed with what the fixes say */
+static double start_heading_sigma_rad(const char *what)
+{
+    speed = 15.0;
+    assert_true(drive_until_navigating(10.0, 15.0) > 0.0);
+    const double sigma = (double)app.run.align.mot_heading_sigma_rad;
+    print_message("in-motion start at 15 m/s, %s: heading sigma %.3f deg\n", what, sigma / DEG);
+    return sigma;
+}
+
 /* GIVEN a receiver configured as reporting no accuracy (gnss_accuracy = declared, its
  *       declared speed accuracy 1.0 m/s), whose fixes say 0.2 m/s
  * WHEN the in-motion alignment starts navigation at 15 m/s
@@ -301,11 +311,7 @@ static void test_inmotion_start_takes_the_declared_accuracy(void **state)
     (void)state;
     app.cfg.gnss_accuracy = GNSS_ACC_DECLARED;
     app.cfg.gnss_sacc_mps = 1.0f;
-    speed = 15.0;
-    assert_true(drive_until_navigating(10.0, 15.0) > 0.0);
-    const double sigma = (double)app.run.align.mot_heading_sigma_rad;
-    print_message("in-motion start, declared 1.0 m/s at 15 m/s: heading sigma %.3f deg\n",
-                  sigma / DEG);
+    const double sigma = start_heading_sigma_rad("declared 1.0 m/s");
     assert_true(fabs(sigma - 1.0 / 15.0) < 1e-4); /* float32 of 0.0667 rad */
 }
 
@@ -320,11 +326,7 @@ static void test_poor_fix_velocity_is_not_trusted_beyond_its_geometry(void **sta
 {
     (void)state;
     gnss_hacc_m = 30.0f;
-    speed = 15.0;
-    assert_true(drive_until_navigating(10.0, 15.0) > 0.0);
-    const double sigma = (double)app.run.align.mot_heading_sigma_rad;
-    print_message("in-motion start, HorizAccuracy 30 m, SpeedAccuracy 0.2 m/s: heading sigma %.3f deg\n",
-                  sigma / DEG);
+    const double sigma = start_heading_sigma_rad("HorizAccuracy 30 m, SpeedAccuracy 0.2 m/s");
     assert_true(fabs(sigma - 0.03 * 30.0 / 15.0) < 1e-4);
 }
 
