@@ -93,13 +93,6 @@ def _axis_format(db, message: str, names: tuple) -> tuple:
 
 #: The DBC at DBC_PATH, loaded once; the default wherever a `db` argument is omitted.
 DEFAULT_DB = load_db()
-
-
-def choice_value(message: str, signal: str, name: str, db=None) -> int:
-    """The value of the DBC's enumeration name (VAL_) of a signal, e.g.
-    choice_value("NAV_Calibration", "CalSource", "Filter")."""
-    sig = (db or DEFAULT_DB).get_message_by_name(message).get_signal_by_name(signal)
-    return next(int(k) for k, v in (sig.choices or {}).items() if str(v) == name)
 #: IMU quantisation steps and physical ranges per sample, read from the DBC
 #: (IMU_Rate AngleInc*, IMU_Accel VelInc*).
 ANGLE_LSB_RAD, ANGLE_MIN_RAD, ANGLE_MAX_RAD = _axis_format(DEFAULT_DB, IMU_PAIR[0], ANGLE_SIGNALS)
@@ -481,6 +474,13 @@ def data_driven(items: Iterable, db=None) -> list:
     run and the target for the same input."""
     ids = time_driven_ids(db)
     return [x for x in items if _frame_id(x) not in ids]
+
+
+def choice_value(message: str, signal: str, name: str, db=None) -> int:
+    """The value of the DBC's enumeration name (VAL_) of a signal, e.g.
+    choice_value("NAV_Calibration", "CalSource", "Filter")."""
+    sig = (db or DEFAULT_DB).get_message_by_name(message).get_signal_by_name(signal)
+    return next(int(k) for k, v in (sig.choices or {}).items() if str(v) == name)
 
 
 # ---------------------------------------------------------------- NAV_Status, read back

@@ -423,6 +423,31 @@ static void on_imu_accel(app_t *a, hal_t *hal, const rx_input_t *in, uint64_t t_
 
 /* ---------------------------------------------------------------- GNSS ---- */
 
+/* The accuracies every user of a usable fix takes (the filter, the in-motion alignment,
+ * the re-acquisition): the receiver's, or with gnss_accuracy = declared the declared
+ * figures of a receiver that reports none (docs/configuration.md); and a speed sigma no
+ * better than the fix's geometry allows. The Doppler velocity's and the code position's
+ * errors both scale with the same dilution of precision, in the ratio of the range-rate
+ * to the range noise (APP_GNSS_SACC_PER_HACC): a receiver whose speed accuracy ignores a
+ * degraded fix (or a declared constant) is floored by its horizontal accuracy, the 2-D
+ * radius, not per axis: conservative by sqrt(2), on purpose (a poor fix's velocity errors
+ * are far from Gaussian: on the Kingston drive, 2.9 m/s RMS beyond 20 m; the first fixes
+ * after the receiver's own outages say 37 m and their velocities are 1 m/s off,
+ * docs/kalman.md). */
+static void fix_accuracies(const app_config_t *cfg, gnss_fix_t *fix)
+{
+    if (cfg->gnss_accuracy == GNSS_ACC_DECLARED) {
+        fix->hacc_m = cfg->gnss_hacc_m;
+        fix->vacc_m = cfg->gnss_vacc_m;
+        fix->sacc_mps = cfg->gnss_sacc_mps;
+    }
+    const nav_real_t sacc_geom = APP_GNSS_SACC_PER_HACC * fix->hacc_m;
+    if (fix->has_vel != 0u && fix->sacc_mps < sacc_geom) {
+        fix->sacc_mps = sacc_geom;
+    }
+}
+
+
 static void on_gnss_status(app_t *a, hal_t *hal, const rx_input_t *in)
 {
     gnss_fix_t fix;
@@ -450,25 +475,7 @@ static void on_gnss_status(app_t *a, hal_t *hal, const rx_input_t *in)
     if (!r.usable) {
         return;
     }
-    if (a->cfg.gnss_accuracy == GNSS_ACC_DECLARED) {
-        /* a receiver that reports no accuracy: its declared figures, for every user of the
-         * fix (the filter, the in-motion alignment, the re-acquisition; docs/configuration.md) */
-        fix.hacc_m = a->cfg.gnss_hacc_m;
-        fix.vacc_m = a->cfg.gnss_vacc_m;
-        fix.sacc_mps = a->cfg.gnss_sacc_mps;
-    }
-    /* A fix's velocity is no better than its geometry allows: the Doppler velocity's and
-     * the code position's errors both scale with the same dilution of precision, in the
-     * ratio of the range-rate to the range noise (APP_GNSS_SACC_PER_HACC). A receiver
-     * whose speed accuracy ignores a degraded fix (or a declared constant) is floored by
-     * its horizontal accuracy: on the Kingston drive the first fixes after the receiver's
-     * own outages say 37 m and their velocities are 1 m/s off (docs/kalman.md). */
-    const nav_real_t sacc_geom = APP_GNSS_SACC_PER_HACC * fix.hacc_m;
-    if (fix.has_vel != 0u && fix.sacc_mps < sacc_geom) {
-        /* of the 2-D radius, not per axis: conservative by sqrt(2), on purpose (a poor
-         * fix's velocity errors are far from Gaussian: Kingston, 2.9 m/s RMS beyond 20 m) */
-        fix.sacc_mps = sacc_geom;
-    }
+    fix_accuracies(&a->cfg, &fix);
     app_stamp(&a->keep.gnss, a->keep.n_samples);
     const imu_rate_change_t rate = imu_rate_epoch(&a->keep.rate, a->cfg.imu_rate_hz, fix.tow_ms);
     if (rate == IMU_RATE_MISMATCH) {

@@ -126,6 +126,41 @@ static void odo_refused(const fusion_ctx_t *c)
     app_stamp(&c->diag->events->odo_reject, c->diag->n_samples);
 }
 
+/* The standstill updates of one prediction interval T (s), the wheels reading zero: zero
+ * velocity and zero yaw rate. Zero wheels say the car stood when they were read, up to a
+ * period plus the source's latency ago (per, s: 1 s for an OBD-II speed): a car
+ * accelerating away or braking to its stop meanwhile is not standing. The interval's mean
+ * horizontal specific force (f_mean_n, ENU) is the evidence: at rest it is the tilt error
+ * times g (0.02 m/s^2 at 0.1 deg) and the accelerometer's noise over the interval; a
+ * drive-off or a braking is 0.5..3 m/s^2. Measured on the Kingston drive (1 Hz speed): a
+ * ZUPT through each drive-off held the solution behind by 0.3 m along track
+ * (docs/odometry.md). */
+static void standstill_updates(fusion_t *fu, const fusion_ctx_t *c, nav_real_t T, nav_real_t per,
+                               const nav_real_t f_mean_n[3])
+{
+    const nav_real_t a_h_mps2 =
+        nav_sqrt(f_mean_n[0] * f_mean_n[0] + f_mean_n[1] * f_mean_n[1]);
+    if (a_h_mps2 > APP_STILL_ACC_MPS2) {
+        return; /* moving while the wheels still read zero: no update of either kind */
+    }
+    /* Standing wheels say |v| < half a step, not which way the car would go: no heading
+     * information (the heading's 5 deg sigma would otherwise take the first centimetres
+     * of a drive-off, the IMU's acceleration before a wheel reads a step, as a heading
+     * error: 0.2 deg in 0.4 s, every heading but east) */
+    fu->ekf.hold_heading = 1u;
+    const int zv = ekf_zero_velocity(&fu->ekf, c->nav,
+                                     APP_ZUPT_SIGMA_MPS + APP_ZUPT_SIGMA_PER_PERIOD_MPS * per,
+                                     APP_ODO_GATE_SIGMA);
+    fu->ekf.hold_heading = 0u;
+    if (zv == 0) {
+        odo_refused(c); /* "standing" wheels while the car moves: a locked wheel */
+    }
+    nav_real_t w_ie_b[3];
+    sins_earth_rate_b(c->nav, w_ie_b);
+    const nav_real_t resid = fu->w_sum_rad[2] / T - w_ie_b[2];
+    (void)ekf_zero_rate(&fu->ekf, resid, c->cfg->gyro_arw_rad_rts / nav_sqrt(T));
+}
+
 /* The odometer or standstill updates of one prediction interval T (s) with the mean body
  * rate over it: a slow wheel-speed source is a late, averaged speed, its noise grows with
  * the acceleration times its period, and its zero hides a car creeping below one step. */
@@ -141,34 +176,8 @@ static void odometer_updates(fusion_t *fu, const fusion_ctx_t *c, nav_real_t T,
     }
     acc = nav_sqrt(acc) / T;
     const nav_real_t per = odo->period_s;
-    /* Zero wheels say the car stood when they were read, up to a period plus the source's
-     * latency ago (1 s for an OBD-II speed): a car accelerating away or braking to its stop
-     * meanwhile is not standing. The interval's mean horizontal specific force is the
-     * evidence: at rest it is the tilt error times g (0.02 m/s^2 at 0.1 deg) and the
-     * accelerometer's noise over the interval; a drive-off or a braking is 0.5..3 m/s^2.
-     * Measured on the Kingston drive (1 Hz speed): a ZUPT through each drive-off held the
-     * solution behind by 0.3 m along track (docs/odometry.md). */
-    const nav_real_t a_h_mps2 =
-        nav_sqrt(f_mean_n[0] * f_mean_n[0] + f_mean_n[1] * f_mean_n[1]);
-    if (odo->valid && odo->standing && a_h_mps2 > APP_STILL_ACC_MPS2) {
-        /* moving while the wheels still read zero: no update of either kind */
-    } else if (odo->valid && odo->standing) {
-        /* Standing wheels say |v| < half a step, not which way the car would go: no heading
-         * information (the heading's 5 deg sigma would otherwise take the first centimetres
-         * of a drive-off, the IMU's acceleration before a wheel reads a step, as a heading
-         * error: 0.2 deg in 0.4 s, every heading but east) */
-        fu->ekf.hold_heading = 1u;
-        const int zv = ekf_zero_velocity(&fu->ekf, c->nav,
-                                         APP_ZUPT_SIGMA_MPS + APP_ZUPT_SIGMA_PER_PERIOD_MPS * per,
-                                         APP_ODO_GATE_SIGMA);
-        fu->ekf.hold_heading = 0u;
-        if (zv == 0) {
-            odo_refused(c); /* "standing" wheels while the car moves: a locked wheel */
-        }
-        nav_real_t w_ie_b[3];
-        sins_earth_rate_b(c->nav, w_ie_b);
-        const nav_real_t resid = fu->w_sum_rad[2] / T - w_ie_b[2];
-        (void)ekf_zero_rate(&fu->ekf, resid, c->cfg->gyro_arw_rad_rts / nav_sqrt(T));
+    if (odo->valid && odo->standing) {
+        standstill_updates(fu, c, T, per, f_mean_n);
     } else if (odo->valid && odo->n_frames != fu->odo_frames_used &&
                nav_fabs(odo->speed_mps) > APP_ODO_MIN_SPEED_MPS) {
         fu->odo_frames_used = odo->n_frames;

@@ -137,7 +137,7 @@ def calibration_block(cal_meta, cal_log, status, t, herr, dist_at) -> dict:
     # a calibration by the command: CalCount up with a source other than the filter's
     # (the filter's own adoptions count too: filter_adoptions)
     done = [i for i in later if int(cal_log["CalCount"][i]) > count_before
-            and int(cal_log["CalSource"][i]) != FILTER_SOURCE]
+            and int(cal_log["CalSource"][i]) != report.FILTER_CAL_SOURCE]
     # what the command counter page says right after the command
     rej = None
     if status is not None and "CntCmdRejected" in status:
@@ -170,9 +170,6 @@ def calibration_block(cal_meta, cal_log, status, t, herr, dist_at) -> dict:
     return out
 
 
-FILTER_SOURCE = report.FILTER_CAL_SOURCE  # NAV_Calibration CalSource "Filter"
-
-
 def filter_adoptions(cal_log) -> list:
     """Each store of the filter's calibration (NAV_Calibration: CalCount up, CalSource
     Filter): time, odometer scale error and heading (mounting yaw) correction."""
@@ -180,7 +177,8 @@ def filter_adoptions(cal_log) -> list:
         return []
     out, prev = [], None
     for i, n in enumerate(cal_log["CalCount"]):
-        if prev is not None and n > prev and int(cal_log["CalSource"][i]) == FILTER_SOURCE:
+        filter_source = int(cal_log["CalSource"][i]) == report.FILTER_CAL_SOURCE
+        if prev is not None and n > prev and filter_source:
             out.append({"t_s": float(cal_log["t_s"][i]), "mu": float(cal_log["OdoScaleError"][i]),
                         "dH_deg": float(cal_log["HeadingCorrection"][i])})
         prev = n
