@@ -186,6 +186,11 @@ static void test_start_held_then_estimated(void **state)
     }
     assert_int_equal(app.keep.mount_state, APP_MOUNT_ESTIMATED);
     assert_true(cycles <= 2); /* 5 m^2/s^3: 5 s of 1 m/s^2 */
+    /* the sigmas at convergence go with the mounting in use, for the filter's start */
+    for (int i = 0; i < 2; i++) {
+        assert_true(app.keep.mount_sigma_rad[i] > 0.0f);
+        assert_true(app.keep.mount_sigma_rad[i] <= app.cfg.mount_est_sigma_rad);
+    }
     assert_true(fabs(wrap((double)r->rpy_rad[0] - PI)) < 0.2 * DEG);
     assert_true(fabs((double)r->rpy_rad[1]) < 0.2 * DEG);
     assert_true(fabs(wrap((double)r->rpy_rad[2] - 90.0 * DEG)) < 0.2 * DEG);

@@ -101,7 +101,7 @@ static gnss_fix_t fix_at(int32_t lat_e7, int32_t lon_e7, const nav_real_t v[3])
     return f;
 }
 
-static const fusion_prior_t PRIOR = {1e-5f, 0.01f, 1u, 0.02f};
+static const fusion_prior_t PRIOR = {1e-5f, 0.01f, 1u, 0.02f, {0.0f, 0.0f}};
 
 /* metres north and east of a from b */
 static void offset_m(const geo_pos_t *a, const geo_pos_t *b, double *north, double *east)
@@ -140,6 +140,37 @@ static void test_start_at_fix_north(void **state)
     assert_near(fu.ekf.k, 0.01, 1e-6);
     assert_near(fu.ekf.mount_yaw_rad, 0.02, 1e-6);
     assert_int_equal(health.gnss_rejected, 0u);
+}
+
+/* GIVEN a mounting in use known only to 0.3 deg (pitch) and 2.8 deg (yaw), the automatic
+ * coarse estimate's sigmas at its convergence WHEN the filter starts THEN its mounting
+ * yaw variance starts at 2.8 deg, not the default 1 deg of a configured mounting, and
+ * the pitch keeps the default (0.3 < 1 deg): the filter refines the residual from what
+ * is known of it. A negative sigma is refused and counted, the defaults stay. */
+static void test_start_takes_the_mounting_sigma(void **state)
+{
+    (void)state;
+    const nav_real_t v[3] = {0.0f, 10.0f, 0.0f};
+    start_at(0.0, v);
+    fusion_prior_t prior = PRIOR;
+    prior.mount_sigma_rad[0] = (nav_real_t)(0.3 * DEG);
+    prior.mount_sigma_rad[1] = (nav_real_t)(2.8 * DEG);
+    const gnss_fix_t f = fix_at(450010000, 100000000, v);
+    int adopt = 0;
+    assert_int_equal(fusion_gnss(&fu, &ctx, &prior, &f, &adopt), FUSION_GO_ON);
+    assert_int_equal(fu.on, 1);
+    /* the start's position and velocity updates observe neither angle at a constant
+     * velocity without an odometer: the sigmas are the initial ones to 1 % */
+    assert_near((double)ekf_state_sigma(&fu.ekf, EKF_MY), 2.8 * DEG, 0.028 * DEG);
+    assert_near((double)ekf_state_sigma(&fu.ekf, EKF_MP), 1.0 * DEG, 0.01 * DEG);
+    assert_int_equal(health.nav_rejected, 0u);
+
+    start_at(0.0, v);
+    prior.mount_sigma_rad[1] = -1.0f;
+    assert_int_equal(fusion_gnss(&fu, &ctx, &prior, &f, &adopt), FUSION_GO_ON);
+    assert_int_equal(fu.on, 1);
+    assert_near((double)ekf_state_sigma(&fu.ekf, EKF_MY), 1.0 * DEG, 0.01 * DEG);
+    assert_int_equal(health.nav_rejected, 1u);
 }
 
 /* The same heading east: the lever arm (forward 2 m) and the motion are east now. */
@@ -460,6 +491,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test_setup(test_start_at_fix_north, setup),
         cmocka_unit_test_setup(test_start_at_fix_east, setup),
+        cmocka_unit_test_setup(test_start_takes_the_mounting_sigma, setup),
         cmocka_unit_test_setup(test_fix_before_history_skipped, setup),
         cmocka_unit_test_setup(test_fix_beyond_history_refused, setup),
         cmocka_unit_test_setup(test_prediction_every_tenth_sample, setup),

@@ -212,6 +212,11 @@ static void mount_auto_sample(app_t *a, const int32_t w_raw[3], const int32_t v_
     }
     mounting_init(&a->keep.mount, a->keep.mest.res.rpy_rad);
     a->keep.mount_state = (uint8_t)APP_MOUNT_ESTIMATED;
+    /* the filter refines the residual pitch and yaw from the estimate's own sigma, not
+     * from the default 1 deg of a configured mounting (converged up to
+     * mount_est_sigma_rad, which may be set above it) */
+    a->keep.mount_sigma_rad[0] = a->keep.mest.res.sigma_rp_rad;
+    a->keep.mount_sigma_rad[1] = a->keep.mest.res.sigma_yaw_rad;
     if (a->run.mount_held && a->run.mode == APP_MODE_FAULT) {
         align_t *al = &a->run.align;
         al->reacq_roll_rad = NAV_C(0.0);
@@ -538,7 +543,8 @@ static void on_gnss_status(app_t *a, hal_t *hal, const rx_input_t *in)
         const fusion_prior_t prior = {
             a->keep.zbias.bias_rps, a->keep.cal.mu,
             a->keep.cal.source == NAVECU_CAN_NAV_CALIBRATION_CAL_SOURCE_FILTER_CHOICE,
-            a->keep.cal.dh_rad};
+            a->keep.cal.dh_rad,
+            {a->keep.mount_sigma_rad[0], a->keep.mount_sigma_rad[1]}};
         int adopt = 0;
         app_trace(APP_TRACE_GNSS_UPDATE, 0u);
         const fusion_action_t act = fusion_gnss(&a->run.fusion, &c, &prior, &fix, &adopt);

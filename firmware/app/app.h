@@ -91,6 +91,9 @@ typedef struct {
     mounting_t mount;       /* the IMU's configured rotation into the vehicle's axes */
     mount_est_t mest;       /* the automatic mounting estimate (imu_mount_source automatic) */
     uint8_t mount_state;    /* app_mount_state_t */
+    nav_real_t mount_sigma_rad[2]; /* 1-sigma (roll/pitch, yaw) of the mounting in use when
+                                      it is the automatic estimate's, at its convergence;
+                                      0 for a configured one */
     dtc_t dtc;              /* the fault memory: a DTC per health condition (app_dtc.h) */
     uint8_t cmd_refusal;         /* why the last command was refused (cmd_refusal_t; not a
                                     counter, so not in app_health_t, whose fields all are) */

@@ -283,6 +283,10 @@ static int start(fusion_t *fu, const fusion_ctx_t *c, const fusion_prior_t *prio
     if (prior->have_mount_yaw) {
         (void)ekf_set_mount_yaw(&fu->ekf, prior->mount_yaw_rad);
     }
+    if (ekf_widen_mount(&fu->ekf, prior->mount_sigma_rad[0], prior->mount_sigma_rad[1]) !=
+        NAV_OK) {
+        app_diag_reject(c->diag, &c->diag->health->nav_rejected);
+    }
     clear_interval(fu);
     fu->odo_frames_used = c->odo->n_frames;
     fu->start_sample = c->diag->n_samples;

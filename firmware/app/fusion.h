@@ -85,6 +85,8 @@ typedef struct {
     nav_real_t odo_scale;
     uint8_t have_mount_yaw;     /* the calibration in use is the filter's */
     nav_real_t mount_yaw_rad;
+    nav_real_t mount_sigma_rad[2]; /* pitch, yaw: the mounting in use's 1-sigma, if known
+                                      only that well (the automatic estimate); 0: none */
 } fusion_prior_t;
 
 /* One IMU sample with the filter on (SI increments, compensated here). *yaw_rate gets the

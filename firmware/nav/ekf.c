@@ -431,3 +431,20 @@ int ekf_set_mount_yaw(ekf_t *k, nav_real_t yaw_rad)
     k->mount_yaw_rad = yaw_rad;
     return NAV_OK;
 }
+
+int ekf_widen_mount(ekf_t *k, nav_real_t pitch_sigma_rad, nav_real_t yaw_sigma_rad)
+{
+    if (!(pitch_sigma_rad >= NAV_C(0.0)) || !nav_isfinite(pitch_sigma_rad) ||
+        !(yaw_sigma_rad >= NAV_C(0.0)) || !nav_isfinite(yaw_sigma_rad)) {
+        return NAV_EINVAL;
+    }
+    const nav_real_t v_mp = pitch_sigma_rad * pitch_sigma_rad;
+    const nav_real_t v_my = yaw_sigma_rad * yaw_sigma_rad;
+    if (v_mp > k->P[EKF_MP][EKF_MP]) {
+        k->P[EKF_MP][EKF_MP] = v_mp;
+    }
+    if (v_my > k->P[EKF_MY][EKF_MY]) {
+        k->P[EKF_MY][EKF_MY] = v_my;
+    }
+    return NAV_OK;
+}

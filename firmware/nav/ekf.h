@@ -265,6 +265,7 @@ int ekf_zero_rate(ekf_t *k, nav_real_t residual_rate_z_rps, nav_real_t sigma_rps
 #define ekf_set_gyro_bias NAV_SYM(ekf_set_gyro_bias)
 #define ekf_set_odo_scale NAV_SYM(ekf_set_odo_scale)
 #define ekf_set_mount_yaw NAV_SYM(ekf_set_mount_yaw)
+#define ekf_widen_mount NAV_SYM(ekf_widen_mount)
 
 /* 1-sigma of error state i (0 <= i < EKF_N): sqrt(P_ii), in that state's unit. */
 nav_real_t ekf_state_sigma(const ekf_t *k, int i);
@@ -285,5 +286,11 @@ int ekf_set_odo_scale(ekf_t *k, nav_real_t odo_scale);
 
 /* The mounting yaw estimate (rad), |yaw| <= DR_DH_MAX_RAD. */
 int ekf_set_mount_yaw(ekf_t *k, nav_real_t yaw_rad);
+
+/* Widen the mounting pitch and yaw variances to at least sigma^2 (rad) each, for a
+ * mounting in use that is only known to that sigma (the automatic coarse estimate's):
+ * right after ekf_init, whose P is diagonal. A sigma of 0 leaves its state alone.
+ * NAV_EINVAL for a sigma not finite or < 0. */
+int ekf_widen_mount(ekf_t *k, nav_real_t pitch_sigma_rad, nav_real_t yaw_sigma_rad);
 
 #endif /* NAVECU_EKF_H */
