@@ -64,7 +64,7 @@ TESTS_F32 := test_e2e test_codec test_trig test_isotp test_uds test_dtc
 # tests that link both variants themselves
 TESTS_BOTH := test_drive
 # tests of application modules against the in-memory HAL (tests/support/fake_hal.c)
-TESTS_FAKE_HAL := test_app test_calstore test_nvstore test_app_rx test_imu_stream test_imu_rate test_gnss_epoch test_gnss_time test_align test_landnav test_calib test_app_health test_app_config test_app_loop test_output test_commands test_fusion test_dynamics test_mounting test_mount_est test_app_mount test_app_uds test_imu_time test_app_inmotion
+TESTS_FAKE_HAL := test_app test_calstore test_nvstore test_app_rx test_imu_stream test_imu_rate test_gnss_epoch test_gnss_time test_align test_landnav test_calib test_app_health test_app_config test_app_loop test_output test_commands test_fusion test_dynamics test_mounting test_mount_est test_app_mount test_app_uds test_imu_time test_app_inmotion test_gnss_raw
 # what they link besides the application: the in-memory HAL, frames as the senders encode
 # them, a fresh application
 FAKE_HAL_SUPPORT := tests/support/fake_hal.c tests/support/can_frames.c tests/support/app_fixture.c

@@ -105,6 +105,10 @@ void host_summary(FILE *out, const app_t *app, const hal_t *hal, unsigned long f
             (unsigned long)h->nav_rejected, (unsigned long)h->time_jumps);
     fprintf(out, "navecu: foreign frames (not read, not refused): %lu\n",
             (unsigned long)h->foreign);
+    if (app->keep.raw_epochs != 0u) {
+        fprintf(out, "navecu: raw GNSS epochs %lu, satellites %lu (assembled, not fused yet)\n",
+                (unsigned long)app->keep.raw_epochs, (unsigned long)app->keep.raw_sats);
+    }
     if (h->imu_rate_mismatch != 0u) {
         fprintf(out,
                 "navecu: IMU rate mismatch found %lu times: configured %u Hz, the data %s "

@@ -90,13 +90,13 @@ static void test_foreign_id_refused(void **state)
     assert_int_equal(decode(&f), RX_FOREIGN);
 }
 
-/* GIVEN each of navecu's twelve inputs with DLC 7 WHEN decoded THEN bad_dlc. */
+/* GIVEN each of navecu's eighteen inputs with DLC 7 WHEN decoded THEN bad_dlc. */
 static void test_dlc_7_refused(void **state)
 {
     (void)state;
-    uint32_t ids[16];
-    const size_t n = app_rx_ids(STOCK_IDS, ids, 16u);
-    assert_int_equal(n, 12u);
+    uint32_t ids[24];
+    const size_t n = app_rx_ids(STOCK_IDS, ids, 24u);
+    assert_int_equal(n, 18u);
     const uint8_t d[8] = {0};
     for (size_t i = 0u; i < n; i++) {
         hal_can_frame_t f = cf_frame(ids[i], d, 0u);
@@ -105,23 +105,25 @@ static void test_dlc_7_refused(void **state)
     }
 }
 
-/* The twelve input identifiers of the DBC, and a short array gets only what fits. */
+/* The eighteen input identifiers of the DBC (the raw GNSS frames 0x131..0x136 among them),
+ * and a short array gets only what fits. */
 static void test_rx_ids(void **state)
 {
     (void)state;
-    const uint32_t expected[12] = {0x100u, 0x101u, 0x102u, 0x110u, 0x120u, 0x121u,
-                                   0x122u, 0x123u, 0x125u, 0x200u, 0x201u, 0x202u};
-    uint32_t ids[12];
-    assert_int_equal(app_rx_ids(STOCK_IDS, ids, 12u), 12u);
-    for (int i = 0; i < 12; i++) {
+    const uint32_t expected[18] = {0x100u, 0x101u, 0x102u, 0x110u, 0x120u, 0x121u,
+                                   0x122u, 0x123u, 0x125u, 0x131u, 0x132u, 0x133u,
+                                   0x134u, 0x135u, 0x136u, 0x200u, 0x201u, 0x202u};
+    uint32_t ids[18];
+    assert_int_equal(app_rx_ids(STOCK_IDS, ids, 18u), 18u);
+    for (int i = 0; i < 18; i++) {
         int found = 0;
-        for (int j = 0; j < 12; j++) {
+        for (int j = 0; j < 18; j++) {
             found |= ids[j] == expected[i];
         }
         assert_true(found);
     }
     uint32_t few[4] = {0u, 0u, 0u, 0xDEADu};
-    assert_int_equal(app_rx_ids(STOCK_IDS, few, 3u), 12u);
+    assert_int_equal(app_rx_ids(STOCK_IDS, few, 3u), 18u);
     assert_int_equal(few[3], 0xDEADu); /* nothing written beyond max */
 }
 

@@ -30,6 +30,8 @@ BEGIN = "<!-- BEGIN GENERATED: tools/gen_can_doc.py -->"
 END = "<!-- END GENERATED -->"
 
 _INC = "over the sample interval, quantisation remainder carried to the next sample"
+_RAW_EPOCH = ("number of the raw epoch (its GNSS_RawEpoch) this satellite frame belongs to, "
+              "0..14 (15 invalid)")
 _E2E_CRC = "E2E CRC8 SAE J1850 over ID and bytes 0..6"
 _IMU_CRC = ("E2E CRC8 SAE J1850 of the IMU sample, over this frame's ID, the 8 bytes of "
             "IMU_Rate and bytes 0..6 of this frame")
@@ -98,6 +100,24 @@ MEANING = {
     ("GNSS_Status", "GnssEpoch"): "number of the epoch this frame closes",
     "TimeOfWeek": "GPS time of week of the epoch",
     ("GNSS_Height", "Height"): _HEIGHT + " of the fix",
+    "SatPosY": "ECEF y at the transmit time, as SatPosX",
+    "SatPosZ": "ECEF z at the transmit time, as SatPosX",
+    "SatVelY": "ECEF y velocity, as SatVelX",
+    "SatVelZ": "ECEF z velocity, as SatVelX",
+    "RawSlot": "the satellite's index in its raw epoch, 0..NumMeas-1: its five frames share it",
+    "RawSatXCrc": _E2E_CRC,
+    "RawSatYCrc": _E2E_CRC,
+    "RawSatZCrc": _E2E_CRC,
+    "RawRangeCrc": _E2E_CRC,
+    "RawRateCrc": _E2E_CRC,
+    "RawEpochCrc": _E2E_CRC,
+    ("GNSS_RawSatX", "GnssEpoch"): _RAW_EPOCH,
+    ("GNSS_RawSatY", "GnssEpoch"): _RAW_EPOCH,
+    ("GNSS_RawSatZ", "GnssEpoch"): _RAW_EPOCH,
+    ("GNSS_RawRange", "GnssEpoch"): _RAW_EPOCH,
+    ("GNSS_RawRate", "GnssEpoch"): _RAW_EPOCH,
+    ("GNSS_RawEpoch", "GnssEpoch"): "number of the raw epoch this frame closes, 0..14 (15 "
+                                    "invalid)",
     ("GNSS_Height", "GnssEpoch"): "number of the epoch this frame belongs to",
     ("CMD_KnownPosition", "Latitude"): "geodetic latitude of the vehicle now (WGS-84)",
     ("CMD_KnownPosition", "Longitude"): "longitude of the vehicle now",

@@ -570,6 +570,37 @@ static void on_gnss_status(app_t *a, hal_t *hal, const rx_input_t *in)
     }
 }
 
+/* A raw GNSS frame (issue #20): assembled into its epoch and checked (gnss_raw.h), a
+ * repeat counted in bad_counter, a dropped or incomplete epoch in gnss_rejected (once per
+ * epoch); a closed epoch's complete satellites are counted. The filter does not fuse them
+ * yet (the tightly coupled update is the next step of issue #20, docs/can.md). */
+static void on_gnss_raw(app_t *a, const rx_input_t *in)
+{
+    if (in->kind == RX_GNSS_RAW_SAT) {
+        const gnss_raw_frame_t r = gnss_raw_frame(&a->keep.raw, in);
+        if (r == GNSS_RAW_REPEAT) {
+            reject(a, &a->keep.health.bad_counter);
+        } else if (r == GNSS_RAW_DROPPED) {
+            reject(a, &a->keep.health.gnss_rejected);
+        } else {
+            /* taken */
+        }
+        return;
+    }
+    const gnss_raw_close_t c = gnss_raw_close(&a->keep.raw, in);
+    if (c.repeat != 0u) {
+        reject(a, &a->keep.health.bad_counter);
+    } else if (c.mismatch != 0u || c.incomplete != 0u || c.extra != 0u) {
+        reject(a, &a->keep.health.gnss_rejected);
+    } else {
+        /* a well-formed epoch */
+    }
+    if (c.usable != 0u) {
+        app_count(&a->keep.raw_epochs);
+        app_count_n(&a->keep.raw_sats, c.n_sats);
+    }
+}
+
 /* ------------------------------------------------------------- dispatch ---- */
 
 static uint32_t *rx_counter(app_health_t *h, rx_verdict_t v)
@@ -649,6 +680,10 @@ void app_handle_frame(app_t *a, hal_t *hal, const hal_can_frame_t *f)
         break;
     case RX_GNSS_TIME:
         gnss_epoch_week(&a->run.gnss_asm, in.u.time.epoch, in.u.time.gps_week);
+        break;
+    case RX_GNSS_RAW_SAT:
+    case RX_GNSS_RAW_EPOCH:
+        on_gnss_raw(a, &in);
         break;
     case RX_KNOWN_POSITION:
     case RX_COMMAND:

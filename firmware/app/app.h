@@ -7,6 +7,7 @@
  *   imu_stream   IMU pairing, counter, gap bridging, plausibility -> raw samples
  *   imu_rate     the configured IMU rate against the samples counted between GNSS epochs
  *   gnss_epoch   GNSS frames -> one epoch (gnss_fix_t) with its time of validity
+ *   gnss_raw     raw GNSS frames -> one raw epoch of satellites (issue #20: not fused yet)
  *   align        initial state, levelling, start, re-acquisition
  *   landnav      standstill and dead reckoning without the filter
  *   fusion       the Kalman filter's schedule, updates and supervision (gnss_time: when
@@ -45,6 +46,7 @@
 #include "dynamics.h"
 #include "fusion.h"
 #include "gnss_epoch.h"
+#include "gnss_raw.h"
 #include "hal.h"
 #include "imu_rate.h"
 #include "imu_stream.h"
@@ -95,6 +97,10 @@ typedef struct {
                                       it is the automatic estimate's, at its convergence;
                                       0 for a configured one */
     dtc_t dtc;              /* the fault memory: a DTC per health condition (app_dtc.h) */
+    gnss_raw_asm_t raw;     /* the raw GNSS epoch in assembly (gnss_raw.h; the receiver's
+                               state: outlives a navigation reset) */
+    uint32_t raw_epochs;    /* raw epochs closed with a complete satellite (saturating) */
+    uint32_t raw_sats;      /* their complete satellites (saturating) */
     uint8_t cmd_refusal;         /* why the last command was refused (cmd_refusal_t; not a
                                     counter, so not in app_health_t, whose fields all are) */
     uint32_t dtc_dirty;          /* DTCs whose stored byte changed, not yet in NVM (bit i) */

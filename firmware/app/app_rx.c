@@ -41,7 +41,10 @@ static int is_e2e(int msg)
 {
     return msg == NAVECU_MSG_WHEEL_SPEEDS || msg == NAVECU_MSG_GNSS_VELOCITY ||
            msg == NAVECU_MSG_GNSS_TIME || msg == NAVECU_MSG_IMU_TIME ||
-           msg == NAVECU_MSG_CMD_CONTROL || msg == NAVECU_MSG_CMD_INITIAL_ATTITUDE;
+           msg == NAVECU_MSG_CMD_CONTROL || msg == NAVECU_MSG_CMD_INITIAL_ATTITUDE ||
+           msg == NAVECU_MSG_GNSS_RAW_SAT_X || msg == NAVECU_MSG_GNSS_RAW_SAT_Y ||
+           msg == NAVECU_MSG_GNSS_RAW_SAT_Z || msg == NAVECU_MSG_GNSS_RAW_RANGE ||
+           msg == NAVECU_MSG_GNSS_RAW_RATE || msg == NAVECU_MSG_GNSS_RAW_EPOCH;
 }
 
 /* GNSS and known positions: the DBC's ranges, -180 deg included */
@@ -183,6 +186,84 @@ static rx_verdict_t decode_gnss(rx_state_t *rx, int msg, const uint8_t d[8], rx_
     return RX_OK;
 }
 
+/* One axis of a satellite's position and velocity (GNSS_RawSatX/Y/Z). */
+static void raw_axis(struct rx_raw_sat *r, uint8_t part, uint8_t epoch, uint8_t slot,
+                     int32_t pos_lsb, int16_t vel_lsb)
+{
+    r->part = part;
+    r->epoch = epoch;
+    r->slot = slot;
+    r->pos_lsb = pos_lsb;
+    r->vel_lsb = vel_lsb;
+}
+
+/* One of the raw GNSS frames (issue #20): the values stay in the protocol's integer units
+ * (a 32-bit position at 0.02 m does not fit float32's significand; gnss_raw.h converts
+ * them in its fixed-point domain). The epoch number (the E2E counter of these frames) must
+ * be 0..14; the slot, identity and elevation within the DBC's ranges. */
+static rx_verdict_t decode_raw(int msg, const uint8_t d[8], rx_input_t *in)
+{
+    struct rx_raw_sat *r = &in->u.raw_sat;
+    (void)memset(r, 0, sizeof *r);
+    in->kind = RX_GNSS_RAW_SAT;
+    if (msg == (int)NAVECU_MSG_GNSS_RAW_EPOCH) {
+        struct navecu_can_gnss_raw_epoch_t m;
+        (void)navecu_can_gnss_raw_epoch_unpack(&m, d, 8u);
+        if (m.gnss_epoch > E2E_COUNTER_MAX) {
+            return RX_BAD_COUNTER;
+        }
+        if (!navecu_can_gnss_raw_epoch_num_meas_is_in_range(m.num_meas) ||
+            !navecu_can_gnss_raw_epoch_time_of_week_is_in_range(m.time_of_week)) {
+            return RX_BAD_VALUE;
+        }
+        in->kind = RX_GNSS_RAW_EPOCH;
+        in->u.raw_epoch.epoch = m.gnss_epoch;
+        in->u.raw_epoch.n_meas = m.num_meas;
+        in->u.raw_epoch.clock_reset = m.clock_reset;
+        in->u.raw_epoch.tow_ms = m.time_of_week;
+        return RX_OK;
+    }
+    if (msg == (int)NAVECU_MSG_GNSS_RAW_RANGE) {
+        struct navecu_can_gnss_raw_range_t m;
+        (void)navecu_can_gnss_raw_range_unpack(&m, d, 8u);
+        r->part = (uint8_t)RX_RAW_PART_RANGE;
+        r->epoch = m.gnss_epoch;
+        r->slot = m.raw_slot;
+        r->pr_lsb = m.pseudorange;
+        r->system = m.gnss_system;
+        r->sv_id = m.sv_id;
+        r->elevation_deg = m.elevation;
+        r->pr_valid = m.pseudorange_valid;
+        if (!navecu_can_gnss_raw_range_elevation_is_in_range(m.elevation)) {
+            return RX_BAD_VALUE;
+        }
+    } else if (msg == (int)NAVECU_MSG_GNSS_RAW_RATE) {
+        struct navecu_can_gnss_raw_rate_t m;
+        (void)navecu_can_gnss_raw_rate_unpack(&m, d, 8u);
+        r->part = (uint8_t)RX_RAW_PART_RATE;
+        r->epoch = m.gnss_epoch;
+        r->slot = m.raw_slot;
+        r->rr_lsb = m.range_rate;
+        r->pr_sigma_lsb = m.pseudorange_sigma;
+        r->rr_sigma_lsb = m.range_rate_sigma;
+        r->cn0_dbhz = m.cn0;
+        r->rr_valid = m.range_rate_valid;
+    } else if (msg == (int)NAVECU_MSG_GNSS_RAW_SAT_X) {
+        struct navecu_can_gnss_raw_sat_x_t m;
+        (void)navecu_can_gnss_raw_sat_x_unpack(&m, d, 8u);
+        raw_axis(r, RX_RAW_PART_X, m.gnss_epoch, m.raw_slot, m.sat_pos_x, m.sat_vel_x);
+    } else if (msg == (int)NAVECU_MSG_GNSS_RAW_SAT_Y) {
+        struct navecu_can_gnss_raw_sat_y_t m;
+        (void)navecu_can_gnss_raw_sat_y_unpack(&m, d, 8u);
+        raw_axis(r, RX_RAW_PART_Y, m.gnss_epoch, m.raw_slot, m.sat_pos_y, m.sat_vel_y);
+    } else {
+        struct navecu_can_gnss_raw_sat_z_t m;
+        (void)navecu_can_gnss_raw_sat_z_unpack(&m, d, 8u);
+        raw_axis(r, RX_RAW_PART_Z, m.gnss_epoch, m.raw_slot, m.sat_pos_z, m.sat_vel_z);
+    }
+    return r->epoch > E2E_COUNTER_MAX ? RX_BAD_COUNTER : RX_OK;
+}
+
 static rx_verdict_t decode_command(rx_state_t *rx, int msg, const uint8_t d[8],
                                    rx_input_t *in)
 {
@@ -308,6 +389,13 @@ rx_verdict_t app_rx_decode(rx_state_t *rx, const uint32_t can_ids[NAVECU_MSG_N],
     case NAVECU_MSG_GNSS_STATUS:
     case NAVECU_MSG_GNSS_TIME:
         return decode_gnss(rx, msg, f->data, in);
+    case NAVECU_MSG_GNSS_RAW_SAT_X:
+    case NAVECU_MSG_GNSS_RAW_SAT_Y:
+    case NAVECU_MSG_GNSS_RAW_SAT_Z:
+    case NAVECU_MSG_GNSS_RAW_RANGE:
+    case NAVECU_MSG_GNSS_RAW_RATE:
+    case NAVECU_MSG_GNSS_RAW_EPOCH:
+        return decode_raw(msg, f->data, in);
     default: /* CMD_KnownPosition, CMD_Control, CMD_InitialAttitude */
         return decode_command(rx, msg, f->data, in);
     }

@@ -41,7 +41,18 @@ typedef enum {
     RX_COMMAND,
     RX_INITIAL_ATTITUDE,
     RX_IMU_TIME,
+    RX_GNSS_RAW_SAT,   /* one of a satellite's five raw frames (gnss_raw.h) */
+    RX_GNSS_RAW_EPOCH, /* GNSS_RawEpoch, closing a raw epoch */
 } rx_kind_t;
+
+/* Which of a satellite's five raw frames (rx_raw_sat.part): the bit of each, so that a
+ * slot's frames can be collected in one byte. */
+#define RX_RAW_PART_X 0x01u
+#define RX_RAW_PART_Y 0x02u
+#define RX_RAW_PART_Z 0x04u
+#define RX_RAW_PART_RANGE 0x08u
+#define RX_RAW_PART_RATE 0x10u
+#define RX_RAW_PARTS_ALL 0x1Fu
 
 /* Why a frame was refused (the counter of app_health_t it is counted in). */
 typedef enum {
@@ -122,6 +133,21 @@ typedef struct {
         struct rx_attitude { /* CMD_InitialAttitude */
             nav_real_t roll_rad, pitch_rad;
         } attitude;
+        struct rx_raw_sat { /* GNSS_RawSatX/Y/Z, GNSS_RawRange, GNSS_RawRate: the signals
+                               in their protocol units (exact integers, gnss_raw.h) */
+            uint8_t part;     /* RX_RAW_PART_* of the frame */
+            uint8_t epoch, slot;
+            int32_t pos_lsb;  /* X/Y/Z: ECEF position, 0.02 m */
+            int16_t vel_lsb;  /* X/Y/Z: ECEF velocity, 0.125 m/s */
+            uint32_t pr_lsb;  /* range: corrected pseudorange, 0.02 m */
+            uint8_t system, sv_id, elevation_deg, pr_valid;
+            int32_t rr_lsb;   /* rate: pseudorange rate, 0.01 m/s */
+            uint8_t pr_sigma_lsb, rr_sigma_lsb, cn0_dbhz, rr_valid;
+        } raw_sat;
+        struct rx_raw_epoch { /* GNSS_RawEpoch */
+            uint8_t epoch, n_meas, clock_reset;
+            uint32_t tow_ms;  /* the measurement time, GPS time of week (receiver clock) */
+        } raw_epoch;
     } u;
 } rx_input_t;
 

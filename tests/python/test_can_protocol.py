@@ -21,7 +21,9 @@ U = 7.292115e-5
 ANGLE_LSB = 2.0**-21
 VEL_LSB = 2.0**-12
 
-E2E_MESSAGES = {"IMU_Rate", "IMU_Accel", "IMU_Time", "WheelSpeeds", "GNSS_Velocity", "GNSS_Time", "CMD_Control",
+E2E_MESSAGES = {"IMU_Rate", "IMU_Accel", "IMU_Time", "WheelSpeeds", "GNSS_Velocity", "GNSS_Time",
+                "GNSS_RawSatX", "GNSS_RawSatY", "GNSS_RawSatZ", "GNSS_RawRange", "GNSS_RawRate",
+                "GNSS_RawEpoch", "CMD_Control",
                 "CMD_InitialAttitude", "NAV_Height", "NAV_Velocity", "NAV_Attitude", "NAV_Rates",
                 "NAV_AttitudeRates", "NAV_Accel", "NAV_AccelEnu", "NAV_Status", "NAV_Accuracy",
                 "NAV_Calibration", "NAV_Time", "NAV_Heartbeat"}
@@ -35,7 +37,7 @@ def db():
 # ------------------------------------------------------------------------------ DBC ----
 
 def test_dbc_loads_strict(db):
-    assert len(db.messages) == 25
+    assert len(db.messages) == 31
     for msg in db.messages:
         assert msg.length == 8 and not msg.is_extended_frame and not msg.is_fd, msg.name
         assert msg.frame_id <= 0x7FF

@@ -96,6 +96,7 @@ GPS_WEEK = 1485
 # frame order at equal timestamps
 O_KNOWN, O_SETPOS, O_ATT, O_RATE, O_ACCEL, O_WHEEL = 0, 1, 2, 3, 4, 5
 O_GPOS, O_GVEL, O_GHGT, O_GSTAT, O_CAL_KNOWN, O_CAL_CMD = 6, 7, 8, 9, 10, 11
+O_GRAW = 12  # a raw epoch's frames, in their own order (tools/gnss_raw.encode_epoch)
 
 
 @dataclass
@@ -290,7 +291,7 @@ def _timing_1hz(t_gps) -> dict:
 def build(drive: Drive, *, gnss: bool = True, outages=(), calibrate_at_km=DEFAULT_CAL_KM,
           speed_accuracy_mps: float = SPEED_ACCURACY_MPS, imu_rule: str = "rect",
           initial_attitude: bool = True, odometer: bool = True, gnss_velocity: bool = True,
-          db=None) -> tuple:
+          gnss_raw: bool = False, raw_keep_in_outages: int = 0, db=None) -> tuple:
     """Every input frame of the drive as (t_s, order, can.Message), sorted, and the sidecar
     metadata (a dict, JSON-ready)."""
     db = db if db is not None else nc.DEFAULT_DB
@@ -405,6 +406,33 @@ def build(drive: Drive, *, gnss: bool = True, outages=(), calibrate_at_km=DEFAUL
                  for (a, b), n in zip(outages, dropped)],
         epochs_dropped_in_outages=int(sum(dropped)))
 
+    # raw measurements (issue #20): gnss_raw.csv as raw epochs, after the fix of the same
+    # second; in an outage none, or with raw_keep_in_outages N the N highest satellites (a
+    # partial outage: an urban canyon that leaves a few)
+    meta["gnss_raw"] = None
+    if gnss_raw and gnss:
+        from tools import gnss_raw as gr
+        from tools.kingston import raw as kraw
+        n_raw = n_partial = n_sats = 0
+        for tow, ep in kraw.epochs(kraw.read(drive.data_dir), drive.gnss,
+                                   GNSS_HEIGHT_ABOVE_REF_M):
+            t = tow - t0
+            if t < 0.0 or t > t_last:
+                continue
+            if in_outage(t, outages) >= 0:
+                if raw_keep_in_outages <= 0:
+                    continue
+                ep.meas = sorted(ep.meas, key=lambda m: -m.elevation_deg)[:raw_keep_in_outages]
+                n_partial += 1
+            number = n_raw % (nc.E2E_COUNTER_MAX + 1)
+            for k, m in enumerate(gr.encode_epoch(sender, ep, number, t)):
+                out.append((t, O_GRAW + k, m))
+            n_raw += 1
+            n_sats += len(ep.meas)
+        meta["gnss_raw"] = {"epochs_sent": n_raw, "satellites_sent": n_sats,
+                            "partial_epochs_in_outages": n_partial,
+                            "keep_in_outages": int(raw_keep_in_outages)}
+
     # one-point calibration at a known point
     meta["calibration"] = None
     if calibrate_at_km is not None:
@@ -476,6 +504,11 @@ def summary(meta: dict) -> str:
                      "with < 4 satellites)")
     else:
         lines.append("GNSS: none (--no-gnss)")
+    r = meta.get("gnss_raw")
+    if r:
+        lines.append(f"raw GNSS: {r['epochs_sent']} epochs, {r['satellites_sent']} satellites "
+                     f"({r['partial_epochs_in_outages']} in outages with the "
+                     f"{r['keep_in_outages']} highest)")
     c = meta["calibration"]
     if c:
         lines.append(f"calibration: CalibrateHere at t = {c['time_s']:.2f} s "
@@ -500,6 +533,11 @@ def main(argv=None) -> int:
                     help="omit every WheelSpeeds frame (with --no-gnss: free inertial)")
     ap.add_argument("--no-gnss-velocity", action="store_true",
                     help="omit every GNSS_Velocity frame (GNSS position only)")
+    ap.add_argument("--gnss-raw", action="store_true",
+                    help="also send gnss_raw.csv as raw epochs (GNSS_Raw*, docs/can.md)")
+    ap.add_argument("--raw-keep", type=int, default=0, metavar="N",
+                    help="with --gnss-raw: in the outages keep the N highest satellites' raw "
+                         "measurements (a partial outage) instead of none")
     a = ap.parse_args(argv)
     drive = load(a.data)
     t_end = float(drive.imu["time_s"][-1] - drive.t0_gps)
@@ -510,7 +548,8 @@ def main(argv=None) -> int:
     meta = convert(a.out, a.data, gnss=not a.no_gnss, outages=outages,
                    calibrate_at_km=a.calibrate_at_km, imu_rule=a.imu_rule,
                    initial_attitude=not a.level, odometer=not a.no_odometer,
-                   gnss_velocity=not a.no_gnss_velocity)
+                   gnss_velocity=not a.no_gnss_velocity, gnss_raw=a.gnss_raw,
+                   raw_keep_in_outages=a.raw_keep)
     print(summary(meta))
     print(f"wrote {a.out} and {sidecar_path(a.out)}")
     return 0

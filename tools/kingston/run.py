@@ -453,6 +453,13 @@ def main(argv=None) -> int:
                     help="omit the WheelSpeeds frames (with --mode dr: free inertial)")
     ap.add_argument("--no-gnss-velocity", action="store_true",
                     help="omit the GNSS_Velocity frames (GNSS position only)")
+    ap.add_argument("--gnss-raw", action="store_true",
+                    help="also send gnss_raw.csv as raw epochs (GNSS_Raw*, docs/can.md; the "
+                         "firmware assembles and counts them, its filter does not fuse them "
+                         "yet)")
+    ap.add_argument("--raw-keep", type=int, default=0, metavar="N",
+                    help="with --gnss-raw: in the outages the N highest satellites' raw "
+                         "measurements are kept (a partial outage)")
     ap.add_argument("--data", default=None, help=f"data folder (default {convert.DATA_DIR})")
     ap.add_argument("--out", default=None,
                     help="output folder (default out/kingston-dr or out/kingston)")
@@ -476,7 +483,8 @@ def main(argv=None) -> int:
     frames, meta = convert.build(drive, gnss=gnss, outages=outages,
                                  calibrate_at_km=a.calibrate_at_km, imu_rule=a.imu_rule,
                                  initial_attitude=not a.level, odometer=not a.no_odometer,
-                                 gnss_velocity=not a.no_gnss_velocity)
+                                 gnss_velocity=not a.no_gnss_velocity, gnss_raw=a.gnss_raw,
+                                 raw_keep_in_outages=a.raw_keep)
     nc.write_candump(can_in, (m for _, _, m in frames))
     meta["log"] = str(can_in)
     meta["mode"] = a.mode

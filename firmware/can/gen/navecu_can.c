@@ -1571,6 +1571,1139 @@ bool navecu_can_gnss_time_gnss_time_crc_is_in_phys_range(float value)
     return ((value >= 0.0f) && (value <= 255.0f));
 }
 
+int navecu_can_gnss_raw_sat_x_pack(
+    uint8_t *dst_p,
+    const struct navecu_can_gnss_raw_sat_x_t *src_p,
+    size_t size)
+{
+    uint16_t sat_vel_x;
+    uint32_t sat_pos_x;
+
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    memset(&dst_p[0], 0, 8);
+
+    sat_pos_x = (uint32_t)src_p->sat_pos_x;
+    dst_p[0] |= pack_left_shift_u32(sat_pos_x, 0u, 0xffu);
+    dst_p[1] |= pack_right_shift_u32(sat_pos_x, 8u, 0xffu);
+    dst_p[2] |= pack_right_shift_u32(sat_pos_x, 16u, 0xffu);
+    dst_p[3] |= pack_right_shift_u32(sat_pos_x, 24u, 0xffu);
+    sat_vel_x = (uint16_t)src_p->sat_vel_x;
+    dst_p[4] |= pack_left_shift_u16(sat_vel_x, 0u, 0xffu);
+    dst_p[5] |= pack_right_shift_u16(sat_vel_x, 8u, 0xffu);
+    dst_p[6] |= pack_left_shift_u8(src_p->raw_slot, 0u, 0x0fu);
+    dst_p[6] |= pack_left_shift_u8(src_p->gnss_epoch, 4u, 0xf0u);
+    dst_p[7] |= pack_left_shift_u8(src_p->raw_sat_x_crc, 0u, 0xffu);
+
+    return (8);
+}
+
+int navecu_can_gnss_raw_sat_x_unpack(
+    struct navecu_can_gnss_raw_sat_x_t *dst_p,
+    const uint8_t *src_p,
+    size_t size)
+{
+    uint16_t sat_vel_x;
+    uint32_t sat_pos_x;
+
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    sat_pos_x = unpack_right_shift_u32(src_p[0], 0u, 0xffu);
+    sat_pos_x |= unpack_left_shift_u32(src_p[1], 8u, 0xffu);
+    sat_pos_x |= unpack_left_shift_u32(src_p[2], 16u, 0xffu);
+    sat_pos_x |= unpack_left_shift_u32(src_p[3], 24u, 0xffu);
+    dst_p->sat_pos_x = (int32_t)sat_pos_x;
+    sat_vel_x = unpack_right_shift_u16(src_p[4], 0u, 0xffu);
+    sat_vel_x |= unpack_left_shift_u16(src_p[5], 8u, 0xffu);
+    dst_p->sat_vel_x = (int16_t)sat_vel_x;
+    dst_p->raw_slot = unpack_right_shift_u8(src_p[6], 0u, 0x0fu);
+    dst_p->gnss_epoch = unpack_right_shift_u8(src_p[6], 4u, 0xf0u);
+    dst_p->raw_sat_x_crc = unpack_right_shift_u8(src_p[7], 0u, 0xffu);
+
+    return (0);
+}
+
+int navecu_can_gnss_raw_sat_x_init(struct navecu_can_gnss_raw_sat_x_t *msg_p)
+{
+    if (msg_p == NULL) return -1;
+
+    memset(msg_p, 0, sizeof(struct navecu_can_gnss_raw_sat_x_t));
+
+    return 0;
+}
+
+int32_t navecu_can_gnss_raw_sat_x_sat_pos_x_encode(float value)
+{
+    return (int32_t)(roundf(value / 0.02f));
+}
+
+float navecu_can_gnss_raw_sat_x_sat_pos_x_decode(int32_t value)
+{
+    return ((float)value * 0.02f);
+}
+
+bool navecu_can_gnss_raw_sat_x_sat_pos_x_is_in_range(int32_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_gnss_raw_sat_x_sat_pos_x_is_in_phys_range(float value)
+{
+    return ((value >= -42949672.96f) && (value <= 42949672.94f));
+}
+
+int16_t navecu_can_gnss_raw_sat_x_sat_vel_x_encode(float value)
+{
+    return (int16_t)(roundf(value / 0.125f));
+}
+
+float navecu_can_gnss_raw_sat_x_sat_vel_x_decode(int16_t value)
+{
+    return ((float)value * 0.125f);
+}
+
+bool navecu_can_gnss_raw_sat_x_sat_vel_x_is_in_range(int16_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_gnss_raw_sat_x_sat_vel_x_is_in_phys_range(float value)
+{
+    return ((value >= -4096.0f) && (value <= 4095.875f));
+}
+
+uint8_t navecu_can_gnss_raw_sat_x_raw_slot_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_gnss_raw_sat_x_raw_slot_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_gnss_raw_sat_x_raw_slot_is_in_range(uint8_t value)
+{
+    return (value <= 15u);
+}
+
+bool navecu_can_gnss_raw_sat_x_raw_slot_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 15.0f));
+}
+
+uint8_t navecu_can_gnss_raw_sat_x_gnss_epoch_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_gnss_raw_sat_x_gnss_epoch_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_gnss_raw_sat_x_gnss_epoch_is_in_range(uint8_t value)
+{
+    return (value <= 14u);
+}
+
+bool navecu_can_gnss_raw_sat_x_gnss_epoch_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 14.0f));
+}
+
+uint8_t navecu_can_gnss_raw_sat_x_raw_sat_x_crc_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_gnss_raw_sat_x_raw_sat_x_crc_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_gnss_raw_sat_x_raw_sat_x_crc_is_in_range(uint8_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_gnss_raw_sat_x_raw_sat_x_crc_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 255.0f));
+}
+
+int navecu_can_gnss_raw_sat_y_pack(
+    uint8_t *dst_p,
+    const struct navecu_can_gnss_raw_sat_y_t *src_p,
+    size_t size)
+{
+    uint16_t sat_vel_y;
+    uint32_t sat_pos_y;
+
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    memset(&dst_p[0], 0, 8);
+
+    sat_pos_y = (uint32_t)src_p->sat_pos_y;
+    dst_p[0] |= pack_left_shift_u32(sat_pos_y, 0u, 0xffu);
+    dst_p[1] |= pack_right_shift_u32(sat_pos_y, 8u, 0xffu);
+    dst_p[2] |= pack_right_shift_u32(sat_pos_y, 16u, 0xffu);
+    dst_p[3] |= pack_right_shift_u32(sat_pos_y, 24u, 0xffu);
+    sat_vel_y = (uint16_t)src_p->sat_vel_y;
+    dst_p[4] |= pack_left_shift_u16(sat_vel_y, 0u, 0xffu);
+    dst_p[5] |= pack_right_shift_u16(sat_vel_y, 8u, 0xffu);
+    dst_p[6] |= pack_left_shift_u8(src_p->raw_slot, 0u, 0x0fu);
+    dst_p[6] |= pack_left_shift_u8(src_p->gnss_epoch, 4u, 0xf0u);
+    dst_p[7] |= pack_left_shift_u8(src_p->raw_sat_y_crc, 0u, 0xffu);
+
+    return (8);
+}
+
+int navecu_can_gnss_raw_sat_y_unpack(
+    struct navecu_can_gnss_raw_sat_y_t *dst_p,
+    const uint8_t *src_p,
+    size_t size)
+{
+    uint16_t sat_vel_y;
+    uint32_t sat_pos_y;
+
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    sat_pos_y = unpack_right_shift_u32(src_p[0], 0u, 0xffu);
+    sat_pos_y |= unpack_left_shift_u32(src_p[1], 8u, 0xffu);
+    sat_pos_y |= unpack_left_shift_u32(src_p[2], 16u, 0xffu);
+    sat_pos_y |= unpack_left_shift_u32(src_p[3], 24u, 0xffu);
+    dst_p->sat_pos_y = (int32_t)sat_pos_y;
+    sat_vel_y = unpack_right_shift_u16(src_p[4], 0u, 0xffu);
+    sat_vel_y |= unpack_left_shift_u16(src_p[5], 8u, 0xffu);
+    dst_p->sat_vel_y = (int16_t)sat_vel_y;
+    dst_p->raw_slot = unpack_right_shift_u8(src_p[6], 0u, 0x0fu);
+    dst_p->gnss_epoch = unpack_right_shift_u8(src_p[6], 4u, 0xf0u);
+    dst_p->raw_sat_y_crc = unpack_right_shift_u8(src_p[7], 0u, 0xffu);
+
+    return (0);
+}
+
+int navecu_can_gnss_raw_sat_y_init(struct navecu_can_gnss_raw_sat_y_t *msg_p)
+{
+    if (msg_p == NULL) return -1;
+
+    memset(msg_p, 0, sizeof(struct navecu_can_gnss_raw_sat_y_t));
+
+    return 0;
+}
+
+int32_t navecu_can_gnss_raw_sat_y_sat_pos_y_encode(float value)
+{
+    return (int32_t)(roundf(value / 0.02f));
+}
+
+float navecu_can_gnss_raw_sat_y_sat_pos_y_decode(int32_t value)
+{
+    return ((float)value * 0.02f);
+}
+
+bool navecu_can_gnss_raw_sat_y_sat_pos_y_is_in_range(int32_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_gnss_raw_sat_y_sat_pos_y_is_in_phys_range(float value)
+{
+    return ((value >= -42949672.96f) && (value <= 42949672.94f));
+}
+
+int16_t navecu_can_gnss_raw_sat_y_sat_vel_y_encode(float value)
+{
+    return (int16_t)(roundf(value / 0.125f));
+}
+
+float navecu_can_gnss_raw_sat_y_sat_vel_y_decode(int16_t value)
+{
+    return ((float)value * 0.125f);
+}
+
+bool navecu_can_gnss_raw_sat_y_sat_vel_y_is_in_range(int16_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_gnss_raw_sat_y_sat_vel_y_is_in_phys_range(float value)
+{
+    return ((value >= -4096.0f) && (value <= 4095.875f));
+}
+
+uint8_t navecu_can_gnss_raw_sat_y_raw_slot_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_gnss_raw_sat_y_raw_slot_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_gnss_raw_sat_y_raw_slot_is_in_range(uint8_t value)
+{
+    return (value <= 15u);
+}
+
+bool navecu_can_gnss_raw_sat_y_raw_slot_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 15.0f));
+}
+
+uint8_t navecu_can_gnss_raw_sat_y_gnss_epoch_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_gnss_raw_sat_y_gnss_epoch_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_gnss_raw_sat_y_gnss_epoch_is_in_range(uint8_t value)
+{
+    return (value <= 14u);
+}
+
+bool navecu_can_gnss_raw_sat_y_gnss_epoch_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 14.0f));
+}
+
+uint8_t navecu_can_gnss_raw_sat_y_raw_sat_y_crc_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_gnss_raw_sat_y_raw_sat_y_crc_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_gnss_raw_sat_y_raw_sat_y_crc_is_in_range(uint8_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_gnss_raw_sat_y_raw_sat_y_crc_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 255.0f));
+}
+
+int navecu_can_gnss_raw_sat_z_pack(
+    uint8_t *dst_p,
+    const struct navecu_can_gnss_raw_sat_z_t *src_p,
+    size_t size)
+{
+    uint16_t sat_vel_z;
+    uint32_t sat_pos_z;
+
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    memset(&dst_p[0], 0, 8);
+
+    sat_pos_z = (uint32_t)src_p->sat_pos_z;
+    dst_p[0] |= pack_left_shift_u32(sat_pos_z, 0u, 0xffu);
+    dst_p[1] |= pack_right_shift_u32(sat_pos_z, 8u, 0xffu);
+    dst_p[2] |= pack_right_shift_u32(sat_pos_z, 16u, 0xffu);
+    dst_p[3] |= pack_right_shift_u32(sat_pos_z, 24u, 0xffu);
+    sat_vel_z = (uint16_t)src_p->sat_vel_z;
+    dst_p[4] |= pack_left_shift_u16(sat_vel_z, 0u, 0xffu);
+    dst_p[5] |= pack_right_shift_u16(sat_vel_z, 8u, 0xffu);
+    dst_p[6] |= pack_left_shift_u8(src_p->raw_slot, 0u, 0x0fu);
+    dst_p[6] |= pack_left_shift_u8(src_p->gnss_epoch, 4u, 0xf0u);
+    dst_p[7] |= pack_left_shift_u8(src_p->raw_sat_z_crc, 0u, 0xffu);
+
+    return (8);
+}
+
+int navecu_can_gnss_raw_sat_z_unpack(
+    struct navecu_can_gnss_raw_sat_z_t *dst_p,
+    const uint8_t *src_p,
+    size_t size)
+{
+    uint16_t sat_vel_z;
+    uint32_t sat_pos_z;
+
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    sat_pos_z = unpack_right_shift_u32(src_p[0], 0u, 0xffu);
+    sat_pos_z |= unpack_left_shift_u32(src_p[1], 8u, 0xffu);
+    sat_pos_z |= unpack_left_shift_u32(src_p[2], 16u, 0xffu);
+    sat_pos_z |= unpack_left_shift_u32(src_p[3], 24u, 0xffu);
+    dst_p->sat_pos_z = (int32_t)sat_pos_z;
+    sat_vel_z = unpack_right_shift_u16(src_p[4], 0u, 0xffu);
+    sat_vel_z |= unpack_left_shift_u16(src_p[5], 8u, 0xffu);
+    dst_p->sat_vel_z = (int16_t)sat_vel_z;
+    dst_p->raw_slot = unpack_right_shift_u8(src_p[6], 0u, 0x0fu);
+    dst_p->gnss_epoch = unpack_right_shift_u8(src_p[6], 4u, 0xf0u);
+    dst_p->raw_sat_z_crc = unpack_right_shift_u8(src_p[7], 0u, 0xffu);
+
+    return (0);
+}
+
+int navecu_can_gnss_raw_sat_z_init(struct navecu_can_gnss_raw_sat_z_t *msg_p)
+{
+    if (msg_p == NULL) return -1;
+
+    memset(msg_p, 0, sizeof(struct navecu_can_gnss_raw_sat_z_t));
+
+    return 0;
+}
+
+int32_t navecu_can_gnss_raw_sat_z_sat_pos_z_encode(float value)
+{
+    return (int32_t)(roundf(value / 0.02f));
+}
+
+float navecu_can_gnss_raw_sat_z_sat_pos_z_decode(int32_t value)
+{
+    return ((float)value * 0.02f);
+}
+
+bool navecu_can_gnss_raw_sat_z_sat_pos_z_is_in_range(int32_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_gnss_raw_sat_z_sat_pos_z_is_in_phys_range(float value)
+{
+    return ((value >= -42949672.96f) && (value <= 42949672.94f));
+}
+
+int16_t navecu_can_gnss_raw_sat_z_sat_vel_z_encode(float value)
+{
+    return (int16_t)(roundf(value / 0.125f));
+}
+
+float navecu_can_gnss_raw_sat_z_sat_vel_z_decode(int16_t value)
+{
+    return ((float)value * 0.125f);
+}
+
+bool navecu_can_gnss_raw_sat_z_sat_vel_z_is_in_range(int16_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_gnss_raw_sat_z_sat_vel_z_is_in_phys_range(float value)
+{
+    return ((value >= -4096.0f) && (value <= 4095.875f));
+}
+
+uint8_t navecu_can_gnss_raw_sat_z_raw_slot_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_gnss_raw_sat_z_raw_slot_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_gnss_raw_sat_z_raw_slot_is_in_range(uint8_t value)
+{
+    return (value <= 15u);
+}
+
+bool navecu_can_gnss_raw_sat_z_raw_slot_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 15.0f));
+}
+
+uint8_t navecu_can_gnss_raw_sat_z_gnss_epoch_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_gnss_raw_sat_z_gnss_epoch_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_gnss_raw_sat_z_gnss_epoch_is_in_range(uint8_t value)
+{
+    return (value <= 14u);
+}
+
+bool navecu_can_gnss_raw_sat_z_gnss_epoch_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 14.0f));
+}
+
+uint8_t navecu_can_gnss_raw_sat_z_raw_sat_z_crc_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_gnss_raw_sat_z_raw_sat_z_crc_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_gnss_raw_sat_z_raw_sat_z_crc_is_in_range(uint8_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_gnss_raw_sat_z_raw_sat_z_crc_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 255.0f));
+}
+
+int navecu_can_gnss_raw_range_pack(
+    uint8_t *dst_p,
+    const struct navecu_can_gnss_raw_range_t *src_p,
+    size_t size)
+{
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    memset(&dst_p[0], 0, 8);
+
+    dst_p[0] |= pack_left_shift_u32(src_p->pseudorange, 0u, 0xffu);
+    dst_p[1] |= pack_right_shift_u32(src_p->pseudorange, 8u, 0xffu);
+    dst_p[2] |= pack_right_shift_u32(src_p->pseudorange, 16u, 0xffu);
+    dst_p[3] |= pack_right_shift_u32(src_p->pseudorange, 24u, 0x7fu);
+    dst_p[3] |= pack_left_shift_u8(src_p->gnss_system, 7u, 0x80u);
+    dst_p[4] |= pack_right_shift_u8(src_p->gnss_system, 1u, 0x03u);
+    dst_p[4] |= pack_left_shift_u8(src_p->sv_id, 2u, 0xfcu);
+    dst_p[5] |= pack_left_shift_u8(src_p->elevation, 0u, 0x7fu);
+    dst_p[5] |= pack_left_shift_u8(src_p->pseudorange_valid, 7u, 0x80u);
+    dst_p[6] |= pack_left_shift_u8(src_p->raw_slot, 0u, 0x0fu);
+    dst_p[6] |= pack_left_shift_u8(src_p->gnss_epoch, 4u, 0xf0u);
+    dst_p[7] |= pack_left_shift_u8(src_p->raw_range_crc, 0u, 0xffu);
+
+    return (8);
+}
+
+int navecu_can_gnss_raw_range_unpack(
+    struct navecu_can_gnss_raw_range_t *dst_p,
+    const uint8_t *src_p,
+    size_t size)
+{
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    dst_p->pseudorange = unpack_right_shift_u32(src_p[0], 0u, 0xffu);
+    dst_p->pseudorange |= unpack_left_shift_u32(src_p[1], 8u, 0xffu);
+    dst_p->pseudorange |= unpack_left_shift_u32(src_p[2], 16u, 0xffu);
+    dst_p->pseudorange |= unpack_left_shift_u32(src_p[3], 24u, 0x7fu);
+    dst_p->gnss_system = unpack_right_shift_u8(src_p[3], 7u, 0x80u);
+    dst_p->gnss_system |= unpack_left_shift_u8(src_p[4], 1u, 0x03u);
+    dst_p->sv_id = unpack_right_shift_u8(src_p[4], 2u, 0xfcu);
+    dst_p->elevation = unpack_right_shift_u8(src_p[5], 0u, 0x7fu);
+    dst_p->pseudorange_valid = unpack_right_shift_u8(src_p[5], 7u, 0x80u);
+    dst_p->raw_slot = unpack_right_shift_u8(src_p[6], 0u, 0x0fu);
+    dst_p->gnss_epoch = unpack_right_shift_u8(src_p[6], 4u, 0xf0u);
+    dst_p->raw_range_crc = unpack_right_shift_u8(src_p[7], 0u, 0xffu);
+
+    return (0);
+}
+
+int navecu_can_gnss_raw_range_init(struct navecu_can_gnss_raw_range_t *msg_p)
+{
+    if (msg_p == NULL) return -1;
+
+    memset(msg_p, 0, sizeof(struct navecu_can_gnss_raw_range_t));
+
+    return 0;
+}
+
+uint32_t navecu_can_gnss_raw_range_pseudorange_encode(float value)
+{
+    return (uint32_t)(cantools_unsigned_from_double(roundf(value / 0.02f)));
+}
+
+float navecu_can_gnss_raw_range_pseudorange_decode(uint32_t value)
+{
+    return ((float)value * 0.02f);
+}
+
+bool navecu_can_gnss_raw_range_pseudorange_is_in_range(uint32_t value)
+{
+    return (value <= 2147483647u);
+}
+
+bool navecu_can_gnss_raw_range_pseudorange_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 42949672.94f));
+}
+
+uint8_t navecu_can_gnss_raw_range_gnss_system_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_gnss_raw_range_gnss_system_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_gnss_raw_range_gnss_system_is_in_range(uint8_t value)
+{
+    return (value <= 7u);
+}
+
+bool navecu_can_gnss_raw_range_gnss_system_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 7.0f));
+}
+
+uint8_t navecu_can_gnss_raw_range_sv_id_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_gnss_raw_range_sv_id_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_gnss_raw_range_sv_id_is_in_range(uint8_t value)
+{
+    return (value <= 63u);
+}
+
+bool navecu_can_gnss_raw_range_sv_id_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 63.0f));
+}
+
+uint8_t navecu_can_gnss_raw_range_elevation_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_gnss_raw_range_elevation_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_gnss_raw_range_elevation_is_in_range(uint8_t value)
+{
+    return (value <= 90u);
+}
+
+bool navecu_can_gnss_raw_range_elevation_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 90.0f));
+}
+
+uint8_t navecu_can_gnss_raw_range_pseudorange_valid_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_gnss_raw_range_pseudorange_valid_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_gnss_raw_range_pseudorange_valid_is_in_range(uint8_t value)
+{
+    return (value <= 1u);
+}
+
+bool navecu_can_gnss_raw_range_pseudorange_valid_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 1.0f));
+}
+
+uint8_t navecu_can_gnss_raw_range_raw_slot_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_gnss_raw_range_raw_slot_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_gnss_raw_range_raw_slot_is_in_range(uint8_t value)
+{
+    return (value <= 15u);
+}
+
+bool navecu_can_gnss_raw_range_raw_slot_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 15.0f));
+}
+
+uint8_t navecu_can_gnss_raw_range_gnss_epoch_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_gnss_raw_range_gnss_epoch_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_gnss_raw_range_gnss_epoch_is_in_range(uint8_t value)
+{
+    return (value <= 14u);
+}
+
+bool navecu_can_gnss_raw_range_gnss_epoch_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 14.0f));
+}
+
+uint8_t navecu_can_gnss_raw_range_raw_range_crc_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_gnss_raw_range_raw_range_crc_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_gnss_raw_range_raw_range_crc_is_in_range(uint8_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_gnss_raw_range_raw_range_crc_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 255.0f));
+}
+
+int navecu_can_gnss_raw_rate_pack(
+    uint8_t *dst_p,
+    const struct navecu_can_gnss_raw_rate_t *src_p,
+    size_t size)
+{
+    uint32_t range_rate;
+
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    memset(&dst_p[0], 0, 8);
+
+    range_rate = (uint32_t)src_p->range_rate;
+    dst_p[0] |= pack_left_shift_u32(range_rate, 0u, 0xffu);
+    dst_p[1] |= pack_right_shift_u32(range_rate, 8u, 0xffu);
+    dst_p[2] |= pack_right_shift_u32(range_rate, 16u, 0x0fu);
+    dst_p[2] |= pack_left_shift_u8(src_p->pseudorange_sigma, 4u, 0xf0u);
+    dst_p[3] |= pack_right_shift_u8(src_p->pseudorange_sigma, 4u, 0x0fu);
+    dst_p[3] |= pack_left_shift_u8(src_p->range_rate_sigma, 4u, 0xf0u);
+    dst_p[4] |= pack_right_shift_u8(src_p->range_rate_sigma, 4u, 0x0fu);
+    dst_p[4] |= pack_left_shift_u8(src_p->cn0, 4u, 0xf0u);
+    dst_p[5] |= pack_right_shift_u8(src_p->cn0, 4u, 0x03u);
+    dst_p[5] |= pack_left_shift_u8(src_p->range_rate_valid, 2u, 0x04u);
+    dst_p[6] |= pack_left_shift_u8(src_p->raw_slot, 0u, 0x0fu);
+    dst_p[6] |= pack_left_shift_u8(src_p->gnss_epoch, 4u, 0xf0u);
+    dst_p[7] |= pack_left_shift_u8(src_p->raw_rate_crc, 0u, 0xffu);
+
+    return (8);
+}
+
+int navecu_can_gnss_raw_rate_unpack(
+    struct navecu_can_gnss_raw_rate_t *dst_p,
+    const uint8_t *src_p,
+    size_t size)
+{
+    uint32_t range_rate;
+
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    range_rate = unpack_right_shift_u32(src_p[0], 0u, 0xffu);
+    range_rate |= unpack_left_shift_u32(src_p[1], 8u, 0xffu);
+    range_rate |= unpack_left_shift_u32(src_p[2], 16u, 0x0fu);
+
+    if ((range_rate & (1u << 19)) != 0u) {
+        range_rate |= 0xfff00000u;
+    }
+
+    dst_p->range_rate = (int32_t)range_rate;
+    dst_p->pseudorange_sigma = unpack_right_shift_u8(src_p[2], 4u, 0xf0u);
+    dst_p->pseudorange_sigma |= unpack_left_shift_u8(src_p[3], 4u, 0x0fu);
+    dst_p->range_rate_sigma = unpack_right_shift_u8(src_p[3], 4u, 0xf0u);
+    dst_p->range_rate_sigma |= unpack_left_shift_u8(src_p[4], 4u, 0x0fu);
+    dst_p->cn0 = unpack_right_shift_u8(src_p[4], 4u, 0xf0u);
+    dst_p->cn0 |= unpack_left_shift_u8(src_p[5], 4u, 0x03u);
+    dst_p->range_rate_valid = unpack_right_shift_u8(src_p[5], 2u, 0x04u);
+    dst_p->raw_slot = unpack_right_shift_u8(src_p[6], 0u, 0x0fu);
+    dst_p->gnss_epoch = unpack_right_shift_u8(src_p[6], 4u, 0xf0u);
+    dst_p->raw_rate_crc = unpack_right_shift_u8(src_p[7], 0u, 0xffu);
+
+    return (0);
+}
+
+int navecu_can_gnss_raw_rate_init(struct navecu_can_gnss_raw_rate_t *msg_p)
+{
+    if (msg_p == NULL) return -1;
+
+    memset(msg_p, 0, sizeof(struct navecu_can_gnss_raw_rate_t));
+
+    return 0;
+}
+
+int32_t navecu_can_gnss_raw_rate_range_rate_encode(float value)
+{
+    return (int32_t)(roundf(value / 0.01f));
+}
+
+float navecu_can_gnss_raw_rate_range_rate_decode(int32_t value)
+{
+    return ((float)value * 0.01f);
+}
+
+bool navecu_can_gnss_raw_rate_range_rate_is_in_range(int32_t value)
+{
+    return ((value >= -524288) && (value <= 524287));
+}
+
+bool navecu_can_gnss_raw_rate_range_rate_is_in_phys_range(float value)
+{
+    return ((value >= -5242.88f) && (value <= 5242.87f));
+}
+
+uint8_t navecu_can_gnss_raw_rate_pseudorange_sigma_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value / 0.1f)));
+}
+
+float navecu_can_gnss_raw_rate_pseudorange_sigma_decode(uint8_t value)
+{
+    return ((float)value * 0.1f);
+}
+
+bool navecu_can_gnss_raw_rate_pseudorange_sigma_is_in_range(uint8_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_gnss_raw_rate_pseudorange_sigma_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 25.5f));
+}
+
+uint8_t navecu_can_gnss_raw_rate_range_rate_sigma_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value / 0.01f)));
+}
+
+float navecu_can_gnss_raw_rate_range_rate_sigma_decode(uint8_t value)
+{
+    return ((float)value * 0.01f);
+}
+
+bool navecu_can_gnss_raw_rate_range_rate_sigma_is_in_range(uint8_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_gnss_raw_rate_range_rate_sigma_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 2.55f));
+}
+
+uint8_t navecu_can_gnss_raw_rate_cn0_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_gnss_raw_rate_cn0_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_gnss_raw_rate_cn0_is_in_range(uint8_t value)
+{
+    return (value <= 63u);
+}
+
+bool navecu_can_gnss_raw_rate_cn0_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 63.0f));
+}
+
+uint8_t navecu_can_gnss_raw_rate_range_rate_valid_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_gnss_raw_rate_range_rate_valid_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_gnss_raw_rate_range_rate_valid_is_in_range(uint8_t value)
+{
+    return (value <= 1u);
+}
+
+bool navecu_can_gnss_raw_rate_range_rate_valid_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 1.0f));
+}
+
+uint8_t navecu_can_gnss_raw_rate_raw_slot_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_gnss_raw_rate_raw_slot_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_gnss_raw_rate_raw_slot_is_in_range(uint8_t value)
+{
+    return (value <= 15u);
+}
+
+bool navecu_can_gnss_raw_rate_raw_slot_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 15.0f));
+}
+
+uint8_t navecu_can_gnss_raw_rate_gnss_epoch_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_gnss_raw_rate_gnss_epoch_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_gnss_raw_rate_gnss_epoch_is_in_range(uint8_t value)
+{
+    return (value <= 14u);
+}
+
+bool navecu_can_gnss_raw_rate_gnss_epoch_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 14.0f));
+}
+
+uint8_t navecu_can_gnss_raw_rate_raw_rate_crc_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_gnss_raw_rate_raw_rate_crc_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_gnss_raw_rate_raw_rate_crc_is_in_range(uint8_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_gnss_raw_rate_raw_rate_crc_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 255.0f));
+}
+
+int navecu_can_gnss_raw_epoch_pack(
+    uint8_t *dst_p,
+    const struct navecu_can_gnss_raw_epoch_t *src_p,
+    size_t size)
+{
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    memset(&dst_p[0], 0, 8);
+
+    dst_p[0] |= pack_left_shift_u32(src_p->time_of_week, 0u, 0xffu);
+    dst_p[1] |= pack_right_shift_u32(src_p->time_of_week, 8u, 0xffu);
+    dst_p[2] |= pack_right_shift_u32(src_p->time_of_week, 16u, 0xffu);
+    dst_p[3] |= pack_right_shift_u32(src_p->time_of_week, 24u, 0x3fu);
+    dst_p[3] |= pack_left_shift_u8(src_p->num_meas, 6u, 0xc0u);
+    dst_p[4] |= pack_right_shift_u8(src_p->num_meas, 2u, 0x07u);
+    dst_p[4] |= pack_left_shift_u8(src_p->gnss_epoch, 3u, 0x78u);
+    dst_p[4] |= pack_left_shift_u8(src_p->clock_reset, 7u, 0x80u);
+    dst_p[7] |= pack_left_shift_u8(src_p->raw_epoch_crc, 0u, 0xffu);
+
+    return (8);
+}
+
+int navecu_can_gnss_raw_epoch_unpack(
+    struct navecu_can_gnss_raw_epoch_t *dst_p,
+    const uint8_t *src_p,
+    size_t size)
+{
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    dst_p->time_of_week = unpack_right_shift_u32(src_p[0], 0u, 0xffu);
+    dst_p->time_of_week |= unpack_left_shift_u32(src_p[1], 8u, 0xffu);
+    dst_p->time_of_week |= unpack_left_shift_u32(src_p[2], 16u, 0xffu);
+    dst_p->time_of_week |= unpack_left_shift_u32(src_p[3], 24u, 0x3fu);
+    dst_p->num_meas = unpack_right_shift_u8(src_p[3], 6u, 0xc0u);
+    dst_p->num_meas |= unpack_left_shift_u8(src_p[4], 2u, 0x07u);
+    dst_p->gnss_epoch = unpack_right_shift_u8(src_p[4], 3u, 0x78u);
+    dst_p->clock_reset = unpack_right_shift_u8(src_p[4], 7u, 0x80u);
+    dst_p->raw_epoch_crc = unpack_right_shift_u8(src_p[7], 0u, 0xffu);
+
+    return (0);
+}
+
+int navecu_can_gnss_raw_epoch_init(struct navecu_can_gnss_raw_epoch_t *msg_p)
+{
+    if (msg_p == NULL) return -1;
+
+    memset(msg_p, 0, sizeof(struct navecu_can_gnss_raw_epoch_t));
+
+    return 0;
+}
+
+uint32_t navecu_can_gnss_raw_epoch_time_of_week_encode(float value)
+{
+    return (uint32_t)(cantools_unsigned_from_double(roundf(value / 0.001f)));
+}
+
+float navecu_can_gnss_raw_epoch_time_of_week_decode(uint32_t value)
+{
+    return ((float)value * 0.001f);
+}
+
+bool navecu_can_gnss_raw_epoch_time_of_week_is_in_range(uint32_t value)
+{
+    return (value <= 604799999u);
+}
+
+bool navecu_can_gnss_raw_epoch_time_of_week_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 604799.999f));
+}
+
+uint8_t navecu_can_gnss_raw_epoch_num_meas_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_gnss_raw_epoch_num_meas_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_gnss_raw_epoch_num_meas_is_in_range(uint8_t value)
+{
+    return (value <= 16u);
+}
+
+bool navecu_can_gnss_raw_epoch_num_meas_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 16.0f));
+}
+
+uint8_t navecu_can_gnss_raw_epoch_gnss_epoch_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_gnss_raw_epoch_gnss_epoch_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_gnss_raw_epoch_gnss_epoch_is_in_range(uint8_t value)
+{
+    return (value <= 14u);
+}
+
+bool navecu_can_gnss_raw_epoch_gnss_epoch_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 14.0f));
+}
+
+uint8_t navecu_can_gnss_raw_epoch_clock_reset_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_gnss_raw_epoch_clock_reset_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_gnss_raw_epoch_clock_reset_is_in_range(uint8_t value)
+{
+    return (value <= 1u);
+}
+
+bool navecu_can_gnss_raw_epoch_clock_reset_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 1.0f));
+}
+
+uint8_t navecu_can_gnss_raw_epoch_raw_epoch_crc_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float navecu_can_gnss_raw_epoch_raw_epoch_crc_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool navecu_can_gnss_raw_epoch_raw_epoch_crc_is_in_range(uint8_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool navecu_can_gnss_raw_epoch_raw_epoch_crc_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 255.0f));
+}
+
 int navecu_can_cmd_known_position_pack(
     uint8_t *dst_p,
     const struct navecu_can_cmd_known_position_t *src_p,

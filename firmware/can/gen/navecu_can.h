@@ -56,6 +56,12 @@ extern "C" {
 #define NAVECU_CAN_GNSS_STATUS_FRAME_ID (0x122u)
 #define NAVECU_CAN_GNSS_HEIGHT_FRAME_ID (0x123u)
 #define NAVECU_CAN_GNSS_TIME_FRAME_ID (0x125u)
+#define NAVECU_CAN_GNSS_RAW_SAT_X_FRAME_ID (0x131u)
+#define NAVECU_CAN_GNSS_RAW_SAT_Y_FRAME_ID (0x132u)
+#define NAVECU_CAN_GNSS_RAW_SAT_Z_FRAME_ID (0x133u)
+#define NAVECU_CAN_GNSS_RAW_RANGE_FRAME_ID (0x134u)
+#define NAVECU_CAN_GNSS_RAW_RATE_FRAME_ID (0x135u)
+#define NAVECU_CAN_GNSS_RAW_EPOCH_FRAME_ID (0x136u)
 #define NAVECU_CAN_CMD_KNOWN_POSITION_FRAME_ID (0x200u)
 #define NAVECU_CAN_CMD_CONTROL_FRAME_ID (0x201u)
 #define NAVECU_CAN_CMD_INITIAL_ATTITUDE_FRAME_ID (0x202u)
@@ -83,6 +89,12 @@ extern "C" {
 #define NAVECU_CAN_GNSS_STATUS_LENGTH (8u)
 #define NAVECU_CAN_GNSS_HEIGHT_LENGTH (8u)
 #define NAVECU_CAN_GNSS_TIME_LENGTH (8u)
+#define NAVECU_CAN_GNSS_RAW_SAT_X_LENGTH (8u)
+#define NAVECU_CAN_GNSS_RAW_SAT_Y_LENGTH (8u)
+#define NAVECU_CAN_GNSS_RAW_SAT_Z_LENGTH (8u)
+#define NAVECU_CAN_GNSS_RAW_RANGE_LENGTH (8u)
+#define NAVECU_CAN_GNSS_RAW_RATE_LENGTH (8u)
+#define NAVECU_CAN_GNSS_RAW_EPOCH_LENGTH (8u)
 #define NAVECU_CAN_CMD_KNOWN_POSITION_LENGTH (8u)
 #define NAVECU_CAN_CMD_CONTROL_LENGTH (8u)
 #define NAVECU_CAN_CMD_INITIAL_ATTITUDE_LENGTH (8u)
@@ -110,6 +122,12 @@ extern "C" {
 #define NAVECU_CAN_GNSS_STATUS_IS_EXTENDED (0)
 #define NAVECU_CAN_GNSS_HEIGHT_IS_EXTENDED (0)
 #define NAVECU_CAN_GNSS_TIME_IS_EXTENDED (0)
+#define NAVECU_CAN_GNSS_RAW_SAT_X_IS_EXTENDED (0)
+#define NAVECU_CAN_GNSS_RAW_SAT_Y_IS_EXTENDED (0)
+#define NAVECU_CAN_GNSS_RAW_SAT_Z_IS_EXTENDED (0)
+#define NAVECU_CAN_GNSS_RAW_RANGE_IS_EXTENDED (0)
+#define NAVECU_CAN_GNSS_RAW_RATE_IS_EXTENDED (0)
+#define NAVECU_CAN_GNSS_RAW_EPOCH_IS_EXTENDED (0)
 #define NAVECU_CAN_CMD_KNOWN_POSITION_IS_EXTENDED (0)
 #define NAVECU_CAN_CMD_CONTROL_IS_EXTENDED (0)
 #define NAVECU_CAN_CMD_INITIAL_ATTITUDE_IS_EXTENDED (0)
@@ -145,6 +163,13 @@ extern "C" {
 #define NAVECU_CAN_GNSS_STATUS_FIX_TYPE_DIFFERENTIAL_CHOICE (4u)
 #define NAVECU_CAN_GNSS_STATUS_FIX_TYPE_RTK_FLOAT_CHOICE (5u)
 #define NAVECU_CAN_GNSS_STATUS_FIX_TYPE_RTK_FIXED_CHOICE (6u)
+
+#define NAVECU_CAN_GNSS_RAW_RANGE_GNSS_SYSTEM_GPS_CHOICE (0u)
+#define NAVECU_CAN_GNSS_RAW_RANGE_GNSS_SYSTEM_SBAS_CHOICE (1u)
+#define NAVECU_CAN_GNSS_RAW_RANGE_GNSS_SYSTEM_GALILEO_CHOICE (2u)
+#define NAVECU_CAN_GNSS_RAW_RANGE_GNSS_SYSTEM_BEI_DOU_CHOICE (3u)
+#define NAVECU_CAN_GNSS_RAW_RANGE_GNSS_SYSTEM_QZSS_CHOICE (5u)
+#define NAVECU_CAN_GNSS_RAW_RANGE_GNSS_SYSTEM_GLONASS_CHOICE (6u)
 
 #define NAVECU_CAN_CMD_CONTROL_COMMAND_NONE_CHOICE (0u)
 #define NAVECU_CAN_CMD_CONTROL_COMMAND_RESET_CHOICE (1u)
@@ -194,6 +219,12 @@ extern "C" {
 #define NAVECU_CAN_GNSS_STATUS_NAME "GNSS_Status"
 #define NAVECU_CAN_GNSS_HEIGHT_NAME "GNSS_Height"
 #define NAVECU_CAN_GNSS_TIME_NAME "GNSS_Time"
+#define NAVECU_CAN_GNSS_RAW_SAT_X_NAME "GNSS_RawSatX"
+#define NAVECU_CAN_GNSS_RAW_SAT_Y_NAME "GNSS_RawSatY"
+#define NAVECU_CAN_GNSS_RAW_SAT_Z_NAME "GNSS_RawSatZ"
+#define NAVECU_CAN_GNSS_RAW_RANGE_NAME "GNSS_RawRange"
+#define NAVECU_CAN_GNSS_RAW_RATE_NAME "GNSS_RawRate"
+#define NAVECU_CAN_GNSS_RAW_EPOCH_NAME "GNSS_RawEpoch"
 #define NAVECU_CAN_CMD_KNOWN_POSITION_NAME "CMD_KnownPosition"
 #define NAVECU_CAN_CMD_CONTROL_NAME "CMD_Control"
 #define NAVECU_CAN_CMD_INITIAL_ATTITUDE_NAME "CMD_InitialAttitude"
@@ -250,6 +281,42 @@ extern "C" {
 #define NAVECU_CAN_GNSS_TIME_GPS_WEEK_NAME "GpsWeek"
 #define NAVECU_CAN_GNSS_TIME_GNSS_EPOCH_NAME "GnssEpoch"
 #define NAVECU_CAN_GNSS_TIME_GNSS_TIME_CRC_NAME "GnssTimeCrc"
+#define NAVECU_CAN_GNSS_RAW_SAT_X_SAT_POS_X_NAME "SatPosX"
+#define NAVECU_CAN_GNSS_RAW_SAT_X_SAT_VEL_X_NAME "SatVelX"
+#define NAVECU_CAN_GNSS_RAW_SAT_X_RAW_SLOT_NAME "RawSlot"
+#define NAVECU_CAN_GNSS_RAW_SAT_X_GNSS_EPOCH_NAME "GnssEpoch"
+#define NAVECU_CAN_GNSS_RAW_SAT_X_RAW_SAT_X_CRC_NAME "RawSatXCrc"
+#define NAVECU_CAN_GNSS_RAW_SAT_Y_SAT_POS_Y_NAME "SatPosY"
+#define NAVECU_CAN_GNSS_RAW_SAT_Y_SAT_VEL_Y_NAME "SatVelY"
+#define NAVECU_CAN_GNSS_RAW_SAT_Y_RAW_SLOT_NAME "RawSlot"
+#define NAVECU_CAN_GNSS_RAW_SAT_Y_GNSS_EPOCH_NAME "GnssEpoch"
+#define NAVECU_CAN_GNSS_RAW_SAT_Y_RAW_SAT_Y_CRC_NAME "RawSatYCrc"
+#define NAVECU_CAN_GNSS_RAW_SAT_Z_SAT_POS_Z_NAME "SatPosZ"
+#define NAVECU_CAN_GNSS_RAW_SAT_Z_SAT_VEL_Z_NAME "SatVelZ"
+#define NAVECU_CAN_GNSS_RAW_SAT_Z_RAW_SLOT_NAME "RawSlot"
+#define NAVECU_CAN_GNSS_RAW_SAT_Z_GNSS_EPOCH_NAME "GnssEpoch"
+#define NAVECU_CAN_GNSS_RAW_SAT_Z_RAW_SAT_Z_CRC_NAME "RawSatZCrc"
+#define NAVECU_CAN_GNSS_RAW_RANGE_PSEUDORANGE_NAME "Pseudorange"
+#define NAVECU_CAN_GNSS_RAW_RANGE_GNSS_SYSTEM_NAME "GnssSystem"
+#define NAVECU_CAN_GNSS_RAW_RANGE_SV_ID_NAME "SvId"
+#define NAVECU_CAN_GNSS_RAW_RANGE_ELEVATION_NAME "Elevation"
+#define NAVECU_CAN_GNSS_RAW_RANGE_PSEUDORANGE_VALID_NAME "PseudorangeValid"
+#define NAVECU_CAN_GNSS_RAW_RANGE_RAW_SLOT_NAME "RawSlot"
+#define NAVECU_CAN_GNSS_RAW_RANGE_GNSS_EPOCH_NAME "GnssEpoch"
+#define NAVECU_CAN_GNSS_RAW_RANGE_RAW_RANGE_CRC_NAME "RawRangeCrc"
+#define NAVECU_CAN_GNSS_RAW_RATE_RANGE_RATE_NAME "RangeRate"
+#define NAVECU_CAN_GNSS_RAW_RATE_PSEUDORANGE_SIGMA_NAME "PseudorangeSigma"
+#define NAVECU_CAN_GNSS_RAW_RATE_RANGE_RATE_SIGMA_NAME "RangeRateSigma"
+#define NAVECU_CAN_GNSS_RAW_RATE_CN0_NAME "Cn0"
+#define NAVECU_CAN_GNSS_RAW_RATE_RANGE_RATE_VALID_NAME "RangeRateValid"
+#define NAVECU_CAN_GNSS_RAW_RATE_RAW_SLOT_NAME "RawSlot"
+#define NAVECU_CAN_GNSS_RAW_RATE_GNSS_EPOCH_NAME "GnssEpoch"
+#define NAVECU_CAN_GNSS_RAW_RATE_RAW_RATE_CRC_NAME "RawRateCrc"
+#define NAVECU_CAN_GNSS_RAW_EPOCH_TIME_OF_WEEK_NAME "TimeOfWeek"
+#define NAVECU_CAN_GNSS_RAW_EPOCH_NUM_MEAS_NAME "NumMeas"
+#define NAVECU_CAN_GNSS_RAW_EPOCH_GNSS_EPOCH_NAME "GnssEpoch"
+#define NAVECU_CAN_GNSS_RAW_EPOCH_CLOCK_RESET_NAME "ClockReset"
+#define NAVECU_CAN_GNSS_RAW_EPOCH_RAW_EPOCH_CRC_NAME "RawEpochCrc"
 #define NAVECU_CAN_CMD_KNOWN_POSITION_LATITUDE_NAME "Latitude"
 #define NAVECU_CAN_CMD_KNOWN_POSITION_LONGITUDE_NAME "Longitude"
 #define NAVECU_CAN_CMD_CONTROL_COMMAND_NAME "Command"
@@ -705,6 +772,344 @@ struct navecu_can_gnss_time_t {
      * Offset: 0
      */
     uint8_t gnss_time_crc;
+};
+
+/**
+ * Signals in message GNSS_RawSatX.
+ *
+ * One satellite's measurement of a raw GNSS epoch (tightly coupled GNSS, issue #20; the ECU assembles and checks raw epochs, its filter does not fuse them yet): the satellite's ECEF x position at the signal's transmit time, in the ECEF axes of the transmit time (as the broadcast ephemeris gives it; the ECU applies the Earth's rotation during the signal's travel), and its ECEF x velocity. Five frames per satellite (GNSS_RawSatX, GNSS_RawSatY, GNSS_RawSatZ, GNSS_RawRange, GNSS_RawRate) with the same RawSlot and GnssEpoch, any order, before the GNSS_RawEpoch that closes the epoch.
+ *
+ * All signal values are as on the CAN bus.
+ */
+struct navecu_can_gnss_raw_sat_x_t {
+    /**
+     * ECEF x, WGS-84, at the transmit time; 0.02 m resolution (a 32-bit range of +-42,950 km: GPS, Galileo, GLONASS and BeiDou orbits).
+     *
+     * Range: -2147483648..2147483647 (-42949672.96..42949672.94 m)
+     * Scale: 0.02
+     * Offset: 0
+     */
+    int32_t sat_pos_x;
+
+    /**
+     * ECEF x velocity at the transmit time, 0.125 m/s resolution (the ECU counts its quantisation in the range-rate sigma).
+     *
+     * Range: -32768..32767 (-4096..4095.875 m/s)
+     * Scale: 0.125
+     * Offset: 0
+     */
+    int16_t sat_vel_x;
+
+    /**
+     * The satellite's index in this epoch, 0..NumMeas-1: its five frames share it.
+     *
+     * Range: 0..15 (0..15 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t raw_slot;
+
+    /**
+     * Range: 0..14 (0..14 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t gnss_epoch;
+
+    /**
+     * Range: 0..255 (0..255 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t raw_sat_x_crc;
+};
+
+/**
+ * Signals in message GNSS_RawSatY.
+ *
+ * As GNSS_RawSatX, for the y axis.
+ *
+ * All signal values are as on the CAN bus.
+ */
+struct navecu_can_gnss_raw_sat_y_t {
+    /**
+     * Range: -2147483648..2147483647 (-42949672.96..42949672.94 m)
+     * Scale: 0.02
+     * Offset: 0
+     */
+    int32_t sat_pos_y;
+
+    /**
+     * Range: -32768..32767 (-4096..4095.875 m/s)
+     * Scale: 0.125
+     * Offset: 0
+     */
+    int16_t sat_vel_y;
+
+    /**
+     * Range: 0..15 (0..15 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t raw_slot;
+
+    /**
+     * Range: 0..14 (0..14 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t gnss_epoch;
+
+    /**
+     * Range: 0..255 (0..255 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t raw_sat_y_crc;
+};
+
+/**
+ * Signals in message GNSS_RawSatZ.
+ *
+ * As GNSS_RawSatX, for the z axis.
+ *
+ * All signal values are as on the CAN bus.
+ */
+struct navecu_can_gnss_raw_sat_z_t {
+    /**
+     * Range: -2147483648..2147483647 (-42949672.96..42949672.94 m)
+     * Scale: 0.02
+     * Offset: 0
+     */
+    int32_t sat_pos_z;
+
+    /**
+     * Range: -32768..32767 (-4096..4095.875 m/s)
+     * Scale: 0.125
+     * Offset: 0
+     */
+    int16_t sat_vel_z;
+
+    /**
+     * Range: 0..15 (0..15 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t raw_slot;
+
+    /**
+     * Range: 0..14 (0..14 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t gnss_epoch;
+
+    /**
+     * Range: 0..255 (0..255 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t raw_sat_z_crc;
+};
+
+/**
+ * Signals in message GNSS_RawRange.
+ *
+ * One satellite's pseudorange, corrected by the receiver for the satellite clock (relativistic term included), the ionosphere and the troposphere (its models), and the satellite's identity and elevation.
+ *
+ * All signal values are as on the CAN bus.
+ */
+struct navecu_can_gnss_raw_range_t {
+    /**
+     * Corrected pseudorange; meaningful only with PseudorangeValid 1.
+     *
+     * Range: 0..2147483647 (0..42949672.94 m)
+     * Scale: 0.02
+     * Offset: 0
+     */
+    uint32_t pseudorange;
+
+    /**
+     * u-blox gnssId: 0 GPS, 1 SBAS, 2 Galileo, 3 BeiDou, 5 QZSS, 6 GLONASS.
+     *
+     * Range: 0..7 (0..7 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t gnss_system;
+
+    /**
+     * The satellite number within its system (PRN for GPS).
+     *
+     * Range: 0..63 (0..63 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t sv_id;
+
+    /**
+     * The satellite's elevation seen from the receiver, whole degrees.
+     *
+     * Range: 0..90 (0..90 deg)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t elevation;
+
+    /**
+     * 1: the pseudorange is a measurement; 0: not (tracking without a code lock), the range frames still carry the satellite.
+     *
+     * Range: 0..1 (0..1 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t pseudorange_valid;
+
+    /**
+     * Range: 0..15 (0..15 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t raw_slot;
+
+    /**
+     * Range: 0..14 (0..14 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t gnss_epoch;
+
+    /**
+     * Range: 0..255 (0..255 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t raw_range_crc;
+};
+
+/**
+ * Signals in message GNSS_RawRate.
+ *
+ * One satellite's pseudorange rate (minus the L1 Doppler times the L1 wavelength, corrected for the satellite clock drift when the receiver knows it), the 1-sigma of both measurements and the C/N0.
+ *
+ * All signal values are as on the CAN bus.
+ */
+struct navecu_can_gnss_raw_rate_t {
+    /**
+     * The pseudorange rate (positive when the range grows); meaningful only with RangeRateValid 1.
+     *
+     * Range: -524288..524287 (-5242.88..5242.87 m/s)
+     * Scale: 0.01
+     * Offset: 0
+     */
+    int32_t range_rate;
+
+    /**
+     * The receiver's 1-sigma of the pseudorange; 25.5 is 25.5 m or more; 0 is no estimate.
+     *
+     * Range: 0..255 (0..25.5 m)
+     * Scale: 0.1
+     * Offset: 0
+     */
+    uint8_t pseudorange_sigma;
+
+    /**
+     * The receiver's 1-sigma of the pseudorange rate; 2.55 is 2.55 m/s or more; 0 is no estimate.
+     *
+     * Range: 0..255 (0..2.55 m/s)
+     * Scale: 0.01
+     * Offset: 0
+     */
+    uint8_t range_rate_sigma;
+
+    /**
+     * Carrier-to-noise density, dB-Hz.
+     *
+     * Range: 0..63 (0..63 dB-Hz)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t cn0;
+
+    /**
+     * 1: the pseudorange rate is a measurement; 0: not.
+     *
+     * Range: 0..1 (0..1 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t range_rate_valid;
+
+    /**
+     * Range: 0..15 (0..15 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t raw_slot;
+
+    /**
+     * Range: 0..14 (0..14 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t gnss_epoch;
+
+    /**
+     * Range: 0..255 (0..255 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t raw_rate_crc;
+};
+
+/**
+ * Signals in message GNSS_RawEpoch.
+ *
+ * Closes a raw GNSS epoch: sent after the epoch's satellite frames. The epoch's measurements are those of the NumMeas slots 0..NumMeas-1 with this GnssEpoch, all five frames each; a slot with a frame missing is dropped and counted. Its own epoch number, independent of the fix's GNSS_Status (a receiver sending both may share it).
+ *
+ * All signal values are as on the CAN bus.
+ */
+struct navecu_can_gnss_raw_epoch_t {
+    /**
+     * The epoch's measurement time, GPS time of week by the receiver's clock (its bias and drift are the filter's states).
+     *
+     * Range: 0..604799999 (0..604799.999 s)
+     * Scale: 0.001
+     * Offset: 0
+     */
+    uint32_t time_of_week;
+
+    /**
+     * Satellites in the epoch (slots 0..NumMeas-1), at most 16.
+     *
+     * Range: 0..16 (0..16 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t num_meas;
+
+    /**
+     * Range: 0..14 (0..14 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t gnss_epoch;
+
+    /**
+     * 1: the receiver adjusted its clock (a millisecond jump) since its previous raw epoch: its bias starts again.
+     *
+     * Range: 0..1 (0..1 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t clock_reset;
+
+    /**
+     * Range: 0..255 (0..255 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t raw_epoch_crc;
 };
 
 /**
@@ -3498,6 +3903,1668 @@ bool navecu_can_gnss_time_gnss_time_crc_is_in_range(uint8_t value);
  * @return true if in range, false otherwise.
  */
 bool navecu_can_gnss_time_gnss_time_crc_is_in_phys_range(float value);
+
+/**
+ * Pack message GNSS_RawSatX.
+ *
+ * @param[out] dst_p Buffer to pack the message into.
+ * @param[in] src_p Data to pack.
+ * @param[in] size Size of dst_p.
+ *
+ * @return Size of packed data, or negative error code.
+ */
+int navecu_can_gnss_raw_sat_x_pack(
+    uint8_t *dst_p,
+    const struct navecu_can_gnss_raw_sat_x_t *src_p,
+    size_t size);
+
+/**
+ * Unpack message GNSS_RawSatX.
+ *
+ * @param[out] dst_p Object to unpack the message into.
+ * @param[in] src_p Message to unpack.
+ * @param[in] size Size of src_p.
+ *
+ * @return zero(0) or negative error code.
+ */
+int navecu_can_gnss_raw_sat_x_unpack(
+    struct navecu_can_gnss_raw_sat_x_t *dst_p,
+    const uint8_t *src_p,
+    size_t size);
+
+/**
+ * Init message fields to default values from GNSS_RawSatX.
+ *
+ * @param[in] msg_p Message to init.
+ *
+ * @return zero(0) on success or (-1) in case of nullptr argument.
+ */
+int navecu_can_gnss_raw_sat_x_init(struct navecu_can_gnss_raw_sat_x_t *msg_p);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+int32_t navecu_can_gnss_raw_sat_x_sat_pos_x_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_gnss_raw_sat_x_sat_pos_x_decode(int32_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_sat_x_sat_pos_x_is_in_range(int32_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_sat_x_sat_pos_x_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+int16_t navecu_can_gnss_raw_sat_x_sat_vel_x_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_gnss_raw_sat_x_sat_vel_x_decode(int16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_sat_x_sat_vel_x_is_in_range(int16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_sat_x_sat_vel_x_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_gnss_raw_sat_x_raw_slot_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_gnss_raw_sat_x_raw_slot_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_sat_x_raw_slot_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_sat_x_raw_slot_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_gnss_raw_sat_x_gnss_epoch_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_gnss_raw_sat_x_gnss_epoch_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_sat_x_gnss_epoch_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_sat_x_gnss_epoch_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_gnss_raw_sat_x_raw_sat_x_crc_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_gnss_raw_sat_x_raw_sat_x_crc_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_sat_x_raw_sat_x_crc_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_sat_x_raw_sat_x_crc_is_in_phys_range(float value);
+
+/**
+ * Pack message GNSS_RawSatY.
+ *
+ * @param[out] dst_p Buffer to pack the message into.
+ * @param[in] src_p Data to pack.
+ * @param[in] size Size of dst_p.
+ *
+ * @return Size of packed data, or negative error code.
+ */
+int navecu_can_gnss_raw_sat_y_pack(
+    uint8_t *dst_p,
+    const struct navecu_can_gnss_raw_sat_y_t *src_p,
+    size_t size);
+
+/**
+ * Unpack message GNSS_RawSatY.
+ *
+ * @param[out] dst_p Object to unpack the message into.
+ * @param[in] src_p Message to unpack.
+ * @param[in] size Size of src_p.
+ *
+ * @return zero(0) or negative error code.
+ */
+int navecu_can_gnss_raw_sat_y_unpack(
+    struct navecu_can_gnss_raw_sat_y_t *dst_p,
+    const uint8_t *src_p,
+    size_t size);
+
+/**
+ * Init message fields to default values from GNSS_RawSatY.
+ *
+ * @param[in] msg_p Message to init.
+ *
+ * @return zero(0) on success or (-1) in case of nullptr argument.
+ */
+int navecu_can_gnss_raw_sat_y_init(struct navecu_can_gnss_raw_sat_y_t *msg_p);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+int32_t navecu_can_gnss_raw_sat_y_sat_pos_y_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_gnss_raw_sat_y_sat_pos_y_decode(int32_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_sat_y_sat_pos_y_is_in_range(int32_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_sat_y_sat_pos_y_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+int16_t navecu_can_gnss_raw_sat_y_sat_vel_y_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_gnss_raw_sat_y_sat_vel_y_decode(int16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_sat_y_sat_vel_y_is_in_range(int16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_sat_y_sat_vel_y_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_gnss_raw_sat_y_raw_slot_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_gnss_raw_sat_y_raw_slot_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_sat_y_raw_slot_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_sat_y_raw_slot_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_gnss_raw_sat_y_gnss_epoch_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_gnss_raw_sat_y_gnss_epoch_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_sat_y_gnss_epoch_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_sat_y_gnss_epoch_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_gnss_raw_sat_y_raw_sat_y_crc_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_gnss_raw_sat_y_raw_sat_y_crc_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_sat_y_raw_sat_y_crc_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_sat_y_raw_sat_y_crc_is_in_phys_range(float value);
+
+/**
+ * Pack message GNSS_RawSatZ.
+ *
+ * @param[out] dst_p Buffer to pack the message into.
+ * @param[in] src_p Data to pack.
+ * @param[in] size Size of dst_p.
+ *
+ * @return Size of packed data, or negative error code.
+ */
+int navecu_can_gnss_raw_sat_z_pack(
+    uint8_t *dst_p,
+    const struct navecu_can_gnss_raw_sat_z_t *src_p,
+    size_t size);
+
+/**
+ * Unpack message GNSS_RawSatZ.
+ *
+ * @param[out] dst_p Object to unpack the message into.
+ * @param[in] src_p Message to unpack.
+ * @param[in] size Size of src_p.
+ *
+ * @return zero(0) or negative error code.
+ */
+int navecu_can_gnss_raw_sat_z_unpack(
+    struct navecu_can_gnss_raw_sat_z_t *dst_p,
+    const uint8_t *src_p,
+    size_t size);
+
+/**
+ * Init message fields to default values from GNSS_RawSatZ.
+ *
+ * @param[in] msg_p Message to init.
+ *
+ * @return zero(0) on success or (-1) in case of nullptr argument.
+ */
+int navecu_can_gnss_raw_sat_z_init(struct navecu_can_gnss_raw_sat_z_t *msg_p);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+int32_t navecu_can_gnss_raw_sat_z_sat_pos_z_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_gnss_raw_sat_z_sat_pos_z_decode(int32_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_sat_z_sat_pos_z_is_in_range(int32_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_sat_z_sat_pos_z_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+int16_t navecu_can_gnss_raw_sat_z_sat_vel_z_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_gnss_raw_sat_z_sat_vel_z_decode(int16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_sat_z_sat_vel_z_is_in_range(int16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_sat_z_sat_vel_z_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_gnss_raw_sat_z_raw_slot_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_gnss_raw_sat_z_raw_slot_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_sat_z_raw_slot_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_sat_z_raw_slot_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_gnss_raw_sat_z_gnss_epoch_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_gnss_raw_sat_z_gnss_epoch_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_sat_z_gnss_epoch_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_sat_z_gnss_epoch_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_gnss_raw_sat_z_raw_sat_z_crc_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_gnss_raw_sat_z_raw_sat_z_crc_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_sat_z_raw_sat_z_crc_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_sat_z_raw_sat_z_crc_is_in_phys_range(float value);
+
+/**
+ * Pack message GNSS_RawRange.
+ *
+ * @param[out] dst_p Buffer to pack the message into.
+ * @param[in] src_p Data to pack.
+ * @param[in] size Size of dst_p.
+ *
+ * @return Size of packed data, or negative error code.
+ */
+int navecu_can_gnss_raw_range_pack(
+    uint8_t *dst_p,
+    const struct navecu_can_gnss_raw_range_t *src_p,
+    size_t size);
+
+/**
+ * Unpack message GNSS_RawRange.
+ *
+ * @param[out] dst_p Object to unpack the message into.
+ * @param[in] src_p Message to unpack.
+ * @param[in] size Size of src_p.
+ *
+ * @return zero(0) or negative error code.
+ */
+int navecu_can_gnss_raw_range_unpack(
+    struct navecu_can_gnss_raw_range_t *dst_p,
+    const uint8_t *src_p,
+    size_t size);
+
+/**
+ * Init message fields to default values from GNSS_RawRange.
+ *
+ * @param[in] msg_p Message to init.
+ *
+ * @return zero(0) on success or (-1) in case of nullptr argument.
+ */
+int navecu_can_gnss_raw_range_init(struct navecu_can_gnss_raw_range_t *msg_p);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint32_t navecu_can_gnss_raw_range_pseudorange_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_gnss_raw_range_pseudorange_decode(uint32_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_range_pseudorange_is_in_range(uint32_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_range_pseudorange_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_gnss_raw_range_gnss_system_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_gnss_raw_range_gnss_system_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_range_gnss_system_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_range_gnss_system_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_gnss_raw_range_sv_id_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_gnss_raw_range_sv_id_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_range_sv_id_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_range_sv_id_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_gnss_raw_range_elevation_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_gnss_raw_range_elevation_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_range_elevation_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_range_elevation_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_gnss_raw_range_pseudorange_valid_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_gnss_raw_range_pseudorange_valid_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_range_pseudorange_valid_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_range_pseudorange_valid_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_gnss_raw_range_raw_slot_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_gnss_raw_range_raw_slot_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_range_raw_slot_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_range_raw_slot_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_gnss_raw_range_gnss_epoch_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_gnss_raw_range_gnss_epoch_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_range_gnss_epoch_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_range_gnss_epoch_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_gnss_raw_range_raw_range_crc_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_gnss_raw_range_raw_range_crc_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_range_raw_range_crc_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_range_raw_range_crc_is_in_phys_range(float value);
+
+/**
+ * Pack message GNSS_RawRate.
+ *
+ * @param[out] dst_p Buffer to pack the message into.
+ * @param[in] src_p Data to pack.
+ * @param[in] size Size of dst_p.
+ *
+ * @return Size of packed data, or negative error code.
+ */
+int navecu_can_gnss_raw_rate_pack(
+    uint8_t *dst_p,
+    const struct navecu_can_gnss_raw_rate_t *src_p,
+    size_t size);
+
+/**
+ * Unpack message GNSS_RawRate.
+ *
+ * @param[out] dst_p Object to unpack the message into.
+ * @param[in] src_p Message to unpack.
+ * @param[in] size Size of src_p.
+ *
+ * @return zero(0) or negative error code.
+ */
+int navecu_can_gnss_raw_rate_unpack(
+    struct navecu_can_gnss_raw_rate_t *dst_p,
+    const uint8_t *src_p,
+    size_t size);
+
+/**
+ * Init message fields to default values from GNSS_RawRate.
+ *
+ * @param[in] msg_p Message to init.
+ *
+ * @return zero(0) on success or (-1) in case of nullptr argument.
+ */
+int navecu_can_gnss_raw_rate_init(struct navecu_can_gnss_raw_rate_t *msg_p);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+int32_t navecu_can_gnss_raw_rate_range_rate_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_gnss_raw_rate_range_rate_decode(int32_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_rate_range_rate_is_in_range(int32_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_rate_range_rate_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_gnss_raw_rate_pseudorange_sigma_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_gnss_raw_rate_pseudorange_sigma_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_rate_pseudorange_sigma_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_rate_pseudorange_sigma_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_gnss_raw_rate_range_rate_sigma_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_gnss_raw_rate_range_rate_sigma_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_rate_range_rate_sigma_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_rate_range_rate_sigma_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_gnss_raw_rate_cn0_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_gnss_raw_rate_cn0_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_rate_cn0_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_rate_cn0_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_gnss_raw_rate_range_rate_valid_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_gnss_raw_rate_range_rate_valid_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_rate_range_rate_valid_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_rate_range_rate_valid_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_gnss_raw_rate_raw_slot_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_gnss_raw_rate_raw_slot_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_rate_raw_slot_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_rate_raw_slot_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_gnss_raw_rate_gnss_epoch_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_gnss_raw_rate_gnss_epoch_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_rate_gnss_epoch_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_rate_gnss_epoch_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_gnss_raw_rate_raw_rate_crc_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_gnss_raw_rate_raw_rate_crc_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_rate_raw_rate_crc_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_rate_raw_rate_crc_is_in_phys_range(float value);
+
+/**
+ * Pack message GNSS_RawEpoch.
+ *
+ * @param[out] dst_p Buffer to pack the message into.
+ * @param[in] src_p Data to pack.
+ * @param[in] size Size of dst_p.
+ *
+ * @return Size of packed data, or negative error code.
+ */
+int navecu_can_gnss_raw_epoch_pack(
+    uint8_t *dst_p,
+    const struct navecu_can_gnss_raw_epoch_t *src_p,
+    size_t size);
+
+/**
+ * Unpack message GNSS_RawEpoch.
+ *
+ * @param[out] dst_p Object to unpack the message into.
+ * @param[in] src_p Message to unpack.
+ * @param[in] size Size of src_p.
+ *
+ * @return zero(0) or negative error code.
+ */
+int navecu_can_gnss_raw_epoch_unpack(
+    struct navecu_can_gnss_raw_epoch_t *dst_p,
+    const uint8_t *src_p,
+    size_t size);
+
+/**
+ * Init message fields to default values from GNSS_RawEpoch.
+ *
+ * @param[in] msg_p Message to init.
+ *
+ * @return zero(0) on success or (-1) in case of nullptr argument.
+ */
+int navecu_can_gnss_raw_epoch_init(struct navecu_can_gnss_raw_epoch_t *msg_p);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint32_t navecu_can_gnss_raw_epoch_time_of_week_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_gnss_raw_epoch_time_of_week_decode(uint32_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_epoch_time_of_week_is_in_range(uint32_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_epoch_time_of_week_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_gnss_raw_epoch_num_meas_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_gnss_raw_epoch_num_meas_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_epoch_num_meas_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_epoch_num_meas_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_gnss_raw_epoch_gnss_epoch_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_gnss_raw_epoch_gnss_epoch_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_epoch_gnss_epoch_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_epoch_gnss_epoch_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_gnss_raw_epoch_clock_reset_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_gnss_raw_epoch_clock_reset_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_epoch_clock_reset_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_epoch_clock_reset_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t navecu_can_gnss_raw_epoch_raw_epoch_crc_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float navecu_can_gnss_raw_epoch_raw_epoch_crc_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_epoch_raw_epoch_crc_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool navecu_can_gnss_raw_epoch_raw_epoch_crc_is_in_phys_range(float value);
 
 /**
  * Pack message CMD_KnownPosition.
