@@ -12,7 +12,10 @@ the DBC changes). Standard library only.
 
 Raw-only signals: a 32-bit signal of scale 1 (IMU_Time.SampleTime, a free-running
 microsecond counter) cannot go through cantools' float32 API: decode rounds raw values
-within 128 of 2^32 up to 2^32, which encode cannot give back (it wraps to 0). The firmware
+within 128 of 2^32 up to 2^32, which encode cannot give back (it wraps to 0). Nor can a
+32-bit signal of any scale whose raw range reaches the limit of its C type (the raw GNSS
+satellite positions, the 31-bit pseudorange): encode of its largest physical value rounds
+past the type and overflows (reaches_type_limit). The firmware
 reads such signals from the unpacked struct as integers; the generator checks that no
 source under SRC_DIRS calls their float encode/decode (and fails the build if one does),
 and for them checks only the integer pack/unpack identity, not the float round trips.
@@ -43,6 +46,23 @@ def float_api_users(src_dirs, names):
                     if re.search(rf"\b{n}\s*\(", text):
                         users.setdefault(n, []).append(path)
     return users
+
+
+def reaches_type_limit(cfile: str, pfx: str, typ: str) -> bool:
+    """True if the signal's raw range reaches within float32's rounding (2^8 at 2^31) of
+    its C type's limit: cantools' float encode of its largest physical value then rounds
+    past the type and overflows (a 32-bit satellite position at 0.02 m, a 31-bit
+    pseudorange: the CI's fuzz found it), so its float API is unusable at the ends."""
+    body = re.search(rf"{pfx}_is_in_range\(\w+ value\)\s*\{{(.*?)\}}", cfile, re.S)
+    if body is None:
+        return False
+    text = body.group(1)
+    if re.search(r"return \(true\);", text):
+        return True  # the whole span of the type
+    limits = [int(v) for v in re.findall(r"value [<>]= \(?(-?\d+)", text)]
+    top = (1 << 31) if typ.startswith("int") else (1 << 32)
+    return any(abs(v) >= top - 256 or (typ.startswith("uint") and v >= (1 << 31) - 256)
+               for v in limits)
 
 
 def main() -> int:
@@ -87,8 +107,9 @@ def main() -> int:
                     print(f"gen_codec_checks: {pfx}_{suffix} missing", file=sys.stderr)
                     return 1
             bits = int(re.search(r"\d+", typ).group(0))
-            raw_only = bits >= RAW_ONLY_MIN_BITS and re.search(
+            raw_only = bits >= RAW_ONLY_MIN_BITS and (re.search(
                 rf"{pfx}_decode\(\w+ value\)\s*\{{\s*return \(\(float\)value\);", cfile)
+                or reaches_type_limit(cfile, pfx, typ))
             if raw_only:
                 api = [f"{pfx}_encode", f"{pfx}_decode"]
                 users = float_api_users(src_dirs, api)
