@@ -30,6 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
+from tools import gnss_raw
 from tools import navecu_can as nc
 from tools.sim import report, scenario, sensors, trajectory
 
@@ -122,7 +123,8 @@ def calibration_frames(sender, truth, cal: dict) -> list:
 
 
 def frames(truth, dtheta, dv, wheels, gnss, db, initial_attitude=False, heading_deg=None,
-           calibration=None, car=None, power_on_s=None, reset_s=(), heading_valid=True):
+           calibration=None, car=None, power_on_s=None, reset_s=(), heading_valid=True,
+           raw=()):
     """Every input frame of the drive as (t_s, order, can.Message), unsorted. With
     initial_attitude, a CMD_InitialAttitude with the true roll and pitch follows the
     initialization commands: a perfect start, no levelling. heading_deg: the Heading of
@@ -188,6 +190,9 @@ def frames(truth, dtheta, dv, wheels, gnss, db, initial_attitude=False, heading_
             "HorizAccuracy": float(min(gnss["hacc_m"][i], 102.3)),
             "VertAccuracy": float(min(gnss["vacc_m"][i], 102.3)), "GnssEpoch": epoch,
             "TimeOfWeek": round((GPS_TOW0_S + float(gnss["t_meas_s"][i])) % 604800.0, 3)}, t)))
+    for i, (t, ep) in enumerate(raw):
+        out.extend((float(t), 9, m) for m in gnss_raw.encode_epoch(
+            sender, ep, i % (nc.E2E_COUNTER_MAX + 1), float(t)))
     for t in reset_s:
         out.append((float(t), 1, sender.encode("CMD_Control", {"Command": 1, "HeadingValid": 0, "Heading": 0.0, "Height": 0.0}, float(t))))
     if power_on_s is not None:
@@ -319,9 +324,16 @@ def main(argv=None) -> int:
     st.start("CAN encoding")
     db = nc.load_db()
     hdg_cmd = scenario.heading_command_deg(truth.heading_rad[0], scen)
+    raw = []
+    if scen.get("gnss_raw", {}).get("enabled"):
+        from tools.sim import receiver
+        spec = receiver.ReceiverSpec(canyons=[tuple(map(float, c)) for c in
+                                              scen["gnss_raw"].get("canyons", [])])
+        raw = [(t, ep) for t, ep, _ in
+               receiver.simulate(truth, spec, 3 * a.seed + 2, t0_gps_s=GPS_TOW0_S)]
     fr = frames(truth, dtheta, dv, wheels, gnss, db, heading_deg=hdg_cmd, calibration=cal,
                 car=car, power_on_s=a.power_on_s, reset_s=a.reset_s,
-                heading_valid=not a.no_heading)
+                heading_valid=not a.no_heading, raw=raw)
     fr.sort(key=lambda x: (x[0], x[1]))
     can_in = out / "can_in.log"
     n = nc.write_candump(can_in, (m for _, _, m in fr))

@@ -102,10 +102,15 @@ Scenario file (TOML, read by :func:`load_scenario`)
                                   # delivered extra_s late (frames at t + extra_s, after the
                                   # epochs reported meanwhile) with its TimeOfWeek unchanged
 
+    [gnss_raw]                    # raw measurements (tools/sim/receiver.py, issue #20),
+                                  # absent: none
+    enabled = true                # send a raw epoch (GNSS_Raw*) each second, none in outages
+    canyons = [[200, 500, 4.0]]   # [start_s, end_s, 2H/W]: street canyons along the heading
+
 Inheritance: a top-level ``base = "default"`` (a scenario name in the same folder, or a
 .toml path relative to this file's folder) starts from that scenario: its tables ([start],
 [vehicle], [sim], [imu_mounting], [odometer], [initialization], [calibration],
-[gnss_faults]) are merged key by key with this file's (this file's keys win), its
+[gnss_faults], [gnss_raw]) are merged key by key with this file's (this file's keys win), its
 [[segment]] and [[outage]] arrays are kept unless this file gives its own (which replace
 them as a whole; ``outage = []`` drops the base's outages). name and description are never
 inherited. Bases may themselves have a base (no cycles).
@@ -151,6 +156,7 @@ _OPTIONAL_TABLES = {
     "initialization": set(INITIALIZATION_DEFAULTS),
     "calibration": {"at_s", "source", "gnss"},
     "gnss_faults": {"jumps", "freeze", "latency_spike"},
+    "gnss_raw": {"enabled", "canyons"},
 }
 GNSS_JUMP_AZIMUTH_DEG_DEFAULT = 0.0   # a jump without an azimuth moves the fix north
 
