@@ -58,7 +58,7 @@ HAL_M4_SRC := hal/cortex_m4f/bxcan.c hal/cortex_m4f/stm32_flash.c hal/cortex_m4f
 SUPPORT_SRC_F64 := tests/support/truth.c tests/support/motions.c
 SUPPORT_SRC_BOTH := tests/support/nav_run.c
 # tests built once per numeric variant (f32 firmware, f64 reference)
-TESTS_VARIANT := test_nav_math test_earth test_sins test_dr test_ekf test_ekf_rows
+TESTS_VARIANT := test_nav_math test_earth test_sins test_dr test_ekf test_ekf_rows test_gnss_geom
 # tests of the float32 firmware only (application, codec, HAL)
 TESTS_F32 := test_e2e test_codec test_trig test_isotp test_uds test_dtc
 # tests that link both variants themselves

@@ -193,3 +193,22 @@ def test_the_receiver_steps_its_clock(drive):
     drift = eps[k][2].drift_mps
     dt = eps[k][0] - eps[k - 1][0]
     assert abs(abs(b[1] - b[0] - drift * dt) - step) < 1e-3
+
+
+def test_float32_cannot_form_the_receiver_ecef():
+    """Why the firmware's GNSS geometry is fixed point (firmware/nav/gnss_geom.c,
+    docs/numeric-design.md): the receiver's ECEF position from float32 latitude, longitude,
+    sin and cos is off by decimetres to metres, against a need of millimetres."""
+    rng = np.random.default_rng(1)
+    f = np.float32
+    worst = 0.0
+    for _ in range(20000):
+        lat, lon, h = rng.uniform(-1.5, 1.5), rng.uniform(-3.1, 3.1), rng.uniform(-500, 9000)
+        ref = gr.ecef_from_geodetic(lat, lon, h)
+        la, lo = f(lat), f(lon)
+        n = f(gr.WGS84_A_M) / np.sqrt(f(1) - f(gr.WGS84_E2) * np.sin(la) * np.sin(la))
+        x = np.array([(n + f(h)) * np.cos(la) * np.cos(lo), (n + f(h)) * np.cos(la) * np.sin(lo),
+                      (n * (f(1) - f(gr.WGS84_E2)) + f(h)) * np.sin(la)], dtype=np.float32)
+        worst = max(worst, float(np.max(np.abs(x.astype(float) - ref))))
+    print(f"float32 ECEF of the receiver: worst error {worst:.2f} m over 20,000 positions")
+    assert worst > 0.1
