@@ -176,6 +176,14 @@ def test_a_street_canyon_leaves_one_to_three_satellites(drive):
     assert inside and outside and t_end > 120.0
     assert 0 <= min(inside) and max(inside) <= 3 and np.median(inside) >= 1
     assert min(outside) >= 5
+    # a cap keeps the highest of them (issue #20's 2-satellite canyon, canyon5-raw.toml)
+    capped = receiver.simulate(drive, receiver.ReceiverSpec(canyons=[(60.0, 120.0, 4.0, 2)]),
+                               seed=1)
+    for (t, ep, _), (_, ep_all, _) in zip(capped, eps):
+        if 60.0 <= t <= 120.0:
+            assert len(ep.meas) == min(2, len(ep_all.meas))
+            assert all(m.elevation_deg >= n.elevation_deg for m in ep.meas
+                       for n in ep_all.meas[len(ep.meas):])
 
 
 def test_the_receiver_steps_its_clock(drive):

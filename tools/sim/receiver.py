@@ -73,7 +73,7 @@ class ReceiverSpec:
     multipath_corr_s: float = 20.0
     code_noise_m: float = 0.5            # at 45 dB-Hz
     doppler_noise_mps: float = 0.05      # at 45 dB-Hz
-    canyons: list = field(default_factory=list)   # [(start_s, end_s, ratio 2H/W)]
+    canyons: list = field(default_factory=list)   # [(start_s, end_s, 2H/W[, max_sats])]
 
 
 _RAAN = np.repeat(np.radians(60.0 * np.arange(N_PLANES)), SATS_PER_PLANE)
@@ -104,11 +104,14 @@ def satellite_ecef(t_s):
     return r_e, v_e, PRNS
 
 
-def canyon_ratio(t_s: float, canyons) -> float:
-    for a, b, ratio in canyons:
-        if a <= t_s <= b:
-            return float(ratio)
-    return 0.0
+def canyon_at(t_s: float, canyons) -> tuple:
+    """(2H/W, the most satellites it leaves or 0 for no cap) of the canyon at t_s, or
+    (0, 0). A canyon is (start_s, end_s, 2H/W[, max_sats]): max_sats keeps only that many of
+    the highest satellites the mask leaves (a street whose far end is blocked too)."""
+    for c in canyons:
+        if c[0] <= t_s <= c[1]:
+            return float(c[2]), int(c[3]) if len(c) > 3 else 0
+    return 0.0, 0
 
 
 def _gm_step(x, rng, dt, tau, sigma):
@@ -186,7 +189,7 @@ def simulate(truth, spec: ReceiverSpec, seed: int, t0_gps_s: float = 0.0,
         rx = gr.ecef_from_geodetic(lat, lon, h)
         enu = gr.enu_axes(lat, lon)
         v_rx = enu.T @ v_enu
-        ratio = canyon_ratio(te, spec.canyons)
+        ratio, cap = canyon_at(te, spec.canyons)
         tow = t0_gps_s + te
         # every satellite at its transmit time (tau from the geometric range, iterated)
         p_all, _, _ = satellite_ecef(tow)
@@ -232,16 +235,17 @@ def simulate(truth, spec: ReceiverSpec, seed: int, t0_gps_s: float = 0.0,
                 pr_sigma_m=sig_pr, rr_sigma_mps=sig_rr, elevation_deg=math.degrees(el),
                 cn0_dbhz=int(round(cn0))))
         ep.meas.sort(key=lambda m: -m.elevation_deg)
-        ep.meas = ep.meas[:gr.MAX_SATS]
+        ep.meas = ep.meas[:cap if cap > 0 else gr.MAX_SATS]
         out.append((te, ep, RawTruth(t_s=te, rx_m=rx, v_rx_mps=v_rx, clock_m=bias,
                                      drift_mps=drift, in_view=in_view)))
     return out
 
 
 def parse_canyon(text: str) -> tuple:
-    span, _, ratio = text.partition(":")
+    span, _, rest = text.partition(":")
     a, _, b = span.partition("-")
-    return float(a), float(b), float(ratio or 3.0)
+    ratio, _, cap = rest.partition(":")
+    return (float(a), float(b), float(ratio or 3.0)) + ((int(cap),) if cap else ())
 
 
 def main(argv=None) -> int:
@@ -250,7 +254,8 @@ def main(argv=None) -> int:
     ap.add_argument("--scenario", default="default")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--canyon", action="append", default=[], type=parse_canyon,
-                    help="START-END:RATIO, a street canyon of 2H/W = RATIO (repeatable)")
+                    help="START-END:RATIO[:MAX], a street canyon of 2H/W = RATIO leaving at most "
+                         "MAX satellites (repeatable)")
     ap.add_argument("--imu-rate-hz", type=int, default=10,
                     help="the truth's sample rate (the receiver interpolates it)")
     a = ap.parse_args(argv)

@@ -327,10 +327,14 @@ def main(argv=None) -> int:
     raw = []
     if scen.get("gnss_raw", {}).get("enabled"):
         from tools.sim import receiver
-        spec = receiver.ReceiverSpec(canyons=[tuple(map(float, c)) for c in
+        spec = receiver.ReceiverSpec(canyons=[tuple(c) for c in
                                               scen["gnss_raw"].get("canyons", [])])
-        raw = [(t, ep) for t, ep, _ in
-               receiver.simulate(truth, spec, 3 * a.seed + 2, t0_gps_s=GPS_TOW0_S)]
+        # no raw epoch in an outage of every signal (a tunnel), but one that a canyon
+        # covers: there the fixes stop and the satellites along the street stay
+        dark = [(o0, o1) for (o0, o1, *_r) in truth.outages
+                if not any(c[0] <= o0 and o1 <= c[1] for c in spec.canyons)]
+        raw = [(t, ep) for t, ep, _ in receiver.simulate(truth, spec, 3 * a.seed + 2,
+                                                         t0_gps_s=GPS_TOW0_S, outages=dark)]
     fr = frames(truth, dtheta, dv, wheels, gnss, db, heading_deg=hdg_cmd, calibration=cal,
                 car=car, power_on_s=a.power_on_s, reset_s=a.reset_s,
                 heading_valid=not a.no_heading, raw=raw)

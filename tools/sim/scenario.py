@@ -105,7 +105,8 @@ Scenario file (TOML, read by :func:`load_scenario`)
     [gnss_raw]                    # raw measurements (tools/sim/receiver.py, issue #20),
                                   # absent: none
     enabled = true                # send a raw epoch (GNSS_Raw*) each second, none in outages
-    canyons = [[200, 500, 4.0]]   # [start_s, end_s, 2H/W]: street canyons along the heading
+    canyons = [[200, 500, 4.0]]   # [start_s, end_s, 2H/W(, max_sats)]: street canyons along
+                                  # the heading; max_sats keeps the highest of those left
 
 Inheritance: a top-level ``base = "default"`` (a scenario name in the same folder, or a
 .toml path relative to this file's folder) starts from that scenario: its tables ([start],
