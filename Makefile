@@ -21,7 +21,7 @@ CFLAGS_BASE := $(CSTD) -O2 -g $(WARN) $(FPFLAGS)
 SAN_FLAGS := -fsanitize=address,undefined,float-cast-overflow -fno-sanitize-recover=all -fno-omit-frame-pointer
 
 # firmware/ sees only its own folders and the HAL interface (docs/architecture.md)
-FW_INC := -Ifirmware/nav -Ifirmware/can -Ifirmware/can/gen -Ifirmware/diag -Ifirmware/app -Ifirmware/app/gen -Ifirmware/vehicle -Ihal
+FW_INC := -Ifirmware/nav -Ifirmware/can -Ifirmware/can/gen -Ifirmware/diag -Ifirmware/boot -Ifirmware/app -Ifirmware/app/gen -Ifirmware/vehicle -Ihal
 HOST_INC := $(FW_INC) -Ihal/common -Ihal/linux -Ihal/cortex_m4f -Ihost_sim -Ihost_sim/gen -Itests/support
 
 CORE_SRC := $(wildcard firmware/nav/*.c)
@@ -44,9 +44,13 @@ CODEC_GEN := firmware/can/gen/navecu_can.c firmware/can/gen/navecu_can.h
 # the diagnostic transport (ISO-TP, docs/can.md): part of the application's library, linked
 # into the images, kept out of them by --gc-sections until the application calls it
 DIAG_SRC := $(sort $(wildcard firmware/diag/*.c))
+# the bootloader's logic (firmware/boot, issue #19): in the library for its host tests and
+# host executable; the application's images leave it out (--gc-sections), the bootloader's
+# images link it (boards/stm32f405/boot_main.c)
+BOOT_SRC := firmware/boot/boot.c
 APP_SRC := firmware/can/e2e.c firmware/can/gen/navecu_can.c firmware/app/gen/app_params.c \
            firmware/app/gen/dtc_table.c \
-           $(DIAG_SRC) $(sort $(wildcard firmware/app/*.c))
+           $(DIAG_SRC) $(BOOT_SRC) $(sort $(wildcard firmware/app/*.c))
 # the host executable: its board files (host_sim/)
 HOST_SIM_SRC := host_sim/main.c host_sim/options.c host_sim/report.c host_sim/host_board.c
 HAL_LINUX_SRC := hal/linux/hal_linux.c hal/linux/hal_socketcan.c hal/common/candump.c \
@@ -60,7 +64,7 @@ SUPPORT_SRC_BOTH := tests/support/nav_run.c
 # tests built once per numeric variant (f32 firmware, f64 reference)
 TESTS_VARIANT := test_nav_math test_earth test_sins test_dr test_ekf test_ekf_rows
 # tests of the float32 firmware only (application, codec, HAL)
-TESTS_F32 := test_e2e test_codec test_trig test_isotp test_uds test_dtc
+TESTS_F32 := test_e2e test_codec test_trig test_isotp test_uds test_dtc test_boot
 # tests that link both variants themselves
 TESTS_BOTH := test_drive
 # tests of application modules against the in-memory HAL (tests/support/fake_hal.c)
@@ -510,7 +514,7 @@ fuzz_codec_SRC := tests/fuzz/fuzz_codec.c $(FUZZ_COMMON) firmware/can/e2e.c \
                   firmware/can/gen/navecu_can.c
 fuzz_app_SRC := tests/fuzz/fuzz_app.c $(FUZZ_APP_SRC)
 fuzz_options_SRC := tests/fuzz/fuzz_options.c $(FUZZ_APP_SRC)
-fuzz_calstore_SRC := tests/fuzz/fuzz_calstore.c tests/fuzz/fuzz_fail.c firmware/app/calstore.c \
+fuzz_calstore_SRC := tests/fuzz/fuzz_calstore.c tests/fuzz/fuzz_fail.c firmware/app/calstore.c firmware/diag/crc32.c \
                      tests/support/fake_hal.c
 fuzz_nvstore_SRC := tests/fuzz/fuzz_nvstore.c $(FUZZ_APP_SRC)
 fuzz_candump_SRC := tests/fuzz/fuzz_candump.c tests/fuzz/fuzz_fail.c $(HAL_LINUX_SRC)
