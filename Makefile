@@ -344,11 +344,18 @@ M4_LD := boards/stm32f405/stm32f405.ld
 M4_TGT_CFLAGS := $(CFLAGS_BASE) $(M4_FLAGS) -ffunction-sections -fdata-sections \
                  -fstack-usage -fcallgraph-info=su
 M4_TGT_INC := $(FW_INC) -Ihal/common -Ihal/cortex_m4f -Iboards/qemu -I$(VEH_OUT)/$(VEHICLE)
-M4_LDFLAGS := $(M4_FLAGS) -nostartfiles --specs=nano.specs -T $(M4_LD) -Wl,--gc-sections
+M4_LDFLAGS_COMMON := $(M4_FLAGS) -nostartfiles --specs=nano.specs -Lboards/stm32f405 -Wl,--gc-sections
+M4_LDFLAGS := $(M4_LDFLAGS_COMMON) -T $(M4_LD)
 # boards/: the entry points and startup of the two Cortex-M4F images (the QEMU machine is
 # an STM32F405 too: the same startup and linker script)
-M4_BOARD_SRC := boards/stm32f405/startup.c hal/cortex_m4f/f2l.c
+M4_BOARD_SRC := boards/stm32f405/startup.c boards/stm32f405/app_slot.c hal/cortex_m4f/f2l.c
 ECU_SRC := $(M4_SRC) $(M4_BOARD_SRC) hal/cortex_m4f/hal_stm32.c boards/stm32f405/main.c
+# the bootloader (issue #19, docs/target.md): sector 0, boards/stm32f405/boot.ld; the same
+# startup, HAL drivers and diagnostics as the application, the logic of firmware/boot
+BOOT_LD := boards/stm32f405/boot.ld
+BOOT_ECU_SRC := boards/stm32f405/startup.c boards/stm32f405/boot_main.c $(BOOT_SRC) \
+  firmware/diag/isotp.c firmware/diag/uds.c firmware/diag/crc32.c $(HAL_M4_SRC) \
+  hal/cortex_m4f/hal_stm32.c
 QEMU_SRC := $(CORE_SRC) $(APP_SRC) $(call VEH_SRC,$(VEHICLE)) $(M4_BOARD_SRC) hal/common/candump.c hal/common/nvm_flash.c \
             hal/cortex_m4f/semihost.c \
             hal/cortex_m4f/hal_semihost.c \
@@ -362,29 +369,36 @@ $(TGT)/obj/%.o: %.c
 # flash limit (docs/target.md); the C and its IEEE arithmetic are the same at either level
 # (-ffp-contract=off): target-test checks the outputs equal the host's byte for byte, and
 # target-bench measures what it costs in CPU.
-M4_SIZE_SRC := $(filter firmware/app/% firmware/diag/% firmware/can/%,$(APP_SRC) $(CORE_SRC)) \
+M4_SIZE_SRC := $(filter firmware/app/% firmware/diag/% firmware/can/% firmware/boot/%,$(APP_SRC) $(CORE_SRC)) \
   $(call VEH_GEN_SRC,$(VEHICLE))
 $(M4_SIZE_SRC:%.c=$(TGT)/obj/%.o): M4_TGT_CFLAGS += -Os
 $(TGT)/navecu.elf: $(ECU_SRC:%.c=$(TGT)/obj/%.o) $(M4_LD)
 	$(ARM_CC) $(M4_LDFLAGS) -Wl,-Map=$(TGT)/navecu.map $(filter %.o,$^) -lm -o $@
 $(TGT)/navecu-qemu.elf: $(QEMU_SRC:%.c=$(TGT)/obj/%.o) $(M4_LD)
 	$(ARM_CC) $(M4_LDFLAGS) -Wl,-Map=$(TGT)/navecu-qemu.map $(filter %.o,$^) -lm -o $@
-# Raw binaries: one per flash area, since a single .bin would fill the gap over the NVM
-# sectors with zeros and erase the calibration when flashed. navecu-vectors.bin goes to
-# 0x08000000 (sector 0), navecu.bin to 0x0800C000; the .hex carries its addresses.
-$(TGT)/navecu-vectors.bin: $(TGT)/navecu.elf
-	arm-none-eabi-objcopy -O binary -j .isr_vector $< $@
-$(TGT)/navecu.bin: $(TGT)/navecu.elf
-	arm-none-eabi-objcopy -O binary -R .isr_vector $< $@
+$(TGT)/boot.elf: $(BOOT_ECU_SRC:%.c=$(TGT)/obj/%.o) $(BOOT_LD) boards/stm32f405/stm32f405_sections.ld
+	$(ARM_CC) $(M4_LDFLAGS_COMMON) -T $(BOOT_LD) -Wl,-Map=$(TGT)/boot.map $(filter %.o,$^) -o $@
+# Raw binaries, one per flash area (the NVM sectors between them are never written):
+# boot.bin for 0x08000000 (sector 0), the application's navecu.bin for 0x0800C000
+# (sectors 3-4) with its marker slot erased: navecu.pkg is it as a package for the UDS
+# download (make flash-can), navecu-app.bin with the validity marker a factory image
+# (make flash); the same for the QEMU application (tools/navecu_pkg.py)
+$(TGT)/%.bin: $(TGT)/%.elf
+	arm-none-eabi-objcopy -O binary $< $@
+$(TGT)/%-app.bin: $(TGT)/%.bin tools/navecu_pkg.py
+	python3 -m tools.navecu_pkg mark $< $@
+$(TGT)/%.pkg: $(TGT)/%.bin tools/navecu_pkg.py
+	python3 -m tools.navecu_pkg pack $< $@
 $(TGT)/%.hex: $(TGT)/%.elf
 	arm-none-eabi-objcopy -O ihex $< $@
 
 .PHONY: target target-qemu target-test target-bench target-budget target-check
-target: deps $(TGT)/navecu.elf $(TGT)/navecu.bin $(TGT)/navecu-vectors.bin $(TGT)/navecu.hex
+target: deps $(TGT)/navecu.elf $(TGT)/navecu.bin $(TGT)/navecu.hex $(TGT)/navecu.pkg \
+		$(TGT)/navecu-app.bin $(TGT)/boot.elf $(TGT)/boot.bin $(TGT)/boot.hex
 	@arm-none-eabi-size -A $(TGT)/navecu.elf > $(TGT)/navecu.size
-	@arm-none-eabi-size $(TGT)/navecu.elf
-	@echo "target: $(TGT)/navecu.elf, .hex, navecu-vectors.bin (at 0x08000000) + navecu.bin (at 0x0800C000), map $(TGT)/navecu.map, sizes $(TGT)/navecu.size"
-target-qemu: deps $(TGT)/navecu-qemu.elf
+	@arm-none-eabi-size $(TGT)/navecu.elf $(TGT)/boot.elf
+	@echo "target: $(TGT)/boot.bin (at 0x08000000), navecu.bin (at 0x0800C000; navecu.pkg for make flash-can, navecu-app.bin with the marker for make flash), .elf, .hex, maps, sizes $(TGT)/navecu.size"
+target-qemu: deps $(TGT)/navecu-qemu.elf $(TGT)/navecu-qemu-app.bin $(TGT)/boot.elf $(TGT)/navecu-app.bin
 
 # the QEMU image against the host float32 build on a 10-minute drive, byte for byte
 target-test: deps venv target-qemu target $(BUILD)/host/navecu$(VEH_SUFFIX)
