@@ -239,13 +239,20 @@ $(ISOTP_PEER): $(BUILD)/host/f32/tests/tools/isotp_peer.o $(BUILD)/host/libnavap
 	@mkdir -p $(@D)
 	$(CC) $^ -o $@
 
+# the bootloader's logic as a host program on stdin/stdout candump lines with a file as the
+# application's flash (host_sim/boot_main.c): the peer of tools/navecu_flash.py's tests
+BOOT_HOST := $(BUILD)/host/navecu-boot
+$(BOOT_HOST): $(BUILD)/host/f32/host_sim/boot_main.o $(BUILD)/host/libnavapp.a $(BUILD)/host/libhal_linux.a
+	@mkdir -p $(@D)
+	$(CC) $^ -o $@
+
 # Python tests drive the host executable (plain build) through real CAN logs; the vehicle
 # profiles' tests also run each profile's host executable (the RAV4's on its recorded bus,
 # the VW's on its generated frames) and its decoder.
 VEH_TEST_BINS := $(foreach v,$(filter-out native,$(VEHICLES_BUILT)),$(BUILD)/host/navecu-$(v)) \
                  $(foreach v,$(VEHICLES_BUILT),$(BUILD)/host/tests/vehicle_decode-$(v))
-test-python: venv $(BUILD)/host/navecu $(VEH_TEST_BINS) $(ISOTP_PEER) $(BUILD)/target$(VEH_SUFFIX)/navecu-qemu.elf
-	NAVECU_BIN=$(BUILD)/host/navecu ISOTP_PEER_BIN=$(ISOTP_PEER) $(PY) -m pytest -q -rs tests/python
+test-python: venv $(BUILD)/host/navecu $(VEH_TEST_BINS) $(ISOTP_PEER) $(BOOT_HOST) target-qemu
+	NAVECU_BIN=$(BUILD)/host/navecu ISOTP_PEER_BIN=$(ISOTP_PEER) NAVECU_BOOT_BIN=$(BOOT_HOST) $(PY) -m pytest -q -rs tests/python
 
 test: deps
 	./tools/check_layers.sh
@@ -450,6 +457,29 @@ uds: venv $(if $(filter log,$(BUS_UDS)),$(BUILD)/host/navecu)
 	@mkdir -p $(BUILD)/uds
 	$(PY) -m tools.navecu_uds $(if $(filter log,$(BUS_UDS)),--log-runner --navecu $(BUILD)/host/navecu \
 	  --session $(BUILD)/uds/session.log --nvm $(BUILD)/uds/nvm.bin,--channel $(BUS_UDS)) $(ARGS)
+
+# ---- flashing (issue #19, docs/target.md "The bootloader") ----
+# make flash-can IMAGE=... BUS=can0: the application through the bootloader over UDS
+# (tools/navecu_flash.py; IMAGE a .pkg, .hex or .bin, default the ECU's navecu.pkg);
+# BUS=host: the bootloader's logic on the host (build/host/navecu-boot) with
+# build/flash/flash.bin as its flash, a dry run without an ECU.
+# make flash: the bootloader (sector 0) and the marked application (sectors 3-4) with
+# openocd and an ST-LINK, which erases only the sectors it writes: the NVM (sectors 1-2)
+# stays. OPENOCD_CFG for another probe. Never run by make test (no probe in CI).
+.PHONY: flash flash-can
+IMAGE ?= $(TGT)/navecu.pkg
+BUS_FLASH = $(if $(BUS),$(BUS),vcan0)
+flash-can: venv $(if $(filter host,$(BUS_FLASH)),$(BOOT_HOST)) $(if $(filter $(TGT)/navecu.pkg,$(IMAGE)),$(TGT)/navecu.pkg)
+	@mkdir -p $(BUILD)/flash
+	$(PY) -m tools.navecu_flash $(if $(filter host,$(BUS_FLASH)),--pipe "$(BOOT_HOST) --flash $(BUILD)/flash/flash.bin",--channel $(BUS_FLASH)) flash $(IMAGE)
+OPENOCD ?= openocd
+OPENOCD_CFG ?= -f interface/stlink.cfg -f target/stm32f4x.cfg
+flash: target
+	$(OPENOCD) $(OPENOCD_CFG) -c "init" -c "reset halt" \
+	  -c "flash write_image erase $(TGT)/boot.bin 0x08000000 bin" \
+	  -c "flash write_image erase $(TGT)/navecu-app.bin 0x0800C000 bin" \
+	  -c "verify_image $(TGT)/boot.bin 0x08000000 bin" \
+	  -c "verify_image $(TGT)/navecu-app.bin 0x0800C000 bin" -c "reset run" -c "shutdown"
 
 # ---- vcan0 on a normal Linux machine (sudo); without kernel CAN the tests use
 # tools/vcan/with_vcan.sh, which boots User-Mode Linux with real vcan

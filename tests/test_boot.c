@@ -238,10 +238,10 @@ static size_t transfer(uint8_t bsc, const uint8_t *data, size_t n)
 
 static void check(uint32_t crc, uint8_t want_nrc)
 {
-    uint8_t r[8] = {0x31, 0x01, 0x02, 0x02};
+    uint8_t r[8] = {0x31, 0x01, 0xFF, 0x01};
     put_be32(&r[4], crc);
     if (want_nrc == 0u) {
-        expect_rsp(r, sizeof r, B(0x71, 0x01, 0x02, 0x02));
+        expect_rsp(r, sizeof r, B(0x71, 0x01, 0xFF, 0x01));
     } else {
         expect_nrc(r, sizeof r, want_nrc);
     }
@@ -265,7 +265,7 @@ static uint8_t flash_image(size_t len, size_t block)
     }
     expect_rsp(B(0x37), B(0x77));
     now_us += 1000u;
-    uint8_t r[8] = {0x31, 0x01, 0x02, 0x02};
+    uint8_t r[8] = {0x31, 0x01, 0xFF, 0x01};
     put_be32(&r[4], crc32_of(img, len));
     const size_t n = boot_handle(&boot, r, sizeof r, now_us, rsp, sizeof rsp);
     return n == 3u ? rsp[2] : 0u;

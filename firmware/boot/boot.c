@@ -171,7 +171,7 @@ static uint8_t erase_memory(boot_t *b, const uint8_t *data, size_t len)
     return UDS_NRC_OK;
 }
 
-/* 31 01 0202 crc(4): the downloaded image's CRC-32 (big-endian) against the flash, the
+/* 31 01 FF01 crc(4): the downloaded image's CRC-32 (big-endian) against the flash, the
  * vectors; then the marker, the last thing written */
 static uint8_t check_memory(boot_t *b, const uint8_t *data, size_t len)
 {

@@ -11,11 +11,12 @@
  *   0x10 01 default, 02 programming, 03 extended; 0x11 01 (unlocked); 0x3E 00;
  *   0x27 01/02 as the application (uds.c: the same seed and key)
  *   0x22 F180 (bootSoftwareIdentification), F186 (the session)
- *   0x31 01 FF00 eraseMemory (44 addr size), 0x31 01 0202 checkMemory (CRC-32):
+ *   0x31 01 FF00 eraseMemory (44 addr size), 0x31 01 FF01 checkProgrammingDependencies
+ *        (the image's CRC-32):
  *        programming session, unlocked
  *   0x34 RequestDownload (00 44 addr size), 0x36 TransferData, 0x37 RequestTransferExit:
  *        programming session, unlocked
- * The image becomes valid only when checkMemory found the written flash's CRC-32 equal to
+ * The image becomes valid only when FF01 found the written flash's CRC-32 equal to
  * the tester's and the vectors sane (initial SP in RAM, reset vector a Thumb address in the
  * image); the marker (boot_image.h) is then the last thing written. eraseMemory erases the
  * marker's sector first. Anything interrupted (a power cut, a reset, a session change, S3)
@@ -32,7 +33,7 @@
 #include "uds.h"
 
 #define BOOT_RID_ERASE 0xFF00u   /* eraseMemory (ISO 14229-1 Annex F range) */
-#define BOOT_RID_CHECK 0x0202u   /* checkMemory: the CRC-32 of the downloaded image */
+#define BOOT_RID_CHECK 0xFF01u   /* checkProgrammingDependencies: the image's CRC-32 */
 #define BOOT_DID_VERSION 0xF180u /* bootSoftwareIdentification */
 #define BOOT_DID_SESSION 0xF186u /* activeDiagnosticSession */
 #define BOOT_ALFID 0x44u         /* addressAndLengthFormatIdentifier: 4 + 4 bytes */
@@ -80,7 +81,7 @@ typedef struct {
     uint32_t blocks_written; /* TransferData blocks programmed */
     uint32_t blocks_repeated;/* a repeat of the last block, acknowledged, not rewritten */
     uint32_t erases;         /* sectors erased */
-    uint32_t checks_failed;  /* checkMemory refused (CRC, vectors, marker write) */
+    uint32_t checks_failed;  /* the check routine (FF01) refused (CRC, vectors, marker write) */
     uint32_t flash_errors;   /* erase/write/read that returned an error */
     uint32_t pending_sent;   /* 7F xx 78 sent before an erase or the check */
 } boot_counters_t;
@@ -109,7 +110,7 @@ typedef struct {
     uint32_t dl_pos;         /* bytes of it programmed */
     uint32_t last_pos;       /* where the last accepted block started, its length */
     uint32_t last_len;
-    uint8_t dl_state;        /* 0 none, 1 transferring, 2 exited (checkMemory may run) */
+    uint8_t dl_state;        /* 0 none, 1 transferring, 2 exited (FF01 may run) */
     uint8_t bsc;             /* the next block sequence counter expected */
     uint8_t reset_due;       /* ECUReset accepted: the board resets once it went out */
     uint8_t req[ISOTP_MAX_LEN];
