@@ -379,9 +379,9 @@ $(TGT)/obj/%.o: %.c
 M4_SIZE_SRC := $(filter firmware/app/% firmware/diag/% firmware/can/% firmware/boot/%,$(APP_SRC) $(CORE_SRC)) \
   $(call VEH_GEN_SRC,$(VEHICLE))
 $(M4_SIZE_SRC:%.c=$(TGT)/obj/%.o): M4_TGT_CFLAGS += -Os
-$(TGT)/navecu.elf: $(ECU_SRC:%.c=$(TGT)/obj/%.o) $(M4_LD)
+$(TGT)/navecu.elf: $(ECU_SRC:%.c=$(TGT)/obj/%.o) $(M4_LD) boards/stm32f405/stm32f405_sections.ld
 	$(ARM_CC) $(M4_LDFLAGS) -Wl,-Map=$(TGT)/navecu.map $(filter %.o,$^) -lm -o $@
-$(TGT)/navecu-qemu.elf: $(QEMU_SRC:%.c=$(TGT)/obj/%.o) $(M4_LD)
+$(TGT)/navecu-qemu.elf: $(QEMU_SRC:%.c=$(TGT)/obj/%.o) $(M4_LD) boards/stm32f405/stm32f405_sections.ld
 	$(ARM_CC) $(M4_LDFLAGS) -Wl,-Map=$(TGT)/navecu-qemu.map $(filter %.o,$^) -lm -o $@
 $(TGT)/boot.elf: $(BOOT_ECU_SRC:%.c=$(TGT)/obj/%.o) $(BOOT_LD) boards/stm32f405/stm32f405_sections.ld
 	$(ARM_CC) $(M4_LDFLAGS_COMMON) -T $(BOOT_LD) -Wl,-Map=$(TGT)/boot.map $(filter %.o,$^) -o $@
@@ -427,12 +427,26 @@ M4_WAIT_HOOK_CALLERS := bxcan_init hal/cortex_m4f/stm32_clock.c:fail stm32_clock
 # data functions, all the application's (firmware/app/app_uds.c)
 M4_UDS := firmware/app/app_uds.c
 M4_UDS_INDIRECT := --indirect isotp_poll=$(M4_UDS):tx_frame \
-  --indirect uds_handle=$(M4_UDS):read_did,$(M4_UDS):write_did,$(M4_UDS):is_writable,$(M4_UDS):start_routine,$(M4_UDS):uds_dtc_count,$(M4_UDS):uds_dtc_get,$(M4_UDS):uds_dtc_clear,$(M4_UDS):uds_dtc_availability
+  --indirect uds_handle=$(M4_UDS):read_did,$(M4_UDS):write_did,$(M4_UDS):is_writable,$(M4_UDS):start_routine,$(M4_UDS):uds_dtc_count,$(M4_UDS):uds_dtc_get,$(M4_UDS):uds_dtc_clear,$(M4_UDS):uds_dtc_availability,$(M4_UDS):session_change
+# the bootloader's indirect calls: the wait hooks (hal_stm32.c's and boot_main.c's kick for
+# the application sectors' driver instances), ISO-TP's transmit function, the UDS server's
+# functions and the flash functions of firmware/boot (boot_main.c), called from the
+# functions -Os leaves after inlining (the services inline their routines and transfers)
+BOOT_MAIN := boards/stm32f405/boot_main.c
+BOOT_C := firmware/boot/boot.c
+BOOT_INDIRECT := $(foreach f,$(M4_WAIT_HOOK_CALLERS),--indirect $(f)=$(M4_WAIT_HOOK),$(BOOT_MAIN):kick) \
+  --indirect isotp_poll=$(BOOT_MAIN):tx \
+  --indirect uds_handle=$(BOOT_C):read_did,$(BOOT_C):write_did,$(BOOT_C):is_writable,$(BOOT_C):start_routine,$(BOOT_C):session_change,$(BOOT_C):service \
+  $(foreach f,boot_image_check $(BOOT_C):image_crc.constprop.0 $(BOOT_C):vectors_ok $(BOOT_C):service $(BOOT_C):start_routine,--indirect $(f)=$(BOOT_MAIN):fl_read,$(BOOT_MAIN):fl_write,$(BOOT_MAIN):fl_erase)
 target-budget: deps venv target
 	$(PY) -m tools.target.budget --elf $(TGT)/navecu.elf --objs $(ECU_SRC:%.c=$(TGT)/obj/%.o) \
 	  --entry Reset_Handler --isr CAN1_RX0_IRQHandler --isr CAN1_SCE_IRQHandler \
 	  --isr SysTick_Handler $(foreach f,$(M4_WAIT_HOOK_CALLERS),--indirect $(f)=$(M4_WAIT_HOOK)) \
-	  $(M4_UDS_INDIRECT) --json out/target-budget$(VEH_SUFFIX).json
+	  $(M4_UDS_INDIRECT) --sectors 3,4 --json out/target-budget$(VEH_SUFFIX).json
+	$(PY) -m tools.target.budget --elf $(TGT)/boot.elf --objs $(BOOT_ECU_SRC:%.c=$(TGT)/obj/%.o) \
+	  --entry Reset_Handler --isr CAN1_RX0_IRQHandler --isr CAN1_SCE_IRQHandler \
+	  $(BOOT_INDIRECT) --flash-limit 16384 --flash-aim 0 --sectors 0 \
+	  --json out/target-budget-boot$(VEH_SUFFIX).json
 
 # instruction counts per IMU step and per measurement update -> out/target-bench.json
 target-bench: deps venv target-qemu $(BUILD)/host/navecu$(VEH_SUFFIX)
