@@ -436,8 +436,8 @@ BOOT_MAIN := boards/stm32f405/boot_main.c
 BOOT_C := firmware/boot/boot.c
 BOOT_INDIRECT := $(foreach f,$(M4_WAIT_HOOK_CALLERS),--indirect $(f)=$(M4_WAIT_HOOK),$(BOOT_MAIN):kick) \
   --indirect isotp_poll=$(BOOT_MAIN):tx \
-  --indirect uds_handle=$(BOOT_C):read_did,$(BOOT_C):write_did,$(BOOT_C):is_writable,$(BOOT_C):start_routine,$(BOOT_C):session_change,$(BOOT_C):service \
-  $(foreach f,boot_image_check $(BOOT_C):image_crc.constprop.0 $(BOOT_C):vectors_ok $(BOOT_C):service $(BOOT_C):start_routine,--indirect $(f)=$(BOOT_MAIN):fl_read,$(BOOT_MAIN):fl_write,$(BOOT_MAIN):fl_erase)
+  --indirect uds_handle=$(BOOT_C):boot_read_did,$(BOOT_C):boot_write_did,$(BOOT_C):boot_is_writable,$(BOOT_C):boot_start_routine,$(BOOT_C):boot_session_change,$(BOOT_C):boot_service \
+  $(foreach f,boot_image_check $(BOOT_C):image_crc.constprop.0 $(BOOT_C):vectors_ok $(BOOT_C):boot_service $(BOOT_C):boot_start_routine,--indirect $(f)=$(BOOT_MAIN):fl_read,$(BOOT_MAIN):fl_write,$(BOOT_MAIN):fl_erase)
 target-budget: deps venv target
 	$(PY) -m tools.target.budget --elf $(TGT)/navecu.elf --objs $(ECU_SRC:%.c=$(TGT)/obj/%.o) \
 	  --entry Reset_Handler --isr CAN1_RX0_IRQHandler --isr CAN1_SCE_IRQHandler \

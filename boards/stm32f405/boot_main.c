@@ -39,7 +39,7 @@ _Static_assert(BOOT_REQUEST_ADDR == HAL_STM32_BOOT_REQUEST_ADDR &&
 
 static boot_t boot;
 static stm32_flash_t sector3, sector4;
-static hal_t *hal;
+static hal_t *board_hal;
 
 void board_main(void) __attribute__((noreturn));
 
@@ -85,11 +85,11 @@ static int fl_erase(void *ctx, size_t sector)
     (void)ctx;
     /* up to 1.1 s for 64 KiB (x32), the CPU stalled on the flash meanwhile: the watchdog
      * runs with its erase timeout around it, as the application's NVM erase */
-    if (stm32_iwdg_set_timeout(&hal->iwdg, STM32_IWDG_ERASE_TIMEOUT_MS) != 0) {
+    if (stm32_iwdg_set_timeout(&board_hal->iwdg, STM32_IWDG_ERASE_TIMEOUT_MS) != 0) {
         return HAL_EIO;
     }
     const int rc = stm32_flash_erase_sector(sector == 0u ? &sector3 : &sector4, 0u);
-    (void)stm32_iwdg_set_timeout(&hal->iwdg, STM32_IWDG_DEFAULT_TIMEOUT_MS);
+    (void)stm32_iwdg_set_timeout(&board_hal->iwdg, STM32_IWDG_DEFAULT_TIMEOUT_MS);
     return rc;
 }
 
@@ -132,36 +132,39 @@ static void init_sector(stm32_flash_t *dev, uint8_t number, uint32_t addr, uint3
     c.sector_size_bytes = size;
     c.timeout_polls = FLASH_POLLS;
     c.wait_hook = kick;
-    c.hook_ctx = &hal->iwdg;
+    c.hook_ctx = &board_hal->iwdg;
     (void)stm32_flash_init(dev, &c); /* constant, valid configuration */
 }
 
 void board_main(void)
 {
     volatile uint32_t *request = (volatile uint32_t *)BOOT_REQUEST_ADDR;
-    const int stay = (request[0] == BOOT_REQUEST_MAGIC && request[1] == ~BOOT_REQUEST_MAGIC);
+    int stay = 0;
+    if (request[0] == BOOT_REQUEST_MAGIC && request[1] == ~BOOT_REQUEST_MAGIC) {
+        stay = 1;
+    }
     request[0] = 0u;
     request[1] = 0u;
     if (!stay && boot_image_check(&flash) == BOOT_IMAGE_OK) {
         start_application();
     }
     static const uint32_t rx_ids[1] = {BOOT_RX_ID};
-    hal = hal_stm32_init(rx_ids, 1u);
+    board_hal = hal_stm32_init(rx_ids, 1u);
     init_sector(&sector3, 3u, BOOT_APP_START, BOOT_APP_SECTOR3_SIZE);
     init_sector(&sector4, 4u, BOOT_APP_START + BOOT_APP_SECTOR3_SIZE, BOOT_APP_SECTOR4_SIZE);
-    (void)boot_init(&boot, &flash, BOOT_RX_ID, BOOT_TX_ID, tx, hal,
-                    (uint32_t)hal_time_us(hal) ^ 0x5A5A1234u);
+    (void)boot_init(&boot, &flash, BOOT_RX_ID, BOOT_TX_ID, tx, board_hal,
+                    (uint32_t)hal_time_us(board_hal) ^ 0x5A5A1234u);
     if (stay) {
-        boot_programming_requested(&boot, hal_time_us(hal)); /* 50 02: the pending answer */
+        boot_programming_requested(&boot, hal_time_us(board_hal)); /* 50 02: the pending answer */
     }
     for (;;) {
         hal_can_frame_t f;
-        while (hal_can_receive(hal, &f) == 0) {
-            boot_frame(&boot, &f, hal_time_us(hal));
+        while (hal_can_receive(board_hal, &f) == 0) {
+            boot_frame(&boot, &f, hal_time_us(board_hal));
         }
-        if (boot_poll(&boot, hal_time_us(hal))) {
+        if (boot_poll(&boot, hal_time_us(board_hal))) {
             mcu_reset(); /* the ECUReset's response left: check the image again */
         }
-        hal_watchdog_kick(hal);
+        hal_watchdog_kick(board_hal);
     }
 }

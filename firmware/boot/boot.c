@@ -15,24 +15,24 @@ const boot_sector_t boot_sectors[BOOT_N_SECTORS] = {
 #define DL_EXITED 2u
 #define CHUNK 64u /* bytes read at a time for the CRC and the repeat comparison */
 
-static void count(uint32_t *c)
+static void boot_count(uint32_t *c)
 {
     if (*c != UINT32_MAX) {
         (*c)++;
     }
 }
 
-static uint32_t get_u32be(const uint8_t *p)
+static uint32_t boot_get_u32be(const uint8_t *p)
 {
     return ((uint32_t)p[0] << 24) | ((uint32_t)p[1] << 16) | ((uint32_t)p[2] << 8) | p[3];
 }
 
-static uint32_t get_u32le(const uint8_t *p)
+static uint32_t boot_get_u32le(const uint8_t *p)
 {
     return ((uint32_t)p[3] << 24) | ((uint32_t)p[2] << 16) | ((uint32_t)p[1] << 8) | p[0];
 }
 
-static void put_u32le(uint8_t *p, uint32_t v)
+static void boot_put_u32le(uint8_t *p, uint32_t v)
 {
     p[0] = (uint8_t)v;
     p[1] = (uint8_t)(v >> 8);
@@ -42,10 +42,10 @@ static void put_u32le(uint8_t *p, uint32_t v)
 
 void boot_marker_encode(uint32_t len, uint32_t crc, uint8_t out[BOOT_MARKER_LEN])
 {
-    put_u32le(&out[0], BOOT_MARKER_MAGIC);
-    put_u32le(&out[4], len);
-    put_u32le(&out[8], crc);
-    put_u32le(&out[12], ~(BOOT_MARKER_MAGIC ^ len ^ crc));
+    boot_put_u32le(&out[0], BOOT_MARKER_MAGIC);
+    boot_put_u32le(&out[4], len);
+    boot_put_u32le(&out[8], crc);
+    boot_put_u32le(&out[12], ~(BOOT_MARKER_MAGIC ^ len ^ crc));
 }
 
 /* the CRC-32 of the flash [BOOT_APP_START, + len) with the marker slot read as erased */
@@ -53,7 +53,8 @@ static int image_crc(const boot_flash_t *fl, uint32_t len, uint32_t *crc)
 {
     uint8_t buf[CHUNK];
     uint32_t c = CRC32_INIT;
-    for (uint32_t pos = 0u; pos < len;) {
+    uint32_t pos = 0u;
+    while (pos < len) {
         const uint32_t n = (len - pos) < CHUNK ? (len - pos) : CHUNK;
         const uint32_t addr = BOOT_APP_START + pos;
         if (fl->read(fl->ctx, addr, buf, n) != 0) {
@@ -79,8 +80,8 @@ static boot_image_t vectors_ok(const boot_flash_t *fl, uint32_t len)
     if (fl->read(fl->ctx, BOOT_APP_START, v, sizeof v) != 0) {
         return BOOT_IMAGE_READ_ERROR;
     }
-    const uint32_t sp = get_u32le(&v[0]);
-    const uint32_t pc = get_u32le(&v[4]);
+    const uint32_t sp = boot_get_u32le(&v[0]);
+    const uint32_t pc = boot_get_u32le(&v[4]);
     const uint32_t entry = pc & ~1u;
     if (sp < BOOT_RAM_START + 8u || sp > BOOT_RAM_START + BOOT_RAM_SIZE || (sp & 3u) != 0u ||
         (pc & 1u) == 0u || entry < BOOT_APP_START + BOOT_VECTORS_LEN + BOOT_MARKER_LEN ||
@@ -101,10 +102,10 @@ boot_image_t boot_image_check(const boot_flash_t *fl)
     if (fl->read(fl->ctx, BOOT_MARKER_ADDR, m, sizeof m) != 0) {
         return BOOT_IMAGE_READ_ERROR;
     }
-    const uint32_t magic = get_u32le(&m[0]);
-    const uint32_t len = get_u32le(&m[4]);
-    const uint32_t crc = get_u32le(&m[8]);
-    if (magic != BOOT_MARKER_MAGIC || get_u32le(&m[12]) != ~(magic ^ len ^ crc)) {
+    const uint32_t magic = boot_get_u32le(&m[0]);
+    const uint32_t len = boot_get_u32le(&m[4]);
+    const uint32_t crc = boot_get_u32le(&m[8]);
+    if (magic != BOOT_MARKER_MAGIC || boot_get_u32le(&m[12]) != ~(magic ^ len ^ crc)) {
         return BOOT_IMAGE_NO_MARKER;
     }
     if (!len_ok(len)) {
@@ -122,7 +123,7 @@ boot_image_t boot_image_check(const boot_flash_t *fl)
 
 /* ---- the transport's part: 7F SID 78 before a long operation ---- */
 
-static void send_pending(boot_t *b, uint8_t sid)
+static void boot_send_pending(boot_t *b, uint8_t sid)
 {
     const uint8_t p[3] = {UDS_NEGATIVE, sid, UDS_NRC_RESPONSE_PENDING};
     if (b->tx == NULL || isotp_tx_busy(&b->tp)) {
@@ -131,7 +132,7 @@ static void send_pending(boot_t *b, uint8_t sid)
     if (isotp_send(&b->tp, p, sizeof p, b->now_us) == 0) {
         /* a single frame: it leaves in this poll, so p may go out of scope */
         (void)isotp_poll(&b->tp, b->now_us, b->tx, b->tx_user);
-        count(&b->cnt.pending_sent);
+        boot_count(&b->cnt.pending_sent);
     }
 }
 
@@ -152,20 +153,20 @@ static uint8_t erase_memory(boot_t *b, const uint8_t *data, size_t len)
     if (len != 9u || data[0] != BOOT_ALFID) {
         return UDS_NRC_INCORRECT_LENGTH;
     }
-    const uint32_t addr = get_u32be(&data[1]);
-    const uint32_t size = get_u32be(&data[5]);
+    const uint32_t addr = boot_get_u32be(&data[1]);
+    const uint32_t size = boot_get_u32be(&data[5]);
     if (addr != BOOT_APP_START || size == 0u || size > BOOT_APP_SIZE) {
         return UDS_NRC_REQUEST_OUT_OF_RANGE;
     }
     abort_download(b);
     b->erased_end = BOOT_APP_START;
-    send_pending(b, UDS_SID_ROUTINE);
+    boot_send_pending(b, UDS_SID_ROUTINE);
     for (size_t i = 0u; i < BOOT_N_SECTORS && boot_sectors[i].addr < addr + size; i++) {
         if (b->fl.erase(b->fl.ctx, i) != 0) {
-            count(&b->cnt.flash_errors);
+            boot_count(&b->cnt.flash_errors);
             return UDS_NRC_GENERAL_PROGRAMMING_FAILURE;
         }
-        count(&b->cnt.erases);
+        boot_count(&b->cnt.erases);
         b->erased_end = boot_sectors[i].addr + boot_sectors[i].size;
     }
     return UDS_NRC_OK;
@@ -181,32 +182,32 @@ static uint8_t check_memory(boot_t *b, const uint8_t *data, size_t len)
     if (b->dl_state != DL_EXITED) {
         return UDS_NRC_REQUEST_SEQUENCE_ERROR;
     }
-    const uint32_t want = get_u32be(data);
+    const uint32_t want = boot_get_u32be(data);
     const uint32_t n = b->dl_len;
     abort_download(b); /* one check per download, whatever its result */
-    send_pending(b, UDS_SID_ROUTINE);
+    boot_send_pending(b, UDS_SID_ROUTINE);
     uint32_t crc = 0u;
     if (image_crc(&b->fl, n, &crc) != 0) {
-        count(&b->cnt.flash_errors);
-        count(&b->cnt.checks_failed);
+        boot_count(&b->cnt.flash_errors);
+        boot_count(&b->cnt.checks_failed);
         return UDS_NRC_GENERAL_PROGRAMMING_FAILURE;
     }
     if (crc != want || !len_ok(n) || vectors_ok(&b->fl, n) != BOOT_IMAGE_OK) {
-        count(&b->cnt.checks_failed);
+        boot_count(&b->cnt.checks_failed);
         return UDS_NRC_GENERAL_PROGRAMMING_FAILURE;
     }
     uint8_t m[BOOT_MARKER_LEN];
     boot_marker_encode(n, crc, m);
     if (b->fl.write(b->fl.ctx, BOOT_MARKER_ADDR, m, sizeof m) != 0 ||
         boot_image_check(&b->fl) != BOOT_IMAGE_OK) {
-        count(&b->cnt.flash_errors);
-        count(&b->cnt.checks_failed);
+        boot_count(&b->cnt.flash_errors);
+        boot_count(&b->cnt.checks_failed);
         return UDS_NRC_GENERAL_PROGRAMMING_FAILURE;
     }
     return UDS_NRC_OK;
 }
 
-static uint8_t start_routine(void *user, uint16_t rid, const uint8_t *data, size_t len)
+static uint8_t boot_start_routine(void *user, uint16_t rid, const uint8_t *data, size_t len)
 {
     boot_t *b = (boot_t *)user;
     if (b->srv.session != UDS_SESSION_PROGRAMMING) {
@@ -233,8 +234,8 @@ static uint8_t request_download(boot_t *b, const uint8_t *req, size_t len, uint8
     if (req[1] != 0x00u || req[2] != BOOT_ALFID) {
         return UDS_NRC_REQUEST_OUT_OF_RANGE; /* compression, encryption, other formats */
     }
-    const uint32_t addr = get_u32be(&req[3]);
-    const uint32_t size = get_u32be(&req[7]);
+    const uint32_t addr = boot_get_u32be(&req[3]);
+    const uint32_t size = boot_get_u32be(&req[7]);
     if (addr != BOOT_APP_START || size == 0u || size > BOOT_APP_SIZE) {
         return UDS_NRC_REQUEST_OUT_OF_RANGE;
     }
@@ -261,7 +262,8 @@ static uint8_t request_download(boot_t *b, const uint8_t *req, size_t len, uint8
 static int flash_equals(const boot_flash_t *fl, uint32_t addr, const uint8_t *data, uint32_t n)
 {
     uint8_t buf[CHUNK];
-    for (uint32_t pos = 0u; pos < n;) {
+    uint32_t pos = 0u;
+    while (pos < n) {
         const uint32_t k = (n - pos) < CHUNK ? (n - pos) : CHUNK;
         if (fl->read(fl->ctx, addr + pos, buf, k) != 0 || memcmp(buf, &data[pos], k) != 0) {
             return 0;
@@ -290,7 +292,7 @@ static uint8_t transfer_data(boot_t *b, const uint8_t *req, size_t len, uint8_t 
         /* the last block again (its response was lost): acknowledged, not rewritten,
          * when it is the same block */
         if (n == b->last_len && flash_equals(&b->fl, BOOT_APP_START + b->last_pos, data, n)) {
-            count(&b->cnt.blocks_repeated);
+            boot_count(&b->cnt.blocks_repeated);
             return UDS_NRC_OK;
         }
         return UDS_NRC_WRONG_BLOCK_SEQUENCE_COUNTER;
@@ -310,11 +312,11 @@ static uint8_t transfer_data(boot_t *b, const uint8_t *req, size_t len, uint8_t 
         }
     }
     if (b->fl.write(b->fl.ctx, addr, data, n) != 0) {
-        count(&b->cnt.flash_errors);
+        boot_count(&b->cnt.flash_errors);
         abort_download(b); /* the flash is in an unknown state: erase again */
         return UDS_NRC_GENERAL_PROGRAMMING_FAILURE;
     }
-    count(&b->cnt.blocks_written);
+    boot_count(&b->cnt.blocks_written);
     b->last_pos = b->dl_pos;
     b->last_len = n;
     b->dl_pos += n;
@@ -336,7 +338,7 @@ static uint8_t transfer_exit(boot_t *b, size_t len, size_t *rsp_len)
     return UDS_NRC_OK;
 }
 
-static uint8_t service(void *user, uint8_t session, uint8_t unlocked, const uint8_t *req,
+static uint8_t boot_service(void *user, uint8_t session, uint8_t unlocked, const uint8_t *req,
                        size_t len, uint8_t *rsp, size_t cap, size_t *rsp_len)
 {
     boot_t *b = (boot_t *)user;
@@ -362,7 +364,7 @@ static uint8_t service(void *user, uint8_t session, uint8_t unlocked, const uint
     return transfer_exit(b, len, rsp_len);
 }
 
-static uint8_t session_change(void *user, uint8_t session)
+static uint8_t boot_session_change(void *user, uint8_t session)
 {
     boot_t *b = (boot_t *)user;
     abort_download(b); /* a download never survives a session change */
@@ -373,14 +375,14 @@ static uint8_t session_change(void *user, uint8_t session)
 
 /* ---- data identifiers: read-only ---- */
 
-static size_t read_did(void *user, uint16_t did, uint8_t *buf, size_t cap)
+static size_t boot_read_did(void *user, uint16_t did, uint8_t *buf, size_t cap)
 {
     const boot_t *b = (const boot_t *)user;
     if (did == BOOT_DID_VERSION) {
         static const char v[] = BOOT_VERSION_STRING;
         const size_t n = sizeof v - 1u;
         if (n <= cap) {
-            memcpy(buf, v, n);
+            (void)memcpy(buf, v, n);
         }
         return n;
     }
@@ -393,7 +395,7 @@ static size_t read_did(void *user, uint16_t did, uint8_t *buf, size_t cap)
     return 0u;
 }
 
-static uint8_t write_did(void *user, uint16_t did, const uint8_t *data, size_t len)
+static uint8_t boot_write_did(void *user, uint16_t did, const uint8_t *data, size_t len)
 {
     (void)user;
     (void)did;
@@ -402,7 +404,7 @@ static uint8_t write_did(void *user, uint16_t did, const uint8_t *data, size_t l
     return UDS_NRC_REQUEST_OUT_OF_RANGE;
 }
 
-static int is_writable(void *user, uint16_t did)
+static int boot_is_writable(void *user, uint16_t did)
 {
     (void)user;
     (void)did;
@@ -415,19 +417,19 @@ int boot_init(boot_t *b, const boot_flash_t *fl, uint32_t rx_id, uint32_t tx_id,
     if (b == NULL || fl == NULL || fl->read == NULL || fl->write == NULL || fl->erase == NULL) {
         return -1;
     }
-    memset(b, 0, sizeof *b);
+    (void)memset(b, 0, sizeof *b);
     b->fl = *fl;
     b->tx = tx;
     b->tx_user = tx_user;
     b->erased_end = BOOT_APP_START;
     const uds_if_t itf = {
         .user = b,
-        .read_did = read_did,
-        .write_did = write_did,
-        .is_writable = is_writable,
-        .start_routine = start_routine,
-        .session_change = session_change,
-        .service = service,
+        .read_did = boot_read_did,
+        .write_did = boot_write_did,
+        .is_writable = boot_is_writable,
+        .start_routine = boot_start_routine,
+        .session_change = boot_session_change,
+        .service = boot_service,
     };
     isotp_config_t c;
     isotp_config_defaults(&c, rx_id, tx_id);
@@ -460,7 +462,7 @@ void boot_programming_requested(boot_t *b, uint64_t now_us)
     }
 }
 
-static void serve(boot_t *b, uint64_t now_us)
+static void boot_serve(boot_t *b, uint64_t now_us)
 {
     if (b->tx == NULL) {
         return;
@@ -482,12 +484,12 @@ static void serve(boot_t *b, uint64_t now_us)
 void boot_frame(boot_t *b, const hal_can_frame_t *f, uint64_t now_us)
 {
     (void)isotp_on_frame(&b->tp, f, now_us);
-    serve(b, now_us);
+    boot_serve(b, now_us);
 }
 
 int boot_poll(boot_t *b, uint64_t now_us)
 {
-    serve(b, now_us);
+    boot_serve(b, now_us);
     uds_poll(&b->srv, now_us);
     if (b->srv.session != UDS_SESSION_PROGRAMMING) {
         abort_download(b);

@@ -9,12 +9,13 @@ uint32_t crc32_update(uint32_t crc, const uint8_t *data, size_t len)
         0x4DB26158u, 0x5005713Cu, 0xEDB88320u, 0xF00F9344u, 0xD6D6A3E8u, 0xCB61B38Cu,
         0x9B64C2B0u, 0x86D3D2D4u, 0xA00AE278u, 0xBDBDF21Cu,
     };
+    uint32_t c = crc;
     for (size_t k = 0u; k < len; k++) {
-        crc ^= data[k];
-        crc = (crc >> 4) ^ table[crc & 0xFu];
-        crc = (crc >> 4) ^ table[crc & 0xFu];
+        c ^= data[k];
+        c = (c >> 4) ^ table[c & 0xFu];
+        c = (c >> 4) ^ table[c & 0xFu];
     }
-    return crc;
+    return c;
 }
 
 uint32_t crc32_final(uint32_t crc)

@@ -119,9 +119,8 @@ void uds_set_session(uds_t *s, uint8_t session, uint64_t now_us)
 static result_t session_control(uds_t *s, const uint8_t *req, size_t len, uint8_t *rsp)
 {
     const uint8_t sub = (uint8_t)(req[1] & 0x7Fu);
-    const int known = (sub == UDS_SESSION_DEFAULT || sub == UDS_SESSION_EXTENDED ||
-                       (sub == UDS_SESSION_PROGRAMMING && s->itf.session_change != NULL)) ? 1 : 0;
-    if (!known) {
+    if (sub != UDS_SESSION_DEFAULT && sub != UDS_SESSION_EXTENDED &&
+        (sub != UDS_SESSION_PROGRAMMING || s->itf.session_change == NULL)) {
         return nrc(UDS_NRC_SUBFUNCTION_NOT_SUPPORTED);
     }
     if (len != 2u) {

@@ -235,9 +235,9 @@ int hal_bootloader(hal_t *hal, int go)
         return 0; /* the application is linked behind the bootloader (stm32f405.ld) */
     }
     const uint32_t empty = BXCAN_TSR_TME0 | BXCAN_TSR_TME1 | BXCAN_TSR_TME2;
-    for (uint32_t i = 0u; i < TX_DRAIN_POLLS && (hal->init_faults & HAL_STM32_FAULT_CAN) == 0u &&
-                          (hal->can.regs->TSR & empty) != empty;
-         i++) {
+    uint32_t polls = (hal->init_faults & HAL_STM32_FAULT_CAN) == 0u ? TX_DRAIN_POLLS : 0u;
+    while (polls > 0u && (hal->can.regs->TSR & empty) != empty) {
+        polls--;
     }
     volatile uint32_t *request = (volatile uint32_t *)HAL_STM32_BOOT_REQUEST_ADDR;
     request[0] = HAL_STM32_BOOT_REQUEST_MAGIC;
