@@ -385,6 +385,13 @@ $(TGT)/navecu-qemu.elf: $(QEMU_SRC:%.c=$(TGT)/obj/%.o) $(M4_LD) boards/stm32f405
 	$(ARM_CC) $(M4_LDFLAGS) -Wl,-Map=$(TGT)/navecu-qemu.map $(filter %.o,$^) -lm -o $@
 $(TGT)/boot.elf: $(BOOT_ECU_SRC:%.c=$(TGT)/obj/%.o) $(BOOT_LD) boards/stm32f405/stm32f405_sections.ld
 	$(ARM_CC) $(M4_LDFLAGS_COMMON) -T $(BOOT_LD) -Wl,-Map=$(TGT)/boot.map $(filter %.o,$^) -o $@
+# the bootloader's logic on QEMU: the application's flash a semihosting file, CAN a log
+# (boards/qemu/boot_main.c; tests/python/test_flash_tool.py)
+BOOT_QEMU_SRC := boards/stm32f405/startup.c boards/qemu/boot_main.c boards/qemu/bench_trace.c \
+  $(BOOT_SRC) firmware/diag/isotp.c firmware/diag/uds.c firmware/diag/crc32.c \
+  hal/common/candump.c hal/common/nvm_flash.c hal/cortex_m4f/semihost.c hal/cortex_m4f/hal_semihost.c
+$(TGT)/boot-qemu.elf: $(BOOT_QEMU_SRC:%.c=$(TGT)/obj/%.o) $(BOOT_LD) boards/stm32f405/stm32f405_sections.ld
+	$(ARM_CC) $(M4_LDFLAGS_COMMON) -T $(BOOT_LD) -Wl,-Map=$(TGT)/boot-qemu.map $(filter %.o,$^) -o $@
 # Raw binaries, one per flash area (the NVM sectors between them are never written):
 # boot.bin for 0x08000000 (sector 0), the application's navecu.bin for 0x0800C000
 # (sectors 3-4) with its marker slot erased: navecu.pkg is it as a package for the UDS
@@ -405,7 +412,8 @@ target: deps $(TGT)/navecu.elf $(TGT)/navecu.bin $(TGT)/navecu.hex $(TGT)/navecu
 	@arm-none-eabi-size -A $(TGT)/navecu.elf > $(TGT)/navecu.size
 	@arm-none-eabi-size $(TGT)/navecu.elf $(TGT)/boot.elf
 	@echo "target: $(TGT)/boot.bin (at 0x08000000), navecu.bin (at 0x0800C000; navecu.pkg for make flash-can, navecu-app.bin with the marker for make flash), .elf, .hex, maps, sizes $(TGT)/navecu.size"
-target-qemu: deps $(TGT)/navecu-qemu.elf $(TGT)/navecu-qemu-app.bin $(TGT)/boot.elf $(TGT)/navecu-app.bin
+target-qemu: deps $(TGT)/navecu-qemu.elf $(TGT)/navecu-qemu-app.bin $(TGT)/boot.elf $(TGT)/navecu-app.bin \
+		$(TGT)/boot-qemu.elf
 
 # the QEMU image against the host float32 build on a 10-minute drive, byte for byte
 target-test: deps venv target-qemu target $(BUILD)/host/navecu$(VEH_SUFFIX)

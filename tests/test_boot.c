@@ -375,13 +375,16 @@ static void test_sequence_errors(void **state)
     expect_nrc(B(0x34, 0x00, 0x44, 0x08, 0x00, 0xC0, 0x00, 0, 0, 0x10), 0x13);
     request_download(BOOT_APP_START, 3000u, 0u);
     request_download(BOOT_APP_START, 3000u, 0x22);  /* one already running */
-    assert_int_equal(transfer(1u, img, 1000u), 2u);
+    assert_int_equal(transfer(1u, img, 500u), 2u);
+    assert_int_equal(transfer(2u, &img[500], 500u), 2u);
     expect_nrc(B(0x37), 0x24);                      /* 2000 bytes missing */
     check(crc32_of(img, 3000u), 0x24);
-    assert_int_equal(transfer(2u, &img[1000], 1000u), 2u);
-    assert_int_equal(transfer(3u, &img[2000], 1001u), 3u); /* one byte too many */
+    assert_int_equal(transfer(3u, &img[1000], 500u), 2u);
+    assert_int_equal(transfer(4u, &img[1500], 500u), 2u);
+    assert_int_equal(transfer(5u, &img[2000], 500u), 2u);
+    assert_int_equal(transfer(6u, &img[2500], 501u), 3u); /* one byte too many */
     assert_int_equal(rsp[2], 0x71);
-    assert_int_equal(transfer(3u, &img[2000], 1000u), 2u);
+    assert_int_equal(transfer(6u, &img[2500], 500u), 2u);
     expect_rsp(B(0x37), B(0x77));
     expect_nrc(B(0x37), 0x24);
     /* a second download needs a new erase: flash is programmed once */
@@ -483,7 +486,7 @@ static void test_session_change_and_s3_abort_download(void **state)
     unlock();
     erase(2000u, 0u);
     request_download(BOOT_APP_START, 2000u, 0u);
-    assert_int_equal(transfer(1u, img, 1000u), 2u);
+    assert_int_equal(transfer(1u, img, 500u), 2u);
     /* S3: 5 s without a request -> default session, locked, the download gone */
     now_us += UDS_S3_US;
     expect_nrc(B(0x36, 0x02, 0xAA), 0x7F);

@@ -59,6 +59,8 @@ class PipeBus(can.BusABC):
                                      stderr=subprocess.PIPE, text=True, bufsize=1)
         self._rx: queue.Queue = queue.Queue()
         self._last = 0.0
+        self.sent_lines: list = []      # every line written to the program (a tester log)
+        self.received_lines: list = []  # every frame line it wrote
         self._reader = threading.Thread(target=self._read, daemon=True)
         self._reader.start()
 
@@ -68,6 +70,7 @@ class PipeBus(can.BusABC):
             if len(p) != 3 or "#" not in p[2]:
                 continue
             ident, data = p[2].split("#", 1)
+            self.received_lines.append(ln)
             self._rx.put(can.Message(timestamp=float(p[0].strip("()")),
                                      arbitration_id=int(ident, 16),
                                      is_extended_id=len(ident) > 3,
@@ -79,8 +82,10 @@ class PipeBus(can.BusABC):
         t = max(time.time(), self._last + 1e-6)
         self._last = t
         ident = f"{msg.arbitration_id:08X}" if msg.is_extended_id else f"{msg.arbitration_id:03X}"
+        line = f"({t:.6f}) can0 {ident}#{bytes(msg.data).hex().upper()}\n"
+        self.sent_lines.append(line)
         try:
-            self.proc.stdin.write(f"({t:.6f}) can0 {ident}#{bytes(msg.data).hex().upper()}\n")
+            self.proc.stdin.write(line)
             self.proc.stdin.flush()
         except (BrokenPipeError, ValueError):
             pass

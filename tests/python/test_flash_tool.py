@@ -156,7 +156,7 @@ def test_every_negative_response_named(tmp_path):
 
 def test_power_cut_at_every_block_boundary_then_reflash(tmp_path):
     """The old image valid; the new one flashed with the power cut after every whole
-    TransferData block (1024 bytes on the host build), half-way into the first block, in
+    TransferData block (510 bytes, as on the ECU), half-way into the first block, in
     the marker, and half-way through each of the two sector erases: after each the
     bootloader finds no valid image and stays; then a complete flash starts."""
     _need(BOOT_HOST, APP_BIN)
@@ -164,9 +164,9 @@ def test_power_cut_at_every_block_boundary_then_reflash(tmp_path):
     flash = tmp_path / "flash.bin"
     rc, text = flash_tool(flash, APP_BIN)
     assert rc == 0, text
-    block = 1024
+    block = 510
     cuts = [["--cut-after", str(n)] for n in range(0, len(image), block)]
-    cuts += [["--cut-after", "512"], ["--cut-after", str(len(image) + 8)],
+    cuts += [["--cut-after", "255"], ["--cut-after", str(len(image) + 8)],
              ["--cut-in-erase", "0"], ["--cut-in-erase", "1"]]
     for cut in cuts:
         rc, text = flash_tool(flash, APP_BIN, *cut, timeout=0.3, retries=0)
@@ -240,3 +240,75 @@ def test_flashed_file_boots_on_qemu_like_the_host(tmp_path):
     assert rc == navecu_uds.EXIT_TRANSPORT
     assert qemu_from_flash(flash, log, tmp_path / "cut.out", 5) is None
     assert not (tmp_path / "cut.out").exists()
+
+
+BOOT_QEMU = TARGET / "boot-qemu.elf"
+
+
+def boot_qemu(in_log: Path, out_log: Path, flash: Path, timeout: float = 300) -> str:
+    """The bootloader's logic on QEMU (boards/qemu/boot_main.c): the tester's log in, its
+    answers out, the application's flash a semihosting file. Its console text."""
+    semi = f"enable=on,target=native,arg=boot,arg={in_log},arg={out_log},arg={flash}"
+    r = subprocess.run(["qemu-system-arm", "-M", "netduinoplus2", "-nographic", "-monitor",
+                        "none", "-serial", "none", "-semihosting-config", semi, "-kernel",
+                        str(BOOT_QEMU)], capture_output=True, text=True, timeout=timeout)
+    assert r.returncode == 0, r.stdout + r.stderr
+    return r.stdout + r.stderr
+
+
+def test_qemu_bootloader_answers_as_the_host_and_survives_cuts(tmp_path):
+    """The tester's frames of a flash run against the host bootloader, replayed to the
+    bootloader built for the Cortex-M4F on QEMU: the same answers byte for byte and the
+    same flash file, which the ECU's boot.elf then starts on QEMU. Then the same log cut
+    at every TransferData block boundary (the power goes when the log ends): the next boot
+    finds no valid application each time (checked on QEMU for every 8th cut and the last,
+    by the same code on the host for all)."""
+    _need(BOOT_HOST, APP_BIN, BOOT_ELF, BOOT_QEMU)
+    if shutil.which("qemu-system-arm") is None:
+        pytest.skip("needs qemu-system-arm")
+    host_flash = tmp_path / "host.bin"
+    bus = navecu_flash.PipeBus(cmd=[str(BOOT_HOST), "--flash", str(host_flash)])
+    client = navecu_uds.client_on_bus(bus, 0x7A0, 0x7A8, 1.0, {}, p2_star_s=5.0)
+    try:
+        navecu_flash.Flasher(client, out=io.StringIO()).flash(
+            navecu_pkg.Package(image=APP_BIN.read_bytes()))
+    finally:
+        navecu_uds.close_client(client)
+    tester = bus.sent_lines
+    (tmp_path / "tester.log").write_text("".join(tester))
+    qemu_flash = tmp_path / "qemu.bin"
+    text = boot_qemu(tmp_path / "tester.log", tmp_path / "qemu.out", qemu_flash)
+    assert "no valid application" in text and "application valid: started" in text, text
+    assert (tmp_path / "qemu.out").read_text().splitlines() == \
+        [ln.rstrip("\n") for ln in bus.received_lines]
+    assert qemu_flash.read_bytes() == host_flash.read_bytes()
+    print(f"QEMU bootloader: {len(tester)} tester frames, {len(bus.received_lines)} answers "
+          "identical to the host build's, the same flash file")
+    # the ECU bootloader starts what the QEMU bootloader wrote
+    log = drive_log(tmp_path)
+    assert qemu_from_flash(qemu_flash, log, tmp_path / "app.out", 600) == 0
+    assert (tmp_path / "app.out").stat().st_size > 0
+    # a power cut before each TransferData request (FF with SID 0x36 at its third byte),
+    # before the exit and before the check
+    def is_ff_of(ln: str, sid: int) -> bool:
+        d = bytes.fromhex(ln.split("#")[1])
+        return d[0] >> 4 == 1 and d[2] == sid or d[0] >> 4 == 0 and d[1] == sid
+    cuts = [i for i, ln in enumerate(tester) if "7A0#" in ln and is_ff_of(ln, 0x36)]
+    cuts += [i for i, ln in enumerate(tester) if "7A0#" in ln and (is_ff_of(ln, 0x37)
+             or (is_ff_of(ln, 0x31) and "FF01" in ln))]
+    n_blocks = -(-len(APP_BIN.read_bytes()) // 510)  # the ECU's blocks: 510 data bytes
+    assert len(cuts) == n_blocks + 2
+    for n, i in enumerate(cuts):
+        flash = tmp_path / "cut.bin"
+        if flash.exists():
+            flash.unlink()
+        (tmp_path / "cut.log").write_text("".join(tester[:i]))
+        text = boot_qemu(tmp_path / "cut.log", tmp_path / "cut.out", flash)
+        assert "end of the log" in text, text
+        assert "no valid application" in power_on(flash), n
+        if n % 8 == 0 or n == len(cuts) - 1:
+            empty = tmp_path / "empty.log"
+            empty.write_text("")
+            assert "no valid application" in boot_qemu(empty, tmp_path / "e.out", flash), n
+    print(f"QEMU bootloader: {len(cuts)} power cuts (every block boundary, before the exit "
+          "and before the check): never a valid application after one")
