@@ -21,7 +21,7 @@ CFLAGS_BASE := $(CSTD) -O2 -g $(WARN) $(FPFLAGS)
 SAN_FLAGS := -fsanitize=address,undefined,float-cast-overflow -fno-sanitize-recover=all -fno-omit-frame-pointer
 
 # firmware/ sees only its own folders and the HAL interface (docs/architecture.md)
-FW_INC := -Ifirmware/nav -Ifirmware/can -Ifirmware/can/gen -Ifirmware/diag -Ifirmware/app -Ifirmware/app/gen -Ifirmware/vehicle -Ihal
+FW_INC := -Ifirmware/nav -Ifirmware/can -Ifirmware/can/gen -Ifirmware/diag -Ifirmware/boot -Ifirmware/app -Ifirmware/app/gen -Ifirmware/vehicle -Ihal
 HOST_INC := $(FW_INC) -Ihal/common -Ihal/linux -Ihal/cortex_m4f -Ihost_sim -Ihost_sim/gen -Itests/support
 
 CORE_SRC := $(wildcard firmware/nav/*.c)
@@ -44,9 +44,13 @@ CODEC_GEN := firmware/can/gen/navecu_can.c firmware/can/gen/navecu_can.h
 # the diagnostic transport (ISO-TP, docs/can.md): part of the application's library, linked
 # into the images, kept out of them by --gc-sections until the application calls it
 DIAG_SRC := $(sort $(wildcard firmware/diag/*.c))
+# the bootloader's logic (firmware/boot, issue #19): in the library for its host tests and
+# host executable; the application's images leave it out (--gc-sections), the bootloader's
+# images link it (boards/stm32f405/boot_main.c)
+BOOT_SRC := firmware/boot/boot.c
 APP_SRC := firmware/can/e2e.c firmware/can/gen/navecu_can.c firmware/app/gen/app_params.c \
            firmware/app/gen/dtc_table.c \
-           $(DIAG_SRC) $(sort $(wildcard firmware/app/*.c))
+           $(DIAG_SRC) $(BOOT_SRC) $(sort $(wildcard firmware/app/*.c))
 # the host executable: its board files (host_sim/)
 HOST_SIM_SRC := host_sim/main.c host_sim/options.c host_sim/report.c host_sim/host_board.c
 HAL_LINUX_SRC := hal/linux/hal_linux.c hal/linux/hal_socketcan.c hal/common/candump.c \
@@ -60,7 +64,7 @@ SUPPORT_SRC_BOTH := tests/support/nav_run.c
 # tests built once per numeric variant (f32 firmware, f64 reference)
 TESTS_VARIANT := test_nav_math test_earth test_sins test_dr test_ekf test_ekf_rows test_gnss_geom
 # tests of the float32 firmware only (application, codec, HAL)
-TESTS_F32 := test_e2e test_codec test_trig test_isotp test_uds test_dtc
+TESTS_F32 := test_e2e test_codec test_trig test_isotp test_uds test_dtc test_boot
 # tests that link both variants themselves
 TESTS_BOTH := test_drive
 # tests of application modules against the in-memory HAL (tests/support/fake_hal.c)
@@ -100,7 +104,11 @@ help:
 	@echo "make codec         regenerate the CAN codec from firmware/can/navecu.dbc"
 	@echo "make dtc           regenerate the DTC table from firmware/app/dtc.toml"
 	@echo "make cross         build the firmware for the Cortex-M4F, check: no double math"
-	@echo "make target        the ECU image for an STM32F405: build/target/navecu.elf .hex .bin"
+	@echo "make target        the ECU images for an STM32F405: bootloader build/target/boot.elf .bin,"
+	@echo "                   application navecu.elf .hex .bin .pkg, navecu-app.bin (with its marker)"
+	@echo "make flash-can IMAGE=build/target/navecu.pkg BUS=can0"
+	@echo "                   the application over CAN through the bootloader (BUS=host: a dry run)"
+	@echo "make flash         bootloader + application with openocd (ST-LINK); the NVM is kept"
 	@echo "make target-test   the M4F image on QEMU, output frames identical to the host's"
 	@echo "make target-bench  instruction counts on QEMU -> out/target-bench.json, CPU load"
 	@echo "make target-budget flash, RAM, stack, no heap, no double -> out/target-budget.json"
@@ -235,13 +243,20 @@ $(ISOTP_PEER): $(BUILD)/host/f32/tests/tools/isotp_peer.o $(BUILD)/host/libnavap
 	@mkdir -p $(@D)
 	$(CC) $^ -o $@
 
+# the bootloader's logic as a host program on stdin/stdout candump lines with a file as the
+# application's flash (host_sim/boot_main.c): the peer of tools/navecu_flash.py's tests
+BOOT_HOST := $(BUILD)/host/navecu-boot
+$(BOOT_HOST): $(BUILD)/host/f32/host_sim/boot_main.o $(BUILD)/host/libnavapp.a $(BUILD)/host/libhal_linux.a
+	@mkdir -p $(@D)
+	$(CC) $^ -o $@
+
 # Python tests drive the host executable (plain build) through real CAN logs; the vehicle
 # profiles' tests also run each profile's host executable (the RAV4's on its recorded bus,
 # the VW's on its generated frames) and its decoder.
 VEH_TEST_BINS := $(foreach v,$(filter-out native,$(VEHICLES_BUILT)),$(BUILD)/host/navecu-$(v)) \
                  $(foreach v,$(VEHICLES_BUILT),$(BUILD)/host/tests/vehicle_decode-$(v))
-test-python: venv $(BUILD)/host/navecu $(VEH_TEST_BINS) $(ISOTP_PEER) $(BUILD)/target$(VEH_SUFFIX)/navecu-qemu.elf
-	NAVECU_BIN=$(BUILD)/host/navecu ISOTP_PEER_BIN=$(ISOTP_PEER) $(PY) -m pytest -q -rs tests/python
+test-python: venv $(BUILD)/host/navecu $(VEH_TEST_BINS) $(ISOTP_PEER) $(BOOT_HOST) target-qemu
+	NAVECU_BIN=$(BUILD)/host/navecu ISOTP_PEER_BIN=$(ISOTP_PEER) NAVECU_BOOT_BIN=$(BOOT_HOST) $(PY) -m pytest -q -rs tests/python
 
 test: deps
 	./tools/check_layers.sh
@@ -340,11 +355,18 @@ M4_LD := boards/stm32f405/stm32f405.ld
 M4_TGT_CFLAGS := $(CFLAGS_BASE) $(M4_FLAGS) -ffunction-sections -fdata-sections \
                  -fstack-usage -fcallgraph-info=su
 M4_TGT_INC := $(FW_INC) -Ihal/common -Ihal/cortex_m4f -Iboards/qemu -I$(VEH_OUT)/$(VEHICLE)
-M4_LDFLAGS := $(M4_FLAGS) -nostartfiles --specs=nano.specs -T $(M4_LD) -Wl,--gc-sections
+M4_LDFLAGS_COMMON := $(M4_FLAGS) -nostartfiles --specs=nano.specs -Lboards/stm32f405 -Wl,--gc-sections
+M4_LDFLAGS := $(M4_LDFLAGS_COMMON) -T $(M4_LD)
 # boards/: the entry points and startup of the two Cortex-M4F images (the QEMU machine is
 # an STM32F405 too: the same startup and linker script)
-M4_BOARD_SRC := boards/stm32f405/startup.c hal/cortex_m4f/f2l.c
+M4_BOARD_SRC := boards/stm32f405/startup.c boards/stm32f405/app_slot.c hal/cortex_m4f/f2l.c
 ECU_SRC := $(M4_SRC) $(M4_BOARD_SRC) hal/cortex_m4f/hal_stm32.c boards/stm32f405/main.c
+# the bootloader (issue #19, docs/target.md): sector 0, boards/stm32f405/boot.ld; the same
+# startup, HAL drivers and diagnostics as the application, the logic of firmware/boot
+BOOT_LD := boards/stm32f405/boot.ld
+BOOT_ECU_SRC := boards/stm32f405/startup.c boards/stm32f405/boot_main.c $(BOOT_SRC) \
+  firmware/diag/isotp.c firmware/diag/uds.c firmware/diag/crc32.c $(HAL_M4_SRC) \
+  hal/cortex_m4f/hal_stm32.c
 QEMU_SRC := $(CORE_SRC) $(APP_SRC) $(call VEH_SRC,$(VEHICLE)) $(M4_BOARD_SRC) hal/common/candump.c hal/common/nvm_flash.c \
             hal/cortex_m4f/semihost.c \
             hal/cortex_m4f/hal_semihost.c \
@@ -358,29 +380,44 @@ $(TGT)/obj/%.o: %.c
 # flash limit (docs/target.md); the C and its IEEE arithmetic are the same at either level
 # (-ffp-contract=off): target-test checks the outputs equal the host's byte for byte, and
 # target-bench measures what it costs in CPU.
-M4_SIZE_SRC := $(filter firmware/app/% firmware/diag/% firmware/can/%,$(APP_SRC) $(CORE_SRC)) \
+M4_SIZE_SRC := $(filter firmware/app/% firmware/diag/% firmware/can/% firmware/boot/%,$(APP_SRC) $(CORE_SRC)) \
   $(call VEH_GEN_SRC,$(VEHICLE))
 $(M4_SIZE_SRC:%.c=$(TGT)/obj/%.o): M4_TGT_CFLAGS += -Os
-$(TGT)/navecu.elf: $(ECU_SRC:%.c=$(TGT)/obj/%.o) $(M4_LD)
+$(TGT)/navecu.elf: $(ECU_SRC:%.c=$(TGT)/obj/%.o) $(M4_LD) boards/stm32f405/stm32f405_sections.ld
 	$(ARM_CC) $(M4_LDFLAGS) -Wl,-Map=$(TGT)/navecu.map $(filter %.o,$^) -lm -o $@
-$(TGT)/navecu-qemu.elf: $(QEMU_SRC:%.c=$(TGT)/obj/%.o) $(M4_LD)
+$(TGT)/navecu-qemu.elf: $(QEMU_SRC:%.c=$(TGT)/obj/%.o) $(M4_LD) boards/stm32f405/stm32f405_sections.ld
 	$(ARM_CC) $(M4_LDFLAGS) -Wl,-Map=$(TGT)/navecu-qemu.map $(filter %.o,$^) -lm -o $@
-# Raw binaries: one per flash area, since a single .bin would fill the gap over the NVM
-# sectors with zeros and erase the calibration when flashed. navecu-vectors.bin goes to
-# 0x08000000 (sector 0), navecu.bin to 0x0800C000; the .hex carries its addresses.
-$(TGT)/navecu-vectors.bin: $(TGT)/navecu.elf
-	arm-none-eabi-objcopy -O binary -j .isr_vector $< $@
-$(TGT)/navecu.bin: $(TGT)/navecu.elf
-	arm-none-eabi-objcopy -O binary -R .isr_vector $< $@
+$(TGT)/boot.elf: $(BOOT_ECU_SRC:%.c=$(TGT)/obj/%.o) $(BOOT_LD) boards/stm32f405/stm32f405_sections.ld
+	$(ARM_CC) $(M4_LDFLAGS_COMMON) -T $(BOOT_LD) -Wl,-Map=$(TGT)/boot.map $(filter %.o,$^) -o $@
+# the bootloader's logic on QEMU: the application's flash a semihosting file, CAN a log
+# (boards/qemu/boot_main.c; tests/python/test_flash_tool.py)
+BOOT_QEMU_SRC := boards/stm32f405/startup.c boards/qemu/boot_main.c boards/qemu/bench_trace.c \
+  $(BOOT_SRC) firmware/diag/isotp.c firmware/diag/uds.c firmware/diag/crc32.c \
+  hal/common/candump.c hal/common/nvm_flash.c hal/cortex_m4f/semihost.c hal/cortex_m4f/hal_semihost.c
+$(TGT)/boot-qemu.elf: $(BOOT_QEMU_SRC:%.c=$(TGT)/obj/%.o) $(BOOT_LD) boards/stm32f405/stm32f405_sections.ld
+	$(ARM_CC) $(M4_LDFLAGS_COMMON) -T $(BOOT_LD) -Wl,-Map=$(TGT)/boot-qemu.map $(filter %.o,$^) -o $@
+# Raw binaries, one per flash area (the NVM sectors between them are never written):
+# boot.bin for 0x08000000 (sector 0), the application's navecu.bin for 0x0800C000
+# (sectors 3-4) with its marker slot erased: navecu.pkg is it as a package for the UDS
+# download (make flash-can), navecu-app.bin with the validity marker a factory image
+# (make flash); the same for the QEMU application (tools/navecu_pkg.py)
+$(TGT)/%.bin: $(TGT)/%.elf
+	arm-none-eabi-objcopy -O binary $< $@
+$(TGT)/%-app.bin: $(TGT)/%.bin tools/navecu_pkg.py
+	python3 -m tools.navecu_pkg mark $< $@
+$(TGT)/%.pkg: $(TGT)/%.bin tools/navecu_pkg.py
+	python3 -m tools.navecu_pkg pack $< $@
 $(TGT)/%.hex: $(TGT)/%.elf
 	arm-none-eabi-objcopy -O ihex $< $@
 
 .PHONY: target target-qemu target-test target-bench target-budget target-check
-target: deps $(TGT)/navecu.elf $(TGT)/navecu.bin $(TGT)/navecu-vectors.bin $(TGT)/navecu.hex
+target: deps $(TGT)/navecu.elf $(TGT)/navecu.bin $(TGT)/navecu.hex $(TGT)/navecu.pkg \
+		$(TGT)/navecu-app.bin $(TGT)/boot.elf $(TGT)/boot.bin $(TGT)/boot.hex
 	@arm-none-eabi-size -A $(TGT)/navecu.elf > $(TGT)/navecu.size
-	@arm-none-eabi-size $(TGT)/navecu.elf
-	@echo "target: $(TGT)/navecu.elf, .hex, navecu-vectors.bin (at 0x08000000) + navecu.bin (at 0x0800C000), map $(TGT)/navecu.map, sizes $(TGT)/navecu.size"
-target-qemu: deps $(TGT)/navecu-qemu.elf
+	@arm-none-eabi-size $(TGT)/navecu.elf $(TGT)/boot.elf
+	@echo "target: $(TGT)/boot.bin (at 0x08000000), navecu.bin (at 0x0800C000; navecu.pkg for make flash-can, navecu-app.bin with the marker for make flash), .elf, .hex, maps, sizes $(TGT)/navecu.size"
+target-qemu: deps $(TGT)/navecu-qemu.elf $(TGT)/navecu-qemu-app.bin $(TGT)/boot.elf $(TGT)/navecu-app.bin \
+		$(TGT)/boot-qemu.elf
 
 # the QEMU image against the host float32 build on a 10-minute drive, byte for byte
 target-test: deps venv target-qemu target $(BUILD)/host/navecu$(VEH_SUFFIX)
@@ -402,12 +439,26 @@ M4_WAIT_HOOK_CALLERS := bxcan_init hal/cortex_m4f/stm32_clock.c:fail stm32_clock
 # data functions, all the application's (firmware/app/app_uds.c)
 M4_UDS := firmware/app/app_uds.c
 M4_UDS_INDIRECT := --indirect isotp_poll=$(M4_UDS):tx_frame \
-  --indirect uds_handle=$(M4_UDS):read_did,$(M4_UDS):write_did,$(M4_UDS):is_writable,$(M4_UDS):start_routine,$(M4_UDS):uds_dtc_count,$(M4_UDS):uds_dtc_get,$(M4_UDS):uds_dtc_clear,$(M4_UDS):uds_dtc_availability
+  --indirect uds_handle=$(M4_UDS):read_did,$(M4_UDS):write_did,$(M4_UDS):is_writable,$(M4_UDS):start_routine,$(M4_UDS):uds_dtc_count,$(M4_UDS):uds_dtc_get,$(M4_UDS):uds_dtc_clear,$(M4_UDS):uds_dtc_availability,$(M4_UDS):session_change
+# the bootloader's indirect calls: the wait hooks (hal_stm32.c's and boot_main.c's kick for
+# the application sectors' driver instances), ISO-TP's transmit function, the UDS server's
+# functions and the flash functions of firmware/boot (boot_main.c), called from the
+# functions -Os leaves after inlining (the services inline their routines and transfers)
+BOOT_MAIN := boards/stm32f405/boot_main.c
+BOOT_C := firmware/boot/boot.c
+BOOT_INDIRECT := $(foreach f,$(M4_WAIT_HOOK_CALLERS),--indirect $(f)=$(M4_WAIT_HOOK),$(BOOT_MAIN):kick) \
+  --indirect isotp_poll=$(BOOT_MAIN):tx \
+  --indirect uds_handle=$(BOOT_C):boot_read_did,$(BOOT_C):boot_write_did,$(BOOT_C):boot_is_writable,$(BOOT_C):boot_start_routine,$(BOOT_C):boot_session_change,$(BOOT_C):boot_service \
+  $(foreach f,boot_image_check $(BOOT_C):image_crc.constprop.0 $(BOOT_C):vectors_ok $(BOOT_C):boot_service $(BOOT_C):boot_start_routine,--indirect $(f)=$(BOOT_MAIN):fl_read,$(BOOT_MAIN):fl_write,$(BOOT_MAIN):fl_erase)
 target-budget: deps venv target
 	$(PY) -m tools.target.budget --elf $(TGT)/navecu.elf --objs $(ECU_SRC:%.c=$(TGT)/obj/%.o) \
 	  --entry Reset_Handler --isr CAN1_RX0_IRQHandler --isr CAN1_SCE_IRQHandler \
 	  --isr SysTick_Handler $(foreach f,$(M4_WAIT_HOOK_CALLERS),--indirect $(f)=$(M4_WAIT_HOOK)) \
-	  $(M4_UDS_INDIRECT) --json out/target-budget$(VEH_SUFFIX).json
+	  $(M4_UDS_INDIRECT) --sectors 3,4 --json out/target-budget$(VEH_SUFFIX).json
+	$(PY) -m tools.target.budget --elf $(TGT)/boot.elf --objs $(BOOT_ECU_SRC:%.c=$(TGT)/obj/%.o) \
+	  --entry Reset_Handler --isr CAN1_RX0_IRQHandler --isr CAN1_SCE_IRQHandler \
+	  $(BOOT_INDIRECT) --flash-limit 16384 --flash-aim 0 --sectors 0 \
+	  --json out/target-budget-boot$(VEH_SUFFIX).json
 
 # instruction counts per IMU step and per measurement update -> out/target-bench.json
 target-bench: deps venv target-qemu $(BUILD)/host/navecu$(VEH_SUFFIX)
@@ -432,6 +483,29 @@ uds: venv $(if $(filter log,$(BUS_UDS)),$(BUILD)/host/navecu)
 	@mkdir -p $(BUILD)/uds
 	$(PY) -m tools.navecu_uds $(if $(filter log,$(BUS_UDS)),--log-runner --navecu $(BUILD)/host/navecu \
 	  --session $(BUILD)/uds/session.log --nvm $(BUILD)/uds/nvm.bin,--channel $(BUS_UDS)) $(ARGS)
+
+# ---- flashing (issue #19, docs/target.md "The bootloader") ----
+# make flash-can IMAGE=... BUS=can0: the application through the bootloader over UDS
+# (tools/navecu_flash.py; IMAGE a .pkg, .hex or .bin, default the ECU's navecu.pkg);
+# BUS=host: the bootloader's logic on the host (build/host/navecu-boot) with
+# build/flash/flash.bin as its flash, a dry run without an ECU.
+# make flash: the bootloader (sector 0) and the marked application (sectors 3-4) with
+# openocd and an ST-LINK, which erases only the sectors it writes: the NVM (sectors 1-2)
+# stays. OPENOCD_CFG for another probe. Never run by make test (no probe in CI).
+.PHONY: flash flash-can
+IMAGE ?= $(TGT)/navecu.pkg
+BUS_FLASH = $(if $(BUS),$(BUS),vcan0)
+flash-can: venv $(if $(filter host,$(BUS_FLASH)),$(BOOT_HOST)) $(if $(filter $(TGT)/navecu.pkg,$(IMAGE)),$(TGT)/navecu.pkg)
+	@mkdir -p $(BUILD)/flash
+	$(PY) -m tools.navecu_flash $(if $(filter host,$(BUS_FLASH)),--pipe "$(BOOT_HOST) --flash $(BUILD)/flash/flash.bin",--channel $(BUS_FLASH)) flash $(IMAGE)
+OPENOCD ?= openocd
+OPENOCD_CFG ?= -f interface/stlink.cfg -f target/stm32f4x.cfg
+flash: target
+	$(OPENOCD) $(OPENOCD_CFG) -c "init" -c "reset halt" \
+	  -c "flash write_image erase $(TGT)/boot.bin 0x08000000 bin" \
+	  -c "flash write_image erase $(TGT)/navecu-app.bin 0x0800C000 bin" \
+	  -c "verify_image $(TGT)/boot.bin 0x08000000 bin" \
+	  -c "verify_image $(TGT)/navecu-app.bin 0x0800C000 bin" -c "reset run" -c "shutdown"
 
 # ---- vcan0 on a normal Linux machine (sudo); without kernel CAN the tests use
 # tools/vcan/with_vcan.sh, which boots User-Mode Linux with real vcan
@@ -510,7 +584,7 @@ fuzz_codec_SRC := tests/fuzz/fuzz_codec.c $(FUZZ_COMMON) firmware/can/e2e.c \
                   firmware/can/gen/navecu_can.c
 fuzz_app_SRC := tests/fuzz/fuzz_app.c $(FUZZ_APP_SRC)
 fuzz_options_SRC := tests/fuzz/fuzz_options.c $(FUZZ_APP_SRC)
-fuzz_calstore_SRC := tests/fuzz/fuzz_calstore.c tests/fuzz/fuzz_fail.c firmware/app/calstore.c \
+fuzz_calstore_SRC := tests/fuzz/fuzz_calstore.c tests/fuzz/fuzz_fail.c firmware/app/calstore.c firmware/diag/crc32.c \
                      tests/support/fake_hal.c
 fuzz_nvstore_SRC := tests/fuzz/fuzz_nvstore.c $(FUZZ_APP_SRC)
 fuzz_candump_SRC := tests/fuzz/fuzz_candump.c tests/fuzz/fuzz_fail.c $(HAL_LINUX_SRC)

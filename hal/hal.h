@@ -82,4 +82,12 @@ int hal_nvm_erase(hal_t *hal);
 /* Kick the watchdog. Must be called at least every 100 ms by the main loop. */
 void hal_watchdog_kick(hal_t *hal);
 
+/*
+ * The bootloader (issue #19, docs/target.md): go 0 asks whether the board has one to
+ * enter (0 yes, HAL_EIO no: the host, QEMU); go 1 enters it for a UDS programming
+ * session: the board leaves the request where the bootloader finds it, lets the frames
+ * already queued leave (bounded), and resets, so it does not return (HAL_EIO if it cannot).
+ */
+int hal_bootloader(hal_t *hal, int go);
+
 #endif /* NAVECU_HAL_H */

@@ -369,6 +369,27 @@ static void test_uds_ids_read_only(void **state)
     assert_int_equal(app.uds.tp.cfg.tx_id, 0x7B8u);
 }
 
+/* 0x10 02: the bootloader's session. Without one (the host, QEMU): 0x22, the session
+ * unchanged; with one: 7F 10 78 first, then the board resets into it (the fake HAL
+ * returns, so the application says 0x22 after it) */
+static void test_programming_session_enters_the_bootloader(void **state)
+{
+    (void)state;
+    pendings = 0;
+    expect_nrc(REQUEST(0x10, 0x02), 0x10, 0x22);
+    assert_int_equal(pendings, 0);
+    assert_int_equal(hal.bootloader_entered, 0u);
+    assert_int_equal(app.uds.srv.session, UDS_SESSION_DEFAULT);
+    hal.has_bootloader = 1;
+    expect_nrc(REQUEST(0x10, 0x02), 0x10, 0x22);
+    assert_int_equal(pendings, 1);
+    assert_int_equal(hal.bootloader_entered, 1u);
+    /* the other sessions are the server's as before */
+    assert_int_equal(REQUEST(0x10, 0x03), 6u);
+    assert_int_equal(app.uds.srv.session, UDS_SESSION_EXTENDED);
+    expect_nrc(REQUEST(0x10, 0x04), 0x10, 0x12);
+}
+
 static void test_s3_on_the_hal_clock(void **state)
 {
     (void)state;
@@ -754,6 +775,7 @@ int main(void)
         cmocka_unit_test_setup(test_calibration_routines, setup_started),
         cmocka_unit_test_setup(test_board_layer_over_nvm, setup_started),
         cmocka_unit_test_setup(test_refused_entries_reported, setup_started),
+        cmocka_unit_test_setup(test_programming_session_enters_the_bootloader, setup),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

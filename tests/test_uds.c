@@ -134,10 +134,9 @@ static uint32_t seed_of(const uint8_t *r)
     return ((uint32_t)r[2] << 24) | ((uint32_t)r[3] << 16) | ((uint32_t)r[4] << 8) | r[5];
 }
 
-/* the extended session, then the seed and its key: unlocked */
-static void unlock(uint64_t t)
+/* the seed and its key in the session the server is in: unlocked */
+static void unlock_in_session(uint64_t t)
 {
-    EXPECT(t, B(0x10, 0x03), B(0x50, 0x03, 0x00, 0x32, 0x01, 0xF4));
     const uint8_t rq[] = {0x27, 0x01};
     assert_int_equal(uds_handle(&srv, rq, 2u, t, rsp, sizeof rsp), 6u);
     assert_int_equal(rsp[0], 0x67);
@@ -149,6 +148,13 @@ static void unlock(uint64_t t)
     assert_int_equal(rsp[0], 0x67);
     assert_int_equal(rsp[1], 0x02);
     assert_int_equal(srv.unlocked, 1);
+}
+
+/* the extended session, then the seed and its key: unlocked */
+static void unlock(uint64_t t)
+{
+    EXPECT(t, B(0x10, 0x03), B(0x50, 0x03, 0x00, 0x32, 0x01, 0xF4));
+    unlock_in_session(t);
 }
 
 static void test_key_algorithm_as_documented(void **state)
@@ -593,6 +599,76 @@ static void test_routine_control(void **state)
     assert_memory_equal(rsp, "\x7F\x31\x11", 3u);
 }
 
+/* the pluggable parts (uds_if_t.session_change, .service), as the bootloader uses them */
+static uint8_t session_veto;   /* what fake_session answers */
+static uint8_t last_session;
+static size_t service_len;     /* the length fake_service reports */
+static uint8_t service_seen[3]; /* session, unlocked, SID of its last call */
+
+static uint8_t fake_session(void *user, uint8_t session)
+{
+    (void)user;
+    last_session = session;
+    return session_veto;
+}
+
+static uint8_t fake_service(void *user, uint8_t session, uint8_t unlocked, const uint8_t *req,
+                            size_t len, uint8_t *out, size_t cap, size_t *rsp_len)
+{
+    (void)user;
+    (void)len;
+    (void)cap;
+    service_seen[0] = session;
+    service_seen[1] = unlocked;
+    service_seen[2] = req[0];
+    if (req[0] != 0x34u) {
+        return UDS_NRC_SERVICE_NOT_SUPPORTED;
+    }
+    out[1] = 0x20u;
+    *rsp_len = service_len;
+    return UDS_NRC_OK;
+}
+
+static void test_pluggable_session_and_service(void **state)
+{
+    (void)state;
+    const uds_if_t itf = {.user = &app, .read_did = fake_read, .write_did = fake_write,
+                          .is_writable = fake_writable, .start_routine = fake_routine,
+                          .session_change = fake_session, .service = fake_service};
+    assert_int_equal(uds_init(&srv, &itf, 7u), 0);
+    /* the hook decides every session; a veto is its NRC, the session unchanged */
+    session_veto = UDS_NRC_CONDITIONS_NOT_CORRECT;
+    EXPECT(0, B(0x10, 0x02), B(0x7F, 0x10, 0x22));
+    assert_int_equal(last_session, UDS_SESSION_PROGRAMMING);
+    assert_int_equal(srv.session, UDS_SESSION_DEFAULT);
+    session_veto = UDS_NRC_OK;
+    EXPECT(0, B(0x10, 0x02), B(0x50, 0x02, 0x00, 0x32, 0x01, 0xF4));
+    assert_int_equal(srv.session, UDS_SESSION_PROGRAMMING);
+    EXPECT(0, B(0x10, 0x04), B(0x7F, 0x10, 0x12)); /* still not a session */
+    /* SecurityAccess and RoutineControl in the programming session */
+    unlock_in_session(0);
+    assert_int_equal(srv.session, UDS_SESSION_PROGRAMMING);
+    EXPECT(0, B(0x31, 0x01, 0x02, 0x00), B(0x71, 0x01, 0x02, 0x00));
+    /* a service of the hook: its response, with the session and security it was given */
+    service_len = 2u;
+    EXPECT(0, B(0x34, 0x00), B(0x74, 0x20));
+    assert_memory_equal(service_seen, "\x02\x01\x34", 3u);
+    EXPECT(0, B(0x85, 0x02), B(0x7F, 0x85, 0x11)); /* the hook's own "not mine" */
+    /* a hook that breaks its contract (no response byte, or more than cap): 0x72 */
+    service_len = 0u;
+    EXPECT(0, B(0x34, 0x00), B(0x7F, 0x34, 0x72));
+    service_len = sizeof rsp + 1u;
+    EXPECT(0, B(0x34, 0x00), B(0x7F, 0x34, 0x72));
+    /* the session's own positive response, as a bootloader sends it unasked */
+    uint8_t r[6];
+    assert_int_equal(uds_session_response(UDS_SESSION_PROGRAMMING, r), 6u);
+    assert_memory_equal(r, "\x50\x02\x00\x32\x01\xF4", 6u);
+    uds_set_session(&srv, UDS_SESSION_PROGRAMMING, 5u);
+    assert_int_equal(srv.unlocked, 0);
+    uds_poll(&srv, 5u + UDS_S3_US);
+    assert_int_equal(srv.session, UDS_SESSION_DEFAULT); /* S3 from uds_set_session's time */
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -617,6 +693,7 @@ int main(void)
         cmocka_unit_test_setup(test_clear_dtc, setup_dtc),
         cmocka_unit_test_setup(test_no_fault_memory_is_service_not_supported, setup),
         cmocka_unit_test_setup(test_routine_control, setup),
+        cmocka_unit_test_setup(test_pluggable_session_and_service, setup),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -12,7 +12,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 fail=0
 os_headers='stdio\.h|stdlib\.h|unistd\.h|fcntl\.h|pthread\.h|time\.h|signal\.h|sys/|linux/|net/|errno\.h'
-if grep -nE "#include <($os_headers)" firmware/nav/*.[ch] firmware/app/*.[ch] firmware/can/*.[ch] firmware/diag/*.[ch]; then
+if grep -nE "#include <($os_headers)" firmware/nav/*.[ch] firmware/app/*.[ch] firmware/can/*.[ch] firmware/diag/*.[ch] firmware/boot/*.[ch]; then
     echo "layers: firmware/ includes an OS header (above)"; fail=1
 fi
 if grep -nE "#include <($os_headers)" hal/cortex_m4f/*.[ch] hal/common/*.[ch]; then
@@ -34,6 +34,11 @@ if grep -rnE "#include \"($app_headers)\"" hal/; then
 fi
 if grep -nE '#include <($os_headers)' boards/*/*.[ch]; then
     echo "layers: a board of boards/ includes an OS header (above)"; fail=1
+fi
+# the bootloader's logic (firmware/boot/) sees the diagnostics and the HAL interface only
+boot_ok="hal\\.h|$diag_headers|$(cd firmware/boot && ls *.h | sed 's/\./\\./' | paste -sd'|')"
+if grep -nE '#include "' firmware/boot/*.[ch] | grep -vE "#include \"($boot_ok)\""; then
+    echo "layers: the bootloader's logic includes a project header other than diag's and hal.h (above)"; fail=1
 fi
 [ $fail -eq 0 ] && echo "layers: firmware/, hal/ and boards/ respect docs/architecture.md"
 exit $fail

@@ -326,9 +326,6 @@ def open_client(a, tab: dict):
     """A connected udsoncan Client over the bus the options name (the caller closes it
     with close_client)."""
     import can
-    import isotp
-    from udsoncan.client import Client
-    from udsoncan.connections import PythonIsoTpConnection
 
     req_id, rsp_id = a.request_id, a.response_id
     if a.log_runner:
@@ -343,18 +340,30 @@ def open_client(a, tab: dict):
         except (OSError, can.CanError, ValueError, ImportError) as e:
             raise TransportError(f"cannot open {a.interface} channel {a.channel}: {e} "
                                  "(no such interface? `make vcan`, or --log-runner)") from None
+    dids = {int(p["did"]): Raw(struct.calcsize(FORMATS[p["type"]])) for p in tab.values()}
+    dids.update({did: Raw(None) for did in (*ID_DIDS, DID_NVM_STATUS)})
+    return client_on_bus(bus, req_id, rsp_id, a.timeout, dids)
+
+
+def client_on_bus(bus, req_id: int, rsp_id: int, timeout: float, dids: dict,
+                  p2_star_s: Optional[float] = None):
+    """An open udsoncan Client on ISO-TP over a python-can bus (close_client closes both):
+    the ECU's and the bootloader's tools (navecu_flash.py) alike. p2_star_s: the wait after
+    a 0x78 responsePending (default: timeout)."""
+    import isotp
+    from udsoncan.client import Client
+    from udsoncan.connections import PythonIsoTpConnection
+
     addr = isotp.Address(isotp.AddressingMode.Normal_11bits, txid=req_id, rxid=rsp_id)
     stack = isotp.CanStack(bus, address=addr,
                            params={"blocking_send": False, "tx_padding": 0xCC, "stmin": 0,
                                    "blocksize": 0})
     conn = PythonIsoTpConnection(stack)
-    dids = {int(p["did"]): Raw(struct.calcsize(FORMATS[p["type"]])) for p in tab.values()}
-    dids.update({did: Raw(None) for did in (*ID_DIDS, DID_NVM_STATUS)})
     config = dict(udsoncan.configs.default_client_config)
-    timeout = a.timeout
     config.update({"data_identifiers": dids, "security_algo": security_algo,
                    "request_timeout": timeout, "p2_timeout": timeout,
-                   "p2_star_timeout": timeout, "use_server_timing": False})
+                   "p2_star_timeout": p2_star_s if p2_star_s is not None else timeout,
+                   "use_server_timing": False})
     client = Client(conn, config=config)
     client.open()
     client._navecu_bus = bus
@@ -614,30 +623,32 @@ def main(argv=None, out=sys.stdout, err=sys.stderr) -> int:
         print(f"navecu_uds: bad input: {e}", file=err)
         return EXIT_INPUT
     except Exception as e:  # noqa: BLE001 - sorted into the exit statuses below
-        return _report(e, err)
+        return report(e, err)
 
 
-def _report(e: Exception, err) -> int:
+def report(e: Exception, err, prog: str = "navecu_uds") -> int:
+    """Say what went wrong (a negative response by its NRC's name) and return the exit
+    status; the flash tool (navecu_flash.py) reports the same way."""
     from udsoncan.exceptions import (InvalidResponseException, NegativeResponseException,
                                      TimeoutException, UnexpectedResponseException)
     if isinstance(e, NegativeResponseException):
         r = e.response
         svc = r.service.get_name() if r.service is not None else "?"
-        print(f"navecu_uds: negative response 0x{r.code:02X} {nrc_name(r.code)} to {svc} "
+        print(f"{prog}: negative response 0x{r.code:02X} {nrc_name(r.code)} to {svc} "
               f"(0x{r.service.request_id():02X})", file=err)
         return EXIT_NRC
     if isinstance(e, TimeoutException):
-        print(f"navecu_uds: no answer: {e}", file=err)
+        print(f"{prog}: no answer: {e}", file=err)
         return EXIT_TRANSPORT
     if isinstance(e, (InvalidResponseException, UnexpectedResponseException, WireError)):
-        print(f"navecu_uds: malformed answer: {e}", file=err)
+        print(f"{prog}: malformed answer: {e}", file=err)
         return EXIT_TRANSPORT
     if isinstance(e, TransportError):
-        print(f"navecu_uds: transport: {e}", file=err)
+        print(f"{prog}: transport: {e}", file=err)
         return EXIT_TRANSPORT
     if isinstance(e, OSError) or type(e).__module__.split(".")[0] in ("can", "isotp",
                                                                       "tools"):
-        print(f"navecu_uds: transport: {type(e).__name__}: {e}", file=err)
+        print(f"{prog}: transport: {type(e).__name__}: {e}", file=err)
         return EXIT_TRANSPORT
     raise e
 

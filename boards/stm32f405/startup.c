@@ -57,8 +57,20 @@ WEAK_HANDLER(CAN1_RX0_IRQHandler);  /* IRQ 20 */
 WEAK_HANDLER(CAN1_RX1_IRQHandler);  /* IRQ 21 */
 WEAK_HANDLER(CAN1_SCE_IRQHandler);  /* IRQ 22 */
 
+typedef union {
+    void (*handler)(void);
+    const void *stack_top;
+} vector_t;
+
+#define N_VECTORS (16u + 82u) /* Cortex-M4 exceptions + STM32F405 IRQ 0..81 */
+extern const vector_t vector_table[N_VECTORS];
+
 void Reset_Handler(void)
 {
+    /* this image's vector table, wherever it is linked: the bootloader's at 0x08000000,
+     * the application's at 0x0800C000 (the bootloader set VTOR too; a debugger that
+     * starts the application directly does not) */
+    *(volatile uint32_t *)0xE000ED08u = (uint32_t)(uintptr_t)vector_table;
     /* volatile pointers: GCC would otherwise turn these loops into memcpy/memset calls */
     const volatile uint32_t *src = _sidata;
     volatile uint32_t *dst = _sdata;
@@ -76,12 +88,6 @@ void Reset_Handler(void)
     board_main();
 }
 
-typedef union {
-    void (*handler)(void);
-    const void *stack_top;
-} vector_t;
-
-#define N_VECTORS (16u + 82u) /* Cortex-M4 exceptions + STM32F405 IRQ 0..81 */
 #define H(fn) {.handler = fn}
 #define D H(default_handler) /* an interrupt the board does not use */
 #define R {.handler = 0}     /* reserved by the architecture */

@@ -351,6 +351,25 @@ static uint8_t start_routine(void *user, uint16_t rid, const uint8_t *data, size
     return c->nvm_error ? UDS_NRC_GENERAL_PROGRAMMING_FAILURE : UDS_NRC_OK;
 }
 
+/* 0x10: the default and extended sessions as the server has them; the programming
+ * session is the bootloader's (issue #19): 7F 10 78 now, the request left for it and the
+ * MCU reset (hal_bootloader does not return); the bootloader sends the 50 02. A board
+ * without a bootloader (the host, QEMU): 0x22. */
+static uint8_t session_change(void *user, uint8_t session)
+{
+    app_t *a = (app_t *)user;
+    if (session != UDS_SESSION_PROGRAMMING) {
+        return UDS_NRC_OK;
+    }
+    hal_t *hal = a->uds.hal;
+    if (hal == NULL || hal_bootloader(hal, 0) != 0) {
+        return UDS_NRC_CONDITIONS_NOT_CORRECT;
+    }
+    send_pending(a, UDS_SID_SESSION);
+    (void)hal_bootloader(hal, 1);
+    return UDS_NRC_CONDITIONS_NOT_CORRECT; /* it returned: the board could not reset */
+}
+
 int app_uds_init(app_t *a)
 {
     isotp_config_t c;
@@ -365,6 +384,7 @@ int app_uds_init(app_t *a)
         .dtc_clear = uds_dtc_clear,
         .dtc_availability = uds_dtc_availability,
         .start_routine = start_routine,
+        .session_change = session_change,
     };
     a->uds.on = 0u;
     if (isotp_init(&a->uds.tp, &c) != 0 || uds_init(&a->uds.srv, &itf, 0u) != 0) {

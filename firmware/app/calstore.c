@@ -5,6 +5,8 @@
 
 #include <string.h>
 
+#include "crc32.h"
+
 _Static_assert(sizeof(float) == 4u, "calstore stores floats as 32-bit IEEE bit patterns");
 
 #define N_SLOTS 2u
@@ -45,19 +47,7 @@ typedef struct {
 
 uint32_t calstore_crc32(const uint8_t *data, size_t len)
 {
-    /* CRC of each nibble value, reflected polynomial 0xEDB88320 */
-    static const uint32_t table[16] = {
-        0x00000000u, 0x1DB71064u, 0x3B6E20C8u, 0x26D930ACu, 0x76DC4190u, 0x6B6B51F4u,
-        0x4DB26158u, 0x5005713Cu, 0xEDB88320u, 0xF00F9344u, 0xD6D6A3E8u, 0xCB61B38Cu,
-        0x9B64C2B0u, 0x86D3D2D4u, 0xA00AE278u, 0xBDBDF21Cu,
-    };
-    uint32_t crc = 0xFFFFFFFFu;
-    for (size_t k = 0u; k < len; k++) {
-        crc ^= data[k];
-        crc = (crc >> 4) ^ table[crc & 0xFu];
-        crc = (crc >> 4) ^ table[crc & 0xFu];
-    }
-    return crc ^ 0xFFFFFFFFu;
+    return crc32_of(data, len); /* firmware/diag/crc32.c, shared with the bootloader */
 }
 
 static void put_u32le(uint8_t *p, uint32_t v)

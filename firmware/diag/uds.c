@@ -99,22 +99,42 @@ static uint32_t get_u32(const uint8_t *p)
     return ((uint32_t)p[0] << 24) | ((uint32_t)p[1] << 16) | ((uint32_t)p[2] << 8) | p[3];
 }
 
+size_t uds_session_response(uint8_t session, uint8_t *rsp)
+{
+    rsp[0] = (uint8_t)(UDS_SID_SESSION + 0x40u);
+    rsp[1] = session;
+    put_u16(&rsp[2], UDS_P2_MS);
+    put_u16(&rsp[4], UDS_P2_STAR_MS / 10u);
+    return 6u;
+}
+
+void uds_set_session(uds_t *s, uint8_t session, uint64_t now_us)
+{
+    s->session = session;
+    lock(s);
+    s->last_request_us = now_us;
+}
+
 /* 0x10: 50 ss P2(ms, 2 bytes) P2*(10 ms, 2 bytes) */
 static result_t session_control(uds_t *s, const uint8_t *req, size_t len, uint8_t *rsp)
 {
     const uint8_t sub = (uint8_t)(req[1] & 0x7Fu);
-    if (sub != UDS_SESSION_DEFAULT && sub != UDS_SESSION_EXTENDED) {
+    if (sub != UDS_SESSION_DEFAULT && sub != UDS_SESSION_EXTENDED &&
+        (sub != UDS_SESSION_PROGRAMMING || s->itf.session_change == NULL)) {
         return nrc(UDS_NRC_SUBFUNCTION_NOT_SUPPORTED);
     }
     if (len != 2u) {
         return nrc(UDS_NRC_INCORRECT_LENGTH);
     }
+    if (s->itf.session_change != NULL) {
+        const uint8_t code = s->itf.session_change(s->itf.user, sub);
+        if (code != UDS_NRC_OK) {
+            return nrc(code);
+        }
+    }
     s->session = sub;
     lock(s); /* every session transition relocks */
-    rsp[1] = sub;
-    put_u16(&rsp[2], UDS_P2_MS);
-    put_u16(&rsp[4], UDS_P2_STAR_MS / 10u);
-    return positive(6u, req[1] & UDS_SUPPRESS_POS);
+    return positive(uds_session_response(sub, rsp), req[1] & UDS_SUPPRESS_POS);
 }
 
 /* 0x11 01: 51 01, the reset done by the caller once the response left */
@@ -370,11 +390,31 @@ static int has_subfunction(uint8_t sid)
     }
 }
 
-/* 1 for the services of the extended session only */
+/* 1 for the services of a non-default session only (extended, or a bootloader's
+ * programming session) */
 static int extended_only(uint8_t sid)
 {
     return (sid == UDS_SID_SECURITY || sid == UDS_SID_WRITE_DID || sid == UDS_SID_ROUTINE) ? 1
                                                                                          : 0;
+}
+
+/* a service of the application's (uds_if_t.service), else serviceNotSupported */
+static result_t other_service(uds_t *s, const uint8_t *req, size_t len, uint8_t *rsp,
+                              size_t cap)
+{
+    if (s->itf.service == NULL) {
+        return nrc(UDS_NRC_SERVICE_NOT_SUPPORTED);
+    }
+    size_t n = 0u;
+    const uint8_t code =
+        s->itf.service(s->itf.user, s->session, s->unlocked, req, len, rsp, cap, &n);
+    if (code != UDS_NRC_OK) {
+        return nrc(code);
+    }
+    if (n < 1u || n > cap) {
+        return nrc(UDS_NRC_GENERAL_PROGRAMMING_FAILURE); /* the service broke its contract */
+    }
+    return positive(n, 0u);
 }
 
 size_t uds_handle(uds_t *s, const uint8_t *req, size_t len, uint64_t now_us, uint8_t *rsp,
@@ -397,7 +437,7 @@ size_t uds_handle(uds_t *s, const uint8_t *req, size_t len, uint64_t now_us, uin
      * length (0x13), the sub-function (0x12), then each service's own checks */
     if (sid == UDS_SID_ROUTINE && s->itf.start_routine == NULL) {
         r = nrc(UDS_NRC_SERVICE_NOT_SUPPORTED); /* an application without routines */
-    } else if (extended_only(sid) && s->session != UDS_SESSION_EXTENDED) {
+    } else if (extended_only(sid) && s->session == UDS_SESSION_DEFAULT) {
         r = nrc(UDS_NRC_NOT_IN_ACTIVE_SESSION);
     } else if (has_sub && len < 2u) {
         r = nrc(UDS_NRC_INCORRECT_LENGTH); /* no sub-function at all */
@@ -432,7 +472,7 @@ size_t uds_handle(uds_t *s, const uint8_t *req, size_t len, uint64_t now_us, uin
             r = routine_control(s, req, len, rsp);
             break;
         default:
-            r = nrc(UDS_NRC_SERVICE_NOT_SUPPORTED);
+            r = other_service(s, req, len, rsp, cap);
             break;
         }
     }

@@ -5,10 +5,12 @@
  * the server reaches them only through uds_if_t below.
  *
  * Services (docs/can.md, "Diagnostics (UDS)", has every request and response byte):
- *   0x10 DiagnosticSessionControl  0x01 default, 0x03 extended; response with P2/P2*
+ *   0x10 DiagnosticSessionControl  0x01 default, 0x03 extended, 0x02 programming when the
+ *                                  application has a session_change; response with P2/P2*
  *   0x11 ECUReset                  0x01 hardReset, unlocked only; done after the response
  *   0x22 ReadDataByIdentifier      1..UDS_MAX_READ_DIDS DIDs per request
- *   0x27 SecurityAccess            0x01 requestSeed / 0x02 sendKey, extended session
+ *   0x27 SecurityAccess            0x01 requestSeed / 0x02 sendKey, extended or programming
+ *                                  session (as 0x2E and 0x31: any non-default session)
  *   0x2E WriteDataByIdentifier     extended session and unlocked
  *   0x31 RoutineControl            0x01 startRoutine, extended session and unlocked;
  *                                  0x11 when the application has no start_routine
@@ -70,6 +72,7 @@
 
 /* sessions (0x10 sub-functions) */
 #define UDS_SESSION_DEFAULT 0x01u
+#define UDS_SESSION_PROGRAMMING 0x02u /* only with a session_change function (uds_if_t) */
 #define UDS_SESSION_EXTENDED 0x03u
 
 /* timing: P2 and P2* announced in the 0x10 response, S3 enforced */
@@ -111,6 +114,16 @@
  *              its option record data[0..len): UDS_NRC_OK once it is done, or the NRC
  *              (0x31 an unknown routine, 0x22 not now, 0x72 an NVM failure). Called only
  *              in the extended session, unlocked.
+ * Pluggable parts, optional (NULL: not there), used by the bootloader (firmware/boot):
+ *   session_change  a 0x10 request for session (its sub-function, suppress bit off) is
+ *              about to be accepted: UDS_NRC_OK lets it (the session changes, relocked), any
+ *              other code is the negative response. Without it the programming session
+ *              (0x02) is 0x12; with it, the function decides for every session.
+ *   service    a service the server does not serve itself (e.g. 0x34, 0x36, 0x37): called
+ *              with the request (req[0] its SID), the session and whether SecurityAccess
+ *              is granted; writes its positive response's bytes after the SID at rsp[1..]
+ *              (at most cap - 1), their count + 1 in *rsp_len, and returns UDS_NRC_OK, or
+ *              the NRC (0x11 for a SID it does not serve either).
  * Functions are appended at the end (applications use designated initialisers).
  */
 typedef struct {
@@ -123,6 +136,9 @@ typedef struct {
     uint8_t (*dtc_clear)(void *user, uint32_t group);
     uint8_t (*dtc_availability)(void *user);
     uint8_t (*start_routine)(void *user, uint16_t rid, const uint8_t *data, size_t len);
+    uint8_t (*session_change)(void *user, uint8_t session);
+    uint8_t (*service)(void *user, uint8_t session, uint8_t unlocked, const uint8_t *req,
+                       size_t len, uint8_t *rsp, size_t cap, size_t *rsp_len);
 } uds_if_t;
 
 /* Counted, each saturating (never decreasing). */
@@ -137,7 +153,7 @@ typedef struct {
 typedef struct {
     uds_if_t itf;
     uds_counters_t cnt;
-    uint8_t session;          /* UDS_SESSION_DEFAULT or _EXTENDED */
+    uint8_t session;          /* UDS_SESSION_DEFAULT, _EXTENDED (or _PROGRAMMING) */
     uint8_t unlocked;         /* SecurityAccess level 0x01 granted */
     uint8_t seed_pending;     /* a seed was sent; its key is awaited */
     uint8_t attempts;         /* wrong keys in a row */
@@ -169,6 +185,13 @@ void uds_poll(uds_t *s, uint64_t now_us);
 
 /* 1 once after an accepted ECUReset (then 0): the caller resets when its response left. */
 int uds_take_reset(uds_t *s);
+
+/* Enter session (a bootloader started on a programming request: the response to that
+ * request is then its own, uds_session_response), relocked, S3 from now_us. */
+void uds_set_session(uds_t *s, uint8_t session, uint64_t now_us);
+
+/* The positive response to 0x10 session (50 ss P2 P2*) at rsp (>= 6 bytes): 6. */
+size_t uds_session_response(uint8_t session, uint8_t *rsp);
 
 /* The demonstration key of a seed (UDS_KEY_XOR, UDS_KEY_ADD above). */
 uint32_t uds_key_of_seed(uint32_t seed);

@@ -223,3 +223,28 @@ void hal_watchdog_kick(hal_t *hal)
 {
     stm32_iwdg_kick(&hal->iwdg);
 }
+
+#define TX_DRAIN_POLLS 200000u /* about 10 ms at 168 MHz: 3 frames take 0.7 ms at 500 kbit/s */
+
+int hal_bootloader(hal_t *hal, int go)
+{
+    if (hal == NULL) {
+        return HAL_EINVAL;
+    }
+    if (!go) {
+        return 0; /* the application is linked behind the bootloader (stm32f405.ld) */
+    }
+    const uint32_t empty = BXCAN_TSR_TME0 | BXCAN_TSR_TME1 | BXCAN_TSR_TME2;
+    uint32_t polls = (hal->init_faults & HAL_STM32_FAULT_CAN) == 0u ? TX_DRAIN_POLLS : 0u;
+    while (polls > 0u && (hal->can.regs->TSR & empty) != empty) {
+        polls--;
+    }
+    volatile uint32_t *request = (volatile uint32_t *)HAL_STM32_BOOT_REQUEST_ADDR;
+    request[0] = HAL_STM32_BOOT_REQUEST_MAGIC;
+    request[1] = ~HAL_STM32_BOOT_REQUEST_MAGIC;
+    __asm__ volatile("dsb" ::: "memory");
+    *(volatile uint32_t *)0xE000ED0Cu = 0x05FA0004u; /* AIRCR SYSRESETREQ */
+    __asm__ volatile("dsb" ::: "memory");
+    for (;;) {
+    }
+}

@@ -40,6 +40,13 @@ struct hal {
 #define HAL_STM32_FAULT_NVM 0x4u
 #define HAL_STM32_FAULT_WATCHDOG 0x8u
 
+/* hal_bootloader's request to the bootloader: this word and its complement in the last
+ * 16 bytes of SRAM, above the stack (the values of firmware/boot/boot_image.h
+ * BOOT_REQUEST_ADDR / BOOT_REQUEST_MAGIC, which hal/ does not include:
+ * boards/stm32f405/boot_main.c asserts that they are equal) */
+#define HAL_STM32_BOOT_REQUEST_ADDR 0x2001FFF0u
+#define HAL_STM32_BOOT_REQUEST_MAGIC 0xB007F1A5u
+
 /*
  * Bring the board up: clocks, peripheral clocks, CAN pins, TIM2, bxCAN with filters for
  * rx_ids[0..n_ids), its interrupts in the NVIC, the flash NVM driver, and the watchdog

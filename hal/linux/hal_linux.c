@@ -191,6 +191,13 @@ void hal_watchdog_kick(hal_t *hal)
     hal->last_kick_us = hal_time_us(hal);
 }
 
+int hal_bootloader(hal_t *hal, int go)
+{
+    (void)hal;
+    (void)go;
+    return HAL_EIO; /* the host has no bootloader (host_sim/boot_main.c is its own program) */
+}
+
 /* Open or create the NVM file and load it into hal->nvm. 0 or HAL_EIO. */
 static int nvm_open(hal_t *hal, const char *path)
 {

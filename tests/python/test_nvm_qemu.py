@@ -30,10 +30,12 @@ import numpy as np
 import pytest
 
 from tools import gen_params, navecu_can
+from tools.target import qemu_run
 
 ROOT = Path(__file__).resolve().parents[2]
 NAVECU = Path(os.environ.get("NAVECU_BIN", ROOT / "build" / "host" / "navecu"))
-QEMU_ELF = ROOT / "build" / "target" / "navecu-qemu.elf"
+QEMU_APP = ROOT / "build" / "target" / "navecu-qemu-app.bin"  # behind boot.elf (qemu_run.machine)
+BOOT_ELF = ROOT / "build" / "target" / "boot.elf"
 DRIVE = ROOT / "tests" / "regression" / "inputs" / "sim-clean.log.xz"
 DRIVE_S = float(os.environ.get("NAVECU_NVM_QEMU_DRIVE_S", "1e9"))  # default: all 277 s
 REQ, RSP = 0x7A0, 0x7A8
@@ -47,9 +49,9 @@ OPTIONS = ["--imu-rate-hz", "100", "--gyro-arw-dpsh", "0.003", "--gyro-bias-dph"
            "--gnss-lever-m", "0.1,0.5,1.2", "--gyro-range-dps", "20",
            "--accel-range-mps2", "9.9"]
 
-MISSING = (shutil.which("qemu-system-arm") is None or not QEMU_ELF.exists()
+MISSING = (shutil.which("qemu-system-arm") is None or not QEMU_APP.exists() or not BOOT_ELF.exists()
            or not NAVECU.exists())
-REASON = ("needs qemu-system-arm, build/target/navecu-qemu.elf (make target-qemu) and "
+REASON = ("needs qemu-system-arm, build/target/navecu-qemu-app.bin and boot.elf (make target-qemu) and "
           "build/host/navecu")
 
 
@@ -144,9 +146,8 @@ def host(in_log, out_log, *args):
 def qemu(in_log, out_log, nvm=None):
     args = ["navecu", in_log, out_log] + ([f"nvm={nvm}"] if nvm else [])
     semi = "enable=on,target=native," + ",".join(f"arg={a}" for a in args)
-    r = subprocess.run(["qemu-system-arm", "-M", "netduinoplus2", "-nographic", "-monitor",
-                        "none", "-serial", "none", "-semihosting-config", semi, "-kernel",
-                        str(QEMU_ELF)], capture_output=True, text=True, timeout=1800)
+    r = subprocess.run(qemu_run.machine(QEMU_APP) + ["-semihosting-config", semi],
+                       capture_output=True, text=True, timeout=1800)
     assert r.returncode == 0, r.stdout + r.stderr
     return r.stdout + r.stderr
 

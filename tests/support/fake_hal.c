@@ -188,3 +188,14 @@ void hal_watchdog_kick(hal_t *hal)
 {
     hal->kicks++;
 }
+
+int hal_bootloader(hal_t *hal, int go)
+{
+    if (!hal->has_bootloader) {
+        return HAL_EIO;
+    }
+    if (go) {
+        hal->bootloader_entered++; /* a real board would not return */
+    }
+    return 0;
+}

@@ -50,6 +50,8 @@ struct hal {
     uint32_t rx_head, rx_n;  /* next to receive, frames queued */
     int rx_empty_rc;         /* what hal_can_receive returns with the queue empty */
     uint32_t rx_calls;       /* hal_can_receive calls */
+    int has_bootloader;      /* what hal_bootloader(hal, 0) says: 1 there is one */
+    uint32_t bootloader_entered; /* hal_bootloader(hal, 1) calls */
 };
 
 void fake_hal_reset(hal_t *hal);

@@ -1,13 +1,15 @@
-"""The ECU image's resource budget (`make target-budget`, docs/target.md).
+"""The ECU images' resource budget (`make target-budget`, docs/target.md): the
+application's and the bootloader's (issue #19: --flash-limit 16384 --sectors 0).
 
     python -m tools.target.budget --elf build/target/navecu.elf --objs OBJ.o ... \
         [--entry Reset_Handler] [--isr CAN1_RX0_IRQHandler ...] [--indirect CALLER=C1,C2 ...]
-        [--json out/target-budget.json]
+        [--flash-limit B] [--flash-aim B] [--sectors 3,4] [--json out/target-budget.json]
 
 Checks, each against the limit of issue #8 (exit status 1 if any is exceeded, 2 if a
 check cannot be made):
 * flash: the bytes programmed into flash (every loaded section: vectors, code, constants,
-  the .data image) <= 64 KiB (aim 48 KiB);
+  the .data image) <= 64 KiB (aim 48 KiB), and only into the erase sectors --sectors
+  allows (the application: 3-4 behind the bootloader; the bootloader: sector 0);
 * static RAM: .data + .bss <= 16 KiB (aim 12 KiB);
 * stack: the worst case over the call graph from -fstack-usage/-fcallgraph-info
   (tools/target/stack_usage.py) from the reset handler plus every interrupt handler
@@ -82,6 +84,7 @@ def memory_use(sec: dict) -> tuple[int, int, dict]:
 SECTORS = ([(0x08000000 + k * 0x4000, 0x4000) for k in range(4)] + [(0x08010000, 0x10000)]
            + [(0x08020000 + k * 0x20000, 0x20000) for k in range(7)])
 NVM_RANGE = (0x08004000, 0x0800C000)  # sectors 1 and 2 (stm32f405.ld)
+APP_SECTORS = [3, 4]  # the application behind the bootloader (firmware/boot/boot_image.h)
 
 
 def load_segments(elf: Path) -> list:
@@ -106,7 +109,8 @@ def sectors_touched(segs: list) -> tuple[int, list]:
     return sum(SECTORS[k][1] for k in touched), touched
 
 
-def stack(objs: list, entries: list, isrs: list, indirect: list) -> dict:
+def stack(objs: list, entries: list, isrs: list, indirect: list,
+          stack_limit: int = LIMITS["stack_bytes"][0]) -> dict:
     """Run stack_usage.py over the .ci files of these objects only (not the QEMU image's)."""
     with tempfile.TemporaryDirectory() as d:
         for k, o in enumerate(objs):
@@ -117,7 +121,7 @@ def stack(objs: list, entries: list, isrs: list, indirect: list) -> dict:
         js = Path(d) / "stack.json"
         # 108: the FPU exception frame (26 words) plus the 4-byte alignment pad (STKALIGN)
         cmd = [sys.executable, str(ROOT / "tools" / "target" / "stack_usage.py"), "--ci-dir", d,
-               "--limit-bytes", str(LIMITS["stack_bytes"][0]), "--exception-frame-bytes", "108",
+               "--limit-bytes", str(stack_limit), "--exception-frame-bytes", "108",
                "--json", str(js)]
         for e in entries:
             cmd += ["--entry", e]
@@ -142,7 +146,14 @@ def main(argv=None) -> int:
     ap.add_argument("--indirect", action="append", default=[], metavar="CALLER=C1,C2",
                     help="callees of CALLER's calls through function pointers (stack_usage.py)")
     ap.add_argument("--json", type=Path, default=None)
+    ap.add_argument("--flash-limit", type=int, default=LIMITS["flash_bytes"][0])
+    ap.add_argument("--flash-aim", type=int, default=LIMITS["flash_bytes"][1])
+    ap.add_argument("--sectors", default=",".join(map(str, APP_SECTORS)),
+                    help="the erase sectors the image may occupy")
     a = ap.parse_args(argv)
+    limits = dict(LIMITS)
+    limits["flash_bytes"] = (a.flash_limit, a.flash_aim or None)
+    allowed = [int(k) for k in a.sectors.split(",")]
     entries = a.entry or ["Reset_Handler"]
     isrs = a.isr or []
 
@@ -155,11 +166,11 @@ def main(argv=None) -> int:
     syms = symbols(a.elf)
     heap = sorted(s for s in syms if HEAP_SYMBOLS.match(s))
     dbl = sorted(s for s in syms if DOUBLE_SYMBOLS.match(s))
-    st = stack(a.objs, entries, isrs, a.indirect)
+    st = stack(a.objs, entries, isrs, a.indirect, limits["stack_bytes"][0])
     stack_bytes = int(st["total_bytes"])
 
-    rows = [("flash", flash, *LIMITS["flash_bytes"]), ("static RAM", ram, *LIMITS["ram_bytes"]),
-            ("worst-case stack", stack_bytes, *LIMITS["stack_bytes"])]
+    rows = [("flash", flash, *limits["flash_bytes"]), ("static RAM", ram, *limits["ram_bytes"]),
+            ("worst-case stack", stack_bytes, *limits["stack_bytes"])]
     failed = []
     print(f"budget of {a.elf}:")
     for name, used, limit, aim in rows:
@@ -177,13 +188,17 @@ def main(argv=None) -> int:
         failed.append("flash accounting (sections vs segments differ)")
     if nvm_overlap:
         failed.append("image overlaps the NVM sectors")
+    outside = [k for k in sector_list if k not in allowed]
+    if outside:
+        failed.append(f"image in erase sectors {outside}, outside its own {allowed}")
     if heap:
         failed.append("heap")
     if dbl:
         failed.append("double")
     res = {"elf": str(a.elf), "flash_bytes": flash, "ram_bytes": ram, "stack_bytes": stack_bytes,
-           "limits": {k: v[0] for k, v in LIMITS.items()},
-           "aims": {k: v[1] for k, v in LIMITS.items() if v[1]},
+           "limits": {k: v[0] for k, v in limits.items()},
+           "aims": {k: v[1] for k, v in limits.items() if v[1]},
+           "sectors_allowed": allowed,
            "sections": detail, "heap_symbols": heap, "double_symbols": dbl,
            "flash_programmed_bytes": flash_programmed, "flash_sectors": sector_list,
            "flash_sector_bytes": sector_bytes,
@@ -194,7 +209,7 @@ def main(argv=None) -> int:
     if failed:
         print(f"target-budget: FAIL ({', '.join(failed)})", file=sys.stderr)
         return 1
-    print("target-budget: every limit met")
+    print(f"target-budget: every limit of {a.elf.name} met")
     return 0
 
 

@@ -59,11 +59,25 @@ def run(cmd, **kw):
                           **kw)
 
 
-def qemu_cmd(qemu_elf: Path, in_log: Path, out_log: Path, trace: Path | None) -> list:
+APP_START = 0x0800C000  # firmware/boot/boot_image.h BOOT_APP_START
+
+
+def machine(app_bin: Path, boot_elf: Path | None = None) -> list:
+    """netduinoplus2 as the ECU's flash holds it (docs/target.md): the bootloader in sector 0
+    (boot.elf, what the CPU's reset starts) and an application image at 0x0800C000 (QEMU's
+    generic loader writes it into the flash before reset). The bootloader checks the
+    image's marker and CRC-32 and starts it; an application image without its marker
+    (navecu-qemu.bin instead of navecu-qemu-app.bin) is not started."""
+    boot_elf = boot_elf or app_bin.parent / "boot.elf"
+    return ["qemu-system-arm", "-M", "netduinoplus2", "-nographic", "-monitor", "none",
+            "-serial", "none", "-kernel", str(boot_elf),
+            "-device", f"loader,file={app_bin},addr=0x{APP_START:08X}"]
+
+
+def qemu_cmd(app_bin: Path, in_log: Path, out_log: Path, trace: Path | None) -> list:
     args = ["navecu", in_log, out_log] + ([trace] if trace else [])
     semi = "enable=on,target=native," + ",".join(f"arg={a}" for a in args)
-    cmd = ["qemu-system-arm", "-M", "netduinoplus2", "-nographic", "-monitor", "none",
-           "-serial", "none", "-semihosting-config", semi, "-kernel", qemu_elf]
+    cmd = machine(app_bin) + ["-semihosting-config", semi]
     if trace:
         cmd[1:1] = ["-icount", "shift=0"]
     return cmd
@@ -83,8 +97,8 @@ def first_difference(a: Path, b: Path, n_show: int = 3) -> str:
     return "\n".join(out)
 
 
-def boot_ecu(ecu_elf: Path, seconds: float = 2.0) -> tuple[bool, str]:
-    """The ECU image (build/target/navecu.elf) booted on netduinoplus2 for `seconds` of wall
+def boot_ecu(ecu_app: Path, seconds: float = 2.0) -> tuple[bool, str]:
+    """The ECU image (build/target/navecu-app.bin behind boot.elf) booted on netduinoplus2 for `seconds` of wall
     time under -icount (virtual time runs from instructions, so a slow machine only runs
     fewer of them): QEMU emulates no RCC, so the clock setup times out and the board runs
     on without CAN, but startup, the drivers' bounded waits, the watchdog and the main loop
@@ -92,9 +106,7 @@ def boot_ecu(ecu_elf: Path, seconds: float = 2.0) -> tuple[bool, str]:
     returns only) and no other exception: QEMU logs a fault as e.g. "[Data Abort]",
     "[Prefetch Abort]", "[Undefined Instruction]" or a v7M fault kind, and default_handler
     then resets the ECU (board_fault), which would show as a second boot."""
-    cmd = ["qemu-system-arm", "-M", "netduinoplus2", "-nographic", "-monitor", "none",
-           "-serial", "none", "-icount", "shift=0,sleep=off", "-d", "int", "-kernel",
-           str(ecu_elf)]
+    cmd = machine(ecu_app) + ["-icount", "shift=0,sleep=off", "-d", "int"]
     try:
         r = subprocess.run(cmd, capture_output=True, text=True, timeout=seconds)
         log = r.stderr
@@ -218,8 +230,8 @@ def main(argv=None) -> int:
     ap.add_argument("--vehicle", default=None,
                     help="the vehicle profile of the build (default: the host executable's)")
     a = ap.parse_args(argv)
-    qemu_elf = Path(a.target_dir) / "navecu-qemu.elf"
-    ecu_elf = Path(a.target_dir) / "navecu.elf"
+    qemu_app = Path(a.target_dir) / "navecu-qemu-app.bin"  # behind boot.elf
+    ecu_app = Path(a.target_dir) / "navecu-app.bin"
     navecu = Path(a.navecu)
     vehicle = a.vehicle or (navecu.name.split("-", 1)[1] if "-" in navecu.name else None)
     if not (a.check or a.bench):
@@ -228,7 +240,7 @@ def main(argv=None) -> int:
         print("qemu_run: qemu-system-arm not found (Debian: apt-get install qemu-system-arm)",
               file=sys.stderr)
         return 1
-    for f in (qemu_elf, navecu):
+    for f in (qemu_app, navecu):
         if not f.exists():
             print(f"qemu_run: {f} missing (make target-qemu build/host/navecu)", file=sys.stderr)
             return 1
@@ -256,7 +268,7 @@ def main(argv=None) -> int:
     qemu_log = out / "qemu.log"
     trace = out / "trace.txt" if a.bench else None
     t0 = time.monotonic()
-    r = run(qemu_cmd(qemu_elf, in_log, qemu_log, trace), timeout=a.timeout_s)
+    r = run(qemu_cmd(qemu_app, in_log, qemu_log, trace), timeout=a.timeout_s)
     wall = time.monotonic() - t0
     print(f"== QEMU netduinoplus2 ({wall:.1f} s): {r.stderr.strip() or r.stdout.strip()}")
     if r.returncode != 0:
@@ -264,8 +276,8 @@ def main(argv=None) -> int:
         return 1
 
     status = 0
-    if a.check and ecu_elf.exists():
-        ok, what = boot_ecu(ecu_elf)
+    if a.check and ecu_app.exists():
+        ok, what = boot_ecu(ecu_app)
         print(f"target-test: the ECU image on netduinoplus2 for 2 s (icount): {what}: "
               f"{'PASS' if ok else 'FAIL'}")
         status |= 0 if ok else 1
