@@ -6,6 +6,7 @@
  *
  *   qemu-system-arm -M netduinoplus2 ... -kernel build/target/boot-qemu.elf \
  *       -semihosting-config enable=on,target=native,arg=boot,arg=IN.log,arg=OUT.log,arg=FLASH
+ *       [,arg=request] [,arg=cut-in-erase=N]
  *
  * FLASH: the application region (80 KiB from 0x0800C000; erased when missing), written
  * back whole after every erase and write, so the file is the flash whenever QEMU stops. At
@@ -14,6 +15,11 @@
  * else the bootloader serves UDS on 0x7A0/0x7A8 to the tester's frames of IN.log, its
  * answers to OUT.log, until an ECUReset (the image checked again: exit 0) or the end of
  * IN.log (exit 0: the power goes). Exit 1: a file could not be opened or written.
+ * request: start as after the application's programming request (hal_bootloader: the
+ * image is not started, the programming session is open), as the host build's --request.
+ * cut-in-erase=N: the power goes half way through the N-th sector erase (0 the first):
+ * the first half of that sector erased, the rest as it was, the file saved, exit 0 (as
+ * the host build's --cut-in-erase N).
  */
 #include <stdint.h>
 #include <string.h>
@@ -27,6 +33,7 @@ static hal_t qb_hal;
 static boot_t qb_boot;
 static uint8_t qb_mem[BOOT_APP_SIZE];
 static const char *flash_path;
+static int32_t cut_in_erase = -1; /* erases before the cut one; < 0: none */
 
 void board_main(void) __attribute__((noreturn));
 void board_fault(void);
@@ -76,8 +83,18 @@ static int qb_erase(void *ctx, size_t sector)
     if (sector >= BOOT_N_SECTORS) {
         return HAL_EINVAL;
     }
-    (void)memset(&qb_mem[boot_sectors[sector].addr - BOOT_APP_START], 0xFF,
-                 boot_sectors[sector].size);
+    uint8_t *start = &qb_mem[boot_sectors[sector].addr - BOOT_APP_START];
+    if (cut_in_erase == 0) {
+        (void)memset(start, 0xFF, boot_sectors[sector].size / 2u);
+        (void)qb_save();
+        (void)hal_semihost_close(&qb_hal);
+        bench_puts("boot-qemu: power cut half way through an erase\n");
+        semihost_exit(0u);
+    }
+    if (cut_in_erase > 0) {
+        cut_in_erase--;
+    }
+    (void)memset(start, 0xFF, boot_sectors[sector].size);
     return qb_save();
 }
 
@@ -100,12 +117,27 @@ static void check_and_start(void)
 
 void board_main(void)
 {
-    const char *argv[4] = {NULL, NULL, NULL, NULL};
-    if (bench_args(argv, 4u) < 4u) {
-        bench_puts("usage: boot-qemu IN.log OUT.log FLASH (semihosting arguments)\n");
+    const char *argv[6] = {NULL, NULL, NULL, NULL, NULL, NULL};
+    const size_t argc = bench_args(argv, 6u);
+    if (argc < 4u) {
+        bench_puts("usage: boot-qemu IN.log OUT.log FLASH [request] [cut-in-erase=N] "
+                   "(semihosting arguments)\n");
         semihost_exit(2u);
     }
     flash_path = argv[3];
+    int request = 0;
+    for (size_t i = 4u; i < argc; i++) {
+        if (strcmp(argv[i], "request") == 0) {
+            request = 1;
+        } else if (strncmp(argv[i], "cut-in-erase=", 13u) == 0 && argv[i][13] >= '0' &&
+                   argv[i][13] <= '9' && argv[i][14] == '\0') {
+            const int32_t digit = (int32_t)argv[i][13];
+            cut_in_erase = digit - (int32_t)'0';
+        } else {
+            bench_puts("boot-qemu: unknown argument\n");
+            semihost_exit(2u);
+        }
+    }
     (void)memset(qb_mem, 0xFF, sizeof qb_mem);
     const int32_t h = semihost_open(flash_path, SEMIHOST_MODE_RB);
     if (h >= 0) {
@@ -121,11 +153,17 @@ void board_main(void)
         bench_puts("boot-qemu: cannot open the input or output log\n");
         semihost_exit(1u);
     }
-    check_and_start();
-    bench_puts("boot-qemu: no valid application: the bootloader serves UDS\n");
+    if (request == 0) {
+        check_and_start();
+    }
+    bench_puts(request != 0 ? "boot-qemu: programming requested: the bootloader serves UDS\n"
+                            : "boot-qemu: no valid application: the bootloader serves UDS\n");
     /* the host build's entropy (host_sim/boot_main.c, time 0 at start): the same seeds */
     (void)boot_init(&qb_boot, &qb_flash, 0x7A0u, 0x7A8u, qb_tx, &qb_hal,
                     (uint32_t)hal_time_us(&qb_hal) ^ 0x1234567u);
+    if (request != 0) {
+        boot_programming_requested(&qb_boot, hal_time_us(&qb_hal));
+    }
     for (;;) {
         hal_can_frame_t f;
         const int rc = hal_can_receive(&qb_hal, &f);

@@ -245,10 +245,13 @@ def test_flashed_file_boots_on_qemu_like_the_host(tmp_path):
 BOOT_QEMU = TARGET / "boot-qemu.elf"
 
 
-def boot_qemu(in_log: Path, out_log: Path, flash: Path, timeout: float = 300) -> str:
+def boot_qemu(in_log: Path, out_log: Path, flash: Path, timeout: float = 300,
+              extra=()) -> str:
     """The bootloader's logic on QEMU (boards/qemu/boot_main.c): the tester's log in, its
-    answers out, the application's flash a semihosting file. Its console text."""
+    answers out, the application's flash a semihosting file; extra: more arguments
+    (request, cut-in-erase=N). Its console text."""
     semi = f"enable=on,target=native,arg=boot,arg={in_log},arg={out_log},arg={flash}"
+    semi += "".join(f",arg={x}" for x in extra)
     r = subprocess.run(["qemu-system-arm", "-M", "netduinoplus2", "-nographic", "-monitor",
                         "none", "-serial", "none", "-semihosting-config", semi, "-kernel",
                         str(BOOT_QEMU)], capture_output=True, text=True, timeout=timeout)
@@ -256,16 +259,10 @@ def boot_qemu(in_log: Path, out_log: Path, flash: Path, timeout: float = 300) ->
     return r.stdout + r.stderr
 
 
-def test_qemu_bootloader_answers_as_the_host_and_survives_cuts(tmp_path):
-    """The tester's frames of a flash run against the host bootloader, replayed to the
-    bootloader built for the Cortex-M4F on QEMU: the same answers byte for byte and the
-    same flash file, which the ECU's boot.elf then starts on QEMU. Then the same log cut
-    at every TransferData block boundary (the power goes when the log ends): the next boot
-    finds no valid application each time (checked on QEMU for every 8th cut and the last,
-    by the same code on the host for all)."""
-    _need(BOOT_HOST, APP_BIN, BOOT_ELF, BOOT_QEMU)
-    if shutil.which("qemu-system-arm") is None:
-        pytest.skip("needs qemu-system-arm")
+def record_tester_log(tmp_path: Path) -> tuple:
+    """A flash run of the QEMU application against the host bootloader on an erased flash:
+    (the host's flash file, the bus with the tester's frames and the answers); the tester's
+    frames also in tmp_path/tester.log, to replay to QEMU."""
     host_flash = tmp_path / "host.bin"
     bus = navecu_flash.PipeBus(cmd=[str(BOOT_HOST), "--flash", str(host_flash)])
     client = navecu_uds.client_on_bus(bus, 0x7A0, 0x7A8, 1.0, {}, p2_star_s=5.0)
@@ -274,8 +271,22 @@ def test_qemu_bootloader_answers_as_the_host_and_survives_cuts(tmp_path):
             navecu_pkg.Package(image=APP_BIN.read_bytes()))
     finally:
         navecu_uds.close_client(client)
+    (tmp_path / "tester.log").write_text("".join(bus.sent_lines))
+    return host_flash, bus
+
+
+def test_qemu_bootloader_answers_as_the_host_and_survives_cuts(tmp_path):
+    """The tester's frames of a flash run against the host bootloader, replayed to the
+    bootloader built for the Cortex-M4F on QEMU: the same answers byte for byte and the
+    same flash file, which the ECU's boot.elf then starts on QEMU. Then the same log cut
+    at every TransferData block boundary (the power goes when the log ends): the next boot
+    finds no valid application each time (checked on QEMU and by the same code on the
+    host, for every cut)."""
+    _need(BOOT_HOST, APP_BIN, BOOT_ELF, BOOT_QEMU)
+    if shutil.which("qemu-system-arm") is None:
+        pytest.skip("needs qemu-system-arm")
+    host_flash, bus = record_tester_log(tmp_path)
     tester = bus.sent_lines
-    (tmp_path / "tester.log").write_text("".join(tester))
     qemu_flash = tmp_path / "qemu.bin"
     text = boot_qemu(tmp_path / "tester.log", tmp_path / "qemu.out", qemu_flash)
     assert "no valid application" in text and "application valid: started" in text, text
@@ -306,9 +317,37 @@ def test_qemu_bootloader_answers_as_the_host_and_survives_cuts(tmp_path):
         text = boot_qemu(tmp_path / "cut.log", tmp_path / "cut.out", flash)
         assert "end of the log" in text, text
         assert "no valid application" in power_on(flash), n
-        if n % 8 == 0 or n == len(cuts) - 1:
-            empty = tmp_path / "empty.log"
-            empty.write_text("")
-            assert "no valid application" in boot_qemu(empty, tmp_path / "e.out", flash), n
+        empty = tmp_path / "empty.log"
+        empty.write_text("")
+        assert "no valid application" in boot_qemu(empty, tmp_path / "e.out", flash), n
     print(f"QEMU bootloader: {len(cuts)} power cuts (every block boundary, before the exit "
           "and before the check): never a valid application after one")
+
+
+def test_qemu_power_cut_in_the_middle_of_an_erase(tmp_path):
+    """On QEMU, a valid application being replaced (the bootloader entered on the
+    application's programming request): the power goes half way through the first sector
+    erase, then half way through the second (the other erase done): the next boot, on QEMU
+    and by the host's check, finds no valid application and the bootloader stays; the same
+    tester's complete flash then writes the image (the host's flash file byte for byte) and
+    it starts."""
+    _need(BOOT_HOST, APP_BIN, BOOT_QEMU)
+    if shutil.which("qemu-system-arm") is None:
+        pytest.skip("needs qemu-system-arm")
+    host_flash, _ = record_tester_log(tmp_path)
+    tester, empty = tmp_path / "tester.log", tmp_path / "empty.log"
+    empty.write_text("")
+    for n in (0, 1):
+        flash = tmp_path / f"cut{n}.bin"
+        flash.write_bytes(host_flash.read_bytes())
+        assert "started" in power_on(flash)
+        text = boot_qemu(tester, tmp_path / "cut.out", flash,
+                         extra=("request", f"cut-in-erase={n}"))
+        assert "programming requested" in text and "half way through an erase" in text, text
+        assert "no valid application" in boot_qemu(empty, tmp_path / "e.out", flash), n
+        assert "no valid application" in power_on(flash), n
+        text = boot_qemu(tester, tmp_path / "re.out", flash)
+        assert "application valid: started" in text, text
+        assert flash.read_bytes() == host_flash.read_bytes()
+    print("QEMU bootloader: power cut half way through each of the two sector erases: no "
+          "valid application after it, the complete re-flash starts")
