@@ -241,14 +241,14 @@ test-c: test-plain test-asan
 ISOTP_PEER := $(BUILD)/host/tests/isotp_peer
 $(ISOTP_PEER): $(BUILD)/host/f32/tests/tools/isotp_peer.o $(BUILD)/host/libnavapp.a $(BUILD)/host/libhal_linux.a
 	@mkdir -p $(@D)
-	$(CC) $^ -o $@
+	$(CC) $^ -lm -o $@
 
 # the bootloader's logic as a host program on stdin/stdout candump lines with a file as the
 # application's flash (host_sim/boot_main.c): the peer of tools/navecu_flash.py's tests
 BOOT_HOST := $(BUILD)/host/navecu-boot
 $(BOOT_HOST): $(BUILD)/host/f32/host_sim/boot_main.o $(BUILD)/host/libnavapp.a $(BUILD)/host/libhal_linux.a
 	@mkdir -p $(@D)
-	$(CC) $^ -o $@
+	$(CC) $^ -lm -o $@
 
 # Python tests drive the host executable (plain build) through real CAN logs; the vehicle
 # profiles' tests also run each profile's host executable (the RAV4's on its recorded bus,
@@ -366,6 +366,7 @@ ECU_SRC := $(M4_SRC) $(M4_BOARD_SRC) hal/cortex_m4f/hal_stm32.c boards/stm32f405
 BOOT_LD := boards/stm32f405/boot.ld
 BOOT_ECU_SRC := boards/stm32f405/startup.c boards/stm32f405/boot_main.c $(BOOT_SRC) \
   firmware/diag/isotp.c firmware/diag/uds.c firmware/diag/crc32.c $(HAL_M4_SRC) \
+  firmware/can/e2e.c firmware/can/gen/navecu_can.c \
   hal/cortex_m4f/hal_stm32.c
 QEMU_SRC := $(CORE_SRC) $(APP_SRC) $(call VEH_SRC,$(VEHICLE)) $(M4_BOARD_SRC) hal/common/candump.c hal/common/nvm_flash.c \
             hal/cortex_m4f/semihost.c \
@@ -393,6 +394,7 @@ $(TGT)/boot.elf: $(BOOT_ECU_SRC:%.c=$(TGT)/obj/%.o) $(BOOT_LD) boards/stm32f405/
 # (boards/qemu/boot_main.c; tests/python/test_flash_tool.py)
 BOOT_QEMU_SRC := boards/stm32f405/startup.c boards/qemu/boot_main.c boards/qemu/bench_trace.c \
   $(BOOT_SRC) firmware/diag/isotp.c firmware/diag/uds.c firmware/diag/crc32.c \
+  firmware/can/e2e.c firmware/can/gen/navecu_can.c \
   hal/common/candump.c hal/common/nvm_flash.c hal/cortex_m4f/semihost.c hal/cortex_m4f/hal_semihost.c
 $(TGT)/boot-qemu.elf: $(BOOT_QEMU_SRC:%.c=$(TGT)/obj/%.o) $(BOOT_LD) boards/stm32f405/stm32f405_sections.ld
 	$(ARM_CC) $(M4_LDFLAGS_COMMON) -T $(BOOT_LD) -Wl,-Map=$(TGT)/boot-qemu.map $(filter %.o,$^) -o $@
@@ -447,7 +449,7 @@ M4_UDS_INDIRECT := --indirect isotp_poll=$(M4_UDS):tx_frame \
 BOOT_MAIN := boards/stm32f405/boot_main.c
 BOOT_C := firmware/boot/boot.c
 BOOT_INDIRECT := $(foreach f,$(M4_WAIT_HOOK_CALLERS),--indirect $(f)=$(M4_WAIT_HOOK),$(BOOT_MAIN):kick) \
-  --indirect isotp_poll=$(BOOT_MAIN):tx \
+  --indirect isotp_poll=$(BOOT_MAIN):tx --indirect boot_poll=$(BOOT_MAIN):tx \
   --indirect uds_handle=$(BOOT_C):boot_read_did,$(BOOT_C):boot_write_did,$(BOOT_C):boot_is_writable,$(BOOT_C):boot_start_routine,$(BOOT_C):boot_session_change,$(BOOT_C):boot_service \
   $(foreach f,boot_image_check $(BOOT_C):image_crc.constprop.0 $(BOOT_C):vectors_ok $(BOOT_C):boot_service $(BOOT_C):boot_start_routine,--indirect $(f)=$(BOOT_MAIN):fl_read,$(BOOT_MAIN):fl_write,$(BOOT_MAIN):fl_erase)
 target-budget: deps venv target

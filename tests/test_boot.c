@@ -18,6 +18,8 @@
 #include <cmocka.h>
 
 #include "boot.h"
+#include "e2e.h"
+#include "navecu_can.h"
 #include "crc32.h"
 
 #define FLASH_BASE 0x08000000u
@@ -94,9 +96,20 @@ static int sim_erase(void *ctx, size_t sector)
 
 static const boot_flash_t fl = {&sim, sim_read, sim_write, sim_erase};
 
+/* the bootloader's NAV_Heartbeat frames, kept apart from the UDS answers */
+static hal_can_frame_t hb[8];
+static int n_hb;
+
 static int tx(void *user, const hal_can_frame_t *f)
 {
     (void)user;
+    if (f->id == NAVECU_CAN_NAV_HEARTBEAT_FRAME_ID) {
+        if (n_hb < 8) {
+            hb[n_hb] = *f;
+        }
+        n_hb++;
+        return 0;
+    }
     frames_sent++;
     memcpy(last_frame, f->data, 8u);
     return 0;
@@ -123,6 +136,7 @@ static int setup(void **state)
     sim.outside = 0;
     sim.writes = 0;
     frames_sent = 0;
+    n_hb = 0;
     reboot();
     return 0;
 }
@@ -507,6 +521,31 @@ static void test_programming_request_answered(void **state)
     assert_memory_equal(last_frame, sf, 8u);
 }
 
+/* A bootloader that stays says so on the bus: NAV_Heartbeat (the application's 0x314) with
+ * Mode Bootloader at its first poll and at each whole second of its uptime after it, E2E
+ * counter and CRC as the application's, the sensors all missing; none between seconds. */
+static void test_heartbeat_says_bootloader(void **state)
+{
+    (void)state;
+    const uint64_t t0 = 7000000u;
+    const uint64_t at[] = {t0, t0 + 500000u, t0 + 999999u, t0 + 1000000u, t0 + 2700000u};
+    for (size_t k = 0u; k < sizeof at / sizeof at[0]; k++) {
+        (void)boot_poll(&boot, at[k]);
+    }
+    assert_int_equal(n_hb, 3);
+    for (int k = 0; k < 3; k++) {
+        struct navecu_can_nav_heartbeat_t m;
+        assert_int_equal(hb[k].dlc, 8u);
+        assert_true(e2e_crc_ok(hb[k].id, hb[k].data));
+        assert_int_equal(navecu_can_nav_heartbeat_unpack(&m, hb[k].data, 8u), 0);
+        assert_int_equal(m.mode, NAVECU_CAN_NAV_HEARTBEAT_MODE_BOOTLOADER_CHOICE);
+        assert_int_equal(m.uptime, (uint32_t)k);
+        assert_int_equal(m.nav_counter, (uint8_t)k);
+        assert_int_equal(m.imu_missing + m.gnss_missing + m.wheels_missing, 3);
+    }
+    assert_int_equal(frames_sent, 0); /* no UDS answer without a request */
+}
+
 /* the old image is valid; a new one is flashed with the power cut after every block
  * boundary (and half-way into each block, and in the marker): the next boot finds no
  * valid image, and the bootloader then takes the whole new image */
@@ -569,6 +608,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test_setup_teardown(test_empty_flash_stays, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_heartbeat_says_bootloader, setup, teardown),
         cmocka_unit_test_setup_teardown(test_flash_whole_image_and_start, setup, teardown),
         cmocka_unit_test_setup_teardown(test_security_and_session_required, setup, teardown),
         cmocka_unit_test_setup_teardown(test_erase_range_checked, setup, teardown),

@@ -4,6 +4,9 @@
 #include <string.h>
 
 #include "crc32.h"
+#include "e2e.h"
+#include "navecu_can.h"
+#include "navecu_protocol.h"
 
 const boot_sector_t boot_sectors[BOOT_N_SECTORS] = {
     {BOOT_APP_START, BOOT_APP_SECTOR3_SIZE},
@@ -487,8 +490,42 @@ void boot_frame(boot_t *b, const hal_can_frame_t *f, uint64_t now_us)
     boot_serve(b, now_us);
 }
 
+/* NAV_Heartbeat with Mode Bootloader, once per whole second of the bootloader's uptime */
+static void heartbeat(boot_t *b, uint64_t now_us)
+{
+    if (b->hb_sent == 0u) {
+        b->start_us = now_us;
+    }
+    const uint64_t up = now_us > b->start_us ? (now_us - b->start_us) / 1000000u : 0u;
+    const uint32_t up_s = up > NAVECU_NAV_HEARTBEAT_UPTIME_RAW_MAX
+                              ? (uint32_t)NAVECU_NAV_HEARTBEAT_UPTIME_RAW_MAX
+                              : (uint32_t)up;
+    if (b->hb_sent != 0u && up_s == b->hb_uptime_s) {
+        return;
+    }
+    b->hb_sent = 1u;
+    b->hb_uptime_s = up_s;
+    struct navecu_can_nav_heartbeat_t m;
+    (void)memset(&m, 0, sizeof m);
+    m.mode = NAVECU_CAN_NAV_HEARTBEAT_MODE_BOOTLOADER_CHOICE;
+    m.imu_missing = 1u;
+    m.gnss_missing = 1u;
+    m.wheels_missing = 1u;
+    m.uptime = up_s;
+    m.nav_counter = b->hb_counter;
+    b->hb_counter = e2e_counter_next(b->hb_counter);
+    hal_can_frame_t f;
+    (void)memset(&f, 0, sizeof f);
+    f.id = NAVECU_CAN_NAV_HEARTBEAT_FRAME_ID;
+    f.dlc = 8u;
+    (void)navecu_can_nav_heartbeat_pack(f.data, &m, sizeof f.data);
+    e2e_protect(f.id, f.data);
+    (void)b->tx(b->tx_user, &f);
+}
+
 int boot_poll(boot_t *b, uint64_t now_us)
 {
+    heartbeat(b, now_us);
     boot_serve(b, now_us);
     uds_poll(&b->srv, now_us);
     if (b->srv.session != UDS_SESSION_PROGRAMMING) {

@@ -114,6 +114,10 @@ typedef struct {
     uint8_t dl_state;        /* 0 none, 1 transferring, 2 exited (FF01 may run) */
     uint8_t bsc;             /* the next block sequence counter expected */
     uint8_t reset_due;       /* ECUReset accepted: the board resets once it went out */
+    uint8_t hb_sent;         /* NAV_Heartbeat (Mode Bootloader) sent since the start */
+    uint8_t hb_counter;      /* its E2E alive counter, the next one */
+    uint32_t hb_uptime_s;    /* the uptime of the last one */
+    uint64_t start_us;       /* the first boot_poll: uptime 0 */
     uint8_t req[ISOTP_MAX_LEN];
     uint8_t rsp[BOOT_RSP_LEN];
 } boot_t;
@@ -142,8 +146,10 @@ size_t boot_handle(boot_t *b, const uint8_t *req, size_t len, uint64_t now_us, u
 /* One received CAN frame (others than the request ID are ignored), then the serving. */
 void boot_frame(boot_t *b, const hal_can_frame_t *f, uint64_t now_us);
 
-/* Timers and the serving: call from the main loop. Returns 1 once an accepted ECUReset's
- * response has left (the board resets now), else 0. */
+/* Timers and the serving: call from the main loop. Sends NAV_Heartbeat (0x314, Mode
+ * Bootloader) at the first call and at each whole second after it, so that a bootloader
+ * that stays says so on the bus (the application's heartbeat, docs/can.md). Returns 1 once
+ * an accepted ECUReset's response has left (the board resets now), else 0. */
 int boot_poll(boot_t *b, uint64_t now_us);
 
 #endif /* NAVECU_BOOT_H */

@@ -208,6 +208,7 @@ extern "C" {
 #define NAVECU_CAN_NAV_HEARTBEAT_MODE_FAULT_CHOICE (3u)
 #define NAVECU_CAN_NAV_HEARTBEAT_MODE_DEAD_RECKONING_CHOICE (4u)
 #define NAVECU_CAN_NAV_HEARTBEAT_MODE_GNSS_INS_CHOICE (5u)
+#define NAVECU_CAN_NAV_HEARTBEAT_MODE_BOOTLOADER_CHOICE (6u)
 
 /* Frame Names. */
 #define NAVECU_CAN_IMU_RATE_NAME "IMU_Rate"
@@ -1992,7 +1993,7 @@ struct navecu_can_nav_calibration_t {
  */
 struct navecu_can_nav_heartbeat_t {
     /**
-     * The output mode, as NAV_Status page 0 Mode.
+     * The output mode, as NAV_Status page 0 Mode; 6 Bootloader: sent by the bootloader, which stays (no valid application, a programming request, a power cut during programming) and serves UDS programming on the diagnostic identifiers (docs/can.md, Programming); ImuMissing, GnssMissing and WheelsMissing are then 1 and Uptime counts from the bootloader's start.
      *
      * Range: 0..15 (0..15 -)
      * Scale: 1
