@@ -35,10 +35,11 @@ fi
 if grep -nE '#include <($os_headers)' boards/*/*.[ch]; then
     echo "layers: a board of boards/ includes an OS header (above)"; fail=1
 fi
-# the bootloader's logic (firmware/boot/) sees the diagnostics and the HAL interface only
-boot_ok="hal\\.h|$diag_headers|$(cd firmware/boot && ls *.h | sed 's/\./\\./' | paste -sd'|')"
+# the bootloader's logic (firmware/boot/) sees the diagnostics, the HAL interface and the
+# CAN protocol's E2E and codec (its NAV_Heartbeat) only: not the application or the core
+boot_ok="hal\\.h|e2e\\.h|navecu_can\\.h|navecu_protocol\\.h|$diag_headers|$(cd firmware/boot && ls *.h | sed 's/\./\\./' | paste -sd'|')"
 if grep -nE '#include "' firmware/boot/*.[ch] | grep -vE "#include \"($boot_ok)\""; then
-    echo "layers: the bootloader's logic includes a project header other than diag's and hal.h (above)"; fail=1
+    echo "layers: the bootloader's logic includes a project header other than diag's, the CAN protocol's and hal.h (above)"; fail=1
 fi
 [ $fail -eq 0 ] && echo "layers: firmware/, hal/ and boards/ respect docs/architecture.md"
 exit $fail
