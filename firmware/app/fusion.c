@@ -405,13 +405,24 @@ fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_pr
     ep_s = nav_clamp(ep_s, APP_GNSS_EPOCH_MIN_S, corr_s);
     const nav_real_t r_scale = corr_s / ep_s;
     /* The correlated part is the filter's state when it spans APP_GNSS_STATE_MIN_FIXES of
-     * the receiver's fix intervals (its shortest: whatever the gap before this fix).
+     * the receiver's fix intervals (its usual one, whatever the gap before this fix).
      * Shorter, consecutive fixes are nearly independent and the variance inflation is
      * the model (the update without the state). */
-    if (!(fu->gnss_ep_min_s > NAV_C(0.0)) || ep_s < fu->gnss_ep_min_s) {
-        fu->gnss_ep_min_s = ep_s; /* the receiver's rate: its shortest fix interval */
+    /* the receiver's usual fix interval, from the first: a shorter interval takes it half
+     * way (from the first, which counts from the boot, to the rate in a few fixes; a
+     * single early epoch halves the distance once), a longer one up to 2.5 times it an
+     * eighth of the way back (one missed epoch counts a little; a gap or an outage is not
+     * the rate) */
+    const nav_real_t ep_raw_s =
+        dt_fix_s > APP_GNSS_EPOCH_MIN_S ? dt_fix_s : APP_GNSS_EPOCH_MIN_S;
+    if (!(fu->gnss_ep_typ_s > NAV_C(0.0))) {
+        fu->gnss_ep_typ_s = ep_raw_s;
+    } else if (ep_raw_s < fu->gnss_ep_typ_s) {
+        fu->gnss_ep_typ_s += (ep_raw_s - fu->gnss_ep_typ_s) * NAV_C(0.5);
+    } else if (ep_raw_s < NAV_C(2.5) * fu->gnss_ep_typ_s) {
+        fu->gnss_ep_typ_s += (ep_raw_s - fu->gnss_ep_typ_s) * NAV_C(0.125);
     }
-    const int as_state = cfg->gnss_corr_s >= APP_GNSS_STATE_MIN_FIXES * fu->gnss_ep_min_s;
+    const int as_state = cfg->gnss_corr_s >= APP_GNSS_STATE_MIN_FIXES * fu->gnss_ep_typ_s;
     const nav_real_t shw = as_state ? cfg->gnss_white_ratio * sh : sh * nav_sqrt(r_scale);
     const nav_real_t shc =
         sh * nav_sqrt(NAV_C(1.0) - cfg->gnss_white_ratio * cfg->gnss_white_ratio);
