@@ -417,13 +417,16 @@ fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_pr
         dt_fix_s > APP_GNSS_EPOCH_MIN_S ? dt_fix_s : APP_GNSS_EPOCH_MIN_S;
     if (!(fu->gnss_ep_typ_s > NAV_C(0.0))) {
         fu->gnss_ep_typ_s = ep_raw_s;
-    } else if (ep_raw_s < fu->gnss_ep_typ_s) {
-        fu->gnss_ep_typ_s += (ep_raw_s - fu->gnss_ep_typ_s) * NAV_C(0.5);
-    } else if (ep_raw_s < NAV_C(2.5) * fu->gnss_ep_typ_s) {
-        fu->gnss_ep_typ_s += (ep_raw_s - fu->gnss_ep_typ_s) * NAV_C(0.125);
+    } else {
+        const nav_real_t w = ep_raw_s < fu->gnss_ep_typ_s                   ? NAV_C(0.5)
+                             : ep_raw_s < NAV_C(2.5) * fu->gnss_ep_typ_s ? NAV_C(0.125)
+                                                                         : NAV_C(0.0);
+        fu->gnss_ep_typ_s += (ep_raw_s - fu->gnss_ep_typ_s) * w;
     }
-    const int as_state = cfg->gnss_corr_s >= APP_GNSS_STATE_MIN_FIXES * fu->gnss_ep_typ_s;
-    const nav_real_t shw = as_state ? cfg->gnss_white_ratio * sh : sh * nav_sqrt(r_scale);
+    const uint8_t as_state =
+        cfg->gnss_corr_s >= APP_GNSS_STATE_MIN_FIXES * fu->gnss_ep_typ_s ? 1u : 0u;
+    const nav_real_t shw =
+        as_state != 0u ? cfg->gnss_white_ratio * sh : sh * nav_sqrt(r_scale);
     const nav_real_t shc =
         sh * nav_sqrt(NAV_C(1.0) - cfg->gnss_white_ratio * cfg->gnss_white_ratio);
     if (!fu->on) {
@@ -433,12 +436,15 @@ fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_pr
         ekf_gnss_bias_start(&fu->ekf, shc);
         fu->gnss_sc_prev_m = shc;
         fu->gnss_bias_sample = n;
-    } else if (as_state) {
-        ekf_gnss_bias_step(&fu->ekf,
-                           (nav_real_t)(n - fu->gnss_bias_sample) / (nav_real_t)cfg->imu_rate_hz,
-                           cfg->gnss_corr_s, shc, fu->gnss_sc_prev_m);
-        fu->gnss_sc_prev_m = shc;
-        fu->gnss_bias_sample = n;
+    } else {
+        if (as_state != 0u) {
+            ekf_gnss_bias_step(&fu->ekf,
+                               (nav_real_t)(n - fu->gnss_bias_sample) /
+                                   (nav_real_t)cfg->imu_rate_hz,
+                               cfg->gnss_corr_s, shc, fu->gnss_sc_prev_m);
+            fu->gnss_sc_prev_m = shc;
+            fu->gnss_bias_sample = n;
+        }
     }
     /* The fix's heading information is its course, sigma ss / speed: below
      * APP_GNSS_HEADING_SPEED_SIGMAS speed sigmas (a course sigma above 1/that rad) it is

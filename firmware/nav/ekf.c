@@ -373,11 +373,12 @@ void ekf_reopen(ekf_t *k, nav_real_t pos_sigma_m, nav_real_t vel_sigma_mps)
 /* exp(-x) for x >= 0: 1 / (1 + y + y^2/2 + y^3/6 + y^4/24) for y = x / 2^m <= 0.5,
  * squared m times (relative error below 2^m y^5 / 120: 3e-6 at x = 0.25, a fix interval
  * of a quarter of the correlation time; 1e-3 at x = 10); 0 from x = 40 (below 5e-18) */
-static nav_real_t exp_neg(nav_real_t x)
+static nav_real_t exp_neg(nav_real_t x_in)
 {
-    if (!(x < NAV_C(40.0))) {
+    if (!(x_in < NAV_C(40.0))) {
         return NAV_C(0.0);
     }
+    nav_real_t x = x_in;
     int m = 0;
     while (x > NAV_C(0.5) && m < 7) {
         x *= NAV_C(0.5);
