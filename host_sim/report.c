@@ -134,6 +134,9 @@ void host_summary(FILE *out, const app_t *app, const hal_t *hal, unsigned long f
                 (double)ekf_state_sigma(ekf, EKF_K), (double)ekf->mount_yaw_rad / RAD_PER_DEG,
                 (double)ekf_state_sigma(ekf, EKF_MY) / RAD_PER_DEG,
                 (double)ekf->mount_pitch_rad / RAD_PER_DEG);
+        fprintf(out, "navecu: GNSS correlated error: E %.2f N %.2f m (sigma %.2f m)\n",
+                (double)ekf->gnss_bias_m[0], (double)ekf->gnss_bias_m[1],
+                (double)ekf_state_sigma(ekf, EKF_GB));
     }
     fprintf(out,
             "navecu: calibration: %s, %u adopted, dH %.4f deg, mu %.5f, stored %u; "

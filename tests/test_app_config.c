@@ -36,6 +36,7 @@ static void test_defaults(void **state)
     assert_near(c.accel_bias_rw_mps2_rts, 0.02 * sqrt(2.0 / 300.0), 1e-8);
     assert_near(c.gnss_latency_s, 0.1, 1e-8);
     assert_near(c.gnss_corr_s, 20.0, 0.0);
+    assert_near(c.gnss_white_ratio, 0.33, 1e-6);
     for (int i = 0; i < 3; i++) {
         assert_near(c.gnss_lever_b_m[i], 0.0, 0.0);
         assert_near(c.odo_lever_b_m[i], 0.0, 0.0);
@@ -95,6 +96,10 @@ typedef struct {
     X(corr_600, c->gnss_corr_s = 600.0f, 1) \
     X(corr_601, c->gnss_corr_s = 601.0f, 0) \
     X(corr_nan, c->gnss_corr_s = NAN, 0) \
+    X(white_1, c->gnss_white_ratio = 1.0f, 1) \
+    X(white_005, c->gnss_white_ratio = 0.05f, 1) \
+    X(white_0, c->gnss_white_ratio = 0.0f, 0) \
+    X(white_nan, c->gnss_white_ratio = NAN, 0) \
     X(lever_10, c->gnss_lever_b_m[2] = -10.0f, 1) \
     X(lever_1001, c->gnss_lever_b_m[1] = 10.01f, 0) \
     X(odo_lever_nan, c->odo_lever_b_m[0] = NAN, 0) \

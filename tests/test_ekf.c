@@ -252,7 +252,8 @@ static void test_gnss_position_update(void **state)
     sd[0] = sd[1] = sd[2] = 10.0;
     filter_with(&f, sd);
     assert_int_equal(ekf_gnss_position(&f, &s, &s.pos, &ant, lever, NAV_C(0.1), NAV_C(0.1),
-                                       NAV_C(5.0), NAV_C(1.0), 1), 3);
+                                       NAV_C(0.1), NAV_C(5.0), NAV_C(1.0), 1, 0),
+                     3);
     assert_near(f.x[EKF_DR + 0], 3.0, 0.03);
     assert_near(f.x[EKF_DR + 1], -2.0, 0.03);
     assert_near(f.x[EKF_DR + 2], 1.0, 0.03);
@@ -268,10 +269,72 @@ static void test_gnss_position_update(void **state)
     const uint32_t gated = f.n_gated;
     /* the horizontal pair is refused; the height, right, is gated on its own and taken */
     assert_int_equal(ekf_gnss_position(&f, &s, &s.pos, &far, lever, NAV_C(0.1), NAV_C(0.1),
-                                       NAV_C(5.0), NAV_C(1.0), 1), 1);
+                                       NAV_C(0.1), NAV_C(5.0), NAV_C(1.0), 1, 0),
+                     1);
     assert_int_equal(f.n_gated, gated + 1u);
     assert_near(f.x[EKF_DR + 0], 0.0, 0.01);
     assert_near(f.x[EKF_DR + 1], 0.0, 0.01);
+}
+
+/* The receiver's correlated error as a state (ekf_gnss_bias_start, ekf_gnss_bias_step):
+ * a standing navigator at the truth, a receiver declared 0.3 m white and 2.0 m correlated
+ * (correlation time 120 s), 600 fixes at 5 Hz (2 min, one correlation time) all 3 m east
+ * of the truth. The offset is split between the navigator's position and the receiver's
+ * estimated error gnss_bias_m (the two add up to the 3 m: the fix less its estimated
+ * error is where the navigator goes), the position sigma stays near the correlated part
+ * (the white model without the state would average 600 fixes to 0.3 / sqrt(600) = 0.01
+ * m) and covers the navigator's error within 2 sigma; over a gap of 10 correlation times
+ * the state forgets: its estimate decays by exp(-10) and its variance returns to the
+ * stationary 2.0^2. */
+static void test_gnss_correlated_error_state(void **state)
+{
+    (void)state;
+    const double v[3] = {0, 0, 0};
+    sins_t s;
+    nav_at(&s, 0.0, 0.0, 40.0 * DEG, v);
+    geo_pos_t fix = s.pos;
+    assert_int_equal(geo_pos_add(&fix, NAV_C(0.0), (nav_real_t)(3.0 / (6388838.0 * cos(LAT0))),
+                                 NAV_C(0.0)),
+                     NAV_OK);
+    ekf_t f;
+    double sd[EKF_N];
+    for (int i = 0; i < EKF_N; i++) {
+        sd[i] = 1e-9;
+    }
+    const double sw = 0.3, sc = 2.0, sh = sqrt(sw * sw + sc * sc);
+    sd[0] = sd[1] = sd[2] = sh;
+    filter_with(&f, sd);
+    ekf_gnss_bias_start(&f, (nav_real_t)sc);
+    assert_near(f.P[EKF_GB][EKF_GB], sc * sc, 1e-4);
+    assert_near(f.P[EKF_DR][EKF_GB], -sc * sc, 1e-4); /* dr = -db + white */
+    const nav_real_t lever[3] = {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)};
+    for (int i = 0; i < 600; i++) {
+        ekf_gnss_bias_step(&f, NAV_C(0.2), NAV_C(120.0), (nav_real_t)sc, (nav_real_t)sc);
+        assert_int_equal(ekf_gnss_position(&f, &s, &s.pos, &fix, lever, (nav_real_t)sh,
+                                           (nav_real_t)sw, NAV_C(1.0), NAV_C(5.0), NAV_C(1.0),
+                                           0, 1),
+                         2);
+        assert_int_equal(ekf_feedback(&f, &s), NAV_OK);
+    }
+    nav_real_t e, n;
+    dr_local_m(&fix, &s.pos, &e, &n); /* the navigator against the fix */
+    const double east = (double)e + 3.0; /* the navigator against the truth */
+    const double sig_e = (double)ekf_state_sigma(&f, EKF_DR);
+    /* the offset split between the position and the receiver's error: none of it averaged
+     * away as if it were white */
+    assert_near((double)f.gnss_bias_m[0] + east, 3.0, 0.02);
+    assert_true(sig_e > 0.6 * sc && sig_e < sc);
+    assert_true(fabs(east) < 2.0 * sig_e);
+    /* a gap of 10 correlation times */
+    const double b0 = (double)f.gnss_bias_m[0];
+    ekf_gnss_bias_step(&f, NAV_C(1200.0), NAV_C(120.0), (nav_real_t)sc, (nav_real_t)sc);
+    assert_near((double)f.gnss_bias_m[0], b0 * exp(-10.0), fabs(b0) * exp(-10.0) * 2e-3 + 1e-7);
+    assert_near(f.P[EKF_GB][EKF_GB], sc * sc, 0.01);
+    /* a declared accuracy that grows adds its variance; one that shrinks bounds it */
+    ekf_gnss_bias_step(&f, NAV_C(0.0), NAV_C(120.0), NAV_C(3.0), (nav_real_t)sc);
+    assert_near(f.P[EKF_GB][EKF_GB], 9.0, 0.01);
+    ekf_gnss_bias_step(&f, NAV_C(0.0), NAV_C(120.0), NAV_C(1.0), NAV_C(3.0));
+    assert_near(f.P[EKF_GB][EKF_GB], 1.0, 1e-4);
 }
 
 /* The heading error shows in the lever arm: an antenna 2 m ahead, the heading 2 deg off,
@@ -297,7 +360,7 @@ static void test_lever_arm_observes_heading(void **state)
     filter_with(&f, sd);
     const nav_real_t lever[3] = {NAV_C(0.0), NAV_C(2.0), NAV_C(0.0)};
     assert_true(ekf_gnss_position(&f, &s, &s.pos, &ant, lever, NAV_C(0.001), NAV_C(0.001),
-                                  NAV_C(0.0), NAV_C(1.0), 1) == 3);
+                                  NAV_C(0.001), NAV_C(0.0), NAV_C(1.0), 1, 0) == 3);
     assert_near(f.x[EKF_PSI + 2], 2.0 * DEG, 0.05 * DEG);
 }
 
@@ -476,6 +539,7 @@ int main(void)
         cmocka_unit_test(test_propagation_matches_sins),
         cmocka_unit_test(test_gnss_position_update),
         cmocka_unit_test(test_lever_arm_observes_heading),
+        cmocka_unit_test(test_gnss_correlated_error_state),
         cmocka_unit_test(test_odometer_scale_and_mounting),
         cmocka_unit_test(test_odometer_lever_arm_in_a_turn),
         cmocka_unit_test(test_standstill_updates),

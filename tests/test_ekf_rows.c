@@ -72,7 +72,8 @@
 
 static const char *const STATE_NAME[EKF_N] = {
     "dr_E", "dr_N", "dr_U", "dv_E", "dv_N", "dv_U", "psi_E", "psi_N", "psi_U",
-    "bg_x", "bg_y", "bg_z", "ba_x", "ba_y", "ba_z", "k", "mount_pitch", "mount_yaw"};
+    "bg_x", "bg_y", "bg_z", "ba_x", "ba_y", "ba_z", "k", "mount_pitch", "mount_yaw",
+    "gnss_bias_E", "gnss_bias_N"};
 
 /* A true state as the filter sees it at x = 0: the navigator, the estimates (k and the
  * mounting, in the ekf_t), the body rate the odometer rows get. */
@@ -317,8 +318,12 @@ static double perturb(const state_t *truth, int j, double d, state_t *comp)
         e = &comp->kf.k;
     } else if (j == EKF_MP) {
         e = &comp->kf.mount_pitch_rad;
-    } else {
+    } else if (j == EKF_MY) {
         e = &comp->kf.mount_yaw_rad;
+    } else {
+        /* the receiver's correlated error: the row builders leave it to ekf_gnss_position
+         * (its row is 1 on the state, the estimate subtracted from the fix) */
+        e = &comp->kf.gnss_bias_m[j - EKF_GB];
     }
     const double before = (double)*e;
     *e = (nav_real_t)(before + d);
@@ -331,7 +336,7 @@ static double step_of(int j)
         STEP_DR_M,    STEP_DR_M,    STEP_DR_M,    STEP_DV_MPS,  STEP_DV_MPS,  STEP_DV_MPS,
         STEP_PSI_RAD, STEP_PSI_RAD, STEP_PSI_RAD, STEP_BG_RPS,  STEP_BG_RPS,  STEP_BG_RPS,
         STEP_BA_MPS2, STEP_BA_MPS2, STEP_BA_MPS2, STEP_K,       STEP_MOUNT_RAD,
-        STEP_MOUNT_RAD};
+        STEP_MOUNT_RAD, STEP_DR_M,    STEP_DR_M};
     return step[j];
 }
 

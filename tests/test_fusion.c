@@ -486,6 +486,53 @@ static void test_outlier_fix_refused(void **state)
     assert_int_equal(fu.on, 1);
 }
 
+/* n fixes at P0 every `every` samples (10 ms each) from the tow after start_filter's;
+ * one of them (k == early) only 5 samples after the one before */
+static void fixes_at_rest(int n, int every, int early)
+{
+    const nav_real_t v0[3] = {0.0f, 0.0f, 0.0f};
+    uint32_t tow = 100000u;
+    for (int k = 0; k < n; k++) {
+        const int m = k == early ? 5 : every;
+        for (int j = 0; j < m; j++) {
+            (void)rest_sample();
+        }
+        tow += (uint32_t)(m * 10);
+        gnss_fix_t f = fix_at(450000000, 100000000, v0);
+        f.tow_ms = tow;
+        int adopt;
+        assert_int_equal(fusion_gnss(&fu, &ctx, &PRIOR, &f, &adopt), FUSION_GO_ON);
+    }
+}
+
+/* The receiver's correlated error is a filter state when its correlation time spans 10
+ * of its fix intervals (docs/kalman.md). GIVEN 1 Hz fixes and a correlation time of 4 s,
+ * one epoch 50 ms after the one before THEN the usual interval comes back to about 1 s
+ * (the early epoch halved it once) and the inflation is the model. GIVEN 50 fixes at
+ * 5 Hz of a standing car THEN with a 20 s correlation time (the state) the position sigma
+ * stays near the correlated part (2 m HorizAccuracy: 1.33 m per axis), with 1 s (the
+ * inflation, 5 fixes per correlation time) it falls as their average does. */
+static void test_correlated_error_model_by_fix_rate(void **state)
+{
+    assert_int_equal(setup(state), 0);
+    cfg.gnss_corr_s = 4.0f;
+    start_filter();
+    fixes_at_rest(20, 100, 10);
+    assert_true(fu.gnss_ep_typ_s > 0.8f && fu.gnss_ep_typ_s < 1.1f);
+    assert_true(cfg.gnss_corr_s < APP_GNSS_STATE_MIN_FIXES * fu.gnss_ep_typ_s);
+    nav_real_t sig[2];
+    for (int as_state = 0; as_state < 2; as_state++) {
+        assert_int_equal(setup(state), 0);
+        cfg.gnss_corr_s = as_state ? 20.0f : 1.0f;
+        start_filter();
+        fixes_at_rest(50, 20, -1);
+        assert_true(fu.gnss_ep_typ_s > 0.19f && fu.gnss_ep_typ_s < 0.3f);
+        sig[as_state] = ekf_state_sigma(&fu.ekf, EKF_DR);
+    }
+    assert_true(sig[1] > 0.7f);
+    assert_true(sig[0] < 0.6f);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -504,6 +551,7 @@ int main(void)
         cmocka_unit_test_setup(test_fix_accuracy_weighs_the_start, setup),
         cmocka_unit_test_setup(test_note_course_and_stop, setup),
         cmocka_unit_test_setup(test_outlier_fix_refused, setup),
+        cmocka_unit_test_setup(test_correlated_error_model_by_fix_rate, setup),
     };
     return cmocka_run_group_tests_name("fusion", tests, NULL, NULL);
 }

@@ -66,6 +66,7 @@ typedef struct {
                                      arrival (more when TimeOfWeek shows a late epoch) */
     nav_real_t gnss_lever_b_m[3]; /* GNSS antenna from the IMU, body axes, m */
     nav_real_t gnss_corr_s;       /* correlation time of the receiver's position errors */
+    nav_real_t gnss_white_ratio;  /* white part of its declared accuracy (sigma ratio) */
     gnss_acc_source_t gnss_accuracy; /* reported, or declared by the next three */
     nav_real_t gnss_hacc_m;       /* declared horizontal accuracy, 68 % radius */
     nav_real_t gnss_vacc_m;       /* declared vertical accuracy, 1 sigma */

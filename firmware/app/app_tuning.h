@@ -107,6 +107,13 @@
 #define APP_GNSS_SACC_MAX_MPS NAV_C(2.0)
 #define APP_GNSS_VUP_SIGMA_RATIO NAV_C(1.5) /* vertical velocity sigma / horizontal */
 #define APP_GNSS_EPOCH_MIN_S NAV_C(0.05)    /* shortest fix interval in the correlation model */
+/* The receiver's correlated horizontal error is a state of the filter (fusion.c) when its
+ * correlation time spans this many fix intervals: consecutive errors then agree within
+ * exp(-1/10) (90 %), and the variance inflation, which treats the fixes as independent
+ * and spreads one correlation time's information over them, no longer describes how the
+ * error moves (the state does, and keeps the part no number of fixes averages away).
+ * Below it the fixes are nearly independent and the inflation is kept. */
+#define APP_GNSS_STATE_MIN_FIXES NAV_C(10.0)
 /* GNSS time alignment (gnss_time.h): an epoch later than the running minimum offset by
  * more than 0.5 s three times in a row, earlier by more than 1 s or later by more than
  * 10 s is a receiver clock jump; the minimum may creep by 50 ppm of elapsed time */

@@ -394,18 +394,61 @@ fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_pr
                                  APP_GNSS_SIGMA_MAX_M);
     const nav_real_t sv = nav_clamp(fix->vacc_m, APP_GNSS_SIGMA_V_MIN_M, APP_GNSS_SIGMA_MAX_M);
     /* A receiver's position errors are correlated over tens of seconds (multipath,
-     * atmosphere, orbits), the filter's noise model is white: N fixes within the
-     * correlation time carry the information of about one. Each fix's variance is
-     * multiplied by (correlation time / fix interval), so the filter neither averages the
-     * errors away on paper nor reports a 1-sigma far below the receiver's (docs/kalman.md,
-     * honest accuracy). */
-    nav_real_t ep_s = (nav_real_t)(n - fu->prev_fix_sample) / (nav_real_t)cfg->imu_rate_hz;
+     * atmosphere, orbits), and N fixes within the correlation time carry the information
+     * of about one. Horizontally the correlated part is a first-order Gauss-Markov state
+     * of the filter (correlation time gnss_corr_s, the declared per-axis accuracy split
+     * into a white part (gnss_white_ratio), the update's noise, and the correlated rest, the state's
+     * stationary sigma: ekf_gnss_bias_step); the filter's position sigma keeps the part no
+     * number of fixes averages away. The height's variance is multiplied by (correlation
+     * time / fix interval) instead (docs/kalman.md, honest accuracy). */
+    const nav_real_t dt_fix_s =
+        (nav_real_t)(n - fu->prev_fix_sample) / (nav_real_t)cfg->imu_rate_hz;
+    nav_real_t ep_s = dt_fix_s;
     fu->prev_fix_sample = n;
     const nav_real_t corr_s = cfg->gnss_corr_s > ep_s ? cfg->gnss_corr_s : ep_s;
     ep_s = nav_clamp(ep_s, APP_GNSS_EPOCH_MIN_S, corr_s);
     const nav_real_t r_scale = corr_s / ep_s;
-    if (!fu->on && !start_at_fix(fu, c, prior, fix, d, sh, &then)) {
-        return FUSION_GO_ON;
+    /* The correlated part is the filter's state when it spans APP_GNSS_STATE_MIN_FIXES of
+     * the receiver's fix intervals (its usual one, whatever the gap before this fix).
+     * Shorter, consecutive fixes are nearly independent and the variance inflation is
+     * the model (the update without the state). */
+    /* the receiver's usual fix interval, from the first: a shorter interval takes it half
+     * way (from the first, which counts from the boot, to the rate in a few fixes; a
+     * single early epoch halves the distance once), a longer one up to 2.5 times it an
+     * eighth of the way back (one missed epoch counts a little; a gap or an outage is not
+     * the rate) */
+    const nav_real_t ep_raw_s =
+        dt_fix_s > APP_GNSS_EPOCH_MIN_S ? dt_fix_s : APP_GNSS_EPOCH_MIN_S;
+    if (!(fu->gnss_ep_typ_s > NAV_C(0.0))) {
+        fu->gnss_ep_typ_s = ep_raw_s;
+    } else {
+        const nav_real_t w = ep_raw_s < fu->gnss_ep_typ_s                   ? NAV_C(0.5)
+                             : ep_raw_s < NAV_C(2.5) * fu->gnss_ep_typ_s ? NAV_C(0.125)
+                                                                         : NAV_C(0.0);
+        fu->gnss_ep_typ_s += (ep_raw_s - fu->gnss_ep_typ_s) * w;
+    }
+    const uint8_t as_state =
+        cfg->gnss_corr_s >= APP_GNSS_STATE_MIN_FIXES * fu->gnss_ep_typ_s ? 1u : 0u;
+    const nav_real_t shw =
+        as_state != 0u ? cfg->gnss_white_ratio * sh : sh * nav_sqrt(r_scale);
+    const nav_real_t shc =
+        sh * nav_sqrt(NAV_C(1.0) - cfg->gnss_white_ratio * cfg->gnss_white_ratio);
+    if (!fu->on) {
+        if (!start_at_fix(fu, c, prior, fix, d, sh, &then)) {
+            return FUSION_GO_ON;
+        }
+        ekf_gnss_bias_start(&fu->ekf, shc);
+        fu->gnss_sc_prev_m = shc;
+        fu->gnss_bias_sample = n;
+    } else {
+        if (as_state != 0u) {
+            ekf_gnss_bias_step(&fu->ekf,
+                               (nav_real_t)(n - fu->gnss_bias_sample) /
+                                   (nav_real_t)cfg->imu_rate_hz,
+                               cfg->gnss_corr_s, shc, fu->gnss_sc_prev_m);
+            fu->gnss_sc_prev_m = shc;
+            fu->gnss_bias_sample = n;
+        }
     }
     /* The fix's heading information is its course, sigma ss / speed: below
      * APP_GNSS_HEADING_SPEED_SIGMAS speed sigmas (a course sigma above 1/that rad) it is
@@ -418,7 +461,8 @@ fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_pr
     const nav_real_t v_min = APP_GNSS_HEADING_SPEED_SIGMAS * ss;
     fu->ekf.hold_heading = v2 < v_min * v_min ? 1u : 0u;
     const int rp = ekf_gnss_position(&fu->ekf, c->nav, &then, &fix->pos, cfg->gnss_lever_b_m,
-                                     sh, sv, APP_GNSS_GATE_SIGMA, r_scale, fix->has_h);
+                                     sh, shw, sv, APP_GNSS_GATE_SIGMA, r_scale, fix->has_h,
+                                     as_state);
     int rv = 1;
     if (fix->has_vel) {
         const nav_real_t *vthen = gnss_time_velocity_then(c->time, &when);

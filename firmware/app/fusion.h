@@ -49,6 +49,9 @@ typedef struct {
     uint8_t gated_run;          /* consecutive fixes refused by the gate */
     uint8_t reopen_run;         /* covariance reopens since the last fix taken */
     uint64_t prev_fix_sample;   /* sample of the previous fix offered (fix interval) */
+    nav_real_t gnss_sc_prev_m;  /* the correlated part of the previous fix's accuracy */
+    uint64_t gnss_bias_sample;  /* sample of the last step of the correlated error state */
+    nav_real_t gnss_ep_typ_s;   /* the receiver's usual fix interval (0: none yet) */
     uint32_t nonfinite_seen, negative_seen; /* ekf counters at the last check */
     uint8_t state_lost;         /* the filter's state was found not finite at a feedback */
     nav_real_t course_rad, speed_mps; /* of the latest GNSS epoch with a velocity */

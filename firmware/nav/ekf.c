@@ -20,6 +20,7 @@ ekf_config_t ekf_default_config(void)
     c.ba_mps2 = NAV_C(1e-3);
     c.k = NAV_C(0.02);
     c.mount_rad = NAV_C(1.0) * DEG_RAD;
+    c.gnss_bias_m = NAV_C(1.0);
     c.arw_rad_rts = NAV_C(8.73e-7);   /* 0.003 deg/sqrt(h) */
     c.vrw_mps_rts = NAV_C(1e-4);
     c.bg_rw_rps_rts = NAV_C(1e-9);
@@ -35,7 +36,7 @@ static int cfg_ok(const ekf_config_t *c)
     const nav_real_t v[] = {c->pos_m, c->vel_mps, c->tilt_rad, c->heading_rad, c->bg_rps,
                             c->ba_mps2, c->k, c->mount_rad, c->arw_rad_rts, c->vrw_mps_rts,
                             c->bg_rw_rps_rts, c->ba_rw_mps2_rts, c->k_rw_rts,
-                            c->mount_rw_rad_rts, c->var_floor};
+                            c->mount_rw_rad_rts, c->var_floor, c->gnss_bias_m};
     for (size_t i = 0u; i < sizeof v / sizeof v[0]; i++) {
         if (!(v[i] > NAV_C(0.0)) || !nav_isfinite(v[i])) {
             return 0;
@@ -56,7 +57,7 @@ static void reset_cov(ekf_t *k, nav_real_t heading_sigma_rad)
                                   c->vel_mps,  c->vel_mps,  c->tilt_rad, c->tilt_rad,
                                   heading_sigma_rad, c->bg_rps, c->bg_rps, c->bg_rps,
                                   c->ba_mps2,  c->ba_mps2,  c->ba_mps2,  c->k,
-                                  c->mount_rad, c->mount_rad};
+                                  c->mount_rad, c->mount_rad, c->gnss_bias_m, c->gnss_bias_m};
     for (int i = 0; i < EKF_N; i++) {
         k->P[i][i] = sd[i] * sd[i];
     }
@@ -78,6 +79,8 @@ int ekf_init(ekf_t *k, const ekf_config_t *cfg, nav_real_t heading_sigma_rad)
     k->k = NAV_C(0.0);
     k->mount_pitch_rad = NAV_C(0.0);
     k->mount_yaw_rad = NAV_C(0.0);
+    k->gnss_bias_m[0] = NAV_C(0.0);
+    k->gnss_bias_m[1] = NAV_C(0.0);
     k->n_updates = 0u;
     k->n_gated = 0u;
     k->n_health_fixes = 0u;
@@ -346,6 +349,8 @@ int ekf_feedback(ekf_t *k, sins_t *s)
     k->k -= x[EKF_K];
     k->mount_pitch_rad -= x[EKF_MP];
     k->mount_yaw_rad -= x[EKF_MY];
+    k->gnss_bias_m[0] -= x[EKF_GB];
+    k->gnss_bias_m[1] -= x[EKF_GB + 1];
     for (int i = 0; i < EKF_N; i++) {
         k->x[i] = NAV_C(0.0);
     }
@@ -363,6 +368,85 @@ void ekf_reopen(ekf_t *k, nav_real_t pos_sigma_m, nav_real_t vel_sigma_mps)
         k->P[i][i] = sd * sd;
     }
     k->n_reopened++;
+}
+
+/* exp(-x) for x >= 0: 1 / (1 + y + y^2/2 + y^3/6 + y^4/24) for y = x / 2^m <= 0.5,
+ * squared m times (relative error below 2^m y^5 / 120: 3e-6 at x = 0.25, a fix interval
+ * of a quarter of the correlation time; 1e-3 at x = 10); 0 from x = 40 (below 5e-18) */
+static nav_real_t exp_neg(nav_real_t x_in)
+{
+    if (!(x_in < NAV_C(40.0))) {
+        return NAV_C(0.0);
+    }
+    nav_real_t x = x_in;
+    int m = 0;
+    while (x > NAV_C(0.5) && m < 7) {
+        x *= NAV_C(0.5);
+        m++;
+    }
+    nav_real_t e = NAV_C(1.0) /
+                   (NAV_C(1.0) +
+                    x * (NAV_C(1.0) +
+                         x * (NAV_C(0.5) + x * (NAV_C(1.0) / NAV_C(6.0) + x * (NAV_C(1.0) / NAV_C(24.0))))));
+    for (int i = 0; i < m; i++) {
+        e *= e;
+    }
+    return e;
+}
+
+/* multiply row and column i of P by a (the diagonal by a^2) */
+static void scale_state(ekf_t *k, int i, nav_real_t a)
+{
+    for (int j = 0; j < EKF_N; j++) {
+        k->P[i][j] *= a;
+        k->P[j][i] *= a;
+    }
+}
+
+void ekf_gnss_bias_step(ekf_t *k, nav_real_t dt_s, nav_real_t tau_s, nav_real_t sigma_c_m,
+                        nav_real_t prev_sigma_c_m)
+{
+    const nav_real_t phi =
+        tau_s > NAV_C(0.0) && dt_s >= NAV_C(0.0) ? exp_neg(dt_s / tau_s) : NAV_C(0.0);
+    const nav_real_t s2 = sigma_c_m * sigma_c_m;
+    const nav_real_t grown = sigma_c_m > prev_sigma_c_m
+                                 ? s2 - prev_sigma_c_m * prev_sigma_c_m
+                                 : NAV_C(0.0);
+    for (int a = 0; a < 2; a++) {
+        const int i = EKF_GB + a;
+        k->gnss_bias_m[a] *= phi;
+        scale_state(k, i, phi);
+        k->P[i][i] += s2 * (NAV_C(1.0) - phi * phi) + grown;
+        if (k->P[i][i] > s2) {
+            /* P_ii scaled to s2 with its row and column by sqrt(s2 / P_ii): the
+             * correlations stay */
+            const nav_real_t a_s = nav_sqrt(s2 / k->P[i][i]);
+            scale_state(k, i, a_s);
+            k->P[i][i] = s2;
+        }
+        if (!(k->P[i][i] >= k->cfg.var_floor)) {
+            k->P[i][i] = k->cfg.var_floor;
+        }
+    }
+}
+
+void ekf_gnss_bias_start(ekf_t *k, nav_real_t sigma_c_m)
+{
+    const nav_real_t s2 = sigma_c_m * sigma_c_m;
+    for (int a = 0; a < 2; a++) {
+        const int i = EKF_GB + a;
+        for (int j = 0; j < EKF_N; j++) {
+            k->P[i][j] = NAV_C(0.0);
+            k->P[j][i] = NAV_C(0.0);
+        }
+        k->gnss_bias_m[a] = NAV_C(0.0);
+        k->P[i][i] = s2 > k->cfg.var_floor ? s2 : k->cfg.var_floor;
+        /* the position is the fix's, true + b + white, and db = 0 - b: dr = -db + white,
+         * cov(dr, db) = -var(db), at most var(dr) in size */
+        const nav_real_t c = s2 < k->P[EKF_DR + a][EKF_DR + a] ? s2 : k->P[EKF_DR + a][EKF_DR + a];
+        k->P[EKF_DR + a][i] = -c;
+        k->P[i][EKF_DR + a] = -c;
+    }
 }
 
 nav_real_t ekf_sigma_h_m(const ekf_t *k)

@@ -1,7 +1,8 @@
 /*
- * ekf.h - the compact error-state Kalman filter: 18 states, float32, fixed-size storage,
+ * ekf.h - the compact error-state Kalman filter: 20 states, float32, fixed-size storage,
  * closed loop (seed 001: "the INS solution is reconciled with the GNSS solution by a Kalman
- * filter with 18 parameters"; docs/kalman.md).
+ * filter with 18 parameters": those 18, and the receiver's correlated horizontal error;
+ * docs/kalman.md).
  *
  * Error state x, all "computed minus true":
  *   0..2   dr    position error, ENU metres at the IMU
@@ -14,11 +15,17 @@
  *   15     k     odometer scale error (reading = (1 + k) x true; seed 000's mu)
  *   16     mp    IMU-to-car mounting pitch (IMU nose up of the car's), rad
  *   17     my    IMU-to-car mounting yaw (IMU forward axis clockwise of the car's), rad
+ *   18..19 db    the receiver's correlated horizontal position error, E and N, m: the
+ *                filter's estimate gnss_bias_m minus the truth (a first-order Gauss-Markov
+ *                process, ekf_gnss_bias_step; the fix's white part is the update's noise)
  * Dynamics (Titterton & Weston eqs 12.6, 12.8, 12.10, small terms of order v/R dropped):
  *   d(dr)/dt = dv
  *   d(dv)/dt = [f_n x] psi + C_bn ba - [(2 w_ie + w_en) x] dv + (0, 0, 2 g / R) dr_U
  *   d(psi)/dt = -[w_in x] psi - C_bn bg
  *   biases, k, mounting: random walks.
+ *   db: constant in ekf_predict (no coupling to the motion); its decay exp(-dt/tau) and
+ *   driving noise are applied once per fix by ekf_gnss_bias_step, which is exact since
+ *   the decay is a scaling of its own rows and columns only.
  * Prediction uses Phi = I + F dt over an interval of several IMU samples with the mean
  * specific force, and P = Phi P Phi^T + Q computed through F's ~40 non-zero entries
  * (ekf_predict). Updates are scalar and sequential (no matrix inverse), in the symmetric
@@ -29,7 +36,7 @@
 
 #include "sins.h"
 
-#define EKF_N 18
+#define EKF_N 20
 enum {
     EKF_DR = 0,
     EKF_DV = 3,
@@ -39,11 +46,13 @@ enum {
     EKF_K = 15,
     EKF_MP = 16,
     EKF_MY = 17,
+    EKF_GB = 18, /* E, N */
 };
 
 typedef struct {
     /* initial 1-sigma */
     nav_real_t pos_m, vel_mps, tilt_rad, heading_rad, bg_rps, ba_mps2, k, mount_rad;
+    nav_real_t gnss_bias_m;      /* the receiver's correlated error per axis (ekf_init) */
     /* noise densities */
     nav_real_t arw_rad_rts;      /* gyro angle random walk, rad/sqrt(s) */
     nav_real_t vrw_mps_rts;      /* accelerometer velocity random walk, m/s/sqrt(s) */
@@ -61,6 +70,9 @@ typedef struct {
     /* estimates fed back (closed loop): the application subtracts the biases from the
      * IMU increments and uses k and the mounting for the odometer */
     nav_real_t bg_rps[3], ba_mps2[3], k, mount_pitch_rad, mount_yaw_rad;
+    /* the receiver's correlated horizontal position error (E, N, m) as estimated: what
+     * the fixes are corrected by before their update (ekf_gnss_position) */
+    nav_real_t gnss_bias_m[2];
     uint32_t n_updates;          /* accepted scalar updates */
     uint32_t n_gated;            /* measurements rejected by their innovation gate */
     uint32_t n_health_fixes;     /* last-resort covariance corrections */
@@ -215,15 +227,37 @@ void ekf_rows_zero_rate(nav_real_t residual_rate_z_rps, nav_real_t h[EKF_ZARU_RO
                         nav_real_t z_rps[EKF_ZARU_ROWS]);
 
 /* GNSS antenna position meas (lat/lon/height) for the navigator at pos_then (its position
- * at the fix's time of validity), antenna at lever_b (body, m) from the IMU; 1-sigma
- * horizontal and vertical error (m), against which the innovation is gated; the update
- * uses the variances times r_scale (>= 1: errors correlated from fix to fix). The
- * horizontal pair and the height are gated apart (the height only if use_height): the
- * return counts the rows applied, 2 or 3 when the horizontal fix was taken. */
+ * at the fix's time of validity), antenna at lever_b (body, m) from the IMU. Horizontal:
+ * the fix less the estimated correlated error gnss_bias_m, rows ekf_rows_gnss_position's
+ * plus 1 on db, gated against the declared 1-sigma sigma_h_m per axis (h P h^T + sigma_h^2)
+ * and applied with the fix's white part sigma_hw_m (0 < sigma_hw_m <= sigma_h_m, else -1).
+ * Vertical: 1-sigma sigma_v_m, gated with it and applied with its variance times
+ * r_scale_v (> 0; >= 1: errors correlated from fix to fix). The horizontal pair and the
+ * height are gated apart (the height only if use_height): the return counts the rows
+ * applied, 2 or 3 when the horizontal fix was taken. */
 int ekf_gnss_position(ekf_t *k, const sins_t *s, const geo_pos_t *pos_then,
                       const geo_pos_t *meas, const nav_real_t lever_b[3], nav_real_t sigma_h_m,
-                      nav_real_t sigma_v_m, nav_real_t gate_sigma, nav_real_t r_scale,
-                      int use_height);
+                      nav_real_t sigma_hw_m, nav_real_t sigma_v_m, nav_real_t gate_sigma,
+                      nav_real_t r_scale_v, int use_height, int use_bias);
+
+/* The receiver's correlated horizontal error over dt_s since the previous fix: a
+ * first-order Gauss-Markov process of correlation time tau_s (<= 0: none, white) and
+ * stationary 1-sigma sigma_c_m per axis (the correlated part of the fix's declared
+ * accuracy): the estimate and its covariance rows decay by phi = exp(-dt/tau), its
+ * variance gains sigma_c^2 (1 - phi^2). A declared accuracy that grew since the previous
+ * fix (prev_sigma_c_m) adds the difference of the variances (a new error source); the
+ * variance is held at most sigma_c^2 (the receiver's error is not larger than it says;
+ * the covariance rows scaled with it, so P stays a covariance). */
+#define ekf_gnss_bias_step NAV_SYM(ekf_gnss_bias_step)
+void ekf_gnss_bias_step(ekf_t *k, nav_real_t dt_s, nav_real_t tau_s, nav_real_t sigma_c_m,
+                        nav_real_t prev_sigma_c_m);
+
+/* The filter started at a fix (its position is the fix's): the position error is the
+ * fix's, white part and correlated part sigma_c_m: db = 0 (the estimate) minus the
+ * receiver's error, variance sigma_c^2, and dr = -db + white: their covariance
+ * -sigma_c^2. */
+#define ekf_gnss_bias_start NAV_SYM(ekf_gnss_bias_start)
+void ekf_gnss_bias_start(ekf_t *k, nav_real_t sigma_c_m);
 
 /* GNSS velocity (ENU m/s) against the navigator's velocity at the fix's time v_then. */
 int ekf_gnss_velocity(ekf_t *k, const nav_real_t v_then_mps[3], const nav_real_t meas_mps[3],

@@ -33,12 +33,12 @@ static nav_real_t nis(const ekf_t *k, const nav_real_t h[EKF_N], nav_real_t z, n
 }
 
 /* gate the rows as one measurement (with the variances r), then apply them in sequence
- * with the variances r times r_scale */
+ * with the variances r times r_scale (> 0) */
 static int apply_rows_scaled(ekf_t *k, nav_real_t H[][EKF_N], const nav_real_t *z,
                              const nav_real_t *r, int n, nav_real_t gate_sigma,
                              nav_real_t r_scale)
 {
-    if (!(r_scale >= NAV_C(1.0)) || !nav_isfinite(r_scale)) {
+    if (!(r_scale > NAV_C(0.0)) || !nav_isfinite(r_scale)) {
         return -1;
     }
     for (int m = 0; m < n; m++) {
@@ -95,20 +95,31 @@ void ekf_rows_gnss_position(const sins_t *s, const geo_pos_t *pos_then, const ge
 
 int ekf_gnss_position(ekf_t *k, const sins_t *s, const geo_pos_t *pos_then,
                       const geo_pos_t *meas, const nav_real_t lever_b[3], nav_real_t sigma_h_m,
-                      nav_real_t sigma_v_m, nav_real_t gate_sigma, nav_real_t r_scale,
-                      int use_height)
+                      nav_real_t sigma_hw_m, nav_real_t sigma_v_m, nav_real_t gate_sigma,
+                      nav_real_t r_scale_v, int use_height, int use_bias)
 {
     nav_real_t H[MAX_ROWS][EKF_N], z[3];
     ekf_rows_gnss_position(s, pos_then, meas, lever_b, H, z);
+    /* the fix less its estimated correlated error: z = dr + db - white */
+    for (int m = 0; use_bias && m < 2; m++) {
+        z[m] += k->gnss_bias_m[m];
+        H[m][EKF_GB + m] = NAV_C(1.0);
+    }
+    if (!(sigma_hw_m > NAV_C(0.0)) || !(sigma_h_m > NAV_C(0.0))) {
+        return -1;
+    }
     const nav_real_t r[3] = {sigma_h_m * sigma_h_m, sigma_h_m * sigma_h_m,
                              sigma_v_m * sigma_v_m};
     /* horizontal and vertical gated apart: a height offset (datum, a receiver without
-     * heights) must not lock out the horizontal fix */
-    const int nh = apply_rows_scaled(k, H, z, r, 2, gate_sigma, r_scale);
+     * heights) must not lock out the horizontal fix; the horizontal gated against the
+     * declared accuracy (a receiver's error jumps when its satellites change), applied
+     * with the white part */
+    const nav_real_t w = sigma_hw_m / sigma_h_m;
+    const int nh = apply_rows_scaled(k, H, z, r, 2, gate_sigma, w * w);
     if (nh < 0 || !use_height) {
         return nh;
     }
-    const int nv = apply_rows_scaled(k, &H[2], &z[2], &r[2], 1, gate_sigma, r_scale);
+    const int nv = apply_rows_scaled(k, &H[2], &z[2], &r[2], 1, gate_sigma, r_scale_v);
     return nv < 0 ? nv : nh + nv;
 }
 

@@ -18,7 +18,7 @@ typedef struct {
     const char *description;
 } params_cli_t;
 
-#define PARAMS_CLI_N 33
+#define PARAMS_CLI_N 34
 
 static const params_cli_t params_cli[PARAMS_CLI_N] = {
     {"--imu-rate-hz", APP_PARAM_IMU_RATE_HZ, "Hz", 10.0, 400.0, 1.0, "", "IMU sample rate: one IMU_Rate + IMU_Accel pair per sample"},
@@ -45,6 +45,7 @@ static const params_cli_t params_cli[PARAMS_CLI_N] = {
     {"--accel-range-mps2", APP_PARAM_ACCEL_RANGE_MPS2, "m/s^2", 1.0, 2000.0, 1.0, "", "the accelerometer's measurement range (default 8 g)"},
     {"--gnss-latency-ms", APP_PARAM_GNSS_LATENCY_S, "ms", 0.0, 500.0, 0.001, "", "receiver latency: a fix's time of validity to its arrival (more when TimeOfWeek shows a late epoch)"},
     {"--gnss-corr-s", APP_PARAM_GNSS_CORR_S, "s", 0.0, 600.0, 1.0, "", "correlation time of the receiver's position errors (docs/kalman.md)"},
+    {"--gnss-white-ratio", APP_PARAM_GNSS_WHITE_RATIO, "", 0.05, 1.0, 1.0, "", "the white part of the receiver's declared per-axis accuracy, as a ratio of the sigmas (tracking noise, fast multipath; the rest, atmosphere, orbits and clocks, is correlated over gnss_corr_s and a state of the filter when that spans 10 fix intervals, docs/kalman.md): a code receiver's about 1/3 (0.7 of 2.1 m per axis), a differential one's about 1/2"},
     {"--gnss-accuracy", APP_PARAM_GNSS_ACCURACY, "", 0.0, 1.0, 1.0, "reported|declared", "where the fixes' accuracies come from: the receiver's GNSS_Status/GNSS_Velocity fields, or declared here for a receiver that reports none (gnss_hacc_m, gnss_vacc_m, gnss_sacc_mps: its datasheet's figures)"},
     {"--gnss-hacc-m", APP_PARAM_GNSS_HACC_M, "m", 0.1, 102.3, 1.0, "", "declared horizontal accuracy (68 % radius, as HorizAccuracy), used with gnss_accuracy = declared"},
     {"--gnss-vacc-m", APP_PARAM_GNSS_VACC_M, "m", 0.1, 102.3, 1.0, "", "declared vertical accuracy (1 sigma, as VertAccuracy), used with gnss_accuracy = declared"},

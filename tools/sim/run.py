@@ -203,7 +203,7 @@ def frames(truth, dtheta, dv, wheels, gnss, db, initial_attitude=False, heading_
 def firmware_args(imu: "sensors.ImuSpec", gnss: "sensors.GnssSpec") -> list:
     """navecu options describing this drive's sensors, as an ECU is configured for the IMU
     and receiver it is installed with (docs/kalman.md): the IMU's noise, turn-on bias and
-    in-run instability, the receiver's latency and error correlation time. Mounting, odometer
+    in-run instability, the receiver's latency, error correlation time and white part. Mounting, odometer
     scale and the errors' realisation stay unknown to the firmware."""
     rad_dph = math.pi / 180.0 / 3600.0
     g = sensors.G0_MPS2
@@ -219,6 +219,10 @@ def firmware_args(imu: "sensors.ImuSpec", gnss: "sensors.GnssSpec") -> list:
     if gnss.enabled:
         args += ["--gnss-latency-ms", f"{gnss.latency_s * 1e3:.6g}",
                  "--gnss-corr-s", f"{min(gnss.pos_gm_corr_time_s, 600.0):.6g}"]
+        if gnss.pos_sigma_h_m > 0.0:
+            # the receiver's white part of its per-axis sigma, as its spec would give it
+            args += ["--gnss-white-ratio",
+                     f"{min(max(gnss.pos_white_h_m / gnss.pos_sigma_h_m, 0.05), 1.0):.3g}"]
     return args
 
 

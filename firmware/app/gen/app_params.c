@@ -30,6 +30,7 @@ const app_param_t app_params[APP_PARAM_N] = {
     [APP_PARAM_ACCEL_RANGE_MPS2] = {"accel_range_mps2", 0x0236u, APP_PARAM_REAL, 0u, 0u, 1u, 0u, NAV_C(1.0), NAV_C(2000.0), {NAV_C(78.4532), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_GNSS_LATENCY_S] = {"gnss_latency_s", 0x0240u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(0.5), {NAV_C(0.1), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_GNSS_CORR_S] = {"gnss_corr_s", 0x0241u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(600.0), {NAV_C(20.0), NAV_C(0.0), NAV_C(0.0)}},
+    [APP_PARAM_GNSS_WHITE_RATIO] = {"gnss_white_ratio", 0x0248u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.05), NAV_C(1.0), {NAV_C(0.33), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_GNSS_ACCURACY] = {"gnss_accuracy", 0x0243u, APP_PARAM_ENUM, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(1.0), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_GNSS_HACC_M] = {"gnss_hacc_m", 0x0244u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.1), NAV_C(102.3), {NAV_C(3.0), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_GNSS_VACC_M] = {"gnss_vacc_m", 0x0245u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.1), NAV_C(102.3), {NAV_C(5.0), NAV_C(0.0), NAV_C(0.0)}},
@@ -149,6 +150,9 @@ void app_param_get(const app_config_t *cfg, app_param_id_t id, nav_real_t v[3])
         break;
     case APP_PARAM_GNSS_CORR_S:
         v[0] = cfg->gnss_corr_s;
+        break;
+    case APP_PARAM_GNSS_WHITE_RATIO:
+        v[0] = cfg->gnss_white_ratio;
         break;
     case APP_PARAM_GNSS_ACCURACY:
         if (cfg->gnss_accuracy == GNSS_ACC_REPORTED) {
@@ -286,6 +290,9 @@ int app_param_set(app_config_t *cfg, app_param_id_t id, const nav_real_t v[3])
         break;
     case APP_PARAM_GNSS_CORR_S:
         cfg->gnss_corr_s = v[0];
+        break;
+    case APP_PARAM_GNSS_WHITE_RATIO:
+        cfg->gnss_white_ratio = v[0];
         break;
     case APP_PARAM_GNSS_ACCURACY:
         cfg->gnss_accuracy = GNSS_ACC_REPORTED;
