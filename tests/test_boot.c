@@ -546,6 +546,37 @@ static void test_heartbeat_says_bootloader(void **state)
     assert_int_equal(frames_sent, 0); /* no UDS answer without a request */
 }
 
+/* The application's programming request, then the tester gone: after S3 (5 s without a
+ * request) the session falls back to the default and, the application untouched and
+ * valid, boot_poll says reset (the board starts it again) instead of leaving the ECU in its
+ * bootloader; with the application erased it stays. */
+static void test_abandoned_programming_returns_to_the_application(void **state)
+{
+    (void)state;
+    make_image(3000u, 5u);
+    unlock();
+    assert_int_equal(flash_image(3000u, 500u), 0u);
+    assert_int_equal(boot_image_check(&fl), BOOT_IMAGE_OK);
+    reboot();
+    const uint64_t t = 20000000u;
+    boot_programming_requested(&boot, t);
+    assert_int_equal(boot_poll(&boot, t + 1000000u), 0);
+    assert_int_equal(boot_poll(&boot, t + 4900000u), 0);
+    assert_int_equal(boot_poll(&boot, t + 5100000u), 1);
+    assert_int_equal(boot.cnt.returns, 1u);
+    /* erased: the tester went away after the erase, the bootloader stays */
+    reboot();
+    boot_programming_requested(&boot, t);
+    unlock();
+    expect_rsp(B(0x31, 0x01, 0xFF, 0x00, 0x44, 0x08, 0x00, 0xC0, 0x00, 0x00, 0x00, 0x10,
+                 0x00), B(0x71, 0x01, 0xFF, 0x00));
+    assert_int_equal(boot_image_check(&fl), BOOT_IMAGE_NO_MARKER);
+    for (uint64_t dt = 1000000u; dt <= 12000000u; dt += 1000000u) {
+        assert_int_equal(boot_poll(&boot, t + dt), 0);
+    }
+    assert_int_equal(boot.cnt.returns, 0u);
+}
+
 /* the old image is valid; a new one is flashed with the power cut after every block
  * boundary (and half-way into each block, and in the marker): the next boot finds no
  * valid image, and the bootloader then takes the whole new image */
@@ -609,6 +640,8 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test_setup_teardown(test_empty_flash_stays, setup, teardown),
         cmocka_unit_test_setup_teardown(test_heartbeat_says_bootloader, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_abandoned_programming_returns_to_the_application,
+                                        setup, teardown),
         cmocka_unit_test_setup_teardown(test_flash_whole_image_and_start, setup, teardown),
         cmocka_unit_test_setup_teardown(test_security_and_session_required, setup, teardown),
         cmocka_unit_test_setup_teardown(test_erase_range_checked, setup, teardown),

@@ -526,6 +526,7 @@ static void heartbeat(boot_t *b, uint64_t now_us)
 int boot_poll(boot_t *b, uint64_t now_us)
 {
     heartbeat(b, now_us);
+    const uint8_t session_before = b->srv.session;
     boot_serve(b, now_us);
     uds_poll(&b->srv, now_us);
     if (b->srv.session != UDS_SESSION_PROGRAMMING) {
@@ -533,6 +534,14 @@ int boot_poll(boot_t *b, uint64_t now_us)
     }
     if (b->reset_due && !isotp_tx_busy(&b->tp)) {
         b->reset_due = 0u;
+        return 1;
+    }
+    /* back in the default session (the tester gone: S3, or its 10 01) with the application
+     * still whole (nothing erased yet): reset, and the application starts again, rather
+     * than an ECU left in its bootloader until the next power cycle */
+    if (session_before != UDS_SESSION_DEFAULT && b->srv.session == UDS_SESSION_DEFAULT &&
+        !isotp_tx_busy(&b->tp) && boot_image_check(&b->fl) == BOOT_IMAGE_OK) {
+        boot_count(&b->cnt.returns);
         return 1;
     }
     return 0;

@@ -85,6 +85,8 @@ typedef struct {
     uint32_t checks_failed;  /* the check routine (FF01) refused (CRC, vectors, marker write) */
     uint32_t flash_errors;   /* erase/write/read that returned an error */
     uint32_t pending_sent;   /* 7F xx 78 sent before an erase or the check */
+    uint32_t returns;        /* back to the default session with the application whole:
+                                reset into it (boot_poll) */
 } boot_counters_t;
 
 /* Why the application is (not) started: boot_image_check. */
@@ -149,7 +151,9 @@ void boot_frame(boot_t *b, const hal_can_frame_t *f, uint64_t now_us);
 /* Timers and the serving: call from the main loop. Sends NAV_Heartbeat (0x314, Mode
  * Bootloader) at the first call and at each whole second after it, so that a bootloader
  * that stays says so on the bus (the application's heartbeat, docs/can.md). Returns 1 once
- * an accepted ECUReset's response has left (the board resets now), else 0. */
+ * an accepted ECUReset's response has left, or when the session fell back to the default
+ * (S3: the tester gone, or its 10 01) while the application is still whole (nothing
+ * erased): the board resets now and, the image valid, the application starts; else 0. */
 int boot_poll(boot_t *b, uint64_t now_us);
 
 #endif /* NAVECU_BOOT_H */
