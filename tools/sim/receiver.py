@@ -152,6 +152,7 @@ def simulate(truth, spec: ReceiverSpec, seed: int, t0_gps_s: float = 0.0,
     mp = rng.standard_normal(nsat)          # stationary from the start
     mp_rate = np.zeros(nsat)
     lon_unw = np.unwrap(np.asarray(truth.lon_rad, dtype=float))
+    hdg_unw = np.unwrap(np.asarray(truth.heading_rad, dtype=float))
     venu = np.asarray(truth.v_enu_mps, dtype=float)
     out = []
     for k in range(n):
@@ -184,7 +185,7 @@ def simulate(truth, spec: ReceiverSpec, seed: int, t0_gps_s: float = 0.0,
         lat = float(np.interp(te, t, truth.lat_rad))
         lon = float(np.interp(te, t, lon_unw))
         h = float(np.interp(te, t, truth.h_m))
-        hdg = float(np.interp(te, t, np.unwrap(truth.heading_rad)))
+        hdg = float(np.interp(te, t, hdg_unw))
         v_enu = np.array([np.interp(te, t, venu[:, i]) for i in range(3)])
         rx = gr.ecef_from_geodetic(lat, lon, h)
         enu = gr.enu_axes(lat, lon)
