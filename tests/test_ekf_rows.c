@@ -73,7 +73,7 @@
 static const char *const STATE_NAME[EKF_N] = {
     "dr_E", "dr_N", "dr_U", "dv_E", "dv_N", "dv_U", "psi_E", "psi_N", "psi_U",
     "bg_x", "bg_y", "bg_z", "ba_x", "ba_y", "ba_z", "k", "mount_pitch", "mount_yaw",
-    "gnss_bias_E", "gnss_bias_N"};
+    "gnss_bias_E", "gnss_bias_N", "clock_bias", "clock_drift"};
 
 /* A true state as the filter sees it at x = 0: the navigator, the estimates (k and the
  * mounting, in the ekf_t), the body rate the odometer rows get. */
@@ -320,6 +320,13 @@ static double perturb(const state_t *truth, int j, double d, state_t *comp)
         e = &comp->kf.mount_pitch_rad;
     } else if (j == EKF_MY) {
         e = &comp->kf.mount_yaw_rad;
+    } else if (j == EKF_CB) {
+        /* the clock estimate in its 0.1 mm integers: the step is exact */
+        const int64_t dd = (int64_t)llround(d * (double)GNSS_GEOM_DMM_PER_M);
+        comp->kf.clock_dmm += dd;
+        return (double)dd / (double)GNSS_GEOM_DMM_PER_M;
+    } else if (j == EKF_CD) {
+        e = &comp->kf.clock_drift_mps;
     } else {
         /* the receiver's correlated error: the row builders leave it to ekf_gnss_position
          * (its row is 1 on the state, the estimate subtracted from the fix) */
@@ -336,7 +343,7 @@ static double step_of(int j)
         STEP_DR_M,    STEP_DR_M,    STEP_DR_M,    STEP_DV_MPS,  STEP_DV_MPS,  STEP_DV_MPS,
         STEP_PSI_RAD, STEP_PSI_RAD, STEP_PSI_RAD, STEP_BG_RPS,  STEP_BG_RPS,  STEP_BG_RPS,
         STEP_BA_MPS2, STEP_BA_MPS2, STEP_BA_MPS2, STEP_K,       STEP_MOUNT_RAD,
-        STEP_MOUNT_RAD, STEP_DR_M,    STEP_DR_M};
+        STEP_MOUNT_RAD, STEP_DR_M,    STEP_DR_M,    STEP_DR_M,    STEP_DV_MPS};
     return step[j];
 }
 
@@ -899,6 +906,266 @@ static void test_rows_zero_rate(void **state)
     expect_rows_right(&m, &truth);
 }
 
+
+/* ------------------------------------------------ raw GNSS (issue #20) ---- */
+
+/* WGS-84 ECEF of a geodetic position, double */
+static void ecef_of(double lat, double lon, double h, double x[3])
+{
+    const double n = WGS84_A_M / sqrt(1.0 - WGS84_E2 * sin(lat) * sin(lat));
+    x[0] = (n + h) * cos(lat) * cos(lon);
+    x[1] = (n + h) * cos(lat) * sin(lon);
+    x[2] = (n * (1.0 - WGS84_E2) + h) * sin(lat);
+}
+
+/* ENU axes at (lat, lon) as ECEF unit vectors: rows east, north, up */
+static void enu_axes(double lat, double lon, double E[3][3])
+{
+    const double sl = sin(lat), cl = cos(lat), so = sin(lon), co = cos(lon);
+    const double e[3][3] = {{-so, co, 0.0}, {-sl * co, -sl * so, cl}, {cl * co, cl * so, sl}};
+    memcpy(E, e, sizeof e);
+}
+
+/* the satellite of the raw tests, in the protocol's units */
+typedef struct {
+    int32_t pos_lsb[3];
+    int16_t vel_lsb[3];
+    uint32_t pr_lsb;
+    nav_real_t rr_mps;
+    nav_real_t lever_b_m[3];
+    double lever_norm_m;
+    double rel_speed_mps; /* |v_sat| + |v_antenna|: for the line of sight's allowance */
+} raw_ctx_t;
+
+/* The truth for a state: the antenna (IMU + C l_b, exact in ECEF) and its velocity
+ * (v + C (w_b x l_b)) in ECEF; the satellite turned from its transmit-time axes into the
+ * receive-time ones by the Earth's rotation during the travel (IS-GPS-200
+ * 20.3.3.4.3.3.2), the travel time iterated to convergence; the unit line of sight. */
+typedef struct {
+    double range_m, u[3], v_rel_los_mps, clock_m, drift_mps;
+} raw_truth_t;
+
+static raw_truth_t raw_geometry(const raw_ctx_t *c, const state_t *st)
+{
+    const state_d_t s = read_state(st);
+    double E[3][3], imu[3], l_n[3], wl_b[3], wl_n[3], v_a_n[3], ant[3], v_a[3];
+    enu_axes(s.lat_rad, s.lon_rad, E);
+    ecef_of(s.lat_rad, s.lon_rad, s.h_m, imu);
+    const double l[3] = {(double)c->lever_b_m[0], (double)c->lever_b_m[1],
+                         (double)c->lever_b_m[2]};
+    cross_d(s.w_b_rps, l, wl_b);
+    for (int i = 0; i < 3; i++) {
+        l_n[i] = s.C_bn[i][0] * l[0] + s.C_bn[i][1] * l[1] + s.C_bn[i][2] * l[2];
+        wl_n[i] = s.C_bn[i][0] * wl_b[0] + s.C_bn[i][1] * wl_b[1] + s.C_bn[i][2] * wl_b[2];
+        v_a_n[i] = s.v_n_mps[i] + wl_n[i];
+    }
+    for (int i = 0; i < 3; i++) {
+        ant[i] = imu[i] + E[0][i] * l_n[0] + E[1][i] * l_n[1] + E[2][i] * l_n[2];
+        v_a[i] = E[0][i] * v_a_n[0] + E[1][i] * v_a_n[1] + E[2][i] * v_a_n[2];
+    }
+    const double sp[3] = {c->pos_lsb[0] * 0.02, c->pos_lsb[1] * 0.02, c->pos_lsb[2] * 0.02};
+    const double sv[3] = {c->vel_lsb[0] * 0.125, c->vel_lsb[1] * 0.125, c->vel_lsb[2] * 0.125};
+    raw_truth_t t;
+    double d[3], rs[3], rv[3], tau = 0.0;
+    for (int it = 0; it < 5; it++) {
+        const double th = WGS84_OMEGA_IE_RPS * tau;
+        rs[0] = cos(th) * sp[0] + sin(th) * sp[1];
+        rs[1] = -sin(th) * sp[0] + cos(th) * sp[1];
+        rs[2] = sp[2];
+        rv[0] = cos(th) * sv[0] + sin(th) * sv[1];
+        rv[1] = -sin(th) * sv[0] + cos(th) * sv[1];
+        rv[2] = sv[2];
+        for (int i = 0; i < 3; i++) {
+            d[i] = rs[i] - ant[i];
+        }
+        t.range_m = norm_d(d);
+        tau = t.range_m / 299792458.0;
+    }
+    t.v_rel_los_mps = 0.0;
+    for (int i = 0; i < 3; i++) {
+        t.u[i] = d[i] / t.range_m;
+        t.v_rel_los_mps += t.u[i] * (rv[i] - v_a[i]);
+    }
+    t.clock_m = (double)st->kf.clock_dmm / (double)GNSS_GEOM_DMM_PER_M;
+    t.drift_mps = (double)st->kf.clock_drift_mps;
+    return t;
+}
+
+static void pr_h(const void *ctx, const state_t *st, double *z)
+{
+    const raw_ctx_t *c = ctx;
+    const raw_truth_t t = raw_geometry(c, st);
+    z[0] = t.range_m + t.clock_m - (double)c->pr_lsb * 0.02;
+}
+
+static void pr_rows(const void *ctx, const state_t *st, nav_real_t h[][EKF_N], nav_real_t *z)
+{
+    const raw_ctx_t *c = ctx;
+    ekf_sat_t sat;
+    assert_int_equal(ekf_rows_pseudorange(&st->kf, &st->nav, &st->nav.pos, c->lever_b_m,
+                                          c->pos_lsb, c->vel_lsb, c->pr_lsb, &sat, h[0], z),
+                     NAV_OK);
+}
+
+/* The innovation, formed in 0.1 mm integers (gnss_geom.h): the antenna's ECEF rounded to
+ * 0.1 mm per axis (0.05 mm each, 0.087 mm along any line of sight), the Earth-rotation
+ * correction rounded to 0.1 mm (0.07 mm), the range's refinement (0.01 mm,
+ * test_gnss_geom), the antenna added to the position in its 1e-7 mm units, and the lever
+ * arm turned in nav_real_t: |l| eps; 0.2 mm in all, and the float32 sum of a residual of
+ * |z| m (eps |z|). */
+static double pr_allow_z(const void *ctx, const state_t *st, int row)
+{
+    const raw_ctx_t *c = ctx;
+    double z;
+    (void)row;
+    pr_h(ctx, st, &z);
+    return 2.0e-4 + NAV_EPS * (fabs(z) + c->lever_norm_m);
+}
+
+static double sat_radius_m(const raw_ctx_t *c)
+{
+    return 0.02 * sqrt((double)c->pos_lsb[0] * c->pos_lsb[0] +
+                       (double)c->pos_lsb[1] * c->pos_lsb[1] +
+                       (double)c->pos_lsb[2] * c->pos_lsb[2]);
+}
+
+/* Allowances of the raw rows' entries. Model, what the pseudorange row neglects (ekf.h):
+ * the Earth's rotation during the signal's travel changes with the range, w_ie |r_sat| / c
+ * per metre of position. Numerical, beyond the file comment's: the first-principles range
+ * is a difference of coordinates of |r_sat| = 2.7e7 m, each evaluation rounded to
+ * 16 eps_d |r_sat| (4e-9 m) however small the step's effect, so the central difference is
+ * off by that over the step; and the filter's line of sight comes from the 0.1 mm geometry,
+ * 2e-4 m over the range in direction, on entries up to S. */
+static double raw_allow_h(const raw_ctx_t *c, const state_t *truth, int col, double S,
+                          double z_size)
+{
+    const raw_truth_t t = raw_geometry(c, truth);
+    return 16.0 * DBL_EPSILON * z_size / step_of(col) + 2.0e-4 / t.range_m * S;
+}
+
+static double pr_allow_h(const void *ctx, const state_t *truth, int row, int col)
+{
+    const raw_ctx_t *c = ctx;
+    (void)row;
+    const double sagnac = col < EKF_DV ? WGS84_OMEGA_IE_RPS * sat_radius_m(c) / 299792458.0
+                                       : 0.0;
+    return sagnac + raw_allow_h(c, truth, col, 1.0 + c->lever_norm_m, sat_radius_m(c));
+}
+
+static void rr_h(const void *ctx, const state_t *st, double *z)
+{
+    const raw_ctx_t *c = ctx;
+    const raw_truth_t t = raw_geometry(c, st);
+    z[0] = t.v_rel_los_mps + t.drift_mps - (double)c->rr_mps;
+}
+
+static void rr_rows(const void *ctx, const state_t *st, nav_real_t h[][EKF_N], nav_real_t *z)
+{
+    const raw_ctx_t *c = ctx;
+    ekf_sat_t sat;
+    nav_real_t h_pr[EKF_N], z_pr;
+    assert_int_equal(ekf_rows_pseudorange(&st->kf, &st->nav, &st->nav.pos, c->lever_b_m,
+                                          c->pos_lsb, c->vel_lsb, c->pr_lsb, &sat, h_pr, &z_pr),
+                     NAV_OK);
+    ekf_rows_range_rate(&st->kf, &st->nav, st->nav.v_n_mps, st->w_b_rps, c->lever_b_m, &sat,
+                        c->rr_mps, h[0], z);
+}
+
+/* What the range-rate row neglects (ekf.h): the line of sight turns with the position
+ * error by 1/r per metre, changing u . (v_sat - v_a) by at most |v_sat - v_a| / r (the
+ * antenna's error: dr, and psi through the lever arm, |l_b| per rad); and the
+ * numerical allowances of raw_allow_h (the first-principles rate's rounding is on
+ * velocities of the satellite's size). */
+static double rr_allow_h(const void *ctx, const state_t *truth, int row, int col)
+{
+    const raw_ctx_t *c = ctx;
+    (void)row;
+    const raw_truth_t t = raw_geometry(c, truth);
+    /* the antenna moves by 1 m per metre of dr, by |l_b| per rad of psi */
+    const double los = col < EKF_DV                      ? c->rel_speed_mps / t.range_m
+                       : (col >= EKF_PSI && col < EKF_BG) ? c->rel_speed_mps / t.range_m *
+                                                                c->lever_norm_m
+                                                          : 0.0;
+    return los + raw_allow_h(c, truth, col, 1.0 + SPEED_MPS + c->lever_norm_m,
+                             c->rel_speed_mps);
+}
+
+/* The innovation: nav_real_t sums of terms up to the satellite's speed (eps each), and
+ * the line of sight from the 0.1 mm geometry (0.2 mm over the range) times the relative
+ * speed. */
+static double rr_allow_z(const void *ctx, const state_t *st, int row)
+{
+    const raw_ctx_t *c = ctx;
+    (void)row;
+    const raw_truth_t t = raw_geometry(c, st);
+    return 8.0 * NAV_EPS * (c->rel_speed_mps + fabs((double)st->kf.clock_drift_mps) +
+                            fabs((double)c->rr_mps)) +
+           c->rel_speed_mps * 2.0e-4 / t.range_m;
+}
+
+/* A satellite 20,200 km up at elevation 35 deg, azimuth 60 deg of the true state, moving
+ * at 3.1 km/s; the receiver clock 4,321.2345 m ahead, drifting 57.3 m/s; the pseudorange
+ * 2.7 m long, the rate 0.06 m/s high. */
+static void raw_case(state_t *truth, raw_ctx_t *c)
+{
+    true_state(truth, SPEED_MPS, MOUNT_PITCH_RAD, MOUNT_YAW_RAD);
+    truth->kf.clock_dmm = 43212345;
+    truth->kf.clock_drift_mps = NAV_C(57.3);
+    lever_of(GNSS_LEVER_B_M, c->lever_b_m);
+    c->lever_norm_m = norm_d(GNSS_LEVER_B_M);
+    const state_d_t s = read_state(truth);
+    double E[3][3], rx[3];
+    enu_axes(s.lat_rad, s.lon_rad, E);
+    ecef_of(s.lat_rad, s.lon_rad, s.h_m, rx);
+    const double el = 35.0 * DEG, az = 60.0 * DEG;
+    const double los_n[3] = {cos(el) * sin(az), cos(el) * cos(az), sin(el)};
+    /* the range to a satellite at 26,560 km from the centre along the line of sight */
+    double los[3], b = 0.0, r2 = 0.0;
+    for (int i = 0; i < 3; i++) {
+        los[i] = E[0][i] * los_n[0] + E[1][i] * los_n[1] + E[2][i] * los_n[2];
+        b += rx[i] * los[i];
+        r2 += rx[i] * rx[i];
+    }
+    const double R = 26.56e6;
+    const double rho = -b + sqrt(b * b - r2 + R * R);
+    const double vs[3] = {-1850.0, 2290.0, 1125.0};
+    for (int i = 0; i < 3; i++) {
+        c->pos_lsb[i] = (int32_t)llround((rx[i] + rho * los[i]) / 0.02);
+        c->vel_lsb[i] = (int16_t)lround(vs[i] / 0.125);
+    }
+    c->rel_speed_mps = norm_d(vs) + SPEED_MPS + 1.0;
+    c->pr_lsb = 0u;
+    c->rr_mps = NAV_C(0.0);
+    const raw_truth_t t = raw_geometry(c, truth);
+    c->pr_lsb = (uint32_t)llround((t.range_m + t.clock_m + 2.7) / 0.02);
+    c->rr_mps = (nav_real_t)(t.v_rel_los_mps + t.drift_mps + 0.06);
+}
+
+static const char *const RAW_ROW[1] = {"satellite"};
+
+static void test_rows_pseudorange(void **state)
+{
+    (void)state;
+    static state_t truth;
+    raw_ctx_t c;
+    raw_case(&truth, &c);
+    const meas_t m = {"pseudorange", 1, RAW_ROW, 1.0 + c.lever_norm_m + 2.7 + STEP_DR_M, pr_h,
+                      pr_rows, pr_allow_h, pr_allow_z, &c};
+    expect_rows_right(&m, &truth);
+}
+
+static void test_rows_range_rate(void **state)
+{
+    (void)state;
+    static state_t truth;
+    raw_ctx_t c;
+    raw_case(&truth, &c);
+    const meas_t m = {"pseudorange rate", 1, RAW_ROW,
+                      1.0 + SPEED_MPS + norm_d(W_TURN_B_RPS) * c.lever_norm_m, rr_h, rr_rows,
+                      rr_allow_h, rr_allow_z, &c};
+    expect_rows_right(&m, &truth);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -908,6 +1175,8 @@ int main(void)
         cmocka_unit_test(test_rows_odometer_mounted),
         cmocka_unit_test(test_rows_zero_velocity),
         cmocka_unit_test(test_rows_zero_rate),
+        cmocka_unit_test(test_rows_pseudorange),
+        cmocka_unit_test(test_rows_range_rate),
         cmocka_unit_test(test_check_refuses_wrong_rows),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

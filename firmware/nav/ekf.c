@@ -1,5 +1,5 @@
 /*
- * ekf.c - 18-state error-state Kalman filter (ekf.h, docs/kalman.md).
+ * ekf.c - the 22-state error-state Kalman filter (ekf.h, docs/kalman.md).
  */
 #include "ekf.h"
 
@@ -8,6 +8,19 @@
 #include <stddef.h>
 
 #define DEG_RAD NAV_C(0.017453292519943295)
+
+/* metres to the clock's 0.1 mm units, rounded; held within +-1e8 m (a clock error beyond
+ * any receiver's, and far inside int64) so that no float-to-integer conversion overflows */
+static int64_t nav_round_dmm(nav_real_t m)
+{
+    if (!nav_isfinite(m)) {
+        return 0;
+    }
+    const nav_real_t lim = NAV_C(1.0e8);
+    const nav_real_t c = m > lim ? lim : (m < -lim ? -lim : m);
+    const nav_real_t d = c * (nav_real_t)GNSS_GEOM_DMM_PER_M;
+    return (int64_t)(d >= NAV_C(0.0) ? d + NAV_C(0.5) : d - NAV_C(0.5));
+}
 
 ekf_config_t ekf_default_config(void)
 {
@@ -21,12 +34,20 @@ ekf_config_t ekf_default_config(void)
     c.k = NAV_C(0.02);
     c.mount_rad = NAV_C(1.0) * DEG_RAD;
     c.gnss_bias_m = NAV_C(1.0);
+    /* a receiver clock unknown to 1 ms (a receiver's clock steps, IS-GPS-200's 1 ms
+     * ambiguity) and 1 ppm in frequency (a TCXO's tolerance) */
+    c.clk_bias_m = NAV_C(3.0e5);
+    c.clk_drift_mps = NAV_C(300.0);
     c.arw_rad_rts = NAV_C(8.73e-7);   /* 0.003 deg/sqrt(h) */
     c.vrw_mps_rts = NAV_C(1e-4);
     c.bg_rw_rps_rts = NAV_C(1e-9);
     c.ba_rw_mps2_rts = NAV_C(1e-6);
     c.k_rw_rts = NAV_C(1e-6);
     c.mount_rw_rad_rts = NAV_C(1e-7);
+    /* a TCXO (Brown & Hwang, 4th ed., table 9.2: h0 = 2e-19 s, h-2 = 2e-20 1/s):
+     * c^2 h0 / 2 = 9.0e-3 m^2/s, 2 pi^2 c^2 h-2 = 3.5e-2 m^2/s^3 */
+    c.clk_b_psd_m2ps = NAV_C(9.0e-3);
+    c.clk_d_psd_m2ps3 = NAV_C(3.5e-2);
     c.var_floor = NAV_C(1e-18);
     return c;
 }
@@ -36,7 +57,9 @@ static int cfg_ok(const ekf_config_t *c)
     const nav_real_t v[] = {c->pos_m, c->vel_mps, c->tilt_rad, c->heading_rad, c->bg_rps,
                             c->ba_mps2, c->k, c->mount_rad, c->arw_rad_rts, c->vrw_mps_rts,
                             c->bg_rw_rps_rts, c->ba_rw_mps2_rts, c->k_rw_rts,
-                            c->mount_rw_rad_rts, c->var_floor, c->gnss_bias_m};
+                            c->mount_rw_rad_rts, c->var_floor, c->gnss_bias_m,
+                            c->clk_bias_m, c->clk_drift_mps, c->clk_b_psd_m2ps,
+                            c->clk_d_psd_m2ps3};
     for (size_t i = 0u; i < sizeof v / sizeof v[0]; i++) {
         if (!(v[i] > NAV_C(0.0)) || !nav_isfinite(v[i])) {
             return 0;
@@ -57,7 +80,8 @@ static void reset_cov(ekf_t *k, nav_real_t heading_sigma_rad)
                                   c->vel_mps,  c->vel_mps,  c->tilt_rad, c->tilt_rad,
                                   heading_sigma_rad, c->bg_rps, c->bg_rps, c->bg_rps,
                                   c->ba_mps2,  c->ba_mps2,  c->ba_mps2,  c->k,
-                                  c->mount_rad, c->mount_rad, c->gnss_bias_m, c->gnss_bias_m};
+                                  c->mount_rad, c->mount_rad, c->gnss_bias_m, c->gnss_bias_m,
+                                  c->clk_bias_m, c->clk_drift_mps};
     for (int i = 0; i < EKF_N; i++) {
         k->P[i][i] = sd[i] * sd[i];
     }
@@ -81,6 +105,8 @@ int ekf_init(ekf_t *k, const ekf_config_t *cfg, nav_real_t heading_sigma_rad)
     k->mount_yaw_rad = NAV_C(0.0);
     k->gnss_bias_m[0] = NAV_C(0.0);
     k->gnss_bias_m[1] = NAV_C(0.0);
+    k->clock_dmm = 0;
+    k->clock_drift_mps = NAV_C(0.0);
     k->n_updates = 0u;
     k->n_gated = 0u;
     k->n_health_fixes = 0u;
@@ -90,6 +116,15 @@ int ekf_init(ekf_t *k, const ekf_config_t *cfg, nav_real_t heading_sigma_rad)
     k->hold_heading = 0u;
     reset_cov(k, heading_sigma_rad > NAV_C(0.0) ? heading_sigma_rad : cfg->heading_rad);
     return NAV_OK;
+}
+
+/* multiply row and column i of P by a (the diagonal by a^2) */
+static void scale_state(ekf_t *k, int i, nav_real_t a)
+{
+    for (int j = 0; j < EKF_N; j++) {
+        k->P[i][j] *= a;
+        k->P[j][i] *= a;
+    }
 }
 
 /* ------------------------------------------------------------- prediction ---- */
@@ -161,6 +196,7 @@ void ekf_predict(ekf_t *k, const sins_t *s, const nav_real_t f_n_mps2[3], nav_re
                   NAV_C(2.0) * e.g_mps2 / nav_sqrt(e.R_M_m * e.R_N_m)); /* gravity vs height */
     n = add_skew(F, n, EKF_PSI, EKF_PSI, w_in, NAV_C(-1.0));    /* -w_in x psi */
     n = add_mat(F, n, EKF_PSI, EKF_BG, &C, NAV_C(-1.0));        /* -C_bn bg */
+    n = add_entry(F, n, EKF_CB, EKF_CD, NAV_C(1.0));             /* clock bias <- drift */
 
     /* P <- (I + F dt) P (I + F dt)^T = P + dt (FP + (FP)^T) + dt^2 F (FP)^T */
     nav_real_t (*fp)[EKF_N] = k->fp;
@@ -195,6 +231,23 @@ void ekf_predict(ekf_t *k, const sins_t *s, const nav_real_t f_n_mps2[3], nav_re
     k->P[EKF_K][EKF_K] += c->k_rw_rts * c->k_rw_rts * dt_s;
     k->P[EKF_MP][EKF_MP] += c->mount_rw_rad_rts * c->mount_rw_rad_rts * dt_s;
     k->P[EKF_MY][EKF_MY] += c->mount_rw_rad_rts * c->mount_rw_rad_rts * dt_s;
+    /* the two-state clock's discrete noise (Brown & Hwang sec. 9.3): the drift's white
+     * noise integrated into the bias; Phi = I + F dt is exact for this block */
+    const nav_real_t qd = c->clk_d_psd_m2ps3;
+    k->P[EKF_CB][EKF_CB] += c->clk_b_psd_m2ps * dt_s + qd * dt2 * dt_s / NAV_C(3.0);
+    k->P[EKF_CB][EKF_CD] += qd * dt2 / NAV_C(2.0);
+    k->P[EKF_CD][EKF_CB] += qd * dt2 / NAV_C(2.0);
+    k->P[EKF_CD][EKF_CD] += qd * dt_s;
+    /* never more uncertain than a clock nobody measured (ekf_config_t): bounded without
+     * raw measurements */
+    const nav_real_t cap[2] = {c->clk_bias_m * c->clk_bias_m, c->clk_drift_mps * c->clk_drift_mps};
+    for (int a = 0; a < 2; a++) {
+        const int i = EKF_CB + a;
+        if (k->P[i][i] > cap[a]) {
+            scale_state(k, i, nav_sqrt(cap[a] / k->P[i][i]));
+            k->P[i][i] = cap[a];
+        }
+    }
     (void)ekf_health(k);
 }
 
@@ -351,6 +404,8 @@ int ekf_feedback(ekf_t *k, sins_t *s)
     k->mount_yaw_rad -= x[EKF_MY];
     k->gnss_bias_m[0] -= x[EKF_GB];
     k->gnss_bias_m[1] -= x[EKF_GB + 1];
+    k->clock_dmm -= nav_round_dmm(x[EKF_CB]);
+    k->clock_drift_mps -= x[EKF_CD];
     for (int i = 0; i < EKF_N; i++) {
         k->x[i] = NAV_C(0.0);
     }
@@ -392,15 +447,6 @@ static nav_real_t exp_neg(nav_real_t x_in)
         e *= e;
     }
     return e;
-}
-
-/* multiply row and column i of P by a (the diagonal by a^2) */
-static void scale_state(ekf_t *k, int i, nav_real_t a)
-{
-    for (int j = 0; j < EKF_N; j++) {
-        k->P[i][j] *= a;
-        k->P[j][i] *= a;
-    }
 }
 
 void ekf_gnss_bias_step(ekf_t *k, nav_real_t dt_s, nav_real_t tau_s, nav_real_t sigma_c_m,
@@ -449,6 +495,29 @@ void ekf_gnss_bias_start(ekf_t *k, nav_real_t sigma_c_m)
     }
 }
 
+void ekf_clock_start(ekf_t *k, int64_t clock_dmm, nav_real_t drift_mps, nav_real_t sigma_b_m,
+                     nav_real_t sigma_d_mps)
+{
+    const nav_real_t sd[2] = {sigma_b_m, sigma_d_mps};
+    for (int a = 0; a < 2; a++) {
+        const int i = EKF_CB + a;
+        for (int j = 0; j < EKF_N; j++) {
+            k->P[i][j] = NAV_C(0.0);
+            k->P[j][i] = NAV_C(0.0);
+        }
+        const nav_real_t v = sd[a] * sd[a];
+        k->P[i][i] = v > k->cfg.var_floor ? v : k->cfg.var_floor;
+        k->x[i] = NAV_C(0.0);
+    }
+    k->clock_dmm = clock_dmm;
+    k->clock_drift_mps = drift_mps;
+}
+
+void ekf_clock_advance(ekf_t *k, nav_real_t dt_s)
+{
+    k->clock_dmm += nav_round_dmm(k->clock_drift_mps * dt_s);
+}
+
 nav_real_t ekf_sigma_h_m(const ekf_t *k)
 {
     return nav_sqrt(k->P[EKF_DR][EKF_DR] + k->P[EKF_DR + 1][EKF_DR + 1]);
@@ -476,9 +545,10 @@ static int finite_n(const nav_real_t *v, int n)
 
 int ekf_state_ok(const ekf_t *k)
 {
-    const nav_real_t scalars[3] = {k->k, k->mount_yaw_rad, k->mount_pitch_rad};
+    const nav_real_t scalars[4] = {k->k, k->mount_yaw_rad, k->mount_pitch_rad,
+                                   k->clock_drift_mps};
     if (!finite_n(k->x, EKF_N) || !finite_n(k->bg_rps, 3) || !finite_n(k->ba_mps2, 3) ||
-        !finite_n(scalars, 3)) {
+        !finite_n(scalars, 4)) {
         return 0;
     }
     for (int i = 0; i < EKF_N; i++) {

@@ -1,8 +1,8 @@
 /*
- * ekf.h - the compact error-state Kalman filter: 20 states, float32, fixed-size storage,
+ * ekf.h - the compact error-state Kalman filter: 22 states, float32, fixed-size storage,
  * closed loop (seed 001: "the INS solution is reconciled with the GNSS solution by a Kalman
- * filter with 18 parameters": those 18, and the receiver's correlated horizontal error;
- * docs/kalman.md).
+ * filter with 18 parameters": those 18, the receiver's correlated horizontal error, and
+ * the receiver's clock for raw measurements (issue #20); docs/kalman.md).
  *
  * Error state x, all "computed minus true":
  *   0..2   dr    position error, ENU metres at the IMU
@@ -18,11 +18,20 @@
  *   18..19 db    the receiver's correlated horizontal position error, E and N, m: the
  *                filter's estimate gnss_bias_m minus the truth (a first-order Gauss-Markov
  *                process, ekf_gnss_bias_step; the fix's white part is the update's noise)
+ *   20     dcb   the receiver clock bias, m (c times seconds): the estimate clock_dmm
+ *                minus the truth
+ *   21     dcd   the receiver clock drift, m/s: the estimate clock_drift_mps minus the truth
+ *                (seed 001's test stand: the receiver's clock errors; Brown & Hwang,
+ *                "Introduction to Random Signals and Applied Kalman Filtering", 4th ed.,
+ *                sec. 9.3: the two-state clock model)
  * Dynamics (Titterton & Weston eqs 12.6, 12.8, 12.10, small terms of order v/R dropped):
  *   d(dr)/dt = dv
  *   d(dv)/dt = [f_n x] psi + C_bn ba - [(2 w_ie + w_en) x] dv + (0, 0, 2 g / R) dr_U
  *   d(psi)/dt = -[w_in x] psi - C_bn bg
  *   biases, k, mounting: random walks.
+ *   d(dcb)/dt = dcd + white (psd clk_b_psd), d(dcd)/dt = white (psd clk_d_psd): the clock
+ *   states are coupled to nothing else until a raw measurement correlates them, so a filter
+ *   fed only fixes computes the other 20 states exactly as without them.
  *   db: constant in ekf_predict (no coupling to the motion); its decay exp(-dt/tau) and
  *   driving noise are applied once per fix by ekf_gnss_bias_step, which is exact since
  *   the decay is a scaling of its own rows and columns only.
@@ -34,9 +43,10 @@
 #ifndef NAVECU_EKF_H
 #define NAVECU_EKF_H
 
+#include "gnss_geom.h"
 #include "sins.h"
 
-#define EKF_N 20
+#define EKF_N 22
 enum {
     EKF_DR = 0,
     EKF_DV = 3,
@@ -47,12 +57,15 @@ enum {
     EKF_MP = 16,
     EKF_MY = 17,
     EKF_GB = 18, /* E, N */
+    EKF_CB = 20, /* receiver clock bias, m */
+    EKF_CD = 21, /* receiver clock drift, m/s */
 };
 
 typedef struct {
     /* initial 1-sigma */
     nav_real_t pos_m, vel_mps, tilt_rad, heading_rad, bg_rps, ba_mps2, k, mount_rad;
     nav_real_t gnss_bias_m;      /* the receiver's correlated error per axis (ekf_init) */
+    nav_real_t clk_bias_m, clk_drift_mps; /* the receiver clock's, until ekf_clock_start */
     /* noise densities */
     nav_real_t arw_rad_rts;      /* gyro angle random walk, rad/sqrt(s) */
     nav_real_t vrw_mps_rts;      /* accelerometer velocity random walk, m/s/sqrt(s) */
@@ -60,6 +73,8 @@ typedef struct {
     nav_real_t ba_rw_mps2_rts;   /* accelerometer bias random walk */
     nav_real_t k_rw_rts;         /* odometer scale random walk (tyre wear, pressure), 1/sqrt(s) */
     nav_real_t mount_rw_rad_rts; /* mounting random walk (load, suspension) */
+    nav_real_t clk_b_psd_m2ps;   /* clock bias white noise psd, m^2/s (c^2 h0 / 2) */
+    nav_real_t clk_d_psd_m2ps3;  /* clock drift white noise psd, m^2/s^3 (2 pi^2 c^2 h-2) */
     nav_real_t var_floor;        /* smallest variance allowed on the diagonal */
 } ekf_config_t;
 
@@ -73,6 +88,10 @@ typedef struct {
     /* the receiver's correlated horizontal position error (E, N, m) as estimated: what
      * the fixes are corrected by before their update (ekf_gnss_position) */
     nav_real_t gnss_bias_m[2];
+    /* the receiver clock as estimated: its bias in 0.1 mm units (c times seconds: a clock of
+     * 1 ms is 3e5 m, beyond what float32 keeps to millimetres) and its drift, m/s */
+    int64_t clock_dmm;
+    nav_real_t clock_drift_mps;
     uint32_t n_updates;          /* accepted scalar updates */
     uint32_t n_gated;            /* measurements rejected by their innovation gate */
     uint32_t n_health_fixes;     /* last-resort covariance corrections */
@@ -288,6 +307,65 @@ int ekf_zero_velocity(ekf_t *k, const sins_t *s, nav_real_t sigma_mps, nav_real_
 /* Standstill: the bias-compensated z gyro rate minus the Earth's rate seen by the body z
  * axis (rad/s) measures the residual z gyro bias; 1-sigma sigma_rps. */
 int ekf_zero_rate(ekf_t *k, nav_real_t residual_rate_z_rps, nav_real_t sigma_rps);
+
+/* ------------------------------------------------------- raw GNSS (issue #20) ----
+ * Tightly coupled updates: one scalar per satellite and observable, formed against the
+ * fixed-point geometry of gnss_geom.h so that float32 sees only the residual (ranges of
+ * 2e7 m are reduced against the predicted range in 0.1 mm integers first:
+ * docs/numeric-design.md, "Raw GNSS ranges"). */
+#define EKF_RAW_ROWS 1
+#define ekf_rows_pseudorange NAV_SYM(ekf_rows_pseudorange)
+#define ekf_rows_range_rate NAV_SYM(ekf_rows_range_rate)
+#define ekf_clock_start NAV_SYM(ekf_clock_start)
+#define ekf_clock_advance NAV_SYM(ekf_clock_advance)
+
+/* One satellite as the rows need it: its geometry from the antenna (gnss_geom_sat) and the
+ * line of sight in the local ENU axes of the antenna. */
+typedef struct {
+    gnss_geom_t g;
+    nav_real_t los_enu[3]; /* unit vector antenna -> satellite, the navigator's ENU axes */
+    nav_real_t sat_vel_enu_mps[3]; /* the satellite's velocity in the same axes */
+} ekf_sat_t;
+
+/* Pseudorange (corrected: satellite clock, ionosphere and troposphere removed by the
+ * receiver, docs/can.md) of a satellite at sat_pos_lsb (0.02 m, ECEF axes of the transmit
+ * time) with velocity sat_vel_lsb (0.125 m/s), pr_lsb (0.02 m), seen by the antenna at
+ * lever_b_m (body, m) from the navigator s, whose position at the epoch's time of validity
+ * is pos_then. The antenna is pos_then + C l_b; the geometric range r (gnss_geom_sat: the
+ * Earth's rotation during the signal's travel included) and the clock estimate clock_dmm
+ * give the prediction; out z_m = r + clock - pr (m, formed in integers first) and the row
+ *   z = -u^T dr - u^T [(C l_b) x] psi + dcb = -u^T dr - (u x C l_b)^T psi + dcb
+ * with u the unit line of sight in ENU (the antenna error dr + [(C l_b) x] psi of the
+ * position rows, seen along u). Neglected: the Earth's rotation during the travel moves
+ * with the range, by w_ie |r_sat| / c per metre (6.5e-6: 65 um for a 10 m error). The satellite's geometry is returned in sat for the
+ * range-rate row. NAV_EINVAL for a satellite gnss_geom_sat refuses (a corrupt position)
+ * or a position pos_then + C l_b cannot form. */
+int ekf_rows_pseudorange(const ekf_t *k, const sins_t *s, const geo_pos_t *pos_then,
+                         const nav_real_t lever_b_m[3], const int32_t sat_pos_lsb[3],
+                         const int16_t sat_vel_lsb[3], uint32_t pr_lsb, ekf_sat_t *sat,
+                         nav_real_t h[EKF_N], nav_real_t *z_m);
+
+/* Pseudorange rate (m/s, rr_mps: the rate of the range plus the clock drift; a Doppler
+ * shift D at wavelength L is -D L) of the satellite sat (ekf_rows_pseudorange's), for the
+ * navigator's velocity at the epoch v_then_mps (ENU) and body rate w_b_rps: the antenna
+ * moves at v_a = v + C (w_b x l_b). Out z_mps = u . (v_sat - v_a) + clock_drift - rr and
+ *   z = -u^T dv - (u x C (w_b x l_b))^T psi + ((C^T u) x l_b)^T bg + dcd
+ * (the compensated rate w_b is the true one plus the residual gyro bias bg).
+ * Neglected: the line of sight's change with the position error, |v_sat - v_a| / r per
+ * metre (4e3 / 2e7: 2e-4 m/s per m). */
+void ekf_rows_range_rate(const ekf_t *k, const sins_t *s, const nav_real_t v_then_mps[3],
+                         const nav_real_t w_b_rps[3], const nav_real_t lever_b_m[3],
+                         const ekf_sat_t *sat, nav_real_t rr_mps, nav_real_t h[EKF_N],
+                         nav_real_t *z_mps);
+
+/* The clock estimated afresh (the first raw epoch, a receiver clock reset, a long gap): the
+ * estimates set to clock_dmm and drift_mps, their errors uncorrelated with the other states,
+ * 1-sigma sigma_b_m and sigma_d_mps. */
+void ekf_clock_start(ekf_t *k, int64_t clock_dmm, nav_real_t drift_mps, nav_real_t sigma_b_m,
+                     nav_real_t sigma_d_mps);
+
+/* The clock estimate moved on by its drift over dt_s (the errors' growth is ekf_predict's). */
+void ekf_clock_advance(ekf_t *k, nav_real_t dt_s);
 
 /* ---------------------------------------------------------------- access ----
  * The application reads the filter through these and changes its estimates only through

@@ -1,5 +1,5 @@
 /*
- * ekf_meas.c - the measurements of the 18-state filter (ekf.h, docs/kalman.md): for each,
+ * ekf_meas.c - the measurements of the filter (ekf.h, docs/kalman.md): for each,
  * a row builder (ekf_rows_*: rows h and innovations z, also called by the tests that check
  * each row against a numerical derivative, tests/test_ekf_rows.c) and the update that
  * gates and applies them.
@@ -247,4 +247,93 @@ int ekf_zero_rate(ekf_t *k, nav_real_t residual_rate_z_rps, nav_real_t sigma_rps
     ekf_rows_zero_rate(residual_rate_z_rps, H, z);
     const nav_real_t r[1] = {sigma_rps * sigma_rps};
     return apply_rows(k, H, z, r, 1, NAV_C(0.0));
+}
+
+/* ------------------------------------------------------- raw GNSS (issue #20) ---- */
+
+/* a in ECEF axes to the local east, north, up axes at latitude lat and longitude lon */
+static void ecef_to_enu(nav_real_t lat, nav_real_t lon, const nav_real_t a[3], nav_real_t out[3])
+{
+    const nav_real_t sl = nav_sin(lat), cl = nav_cos(lat);
+    const nav_real_t so = nav_sin(lon), co = nav_cos(lon);
+    out[0] = -so * a[0] + co * a[1];
+    out[1] = -sl * co * a[0] - sl * so * a[1] + cl * a[2];
+    out[2] = cl * co * a[0] + cl * so * a[1] + sl * a[2];
+}
+
+/* (u x a) for the rows' psi entries, negated: -(u x a) */
+static void neg_cross(const nav_real_t u[3], const nav_real_t a[3], nav_real_t out[3])
+{
+    out[0] = -(u[1] * a[2] - u[2] * a[1]);
+    out[1] = -(u[2] * a[0] - u[0] * a[2]);
+    out[2] = -(u[0] * a[1] - u[1] * a[0]);
+}
+
+int ekf_rows_pseudorange(const ekf_t *k, const sins_t *s, const geo_pos_t *pos_then,
+                         const nav_real_t lever_b_m[3], const int32_t sat_pos_lsb[3],
+                         const int16_t sat_vel_lsb[3], uint32_t pr_lsb, ekf_sat_t *sat,
+                         nav_real_t h[EKF_N], nav_real_t *z_m)
+{
+    mat3_t C;
+    quat_to_dcm(s->q_bn, &C);
+    nav_real_t l_n[3];
+    mat3_mul_vec(&C, lever_b_m, l_n);
+    const nav_real_t lat = geo_lat_rad(pos_then);
+    const nav_real_t hgt = geo_h_m(pos_then);
+    nav_real_t R_M, R_N;
+    earth_radii(nav_sin(lat), &R_M, &R_N);
+    geo_pos_t ant = *pos_then;
+    if (geo_pos_add(&ant, l_n[1] / (R_M + hgt), l_n[0] / ((R_N + hgt) * nav_cos(lat)),
+                    l_n[2]) != NAV_OK) {
+        return NAV_EINVAL;
+    }
+    int64_t rx_dmm[3];
+    geo_to_ecef_dmm(&ant, rx_dmm);
+    if (gnss_geom_sat(rx_dmm, sat_pos_lsb, sat_vel_lsb, &sat->g) != NAV_OK) {
+        return NAV_EINVAL;
+    }
+    /* the navigator's ENU axes, those of the error state dr and of its velocity */
+    const nav_real_t lon = geo_lon_rad(pos_then);
+    ecef_to_enu(lat, lon, sat->g.los_ecef, sat->los_enu);
+    ecef_to_enu(lat, lon, sat->g.sat_vel_mps, sat->sat_vel_enu_mps);
+    zero_row(h);
+    const nav_real_t *u = sat->los_enu;
+    nav_real_t hp[3];
+    neg_cross(u, l_n, hp);
+    for (int i = 0; i < 3; i++) {
+        h[EKF_DR + i] = -u[i];
+        h[EKF_PSI + i] = hp[i];
+    }
+    h[EKF_CB] = NAV_C(1.0);
+    *z_m = -gnss_geom_pr_residual_m(pr_lsb, &sat->g, k->clock_dmm);
+    return NAV_OK;
+}
+
+void ekf_rows_range_rate(const ekf_t *k, const sins_t *s, const nav_real_t v_then_mps[3],
+                         const nav_real_t w_b_rps[3], const nav_real_t lever_b_m[3],
+                         const ekf_sat_t *sat, nav_real_t rr_mps, nav_real_t h[EKF_N],
+                         nav_real_t *z_mps)
+{
+    mat3_t C;
+    quat_to_dcm(s->q_bn, &C);
+    nav_real_t wl_b[3], wl_n[3];
+    vec3_cross(w_b_rps, lever_b_m, wl_b);
+    mat3_mul_vec(&C, wl_b, wl_n);
+    const nav_real_t *u = sat->los_enu;
+    nav_real_t rate = k->clock_drift_mps - rr_mps;
+    for (int i = 0; i < 3; i++) {
+        rate += u[i] * (sat->sat_vel_enu_mps[i] - (v_then_mps[i] + wl_n[i]));
+    }
+    zero_row(h);
+    nav_real_t hp[3], u_b[3], hb[3];
+    neg_cross(u, wl_n, hp);
+    mat3t_mul_vec(&C, u, u_b);
+    vec3_cross(u_b, lever_b_m, hb);
+    for (int i = 0; i < 3; i++) {
+        h[EKF_DV + i] = -u[i];
+        h[EKF_PSI + i] = hp[i];
+        h[EKF_BG + i] = hb[i];
+    }
+    h[EKF_CD] = NAV_C(1.0);
+    *z_mps = rate;
 }
