@@ -106,8 +106,15 @@ void host_summary(FILE *out, const app_t *app, const hal_t *hal, unsigned long f
     fprintf(out, "navecu: foreign frames (not read, not refused): %lu\n",
             (unsigned long)h->foreign);
     if (app->keep.raw_epochs != 0u) {
-        fprintf(out, "navecu: raw GNSS epochs %lu, satellites %lu (assembled, not fused yet)\n",
-                (unsigned long)app->keep.raw_epochs, (unsigned long)app->keep.raw_sats);
+        const fusion_raw_counts_t *r = &app->keep.raw_counts;
+        fprintf(out, "navecu: raw GNSS epochs %lu, satellites %lu; fused epochs %lu: "
+                "pseudoranges %lu, range rates %lu used, %lu excluded (fault exclusion), %lu "
+                "gated; clock starts %lu, clock jumps %lu\n",
+                (unsigned long)app->keep.raw_epochs, (unsigned long)app->keep.raw_sats,
+                (unsigned long)r->epochs_used, (unsigned long)r->pr_used,
+                (unsigned long)r->rr_used, (unsigned long)r->excluded,
+                (unsigned long)r->gated, (unsigned long)r->clock_starts,
+                (unsigned long)r->clock_jumps);
     }
     if (h->imu_rate_mismatch != 0u) {
         fprintf(out,

@@ -943,6 +943,7 @@ typedef struct {
  * 20.3.3.4.3.3.2), the travel time iterated to convergence; the unit line of sight. */
 typedef struct {
     double range_m, u[3], v_rel_los_mps, clock_m, drift_mps;
+    double u_enu[3]; /* the line of sight in the navigator's ENU axes */
 } raw_truth_t;
 
 static raw_truth_t raw_geometry(const raw_ctx_t *c, const state_t *st)
@@ -986,6 +987,9 @@ static raw_truth_t raw_geometry(const raw_ctx_t *c, const state_t *st)
         t.u[i] = d[i] / t.range_m;
         t.v_rel_los_mps += t.u[i] * (rv[i] - v_a[i]);
     }
+    for (int i = 0; i < 3; i++) {
+        t.u_enu[i] = E[i][0] * t.u[0] + E[i][1] * t.u[1] + E[i][2] * t.u[2];
+    }
     t.clock_m = (double)st->kf.clock_dmm / (double)GNSS_GEOM_DMM_PER_M;
     t.drift_mps = (double)st->kf.clock_drift_mps;
     return t;
@@ -995,7 +999,9 @@ static void pr_h(const void *ctx, const state_t *st, double *z)
 {
     const raw_ctx_t *c = ctx;
     const raw_truth_t t = raw_geometry(c, st);
-    z[0] = t.range_m + t.clock_m - (double)c->pr_lsb * 0.02;
+    /* the correlated error estimate b shortens the predicted range by u . b */
+    z[0] = t.range_m + t.clock_m - (double)c->pr_lsb * 0.02 -
+           (t.u_enu[0] * (double)st->kf.gnss_bias_m[0] + t.u_enu[1] * (double)st->kf.gnss_bias_m[1]);
 }
 
 static void pr_rows(const void *ctx, const state_t *st, nav_real_t h[][EKF_N], nav_real_t *z)
@@ -1003,7 +1009,7 @@ static void pr_rows(const void *ctx, const state_t *st, nav_real_t h[][EKF_N], n
     const raw_ctx_t *c = ctx;
     ekf_sat_t sat;
     assert_int_equal(ekf_rows_pseudorange(&st->kf, &st->nav, &st->nav.pos, c->lever_b_m,
-                                          c->pos_lsb, c->vel_lsb, c->pr_lsb, &sat, h[0], z),
+                                          c->pos_lsb, c->vel_lsb, c->pr_lsb, 1, &sat, h[0], z),
                      NAV_OK);
 }
 
@@ -1065,7 +1071,8 @@ static void rr_rows(const void *ctx, const state_t *st, nav_real_t h[][EKF_N], n
     ekf_sat_t sat;
     nav_real_t h_pr[EKF_N], z_pr;
     assert_int_equal(ekf_rows_pseudorange(&st->kf, &st->nav, &st->nav.pos, c->lever_b_m,
-                                          c->pos_lsb, c->vel_lsb, c->pr_lsb, &sat, h_pr, &z_pr),
+                                          c->pos_lsb, c->vel_lsb, c->pr_lsb, 1, &sat, h_pr,
+                                          &z_pr),
                      NAV_OK);
     ekf_rows_range_rate(&st->kf, &st->nav, st->nav.v_n_mps, st->w_b_rps, c->lever_b_m, &sat,
                         c->rr_mps, h[0], z);
@@ -1111,6 +1118,8 @@ static void raw_case(state_t *truth, raw_ctx_t *c)
     true_state(truth, SPEED_MPS, MOUNT_PITCH_RAD, MOUNT_YAW_RAD);
     truth->kf.clock_dmm = 43212345;
     truth->kf.clock_drift_mps = NAV_C(57.3);
+    truth->kf.gnss_bias_m[0] = NAV_C(0.8);
+    truth->kf.gnss_bias_m[1] = NAV_C(-1.3);
     lever_of(GNSS_LEVER_B_M, c->lever_b_m);
     c->lever_norm_m = norm_d(GNSS_LEVER_B_M);
     const state_d_t s = read_state(truth);

@@ -64,7 +64,9 @@ static void start_at(double heading_deg, const nav_real_t v[3])
     diag.health = &health;
     diag.events = &events;
     diag.n_samples = N0;
-    const fusion_ctx_t c = {&nav, &dr, &odo, &land, &cfg, &diag, &filter_reset, &gnss, &gtime};
+    static fusion_raw_counts_t raw;
+    const fusion_ctx_t c = {&nav, &dr, &odo, &land, &cfg, &diag, &filter_reset, &gnss, &gtime,
+                            &raw};
     ctx = c;
     for (uint64_t n = N0 - 50u; n < N0; n++) {
         gnss_time_record(&gtime, n, cfg.imu_rate_hz, v);

@@ -116,7 +116,7 @@ static fusion_ctx_t fusion_ctx(app_t *a, const app_diag_t *d)
 {
     const fusion_ctx_t c = {&a->run.nav,          &a->run.dr,  &a->keep.odo, &a->run.land,
                             &a->cfg,              d,           &a->keep.filter_reset,
-                            &a->keep.gnss,        &a->keep.gnss_time};
+                            &a->keep.gnss,        &a->keep.gnss_time, &a->keep.raw_counts};
     return c;
 }
 
@@ -128,6 +128,14 @@ static void begin_reacquire(app_t *a)
     align_reacquire_begin(&a->run.align, &a->run.nav, mount);
     fusion_stop(&a->run.fusion);
     a->run.mode = APP_MODE_FAULT;
+}
+
+/* after a GNSS update: the filter's odometer scale and mounting offered to the calibration
+ * (calib.h: adopted by its policy) */
+static void adopt_filter_calibration(app_t *a, hal_t *hal)
+{
+    calib_adopt_filter(&a->keep.cal, &a->run.cal, hal, a->keep.n_samples, a->cfg.imu_rate_hz,
+                       &a->run.fusion.ekf, &a->run.dr, a->keep.odo.standing);
 }
 
 static void after_fusion(app_t *a, fusion_action_t act)
@@ -549,9 +557,7 @@ static void on_gnss_status(app_t *a, hal_t *hal, const rx_input_t *in)
         app_trace(APP_TRACE_GNSS_UPDATE, 0u);
         const fusion_action_t act = fusion_gnss(&a->run.fusion, &c, &prior, &fix, &adopt);
         if (adopt) {
-            calib_adopt_filter(&a->keep.cal, &a->run.cal, hal, a->keep.n_samples,
-                               a->cfg.imu_rate_hz, &a->run.fusion.ekf, &a->run.dr,
-                               a->keep.odo.standing);
+            adopt_filter_calibration(a, hal);
         }
         after_fusion(a, act);
         app_trace(APP_TRACE_GNSS_UPDATE, 1u);
@@ -572,9 +578,9 @@ static void on_gnss_status(app_t *a, hal_t *hal, const rx_input_t *in)
 
 /* A raw GNSS frame (issue #20): assembled into its epoch and checked (gnss_raw.h), a
  * repeat counted in bad_counter, a dropped or incomplete epoch in gnss_rejected (once per
- * epoch); a closed epoch's complete satellites are counted. The filter does not fuse them
- * yet (the tightly coupled update is the next step of issue #20, docs/can.md). */
-static void on_gnss_raw(app_t *a, const rx_input_t *in)
+ * epoch); a closed epoch's complete satellites are counted, and fused by the filter when
+ * gnss_input says so (fusion_raw). */
+static void on_gnss_raw(app_t *a, hal_t *hal, const rx_input_t *in)
 {
     if (in->kind == RX_GNSS_RAW_SAT) {
         const gnss_raw_frame_t r = gnss_raw_frame(&a->keep.raw, in);
@@ -595,9 +601,24 @@ static void on_gnss_raw(app_t *a, const rx_input_t *in)
     } else {
         /* a well-formed epoch */
     }
-    if (c.usable != 0u) {
-        app_count(&a->keep.raw_epochs);
-        app_count_n(&a->keep.raw_sats, c.n_sats);
+    if (c.usable == 0u) {
+        return;
+    }
+    app_count(&a->keep.raw_epochs);
+    app_count_n(&a->keep.raw_sats, c.n_sats);
+    if (a->run.mode == APP_MODE_NAVIGATING && !imu_rate_mismatch(&a->keep.rate)) {
+        const app_diag_t d = diag_of(a);
+        const fusion_ctx_t fc = fusion_ctx(a, &d);
+        int adopt = 0;
+        app_trace(APP_TRACE_GNSS_UPDATE, 0u);
+        const fusion_action_t act =
+            fusion_raw(&a->run.fusion, &fc, &a->keep.raw, &c, in->u.raw_epoch.tow_ms,
+                       in->u.raw_epoch.clock_reset != 0u, &adopt);
+        if (adopt) {
+            adopt_filter_calibration(a, hal);
+        }
+        after_fusion(a, act);
+        app_trace(APP_TRACE_GNSS_UPDATE, 1u);
     }
 }
 
@@ -683,7 +704,7 @@ void app_handle_frame(app_t *a, hal_t *hal, const hal_can_frame_t *f)
         break;
     case RX_GNSS_RAW_SAT:
     case RX_GNSS_RAW_EPOCH:
-        on_gnss_raw(a, &in);
+        on_gnss_raw(a, hal, &in);
         break;
     case RX_KNOWN_POSITION:
     case RX_COMMAND:

@@ -101,6 +101,7 @@ typedef struct {
                                state: outlives a navigation reset) */
     uint32_t raw_epochs;    /* raw epochs closed with a complete satellite (saturating) */
     uint32_t raw_sats;      /* their complete satellites (saturating) */
+    fusion_raw_counts_t raw_counts; /* what the tightly coupled updates did (fusion.h) */
     uint8_t cmd_refusal;         /* why the last command was refused (cmd_refusal_t; not a
                                     counter, so not in app_health_t, whose fields all are) */
     uint32_t dtc_dirty;          /* DTCs whose stored byte changed, not yet in NVM (bit i) */

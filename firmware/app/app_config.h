@@ -36,6 +36,13 @@ typedef enum {
     GNSS_VUP_NONE = 1, /* GNSS_Velocity VelUp is not a measurement: not fused */
 } gnss_vel_up_t;
 
+/* what the filter fuses of the receiver (the parameter gnss_input) */
+typedef enum {
+    GNSS_INPUT_FIX = 0,  /* fixes: position and velocity (loosely coupled) */
+    GNSS_INPUT_RAW = 1,  /* raw pseudoranges and rates (tightly coupled); fixes start it */
+    GNSS_INPUT_BOTH = 2, /* per epoch the fix, or the raw measurements of an epoch without */
+} gnss_input_t;
+
 /* the IMU's sample time (the parameter imu_time) */
 typedef enum {
     IMU_TIME_GRID = 0,    /* every sample 1/imu_rate_hz long */
@@ -72,6 +79,7 @@ typedef struct {
     nav_real_t gnss_vacc_m;       /* declared vertical accuracy, 1 sigma */
     nav_real_t gnss_sacc_mps;     /* declared speed accuracy */
     gnss_vel_up_t gnss_vel_up;    /* the receiver measures VelUp, or not */
+    gnss_input_t gnss_input;      /* what the filter fuses: fixes, raw measurements, both */
     nav_real_t odo_lever_b_m[3];  /* the odometer's reference point (rear axle middle) from
                                      the IMU, body axes, m */
     nav_real_t odo_lever_sigma_m; /* its 1-sigma uncertainty, m */

@@ -170,6 +170,31 @@
 #define APP_GNSS_REOPEN_VEL_MPS NAV_C(1.0)
 #define APP_GNSS_REOPEN_AFTER 2u /* refused fixes in a row before a reopen may happen */
 
+/* ---- tightly coupled GNSS (issue #20, fusion.c, docs/kalman.md) ----
+ * A pseudorange is no better than a code receiver's range error: APP_RAW_PR_SIGMA_ZENITH_M
+ * at the zenith over sin(elevation) (the atmosphere's residuals and multipath grow toward
+ * the horizon; elevations below APP_RAW_EL_MIN_RAD count as that), whatever the receiver
+ * declares (its tracking figure: the Kingston receiver says 0.05 m). Range rates: at least
+ * APP_RAW_RR_SIGMA_MIN_MPS (a Doppler's noise and the satellites' velocity errors). */
+#define APP_RAW_PR_SIGMA_ZENITH_M NAV_C(3.0)
+#define APP_RAW_EL_MIN_RAD NAV_C(0.1745) /* 10 deg */
+#define APP_RAW_RR_SIGMA_MIN_MPS NAV_C(0.2)
+/* the clock estimated afresh: its sigma is the filter's position (velocity) sigma plus
+ * these, for the satellites' errors in the median */
+#define APP_RAW_CLOCK_SIGMA_M NAV_C(10.0)
+#define APP_RAW_DRIFT_SIGMA_MPS NAV_C(0.5)
+/* the clock carried over a gap of at most this (a TCXO's drift random walk grows the bias
+ * sigma to ~50 m in 60 s) */
+#define APP_RAW_CLOCK_KEEP_S NAV_C(60.0)
+/* a receiver clock reset found: every residual (their median) beyond both */
+#define APP_RAW_CLOCK_JUMP_M NAV_C(1000.0)
+#define APP_RAW_CLOCK_JUMP_SIGMAS NAV_C(10.0)
+/* gnss_input = both: raw epochs are fused when no fix came for this many of the
+ * receiver's usual fix intervals (1.5: a fix late by half an interval is still coming) */
+#define APP_RAW_BOTH_GAP_EPOCHS NAV_C(1.5)
+/* fault exclusion: a residual this many sigmas from the epoch's median */
+#define APP_RAW_FDE_SIGMAS NAV_C(5.0)
+
 /* ---- filter supervision (docs/reliability.md) ---- */
 #define APP_FILTER_REOPEN_LIMIT 3u /* covariance reopens without a fix taken: diverged */
 /* GNSS course vs the filter's heading: 10 deg */

@@ -249,6 +249,9 @@ fusion_action_t fusion_imu_step(fusion_t *fu, const fusion_ctx_t *c, imu_inc_t *
     app_trace(APP_TRACE_PREDICTION, 0u);
     ekf_predict(&fu->ekf, c->nav, f_mean, T);
     app_trace(APP_TRACE_PREDICTION, 1u);
+    for (int i = 0; i < 3; i++) {
+        fu->w_b_last_rps[i] = fu->w_sum_rad[i] / T;
+    }
     odometer_updates(fu, c, T, f_mean);
     feed_back(fu, c);
     int was_reset;
@@ -378,6 +381,7 @@ fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_pr
         }
         return FUSION_GO_ON;
     }
+
     nav_real_t d[3];
     gnss_time_displacement(c->time, &when, d);
     geo_pos_t then = c->nav->pos;
@@ -433,6 +437,11 @@ fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_pr
         as_state != 0u ? cfg->gnss_white_ratio * sh : sh * nav_sqrt(r_scale);
     const nav_real_t shc =
         sh * nav_sqrt(NAV_C(1.0) - cfg->gnss_white_ratio * cfg->gnss_white_ratio);
+    if (fu->on && cfg->gnss_input == GNSS_INPUT_RAW) {
+        /* raw measurements are the filter's GNSS input (gnss_input): the fix has served the
+         * receiver's clock, latency and usual interval (above) */
+        return FUSION_GO_ON;
+    }
     if (!fu->on) {
         if (!start_at_fix(fu, c, prior, fix, d, sh, &then)) {
             return FUSION_GO_ON;
@@ -477,6 +486,364 @@ fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_pr
     }
     fu->ekf.hold_heading = 0u;
     gate_run(fu, c, rp >= 2, sh); /* rp >= 2: the horizontal fix was taken */
+    feed_back(fu, c);
+    int was_reset;
+    const fusion_action_t act = supervise(fu, c, &was_reset);
+    *adopt = !was_reset;
+    return act;
+}
+
+/* ------------------------------------------------------ raw GNSS (issue #20) ----
+ * Tightly coupled: each satellite's pseudorange and range rate a scalar update of the
+ * filter (ekf_rows_pseudorange, ekf_rows_range_rate), docs/kalman.md "Tightly coupled
+ * GNSS". Per epoch:
+ * 1. the epoch's time of validity in the navigator's history, as for a fix;
+ * 2. the clock: moved on by its drift since the last epoch; estimated afresh from the
+ *    median of the satellites' residuals at the first epoch, after a gap longer than
+ *    APP_RAW_CLOCK_KEEP_S, after the filter was reopened, and at a receiver clock reset
+ *    (flagged, or every residual off by the same beyond APP_RAW_CLOCK_JUMP_SIGMAS of the
+ *    clock's sigma and APP_RAW_CLOCK_JUMP_M);
+ * 3. fault exclusion: a satellite whose residual differs from the epoch's median by more
+ *    than APP_RAW_FDE_SIGMAS of (its sigma and the filter's position sigma) is excluded
+ *    and counted (a multipath or a tracking fault: the median is the other satellites'
+ *    consensus on the clock; with two satellites that disagree, neither can be told
+ *    right, and both are excluded);
+ * 4. the updates, highest satellite first, each gated by the filter (APP_GNSS_GATE_SIGMA);
+ *    the pseudoranges' variances multiplied by gnss_corr_s over the epoch interval, as
+ *    the fixes' height (errors correlated from epoch to epoch), the range rates' not. */
+
+#define RAW_MAX ((int)GNSS_RAW_MAX_SATS)
+
+/* the median of n values (1 <= n <= RAW_MAX): a sorted copy */
+static nav_real_t median_of(const nav_real_t *v, int n)
+{
+    nav_real_t s[RAW_MAX];
+    for (int i = 0; i < n; i++) {
+        nav_real_t x = v[i];
+        int j = i;
+        while (j > 0 && s[j - 1] > x) {
+            s[j] = s[j - 1];
+            j--;
+        }
+        s[j] = x;
+    }
+    return (n % 2) != 0 ? s[n / 2] : NAV_C(0.5) * (s[n / 2 - 1] + s[n / 2]);
+}
+
+/* one satellite's pseudorange sigma (m) and range-rate sigma (m/s): the receiver's, no
+ * better than the floors (a receiver's tracking figure is not its range error) */
+static nav_real_t pr_sigma_m(const gnss_raw_sat_t *m)
+{
+    const nav_real_t el = (nav_real_t)m->elevation_deg * NAV_C(0.017453292519943295);
+    const nav_real_t s_el = nav_sin(el > APP_RAW_EL_MIN_RAD ? el : APP_RAW_EL_MIN_RAD);
+    const nav_real_t floor_m = APP_RAW_PR_SIGMA_ZENITH_M / s_el;
+    const nav_real_t d = (nav_real_t)m->pr_sigma_lsb * NAV_C(0.1);
+    return d > floor_m ? d : floor_m;
+}
+
+static nav_real_t rr_sigma_mps(const gnss_raw_sat_t *m)
+{
+    const nav_real_t d = (nav_real_t)m->rr_sigma_lsb * NAV_C(0.01);
+    return d > APP_RAW_RR_SIGMA_MIN_MPS ? d : APP_RAW_RR_SIGMA_MIN_MPS;
+}
+
+typedef struct {
+    const fusion_ctx_t *c;
+    const gnss_raw_asm_t *g;
+    geo_pos_t then;
+    const nav_real_t *v_then;
+    int n;                    /* satellites */
+    uint8_t slot[RAW_MAX];    /* their slots, highest first */
+    int use_bias;             /* the ranges' correlated errors are the state db */
+} raw_epoch_t;
+
+/* residuals (computed minus measured) of every satellite's pseudorange (rate = 0) or
+ * range rate (rate = 1) against the filter's estimates, ok[i] = 0 where none */
+static void raw_residuals(const fusion_t *fu, const raw_epoch_t *e, int rate, nav_real_t *z,
+                          uint8_t *ok)
+{
+    const app_config_t *cfg = e->c->cfg;
+    for (int i = 0; i < e->n; i++) {
+        const gnss_raw_sat_t *m = &e->g->sat[e->slot[i]];
+        ekf_sat_t sat;
+        nav_real_t h[EKF_N];
+        ok[i] = 0u;
+        if (ekf_rows_pseudorange(&fu->ekf, e->c->nav, &e->then, cfg->gnss_lever_b_m, m->pos_lsb,
+                                 m->vel_lsb, m->pr_lsb, e->use_bias, &sat, h, &z[i]) != NAV_OK) {
+            continue;
+        }
+        if (rate != 0) {
+            if (m->rr_valid == 0u) {
+                continue;
+            }
+            ekf_rows_range_rate(&fu->ekf, e->c->nav, e->v_then, fu->w_b_last_rps,
+                                cfg->gnss_lever_b_m, &sat, (nav_real_t)m->rr_lsb * NAV_C(0.01),
+                                h, &z[i]);
+        } else if (m->pr_valid == 0u) {
+            continue;
+        } else {
+            /* a pseudorange */
+        }
+        ok[i] = (uint8_t)(nav_isfinite(z[i]) ? 1u : 0u);
+    }
+}
+
+/* the median of the usable residuals; 0 when there is none (n_ok = 0) */
+static nav_real_t median_ok(const nav_real_t *z, const uint8_t *ok, int n, int *n_ok)
+{
+    nav_real_t v[RAW_MAX];
+    int k = 0;
+    for (int i = 0; i < n; i++) {
+        if (ok[i] != 0u) {
+            v[k] = z[i];
+            k++;
+        }
+    }
+    *n_ok = k;
+    return k > 0 ? median_of(v, k) : NAV_C(0.0);
+}
+
+/* The clock estimated afresh from the median residuals (the clock bias and drift that make
+ * them zero), sigmas: the filter's position (velocity) sigma and the clock's floor. */
+static void raw_clock_start(fusion_t *fu, const raw_epoch_t *e, nav_real_t med_pr,
+                            nav_real_t med_rr)
+{
+    ekf_t *k = &fu->ekf;
+    const nav_real_t sp = nav_sqrt(k->P[EKF_DR][EKF_DR] + k->P[EKF_DR + 1][EKF_DR + 1] +
+                                   k->P[EKF_DR + 2][EKF_DR + 2]);
+    const nav_real_t sv = nav_sqrt(k->P[EKF_DV][EKF_DV] + k->P[EKF_DV + 1][EKF_DV + 1] +
+                                   k->P[EKF_DV + 2][EKF_DV + 2]);
+    const nav_real_t shift_dmm = med_pr * (nav_real_t)GNSS_GEOM_DMM_PER_M;
+    const int64_t clock = k->clock_dmm - (int64_t)(shift_dmm >= NAV_C(0.0)
+                                                       ? shift_dmm + NAV_C(0.5)
+                                                       : shift_dmm - NAV_C(0.5));
+    ekf_clock_start(k, clock, k->clock_drift_mps - med_rr, sp + APP_RAW_CLOCK_SIGMA_M,
+                    sv + APP_RAW_DRIFT_SIGMA_MPS);
+    fu->clock_valid = 1u;
+    app_count(&e->c->raw->clock_starts);
+}
+
+/* fault exclusion (step 3 above): ok[i] cleared for a residual too far from the median;
+ * sigma(i) the measurement's, s_state the filter's sigma along any line of sight.
+ * Returns the number excluded. */
+static int raw_exclude(const raw_epoch_t *e, const nav_real_t *z, uint8_t *ok, int rate,
+                       nav_real_t s_state)
+{
+    int n_ok;
+    const nav_real_t med = median_ok(z, ok, e->n, &n_ok);
+    int n_out = 0;
+    if (n_ok < 2) {
+        return 0;
+    }
+    for (int i = 0; i < e->n; i++) {
+        if (ok[i] == 0u) {
+            continue;
+        }
+        const gnss_raw_sat_t *m = &e->g->sat[e->slot[i]];
+        const nav_real_t s = rate != 0 ? rr_sigma_mps(m) : pr_sigma_m(m);
+        const nav_real_t lim = APP_RAW_FDE_SIGMAS * nav_sqrt(s * s + s_state * s_state);
+        if (nav_fabs(z[i] - med) > lim) {
+            ok[i] = 0u;
+            n_out++;
+        }
+    }
+    return n_out;
+}
+
+/* the scalar updates of the usable measurements (rate = 0 pseudoranges, 1 range rates);
+ * returns the number applied, *gated the number the gate refused */
+static int raw_updates(fusion_t *fu, const raw_epoch_t *e, const uint8_t *ok, int rate,
+                       nav_real_t r_scale, int *gated)
+{
+    const app_config_t *cfg = e->c->cfg;
+    int used = 0;
+    for (int i = 0; i < e->n; i++) {
+        if (ok[i] == 0u) {
+            continue;
+        }
+        const gnss_raw_sat_t *m = &e->g->sat[e->slot[i]];
+        ekf_sat_t sat;
+        nav_real_t h[EKF_N], z;
+        if (ekf_rows_pseudorange(&fu->ekf, e->c->nav, &e->then, cfg->gnss_lever_b_m, m->pos_lsb,
+                                 m->vel_lsb, m->pr_lsb, e->use_bias, &sat, h, &z) != NAV_OK) {
+            continue;
+        }
+        nav_real_t r;
+        if (rate != 0) {
+            ekf_rows_range_rate(&fu->ekf, e->c->nav, e->v_then, fu->w_b_last_rps,
+                                cfg->gnss_lever_b_m, &sat, (nav_real_t)m->rr_lsb * NAV_C(0.01),
+                                h, &z);
+            const nav_real_t s = rr_sigma_mps(m);
+            r = s * s;
+        } else {
+            /* with the state db the white part (gnss_white_ratio), else all of it,
+             * its variance inflated by r_scale */
+            const nav_real_t s = pr_sigma_m(m) * (e->use_bias != 0 ? cfg->gnss_white_ratio
+                                                                    : NAV_C(1.0));
+            r = s * s * r_scale;
+        }
+        const int rc = ekf_update(&fu->ekf, h, z, r, APP_GNSS_GATE_SIGMA);
+        if (rc == 1) {
+            used++;
+        } else if (rc == 0) {
+            (*gated)++;
+        } else {
+            /* not finite: not counted as a measurement */
+        }
+    }
+    return used;
+}
+
+/* the epoch's satellites with a complete set of frames, highest first */
+static void raw_order(raw_epoch_t *e, const gnss_raw_close_t *closed)
+{
+    e->n = 0;
+    for (int s = 0; s < RAW_MAX; s++) {
+        if ((closed->complete & (1u << (unsigned)s)) == 0u) {
+            continue;
+        }
+        const uint8_t el = e->g->sat[s].elevation_deg;
+        int j = e->n;
+        while (j > 0 && e->g->sat[e->slot[j - 1]].elevation_deg < el) {
+            e->slot[j] = e->slot[j - 1];
+            j--;
+        }
+        e->slot[j] = (uint8_t)s;
+        e->n++;
+    }
+}
+
+fusion_action_t fusion_raw(fusion_t *fu, const fusion_ctx_t *c, const gnss_raw_asm_t *g,
+                           const gnss_raw_close_t *closed, uint32_t tow_ms, int clock_reset,
+                           int *adopt)
+{
+    const app_config_t *cfg = c->cfg;
+    const uint64_t n = c->diag->n_samples;
+    *adopt = 0;
+    if (!fu->on || cfg->gnss_input == GNSS_INPUT_FIX) {
+        return FUSION_GO_ON;
+    }
+    /* gnss_input = both: the raw measurements only while the receiver gives no fixes (none
+     * offered for APP_RAW_BOTH_GAP_EPOCHS of its usual intervals): an epoch's fix and its raw
+     * measurements are the same information, whichever comes first on the bus */
+    if (cfg->gnss_input == GNSS_INPUT_BOTH && fu->gnss_ep_typ_s > NAV_C(0.0) &&
+        (nav_real_t)(n - fu->prev_fix_sample) <
+            APP_RAW_BOTH_GAP_EPOCHS * fu->gnss_ep_typ_s * (nav_real_t)cfg->imu_rate_hz) {
+        return FUSION_GO_ON;
+    }
+    gnss_when_t when = gnss_time_align(c->time, c->diag->t_us, cfg->imu_rate_hz, tow_ms,
+                                       gnss_time_latency(c->time, cfg->gnss_latency_s));
+    if (when.jumped) {
+        app_count(&c->diag->health->time_jumps);
+    }
+    if (!when.in_history) {
+        if (!when.before_history) {
+            app_diag_reject(c->diag, &c->diag->health->gnss_rejected);
+        }
+        return FUSION_GO_ON;
+    }
+    raw_epoch_t e;
+    e.c = c;
+    e.g = g;
+    nav_real_t d[3];
+    gnss_time_displacement(c->time, &when, d);
+    e.then = c->nav->pos;
+    const nav_real_t lat = geo_lat_rad(&e.then);
+    const nav_real_t h = geo_h_m(&e.then);
+    nav_real_t R_M, R_N;
+    earth_radii(nav_sin(lat), &R_M, &R_N);
+    if (geo_pos_add(&e.then, -d[1] / (R_M + h), -d[0] / ((R_N + h) * nav_cos(lat)), -d[2]) !=
+        NAV_OK) {
+        app_diag_reject(c->diag, &c->diag->health->gnss_rejected);
+        return FUSION_GO_ON;
+    }
+    e.v_then = gnss_time_velocity_then(c->time, &when);
+    raw_order(&e, closed);
+    /* the correlated errors as the fixes' state db when it is one (fusion_gnss: the
+     * correlation time spans APP_GNSS_STATE_MIN_FIXES of the receiver's epochs) */
+    e.use_bias = fu->gnss_ep_typ_s > NAV_C(0.0) &&
+                 cfg->gnss_corr_s >= APP_GNSS_STATE_MIN_FIXES * fu->gnss_ep_typ_s;
+    /* 2. the clock */
+    const nav_real_t dt_s = (nav_real_t)(n - fu->raw_sample) / (nav_real_t)cfg->imu_rate_hz;
+    if (fu->clock_valid != 0u && dt_s <= APP_RAW_CLOCK_KEEP_S) {
+        ekf_clock_advance(&fu->ekf, dt_s);
+    } else {
+        fu->clock_valid = 0u;
+    }
+    fu->raw_sample = n;
+    nav_real_t z_pr[RAW_MAX], z_rr[RAW_MAX];
+    uint8_t ok_pr[RAW_MAX], ok_rr[RAW_MAX];
+    raw_residuals(fu, &e, 0, z_pr, ok_pr);
+    raw_residuals(fu, &e, 1, z_rr, ok_rr);
+    int n_pr, n_rr;
+    const nav_real_t med_pr = median_ok(z_pr, ok_pr, e.n, &n_pr);
+    const nav_real_t med_rr = median_ok(z_rr, ok_rr, e.n, &n_rr);
+    if (n_pr == 0) {
+        return FUSION_GO_ON; /* nothing to measure with */
+    }
+    const nav_real_t s_clk = ekf_state_sigma(&fu->ekf, EKF_CB);
+    const int jumped = fu->clock_valid != 0u && n_pr >= 2 &&
+                       nav_fabs(med_pr) > APP_RAW_CLOCK_JUMP_M &&
+                       nav_fabs(med_pr) > APP_RAW_CLOCK_JUMP_SIGMAS * s_clk;
+    if (clock_reset != 0 || jumped) {
+        app_count(&c->raw->clock_jumps);
+        fu->clock_valid = 0u;
+    }
+    if (fu->clock_valid == 0u) {
+        raw_clock_start(fu, &e, med_pr, med_rr);
+        raw_residuals(fu, &e, 0, z_pr, ok_pr);
+        raw_residuals(fu, &e, 1, z_rr, ok_rr);
+    }
+    /* 3. fault exclusion */
+    const ekf_t *k = &fu->ekf;
+    const nav_real_t s_pos = nav_sqrt(k->P[EKF_DR][EKF_DR] + k->P[EKF_DR + 1][EKF_DR + 1] +
+                                      k->P[EKF_DR + 2][EKF_DR + 2]);
+    const nav_real_t s_vel = nav_sqrt(k->P[EKF_DV][EKF_DV] + k->P[EKF_DV + 1][EKF_DV + 1] +
+                                      k->P[EKF_DV + 2][EKF_DV + 2]);
+    int out = raw_exclude(&e, z_pr, ok_pr, 0, s_pos);
+    out += raw_exclude(&e, z_rr, ok_rr, 1, s_vel);
+    /* 4. the updates: the pseudoranges' errors correlated over gnss_corr_s, as the state
+     * db (its stationary sigma the correlated part of the epoch's median range sigma) or
+     * by inflating their variance */
+    const nav_real_t ep_s = dt_s > APP_GNSS_EPOCH_MIN_S ? dt_s : APP_GNSS_EPOCH_MIN_S;
+    nav_real_t r_scale = cfg->gnss_corr_s > ep_s ? cfg->gnss_corr_s / ep_s : NAV_C(1.0);
+    if (e.use_bias != 0) {
+        nav_real_t sg[RAW_MAX];
+        for (int i = 0; i < e.n; i++) {
+            sg[i] = pr_sigma_m(&g->sat[e.slot[i]]);
+        }
+        const nav_real_t shc =
+            median_of(sg, e.n) *
+            nav_sqrt(NAV_C(1.0) - cfg->gnss_white_ratio * cfg->gnss_white_ratio);
+        ekf_gnss_bias_step(&fu->ekf,
+                           (nav_real_t)(n - fu->gnss_bias_sample) / (nav_real_t)cfg->imu_rate_hz,
+                           cfg->gnss_corr_s, shc, fu->gnss_sc_prev_m);
+        fu->gnss_sc_prev_m = shc;
+        fu->gnss_bias_sample = n;
+        r_scale = NAV_C(1.0);
+    }
+    const nav_real_t v2 = e.v_then[0] * e.v_then[0] + e.v_then[1] * e.v_then[1];
+    const nav_real_t v_min = APP_GNSS_HEADING_SPEED_SIGMAS * APP_RAW_RR_SIGMA_MIN_MPS;
+    fu->ekf.hold_heading = v2 < v_min * v_min ? 1u : 0u;
+    int gated = 0;
+    const int pr_used = raw_updates(fu, &e, ok_pr, 0, r_scale, &gated);
+    const int rr_used = raw_updates(fu, &e, ok_rr, 1, NAV_C(1.0), &gated);
+    fu->ekf.hold_heading = 0u;
+    app_count_n(&c->raw->pr_used, (uint32_t)pr_used);
+    app_count_n(&c->raw->rr_used, (uint32_t)rr_used);
+    app_count_n(&c->raw->excluded, (uint32_t)out);
+    app_count_n(&c->raw->gated, (uint32_t)gated);
+    if (pr_used > 0) {
+        app_count(&c->raw->epochs_used);
+    }
+    if (out + gated > 0) {
+        app_diag_reject(c->diag, &c->diag->health->gnss_rejected); /* once per epoch */
+    }
+    const uint32_t reopened = fu->ekf.n_reopened;
+    gate_run(fu, c, pr_used > 0, APP_RAW_PR_SIGMA_ZENITH_M);
+    if (fu->ekf.n_reopened != reopened) {
+        fu->clock_valid = 0u; /* the clock goes with the position it was estimated with */
+    }
     feed_back(fu, c);
     int was_reset;
     const fusion_action_t act = supervise(fu, c, &was_reset);

@@ -30,10 +30,26 @@
 #include "dr.h"
 #include "ekf.h"
 #include "gnss_epoch.h"
+#include "gnss_raw.h"
 #include "gnss_time.h"
 #include "landnav.h"
 #include "odo.h"
 #include "sins.h"
+
+/* What the tightly coupled updates did (issue #20), kept over navigation restarts
+ * (app_keep_t); saturating. */
+typedef struct {
+    uint32_t epochs_used;   /* raw epochs fused */
+    uint32_t pr_used;       /* pseudorange updates applied */
+    uint32_t rr_used;       /* range-rate updates applied */
+    uint32_t excluded;      /* measurements excluded by the consistency check among the
+                               epoch's satellites (fault exclusion: fusion.c) */
+    uint32_t gated;         /* measurements refused by the filter's innovation gate */
+    uint32_t clock_starts;  /* the clock estimated afresh: the first epoch, a long gap, a
+                               reopened filter */
+    uint32_t clock_jumps;   /* receiver clock resets (flagged in GNSS_RawEpoch, or found:
+                               every satellite off by the same beyond the clock's sigma) */
+} fusion_raw_counts_t;
 
 typedef struct {
     ekf_t ekf;
@@ -58,6 +74,10 @@ typedef struct {
     /* the next start's heading and tilt sigmas (rad) when the start knows them (the
      * in-motion alignment, align.h); 0: the filter's defaults. Used once. */
     nav_real_t init_heading_sigma_rad, init_tilt_sigma_rad;
+    nav_real_t w_b_last_rps[3]; /* the mean body rate of the last prediction interval */
+    /* raw GNSS (issue #20) */
+    uint8_t clock_valid;        /* the filter's clock states hold an estimate */
+    uint64_t raw_sample;        /* sample of the last raw epoch fused */
 } fusion_t;
 
 /* What the caller does after a fusion step. */
@@ -80,6 +100,7 @@ typedef struct {
     const app_stamp_t *gnss;    /* the latest usable GNSS epoch */
     gnss_time_t *time;          /* the receiver's clock and latency, the velocity history
                                    (app_keep_t: the receiver outlives a navigation reset) */
+    fusion_raw_counts_t *raw;   /* the tightly coupled updates' counters */
 } fusion_ctx_t;
 
 /* The estimates the filter starts from: what standstill and calibration already know. */
@@ -104,6 +125,15 @@ fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_pr
                             const gnss_fix_t *fix, int *adopt);
 
 /* Remember the latest GNSS course and speed (any epoch with a velocity). */
+/* One closed raw epoch (gnss_raw.h: the assembly g with its complete satellites in
+ * closed->complete; TimeOfWeek tow_ms; clock_reset as flagged in GNSS_RawEpoch) for the
+ * tightly coupled updates (docs/kalman.md, "Tightly coupled GNSS"), with cfg->gnss_input
+ * raw, or both while the receiver gives no fixes. The filter starts from a fix: before
+ * that the epoch is not used. */
+fusion_action_t fusion_raw(fusion_t *fu, const fusion_ctx_t *c, const gnss_raw_asm_t *g,
+                           const gnss_raw_close_t *closed, uint32_t tow_ms, int clock_reset,
+                           int *adopt);
+
 void fusion_note_course(fusion_t *fu, nav_real_t speed_mps, nav_real_t course_rad);
 
 /* Stop the filter (re-acquisition, a reset): it restarts at a later fix. */

@@ -339,11 +339,16 @@ typedef struct {
  * position rows, seen along u). Neglected: the Earth's rotation during the travel moves
  * with the range, by w_ie |r_sat| / c per metre (6.5e-6: 65 um for a 10 m error). The satellite's geometry is returned in sat for the
  * range-rate row. NAV_EINVAL for a satellite gnss_geom_sat refuses (a corrupt position)
- * or a position pos_then + C l_b cannot form. */
+ * or a position pos_then + C l_b cannot form.
+ * With use_bias, the ranges' errors correlated in time are the receiver's correlated
+ * horizontal position error (the state db of the fixes, ekf_gnss_bias_step) seen along the
+ * line of sight: the prediction is shortened by u_E b_E + u_N b_N (b = gnss_bias_m) and
+ * the row has -u_E, -u_N on db. Exact while the same satellites are tracked; a model of
+ * the errors' correlation, like the fixes' (docs/kalman.md). */
 int ekf_rows_pseudorange(const ekf_t *k, const sins_t *s, const geo_pos_t *pos_then,
                          const nav_real_t lever_b_m[3], const int32_t sat_pos_lsb[3],
-                         const int16_t sat_vel_lsb[3], uint32_t pr_lsb, ekf_sat_t *sat,
-                         nav_real_t h[EKF_N], nav_real_t *z_m);
+                         const int16_t sat_vel_lsb[3], uint32_t pr_lsb, int use_bias,
+                         ekf_sat_t *sat, nav_real_t h[EKF_N], nav_real_t *z_m);
 
 /* Pseudorange rate (m/s, rr_mps: the rate of the range plus the clock drift; a Doppler
  * shift D at wavelength L is -D L) of the satellite sat (ekf_rows_pseudorange's), for the

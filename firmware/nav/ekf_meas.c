@@ -271,8 +271,8 @@ static void neg_cross(const nav_real_t u[3], const nav_real_t a[3], nav_real_t o
 
 int ekf_rows_pseudorange(const ekf_t *k, const sins_t *s, const geo_pos_t *pos_then,
                          const nav_real_t lever_b_m[3], const int32_t sat_pos_lsb[3],
-                         const int16_t sat_vel_lsb[3], uint32_t pr_lsb, ekf_sat_t *sat,
-                         nav_real_t h[EKF_N], nav_real_t *z_m)
+                         const int16_t sat_vel_lsb[3], uint32_t pr_lsb, int use_bias,
+                         ekf_sat_t *sat, nav_real_t h[EKF_N], nav_real_t *z_m)
 {
     mat3_t C;
     quat_to_dcm(s->q_bn, &C);
@@ -306,6 +306,13 @@ int ekf_rows_pseudorange(const ekf_t *k, const sins_t *s, const geo_pos_t *pos_t
     }
     h[EKF_CB] = NAV_C(1.0);
     *z_m = -gnss_geom_pr_residual_m(pr_lsb, &sat->g, k->clock_dmm);
+    if (use_bias != 0) {
+        /* the correlated part of the range errors as the receiver's horizontal position
+         * error b: the range is short by u . b */
+        h[EKF_GB] = -u[0];
+        h[EKF_GB + 1] = -u[1];
+        *z_m -= u[0] * k->gnss_bias_m[0] + u[1] * k->gnss_bias_m[1];
+    }
     return NAV_OK;
 }
 

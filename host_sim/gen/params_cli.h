@@ -18,7 +18,7 @@ typedef struct {
     const char *description;
 } params_cli_t;
 
-#define PARAMS_CLI_N 34
+#define PARAMS_CLI_N 35
 
 static const params_cli_t params_cli[PARAMS_CLI_N] = {
     {"--imu-rate-hz", APP_PARAM_IMU_RATE_HZ, "Hz", 10.0, 400.0, 1.0, "", "IMU sample rate: one IMU_Rate + IMU_Accel pair per sample"},
@@ -51,6 +51,7 @@ static const params_cli_t params_cli[PARAMS_CLI_N] = {
     {"--gnss-vacc-m", APP_PARAM_GNSS_VACC_M, "m", 0.1, 102.3, 1.0, "", "declared vertical accuracy (1 sigma, as VertAccuracy), used with gnss_accuracy = declared"},
     {"--gnss-sacc-mps", APP_PARAM_GNSS_SACC_MPS, "m/s", 0.01, 1.5, 1.0, "", "declared speed accuracy (as SpeedAccuracy), used with gnss_accuracy = declared"},
     {"--gnss-vel-up", APP_PARAM_GNSS_VEL_UP, "", 0.0, 1.0, 1.0, "measured|none", "whether the receiver measures the vertical velocity: with none, GNSS_Velocity's VelUp is not fused (its east and north are)"},
+    {"--gnss-input", APP_PARAM_GNSS_INPUT, "", 0.0, 2.0, 1.0, "fix|raw|both", "what the filter fuses of the receiver (issue #20, docs/kalman.md): its fixes (loosely coupled); its raw pseudoranges and range rates (tightly coupled; fixes only start the navigation); or both, the fixes while the receiver gives them and the raw measurements while it gives none (fewer than four satellites: an urban canyon)"},
     {"--gnss-lever-m", APP_PARAM_GNSS_LEVER_B_M, "m", -10.0, 10.0, 1.0, "", "the GNSS antenna from the IMU, body axes x right, y forward, z up"},
     {"--uds-request-id", APP_PARAM_UDS_REQUEST_ID, "", 1.0, 2047.0, 1.0, "", "the UDS server's physical request ID (11-bit; docs/can.md, Diagnostics (UDS)): frames on it go to ISO-TP, never to navigation; read-only over UDS (the boards set their receive filters at start)"},
     {"--uds-response-id", APP_PARAM_UDS_RESPONSE_ID, "", 1.0, 2047.0, 1.0, "", "the UDS server's response ID (11-bit, by convention request + 8); read-only over UDS"},

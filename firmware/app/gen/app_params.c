@@ -36,6 +36,7 @@ const app_param_t app_params[APP_PARAM_N] = {
     [APP_PARAM_GNSS_VACC_M] = {"gnss_vacc_m", 0x0245u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.1), NAV_C(102.3), {NAV_C(5.0), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_GNSS_SACC_MPS] = {"gnss_sacc_mps", 0x0246u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.01), NAV_C(1.5), {NAV_C(0.2), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_GNSS_VEL_UP] = {"gnss_vel_up", 0x0247u, APP_PARAM_ENUM, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(1.0), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
+    [APP_PARAM_GNSS_INPUT] = {"gnss_input", 0x0249u, APP_PARAM_ENUM, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(2.0), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_GNSS_LEVER_B_M] = {"gnss_lever_b_m", 0x0242u, APP_PARAM_VEC3, 0u, 0u, 0u, 0u, NAV_C(-10.0), NAV_C(10.0), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_UDS_REQUEST_ID] = {"uds_request_id", 0x0250u, APP_PARAM_U16, 0u, 0u, 1u, 1u, NAV_C(1.0), NAV_C(2047.0), {NAV_C(1952.0), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_UDS_RESPONSE_ID] = {"uds_response_id", 0x0251u, APP_PARAM_U16, 0u, 0u, 1u, 1u, NAV_C(1.0), NAV_C(2047.0), {NAV_C(1960.0), NAV_C(0.0), NAV_C(0.0)}},
@@ -179,6 +180,17 @@ void app_param_get(const app_config_t *cfg, app_param_id_t id, nav_real_t v[3])
             v[0] = NAV_C(1.0);
         }
         break;
+    case APP_PARAM_GNSS_INPUT:
+        if (cfg->gnss_input == GNSS_INPUT_FIX) {
+            v[0] = NAV_C(0.0);
+        }
+        if (cfg->gnss_input == GNSS_INPUT_RAW) {
+            v[0] = NAV_C(1.0);
+        }
+        if (cfg->gnss_input == GNSS_INPUT_BOTH) {
+            v[0] = NAV_C(2.0);
+        }
+        break;
     case APP_PARAM_GNSS_LEVER_B_M:
         v[0] = cfg->gnss_lever_b_m[0];
         v[1] = cfg->gnss_lever_b_m[1];
@@ -313,6 +325,15 @@ int app_param_set(app_config_t *cfg, app_param_id_t id, const nav_real_t v[3])
         cfg->gnss_vel_up = GNSS_VUP_MEASURED;
         if (v[0] > NAV_C(0.5)) {
             cfg->gnss_vel_up = GNSS_VUP_NONE;
+        }
+        break;
+    case APP_PARAM_GNSS_INPUT:
+        cfg->gnss_input = GNSS_INPUT_FIX;
+        if (v[0] > NAV_C(0.5)) {
+            cfg->gnss_input = GNSS_INPUT_RAW;
+        }
+        if (v[0] > NAV_C(1.5)) {
+            cfg->gnss_input = GNSS_INPUT_BOTH;
         }
         break;
     case APP_PARAM_GNSS_LEVER_B_M:
