@@ -74,6 +74,12 @@ class ReceiverSpec:
     code_noise_m: float = 0.5            # at 45 dB-Hz
     doppler_noise_mps: float = 0.05      # at 45 dB-Hz
     canyons: list = field(default_factory=list)   # [(start_s, end_s, 2H/W[, max_sats])]
+    # receiver faults, the test stand's (tests/python/test_gnss_tc.py): dicts of
+    #   kind = "multipath": error_m added to the pseudorange of the satellite of elevation
+    #          rank `rank` (0 the highest) from start_s to end_s (a reflection only);
+    #   kind = "clock_step": the receiver's clock stepped by step_m at at_s, flagged in
+    #          GNSS_RawEpoch ClockReset or not (`flagged`)
+    faults: list = field(default_factory=list)
 
 
 _RAAN = np.repeat(np.radians(60.0 * np.arange(N_PLANES)), SATS_PER_PLANE)
@@ -175,6 +181,10 @@ def simulate(truth, spec: ReceiverSpec, seed: int, t0_gps_s: float = 0.0,
             mp = a_mp * mp + math.sqrt(1.0 - a_mp * a_mp) * rng.standard_normal(nsat)
             mp_rate = rng.standard_normal(nsat)
         clock_reset = False
+        for f in spec.faults:
+            if f["kind"] == "clock_step" and te - dt < f["at_s"] <= te:
+                bias += f["step_m"]
+                clock_reset = bool(f.get("flagged", False))
         if abs(bias) > spec.clock_step_s * c:
             bias -= math.copysign(spec.clock_step_s * c, bias)
             clock_reset = True
@@ -237,6 +247,10 @@ def simulate(truth, spec: ReceiverSpec, seed: int, t0_gps_s: float = 0.0,
                 cn0_dbhz=int(round(cn0))))
         ep.meas.sort(key=lambda m: -m.elevation_deg)
         ep.meas = ep.meas[:cap if cap > 0 else gr.MAX_SATS]
+        for f in spec.faults:
+            if (f["kind"] == "multipath" and f["start_s"] <= te <= f["end_s"]
+                    and f["rank"] < len(ep.meas)):
+                ep.meas[f["rank"]].pseudorange_m += f["error_m"]
         out.append((te, ep, RawTruth(t_s=te, rx_m=rx, v_rx_mps=v_rx, clock_m=bias,
                                      drift_mps=drift, in_view=in_view)))
     return out

@@ -107,6 +107,9 @@ Scenario file (TOML, read by :func:`load_scenario`)
     enabled = true                # send a raw epoch (GNSS_Raw*) each second, none in outages
     canyons = [[200, 500, 4.0]]   # [start_s, end_s, 2H/W(, max_sats)]: street canyons along
                                   # the heading; max_sats keeps the highest of those left
+    faults = [{kind = "multipath", start_s = 100, end_s = 160, rank = 1, error_m = 50.0},
+              {kind = "clock_step", at_s = 200, step_m = 3000.0, flagged = false}]
+                                  # receiver faults (tools/sim/receiver.py ReceiverSpec)
 
 Inheritance: a top-level ``base = "default"`` (a scenario name in the same folder, or a
 .toml path relative to this file's folder) starts from that scenario: its tables ([start],
@@ -157,7 +160,7 @@ _OPTIONAL_TABLES = {
     "initialization": set(INITIALIZATION_DEFAULTS),
     "calibration": {"at_s", "source", "gnss"},
     "gnss_faults": {"jumps", "freeze", "latency_spike"},
-    "gnss_raw": {"enabled", "canyons"},
+    "gnss_raw": {"enabled", "canyons", "faults"},
 }
 GNSS_JUMP_AZIMUTH_DEG_DEFAULT = 0.0   # a jump without an azimuth moves the fix north
 
