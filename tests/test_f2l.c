@@ -2,7 +2,8 @@
  * test_f2l.c - the double-free float to 64-bit integer conversions of the Cortex-M4F
  * images (hal/cortex_m4f/f2l.c) against the host compiler's own conversions (x86-64
  * cvttss2si, exact by IEEE 754) wherever C defines the result, and their saturation
- * where it does not.
+ * where it does not; and the conversions back (f2l_from_i64/u64, the M4F's
+ * __aeabi_l2f/__aeabi_ul2f) against the host's (x86-64 cvtsi2ss, rounded to nearest even).
  */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -82,12 +83,84 @@ static void test_saturates_where_c_is_undefined(void **state)
     assert_true(f2l_to_u64(-INFINITY) == 0u);
 }
 
+/* a small deterministic generator (xorshift64*) for the integers to convert */
+static uint64_t next_random(uint64_t *s)
+{
+    *s ^= *s >> 12;
+    *s ^= *s << 25;
+    *s ^= *s >> 27;
+    return *s * UINT64_C(2685821657736338717);
+}
+
+/* the same float, bit for bit (also tells -0 from +0) */
+static int same(float a, float b)
+{
+    return memcmp(&a, &b, sizeof a) == 0;
+}
+
+static void check_back(uint64_t u)
+{
+    assert_true(same(f2l_from_u64(u), (float)u));
+    const int64_t i = (int64_t)u;
+    assert_true(same(f2l_from_i64(i), (float)i));
+}
+
+/* every bit length, the neighbours of each power of two and of each rounding boundary
+ * (the halfway points between floats, ties to even both ways, with and without sticky
+ * bits far below), and random integers of every length */
+static void test_to_float_matches_c_conversion(void **state)
+{
+    (void)state;
+    unsigned checked = 0u;
+    for (unsigned e = 0u; e < 64u; e++) {
+        const uint64_t p = UINT64_C(1) << e;
+        for (uint64_t d = 0u; d < 5u; d++) {
+            check_back(p + d);
+            check_back(p - d);
+            check_back(~(p + d));
+            checked += 3u;
+        }
+        if (e >= 25u) {
+            /* p + k ulp/2 around the 24-bit significand's rounding position */
+            const uint64_t half = UINT64_C(1) << (e - 24u);
+            for (uint64_t k = 0u; k < 8u; k++) {
+                const uint64_t base = p + k * half;
+                check_back(base);
+                check_back(base + 1u);
+                check_back(base - 1u);
+                check_back(base | (p >> 1)); /* an odd significand: ties go up */
+                check_back((base | (p >> 1)) + 1u);
+                check_back((base | (p >> 1)) - 1u);
+                checked += 6u;
+            }
+        }
+    }
+    check_back(0u);
+    check_back(UINT64_MAX);
+    check_back((uint64_t)INT64_MAX);
+    check_back((uint64_t)INT64_MIN);
+    uint64_t s = UINT64_C(0x9E3779B97F4A7C15);
+    for (unsigned k = 0u; k < 2000000u; k++) {
+        const uint64_t r = next_random(&s);
+        check_back(r >> (k % 64u));
+        checked++;
+    }
+    assert_true(same(f2l_from_i64(0), 0.0f));
+    assert_true(same(f2l_from_i64(INT64_MIN), -9.2233720e18f));
+    assert_true(same(f2l_from_u64(UINT64_MAX), 1.8446744e19f));
+    assert_true(same(f2l_from_u64(16777217u), 16777216.0f));     /* a tie, to even (down) */
+    assert_true(same(f2l_from_u64(16777219u), 16777220.0f));     /* a tie, to even (up) */
+    assert_true(same(f2l_from_u64(UINT64_C(0x100000100000001)), 72057602627862528.0f)); /* above the tie */
+    print_message("%u conversions back to float checked against the compiler's\n", checked);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_matches_c_conversion_wherever_c_defines_it),
         cmocka_unit_test(test_truncates_toward_zero),
         cmocka_unit_test(test_saturates_where_c_is_undefined),
+        cmocka_unit_test(test_to_float_matches_c_conversion),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

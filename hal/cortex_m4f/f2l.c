@@ -1,5 +1,6 @@
 /*
- * f2l.c - float to 64-bit integer conversions from the IEEE 754 bits (contracts in f2l.h).
+ * f2l.c - float to 64-bit integer conversions from the IEEE 754 bits, and 64-bit integer
+ * to float conversions with the FPU's 32-bit VCVT (contracts in f2l.h).
  */
 #include "f2l.h"
 
@@ -56,11 +57,44 @@ uint64_t f2l_to_u64(float x)
     return magnitude_trunc(exp_field, mant_field);
 }
 
+float f2l_from_u64(uint64_t x)
+{
+    const uint32_t hi = (uint32_t)(x >> 32);
+    const uint32_t lo = (uint32_t)x;
+    if (hi == 0u) {
+        return (float)lo; /* one VCVT, rounded to nearest, ties to even */
+    }
+    /* x has 64 - c significant bits, c in [0, 31]: its 32 leading bits, with the bits
+     * below them ORed into the lowest one (a sticky bit, well below the rounding position
+     * of a 24-bit significand), round to the float x rounds to; scaling that by
+     * 2^(31 - c) and by 2 is exact (powers of two, the result below 2^64) */
+    const uint32_t c = (uint32_t)__builtin_clz(hi);
+    uint32_t top = hi;
+    uint32_t rest = lo;
+    if (c != 0u) {
+        top = (hi << c) | (lo >> (32u - c));
+        rest = lo << c;
+    }
+    const uint32_t rounded_as_x = top | (rest != 0u ? 1u : 0u);
+    const uint32_t scale = UINT32_C(1) << (31u - c);
+    return (float)rounded_as_x * (float)scale * 2.0f;
+}
+
+float f2l_from_i64(int64_t x)
+{
+    /* the magnitude as unsigned (also of INT64_MIN); rounding is symmetric about 0 */
+    const uint64_t mag = x < 0 ? 0u - (uint64_t)x : (uint64_t)x;
+    const float f = f2l_from_u64(mag);
+    return x < 0 ? -f : f;
+}
+
 #if defined(__ARM_EABI__)
 /* The RTABI helpers use the base procedure call standard: the float arrives in r0 even
  * in a hard-float (-mfloat-abi=hard) program, hence pcs("aapcs"). */
 int64_t __aeabi_f2lz(float x) __attribute__((pcs("aapcs")));
 uint64_t __aeabi_f2ulz(float x) __attribute__((pcs("aapcs")));
+float __aeabi_l2f(int64_t x) __attribute__((pcs("aapcs")));
+float __aeabi_ul2f(uint64_t x) __attribute__((pcs("aapcs"), noinline));
 
 int64_t __aeabi_f2lz(float x)
 {
@@ -70,5 +104,19 @@ int64_t __aeabi_f2lz(float x)
 uint64_t __aeabi_f2ulz(float x)
 {
     return f2l_to_u64(x);
+}
+/* libgcc's int64-to-float helpers sit in its soft-float adder (_arm_addsubsf3.o), which
+ * they pull into the image with them: 540 bytes for a conversion the FPU does in a few
+ * instructions. These give the same float (IEEE 754, round to nearest, ties to even). */
+float __aeabi_ul2f(uint64_t x)
+{
+    return f2l_from_u64(x);
+}
+
+float __aeabi_l2f(int64_t x)
+{
+    /* f2l_from_i64 through the one copy of the unsigned conversion */
+    const float f = __aeabi_ul2f(x < 0 ? 0u - (uint64_t)x : (uint64_t)x);
+    return x < 0 ? -f : f;
 }
 #endif

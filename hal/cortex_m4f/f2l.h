@@ -1,5 +1,6 @@
 /*
- * f2l.h - float to 64-bit integer conversion without double precision, for the Cortex-M4F.
+ * f2l.h - float to and from 64-bit integer conversion without double precision or software
+ * floating point, for the Cortex-M4F.
  *
  * A C conversion of a float to int64_t/uint64_t compiles to the run-time helpers
  * __aeabi_f2lz/__aeabi_f2ulz (ARM RTABI 4.1.2). libgcc implements them through
@@ -19,5 +20,15 @@
 
 int64_t f2l_to_i64(float x);
 uint64_t f2l_to_u64(float x);
+
+/*
+ * The other way, __aeabi_l2f/__aeabi_ul2f (ARM RTABI 4.1.2): libgcc's live in its software
+ * single-precision adder (_arm_addsubsf3.o, 540 bytes of flash the FPU makes useless).
+ * These convert with the FPU's 32-bit VCVT and an exact scaling by a power of two, and
+ * round as C and IEEE 754 require (to nearest, ties to even): the float the host's
+ * conversion gives, for every input.
+ */
+float f2l_from_i64(int64_t x);
+float f2l_from_u64(uint64_t x);
 
 #endif /* NAVECU_F2L_H */
