@@ -461,11 +461,17 @@ BOOT_INDIRECT := $(foreach f,$(M4_WAIT_HOOK_CALLERS),--indirect $(f)=$(M4_WAIT_H
   --indirect isotp_poll=$(BOOT_MAIN):tx --indirect boot_poll=$(BOOT_MAIN):tx \
   --indirect uds_handle=$(BOOT_C):boot_read_did,$(BOOT_C):boot_write_did,$(BOOT_C):boot_is_writable,$(BOOT_C):boot_start_routine,$(BOOT_C):boot_session_change,$(BOOT_C):boot_service \
   $(foreach f,boot_image_check $(BOOT_C):image_crc.constprop.0 $(BOOT_C):vectors_ok $(BOOT_C):boot_service $(BOOT_C):boot_start_routine,--indirect $(f)=$(BOOT_MAIN):fl_read,$(BOOT_MAIN):fl_write,$(BOOT_MAIN):fl_erase)
+# the application's flash: the limit is its partition, sectors 3 and 4 (80 KiB; the
+# bootloader has sector 0, the NVM 1 and 2); the aim is the 64 KiB budget of issue #20,
+# which the tightly coupled filter's code exceeds (reported "not met", docs/target.md)
+M4_APP_FLASH_LIMIT := 81920
+M4_APP_FLASH_AIM := 65536
 target-budget: deps venv target
 	$(PY) -m tools.target.budget --elf $(TGT)/navecu.elf --objs $(ECU_SRC:%.c=$(TGT)/obj/%.o) \
 	  --entry Reset_Handler --isr CAN1_RX0_IRQHandler --isr CAN1_SCE_IRQHandler \
 	  --isr SysTick_Handler $(foreach f,$(M4_WAIT_HOOK_CALLERS),--indirect $(f)=$(M4_WAIT_HOOK)) \
-	  $(M4_UDS_INDIRECT) --sectors 3,4 --json out/target-budget$(VEH_SUFFIX).json
+	  $(M4_UDS_INDIRECT) --sectors 3,4 --flash-limit $(M4_APP_FLASH_LIMIT) \
+	  --flash-aim $(M4_APP_FLASH_AIM) --json out/target-budget$(VEH_SUFFIX).json
 	$(PY) -m tools.target.budget --elf $(TGT)/boot.elf --objs $(BOOT_ECU_SRC:%.c=$(TGT)/obj/%.o) \
 	  --entry Reset_Handler --isr CAN1_RX0_IRQHandler --isr CAN1_SCE_IRQHandler \
 	  $(BOOT_INDIRECT) --flash-limit 16384 --flash-aim 0 --sectors 0 \

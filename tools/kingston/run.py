@@ -455,8 +455,8 @@ def main(argv=None) -> int:
                     help="omit the GNSS_Velocity frames (GNSS position only)")
     ap.add_argument("--gnss-raw", action="store_true",
                     help="also send gnss_raw.csv as raw epochs (GNSS_Raw*, docs/can.md; the "
-                         "firmware assembles and counts them, its filter does not fuse them "
-                         "yet)")
+                         "firmware assembles and counts them, and fuses them with "
+                         "--navecu-args '--gnss-input raw' (or both))")
     ap.add_argument("--raw-keep", type=int, default=0, metavar="N",
                     help="with --gnss-raw: in the outages the N highest satellites' raw "
                          "measurements are kept (a partial outage)")

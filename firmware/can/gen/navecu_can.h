@@ -778,7 +778,7 @@ struct navecu_can_gnss_time_t {
 /**
  * Signals in message GNSS_RawSatX.
  *
- * One satellite's measurement of a raw GNSS epoch (tightly coupled GNSS, issue #20; the ECU assembles and checks raw epochs, its filter does not fuse them yet): the satellite's ECEF x position at the signal's transmit time, in the ECEF axes of the transmit time (as the broadcast ephemeris gives it; the ECU applies the Earth's rotation during the signal's travel), and its ECEF x velocity. Five frames per satellite (GNSS_RawSatX, GNSS_RawSatY, GNSS_RawSatZ, GNSS_RawRange, GNSS_RawRate) with the same RawSlot and GnssEpoch, any order, before the GNSS_RawEpoch that closes the epoch.
+ * One satellite's measurement of a raw GNSS epoch (tightly coupled GNSS, issue #20; the ECU assembles and checks raw epochs and fuses them when the parameter gnss_input is raw or both): the satellite's ECEF x position at the signal's transmit time, in the ECEF axes of the transmit time (as the broadcast ephemeris gives it; the ECU applies the Earth's rotation during the signal's travel), and its ECEF x velocity. Five frames per satellite (GNSS_RawSatX, GNSS_RawSatY, GNSS_RawSatZ, GNSS_RawRange, GNSS_RawRate) with the same RawSlot and GnssEpoch, any order, before the GNSS_RawEpoch that closes the epoch.
  *
  * All signal values are as on the CAN bus.
  */
