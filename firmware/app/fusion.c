@@ -518,6 +518,9 @@ fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_pr
 static nav_real_t median_of(const nav_real_t *v, int n)
 {
     nav_real_t s[RAW_MAX];
+    for (int i = 0; i < RAW_MAX; i++) {
+        s[i] = NAV_C(0.0);
+    }
     for (int i = 0; i < n; i++) {
         nav_real_t x = v[i];
         int j = i;
@@ -698,8 +701,9 @@ static int raw_updates(fusion_t *fu, const raw_epoch_t *e, const uint8_t *ok, in
 static void raw_order(raw_epoch_t *e, const gnss_raw_close_t *closed)
 {
     e->n = 0;
-    for (int s = 0; s < RAW_MAX; s++) {
-        if ((closed->complete & (1u << (unsigned)s)) == 0u) {
+    uint32_t bit = 1u;
+    for (int s = 0; s < RAW_MAX; s++, bit <<= 1u) {
+        if ((closed->complete & bit) == 0u) {
             continue;
         }
         const uint8_t el = e->g->sat[s].elevation_deg;
@@ -773,6 +777,12 @@ fusion_action_t fusion_raw(fusion_t *fu, const fusion_ctx_t *c, const gnss_raw_a
     fu->raw_sample = n;
     nav_real_t z_pr[RAW_MAX], z_rr[RAW_MAX];
     uint8_t ok_pr[RAW_MAX], ok_rr[RAW_MAX];
+    for (int i = 0; i < RAW_MAX; i++) {
+        z_pr[i] = NAV_C(0.0);
+        z_rr[i] = NAV_C(0.0);
+        ok_pr[i] = 0u;
+        ok_rr[i] = 0u;
+    }
     raw_residuals(fu, &e, 0, z_pr, ok_pr);
     raw_residuals(fu, &e, 1, z_rr, ok_rr);
     int n_pr, n_rr;
