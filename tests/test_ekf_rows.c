@@ -1004,13 +1004,21 @@ static void pr_h(const void *ctx, const state_t *st, double *z)
            (t.u_enu[0] * (double)st->kf.gnss_bias_m[0] + t.u_enu[1] * (double)st->kf.gnss_bias_m[1]);
 }
 
+/* the antenna and the satellite's geometry, then the row, as fusion.c forms them */
+static void raw_geometry_of(const raw_ctx_t *c, const state_t *st, ekf_antenna_t *a,
+                            ekf_sat_t *sat)
+{
+    assert_int_equal(ekf_antenna(&st->nav, &st->nav.pos, c->lever_b_m, a), NAV_OK);
+    assert_int_equal(ekf_sat_geometry(a, c->pos_lsb, c->vel_lsb, sat), NAV_OK);
+}
+
 static void pr_rows(const void *ctx, const state_t *st, nav_real_t h[][EKF_N], nav_real_t *z)
 {
     const raw_ctx_t *c = ctx;
+    ekf_antenna_t a;
     ekf_sat_t sat;
-    assert_int_equal(ekf_rows_pseudorange(&st->kf, &st->nav, &st->nav.pos, c->lever_b_m,
-                                          c->pos_lsb, c->vel_lsb, c->pr_lsb, 1, &sat, h[0], z),
-                     NAV_OK);
+    raw_geometry_of(c, st, &a, &sat);
+    ekf_rows_pseudorange(&st->kf, &a, &sat, c->pr_lsb, 1, h[0], z);
 }
 
 /* The innovation, formed in 0.1 mm integers (gnss_geom.h): the antenna's ECEF rounded to
@@ -1068,12 +1076,9 @@ static void rr_h(const void *ctx, const state_t *st, double *z)
 static void rr_rows(const void *ctx, const state_t *st, nav_real_t h[][EKF_N], nav_real_t *z)
 {
     const raw_ctx_t *c = ctx;
+    ekf_antenna_t a;
     ekf_sat_t sat;
-    nav_real_t h_pr[EKF_N], z_pr;
-    assert_int_equal(ekf_rows_pseudorange(&st->kf, &st->nav, &st->nav.pos, c->lever_b_m,
-                                          c->pos_lsb, c->vel_lsb, c->pr_lsb, 1, &sat, h_pr,
-                                          &z_pr),
-                     NAV_OK);
+    raw_geometry_of(c, st, &a, &sat);
     ekf_rows_range_rate(&st->kf, &st->nav, st->nav.v_n_mps, st->w_b_rps, c->lever_b_m, &sat,
                         c->rr_mps, h[0], z);
 }

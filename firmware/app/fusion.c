@@ -558,36 +558,50 @@ typedef struct {
     int n;                    /* satellites */
     uint8_t slot[RAW_MAX];    /* their slots, highest first */
     int use_bias;             /* the ranges' correlated errors are the state db */
+    ekf_antenna_t ant;        /* the antenna at the epoch */
 } raw_epoch_t;
+
+/* satellite i's row and innovation (rate = 0: its pseudorange, 1: its range rate) from its
+ * geometry of this epoch (raw_geometry); 0 when it has none (refused geometry, a
+ * measurement flagged invalid, not finite) */
+static int raw_row(const fusion_t *fu, const raw_epoch_t *e, int i, int rate,
+                   nav_real_t h[EKF_N], nav_real_t *z)
+{
+    const gnss_raw_sat_t *m = &e->g->sat[e->slot[i]];
+    const uint8_t valid = rate != 0 ? m->rr_valid : m->pr_valid;
+    if (fu->raw_geo_ok[i] == 0u || valid == 0u) {
+        return 0;
+    }
+    if (rate != 0) {
+        ekf_rows_range_rate(&fu->ekf, e->c->nav, e->v_then, fu->w_b_last_rps,
+                            e->c->cfg->gnss_lever_b_m, &fu->raw_geo[i],
+                            (nav_real_t)m->rr_lsb * NAV_C(0.01), h, z);
+    } else {
+        ekf_rows_pseudorange(&fu->ekf, &e->ant, &fu->raw_geo[i], m->pr_lsb, e->use_bias, h, z);
+    }
+    return nav_isfinite(*z) ? 1 : 0;
+}
+
+/* every satellite's geometry from the epoch's antenna, once */
+static void raw_geometry(fusion_t *fu, const raw_epoch_t *e)
+{
+    for (int i = 0; i < e->n; i++) {
+        const gnss_raw_sat_t *m = &e->g->sat[e->slot[i]];
+        fu->raw_geo_ok[i] =
+            (uint8_t)(ekf_sat_geometry(&e->ant, m->pos_lsb, m->vel_lsb, &fu->raw_geo[i]) == NAV_OK
+                          ? 1u
+                          : 0u);
+    }
+}
 
 /* residuals (computed minus measured) of every satellite's pseudorange (rate = 0) or
  * range rate (rate = 1) against the filter's estimates, ok[i] = 0 where none */
 static void raw_residuals(const fusion_t *fu, const raw_epoch_t *e, int rate, nav_real_t *z,
                           uint8_t *ok)
 {
-    const app_config_t *cfg = e->c->cfg;
     for (int i = 0; i < e->n; i++) {
-        const gnss_raw_sat_t *m = &e->g->sat[e->slot[i]];
-        ekf_sat_t sat;
         nav_real_t h[EKF_N];
-        ok[i] = 0u;
-        if (ekf_rows_pseudorange(&fu->ekf, e->c->nav, &e->then, cfg->gnss_lever_b_m, m->pos_lsb,
-                                 m->vel_lsb, m->pr_lsb, e->use_bias, &sat, h, &z[i]) != NAV_OK) {
-            continue;
-        }
-        if (rate != 0) {
-            if (m->rr_valid == 0u) {
-                continue;
-            }
-            ekf_rows_range_rate(&fu->ekf, e->c->nav, e->v_then, fu->w_b_last_rps,
-                                cfg->gnss_lever_b_m, &sat, (nav_real_t)m->rr_lsb * NAV_C(0.01),
-                                h, &z[i]);
-        } else if (m->pr_valid == 0u) {
-            continue;
-        } else {
-            /* a pseudorange */
-        }
-        ok[i] = (uint8_t)(nav_isfinite(z[i]) ? 1u : 0u);
+        ok[i] = (uint8_t)raw_row(fu, e, i, rate, h, &z[i]);
     }
 }
 
@@ -665,17 +679,12 @@ static int raw_updates(fusion_t *fu, const raw_epoch_t *e, const uint8_t *ok, in
             continue;
         }
         const gnss_raw_sat_t *m = &e->g->sat[e->slot[i]];
-        ekf_sat_t sat;
         nav_real_t h[EKF_N], z;
-        if (ekf_rows_pseudorange(&fu->ekf, e->c->nav, &e->then, cfg->gnss_lever_b_m, m->pos_lsb,
-                                 m->vel_lsb, m->pr_lsb, e->use_bias, &sat, h, &z) != NAV_OK) {
+        if (raw_row(fu, e, i, rate, h, &z) == 0) {
             continue;
         }
         nav_real_t r;
         if (rate != 0) {
-            ekf_rows_range_rate(&fu->ekf, e->c->nav, e->v_then, fu->w_b_last_rps,
-                                cfg->gnss_lever_b_m, &sat, (nav_real_t)m->rr_lsb * NAV_C(0.01),
-                                h, &z);
             const nav_real_t s = rr_sigma_mps(m);
             r = s * s;
         } else {
@@ -762,7 +771,12 @@ fusion_action_t fusion_raw(fusion_t *fu, const fusion_ctx_t *c, const gnss_raw_a
         return FUSION_GO_ON;
     }
     e.v_then = gnss_time_velocity_then(c->time, &when);
+    if (ekf_antenna(c->nav, &e.then, cfg->gnss_lever_b_m, &e.ant) != NAV_OK) {
+        app_diag_reject(c->diag, &c->diag->health->gnss_rejected);
+        return FUSION_GO_ON;
+    }
     raw_order(&e, closed);
+    raw_geometry(fu, &e);
     /* the correlated errors as the fixes' state db when it is one (fusion_gnss: the
      * correlation time spans APP_GNSS_STATE_MIN_FIXES of the receiver's epochs) */
     e.use_bias = fu->gnss_ep_typ_s > NAV_C(0.0) &&

@@ -78,6 +78,10 @@ typedef struct {
     /* raw GNSS (issue #20) */
     uint8_t clock_valid;        /* the filter's clock states hold an estimate */
     uint64_t raw_sample;        /* sample of the last raw epoch fused */
+    /* the epoch's satellites' geometry (fusion.c raw_geometry), in the epoch's order: formed
+     * once per epoch; here, not on the stack (64 bytes each) */
+    ekf_sat_t raw_geo[GNSS_RAW_MAX_SATS];
+    uint8_t raw_geo_ok[GNSS_RAW_MAX_SATS];
 } fusion_t;
 
 /* What the caller does after a fusion step. */

@@ -319,39 +319,57 @@ int ekf_zero_rate(ekf_t *k, nav_real_t residual_rate_z_rps, nav_real_t sigma_rps
 #define ekf_clock_start NAV_SYM(ekf_clock_start)
 #define ekf_clock_advance NAV_SYM(ekf_clock_advance)
 
+/* The antenna at the epoch's time of validity: at pos_then + C l_b, its ECEF in 0.1 mm
+ * (gnss_geom.h), the lever arm in ENU (l_n = C l_b) and the navigator's ENU axes (those of
+ * dr and of the velocity). Formed once per epoch. */
+typedef struct {
+    int64_t ecef_dmm[3];
+    nav_real_t l_n[3];
+    nav_real_t sin_lat, cos_lat, sin_lon, cos_lon;
+} ekf_antenna_t;
+
 /* One satellite as the rows need it: its geometry from the antenna (gnss_geom_sat) and the
- * line of sight in the local ENU axes of the antenna. */
+ * line of sight in the navigator's ENU axes. */
 typedef struct {
     gnss_geom_t g;
     nav_real_t los_enu[3]; /* unit vector antenna -> satellite, the navigator's ENU axes */
     nav_real_t sat_vel_enu_mps[3]; /* the satellite's velocity in the same axes */
 } ekf_sat_t;
 
+#define ekf_antenna NAV_SYM(ekf_antenna)
+#define ekf_sat_geometry NAV_SYM(ekf_sat_geometry)
+
+/* The antenna of the navigator s at lever_b_m (body, m) from the IMU, whose position at the
+ * epoch's time of validity is pos_then. NAV_EINVAL when pos_then + C l_b cannot form. */
+int ekf_antenna(const sins_t *s, const geo_pos_t *pos_then, const nav_real_t lever_b_m[3],
+                ekf_antenna_t *a);
+
+/* A satellite at sat_pos_lsb (0.02 m, ECEF axes of the transmit time) with velocity
+ * sat_vel_lsb (0.125 m/s) seen from the antenna a: the geometric range (gnss_geom_sat: the
+ * Earth's rotation during the signal's travel included), the line of sight and the
+ * satellite's velocity in ENU. NAV_EINVAL for a satellite gnss_geom_sat refuses (a corrupt
+ * position). Formed once per satellite and epoch, for both rows. */
+int ekf_sat_geometry(const ekf_antenna_t *a, const int32_t sat_pos_lsb[3],
+                     const int16_t sat_vel_lsb[3], ekf_sat_t *sat);
+
 /* Pseudorange (corrected: satellite clock, ionosphere and troposphere removed by the
- * receiver, docs/can.md) of a satellite at sat_pos_lsb (0.02 m, ECEF axes of the transmit
- * time) with velocity sat_vel_lsb (0.125 m/s), pr_lsb (0.02 m), seen by the antenna at
- * lever_b_m (body, m) from the navigator s, whose position at the epoch's time of validity
- * is pos_then. The antenna is pos_then + C l_b; the geometric range r (gnss_geom_sat: the
- * Earth's rotation during the signal's travel included) and the clock estimate clock_dmm
- * give the prediction; out z_m = r + clock - pr (m, formed in integers first) and the row
+ * receiver, docs/can.md) pr_lsb (0.02 m) of the satellite sat seen from the antenna a: the
+ * geometric range r and the clock estimate clock_dmm give the prediction; out
+ * z_m = r + clock - pr (m, formed in integers first) and the row
  *   z = -u^T dr - u^T [(C l_b) x] psi + dcb = -u^T dr - (u x C l_b)^T psi + dcb
  * with u the unit line of sight in ENU (the antenna error dr + [(C l_b) x] psi of the
  * position rows, seen along u). Neglected: the Earth's rotation during the travel moves
- * with the range, by w_ie |r_sat| / c per metre (6.5e-6: 65 um for a 10 m error). The satellite's geometry is returned in sat for the
- * range-rate row. NAV_EINVAL for a satellite gnss_geom_sat refuses (a corrupt position)
- * or a position pos_then + C l_b cannot form.
+ * with the range, by w_ie |r_sat| / c per metre (6.5e-6: 65 um for a 10 m error).
  * With use_bias, the ranges' errors correlated in time are the receiver's correlated
  * horizontal position error (the state db of the fixes, ekf_gnss_bias_step) seen along the
  * line of sight: the prediction is shortened by u_E b_E + u_N b_N (b = gnss_bias_m) and
  * the row has -u_E, -u_N on db. Exact while the same satellites are tracked; a model of
  * the errors' correlation, like the fixes' (docs/kalman.md). */
-int ekf_rows_pseudorange(const ekf_t *k, const sins_t *s, const geo_pos_t *pos_then,
-                         const nav_real_t lever_b_m[3], const int32_t sat_pos_lsb[3],
-                         const int16_t sat_vel_lsb[3], uint32_t pr_lsb, int use_bias,
-                         ekf_sat_t *sat, nav_real_t h[EKF_N], nav_real_t *z_m);
+void ekf_rows_pseudorange(const ekf_t *k, const ekf_antenna_t *a, const ekf_sat_t *sat,
+                          uint32_t pr_lsb, int use_bias, nav_real_t h[EKF_N], nav_real_t *z_m);
 
 /* Pseudorange rate (m/s, rr_mps: the rate of the range plus the clock drift; a Doppler
- * shift D at wavelength L is -D L) of the satellite sat (ekf_rows_pseudorange's), for the
+ * shift D at wavelength L is -D L) of the satellite sat (ekf_sat_geometry's), for the
  * navigator's velocity at the epoch v_then_mps (ENU) and body rate w_b_rps: the antenna
  * moves at v_a = v + C (w_b x l_b). Out z_mps = u . (v_sat - v_a) + clock_drift - rr and
  *   z = -u^T dv - (u x C (w_b x l_b))^T psi + ((C^T u) x l_b)^T bg + dcd

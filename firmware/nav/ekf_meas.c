@@ -251,16 +251,6 @@ int ekf_zero_rate(ekf_t *k, nav_real_t residual_rate_z_rps, nav_real_t sigma_rps
 
 /* ------------------------------------------------------- raw GNSS (issue #20) ---- */
 
-/* a in ECEF axes to the local east, north, up axes at latitude lat and longitude lon */
-static void ecef_to_enu(nav_real_t lat, nav_real_t lon, const nav_real_t a[3], nav_real_t out[3])
-{
-    const nav_real_t sl = nav_sin(lat), cl = nav_cos(lat);
-    const nav_real_t so = nav_sin(lon), co = nav_cos(lon);
-    out[0] = -so * a[0] + co * a[1];
-    out[1] = -sl * co * a[0] - sl * so * a[1] + cl * a[2];
-    out[2] = cl * co * a[0] + cl * so * a[1] + sl * a[2];
-}
-
 /* (u x a) for the rows' psi entries, negated: -(u x a) */
 static void neg_cross(const nav_real_t u[3], const nav_real_t a[3], nav_real_t out[3])
 {
@@ -269,37 +259,58 @@ static void neg_cross(const nav_real_t u[3], const nav_real_t a[3], nav_real_t o
     out[2] = -(u[0] * a[1] - u[1] * a[0]);
 }
 
-int ekf_rows_pseudorange(const ekf_t *k, const sins_t *s, const geo_pos_t *pos_then,
-                         const nav_real_t lever_b_m[3], const int32_t sat_pos_lsb[3],
-                         const int16_t sat_vel_lsb[3], uint32_t pr_lsb, int use_bias,
-                         ekf_sat_t *sat, nav_real_t h[EKF_N], nav_real_t *z_m)
+int ekf_antenna(const sins_t *s, const geo_pos_t *pos_then, const nav_real_t lever_b_m[3],
+                ekf_antenna_t *a)
 {
     mat3_t C;
     quat_to_dcm(s->q_bn, &C);
-    nav_real_t l_n[3];
-    mat3_mul_vec(&C, lever_b_m, l_n);
+    mat3_mul_vec(&C, lever_b_m, a->l_n);
     const nav_real_t lat = geo_lat_rad(pos_then);
     const nav_real_t hgt = geo_h_m(pos_then);
     nav_real_t R_M, R_N;
     earth_radii(nav_sin(lat), &R_M, &R_N);
     geo_pos_t ant = *pos_then;
-    if (geo_pos_add(&ant, l_n[1] / (R_M + hgt), l_n[0] / ((R_N + hgt) * nav_cos(lat)),
-                    l_n[2]) != NAV_OK) {
+    if (geo_pos_add(&ant, a->l_n[1] / (R_M + hgt), a->l_n[0] / ((R_N + hgt) * nav_cos(lat)),
+                    a->l_n[2]) != NAV_OK) {
         return NAV_EINVAL;
     }
-    int64_t rx_dmm[3];
-    geo_to_ecef_dmm(&ant, rx_dmm);
-    if (gnss_geom_sat(rx_dmm, sat_pos_lsb, sat_vel_lsb, &sat->g) != NAV_OK) {
-        return NAV_EINVAL;
-    }
+    geo_to_ecef_dmm(&ant, a->ecef_dmm);
     /* the navigator's ENU axes, those of the error state dr and of its velocity */
     const nav_real_t lon = geo_lon_rad(pos_then);
-    ecef_to_enu(lat, lon, sat->g.los_ecef, sat->los_enu);
-    ecef_to_enu(lat, lon, sat->g.sat_vel_mps, sat->sat_vel_enu_mps);
+    a->sin_lat = nav_sin(lat);
+    a->cos_lat = nav_cos(lat);
+    a->sin_lon = nav_sin(lon);
+    a->cos_lon = nav_cos(lon);
+    return NAV_OK;
+}
+
+/* a in ECEF axes to the antenna's local east, north, up axes */
+static void ecef_to_enu(const ekf_antenna_t *an, const nav_real_t a[3], nav_real_t out[3])
+{
+    const nav_real_t sl = an->sin_lat, cl = an->cos_lat, so = an->sin_lon, co = an->cos_lon;
+    out[0] = -so * a[0] + co * a[1];
+    out[1] = -sl * co * a[0] - sl * so * a[1] + cl * a[2];
+    out[2] = cl * co * a[0] + cl * so * a[1] + sl * a[2];
+}
+
+int ekf_sat_geometry(const ekf_antenna_t *a, const int32_t sat_pos_lsb[3],
+                     const int16_t sat_vel_lsb[3], ekf_sat_t *sat)
+{
+    if (gnss_geom_sat(a->ecef_dmm, sat_pos_lsb, sat_vel_lsb, &sat->g) != NAV_OK) {
+        return NAV_EINVAL;
+    }
+    ecef_to_enu(a, sat->g.los_ecef, sat->los_enu);
+    ecef_to_enu(a, sat->g.sat_vel_mps, sat->sat_vel_enu_mps);
+    return NAV_OK;
+}
+
+void ekf_rows_pseudorange(const ekf_t *k, const ekf_antenna_t *a, const ekf_sat_t *sat,
+                          uint32_t pr_lsb, int use_bias, nav_real_t h[EKF_N], nav_real_t *z_m)
+{
     zero_row(h);
     const nav_real_t *u = sat->los_enu;
     nav_real_t hp[3];
-    neg_cross(u, l_n, hp);
+    neg_cross(u, a->l_n, hp);
     for (int i = 0; i < 3; i++) {
         h[EKF_DR + i] = -u[i];
         h[EKF_PSI + i] = hp[i];
@@ -313,7 +324,6 @@ int ekf_rows_pseudorange(const ekf_t *k, const sins_t *s, const geo_pos_t *pos_t
         h[EKF_GB + 1] = -u[1];
         *z_m -= u[0] * k->gnss_bias_m[0] + u[1] * k->gnss_bias_m[1];
     }
-    return NAV_OK;
 }
 
 void ekf_rows_range_rate(const ekf_t *k, const sins_t *s, const nav_real_t v_then_mps[3],
