@@ -630,7 +630,10 @@ static void raw_clock_start(fusion_t *fu, const raw_epoch_t *e, nav_real_t med_p
                                    k->P[EKF_DR + 2][EKF_DR + 2]);
     const nav_real_t sv = nav_sqrt(k->P[EKF_DV][EKF_DV] + k->P[EKF_DV + 1][EKF_DV + 1] +
                                    k->P[EKF_DV + 2][EKF_DV + 2]);
-    const nav_real_t shift_dmm = med_pr * (nav_real_t)GNSS_GEOM_DMM_PER_M;
+    /* within +-1e8 m (a residual beyond any range and clock: the conversion stays far
+     * inside int64) */
+    const nav_real_t shift_dmm =
+        nav_clamp(med_pr, NAV_C(-1.0e8), NAV_C(1.0e8)) * (nav_real_t)GNSS_GEOM_DMM_PER_M;
     const int64_t clock = k->clock_dmm - (int64_t)(shift_dmm >= NAV_C(0.0)
                                                        ? shift_dmm + NAV_C(0.5)
                                                        : shift_dmm - NAV_C(0.5));
