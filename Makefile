@@ -74,7 +74,7 @@ TESTS_FAKE_HAL := test_app test_calstore test_nvstore test_app_rx test_imu_strea
 FAKE_HAL_SUPPORT := tests/support/fake_hal.c tests/support/can_frames.c tests/support/app_fixture.c
 # tests of a Cortex-M4F driver against a register block in RAM (tests/test_<driver>.c
 # links hal/cortex_m4f/<driver>.c)
-TESTS_M4_HAL := test_bxcan test_stm32_flash test_stm32_iwdg test_stm32_clock test_stm32_timebase test_f2l
+TESTS_M4_HAL := test_bxcan test_stm32_flash test_stm32_iwdg test_stm32_clock test_stm32_timebase test_f2l test_u64div
 
 .PHONY: grades
 .PHONY: all test test-c test-plain test-asan test-cross test-python codec codec-check params params-check \
@@ -359,7 +359,7 @@ M4_LDFLAGS_COMMON := $(M4_FLAGS) -nostartfiles --specs=nano.specs -Lboards/stm32
 M4_LDFLAGS := $(M4_LDFLAGS_COMMON) -T $(M4_LD)
 # boards/: the entry points and startup of the two Cortex-M4F images (the QEMU machine is
 # an STM32F405 too: the same startup and linker script)
-M4_BOARD_SRC := boards/stm32f405/startup.c boards/stm32f405/app_slot.c hal/cortex_m4f/f2l.c
+M4_BOARD_SRC := boards/stm32f405/startup.c boards/stm32f405/app_slot.c hal/cortex_m4f/f2l.c hal/cortex_m4f/u64div.c
 ECU_SRC := $(M4_SRC) $(M4_BOARD_SRC) hal/cortex_m4f/hal_stm32.c boards/stm32f405/main.c
 # the bootloader (issue #19, docs/target.md): sector 0, boards/stm32f405/boot.ld; the same
 # startup, HAL drivers and diagnostics as the application, the logic of firmware/boot
