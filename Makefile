@@ -359,7 +359,8 @@ M4_LDFLAGS_COMMON := $(M4_FLAGS) -nostartfiles --specs=nano.specs -Lboards/stm32
 M4_LDFLAGS := $(M4_LDFLAGS_COMMON) -T $(M4_LD)
 # boards/: the entry points and startup of the two Cortex-M4F images (the QEMU machine is
 # an STM32F405 too: the same startup and linker script)
-M4_BOARD_SRC := boards/stm32f405/startup.c boards/stm32f405/app_slot.c hal/cortex_m4f/f2l.c hal/cortex_m4f/u64div.c
+M4_BOARD_SRC := boards/stm32f405/startup.c boards/stm32f405/app_slot.c hal/cortex_m4f/f2l.c hal/cortex_m4f/u64div.c \
+  hal/cortex_m4f/memcpy.c
 ECU_SRC := $(M4_SRC) $(M4_BOARD_SRC) hal/cortex_m4f/hal_stm32.c boards/stm32f405/main.c
 # the bootloader (issue #19, docs/target.md): sector 0, boards/stm32f405/boot.ld; the same
 # startup, HAL drivers and diagnostics as the application, the logic of firmware/boot
@@ -398,6 +399,8 @@ M4_SIZE_DRV := $(HAL_M4_SRC) hal/cortex_m4f/hal_stm32.c boards/stm32f405/startup
 M4_SIZE_SRC := $(filter firmware/app/% firmware/diag/% firmware/can/% firmware/boot/%,$(APP_SRC) $(CORE_SRC)) \
   $(call VEH_GEN_SRC,$(VEHICLE)) $(M4_SIZE_NAV) $(M4_SIZE_DRV)
 $(M4_SIZE_SRC:%.c=$(TGT)/obj/%.o): M4_TGT_CFLAGS += -Os
+# memcpy.c's loop must not become a call of memcpy
+$(TGT)/obj/hal/cortex_m4f/memcpy.o: M4_TGT_CFLAGS += -fno-tree-loop-distribute-patterns
 $(TGT)/navecu.elf: $(ECU_SRC:%.c=$(TGT)/obj/%.o) $(M4_LD) boards/stm32f405/stm32f405_sections.ld
 	$(ARM_CC) $(M4_LDFLAGS) -Wl,-Map=$(TGT)/navecu.map $(filter %.o,$^) -lm -o $@
 $(TGT)/navecu-qemu.elf: $(QEMU_SRC:%.c=$(TGT)/obj/%.o) $(M4_LD) boards/stm32f405/stm32f405_sections.ld
