@@ -71,7 +71,7 @@ DEFAULT_M4_FLAGS = "-mcpu=cortex-m4 -mfpu=fpv4-sp-d16 -mfloat-abi=hard -mthumb"
 # in RAM: TESTS_M4_HAL); the rest of hal/cortex_m4f/ builds for the M4F only
 DEFAULT_HOST_M4 = ("hal/cortex_m4f/bxcan.c hal/cortex_m4f/stm32_flash.c "
                    "hal/cortex_m4f/stm32_iwdg.c hal/cortex_m4f/stm32_clock.c "
-                   "hal/cortex_m4f/stm32_timebase.c hal/cortex_m4f/f2l.c")
+                   "hal/cortex_m4f/stm32_timebase.c hal/cortex_m4f/f2l.c hal/cortex_m4f/u64div.c")
 ARM_SYSROOT_INC = "/usr/lib/arm-none-eabi/include"  # newlib's headers, for clang-tidy
 
 
