@@ -192,6 +192,11 @@
 /* gnss_input = both: raw epochs are fused when no fix came for this many of the
  * receiver's usual fix intervals (1.5: a fix late by half an interval is still coming) */
 #define APP_RAW_BOTH_GAP_EPOCHS NAV_C(1.5)
+/* GPS time of week: its length, ms */
+#define APP_WEEK_MS 604800000u
+/* a pseudorange farther than this from its satellite's range is no measurement (a
+ * receiver's clock stays within 1 ms of GPS time: 3e5 m; 3 ms allowed) */
+#define APP_RAW_PR_PLAUSIBLE_M NAV_C(1.0e6)
 /* fault exclusion: a residual this many sigmas from the epoch's median */
 #define APP_RAW_FDE_SIGMAS NAV_C(5.0)
 

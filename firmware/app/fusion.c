@@ -19,6 +19,7 @@ void fusion_stop(fusion_t *fu)
 {
     fu->on = 0u;
     fu->fix.seen = 0u;
+    fu->clock_valid = 0u; /* a new filter starts from an unknown clock (ekf_init) */
 }
 
 static void clear_interval(fusion_t *fu)
@@ -291,6 +292,7 @@ static int start(fusion_t *fu, const fusion_ctx_t *c, const fusion_prior_t *prio
         app_diag_reject(c->diag, &c->diag->health->nav_rejected);
     }
     clear_interval(fu);
+    fu->clock_valid = 0u; /* ekf_init's clock is an unknown one: estimated afresh */
     fu->odo_frames_used = c->odo->n_frames;
     fu->start_sample = c->diag->n_samples;
     fu->nonfinite_seen = fu->ekf.n_nonfinite; /* the supervision's reference: a new filter */
@@ -582,15 +584,24 @@ static int raw_row(const fusion_t *fu, const raw_epoch_t *e, int i, int rate,
     return nav_isfinite(*z) ? 1 : 0;
 }
 
-/* every satellite's geometry from the epoch's antenna, once */
+/* every satellite's geometry from the epoch's antenna, once; a satellite whose position
+ * is not a GNSS satellite's (gnss_geom_sat), or whose pseudorange is not its range within
+ * APP_RAW_PR_PLAUSIBLE_M (a receiver clock within 3 ms of GPS time; a range of 0 or a
+ * corrupt one) is refused and counted in bad_value */
 static void raw_geometry(fusion_t *fu, const raw_epoch_t *e)
 {
     for (int i = 0; i < e->n; i++) {
         const gnss_raw_sat_t *m = &e->g->sat[e->slot[i]];
-        fu->raw_geo_ok[i] =
-            (uint8_t)(ekf_sat_geometry(&e->ant, m->pos_lsb, m->vel_lsb, &fu->raw_geo[i]) == NAV_OK
-                          ? 1u
-                          : 0u);
+        const int geo_ok =
+            ekf_sat_geometry(&e->ant, m->pos_lsb, m->vel_lsb, &fu->raw_geo[i]) == NAV_OK;
+        const int pr_ok = geo_ok && (m->pr_valid == 0u ||
+                                     nav_fabs(gnss_geom_pr_residual_m(m->pr_lsb, &fu->raw_geo[i].g,
+                                                                      0)) <=
+                                         APP_RAW_PR_PLAUSIBLE_M);
+        fu->raw_geo_ok[i] = (uint8_t)(pr_ok ? 1u : 0u);
+        if (!pr_ok) {
+            app_diag_reject(e->c->diag, &e->c->diag->health->bad_value);
+        }
     }
 }
 
@@ -623,7 +634,7 @@ static nav_real_t median_ok(const nav_real_t *z, const uint8_t *ok, int n, int *
 /* The clock estimated afresh from the median residuals (the clock bias and drift that make
  * them zero), sigmas: the filter's position (velocity) sigma and the clock's floor. */
 static void raw_clock_start(fusion_t *fu, const raw_epoch_t *e, nav_real_t med_pr,
-                            nav_real_t med_rr)
+                            nav_real_t med_rr, int n_rr)
 {
     ekf_t *k = &fu->ekf;
     const nav_real_t sp = nav_sqrt(k->P[EKF_DR][EKF_DR] + k->P[EKF_DR + 1][EKF_DR + 1] +
@@ -637,8 +648,10 @@ static void raw_clock_start(fusion_t *fu, const raw_epoch_t *e, nav_real_t med_p
     const int64_t clock = k->clock_dmm - (int64_t)(shift_dmm >= NAV_C(0.0)
                                                        ? shift_dmm + NAV_C(0.5)
                                                        : shift_dmm - NAV_C(0.5));
-    ekf_clock_start(k, clock, k->clock_drift_mps - med_rr, sp + APP_RAW_CLOCK_SIGMA_M,
-                    sv + APP_RAW_DRIFT_SIGMA_MPS);
+    /* without a range rate the drift is not measured: kept, as unknown as a clock nobody
+     * measured (the ranges' change from epoch to epoch then finds it) */
+    const nav_real_t sd = n_rr > 0 ? sv + APP_RAW_DRIFT_SIGMA_MPS : k->cfg.clk_drift_mps;
+    ekf_clock_start(k, clock, k->clock_drift_mps - med_rr, sp + APP_RAW_CLOCK_SIGMA_M, sd);
     fu->clock_valid = 1u;
     app_count(&e->c->raw->clock_starts);
 }
@@ -747,6 +760,25 @@ fusion_action_t fusion_raw(fusion_t *fu, const fusion_ctx_t *c, const gnss_raw_a
             APP_RAW_BOTH_GAP_EPOCHS * fu->gnss_ep_typ_s * (nav_real_t)cfg->imu_rate_hz) {
         return FUSION_GO_ON;
     }
+    /* the receiver's time between the epochs fused (GPS time of week, ms, across the week's
+     * end): the clock moves on by its drift over that, not over the arrival times; an
+     * epoch not after the last one fused (a replay, an old epoch) is refused */
+    nav_real_t dt_s = APP_RAW_CLOCK_KEEP_S + NAV_C(1.0);
+    if (fu->raw_have_tow != 0u) {
+        int64_t d_ms = (int64_t)tow_ms - (int64_t)fu->raw_tow_ms;
+        if (d_ms < -(int64_t)(APP_WEEK_MS / 2u)) {
+            d_ms += (int64_t)APP_WEEK_MS;
+        } else if (d_ms > (int64_t)(APP_WEEK_MS / 2u)) {
+            d_ms -= (int64_t)APP_WEEK_MS;
+        } else {
+            /* within half a week */
+        }
+        if (d_ms <= 0) {
+            app_diag_reject(c->diag, &c->diag->health->bad_counter);
+            return FUSION_GO_ON;
+        }
+        dt_s = (nav_real_t)d_ms * NAV_C(0.001);
+    }
     gnss_when_t when = gnss_time_align(c->time, c->diag->t_us, cfg->imu_rate_hz, tow_ms,
                                        gnss_time_latency(c->time, cfg->gnss_latency_s));
     if (when.jumped) {
@@ -757,6 +789,11 @@ fusion_action_t fusion_raw(fusion_t *fu, const fusion_ctx_t *c, const gnss_raw_a
             app_diag_reject(c->diag, &c->diag->health->gnss_rejected);
         }
         return FUSION_GO_ON;
+    }
+    /* a reopened filter (here or by a fix) forgot the position the clock went with */
+    if (fu->ekf.n_reopened != fu->raw_reopens) {
+        fu->raw_reopens = fu->ekf.n_reopened;
+        fu->clock_valid = 0u;
     }
     raw_epoch_t e;
     e.c = c;
@@ -785,13 +822,13 @@ fusion_action_t fusion_raw(fusion_t *fu, const fusion_ctx_t *c, const gnss_raw_a
     e.use_bias = fu->gnss_ep_typ_s > NAV_C(0.0) &&
                  cfg->gnss_corr_s >= APP_GNSS_STATE_MIN_FIXES * fu->gnss_ep_typ_s;
     /* 2. the clock */
-    const nav_real_t dt_s = (nav_real_t)(n - fu->raw_sample) / (nav_real_t)cfg->imu_rate_hz;
     if (fu->clock_valid != 0u && dt_s <= APP_RAW_CLOCK_KEEP_S) {
         ekf_clock_advance(&fu->ekf, dt_s);
     } else {
         fu->clock_valid = 0u;
     }
-    fu->raw_sample = n;
+    fu->raw_tow_ms = tow_ms;
+    fu->raw_have_tow = 1u;
     nav_real_t z_pr[RAW_MAX], z_rr[RAW_MAX];
     uint8_t ok_pr[RAW_MAX], ok_rr[RAW_MAX];
     for (int i = 0; i < RAW_MAX; i++) {
@@ -817,7 +854,7 @@ fusion_action_t fusion_raw(fusion_t *fu, const fusion_ctx_t *c, const gnss_raw_a
         fu->clock_valid = 0u;
     }
     if (fu->clock_valid == 0u) {
-        raw_clock_start(fu, &e, med_pr, med_rr);
+        raw_clock_start(fu, &e, med_pr, med_rr, n_rr);
         raw_residuals(fu, &e, 0, z_pr, ok_pr);
         raw_residuals(fu, &e, 1, z_rr, ok_rr);
     }
@@ -866,11 +903,7 @@ fusion_action_t fusion_raw(fusion_t *fu, const fusion_ctx_t *c, const gnss_raw_a
     if (out + gated > 0) {
         app_diag_reject(c->diag, &c->diag->health->gnss_rejected); /* once per epoch */
     }
-    const uint32_t reopened = fu->ekf.n_reopened;
     gate_run(fu, c, pr_used > 0, APP_RAW_PR_SIGMA_ZENITH_M);
-    if (fu->ekf.n_reopened != reopened) {
-        fu->clock_valid = 0u; /* the clock goes with the position it was estimated with */
-    }
     feed_back(fu, c);
     int was_reset;
     const fusion_action_t act = supervise(fu, c, &was_reset);

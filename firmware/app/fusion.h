@@ -45,8 +45,9 @@ typedef struct {
     uint32_t excluded;      /* measurements excluded by the consistency check among the
                                epoch's satellites (fault exclusion: fusion.c) */
     uint32_t gated;         /* measurements refused by the filter's innovation gate */
-    uint32_t clock_starts;  /* the clock estimated afresh: the first epoch, a long gap, a
-                               reopened filter */
+    uint32_t clock_starts;  /* the clock estimated afresh: the first epoch of a filter, a
+                               gap of over 60 s, a reopened filter, a clock jump (these
+                               counted in clock_jumps too) */
     uint32_t clock_jumps;   /* receiver clock resets (flagged in GNSS_RawEpoch, or found:
                                every satellite off by the same beyond the clock's sigma) */
 } fusion_raw_counts_t;
@@ -77,7 +78,9 @@ typedef struct {
     nav_real_t w_b_last_rps[3]; /* the mean body rate of the last prediction interval */
     /* raw GNSS (issue #20) */
     uint8_t clock_valid;        /* the filter's clock states hold an estimate */
-    uint64_t raw_sample;        /* sample of the last raw epoch fused */
+    uint32_t raw_tow_ms;        /* TimeOfWeek of the last raw epoch fused */
+    uint8_t raw_have_tow;       /* one was */
+    uint32_t raw_reopens;       /* ekf.n_reopened the clock was estimated with */
     /* the epoch's satellites' geometry (fusion.c raw_geometry), in the epoch's order: formed
      * once per epoch; here, not on the stack (64 bytes each) */
     ekf_sat_t raw_geo[GNSS_RAW_MAX_SATS];

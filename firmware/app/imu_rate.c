@@ -5,7 +5,6 @@
 
 #include "app_tuning.h"
 
-#define MS_PER_WEEK 604800000u
 
 void imu_rate_init(imu_rate_t *r)
 {
@@ -102,7 +101,7 @@ imu_rate_change_t imu_rate_epoch(imu_rate_t *r, uint32_t rate_hz, uint32_t tow_m
     /* the TimeOfWeek interval, modulo the week: a step back is close to a week (both
      * below 604,800,000 ms, so the sum stays below 2^32) */
     const int64_t tow_span = (int64_t)(tow_ms >= r->tow_ms ? tow_ms - r->tow_ms
-                                                           : tow_ms + MS_PER_WEEK - r->tow_ms);
+                                                           : tow_ms + APP_WEEK_MS - r->tow_ms);
     if (tow_span == 0) {
         return IMU_RATE_SAME; /* the same epoch again (a frozen receiver): ignored */
     }

@@ -363,8 +363,9 @@ int ekf_sat_geometry(const ekf_antenna_t *a, const int32_t sat_pos_lsb[3],
  * With use_bias, the ranges' errors correlated in time are the receiver's correlated
  * horizontal position error (the state db of the fixes, ekf_gnss_bias_step) seen along the
  * line of sight: the prediction is shortened by u_E b_E + u_N b_N (b = gnss_bias_m) and
- * the row has -u_E, -u_N on db. Exact while the same satellites are tracked; a model of
- * the errors' correlation, like the fixes' (docs/kalman.md). */
+ * the row has -u_E, -u_N on db. An approximation (independent per-satellite errors are not
+ * a horizontal position error; a state per satellite would be), a model of the errors'
+ * correlation like the fixes' (docs/kalman.md). */
 void ekf_rows_pseudorange(const ekf_t *k, const ekf_antenna_t *a, const ekf_sat_t *sat,
                           uint32_t pr_lsb, int use_bias, nav_real_t h[EKF_N], nav_real_t *z_m);
 

@@ -78,7 +78,9 @@ class ReceiverSpec:
     #   kind = "multipath": error_m added to the pseudorange of the satellite of elevation
     #          rank `rank` (0 the highest) from start_s to end_s (a reflection only);
     #   kind = "clock_step": the receiver's clock stepped by step_m at at_s, flagged in
-    #          GNSS_RawEpoch ClockReset or not (`flagged`)
+    #          GNSS_RawEpoch ClockReset or not (`flagged`);
+    #   kind = "no_rates": every range rate flagged invalid from start_s to end_s (a
+    #          receiver that measures none)
     faults: list = field(default_factory=list)
 
 
@@ -248,9 +250,14 @@ def simulate(truth, spec: ReceiverSpec, seed: int, t0_gps_s: float = 0.0,
         ep.meas.sort(key=lambda m: -m.elevation_deg)
         ep.meas = ep.meas[:cap if cap > 0 else gr.MAX_SATS]
         for f in spec.faults:
-            if (f["kind"] == "multipath" and f["start_s"] <= te <= f["end_s"]
-                    and f["rank"] < len(ep.meas)):
+            if not f["kind"] in ("multipath", "no_rates") or not (
+                    f["start_s"] <= te <= f["end_s"]):
+                continue
+            if f["kind"] == "multipath" and f["rank"] < len(ep.meas):
                 ep.meas[f["rank"]].pseudorange_m += f["error_m"]
+            elif f["kind"] == "no_rates":
+                for m in ep.meas:
+                    m.rr_valid = False
         out.append((te, ep, RawTruth(t_s=te, rx_m=rx, v_rx_mps=v_rx, clock_m=bias,
                                      drift_mps=drift, in_view=in_view)))
     return out

@@ -793,7 +793,7 @@ struct navecu_can_gnss_raw_sat_x_t {
     int32_t sat_pos_x;
 
     /**
-     * ECEF x velocity at the transmit time, 0.125 m/s resolution (the ECU counts its quantisation in the range-rate sigma).
+     * ECEF x velocity at the transmit time, 0.125 m/s resolution (its quantisation, at most 0.11 m/s along a line of sight, is inside the ECU's 0.2 m/s range-rate sigma floor).
      *
      * Range: -32768..32767 (-4096..4095.875 m/s)
      * Scale: 0.125
