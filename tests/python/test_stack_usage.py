@@ -383,3 +383,149 @@ def test_ci_extra_bytes_on_compiled_function_adds(tmp_path):
     write_ci(tmp_path / "e.ci", [("f", 40, "static")], [])
     rc, out, doc = run(tmp_path, "--entry", "f", "--extra-bytes", "f=8")
     assert doc["entries"]["f"]["bytes"] == 48 and doc["assumed"] == {}
+
+
+# ------------------------------------------------------- code generated at the link (-flto)
+def _gcc_supports_lto() -> bool:
+    if not _gcc_supports_callgraph_info():
+        return False
+    try:
+        p = subprocess.run(["gcc", "-O2", "-flto", "-x", "c", "-", "-o", "/dev/null"],
+                           input="int main(void){return 0;}\n", capture_output=True,
+                           text=True, cwd="/tmp", timeout=60)
+    except (OSError, subprocess.SubprocessError):
+        return False
+    return p.returncode == 0
+
+
+needs_lto = pytest.mark.skipif(not _gcc_supports_lto(), reason="host gcc without -flto")
+
+LTO_ONE = """
+int one(int x);
+void (*volatile hook)(int);
+__attribute__((noinline)) static int helper(int x)
+{ volatile char b[400]; b[0] = (char)x; return b[0]; }
+__attribute__((noinline)) static void dispatch(int x) { hook(x); }
+__attribute__((noinline)) int one(int x) { dispatch(x); return helper(x); }
+"""
+LTO_TWO = """
+int one(int x); void target(int x); extern void (*volatile hook)(int);
+__attribute__((noinline)) static int helper(int x)
+{ volatile char b[40]; b[0] = (char)x; return b[0] + 1; }
+__attribute__((noinline)) void target(int x) { volatile char b[700]; b[0] = (char)x; }
+int main(void) { hook = target; return one(3) + helper(4); }
+"""
+
+
+def build_lto(tmp: Path) -> tuple[Path, dict[tuple[str, str], int]]:
+    """one.c and two.c compiled with -flto, linked with the call graph written at the link
+    (-dumpdir lto/, as the Makefile links the images); returns (lto dir, the frames of the
+    link's .su file: {(file, function as in the image): bytes})."""
+    (tmp / "one.c").write_text(LTO_ONE)
+    (tmp / "two.c").write_text(LTO_TWO)
+    for n in ("one", "two"):
+        subprocess.run(["gcc", "-O2", "-flto", "-c", f"{n}.c", "-o", f"{n}.o"], cwd=tmp,
+                       check=True, capture_output=True)
+    (tmp / "lto").mkdir()
+    subprocess.run(["gcc", "-O2", "-flto", "-flto-partition=one", "-fstack-usage",
+                    "-fcallgraph-info=su", "-dumpdir", "lto/", "one.o", "two.o", "-o", "prog"],
+                   cwd=tmp, check=True, capture_output=True)
+    su = sorted((tmp / "lto").glob("*.su"))
+    assert len(su) == 1 and len(list((tmp / "lto").glob("*.ci"))) == 1
+    frames = {}
+    for line in su[0].read_text().splitlines():
+        where, size, _kind = line.rsplit("\t", 2)
+        frames[(where.split(":")[0], where.rsplit(":", 1)[1])] = int(size)
+    return tmp / "lto", frames
+
+
+def lto_frame(frames, file, base):
+    """The frame of the function `base` of `file`, whichever clone the link made of it."""
+    hits = [v for (f, n), v in frames.items() if f == file and n.split(".")[0] == base]
+    assert len(hits) == 1, (file, base, frames)
+    return hits[0]
+
+
+@needs_lto
+def test_lto_statics_titled_after_their_source_and_resolved_by_name(tmp_path):
+    lto, f = build_lto(tmp_path)
+    g = SU.load([lto])
+    assert g.lto_units
+    titles = [t for t, fn in g.funcs.items() if fn.frame is not None]
+    # the link's temporary object names nothing: a static is file.c:name[.clone]
+    assert not [t for t in titles if "ltrans" in t], titles
+    assert [t for t in titles if t.startswith("one.c:helper")]
+    assert [t for t in titles if t.startswith("two.c:helper")]
+    rc, out, doc = run(lto, "--entry", "main", "--indirect", "one.c:dispatch=target")
+    assert rc == 0, out
+    want = lto_frame(f, "two.c", "main") + max(
+        lto_frame(f, "two.c", "helper"),
+        lto_frame(f, "one.c", "one") + max(lto_frame(f, "one.c", "helper"),
+                                           lto_frame(f, "one.c", "dispatch")
+                                           + lto_frame(f, "two.c", "target")))
+    assert doc["entries"]["main"]["bytes"] == want
+    # the indirect call must still be resolved: its caller is named in the output
+    rc, out, _ = run(lto, "--entry", "main")
+    assert rc == 2 and "one.c:dispatch" in out and "without --indirect" in out
+    # a plain name that is two functions' is refused, not guessed
+    rc, out, _ = run(lto, "--entry", "main", "--indirect", "one.c:dispatch=target",
+                     "--extra-bytes", "helper=8")
+    assert rc == 2 and "ambiguous" in out
+    rc, out, doc = run(lto, "--entry", "main", "--indirect", "dispatch=two.c:target")
+    assert rc == 0 and doc["entries"]["main"]["bytes"] == want
+
+
+def write_ltrans_ci(path: Path, unit: str, nodes: list[tuple], edges: list[tuple]) -> None:
+    """A link-time unit's .ci as GCC writes it: local functions titled unit:name; nodes:
+    (name, file, bytes or None, local), edges: (source, target) titles."""
+    lines = [f'graph: {{ title: "{unit}"']
+    for name, file, size, local in nodes:
+        title = f"{unit}:{name}" if local else name
+        if size is None:
+            lines.append(f'node: {{ title: "{title}" label: "{name}\\n{file}:1:1" '
+                         f'shape : ellipse }}')
+        else:
+            lines.append(f'node: {{ title: "{title}" label: "{name}\\n{file}:1:1\\n'
+                         f'{size} bytes (static)" }}')
+    for s, t in edges:
+        lines.append(f'edge: {{ sourcename: "{s}" targetname: "{t}" label: "x.c:2:3" }}')
+    lines.append("}")
+    path.write_text("\n".join(lines) + "\n")
+
+
+def test_ci_lto_folded_alias_needs_its_group(tmp_path):
+    """Identical code folding at the link: the unit calls app_count, which it does not
+    define (an alias of count at the same address). Never assumed: an error, unless the
+    image's symbols (--alias-group) name the function it is."""
+    u = "/tmp/ccAbCdEf.ltrans0.o"
+    write_ltrans_ci(tmp_path / "ltrans0.ltrans.ci", u,
+                    [("Reset_Handler", "startup.c", 8, False), ("count", "uds.c", 300, True),
+                     ("small", "app.c", 16, True)],
+                    [("Reset_Handler", f"{u}:app_count"), ("Reset_Handler", f"{u}:small")])
+    rc, out, _ = run(tmp_path, "--entry", "Reset_Handler")
+    assert rc == 2 and "app_count" in out and "no alias" in out
+    rc, out, doc = run(tmp_path, "--entry", "Reset_Handler", "--alias-group", "app_count,count")
+    assert rc == 0, out
+    assert doc["entries"]["Reset_Handler"]["path"] == [["Reset_Handler", 8], ["uds.c:count", 300]]
+    assert doc["assumed"] == {}
+
+
+def test_ci_lto_clones_of_one_function_all_resolved(tmp_path):
+    """A name given as file.c:name resolves to every clone the link made of it (each gets
+    the --indirect callees); names of two files' functions are ambiguous."""
+    u = "/tmp/ccXyZ.ltrans0.o"
+    write_ltrans_ci(tmp_path / "ltrans0.ltrans.ci", u,
+                    [("Reset_Handler", "startup.c", 8, False),
+                     ("serve.constprop.0", "app_uds.c", 40, True),
+                     ("serve.part.0", "app_uds.c", 24, True),
+                     ("serve", "boot.c", 10, True),
+                     ("read_did", "app_uds.c", 100, True), ("__indirect_call", "", None, False)],
+                    [("Reset_Handler", f"{u}:serve.constprop.0"), ("Reset_Handler", f"{u}:serve.part.0"),
+                     (f"{u}:serve.constprop.0", "__indirect_call"),
+                     (f"{u}:serve.part.0", "__indirect_call")])
+    rc, out, doc = run(tmp_path, "--entry", "Reset_Handler", "--indirect",
+                       "app_uds.c:serve=read_did")
+    assert rc == 0, out
+    assert doc["entries"]["Reset_Handler"]["bytes"] == 8 + 40 + 100
+    rc, out, _ = run(tmp_path, "--entry", "Reset_Handler", "--indirect", "serve=read_did")
+    assert rc == 2 and "ambiguous" in out

@@ -67,3 +67,60 @@ def test_double_and_heap_symbols_are_recognised():
     for name in ("malloc", "_malloc_r", "free", "_sbrk", "_sbrk_r", "realloc"):
         assert budget.HEAP_SYMBOLS.match(name), name
     assert not budget.HEAP_SYMBOLS.match("memset")
+
+
+def _host_cc(tmp_path, name, *flags):
+    import shutil
+    import subprocess
+    if shutil.which("gcc") is None or shutil.which("arm-none-eabi-readelf") is None:
+        pytest.skip("needs gcc and arm-none-eabi-readelf")
+    (tmp_path / f"{name}.c").write_text(f"int {name}(int x);\nint {name}(int x) {{ return x + 1; }}\n")
+    subprocess.run(["gcc", "-O2", "-fstack-usage", "-fcallgraph-info=su", *flags, "-c",
+                    f"{name}.c", "-o", f"{name}.o"], cwd=tmp_path, check=True,
+                   capture_output=True)
+    return tmp_path / f"{name}.o"
+
+
+def test_call_graphs_of_lto_objects_come_from_the_link_or_nowhere(tmp_path):
+    """An object compiled with -flto has no code, so no call graph of its own: the budget
+    reads the link's (--ltrans), refuses without it, and refuses one older than the
+    objects (a stale graph would check code that is not in the image)."""
+    plain = _host_cc(tmp_path, "plain")
+    lto = _host_cc(tmp_path, "inter", "-flto")
+    assert budget.is_lto_object(lto) and not budget.is_lto_object(plain)
+    elf = tmp_path / "image.elf"
+    elf.write_text("")
+    files, _ = budget.call_graphs(elf, [str(plain)], None)
+    assert files == [plain.with_suffix(".ci")]
+    with pytest.raises(SystemExit) as e:
+        budget.call_graphs(elf, [str(plain), str(lto)], None)
+    assert e.value.code == 2
+    ltrans = tmp_path / "lto"
+    ltrans.mkdir()
+    with pytest.raises(SystemExit) as e:                 # no graph written at the link
+        budget.call_graphs(elf, [str(plain), str(lto)], ltrans)
+    assert e.value.code == 2
+    ci = ltrans / "ltrans0.ltrans.ci"
+    ci.write_text("graph: { title: \"/tmp/cc.ltrans0.o\"\n}\n")
+    import os
+    os.utime(ci, (lto.stat().st_mtime - 10, lto.stat().st_mtime - 10))
+    with pytest.raises(SystemExit) as e:                 # older than an object: stale
+        budget.call_graphs(elf, [str(plain), str(lto)], ltrans)
+    assert e.value.code == 2
+    os.utime(ci, None)
+    os.utime(elf, None)
+    files, notes = budget.call_graphs(elf, [str(plain), str(lto)], ltrans)
+    assert files == [plain.with_suffix(".ci"), ci] and notes
+    with pytest.raises(SystemExit) as e:                 # a link graph without -flto objects
+        budget.call_graphs(elf, [str(plain)], ltrans)
+    assert e.value.code == 2
+
+
+def test_alias_groups_from_the_symbol_table(tmp_path, monkeypatch):
+    nm = ("0800d4dc t app_count\n0800d4dc t count\n0800d500 T single\n"
+          "08010d11 t enc_y\n08010d10 t enc_x\n0800c000 t $t\n0800c000 t other\n")
+
+    class R:
+        stdout = nm
+    monkeypatch.setattr(budget.subprocess, "run", lambda *a, **k: R())
+    assert budget.alias_groups(Path("x.elf")) == [["app_count", "count"], ["enc_x", "enc_y"]]

@@ -2,7 +2,7 @@
 application's and the bootloader's (issue #19: --flash-limit 16384 --sectors 0).
 
     python -m tools.target.budget --elf build/target/navecu.elf --objs OBJ.o ... \
-        [--entry Reset_Handler] [--isr CAN1_RX0_IRQHandler ...] [--indirect CALLER=C1,C2 ...]
+        [--ltrans build/target/lto/navecu] [--entry Reset_Handler] [--isr CAN1_RX0_IRQHandler ...] [--indirect CALLER=C1,C2 ...]
         [--flash-limit B] [--flash-aim B] [--sectors 3,4] [--json out/target-budget.json]
 
 Checks, each against the limit of issue #8 (exit status 1 if any is exceeded, 2 if a
@@ -13,7 +13,12 @@ check cannot be made):
 * static RAM: .data + .bss <= 16 KiB (aim 12 KiB);
 * stack: the worst case over the call graph from -fstack-usage/-fcallgraph-info
   (tools/target/stack_usage.py) from the reset handler plus every interrupt handler
-  nested, with their exception frames <= 2 KiB;
+  nested, with their exception frames <= 2 KiB. The graph of an object is its .ci, written
+  when it was compiled; for the objects compiled with -flto (intermediate code, detected
+  from their .gnu.lto_ sections) it is the one the link wrote of the code it generated
+  (--ltrans DIR: the link's -dumpdir, DIR/*ltrans*.ci), refused if missing or older than
+  the objects; functions folded into one by the link (several symbols at one address in
+  the image) are passed to stack_usage.py as --alias-group;
 * no heap: none of malloc, calloc, realloc, free, _sbrk (or their reentrant _r forms) in
   the linked image;
 * no double-precision software floating point: no __aeabi_d*, __aeabi_f2d, __aeabi_*2d
@@ -57,6 +62,19 @@ def symbols(elf: Path) -> set:
     out = subprocess.run(["arm-none-eabi-nm", str(elf)], check=True, capture_output=True,
                          text=True).stdout
     return {line.split()[-1] for line in out.splitlines() if line.strip()}
+
+
+def alias_groups(elf: Path) -> list:
+    """The names of the functions at one address, where there are several (identical code
+    folding at the link, weak aliases): [[name, ...], ...]."""
+    out = subprocess.run(["arm-none-eabi-nm", "--defined-only", str(elf)], check=True,
+                         capture_output=True, text=True).stdout
+    at: dict = {}
+    for line in out.splitlines():
+        p = line.split()
+        if len(p) == 3 and p[1] in "tTwW" and not p[2].startswith("$"):
+            at.setdefault(int(p[0], 16) & ~1, []).append(p[2])
+    return [sorted(set(v)) for _, v in sorted(at.items()) if len(set(v)) > 1]
 
 
 def memory_use(sec: dict) -> tuple[int, int, dict]:
@@ -109,14 +127,63 @@ def sectors_touched(segs: list) -> tuple[int, list]:
     return sum(SECTORS[k][1] for k in touched), touched
 
 
-def stack(objs: list, entries: list, isrs: list, indirect: list,
-          stack_limit: int = LIMITS["stack_bytes"][0]) -> dict:
-    """Run stack_usage.py over the .ci files of these objects only (not the QEMU image's)."""
+def refuse(msg: str):
+    """A check that cannot be made: exit status 2."""
+    print(msg, file=sys.stderr)
+    raise SystemExit(2)
+
+
+def is_lto_object(obj: Path) -> bool:
+    """An object compiled with -flto (slim): GCC's intermediate code, no machine code; its
+    code, and the call graph of it, are generated at the link."""
+    out = subprocess.run(["arm-none-eabi-readelf", "-SW", str(obj)], check=True,
+                         capture_output=True, text=True).stdout
+    return ".gnu.lto_" in out
+
+
+def call_graphs(elf: Path, objs: list, ltrans: Path | None) -> tuple[list, list]:
+    """The .ci files describing the code linked into elf: each object's own (written when
+    it was compiled), except for the -flto objects, whose code the link generated: the
+    link's partitions' (ltrans*.ltrans.ci in ltrans, the link's -dumpdir, written with
+    -fcallgraph-info=su at the link). Refuses (exit 2) what would be stale or missing.
+    Returns (files, notes)."""
+    files, notes, lto = [], [], []
+    for o in map(Path, objs):
+        if is_lto_object(o):
+            lto.append(o)
+            continue
+        ci = o.with_suffix(".ci")
+        if not ci.exists():
+            refuse(f"budget: {ci} missing (objects need -fcallgraph-info=su)")
+        if ci.stat().st_mtime < o.stat().st_mtime - 1:
+            refuse(f"budget: {ci} older than {o}")
+        files.append(ci)
+    if lto:
+        if ltrans is None:
+            refuse(f"budget: {len(lto)} objects compiled with -flto ({lto[0]}, ...): "
+                             f"their code is generated at the link; give the link's -dumpdir "
+                             f"with --ltrans (link with -fstack-usage -fcallgraph-info=su)")
+        lt = sorted(ltrans.glob("*ltrans*.ci"))
+        if not lt:
+            refuse(f"budget: no link-time call graph (*ltrans*.ci) in {ltrans} "
+                             f"(link with -flto -fcallgraph-info=su -dumpdir {ltrans}/)")
+        newest = max(o.stat().st_mtime for o in lto)
+        for ci in lt:
+            if ci.stat().st_mtime < newest or ci.stat().st_mtime > elf.stat().st_mtime + 1:
+                refuse(f"budget: {ci} is not from the link of {elf} (stale)")
+        files += lt
+        notes.append(f"{len(lto)} objects compiled with -flto: their call graph from the "
+                     f"link, {', '.join(str(c) for c in lt)}")
+    elif ltrans is not None:
+        refuse(f"budget: --ltrans {ltrans} given but no object was compiled with -flto")
+    return files, notes
+
+
+def stack(cis: list, entries: list, isrs: list, indirect: list,
+          stack_limit: int = LIMITS["stack_bytes"][0], aliases: list = ()) -> dict:
+    """Run stack_usage.py over these .ci files only (not the QEMU image's)."""
     with tempfile.TemporaryDirectory() as d:
-        for k, o in enumerate(objs):
-            ci = Path(o).with_suffix(".ci")
-            if not ci.exists():
-                raise SystemExit(f"budget: {ci} missing (objects need -fcallgraph-info=su)")
+        for k, ci in enumerate(cis):
             (Path(d) / f"{k:03d}_{ci.name}").write_text(ci.read_text())
         js = Path(d) / "stack.json"
         # 108: the FPU exception frame (26 words) plus the 4-byte alignment pad (STKALIGN)
@@ -129,6 +196,8 @@ def stack(objs: list, entries: list, isrs: list, indirect: list,
             cmd += ["--isr", i]
         for i in indirect:
             cmd += ["--indirect", i]
+        for grp in aliases:
+            cmd += ["--alias-group", ",".join(grp)]
         r = subprocess.run(cmd, capture_output=True, text=True)
         print(r.stdout.rstrip())
         if r.returncode == 2 or not js.exists():
@@ -145,6 +214,9 @@ def main(argv=None) -> int:
     ap.add_argument("--isr", action="append", default=None)
     ap.add_argument("--indirect", action="append", default=[], metavar="CALLER=C1,C2",
                     help="callees of CALLER's calls through function pointers (stack_usage.py)")
+    ap.add_argument("--ltrans", type=Path, default=None, metavar="DIR",
+                    help="the link's -dumpdir: the call graphs of the code generated at the "
+                         "link for the objects compiled with -flto")
     ap.add_argument("--json", type=Path, default=None)
     ap.add_argument("--flash-limit", type=int, default=LIMITS["flash_bytes"][0])
     ap.add_argument("--flash-aim", type=int, default=LIMITS["flash_bytes"][1])
@@ -166,7 +238,10 @@ def main(argv=None) -> int:
     syms = symbols(a.elf)
     heap = sorted(s for s in syms if HEAP_SYMBOLS.match(s))
     dbl = sorted(s for s in syms if DOUBLE_SYMBOLS.match(s))
-    st = stack(a.objs, entries, isrs, a.indirect, limits["stack_bytes"][0])
+    cis, ci_notes = call_graphs(a.elf, a.objs, a.ltrans)
+    for n in ci_notes:
+        print(f"note: {n}")
+    st = stack(cis, entries, isrs, a.indirect, limits["stack_bytes"][0], alias_groups(a.elf))
     stack_bytes = int(st["total_bytes"])
 
     rows = [("flash", flash, *limits["flash_bytes"]), ("static RAM", ram, *limits["ram_bytes"]),

@@ -26,6 +26,26 @@ the same frame sizes as the .su files plus the calls:
     "__indirect_call". Inlined calls (static inline, or inlined by -O2) are not calls: the
     callee's locals are in the caller's frame.
 
+Code generated at the link (-flto): the objects hold GCC's intermediate code and no .ci;
+linking with `-flto -fstack-usage -fcallgraph-info=su -dumpdir DIR/` writes one .ci per
+partition (DIR/ltrans0.ltrans.ci ...), the frames and calls of the code in the image. Its
+graph is titled after the partition's temporary object ("/tmp/ccXXXXXX.ltrans0.o"), and so
+are its local functions (statics, and the globals the link made local):
+"/tmp/ccXXXXXX.ltrans0.o:send.constprop.0". They are retitled after the source file of
+their definition (the label's location), "firmware/app/output.c:send.constprop.0", like a
+compiled object's statics. A function such a unit calls but does not define is an alias
+made by identical code folding (several names at one address): --alias-group F1,F2,...
+(the image's symbols at one address; tools/target/budget.py passes them) makes its calls
+calls of the folded function that has a frame; one that no group resolves is an error,
+never assumed.
+
+Function names (--entry, --isr, --indirect, --extra-bytes) are "name" or "file.c:name"
+(a path suffix will do): they match that function and the clones GCC made of it
+(.constprop.N, .isra.N, .part.N, .lto_priv.N, .cold), in that file if one is given; an
+--indirect list applies to each clone's indirect calls. A name that matches functions of
+two files or two source functions is ambiguous (an error); "name.constprop.0" matches
+only that clone.
+
 Graphs of all .ci files under the --ci-dir directories (recursive) are merged by title.
 For each entry the worst case is the maximum over call paths of the sum of the frames.
 The analysis refuses (exit 2), listing every problem found on paths from the entries:
@@ -70,9 +90,15 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 INDIRECT = "__indirect_call"
+# the title prefix of a link-time unit's local function that the unit calls but does not
+# define (identical code folding made it an alias of another function)
+LTO_LOCAL = "<ltrans>:"
 EXIT_OK, EXIT_LIMIT, EXIT_ERROR = 0, 1, 2
 
 _BYTES_RE = re.compile(r"^(\d+) bytes \((static|dynamic|dynamic,bounded)\)$")
+_GRAPH_RE = re.compile(r'\s*graph:\s*\{\s*title:\s*"((?:[^"\\]|\\.)*)"')
+# the temporary object of a link-time (-flto) partition: /tmp/ccXXXXXX.ltrans0.o
+_LTRANS_RE = re.compile(r"(^|[./])ltrans\d+(\.ltrans)?\.o$")
 _TOKEN_RE = re.compile(r'\s*(?:"((?:[^"\\]|\\.)*)"|([{}:])|([^\s{}:"]+))', re.S)
 
 
@@ -152,6 +178,7 @@ class Graph:
         self.funcs: dict[str, Func] = {}
         self.warnings: list[str] = []
         self.ci_files: list[Path] = []
+        self.lto_units: list[str] = []
 
     def _get(self, title: str) -> Func:
         f = self.funcs.get(title)
@@ -161,11 +188,32 @@ class Graph:
 
     def add_ci(self, path: Path) -> None:
         self.ci_files.append(path)
-        nodes, edges = parse_vcg(path.read_text(errors="replace"))
+        text = path.read_text(errors="replace")
+        nodes, edges = parse_vcg(text)
+        m = _GRAPH_RE.match(text)
+        unit = m.group(1) if m else ""
+        rename: dict[str, str] = {}
+        if _LTRANS_RE.search(unit):
+            # a link-time (-flto) unit: its local functions are titled after the temporary
+            # object it was compiled to; title them after the source file they were defined
+            # in (their location), as a compiled object's statics are
+            for n in nodes:
+                title, lines = n.get("title"), n.get("label", "").split("\n")
+                if title and title.startswith(unit + ":") and len(lines) >= 2 \
+                        and lines[1].count(":") >= 2:
+                    rename[title] = lines[1].rsplit(":", 2)[0] + title[len(unit):]
+            # called there but not defined there: an alias (identical code folding) of a
+            # function that is, resolved with --alias-group, or an error
+            for t in [n.get("title") for n in nodes] + [e.get(k) for e in edges
+                                                        for k in ("sourcename", "targetname")]:
+                if t and t.startswith(unit + ":") and t not in rename:
+                    rename[t] = LTO_LOCAL + t[len(unit) + 1:]
+            self.lto_units.append(str(path))
         for n in nodes:
             title = n.get("title")
             if title is None:
                 continue
+            title = rename.get(title, title)
             f = self._get(title)
             lines = n.get("label", "").split("\n")
             size = next((m for m in (_BYTES_RE.match(x.strip()) for x in lines) if m), None)
@@ -194,6 +242,7 @@ class Graph:
             src, dst = e.get("sourcename"), e.get("targetname")
             if src is None or dst is None:
                 continue
+            src, dst = rename.get(src, src), rename.get(dst, dst)
             self._get(src).callees.add(dst)
             self._get(dst)
 
@@ -217,18 +266,68 @@ class Graph:
                 f.callees = {alias.get(c, c) for c in f.callees}
         return notes
 
-    def resolve(self, name: str) -> str | None:
-        """Title for a user-given function name: exact title, a static's plain name if
-        unique, or a path suffix like "app.c:send"."""
-        if name in self.funcs:
-            return name
-        cands = [t for t in self.funcs
-                 if ":" in t and (t.rsplit(":", 1)[1] == name or t.endswith("/" + name))]
-        if len(cands) == 1:
-            return cands[0]
-        if len(cands) > 1:
-            raise AnalysisError(f"{name!r} is ambiguous: {', '.join(sorted(cands))}")
-        return None
+    def link_aliases(self, groups: list[list[str]]) -> tuple[list[str], list[str]]:
+        """Calls of a link-time unit's function it does not define (LTO_LOCAL: identical
+        code folding made it an alias) become calls of the functions with a frame that
+        share its address (groups: the symbol names at one address, from the image's
+        symbol table). Returns (notes, errors): an error for each such function that no
+        group resolves, so that none is assumed."""
+        notes, errors = [], []
+        by_asm: dict[str, list[str]] = {}
+        for t, f in self.funcs.items():
+            if f.frame is not None:
+                by_asm.setdefault(t.rsplit(":", 1)[-1], []).append(t)
+        alias: dict[str, list[str]] = {}
+        for t, f in self.funcs.items():
+            if not t.startswith(LTO_LOCAL) or f.frame is not None:
+                continue
+            asm = t[len(LTO_LOCAL):]
+            targets = sorted({x for grp in groups if asm in grp for m in grp if m != asm
+                              for x in by_asm.get(m, [])})
+            if not targets:
+                errors.append(f"{asm}: called in the code generated at the link but has no "
+                              f"frame there and is no alias of a function that has one")
+                continue
+            alias[t] = targets
+        folded: dict[str, list[str]] = {}
+        for t, targets in sorted(alias.items()):
+            folded.setdefault(", ".join(targets), []).append(t[len(LTO_LOCAL):])
+        for targets, names in folded.items():
+            notes.append(f"folded into {targets} (identical code): {', '.join(names)}")
+        for f in self.funcs.values():
+            if f.callees & alias.keys():
+                f.callees = {x for c in f.callees for x in alias.get(c, [c])}
+        return notes, errors
+
+    def resolve(self, name: str) -> list[str]:
+        """Titles for a user-given function name, "name" or "file.c:name" (a path suffix
+        will do): the functions of that name, and their clones (GCC's suffixes .constprop.N,
+        .isra.N, .part.N, .lto_priv.N, .cold: the link (-flto) makes them of static and
+        global functions alike), in that file if one is given. Several only when they are
+        one source function and its clones (one file, one name): else the name is
+        ambiguous (an error). A name with a suffix ("f.constprop.0") only that function.
+        [] when nothing matches."""
+        want_file, want = name.rsplit(":", 1) if ":" in name else (None, name)
+        exact = "." in want
+        found: dict[tuple[str, str], list[str]] = {}
+        for t, f in self.funcs.items():
+            if t == INDIRECT:
+                continue
+            if ":" in t:
+                file, asm = t.rsplit(":", 1)
+            else:
+                file, asm = (f.location.rsplit(":", 2)[0] if f.location.count(":") >= 2
+                             else ""), t
+            if (asm if exact else asm.split(".", 1)[0]) != want:
+                continue
+            if want_file is not None and not (file == want_file or
+                                              file.endswith("/" + want_file)):
+                continue
+            found.setdefault((file, want), []).append(t)
+        if len(found) > 1:
+            raise AnalysisError(f"{name!r} is ambiguous: "
+                                f"{', '.join(sorted(t for v in found.values() for t in v))}")
+        return sorted(next(iter(found.values()))) if found else []
 
 
 def load(dirs: list[Path]) -> Graph:
@@ -256,36 +355,48 @@ class Result:
 
 
 def analyse(g: Graph, entries: list[str], indirect: dict[str, list[str]],
-            extra: dict[str, int], unknown_bytes: int) -> Result:
+            extra: dict[str, int], unknown_bytes: int,
+            alias_groups: list[list[str]] | None = None) -> Result:
     errors: list[str] = []
     notes = g.link_weak()
+    n, e = g.link_aliases(alias_groups or [])
+    notes += n
+    errors += e
 
-    def res(name: str, what: str) -> str | None:
+    def res_all(name: str, what: str) -> list[str]:
         try:
-            t = g.resolve(name)
+            ts = g.resolve(name)
         except AnalysisError as e:
             errors.append(f"{what}: {e}")
-            return None
-        if t is None and name in extra:
+            return []
+        if not ts and name in extra:
             g.funcs[name] = Func(name)     # e.g. an asm function known only by assumption
-            t = name
-        if t is None:
+            ts = [name]
+        if not ts:
             errors.append(f"{what} {name!r}: not found in the call graph")
-        return t
+        elif ts != [name]:
+            notes.append(f"{what} {name!r} is {', '.join(ts)}")
+        return ts
+
+    def res(name: str, what: str) -> str | None:
+        ts = res_all(name, what)
+        if len(ts) > 1:
+            errors.append(f"{what} {name!r}: several functions ({', '.join(ts)})")
+            return None
+        return ts[0] if ts else None
 
     ind: dict[str, list[str]] = {}
     for caller, callees in indirect.items():
-        tc = res(caller, "--indirect caller")
-        if tc is None:
-            continue
-        if INDIRECT not in g.funcs[tc].callees:
-            notes.append(f"--indirect {caller}: it makes no indirect call (ignored)")
-        ind[tc] = [t for t in (res(c, f"--indirect {caller} callee") for c in callees) if t]
+        tcs = res_all(caller, "--indirect caller")
+        targets = sorted({t for c in callees for t in res_all(c, f"--indirect {caller} callee")})
+        for tc in tcs:
+            if INDIRECT not in g.funcs[tc].callees:
+                notes.append(f"--indirect {caller}: {tc} makes no indirect call (ignored)")
+            ind[tc] = sorted(set(ind.get(tc, [])) | set(targets))
 
     ext: dict[str, int] = {}
     for name, n in extra.items():
-        t = res(name, "--extra-bytes")
-        if t is not None:
+        for t in res_all(name, "--extra-bytes"):
             ext[t] = n
 
     roots = []
@@ -404,6 +515,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--exception-frame-bytes", type=int, default=104,
                     help="hardware-stacked bytes per interrupt nesting level "
                          "(default 104: Cortex-M4F extended frame with FPU state)")
+    ap.add_argument("--alias-group", action="append", default=[], metavar="F1,F2,...",
+                    help="functions at one address (the image's symbols): a call of one "
+                         "the code generated at the link does not define is a call of the "
+                         "others (identical code folding)")
     ap.add_argument("--json", type=Path, help="write the results as JSON")
     a = ap.parse_args(argv)
 
@@ -428,7 +543,8 @@ def main(argv: list[str] | None = None) -> int:
 
     try:
         g = load(a.ci_dir)
-        r = analyse(g, thread + isrs, indirect, extra, a.unknown_bytes)
+        r = analyse(g, thread + isrs, indirect, extra, a.unknown_bytes,
+                    [[x.strip() for x in grp.split(",") if x.strip()] for grp in a.alias_group])
     except AnalysisError as e:
         r = None
         errors = [str(e)]
