@@ -220,3 +220,23 @@ def test_float32_cannot_form_the_receiver_ecef():
         worst = max(worst, float(np.max(np.abs(x.astype(float) - ref))))
     print(f"float32 ECEF of the receiver: worst error {worst:.2f} m over 20,000 positions")
     assert worst > 0.1
+
+
+def test_docs_test_vector_is_what_the_encoder_sends():
+    """docs/can.md's raw GNSS test vector (a third party's check of its encoder) is what
+    tools/gnss_raw.encode_epoch sends for the values the document lists."""
+    import re
+    from pathlib import Path
+    doc = (Path(__file__).resolve().parents[2] / "docs" / "can.md").read_text()
+    rows = dict(re.findall(r"^\| (GNSS_Raw\w+) \| 0x13[1-6] \| `([0-9A-F ]+)` \|$", doc, re.M))
+    assert len(rows) == 6, rows
+    m = gr.RawMeas(sv_id=12, sat_pos_m=[15600000.12, 7540000.50, 20140000.04],
+                   sat_vel_mps=[-1850.0, 2290.0, 1125.0], pseudorange_m=21345678.90,
+                   range_rate_mps=-345.67, pr_sigma_m=3.2, rr_sigma_mps=0.05,
+                   elevation_deg=47.0, cn0_dbhz=44)
+    ep = gr.RawEpoch(tow_s=302400.5, clock_reset=False)
+    ep.meas = [m]
+    db = nc.load_db()
+    for msg in gr.encode_epoch(nc.E2ESender(db), ep, 3, 0.0):
+        name = db.get_message_by_frame_id(msg.arbitration_id).name
+        assert msg.data.hex(" ").upper() == rows[name], name
