@@ -293,6 +293,7 @@ static int start(fusion_t *fu, const fusion_ctx_t *c, const fusion_prior_t *prio
     }
     clear_interval(fu);
     fu->clock_valid = 0u; /* ekf_init's clock is an unknown one: estimated afresh */
+    fu->raw_have_tow = 0u;
     fu->odo_frames_used = c->odo->n_frames;
     fu->start_sample = c->diag->n_samples;
     fu->nonfinite_seen = fu->ekf.n_nonfinite; /* the supervision's reference: a new filter */
@@ -764,6 +765,12 @@ fusion_action_t fusion_raw(fusion_t *fu, const fusion_ctx_t *c, const gnss_raw_a
      * end): the clock moves on by its drift over that, not over the arrival times; an
      * epoch not after the last one fused (a replay, an old epoch) is refused */
     nav_real_t dt_s = APP_RAW_CLOCK_KEEP_S + NAV_C(1.0);
+    if (fu->raw_have_tow != 0u &&
+        (nav_real_t)(n - fu->raw_sample) > APP_RAW_CLOCK_KEEP_S * (nav_real_t)cfg->imu_rate_hz) {
+        /* the last epoch fused is old news (by the IMU's sample count): no order to keep
+         * with it (a receiver restarted, a new drive), and the clock is estimated afresh */
+        fu->raw_have_tow = 0u;
+    }
     if (fu->raw_have_tow != 0u) {
         int64_t d_ms = (int64_t)tow_ms - (int64_t)fu->raw_tow_ms;
         if (d_ms < -(int64_t)(APP_WEEK_MS / 2u)) {
@@ -829,6 +836,7 @@ fusion_action_t fusion_raw(fusion_t *fu, const fusion_ctx_t *c, const gnss_raw_a
     }
     fu->raw_tow_ms = tow_ms;
     fu->raw_have_tow = 1u;
+    fu->raw_sample = n;
     nav_real_t z_pr[RAW_MAX], z_rr[RAW_MAX];
     uint8_t ok_pr[RAW_MAX], ok_rr[RAW_MAX];
     for (int i = 0; i < RAW_MAX; i++) {

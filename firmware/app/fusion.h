@@ -79,7 +79,8 @@ typedef struct {
     /* raw GNSS (issue #20) */
     uint8_t clock_valid;        /* the filter's clock states hold an estimate */
     uint32_t raw_tow_ms;        /* TimeOfWeek of the last raw epoch fused */
-    uint8_t raw_have_tow;       /* one was */
+    uint8_t raw_have_tow;       /* one was, within APP_RAW_CLOCK_KEEP_S of the IMU's time */
+    uint64_t raw_sample;        /* the IMU sample count at it */
     uint32_t raw_reopens;       /* ekf.n_reopened the clock was estimated with */
     /* the epoch's satellites' geometry (fusion.c raw_geometry), in the epoch's order: formed
      * once per epoch; here, not on the stack (64 bytes each) */
