@@ -358,6 +358,51 @@ static void gate_run(fusion_t *fu, const fusion_ctx_t *c, int taken, nav_real_t 
     }
 }
 
+/* An epoch valid at `when` (gnss_time_align) against the navigator's history: the
+ * navigator's position then (then) and its motion since (d, ENU m). 0 when it is not in
+ * the history (refused and counted, unless it is older than the history: valid before
+ * the navigation started, not a fault of the receiver) or the position cannot form. */
+static int epoch_then(const fusion_ctx_t *c, const gnss_when_t *when, nav_real_t d[3],
+                      geo_pos_t *then)
+{
+    if (!when->in_history) {
+        if (!when->before_history) {
+            app_diag_reject(c->diag, &c->diag->health->gnss_rejected);
+        }
+        return 0;
+    }
+    gnss_time_displacement(c->time, when, d);
+    *then = c->nav->pos;
+    const nav_real_t lat = geo_lat_rad(then);
+    const nav_real_t h = geo_h_m(then);
+    nav_real_t R_M, R_N;
+    earth_radii(nav_sin(lat), &R_M, &R_N);
+    if (geo_pos_add(then, -d[1] / (R_M + h), -d[0] / ((R_N + h) * nav_cos(lat)), -d[2]) !=
+        NAV_OK) {
+        app_diag_reject(c->diag, &c->diag->health->gnss_rejected);
+        return 0;
+    }
+    return 1;
+}
+
+/* The correlated GNSS error is the filter's state when gnss_corr_s spans
+ * APP_GNSS_STATE_MIN_FIXES of the receiver's usual epoch intervals (fusion_gnss) */
+static int bias_is_state(const fusion_t *fu, const app_config_t *cfg)
+{
+    return fu->gnss_ep_typ_s > NAV_C(0.0) &&
+           cfg->gnss_corr_s >= APP_GNSS_STATE_MIN_FIXES * fu->gnss_ep_typ_s;
+}
+
+/* the correlated error state moved on to sample n, its stationary sigma now shc_m */
+static void bias_step(fusion_t *fu, const app_config_t *cfg, uint64_t n, nav_real_t shc_m)
+{
+    const uint64_t since = n - fu->gnss_bias_sample;
+    ekf_gnss_bias_step(&fu->ekf, (nav_real_t)since / (nav_real_t)cfg->imu_rate_hz,
+                       cfg->gnss_corr_s, shc_m, fu->gnss_sc_prev_m);
+    fu->gnss_sc_prev_m = shc_m;
+    fu->gnss_bias_sample = n;
+}
+
 fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_prior_t *prior,
                             const gnss_fix_t *fix, int *adopt)
 {
@@ -375,26 +420,9 @@ fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_pr
     if (fix->has_vel) {
         (void)gnss_time_learn(c->time, &when, fix->v_enu_mps, ss, cfg->gnss_latency_s);
     }
-    if (!when.in_history) {
-        /* later than the history can hold: refused; valid before the navigation started
-         * (the history is younger than the epoch's latency): nothing to compare it with,
-         * not a fault of the fix, so not counted (the next epoch is used) */
-        if (!when.before_history) {
-            app_diag_reject(c->diag, &c->diag->health->gnss_rejected);
-        }
-        return FUSION_GO_ON;
-    }
-
     nav_real_t d[3];
-    gnss_time_displacement(c->time, &when, d);
-    geo_pos_t then = c->nav->pos;
-    const nav_real_t lat = geo_lat_rad(&then);
-    const nav_real_t h = geo_h_m(&then);
-    nav_real_t R_M, R_N;
-    earth_radii(nav_sin(lat), &R_M, &R_N);
-    if (geo_pos_add(&then, -d[1] / (R_M + h), -d[0] / ((R_N + h) * nav_cos(lat)), -d[2]) !=
-        NAV_OK) {
-        app_diag_reject(c->diag, &c->diag->health->gnss_rejected);
+    geo_pos_t then;
+    if (!epoch_then(c, &when, d, &then)) {
         return FUSION_GO_ON;
     }
     const nav_real_t sh = nav_clamp(fix->hacc_m * APP_GNSS_HACC_PER_AXIS, APP_GNSS_SIGMA_FLOOR_M,
@@ -434,8 +462,7 @@ fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_pr
                                                                          : NAV_C(0.0);
         fu->gnss_ep_typ_s += (ep_raw_s - fu->gnss_ep_typ_s) * w;
     }
-    const uint8_t as_state =
-        cfg->gnss_corr_s >= APP_GNSS_STATE_MIN_FIXES * fu->gnss_ep_typ_s ? 1u : 0u;
+    const uint8_t as_state = bias_is_state(fu, cfg) ? 1u : 0u;
     const nav_real_t shw =
         as_state != 0u ? cfg->gnss_white_ratio * sh : sh * nav_sqrt(r_scale);
     const nav_real_t shc =
@@ -454,12 +481,7 @@ fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_pr
         fu->gnss_bias_sample = n;
     } else {
         if (as_state != 0u) {
-            ekf_gnss_bias_step(&fu->ekf,
-                               (nav_real_t)(n - fu->gnss_bias_sample) /
-                                   (nav_real_t)cfg->imu_rate_hz,
-                               cfg->gnss_corr_s, shc, fu->gnss_sc_prev_m);
-            fu->gnss_sc_prev_m = shc;
-            fu->gnss_bias_sample = n;
+            bias_step(fu, cfg, n, shc);
         }
     }
     /* The fix's heading information is its course, sigma ss / speed: below
@@ -632,27 +654,23 @@ static nav_real_t median_ok(const nav_real_t *z, const uint8_t *ok, int n, int *
     return k > 0 ? median_of(v, k) : NAV_C(0.0);
 }
 
+/* the filter's 1-sigma along any direction of the three states from i0 (position, velocity) */
+static nav_real_t sigma3(const ekf_t *k, int i0)
+{
+    return nav_sqrt(k->P[i0][i0] + k->P[i0 + 1][i0 + 1] + k->P[i0 + 2][i0 + 2]);
+}
+
 /* The clock estimated afresh from the median residuals (the clock bias and drift that make
  * them zero), sigmas: the filter's position (velocity) sigma and the clock's floor. */
 static void raw_clock_start(fusion_t *fu, const raw_epoch_t *e, nav_real_t med_pr,
                             nav_real_t med_rr, int n_rr)
 {
     ekf_t *k = &fu->ekf;
-    const nav_real_t sp = nav_sqrt(k->P[EKF_DR][EKF_DR] + k->P[EKF_DR + 1][EKF_DR + 1] +
-                                   k->P[EKF_DR + 2][EKF_DR + 2]);
-    const nav_real_t sv = nav_sqrt(k->P[EKF_DV][EKF_DV] + k->P[EKF_DV + 1][EKF_DV + 1] +
-                                   k->P[EKF_DV + 2][EKF_DV + 2]);
-    /* within +-1e8 m (a residual beyond any range and clock: the conversion stays far
-     * inside int64) */
-    const nav_real_t shift_dmm =
-        nav_clamp(med_pr, NAV_C(-1.0e8), NAV_C(1.0e8)) * (nav_real_t)GNSS_GEOM_DMM_PER_M;
-    const int64_t clock = k->clock_dmm - (int64_t)(shift_dmm >= NAV_C(0.0)
-                                                       ? shift_dmm + NAV_C(0.5)
-                                                       : shift_dmm - NAV_C(0.5));
     /* without a range rate the drift is not measured: kept, as unknown as a clock nobody
      * measured (the ranges' change from epoch to epoch then finds it) */
-    const nav_real_t sd = n_rr > 0 ? sv + APP_RAW_DRIFT_SIGMA_MPS : k->cfg.clk_drift_mps;
-    ekf_clock_start(k, clock, k->clock_drift_mps - med_rr, sp + APP_RAW_CLOCK_SIGMA_M, sd);
+    const nav_real_t sd =
+        n_rr > 0 ? sigma3(k, EKF_DV) + APP_RAW_DRIFT_SIGMA_MPS : k->cfg.clk_drift_mps;
+    ekf_clock_start(k, med_pr, med_rr, sigma3(k, EKF_DR) + APP_RAW_CLOCK_SIGMA_M, sd);
     fu->clock_valid = 1u;
     app_count(&e->c->raw->clock_starts);
 }
@@ -743,6 +761,31 @@ static void raw_order(raw_epoch_t *e, const gnss_raw_close_t *closed)
     }
 }
 
+/* The receiver's time since the last raw epoch fused (GPS time of week, ms, across the
+ * week's end, gnss_tow_diff_ms): the clock moves on by its drift over that, not over the
+ * arrival times. Beyond APP_RAW_CLOCK_KEEP_S when there is no such epoch, or it is older
+ * than that by the IMU's sample count (no order to keep with it: a receiver restarted, a
+ * new drive; the clock is estimated afresh). 0 for an epoch not after it (a replay). */
+static int raw_interval(fusion_t *fu, const fusion_ctx_t *c, uint32_t tow_ms, nav_real_t *dt_s)
+{
+    const uint64_t n = c->diag->n_samples;
+    *dt_s = APP_RAW_CLOCK_KEEP_S + NAV_C(1.0);
+    const uint64_t since = n - fu->raw_sample;
+    if (fu->raw_have_tow != 0u &&
+        (nav_real_t)since > APP_RAW_CLOCK_KEEP_S * (nav_real_t)c->cfg->imu_rate_hz) {
+        fu->raw_have_tow = 0u;
+    }
+    if (fu->raw_have_tow == 0u) {
+        return 1;
+    }
+    const int64_t d_ms = gnss_tow_diff_ms(tow_ms, fu->raw_tow_ms);
+    if (d_ms <= 0) {
+        return 0;
+    }
+    *dt_s = (nav_real_t)d_ms * NAV_C(0.001);
+    return 1;
+}
+
 fusion_action_t fusion_raw(fusion_t *fu, const fusion_ctx_t *c, const gnss_raw_asm_t *g,
                            const gnss_raw_close_t *closed, uint32_t tow_ms, int clock_reset,
                            int *adopt)
@@ -761,40 +804,19 @@ fusion_action_t fusion_raw(fusion_t *fu, const fusion_ctx_t *c, const gnss_raw_a
             APP_RAW_BOTH_GAP_EPOCHS * fu->gnss_ep_typ_s * (nav_real_t)cfg->imu_rate_hz) {
         return FUSION_GO_ON;
     }
-    /* the receiver's time between the epochs fused (GPS time of week, ms, across the week's
-     * end): the clock moves on by its drift over that, not over the arrival times; an
-     * epoch not after the last one fused (a replay, an old epoch) is refused */
-    nav_real_t dt_s = APP_RAW_CLOCK_KEEP_S + NAV_C(1.0);
-    if (fu->raw_have_tow != 0u &&
-        (nav_real_t)(n - fu->raw_sample) > APP_RAW_CLOCK_KEEP_S * (nav_real_t)cfg->imu_rate_hz) {
-        /* the last epoch fused is old news (by the IMU's sample count): no order to keep
-         * with it (a receiver restarted, a new drive), and the clock is estimated afresh */
-        fu->raw_have_tow = 0u;
-    }
-    if (fu->raw_have_tow != 0u) {
-        int64_t d_ms = (int64_t)tow_ms - (int64_t)fu->raw_tow_ms;
-        if (d_ms < -(int64_t)(APP_WEEK_MS / 2u)) {
-            d_ms += (int64_t)APP_WEEK_MS;
-        } else if (d_ms > (int64_t)(APP_WEEK_MS / 2u)) {
-            d_ms -= (int64_t)APP_WEEK_MS;
-        } else {
-            /* within half a week */
-        }
-        if (d_ms <= 0) {
-            app_diag_reject(c->diag, &c->diag->health->bad_counter);
-            return FUSION_GO_ON;
-        }
-        dt_s = (nav_real_t)d_ms * NAV_C(0.001);
+    nav_real_t dt_s;
+    if (!raw_interval(fu, c, tow_ms, &dt_s)) {
+        app_diag_reject(c->diag, &c->diag->health->bad_counter);
+        return FUSION_GO_ON;
     }
     gnss_when_t when = gnss_time_align(c->time, c->diag->t_us, cfg->imu_rate_hz, tow_ms,
                                        gnss_time_latency(c->time, cfg->gnss_latency_s));
     if (when.jumped) {
         app_count(&c->diag->health->time_jumps);
     }
-    if (!when.in_history) {
-        if (!when.before_history) {
-            app_diag_reject(c->diag, &c->diag->health->gnss_rejected);
-        }
+    raw_epoch_t e;
+    nav_real_t d[3];
+    if (!epoch_then(c, &when, d, &e.then)) {
         return FUSION_GO_ON;
     }
     /* a reopened filter (here or by a fix) forgot the position the clock went with */
@@ -802,21 +824,8 @@ fusion_action_t fusion_raw(fusion_t *fu, const fusion_ctx_t *c, const gnss_raw_a
         fu->raw_reopens = fu->ekf.n_reopened;
         fu->clock_valid = 0u;
     }
-    raw_epoch_t e;
     e.c = c;
     e.g = g;
-    nav_real_t d[3];
-    gnss_time_displacement(c->time, &when, d);
-    e.then = c->nav->pos;
-    const nav_real_t lat = geo_lat_rad(&e.then);
-    const nav_real_t h = geo_h_m(&e.then);
-    nav_real_t R_M, R_N;
-    earth_radii(nav_sin(lat), &R_M, &R_N);
-    if (geo_pos_add(&e.then, -d[1] / (R_M + h), -d[0] / ((R_N + h) * nav_cos(lat)), -d[2]) !=
-        NAV_OK) {
-        app_diag_reject(c->diag, &c->diag->health->gnss_rejected);
-        return FUSION_GO_ON;
-    }
     e.v_then = gnss_time_velocity_then(c->time, &when);
     if (ekf_antenna(c->nav, &e.then, cfg->gnss_lever_b_m, &e.ant) != NAV_OK) {
         app_diag_reject(c->diag, &c->diag->health->gnss_rejected);
@@ -824,10 +833,8 @@ fusion_action_t fusion_raw(fusion_t *fu, const fusion_ctx_t *c, const gnss_raw_a
     }
     raw_order(&e, closed);
     raw_geometry(fu, &e);
-    /* the correlated errors as the fixes' state db when it is one (fusion_gnss: the
-     * correlation time spans APP_GNSS_STATE_MIN_FIXES of the receiver's epochs) */
-    e.use_bias = fu->gnss_ep_typ_s > NAV_C(0.0) &&
-                 cfg->gnss_corr_s >= APP_GNSS_STATE_MIN_FIXES * fu->gnss_ep_typ_s;
+    /* the correlated errors as the fixes' state db when it is one */
+    e.use_bias = bias_is_state(fu, cfg);
     /* 2. the clock */
     if (fu->clock_valid != 0u && dt_s <= APP_RAW_CLOCK_KEEP_S) {
         ekf_clock_advance(&fu->ekf, dt_s);
@@ -867,13 +874,8 @@ fusion_action_t fusion_raw(fusion_t *fu, const fusion_ctx_t *c, const gnss_raw_a
         raw_residuals(fu, &e, 1, z_rr, ok_rr);
     }
     /* 3. fault exclusion */
-    const ekf_t *k = &fu->ekf;
-    const nav_real_t s_pos = nav_sqrt(k->P[EKF_DR][EKF_DR] + k->P[EKF_DR + 1][EKF_DR + 1] +
-                                      k->P[EKF_DR + 2][EKF_DR + 2]);
-    const nav_real_t s_vel = nav_sqrt(k->P[EKF_DV][EKF_DV] + k->P[EKF_DV + 1][EKF_DV + 1] +
-                                      k->P[EKF_DV + 2][EKF_DV + 2]);
-    int out = raw_exclude(&e, z_pr, ok_pr, 0, s_pos);
-    out += raw_exclude(&e, z_rr, ok_rr, 1, s_vel);
+    int out = raw_exclude(&e, z_pr, ok_pr, 0, sigma3(&fu->ekf, EKF_DR));
+    out += raw_exclude(&e, z_rr, ok_rr, 1, sigma3(&fu->ekf, EKF_DV));
     /* 4. the updates: the pseudoranges' errors correlated over gnss_corr_s, as the state
      * db (its stationary sigma the correlated part of the epoch's median range sigma) or
      * by inflating their variance */
@@ -884,14 +886,9 @@ fusion_action_t fusion_raw(fusion_t *fu, const fusion_ctx_t *c, const gnss_raw_a
         for (int i = 0; i < e.n; i++) {
             sg[i] = pr_sigma_m(&g->sat[e.slot[i]]);
         }
-        const nav_real_t shc =
-            median_of(sg, e.n) *
-            nav_sqrt(NAV_C(1.0) - cfg->gnss_white_ratio * cfg->gnss_white_ratio);
-        ekf_gnss_bias_step(&fu->ekf,
-                           (nav_real_t)(n - fu->gnss_bias_sample) / (nav_real_t)cfg->imu_rate_hz,
-                           cfg->gnss_corr_s, shc, fu->gnss_sc_prev_m);
-        fu->gnss_sc_prev_m = shc;
-        fu->gnss_bias_sample = n;
+        bias_step(fu, cfg, n,
+                  median_of(sg, e.n) *
+                      nav_sqrt(NAV_C(1.0) - cfg->gnss_white_ratio * cfg->gnss_white_ratio));
         r_scale = NAV_C(1.0);
     }
     const nav_real_t v2 = e.v_then[0] * e.v_then[0] + e.v_then[1] * e.v_then[1];

@@ -174,7 +174,22 @@ void gnss_time_week(gnss_time_t *g, uint16_t gps_week)
     g->have_week = 1u;
 }
 
-#define US_PER_WEEK INT64_C(604800000000)
+#define US_PER_WEEK ((int64_t)APP_WEEK_MS * INT64_C(1000))
+
+int64_t gnss_tow_diff_ms(uint32_t a_ms, uint32_t b_ms)
+{
+    const int64_t week = (int64_t)APP_WEEK_MS;
+    const int64_t half = week / 2;
+    int64_t d = (int64_t)a_ms - (int64_t)b_ms;
+    if (d < -half) {
+        d += week;
+    } else if (d > half) {
+        d -= week;
+    } else {
+        /* within half a week */
+    }
+    return d;
+}
 
 int gnss_time_at(const gnss_time_t *g, uint64_t imu_t_us, nav_real_t latency_s,
                  uint64_t *tow_us, uint16_t *gps_week)

@@ -69,6 +69,10 @@ int gnss_time_learn(gnss_time_t *g, gnss_when_t *w, const nav_real_t v_enu_mps[3
 /* The latency in use: the learnt one, else latency_cfg_s. */
 nav_real_t gnss_time_latency(const gnss_time_t *g, nav_real_t latency_cfg_s);
 
+/* a_ms - b_ms for two GPS times of week (ms), across the week's end: the difference
+ * within half a week of zero */
+int64_t gnss_tow_diff_ms(uint32_t a_ms, uint32_t b_ms);
+
 /* The navigator's displacement (ENU, m) from then to now: the integral of the velocity
  * history over w.back entries (w.in_history must hold). */
 void gnss_time_displacement(const gnss_time_t *g, const gnss_when_t *w, nav_real_t d_n_m[3]);

@@ -495,8 +495,8 @@ void ekf_gnss_bias_start(ekf_t *k, nav_real_t sigma_c_m)
     }
 }
 
-void ekf_clock_start(ekf_t *k, int64_t clock_dmm, nav_real_t drift_mps, nav_real_t sigma_b_m,
-                     nav_real_t sigma_d_mps)
+void ekf_clock_start(ekf_t *k, nav_real_t shift_m, nav_real_t drift_shift_mps,
+                     nav_real_t sigma_b_m, nav_real_t sigma_d_mps)
 {
     const nav_real_t sd[2] = {sigma_b_m, sigma_d_mps};
     for (int a = 0; a < 2; a++) {
@@ -509,8 +509,8 @@ void ekf_clock_start(ekf_t *k, int64_t clock_dmm, nav_real_t drift_mps, nav_real
         k->P[i][i] = v > k->cfg.var_floor ? v : k->cfg.var_floor;
         k->x[i] = NAV_C(0.0);
     }
-    k->clock_dmm = clock_dmm;
-    k->clock_drift_mps = drift_mps;
+    k->clock_dmm -= nav_round_dmm(shift_m);
+    k->clock_drift_mps -= drift_shift_mps;
 }
 
 void ekf_clock_advance(ekf_t *k, nav_real_t dt_s)

@@ -383,10 +383,11 @@ void ekf_rows_range_rate(const ekf_t *k, const sins_t *s, const nav_real_t v_the
                          nav_real_t *z_mps);
 
 /* The clock estimated afresh (the first raw epoch, a receiver clock reset, a long gap): the
- * estimates set to clock_dmm and drift_mps, their errors uncorrelated with the other states,
- * 1-sigma sigma_b_m and sigma_d_mps. */
-void ekf_clock_start(ekf_t *k, int64_t clock_dmm, nav_real_t drift_mps, nav_real_t sigma_b_m,
-                     nav_real_t sigma_d_mps);
+ * estimates moved by -shift_m (rounded to the 0.1 mm units, held within +-1e8 m) and
+ * -drift_shift_mps (the residuals' medians that the new estimates make zero), their errors
+ * uncorrelated with the other states, 1-sigma sigma_b_m and sigma_d_mps. */
+void ekf_clock_start(ekf_t *k, nav_real_t shift_m, nav_real_t drift_shift_mps,
+                     nav_real_t sigma_b_m, nav_real_t sigma_d_mps);
 
 /* The clock estimate moved on by its drift over dt_s (the errors' growth is ekf_predict's). */
 void ekf_clock_advance(ekf_t *k, nav_real_t dt_s);
