@@ -215,6 +215,14 @@ static void nav_at(sins_t *s, double roll, double pitch, double heading, const d
     assert_int_equal(sins_init(s, &cfg, &p, vn, q), NAV_OK);
 }
 
+/* every state's 1-sigma 1e-9 (known), for a test that then opens the ones it studies */
+static void sd_quiet(double sd[EKF_N])
+{
+    for (int i = 0; i < EKF_N; i++) {
+        sd[i] = 1e-9;
+    }
+}
+
 static void filter_with(ekf_t *f, const double sd[EKF_N])
 {
     const ekf_config_t c = quiet_config();
@@ -246,9 +254,7 @@ static void test_gnss_position_update(void **state)
                      NAV_OK);
     ekf_t f;
     double sd[EKF_N];
-    for (int i = 0; i < EKF_N; i++) {
-        sd[i] = 1e-9;
-    }
+    sd_quiet(sd);
     sd[0] = sd[1] = sd[2] = 10.0;
     filter_with(&f, sd);
     assert_int_equal(ekf_gnss_position(&f, &s, &s.pos, &ant, lever, NAV_C(0.1), NAV_C(0.1),
@@ -298,9 +304,7 @@ static void test_gnss_correlated_error_state(void **state)
                      NAV_OK);
     ekf_t f;
     double sd[EKF_N];
-    for (int i = 0; i < EKF_N; i++) {
-        sd[i] = 1e-9;
-    }
+    sd_quiet(sd);
     const double sw = 0.3, sc = 2.0, sh = sqrt(sw * sw + sc * sc);
     sd[0] = sd[1] = sd[2] = sh;
     filter_with(&f, sd);
@@ -353,9 +357,7 @@ static void test_lever_arm_observes_heading(void **state)
                      NAV_OK);
     ekf_t f;
     double sd[EKF_N];
-    for (int i = 0; i < EKF_N; i++) {
-        sd[i] = 1e-9;
-    }
+    sd_quiet(sd);
     sd[EKF_PSI + 2] = 5.0 * DEG;
     filter_with(&f, sd);
     const nav_real_t lever[3] = {NAV_C(0.0), NAV_C(2.0), NAV_C(0.0)};
@@ -376,9 +378,7 @@ static void test_odometer_scale_and_mounting(void **state)
     nav_at(&s, 0.0, 0.0, 41.0 * DEG, v);
     ekf_t f;
     double sd[EKF_N];
-    for (int i = 0; i < EKF_N; i++) {
-        sd[i] = 1e-9;
-    }
+    sd_quiet(sd);
     sd[EKF_K] = 0.05;
     sd[EKF_MY] = 3.0 * DEG;
     filter_with(&f, sd);
@@ -391,9 +391,7 @@ static void test_odometer_scale_and_mounting(void **state)
     /* lateral velocity error: the car's right-hand axis at heading 130 deg */
     const double vl[3] = {v[0] + 0.3 * sin(130 * DEG), v[1] + 0.3 * cos(130 * DEG), 0.0};
     nav_at(&s, 0.0, 0.0, 40.0 * DEG, vl);
-    for (int i = 0; i < EKF_N; i++) {
-        sd[i] = 1e-9;
-    }
+    sd_quiet(sd);
     sd[EKF_DV] = sd[EKF_DV + 1] = sd[EKF_DV + 2] = 1.0;
     filter_with(&f, sd);
     assert_int_equal(ekf_odometer(&f, &s, w0, w0, NAV_C(10.0), NAV_C(0.01), NAV_C(0.01),
@@ -420,9 +418,7 @@ static void test_odometer_lever_arm_in_a_turn(void **state)
     const nav_real_t lever[3] = {NAV_C(0.0), (nav_real_t)-arm, NAV_C(0.0)};
     const nav_real_t none[3] = {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)};
     double sd[EKF_N];
-    for (int i = 0; i < EKF_N; i++) {
-        sd[i] = 1e-9;
-    }
+    sd_quiet(sd);
     sd[EKF_MY] = 3.0 * DEG;
     for (int with_lever = 1; with_lever >= 0; with_lever--) {
         sins_t s;
@@ -448,9 +444,7 @@ static void test_standstill_updates(void **state)
     nav_at(&s, 0.0, 0.0, 0.0, v);
     ekf_t f;
     double sd[EKF_N];
-    for (int i = 0; i < EKF_N; i++) {
-        sd[i] = 1e-9;
-    }
+    sd_quiet(sd);
     sd[EKF_DV] = sd[EKF_DV + 1] = sd[EKF_DV + 2] = 1.0;
     sd[EKF_BG + 2] = 1e-4;
     filter_with(&f, sd);
