@@ -184,8 +184,7 @@ static void odometer_updates(fusion_t *fu, const fusion_ctx_t *c, nav_real_t T,
         fu->odo_frames_used = odo->n_frames;
         const nav_real_t sf = APP_ODO_SIGMA_MPS + APP_ODO_SIGMA_SPEED_FRAC * nav_fabs(odo->speed_mps) +
                               APP_ODO_SIGMA_ACC_PERIOD * acc * per;
-        const nav_real_t w_b[3] = {fu->w_sum_rad[0] / T, fu->w_sum_rad[1] / T,
-                                   fu->w_sum_rad[2] / T};
+        const nav_real_t *w_b = fu->w_b_last_rps; /* the interval's mean (fusion_imu_step) */
         /* the car's lateral and vertical velocity are zero at the measuring axle, which is
          * where odo_lever_b_m says to within odo_lever_sigma_m: in a turn the IMU moves
          * sideways by the yaw rate times the error of that lever arm (Kingston, lever arm
