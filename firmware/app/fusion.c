@@ -149,8 +149,13 @@ static void standstill_updates(fusion_t *fu, const fusion_ctx_t *c, nav_real_t T
      * of a drive-off, the IMU's acceleration before a wheel reads a step, as a heading
      * error: 0.2 deg in 0.4 s, every heading but east) */
     fu->ekf.hold_heading = 1u;
+    /* one zero reading is one measurement: its error (a car creeping below one step) is
+     * the same in every prediction interval until the next frame, so the frame's sigma is
+     * shared by the per / T updates it serves (each sqrt(per / T) times it) */
+    const nav_real_t n_upd = per > T ? per / T : NAV_C(1.0);
     const int zv = ekf_zero_velocity(&fu->ekf, c->nav,
-                                     APP_ZUPT_SIGMA_MPS + APP_ZUPT_SIGMA_PER_PERIOD_MPS * per,
+                                     (APP_ZUPT_SIGMA_MPS + APP_ZUPT_SIGMA_PER_PERIOD_MPS * per) *
+                                         nav_sqrt(n_upd),
                                      APP_ODO_GATE_SIGMA);
     fu->ekf.hold_heading = 0u;
     if (zv == 0) {
