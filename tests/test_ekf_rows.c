@@ -69,11 +69,12 @@
 #define STEP_BG_RPS 0.01
 #define STEP_BA_MPS2 1.0
 #define STEP_K 0.01
+#define STEP_OB_MPS 0.1
 
 static const char *const STATE_NAME[EKF_N] = {
     "dr_E", "dr_N", "dr_U", "dv_E", "dv_N", "dv_U", "psi_E", "psi_N", "psi_U",
     "bg_x", "bg_y", "bg_z", "ba_x", "ba_y", "ba_z", "k", "mount_pitch", "mount_yaw",
-    "gnss_bias_E", "gnss_bias_N", "clock_bias", "clock_drift"};
+    "gnss_bias_E", "gnss_bias_N", "clock_bias", "clock_drift", "odo_offset"};
 
 /* A true state as the filter sees it at x = 0: the navigator, the estimates (k and the
  * mounting, in the ekf_t), the body rate the odometer rows get. */
@@ -88,7 +89,7 @@ typedef struct {
     double lat_rad, lon_rad, h_m;
     double v_n_mps[3];
     double C_bn[3][3];
-    double k, mount_pitch_rad, mount_yaw_rad;
+    double k, mount_pitch_rad, mount_yaw_rad, odo_offset_mps;
     double w_b_rps[3];
 } state_d_t;
 
@@ -136,6 +137,7 @@ static state_d_t read_state(const state_t *st)
         d.w_b_rps[i] = (double)st->w_b_rps[i];
     }
     d.k = (double)st->kf.k;
+    d.odo_offset_mps = (double)st->kf.odo_offset_mps;
     d.mount_pitch_rad = (double)st->kf.mount_pitch_rad;
     d.mount_yaw_rad = (double)st->kf.mount_yaw_rad;
     return d;
@@ -232,8 +234,8 @@ static void ref_point_velocity_b(const state_d_t *s, const nav_real_t lever_b_m[
 
 /* Odometer and non-holonomic constraints, in the EKF_ODO_* order: the reference point's
  * velocity in the car's axes (by the mounting estimates), lateral and vertical (true: 0),
- * and its forward speed as the odometer would read it with the estimated scale, minus the
- * reading. */
+ * and its forward speed as the odometer would read it with the estimated scale and offset
+ * (in the direction of travel, the reading's sign), minus the reading. */
 static void h_odometer(const state_t *st, const nav_real_t lever_b_m[3], double speed_read_mps,
                        double z_mps[EKF_ODO_ROWS])
 {
@@ -246,7 +248,9 @@ static void h_odometer(const state_t *st, const nav_real_t lever_b_m[3], double 
     }
     z_mps[EKF_ODO_LATERAL] = v_c[0];
     z_mps[EKF_ODO_VERTICAL] = v_c[2];
-    z_mps[EKF_ODO_FORWARD] = (1.0 + s.k) * v_c[1] - speed_read_mps;
+    z_mps[EKF_ODO_FORWARD] = (1.0 + s.k) * v_c[1] +
+                             (speed_read_mps < 0.0 ? -1.0 : 1.0) * s.odo_offset_mps -
+                             speed_read_mps;
 }
 
 /* Earth rate in ENU at latitude lat */
@@ -327,6 +331,8 @@ static double perturb(const state_t *truth, int j, double d, state_t *comp)
         return (double)dd / (double)GNSS_GEOM_DMM_PER_M;
     } else if (j == EKF_CD) {
         e = &comp->kf.clock_drift_mps;
+    } else if (j == EKF_OB) {
+        e = &comp->kf.odo_offset_mps;
     } else {
         /* the receiver's correlated error: the row builders leave it to ekf_gnss_position
          * (its row is 1 on the state, the estimate subtracted from the fix) */
@@ -343,7 +349,7 @@ static double step_of(int j)
         STEP_DR_M,    STEP_DR_M,    STEP_DR_M,    STEP_DV_MPS,  STEP_DV_MPS,  STEP_DV_MPS,
         STEP_PSI_RAD, STEP_PSI_RAD, STEP_PSI_RAD, STEP_BG_RPS,  STEP_BG_RPS,  STEP_BG_RPS,
         STEP_BA_MPS2, STEP_BA_MPS2, STEP_BA_MPS2, STEP_K,       STEP_MOUNT_RAD,
-        STEP_MOUNT_RAD, STEP_DR_M,    STEP_DR_M,    STEP_DR_M,    STEP_DV_MPS};
+        STEP_MOUNT_RAD, STEP_DR_M,    STEP_DR_M,    STEP_DR_M,    STEP_DV_MPS,  STEP_OB_MPS};
     return step[j];
 }
 
@@ -503,6 +509,7 @@ static geo_pos_t geo_at(double lat_deg, double lon_deg, double h_m)
 static const double W_TURN_B_RPS[3] = {0.02, -0.01, 0.3}; /* roll, pitch rates; left turn */
 static const double SPEED_MPS = 15.0;
 static const double K_TRUE = 0.015;
+static const double OB_TRUE_MPS = -0.12; /* a truncating whole-km/h speed: half a step low */
 /* the IMU 0.4 deg nose up and 0.7 deg anticlockwise (left) of the car */
 #define MOUNT_PITCH_RAD (0.4 * DEG)
 #define MOUNT_YAW_RAD (-0.7 * DEG)
@@ -529,6 +536,7 @@ static void true_state(state_t *st, double speed_mps, double mount_pitch_rad,
     const ekf_config_t kcfg = ekf_default_config();
     assert_int_equal(ekf_init(&st->kf, &kcfg, NAV_C(0.0)), NAV_OK);
     st->kf.k = (nav_real_t)K_TRUE;
+    st->kf.odo_offset_mps = (nav_real_t)OB_TRUE_MPS;
     st->kf.mount_pitch_rad = (nav_real_t)mount_pitch_rad;
     st->kf.mount_yaw_rad = (nav_real_t)mount_yaw_rad;
     state_d_t s = read_state(st);
@@ -735,7 +743,7 @@ static double odo_allow_h(const void *ctx, const state_t *truth, int row, int co
     if (col >= EKF_BG && col < EKF_BA) {
         return g * c->lever_norm_m;
     }
-    if (col >= EKF_K) {
+    if (col >= EKF_K && col < EKF_GB) { /* the scale and the mounting; the offset's entry is exact */
         const double my = s.mount_yaw_rad, mp = s.mount_pitch_rad;
         return (1.0 + fabs(s.k)) * c->speed_mps * 0.5 * (my * my + mp * mp);
     }
@@ -766,8 +774,9 @@ static void odo_case(state_t *truth, odo_ctx_t *c, meas_t *m, const char *name,
     lever_of(ODO_LEVER_B_M, c->lever_b_m);
     c->lever_norm_m = norm_d(ODO_LEVER_B_M);
     c->speed_mps = SPEED_MPS;
-    /* the odometer reads (1 + k) x the true speed, and 0.04 m/s more */
-    c->speed_read_mps = (nav_real_t)((1.0 + (double)truth->kf.k) * SPEED_MPS + 0.04);
+    /* the odometer reads (1 + k) x the true speed plus its offset, and 0.04 m/s more */
+    c->speed_read_mps = (nav_real_t)((1.0 + (double)truth->kf.k) * SPEED_MPS +
+                                     (double)truth->kf.odo_offset_mps + 0.04);
     const meas_t mm = {name, EKF_ODO_ROWS, ODO_ROW,
                        1.0 + SPEED_MPS + norm_d(W_TURN_B_RPS) * c->lever_norm_m, odo_h,
                        odo_rows, odo_allow_h, odo_allow_z, c};

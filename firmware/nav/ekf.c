@@ -1,5 +1,5 @@
 /*
- * ekf.c - the 22-state error-state Kalman filter (ekf.h, docs/kalman.md).
+ * ekf.c - the 23-state error-state Kalman filter (ekf.h, docs/kalman.md).
  */
 #include "ekf.h"
 
@@ -38,12 +38,15 @@ ekf_config_t ekf_default_config(void)
      * ambiguity) and 1 ppm in frequency (a TCXO's tolerance) */
     c.clk_bias_m = NAV_C(3.0e5);
     c.clk_drift_mps = NAV_C(300.0);
+    /* half of a 1 km/h step: the mean error of a truncated whole-km/h speed (OBD-II) */
+    c.odo_offset_mps = NAV_C(0.14);
     c.arw_rad_rts = NAV_C(8.73e-7);   /* 0.003 deg/sqrt(h) */
     c.vrw_mps_rts = NAV_C(1e-4);
     c.bg_rw_rps_rts = NAV_C(1e-9);
     c.ba_rw_mps2_rts = NAV_C(1e-6);
     c.k_rw_rts = NAV_C(1e-6);
     c.mount_rw_rad_rts = NAV_C(1e-7);
+    c.odo_offset_rw_mps_rts = NAV_C(1e-5); /* 0.6 mm/s in an hour: a property of the signal */
     /* a TCXO (Brown & Hwang, 4th ed., table 9.2: h0 = 2e-19 s, h-2 = 2e-20 1/s):
      * c^2 h0 / 2 = 9.0e-3 m^2/s, 2 pi^2 c^2 h-2 = 3.5e-2 m^2/s^3 */
     c.clk_b_psd_m2ps = NAV_C(9.0e-3);
@@ -59,7 +62,7 @@ static int cfg_ok(const ekf_config_t *c)
                             c->bg_rw_rps_rts, c->ba_rw_mps2_rts, c->k_rw_rts,
                             c->mount_rw_rad_rts, c->var_floor, c->gnss_bias_m,
                             c->clk_bias_m, c->clk_drift_mps, c->clk_b_psd_m2ps,
-                            c->clk_d_psd_m2ps3};
+                            c->clk_d_psd_m2ps3, c->odo_offset_mps, c->odo_offset_rw_mps_rts};
     for (size_t i = 0u; i < sizeof v / sizeof v[0]; i++) {
         if (!(v[i] > NAV_C(0.0)) || !nav_isfinite(v[i])) {
             return 0;
@@ -81,7 +84,7 @@ static void reset_cov(ekf_t *k, nav_real_t heading_sigma_rad)
                                   heading_sigma_rad, c->bg_rps, c->bg_rps, c->bg_rps,
                                   c->ba_mps2,  c->ba_mps2,  c->ba_mps2,  c->k,
                                   c->mount_rad, c->mount_rad, c->gnss_bias_m, c->gnss_bias_m,
-                                  c->clk_bias_m, c->clk_drift_mps};
+                                  c->clk_bias_m, c->clk_drift_mps, c->odo_offset_mps};
     for (int i = 0; i < EKF_N; i++) {
         k->P[i][i] = sd[i] * sd[i];
     }
@@ -101,6 +104,7 @@ int ekf_init(ekf_t *k, const ekf_config_t *cfg, nav_real_t heading_sigma_rad)
         k->ba_mps2[i] = NAV_C(0.0);
     }
     k->k = NAV_C(0.0);
+    k->odo_offset_mps = NAV_C(0.0);
     k->mount_pitch_rad = NAV_C(0.0);
     k->mount_yaw_rad = NAV_C(0.0);
     k->gnss_bias_m[0] = NAV_C(0.0);
@@ -229,6 +233,7 @@ void ekf_predict(ekf_t *k, const sins_t *s, const nav_real_t f_n_mps2[3], nav_re
         k->P[EKF_BA + i][EKF_BA + i] += c->ba_rw_mps2_rts * c->ba_rw_mps2_rts * dt_s;
     }
     k->P[EKF_K][EKF_K] += c->k_rw_rts * c->k_rw_rts * dt_s;
+    k->P[EKF_OB][EKF_OB] += c->odo_offset_rw_mps_rts * c->odo_offset_rw_mps_rts * dt_s;
     k->P[EKF_MP][EKF_MP] += c->mount_rw_rad_rts * c->mount_rw_rad_rts * dt_s;
     k->P[EKF_MY][EKF_MY] += c->mount_rw_rad_rts * c->mount_rw_rad_rts * dt_s;
     /* the two-state clock's discrete noise (Brown & Hwang sec. 9.3): the drift's white
@@ -400,6 +405,7 @@ int ekf_feedback(ekf_t *k, sins_t *s)
         k->ba_mps2[i] += x[EKF_BA + i];
     }
     k->k -= x[EKF_K];
+    k->odo_offset_mps -= x[EKF_OB];
     k->mount_pitch_rad -= x[EKF_MP];
     k->mount_yaw_rad -= x[EKF_MY];
     k->gnss_bias_m[0] -= x[EKF_GB];
@@ -545,10 +551,10 @@ static int finite_n(const nav_real_t *v, int n)
 
 int ekf_state_ok(const ekf_t *k)
 {
-    const nav_real_t scalars[4] = {k->k, k->mount_yaw_rad, k->mount_pitch_rad,
-                                   k->clock_drift_mps};
+    const nav_real_t scalars[5] = {k->k, k->mount_yaw_rad, k->mount_pitch_rad,
+                                   k->clock_drift_mps, k->odo_offset_mps};
     if (!finite_n(k->x, EKF_N) || !finite_n(k->bg_rps, 3) || !finite_n(k->ba_mps2, 3) ||
-        !finite_n(scalars, 4)) {
+        !finite_n(scalars, 5)) {
         return 0;
     }
     for (int i = 0; i < EKF_N; i++) {

@@ -1,8 +1,9 @@
 /*
- * ekf.h - the compact error-state Kalman filter: 22 states, float32, fixed-size storage,
+ * ekf.h - the compact error-state Kalman filter: 23 states, float32, fixed-size storage,
  * closed loop (seed 001: "the INS solution is reconciled with the GNSS solution by a Kalman
- * filter with 18 parameters": those 18, the receiver's correlated horizontal error, and
- * the receiver's clock for raw measurements (issue #20); docs/kalman.md).
+ * filter with 18 parameters": those 18, the receiver's correlated horizontal error, the
+ * receiver's clock for raw measurements (issue #20) and the odometer's speed offset
+ * (issue #18); docs/kalman.md).
  *
  * Error state x, all "computed minus true":
  *   0..2   dr    position error, ENU metres at the IMU
@@ -24,6 +25,12 @@
  *                (seed 001's test stand: the receiver's clock errors; Brown & Hwang,
  *                "Introduction to Random Signals and Applied Kalman Filtering", 4th ed.,
  *                sec. 9.3: the two-state clock model)
+ *   22     ob    odometer speed offset, m/s (reading = (1 + k) x true + ob in the direction
+ *                of travel; the estimate odo_offset_mps minus the truth): a speed signal
+ *                of whole steps that the car's ECU truncates reads half a step low on
+ *                average, whatever the speed (OBD-II's vehicle speed, PID 0x0D, is whole
+ *                km/h: 0.14 m/s; the Kingston drive's reads 0.10..0.17 m/s low from 2 to
+ *                16 m/s, a scale error from -14 % to -0.8 %: docs/odometry.md)
  * Dynamics (Titterton & Weston eqs 12.6, 12.8, 12.10, small terms of order v/R dropped):
  *   d(dr)/dt = dv
  *   d(dv)/dt = [f_n x] psi + C_bn ba - [(2 w_ie + w_en) x] dv + (0, 0, 2 g / R) dr_U
@@ -31,7 +38,8 @@
  *   biases, k, mounting: random walks.
  *   d(dcb)/dt = dcd + white (psd clk_b_psd), d(dcd)/dt = white (psd clk_d_psd): the clock
  *   states are coupled to nothing else until a raw measurement correlates them, so a filter
- *   fed only fixes computes the other 20 states exactly as without them.
+ *   fed only fixes computes the other states exactly as without them.
+ *   ob: a random walk (odo_offset_rw_mps_rts).
  *   db: constant in ekf_predict (no coupling to the motion); its decay exp(-dt/tau) and
  *   driving noise are applied once per fix by ekf_gnss_bias_step, which is exact since
  *   the decay is a scaling of its own rows and columns only.
@@ -46,7 +54,7 @@
 #include "gnss_geom.h"
 #include "sins.h"
 
-#define EKF_N 22
+#define EKF_N 23
 enum {
     EKF_DR = 0,
     EKF_DV = 3,
@@ -59,6 +67,7 @@ enum {
     EKF_GB = 18, /* E, N */
     EKF_CB = 20, /* receiver clock bias, m */
     EKF_CD = 21, /* receiver clock drift, m/s */
+    EKF_OB = 22, /* odometer speed offset, m/s */
 };
 
 typedef struct {
@@ -66,6 +75,7 @@ typedef struct {
     nav_real_t pos_m, vel_mps, tilt_rad, heading_rad, bg_rps, ba_mps2, k, mount_rad;
     nav_real_t gnss_bias_m;      /* the receiver's correlated error per axis (ekf_init) */
     nav_real_t clk_bias_m, clk_drift_mps; /* the receiver clock's, until ekf_clock_start */
+    nav_real_t odo_offset_mps;   /* the odometer's speed offset */
     /* noise densities */
     nav_real_t arw_rad_rts;      /* gyro angle random walk, rad/sqrt(s) */
     nav_real_t vrw_mps_rts;      /* accelerometer velocity random walk, m/s/sqrt(s) */
@@ -73,6 +83,7 @@ typedef struct {
     nav_real_t ba_rw_mps2_rts;   /* accelerometer bias random walk */
     nav_real_t k_rw_rts;         /* odometer scale random walk (tyre wear, pressure), 1/sqrt(s) */
     nav_real_t mount_rw_rad_rts; /* mounting random walk (load, suspension) */
+    nav_real_t odo_offset_rw_mps_rts; /* odometer offset random walk, m/s/sqrt(s) */
     nav_real_t clk_b_psd_m2ps;   /* clock bias white noise psd, m^2/s (c^2 h0 / 2) */
     nav_real_t clk_d_psd_m2ps3;  /* clock drift white noise psd, m^2/s^3 (2 pi^2 c^2 h-2) */
     nav_real_t var_floor;        /* smallest variance allowed on the diagonal */
@@ -85,6 +96,7 @@ typedef struct {
     /* estimates fed back (closed loop): the application subtracts the biases from the
      * IMU increments and uses k and the mounting for the odometer */
     nav_real_t bg_rps[3], ba_mps2[3], k, mount_pitch_rad, mount_yaw_rad;
+    nav_real_t odo_offset_mps; /* the odometer's speed offset, m/s (state 22) */
     /* the receiver's correlated horizontal position error (E, N, m) as estimated: what
      * the fixes are corrected by before their update (ekf_gnss_position) */
     nav_real_t gnss_bias_m[2];

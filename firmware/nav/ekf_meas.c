@@ -182,8 +182,10 @@ void ekf_rows_odometer(const ekf_t *k, const sins_t *s, const nav_real_t w_b_rps
     }
     const nav_real_t my = k->mount_yaw_rad, mp = k->mount_pitch_rad;
     const nav_real_t scale = NAV_C(1.0) + k->k;
+    /* the offset acts in the direction of travel (a reversing car's reading is negative) */
+    const nav_real_t dir = speed_mps < NAV_C(0.0) ? NAV_C(-1.0) : NAV_C(1.0);
     /* car frame: lateral v_b,x + my v_b,y = 0; vertical v_b,z + mp v_b,y = 0;
-     * forward (1 + k) v_b,y = speed read */
+     * forward (1 + k) v_b,y + dir ob = speed read */
     const int axis[EKF_ODO_ROWS] = {0, 2, 1}; /* lateral x, vertical z, forward y */
     for (int m = 0; m < 3; m++) {
         const int i = axis[m];
@@ -197,9 +199,10 @@ void ekf_rows_odometer(const ekf_t *k, const sins_t *s, const nav_real_t w_b_rps
     h[EKF_ODO_LATERAL][EKF_MY] = v_b[1];
     h[EKF_ODO_VERTICAL][EKF_MP] = v_b[1];
     h[EKF_ODO_FORWARD][EKF_K] = v_b[1];
+    h[EKF_ODO_FORWARD][EKF_OB] = dir;
     z_car_mps[EKF_ODO_LATERAL] = v_b[0] + my * v_b[1];
     z_car_mps[EKF_ODO_VERTICAL] = v_b[2] + mp * v_b[1];
-    z_car_mps[EKF_ODO_FORWARD] = scale * v_b[1] - speed_mps;
+    z_car_mps[EKF_ODO_FORWARD] = scale * v_b[1] + dir * k->odo_offset_mps - speed_mps;
 }
 
 int ekf_odometer(ekf_t *k, const sins_t *s, const nav_real_t w_b_rps[3],

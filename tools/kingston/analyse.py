@@ -130,6 +130,81 @@ def odometer_vs_reference(drive) -> dict:
             "reference_polyline_while_odometer_0_m": jitter}
 
 
+def _acf(x: np.ndarray, lags=(1, 2, 3, 5, 10)) -> dict:
+    """Autocorrelation of a 1 Hz series at these lags (NaN samples skipped pairwise)."""
+    out = {}
+    for k in lags:
+        a, b = x[:-k], x[k:]
+        ok = np.isfinite(a) & np.isfinite(b)
+        out[k] = float(np.corrcoef(a[ok], b[ok])[0, 1])
+    return out
+
+
+SPEED_BINS_MPS = ((0.5, 2.0), (2.0, 4.0), (4.0, 6.0), (6.0, 8.0), (8.0, 10.0), (10.0, 12.0),
+                  (12.0, 14.0), (14.0, 16.0))
+
+
+def odometer_error_model(drive) -> dict:
+    """The OBD speed against the reference's 3-D speed at the same time stamp (issue #18):
+    a least-squares reading = scale x true + offset over the moving epochs (reference above
+    0.5 m/s), the mean reading - true per speed bin at low acceleration (|dv/dt| < 0.3
+    m/s^2: no lag effect), the residual's RMS by acceleration and its autocorrelation from
+    one 1-s reading to the next."""
+    r, o = drive.ref, drive.odo
+    vr = np.sqrt(r["ve_mps"] ** 2 + r["vn_mps"] ** 2 + r["vu_mps"] ** 2)
+    v = np.interp(o["time_s"], r["time_s"], vr)
+    acc = np.gradient(v, o["time_s"])
+    m = (v > 0.5) & (o["speed_mps"] > 0.0)
+    A = np.vstack([v[m], np.ones(int(m.sum()))]).T
+    (scale, offset), *_ = np.linalg.lstsq(A, o["speed_mps"][m], rcond=None)
+    res = np.full(v.size, np.nan)
+    res[m] = o["speed_mps"][m] - (scale * v[m] + offset)
+    bins = []
+    for lo, hi in SPEED_BINS_MPS:
+        b = m & (v > lo) & (v <= hi) & (np.abs(acc) < 0.3)
+        if b.sum() >= 10:
+            bins.append({"from_mps": lo, "to_mps": hi, "n": int(b.sum()),
+                         "mean_difference_mps": float(np.mean(o["speed_mps"][b] - v[b])),
+                         "as_scale_error": float(o["speed_mps"][b].sum() / v[b].sum() - 1.0)})
+    by_acc = []
+    for lo, hi in ((0.0, 0.2), (0.2, 0.5), (0.5, 1.0), (1.0, 3.0)):
+        b = m & (np.abs(acc) >= lo) & (np.abs(acc) < hi)
+        by_acc.append({"acc_from_mps2": lo, "acc_to_mps2": hi, "n": int(b.sum()),
+                       "rms_mps": float(np.sqrt(np.mean(res[b] ** 2)))})
+    return {"scale": float(scale), "offset_mps": float(offset), "speed_bins": bins,
+            "residual_rms_by_acceleration": by_acc, "residual_acf": _acf(res)}
+
+
+def gnss_velocity_errors(drive) -> dict:
+    """The receiver's velocity against the reference's at its epochs: the horizontal error's
+    median, p95 and RMS, and the east error's autocorrelation from epoch to epoch (1 Hz)."""
+    g, r = drive.gnss, drive.ref
+    de = g["ve_mps"] - np.interp(g["time_s"], r["time_s"], r["ve_mps"])
+    dn = g["vn_mps"] - np.interp(g["time_s"], r["time_s"], r["vn_mps"])
+    e = np.hypot(de, dn)
+    return {"n": int(e.size), "median_mps": float(np.median(e)),
+            "p95_mps": float(np.percentile(e, 95)), "rms_mps": float(np.sqrt(np.mean(e ** 2))),
+            "east_acf": _acf(de - np.mean(de))}
+
+
+def reference_consistency(drive, window_s: int = 10) -> dict:
+    """The SPAN reference against itself: over every window_s of its 1 Hz rows, the distance
+    its positions move minus the integral of its own velocities (trapezoid), horizontal.
+    What the reference's positions do that its velocities do not bounds what any solution
+    can be measured to."""
+    r = drive.ref
+    lat, lon = np.radians(r["lat_deg"]), np.radians(r["lon_deg"])
+    _, e, n = geodesy.horizontal_error_m(lat[0], lon[0], lat, lon)
+    dt = np.diff(r["time_s"])
+    i_n = np.concatenate([[0.0], np.cumsum(0.5 * (r["vn_mps"][1:] + r["vn_mps"][:-1]) * dt)])
+    i_e = np.concatenate([[0.0], np.cumsum(0.5 * (r["ve_mps"][1:] + r["ve_mps"][:-1]) * dt)])
+    w = window_s
+    d = np.hypot((n[w:] - n[:-w]) - (i_n[w:] - i_n[:-w]), (e[w:] - e[:-w]) - (i_e[w:] - i_e[:-w]))
+    k = int(np.argmax(d))
+    return {"window_s": w, "median_m": float(np.median(d)), "p95_m": float(np.percentile(d, 95)),
+            "max_m": float(d[k]), "max_at_s": float(r["time_s"][k] - r["time_s"][0])}
+
+
 def initial_attitude(drive, still_s: float = 500.0) -> dict:
     r0 = drive.ref[0]
     t = drive.imu["time_s"]
@@ -243,7 +318,10 @@ def analyse(drive) -> dict:
             "gyro_z_vs_reference_heading": gyro_z_timing(drive),
             "gyro_heading_vs_reference": gyro_heading_vs_reference(drive),
             "gyro_noise_at_first_stop": gyro_noise_at_first_stop(drive),
-            "gnss_vs_reference": gnss_vs_reference(drive)}
+            "gnss_vs_reference": gnss_vs_reference(drive),
+            "odometer_error_model": odometer_error_model(drive),
+            "gnss_velocity_errors": gnss_velocity_errors(drive),
+            "reference_consistency": reference_consistency(drive)}
 
 
 def text(a: dict) -> str:
@@ -301,6 +379,28 @@ def text(a: dict) -> str:
         f"median {g['median_m']:.2f} m, "
         f"p95 {g['p95_m']:.2f} m, max {g['max_m']:.1f} m; height - reference median "
         f"{g['height_minus_reference_median_m']:.2f} m",
+    ]
+    om = a["odometer_error_model"]
+    lines += [
+        f"odometer error model (reading = scale x reference speed + offset, moving): scale "
+        f"{om['scale']:.4f}, offset {om['offset_mps']:+.3f} m/s; reading - reference at "
+        f"|acc| < 0.3 m/s^2 by speed: " + ", ".join(
+            f"{b['from_mps']:g}-{b['to_mps']:g} m/s {b['mean_difference_mps']:+.3f} m/s "
+            f"({100 * b['as_scale_error']:+.1f} %)" for b in om["speed_bins"]),
+        "  residual RMS by |acceleration|: " + ", ".join(
+            f"{b['acc_from_mps2']:g}-{b['acc_to_mps2']:g} m/s^2 {b['rms_mps']:.3f} m/s "
+            f"(n {b['n']})" for b in om["residual_rms_by_acceleration"])
+        + "; autocorrelation " + ", ".join(
+            f"{k} s {v:.2f}" for k, v in om["residual_acf"].items()),
+    ]
+    gv, rc = a["gnss_velocity_errors"], a["reference_consistency"]
+    lines += [
+        f"GNSS velocity vs reference: {gv['n']} epochs, horizontal error median "
+        f"{gv['median_mps']:.3f} m/s, p95 {gv['p95_mps']:.3f}, RMS {gv['rms_mps']:.3f}; east "
+        "error autocorrelation " + ", ".join(f"{k} s {v:.2f}" for k, v in gv["east_acf"].items()),
+        f"reference against itself (positions' motion - its velocities' integral over "
+        f"{rc['window_s']} s): median {rc['median_m']:.2f} m, p95 {rc['p95_m']:.2f} m, max "
+        f"{rc['max_m']:.2f} m (window from {rc['max_at_s']:.0f} s)",
     ]
     return "\n".join(lines)
 
