@@ -991,6 +991,33 @@ static void test_dead_reckoning_output(void **state)
 }
 
 /*
+ * GIVEN a perfect start (heading 30 deg) and the navigator moving along its heading at
+ *       -2, -0.1 (within APP_ODO_REVERSE_MPS of standing) and +2 m/s
+ * WHEN WheelSpeeds read +2 m/s (magnitudes: an OBD-II speed forwarded, the car reversing)
+ * THEN with odo_direction navigator the odometer's speed takes the navigator's sign beyond
+ *      APP_ODO_REVERSE_MPS (-2, +2, +2 m/s), with as_read it is the reading (+2 always).
+ */
+static void test_odo_direction_from_navigator(void **state)
+{
+    (void)state;
+    const double v_nav_mps[3] = {-2.0, -0.1, 2.0};
+    for (int mode = 0; mode < 2; mode++) {
+        app_config_t cfg = app_default_config();
+        cfg.odo_direction = mode ? ODO_DIR_NAVIGATOR : ODO_DIR_AS_READ;
+        assert_int_equal(app_init(&app, &cfg), NAV_OK);
+        start_perfect();
+        for (int i = 0; i < 3; i++) {
+            const double v = v_nav_mps[i];
+            app.run.nav.v_n_mps[0] = (nav_real_t)(v * sin(30.0 * DEG));
+            app.run.nav.v_n_mps[1] = (nav_real_t)(v * cos(30.0 * DEG));
+            send_wheels(2.0);
+            const double expect = (mode && v < -(double)APP_ODO_REVERSE_MPS) ? -2.0 : 2.0;
+            assert_near((double)app.keep.odo.speed_mps, expect, 1e-4);
+        }
+    }
+}
+
+/*
  * GIVEN a gyro z bias of 10 deg/h (exactly 1 LSB of 2^-21 rad per 10 ms sample = 9.83
  *       deg/h) and the wheels at zero for 120 s, the bias prior widened to 100 deg/h
  * THEN the heading is held (0.01 deg; unheld it would drift 0.33 deg), the position holds,
@@ -1596,6 +1623,7 @@ int main(void)
         cmocka_unit_test_setup(test_gnss_init_and_epochs, setup),
         cmocka_unit_test_setup(test_initial_attitude_skips_levelling, setup),
         cmocka_unit_test_setup(test_dead_reckoning_output, setup),
+        cmocka_unit_test_setup(test_odo_direction_from_navigator, setup),
         cmocka_unit_test_setup(test_standstill_holds_and_estimates_bias, setup),
         cmocka_unit_test_setup(test_one_point_calibration_and_nvm, setup),
         cmocka_unit_test_setup(test_corrupt_nvm_at_boot, setup),

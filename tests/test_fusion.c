@@ -420,6 +420,32 @@ static void test_vel_up_none_not_fused(void **state)
     cfg.gnss_vel_up = GNSS_VUP_MEASURED;
 }
 
+/* GIVEN the filter running at rest and 5 Hz fixes (SpeedAccuracy 0.2 m/s) WHEN a fix says
+ * 2 m/s east THEN with gnss_vel_corr_s 0 (independent errors) the gate refuses it (with
+ * the filter's 0.5 m/s velocity sigma, 2 m/s is 3.7 sigma); with 3 s the velocity's
+ * sigma is 0.2 x sqrt(3 / 0.2) = 0.77 m/s, 2 m/s is 2.2 sigma, and it is fused. */
+static void test_vel_corr_widens_velocity_sigma(void **state)
+{
+    (void)state;
+    const nav_real_t v[3] = {2.0f, 0.0f, 0.0f};
+    for (int corr = 0; corr < 2; corr++) {
+        start_filter();
+        cfg.gnss_vel_up = GNSS_VUP_NONE;
+        cfg.gnss_vel_corr_s = corr ? NAV_C(3.0) : NAV_C(0.0);
+        for (int k = 0; k < 20; k++) {
+            (void)rest_sample();
+        }
+        gnss_fix_t f = fix_at(450000000, 100000000, v);
+        f.tow_ms += 200u;
+        const uint32_t gated = fu.ekf.n_gated;
+        int adopt = 0;
+        assert_int_equal(fusion_gnss(&fu, &ctx, &PRIOR, &f, &adopt), FUSION_GO_ON);
+        assert_int_equal(fu.ekf.n_gated, gated + (corr ? 0u : 1u));
+    }
+    cfg.gnss_vel_up = GNSS_VUP_MEASURED;
+    cfg.gnss_vel_corr_s = NAV_C(0.0);
+}
+
 /* GIVEN a fix whose HorizAccuracy is 0 (a receiver that sends none) and one saying 5 m
  * WHEN the filter starts at each THEN the fix's figure weighs it: 5 m as a 68 % radius
  * is 3.5 m per axis, the floor a 0 gives is a fraction of that. (With gnss_accuracy =
@@ -550,6 +576,7 @@ int main(void)
         cmocka_unit_test_setup(test_nan_measurement_noise_refused, setup),
         cmocka_unit_test_setup(test_nan_state_found_at_gnss_update, setup),
         cmocka_unit_test_setup(test_vel_up_none_not_fused, setup),
+        cmocka_unit_test_setup(test_vel_corr_widens_velocity_sigma, setup),
         cmocka_unit_test_setup(test_fix_accuracy_weighs_the_start, setup),
         cmocka_unit_test_setup(test_note_course_and_stop, setup),
         cmocka_unit_test_setup(test_outlier_fix_refused, setup),

@@ -640,6 +640,22 @@ static uint32_t *rx_counter(app_health_t *h, rx_verdict_t v)
     }
 }
 
+/* odo_direction = navigator: the wheel speeds are magnitudes (an OBD-II speed cannot tell
+ * reversing); they take the sign of the navigator's forward velocity once it moves backward
+ * faster than APP_ODO_REVERSE_MPS (the IMU sees a car reverse away from a stop before its
+ * first reading the rows use, APP_ODO_MIN_SPEED_MPS) */
+static void wheels_directed(const app_t *a, nav_real_t wheel_mps[4])
+{
+    mat3_t C;
+    quat_to_dcm(a->run.nav.q_bn, &C);
+    nav_real_t v_b[3];
+    mat3t_mul_vec(&C, a->run.nav.v_n_mps, v_b);
+    const nav_real_t sign = v_b[1] < -APP_ODO_REVERSE_MPS ? NAV_C(-1.0) : NAV_C(1.0);
+    for (int i = 0; i < 4; i++) {
+        wheel_mps[i] = sign * nav_fabs(wheel_mps[i]);
+    }
+}
+
 void app_handle_frame(app_t *a, hal_t *hal, const hal_can_frame_t *f)
 {
     a->keep.health.log_line_bad = hal_can_rx_malformed(hal);
@@ -678,6 +694,9 @@ void app_handle_frame(app_t *a, hal_t *hal, const hal_can_frame_t *f)
         imu_stream_time(&a->run.imu, &a->keep.imu, in.u.imu_time.counter, in.u.imu_time.t_us);
         break;
     case RX_WHEELS:
+        if (a->cfg.odo_direction == ODO_DIR_NAVIGATOR) {
+            wheels_directed(a, in.u.wheels.mps);
+        }
         if (odo_wheels(&a->keep.odo, in.u.wheels.mps, a->run.yaw_rate_rps) != NAV_OK) {
             reject(a, &a->keep.health.bad_value); /* a locked or spinning wheel, or range */
         } else if (!a->keep.odo.zero) {

@@ -43,6 +43,12 @@ typedef enum {
     GNSS_INPUT_BOTH = 2, /* per epoch the fix, or the raw measurements of an epoch without */
 } gnss_input_t;
 
+/* where the wheel speeds' direction of travel comes from (the parameter odo_direction) */
+typedef enum {
+    ODO_DIR_AS_READ = 0,   /* their sign (signed WheelSpeeds, or the profile's gear) */
+    ODO_DIR_NAVIGATOR = 1, /* magnitudes: the navigator's forward velocity's sign */
+} odo_direction_t;
+
 /* the IMU's sample time (the parameter imu_time) */
 typedef enum {
     IMU_TIME_GRID = 0,    /* every sample 1/imu_rate_hz long */
@@ -73,6 +79,7 @@ typedef struct {
                                      arrival (more when TimeOfWeek shows a late epoch) */
     nav_real_t gnss_lever_b_m[3]; /* GNSS antenna from the IMU, body axes, m */
     nav_real_t gnss_corr_s;       /* correlation time of the receiver's position errors */
+    nav_real_t gnss_vel_corr_s;   /* and of its velocity errors (0: independent) */
     nav_real_t gnss_white_ratio;  /* white part of its declared accuracy (sigma ratio) */
     gnss_acc_source_t gnss_accuracy; /* reported, or declared by the next three */
     nav_real_t gnss_hacc_m;       /* declared horizontal accuracy, 68 % radius */
@@ -83,6 +90,7 @@ typedef struct {
     nav_real_t odo_lever_b_m[3];  /* the odometer's reference point (rear axle middle) from
                                      the IMU, body axes, m */
     nav_real_t odo_lever_sigma_m; /* its 1-sigma uncertainty, m */
+    odo_direction_t odo_direction; /* the speeds' sign as read, or the navigator's */
     nav_real_t imu_mount_rad[3];  /* the IMU's attitude in the vehicle: roll, pitch, yaw
                                      (mounting.h) */
     mount_source_t imu_mount_source; /* imu_mount_rad, or the automatic estimate */

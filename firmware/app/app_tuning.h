@@ -148,10 +148,19 @@
 #define APP_ODO_SIGMA_SPEED_FRAC NAV_C(0.01) /* plus 1 % of speed */
 /* a slow source's speed is late and averaged: noise grows with acceleration x period */
 #define APP_ODO_SIGMA_ACC_PERIOD NAV_C(0.5)
+/* A source slower than the updates (each reading used once) is a quantised speed the car's
+ * ECU has filtered: its error holds until the speed has moved by a step, over several
+ * readings (the Kingston OBD speed's residual: 0.73 from one 1-s reading to the next, 0.36
+ * three apart; tools/kingston/analyse.py). Its variance is multiplied by this correlation
+ * time over the source's period, as the receiver's fixes' are (docs/kalman.md). */
+#define APP_ODO_SLOW_CORR_S NAV_C(3.0)
 /* the horizontal specific force beyond which zero wheels are not a standstill (fusion.c) */
 #define APP_STILL_ACC_MPS2 NAV_C(0.3)
 #define APP_NHC_SIGMA_MPS NAV_C(0.1)     /* side slip in turns, suspension motion */
 #define APP_ODO_MIN_SPEED_MPS NAV_C(0.5) /* below this the speed rows are not used */
+/* odo_direction = navigator: reversing once the navigator moves backward faster than this
+ * (half the slowest speed the rows use) */
+#define APP_ODO_REVERSE_MPS NAV_C(0.25)
 #define APP_ODO_GATE_SIGMA NAV_C(5.0)    /* odometer and standstill innovation gate */
 #define APP_EKF_POS_SIGMA_MIN_M NAV_C(1.0) /* the filter's initial position sigma floor */
 /* GNSS innovation gate (position and velocity), in sigmas: 3, for receivers' multipath

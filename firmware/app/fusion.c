@@ -187,8 +187,12 @@ static void odometer_updates(fusion_t *fu, const fusion_ctx_t *c, nav_real_t T,
     } else if (odo->valid && odo->n_frames != fu->odo_frames_used &&
                nav_fabs(odo->speed_mps) > APP_ODO_MIN_SPEED_MPS) {
         fu->odo_frames_used = odo->n_frames;
-        const nav_real_t sf = APP_ODO_SIGMA_MPS + APP_ODO_SIGMA_SPEED_FRAC * nav_fabs(odo->speed_mps) +
+        nav_real_t sf = APP_ODO_SIGMA_MPS + APP_ODO_SIGMA_SPEED_FRAC * nav_fabs(odo->speed_mps) +
                               APP_ODO_SIGMA_ACC_PERIOD * acc * per;
+        if (per > T && APP_ODO_SLOW_CORR_S > per) {
+            /* a slow source: its error holds over several readings (below) */
+            sf *= nav_sqrt(APP_ODO_SLOW_CORR_S / per);
+        }
         const nav_real_t *w_b = fu->w_b_last_rps; /* the interval's mean (fusion_imu_step) */
         /* the car's lateral and vertical velocity are zero at the measuring axle, which is
          * where odo_lever_b_m says to within odo_lever_sigma_m: in a turn the IMU moves
@@ -504,11 +508,15 @@ fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_pr
     int rv = 1;
     if (fix->has_vel) {
         const nav_real_t *vthen = gnss_time_velocity_then(c->time, &when);
+        /* the velocity's errors correlated over gnss_vel_corr_s (the receiver's own
+         * smoothing): the variance inflated by it over the fix interval, as the height's */
+        const nav_real_t vc_s = cfg->gnss_vel_corr_s;
+        const nav_real_t sv_mps = ss * nav_sqrt(vc_s > ep_s ? vc_s / ep_s : NAV_C(1.0));
         rv = cfg->gnss_vel_up == GNSS_VUP_NONE
-                 ? ekf_gnss_velocity_horizontal(&fu->ekf, vthen, fix->v_enu_mps, ss,
+                 ? ekf_gnss_velocity_horizontal(&fu->ekf, vthen, fix->v_enu_mps, sv_mps,
                                                 APP_GNSS_GATE_SIGMA)
-                 : ekf_gnss_velocity(&fu->ekf, vthen, fix->v_enu_mps, ss,
-                                     APP_GNSS_VUP_SIGMA_RATIO * ss, APP_GNSS_GATE_SIGMA);
+                 : ekf_gnss_velocity(&fu->ekf, vthen, fix->v_enu_mps, sv_mps,
+                                     APP_GNSS_VUP_SIGMA_RATIO * sv_mps, APP_GNSS_GATE_SIGMA);
     }
     if (rp < 2 || rv == 0) {
         app_diag_reject(c->diag, &c->diag->health->gnss_rejected); /* beyond the gate */

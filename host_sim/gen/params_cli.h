@@ -18,7 +18,7 @@ typedef struct {
     const char *description;
 } params_cli_t;
 
-#define PARAMS_CLI_N 35
+#define PARAMS_CLI_N 37
 
 static const params_cli_t params_cli[PARAMS_CLI_N] = {
     {"--imu-rate-hz", APP_PARAM_IMU_RATE_HZ, "Hz", 10.0, 400.0, 1.0, "", "IMU sample rate: one IMU_Rate + IMU_Accel pair per sample"},
@@ -31,6 +31,7 @@ static const params_cli_t params_cli[PARAMS_CLI_N] = {
     {"--odo-wheelbase-m", APP_PARAM_ODO_WHEELBASE_M, "m", 1.0, 6.0, 1.0, "", "wheelbase, for the front axle's steering correction"},
     {"--odo-lever-m", APP_PARAM_ODO_LEVER_B_M, "m", -10.0, 10.0, 1.0, "", "the odometer's reference point (middle of the measuring axle) from the IMU, body axes x right, y forward, z up"},
     {"--odo-lever-sigma-m", APP_PARAM_ODO_LEVER_SIGMA_M, "m", 0.0, 5.0, 1.0, "", "1-sigma uncertainty of odo_lever_b_m: the default 1 m is an ECU somewhere between the axles with its lever arm not measured; in a turn the no-side-slip constraint allows the yaw rate times it"},
+    {"--odo-direction", APP_PARAM_ODO_DIRECTION, "", 0.0, 1.0, 1.0, "as_read|navigator", "where the wheel speeds' direction of travel comes from: as read (navecu's signed WheelSpeeds, or the vehicle profile's gear); navigator, for a source of magnitudes that cannot tell reversing (an OBD-II vehicle speed, PID 0x0D, forwarded into WheelSpeeds): the sign of the navigator's forward velocity (docs/odometry.md)"},
     {"--cal-min-base-m", APP_PARAM_CAL_MIN_BASE_M, "m", 0.0, 100000.0, 1.0, "", "a one-point calibration closer than this to its base is refused: a point's error e gives about e / base in dH (rad) and in mu"},
     {"--imu-mount-deg", APP_PARAM_IMU_MOUNT_RAD, "deg", -180.0, 180.0, 0.017453292519943295, "", "the IMU's attitude in the vehicle, roll, pitch, yaw (firmware/app/mounting.h: 3-1-2 as the navigation attitude; yaw clockwise, pitch nose up, roll right side down): any rotation, e.g. 0,0,90 turned right, 180,0,0 upside down; the filter estimates the small residual yaw and pitch"},
     {"--imu-mount-source", APP_PARAM_IMU_MOUNT_SOURCE, "", 0.0, 1.0, 1.0, "fixed|automatic", "fixed: imu_mount_deg is the mounting; automatic: navecu estimates it from the data (firmware/app/mount_est.h: gravity at rest, the accelerations and turns against the wheel speeds) and holds navigation (mode Fault, NAV_Calibration MountState estimating) until the estimate converges, then starts from GNSS while driving with it; app_adopt_mounting (RoutineControl 0x0204) copies it into imu_mount_deg"},
@@ -45,6 +46,7 @@ static const params_cli_t params_cli[PARAMS_CLI_N] = {
     {"--accel-range-mps2", APP_PARAM_ACCEL_RANGE_MPS2, "m/s^2", 1.0, 2000.0, 1.0, "", "the accelerometer's measurement range (default 8 g)"},
     {"--gnss-latency-ms", APP_PARAM_GNSS_LATENCY_S, "ms", 0.0, 500.0, 0.001, "", "receiver latency: a fix's time of validity to its arrival (more when TimeOfWeek shows a late epoch)"},
     {"--gnss-corr-s", APP_PARAM_GNSS_CORR_S, "s", 0.0, 600.0, 1.0, "", "correlation time of the receiver's position errors (docs/kalman.md)"},
+    {"--gnss-vel-corr-s", APP_PARAM_GNSS_VEL_CORR_S, "s", 0.0, 60.0, 1.0, "", "correlation time of the receiver's velocity errors (its tracking loops' and navigation filter's smoothing; docs/kalman.md): fixes closer than it carry less than independent ones, and the velocity's variance is multiplied by it over the fix interval; 0: independent from epoch to epoch"},
     {"--gnss-white-ratio", APP_PARAM_GNSS_WHITE_RATIO, "", 0.05, 1.0, 1.0, "", "the white part of the receiver's declared per-axis accuracy, as a ratio of the sigmas (tracking noise, fast multipath; the rest, atmosphere, orbits and clocks, is correlated over gnss_corr_s and a state of the filter when that spans 10 fix intervals, docs/kalman.md): a code receiver's about 1/3 (0.7 of 2.1 m per axis), a differential one's about 1/2"},
     {"--gnss-accuracy", APP_PARAM_GNSS_ACCURACY, "", 0.0, 1.0, 1.0, "reported|declared", "where the fixes' accuracies come from: the receiver's GNSS_Status/GNSS_Velocity fields, or declared here for a receiver that reports none (gnss_hacc_m, gnss_vacc_m, gnss_sacc_mps: its datasheet's figures)"},
     {"--gnss-hacc-m", APP_PARAM_GNSS_HACC_M, "m", 0.1, 102.3, 1.0, "", "declared horizontal accuracy (68 % radius, as HorizAccuracy), used with gnss_accuracy = declared"},

@@ -16,6 +16,7 @@ const app_param_t app_params[APP_PARAM_N] = {
     [APP_PARAM_ODO_WHEELBASE_M] = {"odo_wheelbase_m", 0x0212u, APP_PARAM_REAL, 1u, 1u, 1u, 0u, NAV_C(1.0), NAV_C(6.0), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_ODO_LEVER_B_M] = {"odo_lever_b_m", 0x0213u, APP_PARAM_VEC3, 0u, 0u, 0u, 0u, NAV_C(-10.0), NAV_C(10.0), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_ODO_LEVER_SIGMA_M] = {"odo_lever_sigma_m", 0x0214u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(5.0), {NAV_C(1.0), NAV_C(0.0), NAV_C(0.0)}},
+    [APP_PARAM_ODO_DIRECTION] = {"odo_direction", 0x0215u, APP_PARAM_ENUM, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(1.0), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_CAL_MIN_BASE_M] = {"cal_min_base_m", 0x0220u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(100000.0), {NAV_C(2000.0), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_IMU_MOUNT_RAD] = {"imu_mount_rad", 0x0205u, APP_PARAM_VEC3, 0u, 0u, 1u, 0u, NAV_C(-3.141592653589793), NAV_C(3.141592653589793), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_IMU_MOUNT_SOURCE] = {"imu_mount_source", 0x0206u, APP_PARAM_ENUM, 0u, 0u, 1u, 0u, NAV_C(0.0), NAV_C(1.0), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
@@ -30,6 +31,7 @@ const app_param_t app_params[APP_PARAM_N] = {
     [APP_PARAM_ACCEL_RANGE_MPS2] = {"accel_range_mps2", 0x0236u, APP_PARAM_REAL, 0u, 0u, 1u, 0u, NAV_C(1.0), NAV_C(2000.0), {NAV_C(78.4532), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_GNSS_LATENCY_S] = {"gnss_latency_s", 0x0240u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(0.5), {NAV_C(0.1), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_GNSS_CORR_S] = {"gnss_corr_s", 0x0241u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(600.0), {NAV_C(20.0), NAV_C(0.0), NAV_C(0.0)}},
+    [APP_PARAM_GNSS_VEL_CORR_S] = {"gnss_vel_corr_s", 0x024Au, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(60.0), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_GNSS_WHITE_RATIO] = {"gnss_white_ratio", 0x0248u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.05), NAV_C(1.0), {NAV_C(0.33), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_GNSS_ACCURACY] = {"gnss_accuracy", 0x0243u, APP_PARAM_ENUM, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(1.0), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_GNSS_HACC_M] = {"gnss_hacc_m", 0x0244u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.1), NAV_C(102.3), {NAV_C(3.0), NAV_C(0.0), NAV_C(0.0)}},
@@ -103,6 +105,14 @@ void app_param_get(const app_config_t *cfg, app_param_id_t id, nav_real_t v[3])
     case APP_PARAM_ODO_LEVER_SIGMA_M:
         v[0] = cfg->odo_lever_sigma_m;
         break;
+    case APP_PARAM_ODO_DIRECTION:
+        if (cfg->odo_direction == ODO_DIR_AS_READ) {
+            v[0] = NAV_C(0.0);
+        }
+        if (cfg->odo_direction == ODO_DIR_NAVIGATOR) {
+            v[0] = NAV_C(1.0);
+        }
+        break;
     case APP_PARAM_CAL_MIN_BASE_M:
         v[0] = cfg->cal_min_base_m;
         break;
@@ -151,6 +161,9 @@ void app_param_get(const app_config_t *cfg, app_param_id_t id, nav_real_t v[3])
         break;
     case APP_PARAM_GNSS_CORR_S:
         v[0] = cfg->gnss_corr_s;
+        break;
+    case APP_PARAM_GNSS_VEL_CORR_S:
+        v[0] = cfg->gnss_vel_corr_s;
         break;
     case APP_PARAM_GNSS_WHITE_RATIO:
         v[0] = cfg->gnss_white_ratio;
@@ -256,6 +269,12 @@ int app_param_set(app_config_t *cfg, app_param_id_t id, const nav_real_t v[3])
     case APP_PARAM_ODO_LEVER_SIGMA_M:
         cfg->odo_lever_sigma_m = v[0];
         break;
+    case APP_PARAM_ODO_DIRECTION:
+        cfg->odo_direction = ODO_DIR_AS_READ;
+        if (v[0] > NAV_C(0.5)) {
+            cfg->odo_direction = ODO_DIR_NAVIGATOR;
+        }
+        break;
     case APP_PARAM_CAL_MIN_BASE_M:
         cfg->cal_min_base_m = v[0];
         break;
@@ -302,6 +321,9 @@ int app_param_set(app_config_t *cfg, app_param_id_t id, const nav_real_t v[3])
         break;
     case APP_PARAM_GNSS_CORR_S:
         cfg->gnss_corr_s = v[0];
+        break;
+    case APP_PARAM_GNSS_VEL_CORR_S:
+        cfg->gnss_vel_corr_s = v[0];
         break;
     case APP_PARAM_GNSS_WHITE_RATIO:
         cfg->gnss_white_ratio = v[0];
