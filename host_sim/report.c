@@ -141,6 +141,13 @@ void host_summary(FILE *out, const app_t *app, const hal_t *hal, unsigned long f
                 (double)ekf_state_sigma(ekf, EKF_K), (double)ekf->mount_yaw_rad / RAD_PER_DEG,
                 (double)ekf_state_sigma(ekf, EKF_MY) / RAD_PER_DEG,
                 (double)ekf->mount_pitch_rad / RAD_PER_DEG);
+        nav_real_t v_mean = NAV_C(0.0), mu = NAV_C(0.0), s_mu = NAV_C(0.0);
+        (void)calib_filter_scale(&app->run.cal, ekf, &v_mean, &mu, &s_mu);
+        fprintf(out,
+                "navecu: odometer offset %.3f m/s (sigma %.3f); at the trip's mean speed "
+                "%.2f m/s a scale of %.5f (sigma %.5f)\n",
+                (double)ekf->odo_offset_mps, (double)ekf_state_sigma(ekf, EKF_OB),
+                (double)v_mean, (double)mu, (double)s_mu);
         fprintf(out, "navecu: GNSS correlated error: E %.2f N %.2f m (sigma %.2f m)\n",
                 (double)ekf->gnss_bias_m[0], (double)ekf->gnss_bias_m[1],
                 (double)ekf_state_sigma(ekf, EKF_GB));

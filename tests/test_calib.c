@@ -282,13 +282,54 @@ static void test_one_point_refusals(void **state)
 
 /* ---- the filter's estimates ---- */
 
-/* the filter's odometer scale k and mounting yaw with their 1-sigmas */
+/* the filter's odometer scale k and mounting yaw with their 1-sigmas, its speed offset 0
+ * known to 1 mm/s, after 100 s more of the trip at 10 m/s */
 static void filter_says(float k, float sk, float yaw, float sy)
 {
     ekf.k = k;
     ekf.mount_yaw_rad = yaw;
     ekf.P[EKF_K][EKF_K] = sk * sk;
     ekf.P[EKF_MY][EKF_MY] = sy * sy;
+    ekf.odo_offset_mps = 0.0f;
+    ekf.P[EKF_OB][EKF_OB] = 1e-6f;
+    ekf.P[EKF_K][EKF_OB] = ekf.P[EKF_OB][EKF_K] = 0.0f;
+    for (int i = 0; i < 100 * (int)RATE_HZ; i++) {
+        calib_trip_odo(&trip, 1, 10.0f, 1.0f / (float)RATE_HZ);
+    }
+}
+
+/* GIVEN the filter's scale k 0.001 (sigma 0.0019) and speed offset -0.12 m/s (sigma 0.019
+ * m/s) correlated -0.94 (the Kingston drive's figures at its end), and a trip at 10 m/s
+ * mean (and 0.3 m/s of creeping, which is not counted) THEN the calibration adopted is the
+ * scale the trip's distance implies, k + o / 10 = -0.011, its sigma 0.00066 (the two
+ * estimates' errors cancel: below APP_CAL_ADOPT_SIGMA); uncorrelated its sigma would be
+ * 0.0027 and nothing is adopted. */
+static void test_filter_adoption_with_offset(void **state)
+{
+    (void)state;
+    const ekf_config_t ec = ekf_default_config();
+    for (int correlated = 0; correlated < 2; correlated++) {
+        assert_int_equal(ekf_init(&ekf, &ec, 0.0f), NAV_OK);
+        memset(&trip, 0, sizeof trip);
+        calib_init(&c);
+        filter_says(0.001f, 0.0019f, 0.02f, 0.0004f);
+        for (int i = 0; i < 10 * (int)RATE_HZ; i++) {
+            calib_trip_odo(&trip, 1, 0.3f, 1.0f / (float)RATE_HZ);
+        }
+        ekf.odo_offset_mps = -0.12f;
+        ekf.P[EKF_OB][EKF_OB] = 0.019f * 0.019f;
+        ekf.P[EKF_K][EKF_OB] = ekf.P[EKF_OB][EKF_K] =
+            correlated ? -0.94f * 0.0019f * 0.019f : 0.0f;
+        calib_adopt_filter(&c, &trip, &hal, 1000u, RATE_HZ, &ekf, &dr, 1);
+        if (correlated) {
+            assert_int_equal(c.source, CAL_SRC_FILTER);
+            /* float32: 1e-6 (the mean speed exact in the integer sums) */
+            assert_near(c.mu, 0.001 - 0.012, 1e-6);
+            assert_near(dr.mu, 0.001 - 0.012, 1e-6);
+        } else {
+            assert_int_equal(c.source, CAL_SRC_NONE);
+        }
+    }
 }
 
 static float stored_mu(void)
@@ -397,6 +438,7 @@ int main(void)
         cmocka_unit_test_setup(test_one_point, setup),
         cmocka_unit_test_setup(test_one_point_refusals, setup),
         cmocka_unit_test_setup(test_filter_adoption, setup),
+        cmocka_unit_test_setup(test_filter_adoption_with_offset, setup),
         cmocka_unit_test_setup(test_filter_store_policy, setup),
         cmocka_unit_test_setup(test_start_dr, setup),
     };

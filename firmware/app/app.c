@@ -343,6 +343,7 @@ static void process_sample(app_t *a, hal_t *hal, const int32_t w_raw[3], const i
         app_rx_imu_increment(w_raw, v_raw, dt_s, &inc);
         mounting_apply(&a->keep.mount, &inc);
         const app_diag_t d = diag_of(a);
+        calib_trip_odo(&a->run.cal, a->keep.odo.valid, a->keep.odo.speed_mps, dt_s);
         if (a->run.fusion.on) {
             const fusion_ctx_t c = fusion_ctx(a, &d);
             after_fusion(a, fusion_imu_step(&a->run.fusion, &c, &inc, &a->run.yaw_rate_rps));

@@ -120,16 +120,48 @@ int calib_one_point(calib_t *c, calib_trip_t *t, hal_t *hal, uint64_t n, int rea
     return 0;
 }
 
+void calib_trip_odo(calib_trip_t *t, int valid, nav_real_t speed_mps, nav_real_t dt_s)
+{
+    const nav_real_t v = nav_fabs(speed_mps);
+    if (valid && v > APP_ODO_MIN_SPEED_MPS && dt_s > NAV_C(0.0) && dt_s < NAV_C(1.0) &&
+        v < NAV_C(1000.0)) {
+        t->odo_dist_dmm += (uint64_t)(v * dt_s * NAV_C(1e4) + NAV_C(0.5));
+        t->odo_moving_us += (uint64_t)(dt_s * NAV_C(1e6) + NAV_C(0.5));
+    }
+}
+
+int calib_filter_scale(const calib_trip_t *t, const ekf_t *ekf, nav_real_t *v_mean_mps,
+                       nav_real_t *mu, nav_real_t *sigma)
+{
+    if (t->odo_moving_us == 0u || t->odo_dist_dmm == 0u) {
+        return 0; /* no speed driven yet: no mean speed for the offset */
+    }
+    /* k + o / v_mean; its variance a' P a with a = (1, 1 / v_mean) over (k, o);
+     * 1 / v_mean = (us / 0.1 mm) x 1e-2 s/m */
+    const nav_real_t inv_v =
+        (nav_real_t)t->odo_moving_us / (nav_real_t)t->odo_dist_dmm * NAV_C(1e-2);
+    *v_mean_mps = NAV_C(1.0) / inv_v;
+    *mu = ekf->k + ekf->odo_offset_mps * inv_v;
+    const nav_real_t var_mu = ekf->P[EKF_K][EKF_K] +
+                              NAV_C(2.0) * inv_v * ekf->P[EKF_K][EKF_OB] +
+                              inv_v * inv_v * ekf->P[EKF_OB][EKF_OB];
+    *sigma = nav_sqrt(var_mu > NAV_C(0.0) ? var_mu : NAV_C(0.0));
+    return 1;
+}
+
 void calib_adopt_filter(calib_t *c, calib_trip_t *t, hal_t *hal, uint64_t n,
                         uint32_t imu_rate_hz, const ekf_t *ekf, dr_t *dr, int standing)
 {
-    const nav_real_t sk = ekf_state_sigma(ekf, EKF_K);
+    nav_real_t v_mean, mu, sk;
+    if (!calib_filter_scale(t, ekf, &v_mean, &mu, &sk)) {
+        return;
+    }
     const nav_real_t sy = ekf_state_sigma(ekf, EKF_MY);
     if (sk > APP_CAL_ADOPT_SIGMA || sy > APP_CAL_ADOPT_SIGMA ||
-        dr_set_compensation(dr, ekf->mount_yaw_rad, ekf->k) != NAV_OK) {
+        dr_set_compensation(dr, ekf->mount_yaw_rad, mu) != NAV_OK) {
         return; /* not converged, or outside what the store accepts */
     }
-    c->mu = ekf->k;
+    c->mu = mu;
     c->dh_rad = ekf->mount_yaw_rad;
     c->source = NAVECU_CAN_NAV_CALIBRATION_CAL_SOURCE_FILTER_CHOICE;
     const int changed = !t->filter_stored ||

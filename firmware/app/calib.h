@@ -41,6 +41,9 @@ typedef struct {
     nav_real_t stored_mu, stored_dh_rad; /* the values last written to NVM */
     uint64_t last_save_sample;  /* sample of the last NVM save (0: none since the reset) */
     uint8_t filter_stored;      /* the filter's calibration was stored this trip */
+    uint64_t odo_dist_dmm;      /* this trip's odometer distance at speed, 0.1 mm (integers:
+                                   a float32 sum of an hour's 5-cm steps would round each) */
+    uint64_t odo_moving_us;     /* and its time, us: their ratio is the trip's mean speed */
     uint8_t at_gnss;            /* calibrate at the next accepted GNSS fix */
 } calib_trip_t;
 
@@ -74,8 +77,22 @@ int calib_one_point(calib_t *c, calib_trip_t *t, hal_t *hal, uint64_t n, int rea
 /* A calibration asked for when it cannot be done (CalStatus RefusedNotReady). */
 void calib_not_ready(calib_t *c);
 
+/* One IMU sample of dt_s with the odometer reading speed_mps (valid: the reading is live):
+ * the trip's distance and time at a speed the filter's odometer rows use. */
+void calib_trip_odo(calib_trip_t *t, int valid, nav_real_t speed_mps, nav_real_t dt_s);
+
+/* The scale the filter's odometer scale k and speed offset o imply over this trip,
+ * k + o / v_mean (v_mean the trip's mean speed at speed, calib_trip_odo), and its sigma
+ * from their covariance; 0 before any speed was driven. */
+int calib_filter_scale(const calib_trip_t *t, const ekf_t *ekf, nav_real_t *v_mean_mps,
+                       nav_real_t *mu, nav_real_t *sigma);
+
 /* The filter's odometer scale and mounting yaw, once converged, are the calibration in use
- * (CalSource Filter), also the dead reckoning's; stored by the policy above. */
+ * (CalSource Filter), also the dead reckoning's; stored by the policy above. The filter
+ * has the odometer's speed offset o besides its scale k (ekf.h, state 22); the dead
+ * reckoning and the store have one scale: k + o / v_mean, at the trip's mean speed (what
+ * a one-point calibration over this trip would find), its sigma from the filter's
+ * covariance of k and o. */
 void calib_adopt_filter(calib_t *c, calib_trip_t *t, hal_t *hal, uint64_t n,
                         uint32_t imu_rate_hz, const ekf_t *ekf, dr_t *dr, int standing);
 
