@@ -446,6 +446,21 @@ static void test_vel_corr_widens_velocity_sigma(void **state)
     cfg.gnss_vel_corr_s = NAV_C(0.0);
 }
 
+/* GIVEN odo_step_mps 0.02 m/s (navecu's WheelSpeeds) and 0.2778 m/s (an OBD-II speed's
+ * 1 km/h) WHEN the filter starts THEN the odometer offset state's sigma is half a step. */
+static void test_odo_offset_prior_half_a_step(void **state)
+{
+    (void)state;
+    const float step[2] = {0.02f, 0.2778f};
+    for (int i = 0; i < 2; i++) {
+        fusion_stop(&fu);
+        cfg.odo_step_mps = step[i];
+        start_filter();
+        assert_near(sqrt((double)fu.ekf.P[EKF_OB][EKF_OB]), 0.5 * (double)step[i], 1e-6);
+    }
+    cfg.odo_step_mps = NAV_C(0.02);
+}
+
 /* GIVEN a fix whose HorizAccuracy is 0 (a receiver that sends none) and one saying 5 m
  * WHEN the filter starts at each THEN the fix's figure weighs it: 5 m as a 68 % radius
  * is 3.5 m per axis, the floor a 0 gives is a fraction of that. (With gnss_accuracy =
@@ -577,6 +592,7 @@ int main(void)
         cmocka_unit_test_setup(test_nan_state_found_at_gnss_update, setup),
         cmocka_unit_test_setup(test_vel_up_none_not_fused, setup),
         cmocka_unit_test_setup(test_vel_corr_widens_velocity_sigma, setup),
+        cmocka_unit_test_setup(test_odo_offset_prior_half_a_step, setup),
         cmocka_unit_test_setup(test_fix_accuracy_weighs_the_start, setup),
         cmocka_unit_test_setup(test_note_course_and_stop, setup),
         cmocka_unit_test_setup(test_outlier_fix_refused, setup),

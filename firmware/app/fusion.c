@@ -280,6 +280,8 @@ static int start(fusion_t *fu, const fusion_ctx_t *c, const fusion_prior_t *prio
     ec.bg_rw_rps_rts = cfg->gyro_bias_rw_rps_rts;
     ec.ba_rw_mps2_rts = cfg->accel_bias_rw_mps2_rts;
     ec.pos_m = hacc_m > APP_EKF_POS_SIGMA_MIN_M ? hacc_m : APP_EKF_POS_SIGMA_MIN_M;
+    /* a truncated speed reads up to a step low: half a step, 1 sigma (ekf.h, state 22) */
+    ec.odo_offset_mps = NAV_C(0.5) * cfg->odo_step_mps;
     if (fu->init_tilt_sigma_rad > NAV_C(0.0)) {
         ec.tilt_rad = fu->init_tilt_sigma_rad;
     }

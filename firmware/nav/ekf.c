@@ -38,7 +38,8 @@ ekf_config_t ekf_default_config(void)
      * ambiguity) and 1 ppm in frequency (a TCXO's tolerance) */
     c.clk_bias_m = NAV_C(3.0e5);
     c.clk_drift_mps = NAV_C(300.0);
-    /* half of a 1 km/h step: the mean error of a truncated whole-km/h speed (OBD-II) */
+    /* half of a 1 km/h step: the mean error of a truncated whole-km/h speed (OBD-II); the
+     * application sets half its source's step (the parameter odo_step_mps) */
     c.odo_offset_mps = NAV_C(0.14);
     c.arw_rad_rts = NAV_C(8.73e-7);   /* 0.003 deg/sqrt(h) */
     c.vrw_mps_rts = NAV_C(1e-4);

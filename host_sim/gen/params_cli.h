@@ -18,7 +18,7 @@ typedef struct {
     const char *description;
 } params_cli_t;
 
-#define PARAMS_CLI_N 37
+#define PARAMS_CLI_N 38
 
 static const params_cli_t params_cli[PARAMS_CLI_N] = {
     {"--imu-rate-hz", APP_PARAM_IMU_RATE_HZ, "Hz", 10.0, 400.0, 1.0, "", "IMU sample rate: one IMU_Rate + IMU_Accel pair per sample"},
@@ -31,6 +31,7 @@ static const params_cli_t params_cli[PARAMS_CLI_N] = {
     {"--odo-wheelbase-m", APP_PARAM_ODO_WHEELBASE_M, "m", 1.0, 6.0, 1.0, "", "wheelbase, for the front axle's steering correction"},
     {"--odo-lever-m", APP_PARAM_ODO_LEVER_B_M, "m", -10.0, 10.0, 1.0, "", "the odometer's reference point (middle of the measuring axle) from the IMU, body axes x right, y forward, z up"},
     {"--odo-lever-sigma-m", APP_PARAM_ODO_LEVER_SIGMA_M, "m", 0.0, 5.0, 1.0, "", "1-sigma uncertainty of odo_lever_b_m: the default 1 m is an ECU somewhere between the axles with its lever arm not measured; in a turn the no-side-slip constraint allows the yaw rate times it"},
+    {"--odo-step-mps", APP_PARAM_ODO_STEP_MPS, "m/s", 0.001, 1.0, 1.0, "", "the wheel-speed source's resolution, one step of its speed signal: half a step is the 1-sigma of the filter's speed offset state (a signal the car's ECU truncates reads half a step low; docs/kalman.md): navecu's WheelSpeeds 0.02 m/s; an OBD-II speed (PID 0x0D) forwarded into it whole km/h, 0.2778 m/s"},
     {"--odo-direction", APP_PARAM_ODO_DIRECTION, "", 0.0, 1.0, 1.0, "as_read|navigator", "where the wheel speeds' direction of travel comes from: as read (navecu's signed WheelSpeeds, or the vehicle profile's gear); navigator, for a source of magnitudes that cannot tell reversing (an OBD-II vehicle speed, PID 0x0D, forwarded into WheelSpeeds): the sign of the navigator's forward velocity (docs/odometry.md)"},
     {"--cal-min-base-m", APP_PARAM_CAL_MIN_BASE_M, "m", 0.0, 100000.0, 1.0, "", "a one-point calibration closer than this to its base is refused: a point's error e gives about e / base in dH (rad) and in mu"},
     {"--imu-mount-deg", APP_PARAM_IMU_MOUNT_RAD, "deg", -180.0, 180.0, 0.017453292519943295, "", "the IMU's attitude in the vehicle, roll, pitch, yaw (firmware/app/mounting.h: 3-1-2 as the navigation attitude; yaw clockwise, pitch nose up, roll right side down): any rotation, e.g. 0,0,90 turned right, 180,0,0 upside down; the filter estimates the small residual yaw and pitch"},

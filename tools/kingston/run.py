@@ -55,13 +55,14 @@ RATES = ["--imu-rate-hz", "10", "--nav-rate-hz", "10", "--status-rate-hz", "10"]
 # firmware/app/params.toml); the receiver's fixes are stamped with their time of validity
 # (latency 0) and their errors against the reference decorrelate in 3..5 s (measured). The
 # speed is OBD-II's (PID 0x0D): a magnitude, the car reverses into its parking space at the
-# end (3473-3498 s) with positive readings, so its direction is the navigator's. The
+# end (3473-3498 s) with positive readings, so its direction is the navigator's; and it is
+# whole km/h (0.2778 m/s steps: the filter's offset state's prior is half of one). The
 # receiver's velocity errors are correlated over about 3 s as well (0.70 at 1 s, 0.37 at
 # 3 s: tools/kingston/analyse.py).
 SENSORS = ["--imu-preset", "automotive", "--gyro-arw-dpsh", "0.3", "--gyro-bias-dph", "5",
            "--gyro-instability-dph", "0.5", "--accel-bias-mg", "5",
            "--accel-instability-mg", "0.5", "--gnss-latency-ms", "0", "--gnss-corr-s", "4",
-           "--gnss-vel-corr-s", "3", "--odo-direction", "navigator"]
+           "--gnss-vel-corr-s", "3", "--odo-direction", "navigator", "--odo-step-mps", "0.2778"]
 
 
 def stats(x) -> dict:

@@ -16,6 +16,7 @@ const app_param_t app_params[APP_PARAM_N] = {
     [APP_PARAM_ODO_WHEELBASE_M] = {"odo_wheelbase_m", 0x0212u, APP_PARAM_REAL, 1u, 1u, 1u, 0u, NAV_C(1.0), NAV_C(6.0), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_ODO_LEVER_B_M] = {"odo_lever_b_m", 0x0213u, APP_PARAM_VEC3, 0u, 0u, 0u, 0u, NAV_C(-10.0), NAV_C(10.0), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_ODO_LEVER_SIGMA_M] = {"odo_lever_sigma_m", 0x0214u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(5.0), {NAV_C(1.0), NAV_C(0.0), NAV_C(0.0)}},
+    [APP_PARAM_ODO_STEP_MPS] = {"odo_step_mps", 0x0216u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.001), NAV_C(1.0), {NAV_C(0.02), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_ODO_DIRECTION] = {"odo_direction", 0x0215u, APP_PARAM_ENUM, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(1.0), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_CAL_MIN_BASE_M] = {"cal_min_base_m", 0x0220u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(100000.0), {NAV_C(2000.0), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_IMU_MOUNT_RAD] = {"imu_mount_rad", 0x0205u, APP_PARAM_VEC3, 0u, 0u, 1u, 0u, NAV_C(-3.141592653589793), NAV_C(3.141592653589793), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
@@ -104,6 +105,9 @@ void app_param_get(const app_config_t *cfg, app_param_id_t id, nav_real_t v[3])
         break;
     case APP_PARAM_ODO_LEVER_SIGMA_M:
         v[0] = cfg->odo_lever_sigma_m;
+        break;
+    case APP_PARAM_ODO_STEP_MPS:
+        v[0] = cfg->odo_step_mps;
         break;
     case APP_PARAM_ODO_DIRECTION:
         if (cfg->odo_direction == ODO_DIR_AS_READ) {
@@ -268,6 +272,9 @@ int app_param_set(app_config_t *cfg, app_param_id_t id, const nav_real_t v[3])
         break;
     case APP_PARAM_ODO_LEVER_SIGMA_M:
         cfg->odo_lever_sigma_m = v[0];
+        break;
+    case APP_PARAM_ODO_STEP_MPS:
+        cfg->odo_step_mps = v[0];
         break;
     case APP_PARAM_ODO_DIRECTION:
         cfg->odo_direction = ODO_DIR_AS_READ;
