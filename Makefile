@@ -326,8 +326,8 @@ ARM_NM := arm-none-eabi-nm
 # the ECU's diagnostic buffers: ISO-TP messages of at most 512 bytes (the channel's buffer
 # and the UDS server's request and response, 3 x 512 instead of 3 x 4,095 bytes of the
 # 16 KiB RAM); the longest UDS message the server handles is shorter (docs/can.md,
-# "Diagnostics (UDS)")
-M4_DEFS := -DISOTP_MAX_LEN=512u
+# "Diagnostics (UDS)"); the parameters' names are the hosts' only (app_params.h)
+M4_DEFS := -DISOTP_MAX_LEN=512u -DAPP_PARAM_NO_NAMES
 M4_FLAGS := -mcpu=cortex-m4 -mfpu=fpv4-sp-d16 -mfloat-abi=hard -mthumb $(M4_DEFS)
 M4_SRC := $(CORE_SRC) $(APP_SRC) $(HAL_M4_SRC) $(call VEH_SRC,$(VEHICLE))
 $(BUILD)/m4/%.o: %.c

@@ -194,10 +194,14 @@ def gen_h(params, pre) -> str:
          '#include "nav_types.h"', "",
          "/* what a parameter holds: one value (APP_PARAM_U16, an integer; APP_PARAM_ENUM, the",
          " * index of its value name; APP_PARAM_REAL) or three (APP_PARAM_VEC3) */",
+         "/* the names are the hosts' (the command line, its reports, the tests): an ECU build",
+         " * defines APP_PARAM_NO_NAMES and keeps none of their bytes in its flash */",
+         "#ifdef APP_PARAM_NO_NAMES", "#define APP_PARAM_NAME(s) NULL", "#else",
+         "#define APP_PARAM_NAME(s) (s)", "#endif", "",
          "typedef enum {", "    APP_PARAM_U16 = 0,", "    APP_PARAM_REAL = 1,",
          "    APP_PARAM_VEC3 = 2,", "    APP_PARAM_ENUM = 3,", "} app_param_type_t;", "",
          "typedef struct {",
-         "    const char *name;       /* the app_config_t field */",
+         "    const char *name;       /* the app_config_t field (NULL: APP_PARAM_NO_NAMES) */",
          "    uint16_t did;           /* UDS data identifier */",
          "    app_param_type_t type;",
          "    uint8_t min_exclusive;  /* the range excludes min */",
@@ -240,7 +244,7 @@ def gen_c(params, pre) -> str:
             d = [_si(p, p["default"]), 0.0, 0.0]
         typ = {"u16": "APP_PARAM_U16", "real": "APP_PARAM_REAL", "vec3": "APP_PARAM_VEC3",
                "enum": "APP_PARAM_ENUM"}[p["type"]]
-        L.append(f"    [{_const(p)}] = {{\"{p['name']}\", 0x{int(p['did']):04X}u, {typ}, "
+        L.append(f"    [{_const(p)}] = {{APP_PARAM_NAME(\"{p['name']}\"), 0x{int(p['did']):04X}u, {typ}, "
                  f"{int(p['min_exclusive'])}u, {int(p['vehicle_default'])}u, "
                  f"{int(p['at_reset'])}u, {int(p['uds_read_only'])}u, "
                  f"{_c_real(_si(p, p['min']))}, {_c_real(_si(p, p['max']))}, "
@@ -252,7 +256,7 @@ def gen_c(params, pre) -> str:
     L += ["};", "", "const app_preset_t app_presets[APP_PRESET_N] = {"]
     for n, _, _, vals in lst:
         v = ", ".join(_c_real(_si(by_name[k], vals[k])) for k in names)
-        L.append(f"    [APP_PRESET_{n.upper()}] = {{\"{n}\", {{{v}}}}},")
+        L.append(f"    [APP_PRESET_{n.upper()}] = {{APP_PARAM_NAME(\"{n}\"), {{{v}}}}},")
     L += ["};", "", "void app_param_get(const app_config_t *cfg, app_param_id_t id, nav_real_t v[3])",
           "{", "    v[0] = NAV_C(0.0);", "    v[1] = NAV_C(0.0);", "    v[2] = NAV_C(0.0);",
           "    switch (id) {"]

@@ -125,8 +125,10 @@ void calib_trip_odo(calib_trip_t *t, int valid, nav_real_t speed_mps, nav_real_t
     const nav_real_t v = nav_fabs(speed_mps);
     if (valid && v > APP_ODO_MIN_SPEED_MPS && dt_s > NAV_C(0.0) && dt_s < NAV_C(1.0) &&
         v < NAV_C(1000.0)) {
-        t->odo_dist_dmm += (uint64_t)(v * dt_s * NAV_C(1e4) + NAV_C(0.5));
-        t->odo_moving_us += (uint64_t)(dt_s * NAV_C(1e6) + NAV_C(0.5));
+        const nav_real_t d_dmm = v * dt_s * NAV_C(1e4) + NAV_C(0.5);
+        const nav_real_t t_us = dt_s * NAV_C(1e6) + NAV_C(0.5);
+        t->odo_dist_dmm += (uint64_t)d_dmm;
+        t->odo_moving_us += (uint64_t)t_us;
     }
 }
 

@@ -11,6 +11,14 @@
 
 /* what a parameter holds: one value (APP_PARAM_U16, an integer; APP_PARAM_ENUM, the
  * index of its value name; APP_PARAM_REAL) or three (APP_PARAM_VEC3) */
+/* the names are the hosts' (the command line, its reports, the tests): an ECU build
+ * defines APP_PARAM_NO_NAMES and keeps none of their bytes in its flash */
+#ifdef APP_PARAM_NO_NAMES
+#define APP_PARAM_NAME(s) NULL
+#else
+#define APP_PARAM_NAME(s) (s)
+#endif
+
 typedef enum {
     APP_PARAM_U16 = 0,
     APP_PARAM_REAL = 1,
@@ -19,7 +27,7 @@ typedef enum {
 } app_param_type_t;
 
 typedef struct {
-    const char *name;       /* the app_config_t field */
+    const char *name;       /* the app_config_t field (NULL: APP_PARAM_NO_NAMES) */
     uint16_t did;           /* UDS data identifier */
     app_param_type_t type;
     uint8_t min_exclusive;  /* the range excludes min */
