@@ -188,7 +188,7 @@ static void odometer_updates(fusion_t *fu, const fusion_ctx_t *c, nav_real_t T,
                nav_fabs(odo->speed_mps) > APP_ODO_MIN_SPEED_MPS) {
         fu->odo_frames_used = odo->n_frames;
         nav_real_t sf = APP_ODO_SIGMA_MPS + APP_ODO_SIGMA_SPEED_FRAC * nav_fabs(odo->speed_mps) +
-                              APP_ODO_SIGMA_ACC_PERIOD * acc * per;
+                        APP_ODO_SIGMA_ACC_PERIOD * acc * per;
         if (per > T && APP_ODO_SLOW_CORR_S > per) {
             /* a slow source: its error holds over several readings (below) */
             sf *= nav_sqrt(APP_ODO_SLOW_CORR_S / per);
