@@ -55,7 +55,11 @@ void host_usage(FILE *out)
             fprintf(out, "%s%g..%g %s", p->min_exclusive ? ">" : "", c->min, c->max, c->unit);
         }
         if (p->vehicle_default) {
-            fprintf(out, ", default: the vehicle profile's (%s)\n", vehicle_profile.name);
+            const app_config_t d = app_default_config();
+            nav_real_t v[3];
+            app_param_get(&d, c->id, v);
+            fprintf(out, ", default: the vehicle profile's (%s: %.6g)\n", vehicle_profile.name,
+                    (double)v[0] / c->to_si);
         } else if (p->type == APP_PARAM_ENUM) {
             const char *v = c->values;
             for (int i = 0; i < (int)p->default_si[0] && strchr(v, '|') != NULL; i++) {

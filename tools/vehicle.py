@@ -69,6 +69,7 @@ class Profile:
     ecu_bus: str | None = None
     reads: list = field(default_factory=list)   # CarSignalSet
     speed_factor: float = 1.0          # m/s per wheel-signal unit
+    wheel_step_mps: float = 0.0        # the wheel speed signal's resolution (DBC scale), m/s
     rate_factor: float = 1.0           # rad/s per yaw-rate unit, sign included
     gear_values: dict = field(default_factory=dict)  # raw gear value -> +1, -1, 0
     recordings: list = field(default_factory=list)   # (path, {channel: bus})
@@ -182,6 +183,8 @@ def load(name: str) -> Profile:
     if p.native_wheels:
         if p.direction != "signed":
             raise ProfileError(f"{path.name}: navecu's WheelSpeeds are signed")
+        ws = navecu_can.load_db().get_message_by_name("WheelSpeeds")
+        p.wheel_step_mps = abs(float(ws.signals[0].scale))  # navecu.dbc: m/s
     else:
         _car_reads(p, t, path.name)
     for rec in t.get("recordings", []):
@@ -204,6 +207,7 @@ def _car_reads(p: Profile, t: dict, fname: str) -> None:
     if unit not in SPEED_UNITS:
         raise ProfileError(f"{fname}: wheel unit must be one of {', '.join(SPEED_UNITS)}")
     p.speed_factor = SPEED_UNITS[unit] * float(w.get("scale", 1.0))
+    p.wheel_step_mps = abs(float(sigs[0].scale)) * p.speed_factor
     p.reads.append(CarSignalSet("wheels", msg, sigs, _checksum(w, fname)))
     if p.direction == "gear":
         g = t.get("gear")
@@ -454,7 +458,8 @@ def vehicle_profile_c(p: Profile) -> str:
     if p.reads:
         L += [f'#include "{CODEC_DB}.h"', '#include "vehicle_checksum.h"', ""]
     L += [f"const vehicle_profile_t vehicle_profile = {{\"{p.name}\", {DIRECTIONS[p.direction]}, "
-          f"{1 if p.native_wheels else 0}u, {_c_float(p.track_m)}, {_c_float(p.wheelbase_m)},",
+          f"{1 if p.native_wheels else 0}u, {_c_float(p.track_m)}, {_c_float(p.wheelbase_m)}, "
+          f"{_c_float(p.wheel_step_mps)},",
           f"                                           {{{ids}}}}};", ""]
     fids = [f"{CODEC_DB.upper()}_{_c_name(r.message).upper()}_FRAME_ID" for r in p.reads]
     L += ["size_t vehicle_rx_ids(uint32_t *ids, size_t max)", "{"]

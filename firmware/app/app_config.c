@@ -19,6 +19,7 @@ void app_config_defaults(app_config_t *out)
     }
     out->odo_track_m = vehicle_profile.track_m;
     out->odo_wheelbase_m = vehicle_profile.wheelbase_m;
+    out->odo_step_mps = vehicle_profile.wheel_step_mps;
     for (int i = 0; i < (int)NAVECU_MSG_N; i++) {
         out->can_ids[i] = vehicle_profile.can_ids[i];
     }

@@ -32,6 +32,8 @@ typedef struct {
     uint8_t native_wheels;       /* 1: the wheel speeds come in navecu's WheelSpeeds */
     nav_real_t track_m;          /* rear track: the turn's inner/outer wheel difference */
     nav_real_t wheelbase_m;      /* for the front axle's steering correction */
+    nav_real_t wheel_step_mps;   /* the wheel speed signal's resolution, its DBC scale, m/s
+                                    (the parameter odo_step_mps's default) */
     uint32_t can_ids[NAVECU_MSG_N]; /* navecu's identifiers on this car (navecu_msg_t) */
 } vehicle_profile_t;
 

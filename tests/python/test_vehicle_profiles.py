@@ -466,3 +466,25 @@ def test_every_gear_the_profile_names_is_mapped(tmp_path):
                 got = decode(name, [car.message("gear", {sig.name: raw}) for raw in raws], tmp_path)
                 for raw, d in zip(raws, got):
                     assert (d.verdict, d.gear) == ("OK", sign), (name, gear, raw, d)
+
+
+@pytest.mark.parametrize("name", PROFILES)
+def test_odo_step_default_is_the_wheel_signals_resolution(name):
+    """The parameter odo_step_mps (the prior of the filter's odometer speed offset: half a
+    step) defaults to the profile's wheel speed signal's resolution: its DBC scale in the
+    profile's unit (cantools on the car's DBC), navecu.dbc's WheelSpeeds for the native
+    profile; the build says so in its --help (float32, 6 digits)."""
+    p = profile(name)
+    if p.native_wheels:
+        sig = nc.DEFAULT_DB.get_message_by_name("WheelSpeeds").get_signal_by_name("WheelSpeedFL")
+        expect = abs(sig.scale)
+    else:
+        wheels = next(r for r in p.reads if r.role == "wheels")
+        expect = abs(wheels.signals[0].scale) * p.speed_factor
+    exe = HOST / ("navecu" if name == "native" else f"navecu-{name}")
+    if not exe.exists():
+        pytest.fail(f"{exe} not built: run 'make test-python' (it builds every profile)")
+    out = subprocess.run([str(exe), "--help"], capture_output=True, text=True).stdout
+    line = next(x for x in out.splitlines() if x.strip().startswith("--odo-step-mps"))
+    got = float(line.rsplit(":", 1)[1].strip(" )"))
+    assert got == pytest.approx(expect, rel=1e-5), line
