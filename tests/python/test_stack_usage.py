@@ -67,20 +67,29 @@ def run(tmp: Path, *args: str):
     return p.returncode, p.stdout + p.stderr, doc
 
 
-def write_ci(path: Path, nodes: list[tuple], edges: list[tuple]) -> None:
-    """nodes: (title, bytes or None, kind); edges: (source, target)."""
-    lines = [f'graph: {{ title: "{path.stem}.c"']
-    for title, size, kind in nodes:
-        name = title.rsplit(":", 1)[-1]
+def write_graph(path: Path, unit: str, nodes: list[tuple], edges: list[tuple],
+                edge_file: str) -> None:
+    """A .ci as GCC writes it: nodes (title, name, file, bytes or None, kind), edges
+    (source, target) titles, each labelled at edge_file."""
+    lines = [f'graph: {{ title: "{unit}"']
+    for title, name, file, size, kind in nodes:
         if size is None:
-            lines.append(f'node: {{ title: "{title}" label: "{name}\\nx.h:1:1" shape : ellipse }}')
+            lines.append(f'node: {{ title: "{title}" label: "{name}\\n{file}:1:1" '
+                         f'shape : ellipse }}')
         else:
-            lines.append(f'node: {{ title: "{title}" label: "{name}\\n{path.stem}.c:1:1\\n'
+            lines.append(f'node: {{ title: "{title}" label: "{name}\\n{file}:1:1\\n'
                          f'{size} bytes ({kind})" }}')
     for s, t in edges:
-        lines.append(f'edge: {{ sourcename: "{s}" targetname: "{t}" label: "{path.stem}.c:2:3" }}')
+        lines.append(f'edge: {{ sourcename: "{s}" targetname: "{t}" label: "{edge_file}:2:3" }}')
     lines.append("}")
     path.write_text("\n".join(lines) + "\n")
+
+
+def write_ci(path: Path, nodes: list[tuple], edges: list[tuple]) -> None:
+    """nodes: (title, bytes or None, kind); edges: (source, target)."""
+    src = f"{path.stem}.c"
+    write_graph(path, src, [(t, t.rsplit(":", 1)[-1], "x.h" if n is None else src, n, k)
+                            for t, n, k in nodes], edges, src)
 
 
 CHAIN = """
@@ -478,19 +487,8 @@ def test_lto_statics_titled_after_their_source_and_resolved_by_name(tmp_path):
 def write_ltrans_ci(path: Path, unit: str, nodes: list[tuple], edges: list[tuple]) -> None:
     """A link-time unit's .ci as GCC writes it: local functions titled unit:name; nodes:
     (name, file, bytes or None, local), edges: (source, target) titles."""
-    lines = [f'graph: {{ title: "{unit}"']
-    for name, file, size, local in nodes:
-        title = f"{unit}:{name}" if local else name
-        if size is None:
-            lines.append(f'node: {{ title: "{title}" label: "{name}\\n{file}:1:1" '
-                         f'shape : ellipse }}')
-        else:
-            lines.append(f'node: {{ title: "{title}" label: "{name}\\n{file}:1:1\\n'
-                         f'{size} bytes (static)" }}')
-    for s, t in edges:
-        lines.append(f'edge: {{ sourcename: "{s}" targetname: "{t}" label: "x.c:2:3" }}')
-    lines.append("}")
-    path.write_text("\n".join(lines) + "\n")
+    write_graph(path, unit, [(f"{unit}:{name}" if local else name, name, file, n, "static")
+                             for name, file, n, local in nodes], edges, "x.c")
 
 
 def test_ci_lto_folded_alias_needs_its_group(tmp_path):
