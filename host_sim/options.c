@@ -91,6 +91,30 @@ static int parse_param(const params_cli_t *c, const char *v, app_config_t *cfg)
     return app_param_set(cfg, c->id, si);
 }
 
+/* The UDS IDs against each other and against navecu's own CAN IDs (app_config_valid's
+ * rule, said here with the colliding ID); 0 when they are apart, else 2. */
+static int uds_ids_check(const app_config_t *cfg, char *err, size_t err_len)
+{
+    if (cfg->uds_request_id == cfg->uds_response_id) {
+        say(err, err_len, "the UDS request and response IDs must differ", "", "");
+        return 2;
+    }
+    for (int i = 0; i < (int)NAVECU_MSG_N; i++) {
+        if (cfg->can_ids[i] == cfg->uds_request_id || cfg->can_ids[i] == cfg->uds_response_id) {
+            if (err != NULL && err_len > 0u) {
+                (void)snprintf(err, err_len, "UDS ID 0x%03X is one of navecu's CAN IDs",
+                               (unsigned)cfg->can_ids[i]);
+            }
+            return 2;
+        }
+    }
+    if (!app_config_valid(cfg)) {
+        say(err, err_len, "the configuration is refused by app_config_valid", "", "");
+        return 2; /* a rule not said above: the parser's acceptance stays within app_init's */
+    }
+    return 0;
+}
+
 static const params_cli_t *param_option(const char *name)
 {
     for (size_t k = 0u; k < (size_t)PARAMS_CLI_N; k++) {
@@ -187,5 +211,5 @@ int host_options_parse_over(int argc, char **argv, const app_config_t *base, hos
         say(err, err_len, "output rates cannot exceed the IMU rate", "", "");
         return 2;
     }
-    return 0;
+    return uds_ids_check(&o->cfg, err, err_len);
 }

@@ -21,7 +21,11 @@
  *  - fuzz_cmdline/stall-poll-out-of-range: `--test-stall-poll-s 2.4e93` was refused, but
  *    the value was converted to microseconds first (a double far beyond uint64_t cast:
  *    undefined behaviour, UBSan in the CI's fuzz run): the conversion now follows the
- *    range check (host_sim/options.c). Only the ASan+UBSan build of this test can see it.
+ *    range check (host_sim/options.c). Only the ASan+UBSan build of this test can see it;
+ *  - fuzz_cmdline/uds-request-id-equals-response-id, uds-response-id-equals-request-id,
+ *    uds-request-id-is-a-navecu-id: the parser accepted UDS IDs that collide with each
+ *    other or with one of navecu's CAN IDs, which app_init refuses (CI's fuzz run, 42 s):
+ *    the parser now says which ID collides, and ends with app_config_valid.
  */
 #include <dirent.h>
 #include <setjmp.h>
