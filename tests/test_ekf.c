@@ -334,11 +334,23 @@ static void test_gnss_correlated_error_state(void **state)
     ekf_gnss_bias_step(&f, NAV_C(1200.0), NAV_C(120.0), (nav_real_t)sc, (nav_real_t)sc);
     assert_near((double)f.gnss_bias_m[0], b0 * exp(-10.0), fabs(b0) * exp(-10.0) * 2e-3 + 1e-7);
     assert_near(f.P[EKF_GB][EKF_GB], sc * sc, 0.01);
-    /* a declared accuracy that grows adds its variance; one that shrinks bounds it */
+    /* a declared accuracy that grows adds its variance (a new error, the estimate kept);
+     * one that shrinks to a third takes the estimate, its variance and its covariances to
+     * a third, a ninth and a third (the error of the poorer fixes is gone with them: an
+     * estimate of 6 m held with the better fixes' 1 m sigma would put the navigator 6 m
+     * off them) */
+    const double b1 = (double)f.gnss_bias_m[0];
     ekf_gnss_bias_step(&f, NAV_C(0.0), NAV_C(120.0), NAV_C(3.0), (nav_real_t)sc);
     assert_near(f.P[EKF_GB][EKF_GB], 9.0, 0.01);
+    assert_near((double)f.gnss_bias_m[0], b1, 1e-9);
+    f.gnss_bias_m[0] = NAV_C(6.0); /* as estimated from fixes declared that poor */
+    const double c_dr = (double)f.P[EKF_DR][EKF_GB];
+    const double p_gb = (double)f.P[EKF_GB][EKF_GB];
     ekf_gnss_bias_step(&f, NAV_C(0.0), NAV_C(120.0), NAV_C(1.0), NAV_C(3.0));
-    assert_near(f.P[EKF_GB][EKF_GB], 1.0, 1e-4);
+    assert_near((double)f.gnss_bias_m[0], 2.0, 1e-5);
+    assert_near((double)f.P[EKF_GB][EKF_GB], p_gb / 9.0, 1e-4);
+    assert_near((double)f.P[EKF_DR][EKF_GB], c_dr / 3.0, 1e-5 + fabs(c_dr) * 1e-5);
+    assert_true((double)f.P[EKF_GB][EKF_GB] <= 1.0 + 1e-4);
 }
 
 /* The heading error shows in the lever arm: an antenna 2 m ahead, the heading 2 deg off,

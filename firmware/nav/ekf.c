@@ -465,10 +465,16 @@ void ekf_gnss_bias_step(ekf_t *k, nav_real_t dt_s, nav_real_t tau_s, nav_real_t 
     const nav_real_t grown = sigma_c_m > prev_sigma_c_m
                                  ? s2 - prev_sigma_c_m * prev_sigma_c_m
                                  : NAV_C(0.0);
+    /* a declared accuracy that improved: the error is the fraction sigma_c / prev of the
+     * one estimated, the estimate with it (the receiver regained its satellites: the
+     * degraded fixes' error is gone, not held with the better fixes' certainty) */
+    const nav_real_t shrink = sigma_c_m < prev_sigma_c_m && prev_sigma_c_m > NAV_C(0.0)
+                                  ? sigma_c_m / prev_sigma_c_m
+                                  : NAV_C(1.0);
     for (int a = 0; a < 2; a++) {
         const int i = EKF_GB + a;
-        k->gnss_bias_m[a] *= phi;
-        scale_state(k, i, phi);
+        k->gnss_bias_m[a] *= phi * shrink;
+        scale_state(k, i, phi * shrink);
         k->P[i][i] += s2 * (NAV_C(1.0) - phi * phi) + grown;
         if (k->P[i][i] > s2) {
             /* P_ii scaled to s2 with its row and column by sqrt(s2 / P_ii): the
