@@ -145,3 +145,14 @@ def test_to_json_round_trips():
     assert json.loads(text) == x
     assert '"a": [1, 2.5, "x", null]' in text          # short lists on one line
     assert '  "g": [\n' in text                         # long ones one item per line
+
+
+def test_kingston_case_runs_the_kingston_runners_options():
+    """kingston-900s is the Kingston drive as tools/kingston/run.py runs it: its committed
+    options (cases.json, written by tools/regression_inputs.py) are the runner's RATES and
+    SENSORS, so a change of the runner's sensor figures cannot leave the regression on the
+    old ones unnoticed (regenerate with python -m tools.regression_inputs)."""
+    from tools import regression_inputs
+    from tools.kingston import run as kingston_run
+    case = next(c for c in regression.load_cases(CASES) if c["name"] == "kingston-900s")
+    assert case["args"] == regression_inputs.args_text(kingston_run.RATES + kingston_run.SENSORS)
