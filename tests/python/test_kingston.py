@@ -286,3 +286,23 @@ def test_report_outage_table():
     assert c["max_error_after_m"] is None and c["after_within_end_plus_1m"] is None
     assert krun.median_outage_end_error(rows) == pytest.approx(20.0)
     assert krun.median_outage_end_error([]) is None
+
+
+def test_compare_by_minute_shares_add_up_to_the_difference():
+    """tools.kingston.compare: the minutes' shares of the two runs' mean-square difference
+    add up to it, and a difference put in one minute is that minute's alone."""
+    from tools.kingston import compare
+    t = np.arange(0.0, 300.0, 0.1)
+    ea = np.full(t.size, 1.0)
+    eb = np.full(t.size, 1.0)
+    ea[(t >= 120.0) & (t < 180.0)] = 3.0             # A 2 m worse in the third minute
+    eb[(t >= 240.0) & (t < 250.0)] = 2.0             # B worse for 10 s of the fifth
+    rows = compare.by_minute(t, ea, t, eb)
+    total = float(np.mean(ea ** 2) - np.mean(eb ** 2))
+    assert sum(r[0] for r in rows) == pytest.approx(total, rel=1e-12)
+    share = {m0: sh for sh, m0, _, _ in rows}
+    assert share[120] == pytest.approx(600 * 8.0 / t.size, rel=1e-12)
+    assert share[240] == pytest.approx(-100 * 3.0 / t.size, rel=1e-12)
+    assert share[0] == share[60] == 0.0
+    rms = {m0: (ra, rb) for _, m0, ra, rb in rows}
+    assert rms[120] == pytest.approx((3.0, 1.0))
