@@ -155,6 +155,8 @@ void host_summary(FILE *out, const app_t *app, const hal_t *hal, unsigned long f
         fprintf(out, "navecu: GNSS correlated error: E %.2f N %.2f m (sigma %.2f m)\n",
                 (double)ekf->gnss_bias_m[0], (double)ekf->gnss_bias_m[1],
                 (double)ekf_state_sigma(ekf, EKF_GB));
+        fprintf(out, "navecu: z gyro scale factor %+.0f ppm (sigma %.0f ppm)\n",
+                (double)ekf->gyro_scale_z * 1e6, (double)ekf_state_sigma(ekf, EKF_SG) * 1e6);
     }
     fprintf(out,
             "navecu: calibration: %s, %u adopted, dH %.4f deg, mu %.5f, stored %u; "

@@ -76,7 +76,7 @@ static ekf_config_t quiet_config(void)
 {
     ekf_config_t c = ekf_default_config();
     c.arw_rad_rts = c.vrw_mps_rts = c.bg_rw_rps_rts = c.ba_rw_mps2_rts = NAV_C(1e-15);
-    c.k_rw_rts = c.mount_rw_rad_rts = NAV_C(1e-15);
+    c.k_rw_rts = c.mount_rw_rad_rts = c.gyro_scale_rw_rts = NAV_C(1e-15);
     c.var_floor = NAV_C(1e-30);
     return c;
 }
@@ -106,6 +106,7 @@ static void test_propagation_matches_sins(void **state)
     const double a_r[3] = {2.0, -1.5, 0.0}, a_v[3] = {0.05, -0.03, 0.0};
     const double a_psi[3] = {4e-4, -3e-4, 2e-3};
     const double a_bg[3] = {2e-6, -3e-6, 5e-6}, a_ba[3] = {2e-3, -1.5e-3, 0.0};
+    const double a_sg = 1e-3; /* the z gyro reads 0.1 % high: 0.7 deg over the 12 rad turned */
     double R_M, R_N;
     truth_radii(LAT0, &R_M, &R_N);
     const geo_pos_t pc = geo(LAT0 + a_r[1] / (R_M + H0),
@@ -138,6 +139,7 @@ static void test_propagation_matches_sins(void **state)
         a[EKF_BG + i] = a_bg[i];
         a[EKF_BA + i] = a_ba[i];
     }
+    a[EKF_SG] = a_sg;
     for (int i = 0; i < EKF_N; i++) {
         for (int j = 0; j < EKF_N; j++) {
             f.P[i][j] = (nav_real_t)(a[i] * a[j]);
@@ -146,6 +148,7 @@ static void test_propagation_matches_sins(void **state)
     const double dt = 0.01;
     const int n_pred = 10; /* predict at 10 Hz with the mean specific force */
     nav_real_t f_sum[3] = {0};
+    nav_real_t wz_sum = NAV_C(0.0); /* the compensated z rate, as the application's mean */
     for (int k = 1; k <= 6000; k++) {
         double dth[3], dvb[3];
         truth_step(&g, dt, dth, dvb);
@@ -154,7 +157,7 @@ static void test_propagation_matches_sins(void **state)
         for (int i = 0; i < 3; i++) {
             it.dtheta_b_rad[i] = (nav_real_t)dth[i];
             it.dv_b_mps[i] = (nav_real_t)dvb[i];
-            ic.dtheta_b_rad[i] = (nav_real_t)(dth[i] + a_bg[i] * dt);
+            ic.dtheta_b_rad[i] = (nav_real_t)(dth[i] * (i == 2 ? 1.0 + a_sg : 1.0) + a_bg[i] * dt);
             ic.dv_b_mps[i] = (nav_real_t)(dvb[i] + a_ba[i] * dt);
         }
         assert_int_equal(sins_step(&truth, &it), NAV_OK);
@@ -166,12 +169,15 @@ static void test_propagation_matches_sins(void **state)
         for (int i = 0; i < 3; i++) {
             f_sum[i] += fn[i] / (nav_real_t)dt;
         }
+        wz_sum += ic.dtheta_b_rad[2];
         if (k % n_pred == 0) {
             for (int i = 0; i < 3; i++) {
                 f_sum[i] /= (nav_real_t)n_pred;
             }
-            ekf_predict(&f, &comp, f_sum, (nav_real_t)(dt * n_pred));
+            ekf_predict(&f, &comp, f_sum, wz_sum / (nav_real_t)(dt * n_pred),
+                        (nav_real_t)(dt * n_pred));
             f_sum[0] = f_sum[1] = f_sum[2] = NAV_C(0.0);
+            wz_sum = NAV_C(0.0);
         }
     }
     /* predicted error vector from the column of a constant state */

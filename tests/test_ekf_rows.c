@@ -70,11 +70,12 @@
 #define STEP_BA_MPS2 1.0
 #define STEP_K 0.01
 #define STEP_OB_MPS 0.1
+#define STEP_SG 0.01
 
 static const char *const STATE_NAME[EKF_N] = {
     "dr_E", "dr_N", "dr_U", "dv_E", "dv_N", "dv_U", "psi_E", "psi_N", "psi_U",
     "bg_x", "bg_y", "bg_z", "ba_x", "ba_y", "ba_z", "k", "mount_pitch", "mount_yaw",
-    "gnss_bias_E", "gnss_bias_N", "clock_bias", "clock_drift", "odo_offset"};
+    "gnss_bias_E", "gnss_bias_N", "clock_bias", "clock_drift", "odo_offset", "gyro_scale_z"};
 
 /* A true state as the filter sees it at x = 0: the navigator, the estimates (k and the
  * mounting, in the ekf_t), the body rate the odometer rows get. */
@@ -333,6 +334,13 @@ static double perturb(const state_t *truth, int j, double d, state_t *comp)
         e = &comp->kf.clock_drift_mps;
     } else if (j == EKF_OB) {
         e = &comp->kf.odo_offset_mps;
+    } else if (j == EKF_SG) {
+        /* the compensated z rate = (1 + sg) x the true one: the step actually stored is
+         * the ratio's */
+        nav_real_t *w = &comp->w_b_rps[2];
+        const double w0 = (double)*w;
+        *w = (nav_real_t)(w0 * (1.0 + d));
+        return fabs(w0) > 0.0 ? (double)*w / w0 - 1.0 : d;
     } else {
         /* the receiver's correlated error: the row builders leave it to ekf_gnss_position
          * (its row is 1 on the state, the estimate subtracted from the fix) */
@@ -349,7 +357,8 @@ static double step_of(int j)
         STEP_DR_M,    STEP_DR_M,    STEP_DR_M,    STEP_DV_MPS,  STEP_DV_MPS,  STEP_DV_MPS,
         STEP_PSI_RAD, STEP_PSI_RAD, STEP_PSI_RAD, STEP_BG_RPS,  STEP_BG_RPS,  STEP_BG_RPS,
         STEP_BA_MPS2, STEP_BA_MPS2, STEP_BA_MPS2, STEP_K,       STEP_MOUNT_RAD,
-        STEP_MOUNT_RAD, STEP_DR_M,    STEP_DR_M,    STEP_DR_M,    STEP_DV_MPS,  STEP_OB_MPS};
+        STEP_MOUNT_RAD, STEP_DR_M,    STEP_DR_M,    STEP_DR_M,    STEP_DV_MPS,  STEP_OB_MPS,
+        STEP_SG};
     return step[j];
 }
 
@@ -743,6 +752,9 @@ static double odo_allow_h(const void *ctx, const state_t *truth, int row, int co
     if (col >= EKF_BG && col < EKF_BA) {
         return g * c->lever_norm_m;
     }
+    if (col == EKF_SG) { /* as the bias: the rate's error in the lever arm, w_z per unit */
+        return g * c->lever_norm_m * fabs((double)truth->w_b_rps[2]);
+    }
     if (col >= EKF_K && col < EKF_GB) { /* the scale and the mounting; the offset's entry is exact */
         const double my = s.mount_yaw_rad, mp = s.mount_pitch_rad;
         return (1.0 + fabs(s.k)) * c->speed_mps * 0.5 * (my * my + mp * mp);
@@ -901,6 +913,9 @@ static double zaru_allow_h(const void *ctx, const state_t *truth, int row, int c
     }
     if (col < EKF_DV) {
         return WGS84_OMEGA_IE_RPS / (6.3e6 + h);
+    }
+    if (col == EKF_SG) { /* the scale of a standing car's rate, the Earth's */
+        return WGS84_OMEGA_IE_RPS;
     }
     return 0.0;
 }

@@ -75,6 +75,7 @@ typedef struct {
     nav_real_t accel_bias_mps2;   /* 1-sigma of the accelerometer bias, m/s^2 */
     nav_real_t gyro_bias_rw_rps_rts;    /* in-run gyro bias random walk, rad/s/sqrt(s) */
     nav_real_t accel_bias_rw_mps2_rts;  /* in-run accelerometer bias random walk */
+    nav_real_t gyro_scale;        /* 1-sigma of the z gyro's scale factor error (a ratio) */
     nav_real_t gnss_latency_s;    /* receiver output latency: fix time of validity to
                                      arrival (more when TimeOfWeek shows a late epoch) */
     nav_real_t gnss_lever_b_m[3]; /* GNSS antenna from the IMU, body axes, m */

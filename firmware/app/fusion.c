@@ -217,6 +217,7 @@ fusion_action_t fusion_imu_step(fusion_t *fu, const fusion_ctx_t *c, imu_inc_t *
         inc->dtheta_b_rad[i] -= fu->ekf.bg_rps[i] * dt;
         inc->dv_b_mps[i] -= fu->ekf.ba_mps2[i] * dt;
     }
+    inc->dtheta_b_rad[2] /= NAV_C(1.0) + fu->ekf.gyro_scale_z; /* ekf.h, state 23 */
     *yaw_rate_rps = inc->dtheta_b_rad[2] / dt;
     app_trace(APP_TRACE_MECHANIZATION, 0u);
     const int mech_rc = sins_step(c->nav, inc);
@@ -256,11 +257,11 @@ fusion_action_t fusion_imu_step(fusion_t *fu, const fusion_ctx_t *c, imu_inc_t *
     const nav_real_t T = fu->pred_t_s;
     const nav_real_t f_mean[3] = {fu->f_sum_n[0] / T, fu->f_sum_n[1] / T, fu->f_sum_n[2] / T};
     app_trace(APP_TRACE_PREDICTION, 0u);
-    ekf_predict(&fu->ekf, c->nav, f_mean, T);
-    app_trace(APP_TRACE_PREDICTION, 1u);
     for (int i = 0; i < 3; i++) {
         fu->w_b_last_rps[i] = fu->w_sum_rad[i] / T;
     }
+    ekf_predict(&fu->ekf, c->nav, f_mean, fu->w_b_last_rps[2], T);
+    app_trace(APP_TRACE_PREDICTION, 1u);
     odometer_updates(fu, c, T, f_mean);
     feed_back(fu, c);
     int was_reset;
@@ -279,6 +280,7 @@ static int start(fusion_t *fu, const fusion_ctx_t *c, const fusion_prior_t *prio
     ec.ba_mps2 = cfg->accel_bias_mps2;
     ec.bg_rw_rps_rts = cfg->gyro_bias_rw_rps_rts;
     ec.ba_rw_mps2_rts = cfg->accel_bias_rw_mps2_rts;
+    ec.gyro_scale = cfg->gyro_scale;
     ec.pos_m = hacc_m > APP_EKF_POS_SIGMA_MIN_M ? hacc_m : APP_EKF_POS_SIGMA_MIN_M;
     /* a truncated speed reads up to a step low: half a step, 1 sigma (ekf.h, state 22) */
     ec.odo_offset_mps = NAV_C(0.5) * cfg->odo_step_mps;

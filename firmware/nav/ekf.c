@@ -48,6 +48,10 @@ ekf_config_t ekf_default_config(void)
     c.k_rw_rts = NAV_C(1e-6);
     c.mount_rw_rad_rts = NAV_C(1e-7);
     c.odo_offset_rw_mps_rts = NAV_C(1e-5); /* 0.6 mm/s in an hour: a property of the signal */
+    /* a MEMS gyro's sensitivity tolerance, 1 % (automotive parts' data sheets: 1-2 %, after
+     * a factory trim well under 1 %), drifting with temperature by 0.05 % in an hour */
+    c.gyro_scale = NAV_C(0.01);
+    c.gyro_scale_rw_rts = NAV_C(8.3e-6);
     /* a TCXO (Brown & Hwang, 4th ed., table 9.2: h0 = 2e-19 s, h-2 = 2e-20 1/s):
      * c^2 h0 / 2 = 9.0e-3 m^2/s, 2 pi^2 c^2 h-2 = 3.5e-2 m^2/s^3 */
     c.clk_b_psd_m2ps = NAV_C(9.0e-3);
@@ -63,7 +67,8 @@ static int cfg_ok(const ekf_config_t *c)
                             c->bg_rw_rps_rts, c->ba_rw_mps2_rts, c->k_rw_rts,
                             c->mount_rw_rad_rts, c->var_floor, c->gnss_bias_m,
                             c->clk_bias_m, c->clk_drift_mps, c->clk_b_psd_m2ps,
-                            c->clk_d_psd_m2ps3, c->odo_offset_mps, c->odo_offset_rw_mps_rts};
+                            c->clk_d_psd_m2ps3, c->odo_offset_mps, c->odo_offset_rw_mps_rts,
+                            c->gyro_scale, c->gyro_scale_rw_rts};
     for (size_t i = 0u; i < sizeof v / sizeof v[0]; i++) {
         if (!(v[i] > NAV_C(0.0)) || !nav_isfinite(v[i])) {
             return 0;
@@ -85,7 +90,8 @@ static void reset_cov(ekf_t *k, nav_real_t heading_sigma_rad)
                                   heading_sigma_rad, c->bg_rps, c->bg_rps, c->bg_rps,
                                   c->ba_mps2,  c->ba_mps2,  c->ba_mps2,  c->k,
                                   c->mount_rad, c->mount_rad, c->gnss_bias_m, c->gnss_bias_m,
-                                  c->clk_bias_m, c->clk_drift_mps, c->odo_offset_mps};
+                                  c->clk_bias_m, c->clk_drift_mps, c->odo_offset_mps,
+                                  c->gyro_scale};
     for (int i = 0; i < EKF_N; i++) {
         k->P[i][i] = sd[i] * sd[i];
     }
@@ -106,6 +112,7 @@ int ekf_init(ekf_t *k, const ekf_config_t *cfg, nav_real_t heading_sigma_rad)
     }
     k->k = NAV_C(0.0);
     k->odo_offset_mps = NAV_C(0.0);
+    k->gyro_scale_z = NAV_C(0.0);
     k->mount_pitch_rad = NAV_C(0.0);
     k->mount_yaw_rad = NAV_C(0.0);
     k->gnss_bias_m[0] = NAV_C(0.0);
@@ -174,7 +181,8 @@ static int add_mat(f_entry_t *f, int n, int r0, int c0, const mat3_t *M, nav_rea
     return n;
 }
 
-void ekf_predict(ekf_t *k, const sins_t *s, const nav_real_t f_n_mps2[3], nav_real_t dt_s)
+void ekf_predict(ekf_t *k, const sins_t *s, const nav_real_t f_n_mps2[3],
+                 nav_real_t w_bz_rps, nav_real_t dt_s)
 {
     mat3_t C;
     quat_to_dcm(s->q_bn, &C);
@@ -201,6 +209,9 @@ void ekf_predict(ekf_t *k, const sins_t *s, const nav_real_t f_n_mps2[3], nav_re
                   NAV_C(2.0) * e.g_mps2 / nav_sqrt(e.R_M_m * e.R_N_m)); /* gravity vs height */
     n = add_skew(F, n, EKF_PSI, EKF_PSI, w_in, NAV_C(-1.0));    /* -w_in x psi */
     n = add_mat(F, n, EKF_PSI, EKF_BG, &C, NAV_C(-1.0));        /* -C_bn bg */
+    for (int i = 0; i < 3; i++) {                                /* -C_bn e_z w_z sg */
+        n = add_entry(F, n, EKF_PSI + i, EKF_SG, -C.m[i][2] * w_bz_rps);
+    }
     n = add_entry(F, n, EKF_CB, EKF_CD, NAV_C(1.0));             /* clock bias <- drift */
 
     /* P <- (I + F dt) P (I + F dt)^T = P + dt (FP + (FP)^T) + dt^2 F (FP)^T */
@@ -235,6 +246,7 @@ void ekf_predict(ekf_t *k, const sins_t *s, const nav_real_t f_n_mps2[3], nav_re
     }
     k->P[EKF_K][EKF_K] += c->k_rw_rts * c->k_rw_rts * dt_s;
     k->P[EKF_OB][EKF_OB] += c->odo_offset_rw_mps_rts * c->odo_offset_rw_mps_rts * dt_s;
+    k->P[EKF_SG][EKF_SG] += c->gyro_scale_rw_rts * c->gyro_scale_rw_rts * dt_s;
     k->P[EKF_MP][EKF_MP] += c->mount_rw_rad_rts * c->mount_rw_rad_rts * dt_s;
     k->P[EKF_MY][EKF_MY] += c->mount_rw_rad_rts * c->mount_rw_rad_rts * dt_s;
     /* the two-state clock's discrete noise (Brown & Hwang sec. 9.3): the drift's white
@@ -295,6 +307,7 @@ int ekf_update(ekf_t *k, const nav_real_t h[EKF_N], nav_real_t z, nav_real_t r,
         K[EKF_PSI + 2] = NAV_C(0.0);
         K[EKF_BG + 2] = NAV_C(0.0);
         K[EKF_MY] = NAV_C(0.0);
+        K[EKF_SG] = NAV_C(0.0);
     }
     for (int i = 0; i < EKF_N; i++) {
         k->x[i] += K[i] * innov;
@@ -407,6 +420,7 @@ int ekf_feedback(ekf_t *k, sins_t *s)
     }
     k->k -= x[EKF_K];
     k->odo_offset_mps -= x[EKF_OB];
+    k->gyro_scale_z += x[EKF_SG];
     k->mount_pitch_rad -= x[EKF_MP];
     k->mount_yaw_rad -= x[EKF_MY];
     k->gnss_bias_m[0] -= x[EKF_GB];

@@ -1,9 +1,9 @@
 /*
- * ekf.h - the compact error-state Kalman filter: 23 states, float32, fixed-size storage,
+ * ekf.h - the compact error-state Kalman filter: 24 states, float32, fixed-size storage,
  * closed loop (seed 001: "the INS solution is reconciled with the GNSS solution by a Kalman
  * filter with 18 parameters": those 18, the receiver's correlated horizontal error, the
- * receiver's clock for raw measurements (issue #20) and the odometer's speed offset
- * (issue #18); docs/kalman.md).
+ * receiver's clock for raw measurements (issue #20), the odometer's speed offset and the
+ * yaw gyro's scale factor (issue #18); docs/kalman.md).
  *
  * Error state x, all "computed minus true":
  *   0..2   dr    position error, ENU metres at the IMU
@@ -31,11 +31,18 @@
  *                average, whatever the speed (OBD-II's vehicle speed, PID 0x0D, is whole
  *                km/h: 0.14 m/s; the Kingston drive's reads 0.10..0.17 m/s low from 2 to
  *                16 m/s, a scale error from -14 % to -0.8 %: docs/odometry.md)
+ *   23     sg    residual scale factor error of the body z gyro: the compensated rate is
+ *                (1 + sg) x the true one (a residual, as bg, fed back into the estimate
+ *                gyro_scale_z): a MEMS gyro's sensitivity is known to
+ *                about 1 %, and each 90 deg turn then turns the heading 0.9 deg wrong;
+ *                the GNSS course through the turns observes it (u-blox's automotive dead
+ *                reckoning calibrates it likewise)
  * Dynamics (Titterton & Weston eqs 12.6, 12.8, 12.10, small terms of order v/R dropped):
  *   d(dr)/dt = dv
  *   d(dv)/dt = [f_n x] psi + C_bn ba - [(2 w_ie + w_en) x] dv + (0, 0, 2 g / R) dr_U
- *   d(psi)/dt = -[w_in x] psi - C_bn bg
- *   biases, k, mounting: random walks.
+ *   d(psi)/dt = -[w_in x] psi - C_bn bg - C_bn e_z w_z sg  (w_z the compensated body z
+ *   rate, the interval's mean)
+ *   biases, k, mounting, sg: random walks.
  *   d(dcb)/dt = dcd + white (psd clk_b_psd), d(dcd)/dt = white (psd clk_d_psd): the clock
  *   states are coupled to nothing else until a raw measurement correlates them, so a filter
  *   fed only fixes computes the other states exactly as without them.
@@ -54,7 +61,7 @@
 #include "gnss_geom.h"
 #include "sins.h"
 
-#define EKF_N 23
+#define EKF_N 24
 enum {
     EKF_DR = 0,
     EKF_DV = 3,
@@ -68,6 +75,7 @@ enum {
     EKF_CB = 20, /* receiver clock bias, m */
     EKF_CD = 21, /* receiver clock drift, m/s */
     EKF_OB = 22, /* odometer speed offset, m/s */
+    EKF_SG = 23, /* body z gyro scale factor error */
 };
 
 typedef struct {
@@ -76,6 +84,7 @@ typedef struct {
     nav_real_t gnss_bias_m;      /* the receiver's correlated error per axis (ekf_init) */
     nav_real_t clk_bias_m, clk_drift_mps; /* the receiver clock's, until ekf_clock_start */
     nav_real_t odo_offset_mps;   /* the odometer's speed offset */
+    nav_real_t gyro_scale;       /* the body z gyro's scale factor error */
     /* noise densities */
     nav_real_t arw_rad_rts;      /* gyro angle random walk, rad/sqrt(s) */
     nav_real_t vrw_mps_rts;      /* accelerometer velocity random walk, m/s/sqrt(s) */
@@ -84,6 +93,7 @@ typedef struct {
     nav_real_t k_rw_rts;         /* odometer scale random walk (tyre wear, pressure), 1/sqrt(s) */
     nav_real_t mount_rw_rad_rts; /* mounting random walk (load, suspension) */
     nav_real_t odo_offset_rw_mps_rts; /* odometer offset random walk, m/s/sqrt(s) */
+    nav_real_t gyro_scale_rw_rts; /* z gyro scale factor random walk, 1/sqrt(s) */
     nav_real_t clk_b_psd_m2ps;   /* clock bias white noise psd, m^2/s (c^2 h0 / 2) */
     nav_real_t clk_d_psd_m2ps3;  /* clock drift white noise psd, m^2/s^3 (2 pi^2 c^2 h-2) */
     nav_real_t var_floor;        /* smallest variance allowed on the diagonal */
@@ -97,6 +107,8 @@ typedef struct {
      * IMU increments and uses k and the mounting for the odometer */
     nav_real_t bg_rps[3], ba_mps2[3], k, mount_pitch_rad, mount_yaw_rad;
     nav_real_t odo_offset_mps; /* the odometer's speed offset, m/s (state 22) */
+    nav_real_t gyro_scale_z;   /* the body z gyro's scale factor error (state 23): the
+                                  application divides the z increment by 1 + it */
     /* the receiver's correlated horizontal position error (E, N, m) as estimated: what
      * the fixes are corrected by before their update (ekf_gnss_position) */
     nav_real_t gnss_bias_m[2];
@@ -133,9 +145,10 @@ ekf_config_t ekf_default_config(void);
  * overrides cfg.heading_rad when > 0). NAV_EINVAL for a non-positive sigma. */
 int ekf_init(ekf_t *k, const ekf_config_t *cfg, nav_real_t heading_sigma_rad);
 
-/* Propagate over dt_s with the navigator's state and the mean specific force over the
- * interval in ENU (m/s^2). */
-void ekf_predict(ekf_t *k, const sins_t *s, const nav_real_t f_n_mps2[3], nav_real_t dt_s);
+/* Propagate over dt_s with the navigator's state, the mean specific force over the
+ * interval in ENU (m/s^2) and the mean compensated body z rate (rad/s). */
+void ekf_predict(ekf_t *k, const sins_t *s, const nav_real_t f_n_mps2[3],
+                 nav_real_t w_bz_rps, nav_real_t dt_s);
 
 /*
  * One scalar measurement z = h x + noise of variance r, with innovation z (measured

@@ -354,6 +354,7 @@ void ekf_rows_range_rate(const ekf_t *k, const sins_t *s, const nav_real_t v_the
         h[EKF_PSI + i] = hp[i];
         h[EKF_BG + i] = hb[i];
     }
+    h[EKF_SG] = hb[2] * w_b_rps[2]; /* the z rate's scale error, as its bias (ekf.h) */
     h[EKF_CD] = NAV_C(1.0);
     *z_mps = rate;
 }

@@ -18,7 +18,7 @@ typedef struct {
     const char *description;
 } params_cli_t;
 
-#define PARAMS_CLI_N 38
+#define PARAMS_CLI_N 39
 
 static const params_cli_t params_cli[PARAMS_CLI_N] = {
     {"--imu-rate-hz", APP_PARAM_IMU_RATE_HZ, "Hz", 10.0, 400.0, 1.0, "", "IMU sample rate: one IMU_Rate + IMU_Accel pair per sample"},
@@ -45,6 +45,7 @@ static const params_cli_t params_cli[PARAMS_CLI_N] = {
     {"--accel-instability-mg", APP_PARAM_ACCEL_BIAS_RW_MPS2_RTS, "mg", 1e-05, 1000.0, 0.0008007096195354885, "", "accelerometer in-run bias instability over 300 s, as the gyro's"},
     {"--gyro-range-dps", APP_PARAM_GYRO_RANGE_RPS, "deg/s", 1.0, 5000.0, 0.017453292519943295, "", "the gyro's measurement range: a rate at or beyond it is saturated (counted, flagged)"},
     {"--accel-range-mps2", APP_PARAM_ACCEL_RANGE_MPS2, "m/s^2", 1.0, 2000.0, 1.0, "", "the accelerometer's measurement range (default 8 g)"},
+    {"--gyro-scale-ppm", APP_PARAM_GYRO_SCALE, "ppm", 0.1, 100000.0, 1e-06, "", "the z gyro's scale factor error, 1 sigma (its data sheet's sensitivity tolerance): the prior of the filter's scale state (docs/kalman.md), which the turns with GNSS calibrate; a 1 % error turns the heading 0.9 deg wrong in each 90 deg turn"},
     {"--gnss-latency-ms", APP_PARAM_GNSS_LATENCY_S, "ms", 0.0, 500.0, 0.001, "", "receiver latency: a fix's time of validity to its arrival (more when TimeOfWeek shows a late epoch)"},
     {"--gnss-corr-s", APP_PARAM_GNSS_CORR_S, "s", 0.0, 600.0, 1.0, "", "correlation time of the receiver's position errors (docs/kalman.md)"},
     {"--gnss-vel-corr-s", APP_PARAM_GNSS_VEL_CORR_S, "s", 0.0, 60.0, 1.0, "", "correlation time of the receiver's velocity errors (its tracking loops' and navigation filter's smoothing; docs/kalman.md): fixes closer than it carry less than independent ones, and the velocity's variance is multiplied by it over the fix interval; 0: independent from epoch to epoch"},

@@ -213,6 +213,7 @@ def firmware_args(imu: "sensors.ImuSpec", gnss: "sensors.GnssSpec") -> list:
             "--gyro-instability-dph", f"{max(imu.gyro_bias_instability_rps / rad_dph, 1e-4):.6g}",
             "--accel-instability-mg",
             f"{max(imu.accel_bias_instability_mps2 / g * 1e3, 1e-4):.6g}",
+            "--gyro-scale-ppm", f"{max(imu.gyro_scale_factor_ppm, 0.1):.6g}",
             # the simulated car measures its speed at the IMU (no lever arm), and the
             # installation is measured: to a tape measure's 0.1 m
             "--odo-lever-sigma-m", "0.1"]
