@@ -102,12 +102,23 @@ def altered(m: can.Message, name: str, change: dict, crc) -> bytes:
 
 
 def gnss_epoch(msgs) -> int:
-    """The index of the GNSS_Position opening the first epoch from T_GNSS_S; its frames
-    follow in the simulator's order."""
+    """The index of the GNSS_Position opening the first epoch from T_GNSS_S; its velocity
+    and height follow in the simulator's order, its GNSS_Status closes it (after a
+    GNSS_Time when the epoch has one: status_of)."""
     i = first(msgs, "GNSS_Position", T_GNSS_S)
-    assert [m.arbitration_id for m in msgs[i:i + 4]] == [
-        ID[n] for n in ("GNSS_Position", "GNSS_Velocity", "GNSS_Height", "GNSS_Status")]
+    assert [m.arbitration_id for m in msgs[i:i + 3]] == [
+        ID[n] for n in ("GNSS_Position", "GNSS_Velocity", "GNSS_Height")]
+    status_of(msgs, i)
     return i
+
+
+def status_of(msgs, i: int) -> can.Message:
+    """The GNSS_Status closing the epoch that msgs[i] opens (no other epoch's frame between)."""
+    for m in msgs[i + 3:i + 5]:
+        if m.arbitration_id == ID["GNSS_Status"]:
+            return m
+        assert m.arbitration_id == ID["GNSS_Time"], f"0x{m.arbitration_id:X} inside the epoch"
+    raise AssertionError("no GNSS_Status closing the epoch")
 
 
 def imu_sample(msgs) -> int:
@@ -128,7 +139,7 @@ def pair_crc(rate: can.Message, ok: bool):
 # (place, broken frame): (the index to insert at, the frame) from the clean frames
 def _gnss_dlc7(msgs):
     i = gnss_epoch(msgs)
-    return i + 2, frame("GNSS_Status", bytes(msgs[i + 3].data[:7]))   # between velocity and height
+    return i + 2, frame("GNSS_Status", bytes(status_of(msgs, i).data[:7]))   # between velocity and height
 
 
 def _gnss_bad_crc(msgs):
@@ -159,7 +170,7 @@ BROKEN = {("gnss epoch", "7 bytes"): (_gnss_dlc7, "CntBadDlc"),
 # were taken
 def _gnss_status_whole(msgs):
     i = gnss_epoch(msgs)
-    return i + 2, frame("GNSS_Status", bytes(msgs[i + 3].data))
+    return i + 2, frame("GNSS_Status", bytes(status_of(msgs, i).data))
 
 
 def _gnss_velocity_good_crc(msgs):
