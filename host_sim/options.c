@@ -91,28 +91,23 @@ static int parse_param(const params_cli_t *c, const char *v, app_config_t *cfg)
     return app_param_set(cfg, c->id, si);
 }
 
-/* The UDS IDs against each other and against navecu's own CAN IDs (app_config_valid's
- * rule, said here with the colliding ID); 0 when they are apart, else 2. */
-static int uds_ids_check(const app_config_t *cfg, char *err, size_t err_len)
+/* The configuration against app_config_check's rules (the application's own, so the
+ * parser accepts nothing app_init refuses): 0, or 2 with the broken rule said. */
+static int config_check(const app_config_t *cfg, char *err, size_t err_len)
 {
-    if (cfg->uds_request_id == cfg->uds_response_id) {
-        say(err, err_len, "the UDS request and response IDs must differ", "", "");
-        return 2;
+    static const char *const said[] = {
+        [APP_CONFIG_RANGE] = "a parameter is out of its range",
+        [APP_CONFIG_UDS_ON_NAV] = "a UDS ID is one of navecu's CAN IDs",
+        [APP_CONFIG_CAN_IDS] = "navecu's CAN IDs must be 11-bit and distinct",
+        [APP_CONFIG_UDS_SAME] = "the UDS request and response IDs must differ",
+        [APP_CONFIG_RATES] = "output rates cannot exceed the IMU rate",
+    };
+    const app_config_rule_t rule = app_config_check(cfg);
+    if (rule == APP_CONFIG_OK) {
+        return 0;
     }
-    for (int i = 0; i < (int)NAVECU_MSG_N; i++) {
-        if (cfg->can_ids[i] == cfg->uds_request_id || cfg->can_ids[i] == cfg->uds_response_id) {
-            if (err != NULL && err_len > 0u) {
-                (void)snprintf(err, err_len, "UDS ID 0x%03X is one of navecu's CAN IDs",
-                               (unsigned)cfg->can_ids[i]);
-            }
-            return 2;
-        }
-    }
-    if (!app_config_valid(cfg)) {
-        say(err, err_len, "the configuration is refused by app_config_valid", "", "");
-        return 2; /* a rule not said above: the parser's acceptance stays within app_init's */
-    }
-    return 0;
+    say(err, err_len, said[rule], "", "");
+    return 2;
 }
 
 static const params_cli_t *param_option(const char *name)
@@ -206,10 +201,5 @@ int host_options_parse_over(int argc, char **argv, const app_config_t *base, hos
     if (!o->dyn_rate_given && o->cfg.dyn_rate_hz > o->cfg.imu_rate_hz) {
         o->cfg.dyn_rate_hz = o->cfg.imu_rate_hz;
     }
-    if (o->cfg.nav_rate_hz > o->cfg.imu_rate_hz || o->cfg.status_rate_hz > o->cfg.imu_rate_hz ||
-        o->cfg.dyn_rate_hz > o->cfg.imu_rate_hz) {
-        say(err, err_len, "output rates cannot exceed the IMU rate", "", "");
-        return 2;
-    }
-    return uds_ids_check(&o->cfg, err, err_len);
+    return config_check(&o->cfg, err, err_len);
 }

@@ -91,7 +91,7 @@ static int can_ids_ok(const uint32_t ids[NAVECU_MSG_N])
     return 1;
 }
 
-int app_config_valid(const app_config_t *cfg)
+app_config_rule_t app_config_check(const app_config_t *cfg)
 {
     for (int k = 0; k < (int)APP_PARAM_N; k++) {
         const app_param_id_t id = (app_param_id_t)k;
@@ -99,15 +99,29 @@ int app_config_valid(const app_config_t *cfg)
         app_param_get(cfg, id, v);
         if (!app_param_in_range(id, v) ||
             (app_params[k].vehicle_default && !(v[0] > NAV_C(0.0)))) {
-            return 0;
+            return APP_CONFIG_RANGE;
         }
     }
     for (int i = 0; i < (int)NAVECU_MSG_N; i++) {
         if (cfg->can_ids[i] == cfg->uds_request_id || cfg->can_ids[i] == cfg->uds_response_id) {
-            return 0; /* a diagnostic frame would be taken for one of navecu's messages */
+            return APP_CONFIG_UDS_ON_NAV; /* a diagnostic frame would be taken for one of
+                                             navecu's messages */
         }
     }
-    return can_ids_ok(cfg->can_ids) && cfg->uds_request_id != cfg->uds_response_id &&
-           cfg->nav_rate_hz <= cfg->imu_rate_hz &&
-           cfg->status_rate_hz <= cfg->imu_rate_hz && cfg->dyn_rate_hz <= cfg->imu_rate_hz;
+    if (!can_ids_ok(cfg->can_ids)) {
+        return APP_CONFIG_CAN_IDS;
+    }
+    if (cfg->uds_request_id == cfg->uds_response_id) {
+        return APP_CONFIG_UDS_SAME;
+    }
+    if (cfg->nav_rate_hz > cfg->imu_rate_hz || cfg->status_rate_hz > cfg->imu_rate_hz ||
+        cfg->dyn_rate_hz > cfg->imu_rate_hz) {
+        return APP_CONFIG_RATES;
+    }
+    return APP_CONFIG_OK;
+}
+
+int app_config_valid(const app_config_t *cfg)
+{
+    return app_config_check(cfg) == APP_CONFIG_OK;
 }

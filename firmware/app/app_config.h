@@ -121,9 +121,21 @@ void app_config_defaults(app_config_t *cfg);
  * [presets.NAME]): 0, or -1 for an unknown preset (cfg unchanged). */
 int app_config_preset(app_config_t *cfg, app_preset_id_t id);
 
-/* 1 if every field is within its range (the parameter table), the output rates at most the
- * IMU rate and the CAN identifiers 11-bit and distinct (navecu's messages and the two UDS
- * identifiers together), else 0. */
+/* The first rule of a configuration it breaks (APP_CONFIG_OK: none): every field within
+ * its range (the parameter table), the CAN identifiers 11-bit and distinct (navecu's
+ * messages and the two UDS identifiers together), the output rates at most the IMU rate. */
+typedef enum {
+    APP_CONFIG_OK = 0,
+    APP_CONFIG_RANGE,       /* a parameter out of its range */
+    APP_CONFIG_UDS_ON_NAV,  /* a UDS identifier is one of navecu's message identifiers */
+    APP_CONFIG_CAN_IDS,     /* navecu's identifiers not 11-bit, or one used twice */
+    APP_CONFIG_UDS_SAME,    /* the UDS request and response identifiers are the same */
+    APP_CONFIG_RATES,       /* an output rate above the IMU rate */
+} app_config_rule_t;
+
+app_config_rule_t app_config_check(const app_config_t *cfg);
+
+/* 1 if app_config_check finds no rule broken, else 0. */
 int app_config_valid(const app_config_t *cfg);
 
 /* Parameter id's value(s), SI units (one value in v[0]; APP_PARAM_VEC3 three; an enum its
