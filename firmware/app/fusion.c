@@ -127,6 +127,15 @@ static void odo_refused(const fusion_ctx_t *c)
     app_stamp(&c->diag->events->odo_reject, c->diag->n_samples);
 }
 
+/* How many intervals of interval_s an error correlated over corr_s spans, at least one:
+ * readings closer than the correlation carry less than independent ones, and their
+ * variance is multiplied by this (docs/kalman.md; the receiver's velocity, a slow
+ * odometer, the raw ranges, one zero reading's updates). */
+static nav_real_t corr_spans(nav_real_t corr_s, nav_real_t interval_s)
+{
+    return corr_s > interval_s ? corr_s / interval_s : NAV_C(1.0);
+}
+
 /* The standstill updates of one prediction interval T (s), the wheels reading zero: zero
  * velocity and zero yaw rate. Zero wheels say the car stood when they were read, up to a
  * period plus the source's latency ago (per, s: 1 s for an OBD-II speed): a car
@@ -152,7 +161,7 @@ static void standstill_updates(fusion_t *fu, const fusion_ctx_t *c, nav_real_t T
     /* one zero reading is one measurement: its error (a car creeping below one step) is
      * the same in every prediction interval until the next frame, so the frame's sigma is
      * shared by the per / T updates it serves (each sqrt(per / T) times it) */
-    const nav_real_t n_upd = per > T ? per / T : NAV_C(1.0);
+    const nav_real_t n_upd = corr_spans(per, T);
     const int zv = ekf_zero_velocity(&fu->ekf, c->nav,
                                      (APP_ZUPT_SIGMA_MPS + APP_ZUPT_SIGMA_PER_PERIOD_MPS * per) *
                                          nav_sqrt(n_upd),
@@ -189,9 +198,9 @@ static void odometer_updates(fusion_t *fu, const fusion_ctx_t *c, nav_real_t T,
         fu->odo_frames_used = odo->n_frames;
         nav_real_t sf = APP_ODO_SIGMA_MPS + APP_ODO_SIGMA_SPEED_FRAC * nav_fabs(odo->speed_mps) +
                         APP_ODO_SIGMA_ACC_PERIOD * acc * per;
-        if (per > T && APP_ODO_SLOW_CORR_S > per) {
-            /* a slow source: its error holds over several readings (below) */
-            sf *= nav_sqrt(APP_ODO_SLOW_CORR_S / per);
+        if (per > T) {
+            /* a slow source: its error holds over several readings (APP_ODO_SLOW_CORR_S) */
+            sf *= nav_sqrt(corr_spans(APP_ODO_SLOW_CORR_S, per));
         }
         const nav_real_t *w_b = fu->w_b_last_rps; /* the interval's mean (fusion_imu_step) */
         /* the car's lateral and vertical velocity are zero at the measuring axle, which is
@@ -515,7 +524,7 @@ fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_pr
         /* the velocity's errors correlated over gnss_vel_corr_s (the receiver's own
          * smoothing): the variance inflated by it over the fix interval, as the height's */
         const nav_real_t vc_s = cfg->gnss_vel_corr_s;
-        const nav_real_t sv_mps = ss * nav_sqrt(vc_s > ep_s ? vc_s / ep_s : NAV_C(1.0));
+        const nav_real_t sv_mps = ss * nav_sqrt(corr_spans(vc_s, ep_s));
         rv = cfg->gnss_vel_up == GNSS_VUP_NONE
                  ? ekf_gnss_velocity_horizontal(&fu->ekf, vthen, fix->v_enu_mps, sv_mps,
                                                 APP_GNSS_GATE_SIGMA)
@@ -896,7 +905,7 @@ fusion_action_t fusion_raw(fusion_t *fu, const fusion_ctx_t *c, const gnss_raw_a
      * db (its stationary sigma the correlated part of the epoch's median range sigma) or
      * by inflating their variance */
     const nav_real_t ep_s = dt_s > APP_GNSS_EPOCH_MIN_S ? dt_s : APP_GNSS_EPOCH_MIN_S;
-    nav_real_t r_scale = cfg->gnss_corr_s > ep_s ? cfg->gnss_corr_s / ep_s : NAV_C(1.0);
+    nav_real_t r_scale = corr_spans(cfg->gnss_corr_s, ep_s);
     if (e.use_bias != 0) {
         nav_real_t sg[RAW_MAX];
         for (int i = 0; i < e.n; i++) {
