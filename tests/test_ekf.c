@@ -359,6 +359,22 @@ static void test_gnss_correlated_error_state(void **state)
     assert_true((double)f.P[EKF_GB][EKF_GB] <= 1.0 + 1e-4);
 }
 
+/* ekf_state_ok sees a non-finite fed-back estimate, the gyro scale factor's among them (the
+ * application divides every z increment by 1 + it) */
+static void test_state_ok_sees_the_estimates(void **state)
+{
+    (void)state;
+    ekf_t f;
+    const ekf_config_t c = ekf_default_config();
+    assert_int_equal(ekf_init(&f, &c, NAV_C(0.0)), NAV_OK);
+    assert_true(ekf_state_ok(&f));
+    f.gyro_scale_z = (nav_real_t)NAN;
+    assert_false(ekf_state_ok(&f));
+    f.gyro_scale_z = NAV_C(0.0);
+    f.odo_offset_mps = (nav_real_t)INFINITY;
+    assert_false(ekf_state_ok(&f));
+}
+
 /* The heading error shows in the lever arm: an antenna 2 m ahead, the heading 2 deg off,
  * the position exact: the update (attitude prior 5 deg, position prior tiny) finds the
  * heading error from the 7 cm antenna offset. */
@@ -552,6 +568,7 @@ int main(void)
         cmocka_unit_test(test_gnss_position_update),
         cmocka_unit_test(test_lever_arm_observes_heading),
         cmocka_unit_test(test_gnss_correlated_error_state),
+        cmocka_unit_test(test_state_ok_sees_the_estimates),
         cmocka_unit_test(test_odometer_scale_and_mounting),
         cmocka_unit_test(test_odometer_lever_arm_in_a_turn),
         cmocka_unit_test(test_standstill_updates),

@@ -1,5 +1,5 @@
 /*
- * ekf.c - the 23-state error-state Kalman filter (ekf.h, docs/kalman.md).
+ * ekf.c - the 24-state error-state Kalman filter (ekf.h, docs/kalman.md).
  */
 #include "ekf.h"
 
@@ -572,10 +572,10 @@ static int finite_n(const nav_real_t *v, int n)
 
 int ekf_state_ok(const ekf_t *k)
 {
-    const nav_real_t scalars[5] = {k->k, k->mount_yaw_rad, k->mount_pitch_rad,
-                                   k->clock_drift_mps, k->odo_offset_mps};
+    const nav_real_t scalars[6] = {k->k, k->mount_yaw_rad, k->mount_pitch_rad,
+                                   k->clock_drift_mps, k->odo_offset_mps, k->gyro_scale_z};
     if (!finite_n(k->x, EKF_N) || !finite_n(k->bg_rps, 3) || !finite_n(k->ba_mps2, 3) ||
-        !finite_n(scalars, 5)) {
+        !finite_n(scalars, 6)) {
         return 0;
     }
     for (int i = 0; i < EKF_N; i++) {
