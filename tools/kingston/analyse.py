@@ -187,17 +187,36 @@ def gnss_velocity_errors(drive) -> dict:
             "east_acf": _acf(de - np.mean(de))}
 
 
+def local_en_m(drive, lat_deg, lon_deg) -> tuple:
+    """(east, north) in m of positions (deg) from the reference's first row, on the local
+    radii there."""
+    r = drive.ref
+    _, e, n = geodesy.horizontal_error_m(math.radians(r["lat_deg"][0]),
+                                         math.radians(r["lon_deg"][0]),
+                                         np.radians(lat_deg), np.radians(lon_deg))
+    return e, n
+
+
+def reference_track(drive) -> dict:
+    """The reference's rows in the local frame of local_en_m: t_s from the drive's start,
+    its positions e_m, n_m, and the integrals of its own velocities from the first row,
+    ie_m, in_m (trapezoid)."""
+    r = drive.ref
+    e, n = local_en_m(drive, r["lat_deg"], r["lon_deg"])
+    dt = np.diff(r["time_s"])
+    i_n = np.concatenate([[0.0], np.cumsum(0.5 * (r["vn_mps"][1:] + r["vn_mps"][:-1]) * dt)])
+    i_e = np.concatenate([[0.0], np.cumsum(0.5 * (r["ve_mps"][1:] + r["ve_mps"][:-1]) * dt)])
+    return {"t_s": r["time_s"] - drive.t0_gps, "e_m": e, "n_m": n, "ie_m": i_e, "in_m": i_n}
+
+
 def reference_consistency(drive, window_s: int = 10) -> dict:
     """The SPAN reference against itself: over every window_s of its 1 Hz rows, the distance
     its positions move minus the integral of its own velocities (trapezoid), horizontal.
     What the reference's positions do that its velocities do not bounds what any solution
     can be measured to."""
     r = drive.ref
-    lat, lon = np.radians(r["lat_deg"]), np.radians(r["lon_deg"])
-    _, e, n = geodesy.horizontal_error_m(lat[0], lon[0], lat, lon)
-    dt = np.diff(r["time_s"])
-    i_n = np.concatenate([[0.0], np.cumsum(0.5 * (r["vn_mps"][1:] + r["vn_mps"][:-1]) * dt)])
-    i_e = np.concatenate([[0.0], np.cumsum(0.5 * (r["ve_mps"][1:] + r["ve_mps"][:-1]) * dt)])
+    tr = reference_track(drive)
+    e, n, i_e, i_n = tr["e_m"], tr["n_m"], tr["ie_m"], tr["in_m"]
     w = window_s
     d = np.hypot((n[w:] - n[:-w]) - (i_n[w:] - i_n[:-w]), (e[w:] - e[:-w]) - (i_e[w:] - i_e[:-w]))
     k = int(np.argmax(d))

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from tools import geodesy
-from tools.kingston import convert
+from tools.kingston import analyse, convert
 from tools.sim import report
 
 
@@ -52,30 +52,19 @@ def by_minute(ta, ea, tb, eb) -> list:
 
 def window(drive, runs: dict, t0: float, t1: float) -> list:
     """Lines: every 5 s from t0 the reference's and each run's position less the
-    reference velocity's integral since t0 (trapezoid), east and north, m."""
-    r = drive.ref
-    t = r["time_s"] - drive.t0_gps
-    lat0 = math.radians(r["lat_deg"][0])
-    rm, rn = geodesy.radii_m(lat0)
-
-    def en(lat_deg, lon_deg):
-        return (np.radians(np.asarray(lon_deg) - r["lon_deg"][0]) * rn * math.cos(lat0),
-                np.radians(np.asarray(lat_deg) - r["lat_deg"][0]) * rm)
-
-    e_ref, n_ref = en(r["lat_deg"], r["lon_deg"])
-    ie = np.concatenate([[0.0], np.cumsum(0.5 * (r["ve_mps"][1:] + r["ve_mps"][:-1]) * np.diff(t))])
-    inn = np.concatenate([[0.0], np.cumsum(0.5 * (r["vn_mps"][1:] + r["vn_mps"][:-1]) * np.diff(t))])
-    tracks = {}
+    reference velocity's integral since t0 (analyse.reference_track), east and north, m."""
+    tr = analyse.reference_track(drive)
+    t = tr["t_s"]
+    tracks = {"reference": (tr["e_m"], tr["n_m"])}
     for name, pos in runs.items():
-        e, n = en(pos["Latitude"], pos["Longitude"])
+        e, n = analyse.local_en_m(drive, pos["Latitude"], pos["Longitude"])
         tracks[name] = (np.interp(t, pos["t_s"], e), np.interp(t, pos["t_s"], n))
     i0 = int(np.argmin(np.abs(t - t0)))
     i1 = int(np.argmin(np.abs(t - t1)))
     lines = []
     for i in range(i0, i1 + 1, 5):
-        de, dn = ie[i] - ie[i0], inn[i] - inn[i0]
-        parts = [f"{t[i]:6.0f} s  reference {e_ref[i] - e_ref[i0] - de:+6.2f} "
-                 f"{n_ref[i] - n_ref[i0] - dn:+6.2f}"]
+        de, dn = tr["ie_m"][i] - tr["ie_m"][i0], tr["in_m"][i] - tr["in_m"][i0]
+        parts = [f"{t[i]:6.0f} s"]
         for name, (e, n) in tracks.items():
             parts.append(f"{name} {e[i] - e[i0] - de:+6.2f} {n[i] - n[i0] - dn:+6.2f}")
         lines.append("   ".join(parts))
