@@ -93,6 +93,7 @@ typedef struct {
     nav_real_t odo_lever_sigma_m; /* its 1-sigma uncertainty, m */
     odo_direction_t odo_direction; /* the speeds' sign as read, or the navigator's */
     nav_real_t odo_step_mps;      /* the source's speed resolution (the offset's prior) */
+    nav_real_t odo_latency_s;     /* a reading's moment to its arrival */
     nav_real_t imu_mount_rad[3];  /* the IMU's attitude in the vehicle: roll, pitch, yaw
                                      (mounting.h) */
     mount_source_t imu_mount_source; /* imu_mount_rad, or the automatic estimate */

@@ -196,6 +196,18 @@ static void odometer_updates(fusion_t *fu, const fusion_ctx_t *c, nav_real_t T,
     } else if (odo->valid && odo->n_frames != fu->odo_frames_used &&
                nav_fabs(odo->speed_mps) > APP_ODO_MIN_SPEED_MPS) {
         fu->odo_frames_used = odo->n_frames;
+        /* the reading describes the car odo_latency_s before it arrived, and it arrived
+         * age_s ago: moved on to now with the interval's mean along-track acceleration
+         * (the horizontal specific force along the navigator's velocity; issue #18) */
+        const nav_real_t v_h = nav_sqrt(c->nav->v_n_mps[0] * c->nav->v_n_mps[0] +
+                                        c->nav->v_n_mps[1] * c->nav->v_n_mps[1]);
+        nav_real_t speed = odo->speed_mps;
+        if (v_h > APP_ODO_MIN_SPEED_MPS) {
+            const nav_real_t a_along = (f_mean_n[0] * c->nav->v_n_mps[0] +
+                                        f_mean_n[1] * c->nav->v_n_mps[1]) / v_h;
+            const nav_real_t lag_s = c->cfg->odo_latency_s + odo->age_s;
+            speed += (speed < NAV_C(0.0) ? -lag_s : lag_s) * a_along;
+        }
         nav_real_t sf = APP_ODO_SIGMA_MPS + APP_ODO_SIGMA_SPEED_FRAC * nav_fabs(odo->speed_mps) +
                         APP_ODO_SIGMA_ACC_PERIOD * acc * per;
         if (per > T) {
@@ -210,7 +222,7 @@ static void odometer_updates(fusion_t *fu, const fusion_ctx_t *c, nav_real_t T,
         const nav_real_t s_nhc = APP_NHC_SIGMA_MPS + c->cfg->odo_lever_sigma_m * nav_fabs(w_b[2]);
         app_trace(APP_TRACE_ODOMETER_UPDATE, 0u);
         const int n_used = ekf_odometer(&fu->ekf, c->nav, w_b, c->cfg->odo_lever_b_m,
-                                        odo->speed_mps, sf, s_nhc, APP_ODO_GATE_SIGMA);
+                                        speed, sf, s_nhc, APP_ODO_GATE_SIGMA);
         app_trace(APP_TRACE_ODOMETER_UPDATE, 1u);
         if (n_used == 0) {
             odo_refused(c); /* the odometer disagrees beyond its gate */

@@ -18,7 +18,7 @@ typedef struct {
     const char *description;
 } params_cli_t;
 
-#define PARAMS_CLI_N 39
+#define PARAMS_CLI_N 40
 
 static const params_cli_t params_cli[PARAMS_CLI_N] = {
     {"--imu-rate-hz", APP_PARAM_IMU_RATE_HZ, "Hz", 10.0, 400.0, 1.0, "", "IMU sample rate: one IMU_Rate + IMU_Accel pair per sample"},
@@ -33,6 +33,7 @@ static const params_cli_t params_cli[PARAMS_CLI_N] = {
     {"--odo-lever-sigma-m", APP_PARAM_ODO_LEVER_SIGMA_M, "m", 0.0, 5.0, 1.0, "", "1-sigma uncertainty of odo_lever_b_m: the default 1 m is an ECU somewhere between the axles with its lever arm not measured; in a turn the no-side-slip constraint allows the yaw rate times it"},
     {"--odo-step-mps", APP_PARAM_ODO_STEP_MPS, "m/s", 0.001, 1.0, 1.0, "", "the wheel-speed source's resolution, one step of its speed signal: half a step is the 1-sigma of the filter's speed offset state (a signal the car's ECU truncates reads half a step low; docs/kalman.md); by default the vehicle profile's wheel speed signal's DBC scale (navecu's WheelSpeeds 0.02 m/s, the RAV4's 0.01 km/h); an OBD-II speed (PID 0x0D) forwarded into WheelSpeeds is whole km/h, 0.2778 m/s"},
     {"--odo-direction", APP_PARAM_ODO_DIRECTION, "", 0.0, 1.0, 1.0, "as_read|navigator", "where the wheel speeds' direction of travel comes from: as read (navecu's signed WheelSpeeds, or the vehicle profile's gear); navigator, for a source of magnitudes that cannot tell reversing (an OBD-II vehicle speed, PID 0x0D, forwarded into WheelSpeeds): the sign of the navigator's forward velocity (docs/odometry.md)"},
+    {"--odo-latency-ms", APP_PARAM_ODO_LATENCY_S, "ms", 0.0, 2000.0, 0.001, "", "wheel-speed latency: the moment a reading describes to its arrival (the ABS module's filtering and the bus); each reading is moved on to the moment the filter uses it, this plus its age, with the navigator's along-track acceleration (docs/kalman.md, odometer)"},
     {"--cal-min-base-m", APP_PARAM_CAL_MIN_BASE_M, "m", 0.0, 100000.0, 1.0, "", "a one-point calibration closer than this to its base is refused: a point's error e gives about e / base in dH (rad) and in mu"},
     {"--imu-mount-deg", APP_PARAM_IMU_MOUNT_RAD, "deg", -180.0, 180.0, 0.017453292519943295, "", "the IMU's attitude in the vehicle, roll, pitch, yaw (firmware/app/mounting.h: 3-1-2 as the navigation attitude; yaw clockwise, pitch nose up, roll right side down): any rotation, e.g. 0,0,90 turned right, 180,0,0 upside down; the filter estimates the small residual yaw and pitch"},
     {"--imu-mount-source", APP_PARAM_IMU_MOUNT_SOURCE, "", 0.0, 1.0, 1.0, "fixed|automatic", "fixed: imu_mount_deg is the mounting; automatic: navecu estimates it from the data (firmware/app/mount_est.h: gravity at rest, the accelerations and turns against the wheel speeds) and holds navigation (mode Fault, NAV_Calibration MountState estimating) until the estimate converges, then starts from GNSS while driving with it; app_adopt_mounting (RoutineControl 0x0204) copies it into imu_mount_deg"},

@@ -172,7 +172,27 @@ def odometer_error_model(drive) -> dict:
         by_acc.append({"acc_from_mps2": lo, "acc_to_mps2": hi, "n": int(b.sum()),
                        "rms_mps": float(np.sqrt(np.mean(res[b] ** 2)))})
     return {"scale": float(scale), "offset_mps": float(offset), "speed_bins": bins,
-            "residual_rms_by_acceleration": by_acc, "residual_acf": _acf(res)}
+            "residual_rms_by_acceleration": by_acc, "residual_acf": _acf(res),
+            "residual_rms_by_shift_s": odometer_shift_fit(drive)}
+
+
+def odometer_shift_fit(drive, shifts_s=np.round(np.arange(-1.0, 1.01, 0.1), 1)) -> dict:
+    """The residual RMS (m/s) of reading = scale x reference speed + offset over the moving
+    epochs (reading above 0.5 m/s) with the reference's 3-D speed taken shift s after the
+    reading's time stamp, for shifts in 0.1 s steps: where it is smallest the reading
+    describes the car (a latency of -shift; docs/kalman.md, the odometer's latency)."""
+    r, o = drive.ref, drive.odo
+    vr = np.sqrt(r["ve_mps"] ** 2 + r["vn_mps"] ** 2 + r["vu_mps"] ** 2)
+    sel = ((o["time_s"] > r["time_s"][0] + 2.0) & (o["time_s"] < r["time_s"][-1] - 2.0)
+           & (o["speed_mps"] > 0.5))
+    t, reading = o["time_s"][sel], o["speed_mps"][sel]
+    out = {}
+    for s in shifts_s:
+        v = np.interp(t + s, r["time_s"], vr)
+        A = np.column_stack([v, np.ones_like(v)])
+        coef, *_ = np.linalg.lstsq(A, reading, rcond=None)
+        out[float(s) + 0.0] = float(np.sqrt(np.mean((reading - A @ coef) ** 2)))
+    return out
 
 
 def gnss_velocity_errors(drive) -> dict:
@@ -411,6 +431,10 @@ def text(a: dict) -> str:
             f"(n {b['n']})" for b in om["residual_rms_by_acceleration"])
         + "; autocorrelation " + ", ".join(
             f"{k} s {v:.2f}" for k, v in om["residual_acf"].items()),
+        "  residual RMS with the reference's speed taken s after the reading's stamp: "
+        + ", ".join(f"{k:+.1f} s {v:.3f}" for k, v in om["residual_rms_by_shift_s"].items()
+                    if abs(k) <= 0.5)
+        + f" m/s; smallest at {min(om['residual_rms_by_shift_s'], key=om['residual_rms_by_shift_s'].get):+.1f} s",
     ]
     gv, rc = a["gnss_velocity_errors"], a["reference_consistency"]
     lines += [

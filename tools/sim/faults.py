@@ -118,7 +118,8 @@ def build_drive(name: str = "default", seed: int = 1, imu_rate_hz: int = 100,
     if scen.get("gnss_faults") or scen.get("calibration"):
         raise SystemExit(f"scenario '{name}': fault drives start from a drive without "
                          "[gnss_faults] or [calibration]")
-    fw_args = run.firmware_args(sensors.PRESETS[imu_name], sensors.GNSS_PRESETS[gnss_name])
+    fw_args = run.firmware_args(sensors.PRESETS[imu_name], sensors.GNSS_PRESETS[gnss_name],
+                                odo)
     log(f"  trajectory and sensors ({scen.get('name', name)}, IMU {imu_name}, GNSS "
         f"{gnss_name}): {time.monotonic() - t:.1f} s")
     t = time.monotonic()

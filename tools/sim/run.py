@@ -200,11 +200,13 @@ def frames(truth, dtheta, dv, wheels, gnss, db, initial_attitude=False, heading_
     return out
 
 
-def firmware_args(imu: "sensors.ImuSpec", gnss: "sensors.GnssSpec") -> list:
+def firmware_args(imu: "sensors.ImuSpec", gnss: "sensors.GnssSpec",
+                  odo: "sensors.OdoSpec | None" = None) -> list:
     """navecu options describing this drive's sensors, as an ECU is configured for the IMU
     and receiver it is installed with (docs/kalman.md): the IMU's noise, turn-on bias and
     in-run instability, the receiver's latency, error correlation time and white part. Mounting, odometer
-    scale and the errors' realisation stay unknown to the firmware."""
+    scale and the errors' realisation stay unknown to the firmware. With odo, the wheel
+    speeds' latency (an ABS module's data sheet figure)."""
     rad_dph = math.pi / 180.0 / 3600.0
     g = sensors.G0_MPS2
     args = ["--gyro-arw-dpsh", f"{max(imu.gyro_arw_deg_per_rth, 1e-4):.6g}",
@@ -217,6 +219,8 @@ def firmware_args(imu: "sensors.ImuSpec", gnss: "sensors.GnssSpec") -> list:
             # the simulated car measures its speed at the IMU (no lever arm), and the
             # installation is measured: to a tape measure's 0.1 m
             "--odo-lever-sigma-m", "0.1"]
+    if odo is not None:
+        args += ["--odo-latency-ms", f"{odo.latency_s * 1e3:.6g}"]
     if gnss.enabled:
         args += ["--gnss-latency-ms", f"{gnss.latency_s * 1e3:.6g}",
                  "--gnss-corr-s", f"{min(gnss.pos_gm_corr_time_s, 600.0):.6g}"]
@@ -304,7 +308,7 @@ def main(argv=None) -> int:
     dtheta, dv = sensors.apply_imu(truth, imu_spec, 3 * a.seed)
     wheels = sensors.wheel_speeds(truth, odo, 3 * a.seed + 1)
     gnss = sensors.gnss_epochs(truth, sensors.GNSS_PRESETS[gnss_name], 3 * a.seed + 2)
-    fw_args = firmware_args(sensors.PRESETS[imu_name], sensors.GNSS_PRESETS[gnss_name])
+    fw_args = firmware_args(sensors.PRESETS[imu_name], sensors.GNSS_PRESETS[gnss_name], odo)
     mnt = scen["imu_mounting"]
     mount = a.mount
     if mount == "scenario":

@@ -18,6 +18,7 @@ const app_param_t app_params[APP_PARAM_N] = {
     [APP_PARAM_ODO_LEVER_SIGMA_M] = {APP_PARAM_NAME("odo_lever_sigma_m"), 0x0214u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(5.0), {NAV_C(1.0), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_ODO_STEP_MPS] = {APP_PARAM_NAME("odo_step_mps"), 0x0216u, APP_PARAM_REAL, 0u, 1u, 0u, 0u, NAV_C(0.001), NAV_C(1.0), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_ODO_DIRECTION] = {APP_PARAM_NAME("odo_direction"), 0x0215u, APP_PARAM_ENUM, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(1.0), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
+    [APP_PARAM_ODO_LATENCY_S] = {APP_PARAM_NAME("odo_latency_s"), 0x0217u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(2.0), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_CAL_MIN_BASE_M] = {APP_PARAM_NAME("cal_min_base_m"), 0x0220u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(100000.0), {NAV_C(2000.0), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_IMU_MOUNT_RAD] = {APP_PARAM_NAME("imu_mount_rad"), 0x0205u, APP_PARAM_VEC3, 0u, 0u, 1u, 0u, NAV_C(-3.141592653589793), NAV_C(3.141592653589793), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
     [APP_PARAM_IMU_MOUNT_SOURCE] = {APP_PARAM_NAME("imu_mount_source"), 0x0206u, APP_PARAM_ENUM, 0u, 0u, 1u, 0u, NAV_C(0.0), NAV_C(1.0), {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)}},
@@ -118,6 +119,9 @@ void app_param_get(const app_config_t *cfg, app_param_id_t id, nav_real_t v[3])
         if (cfg->odo_direction == ODO_DIR_NAVIGATOR) {
             v[0] = NAV_C(1.0);
         }
+        break;
+    case APP_PARAM_ODO_LATENCY_S:
+        v[0] = cfg->odo_latency_s;
         break;
     case APP_PARAM_CAL_MIN_BASE_M:
         v[0] = cfg->cal_min_base_m;
@@ -286,6 +290,9 @@ int app_param_set(app_config_t *cfg, app_param_id_t id, const nav_real_t v[3])
         if (v[0] > NAV_C(0.5)) {
             cfg->odo_direction = ODO_DIR_NAVIGATOR;
         }
+        break;
+    case APP_PARAM_ODO_LATENCY_S:
+        cfg->odo_latency_s = v[0];
         break;
     case APP_PARAM_CAL_MIN_BASE_M:
         cfg->cal_min_base_m = v[0];
