@@ -583,6 +583,30 @@ static void test_correlated_error_model_by_fix_rate(void **state)
     assert_true(sig[0] < 0.6f);
 }
 
+/* The reported horizontal accuracy (docs/kalman.md, correlated GNSS errors). GIVEN 50
+ * fixes at 5 Hz of a standing car, declared 2 m (1.414 m per axis, white ratio 0.33: a
+ * correlated part of 1.335 m per axis) THEN with a 20 s correlation time (the state) it is
+ * the filter's sqrt(P_EE + P_NN) with 2 x 1.335^2 added, so at least 1.888 m, whatever
+ * the fixes' average says; with 1 s (the inflation) it is the filter's own. */
+static void test_reported_accuracy_keeps_the_correlated_error(void **state)
+{
+    for (int as_state = 0; as_state < 2; as_state++) {
+        assert_int_equal(setup(state), 0);
+        cfg.gnss_corr_s = as_state ? 20.0f : 1.0f;
+        start_filter();
+        fixes_at_rest(50, 20, -1);
+        const double p_h = (double)fu.ekf.P[EKF_DR][EKF_DR] + (double)fu.ekf.P[EKF_DR + 1][EKF_DR + 1];
+        const double shc = 2.0 * 0.7071 * sqrt(1.0 - (double)cfg.gnss_white_ratio *
+                                                         (double)cfg.gnss_white_ratio);
+        const double expect = sqrt(p_h + (as_state ? 2.0 * shc * shc : 0.0));
+        assert_near(fusion_sigma_h_m(&fu, &cfg), expect, 1e-4 * expect);
+        if (as_state) {
+            assert_true(fusion_sigma_h_m(&fu, &cfg) > 1.888f);
+            assert_true(ekf_sigma_h_m(&fu.ekf) < 1.888f);
+        }
+    }
+}
+
 /* GIVEN the filter started on a car driving north at 10 m/s, braking at 2 m/s^2 from then
  * on, and a wheel-speed reading that describes the car 0.2 s before the update: 10.2 m/s,
  * received one sample (0.01 s) before it, odo_latency_s 0.19 s WHEN the interval's
@@ -643,6 +667,7 @@ int main(void)
         cmocka_unit_test_setup(test_outlier_fix_refused, setup),
         cmocka_unit_test_setup(test_correlated_error_model_by_fix_rate, setup),
         cmocka_unit_test_setup(test_odometer_reading_moved_on_by_its_latency, setup),
+        cmocka_unit_test(test_reported_accuracy_keeps_the_correlated_error),
     };
     return cmocka_run_group_tests_name("fusion", tests, NULL, NULL);
 }

@@ -390,7 +390,8 @@ void output_status(app_t *a, hal_t *hal)
     app_dtc_cycle(a, hal, st.health_flags); /* the DTCs' tests (app_dtc.h) */
     st.horiz_accuracy = NAVECU_NAV_STATUS_HORIZ_ACCURACY_RAW_MAX; /* "unknown" w/o the filter */
     if (ekf != NULL && a->run.mode == APP_MODE_NAVIGATING) {
-        st.horiz_accuracy = (uint16_t)accuracy_raw(ekf_sigma_h_m(ekf) * NAV_C(100.0),
+        st.horiz_accuracy = (uint16_t)accuracy_raw(fusion_sigma_h_m(&a->run.fusion, &a->cfg) *
+                                                       NAV_C(100.0),
                                                    NAVECU_NAV_STATUS_HORIZ_ACCURACY_RAW_MAX);
     }
     /* the IMU rate measured from the data while it disagrees with the configured one */
