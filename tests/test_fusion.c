@@ -587,7 +587,9 @@ static void test_correlated_error_model_by_fix_rate(void **state)
  * fixes at 5 Hz of a standing car, declared 2 m (1.414 m per axis, white ratio 0.33: a
  * correlated part of 1.335 m per axis) THEN with a 20 s correlation time (the state) it is
  * the filter's sqrt(P_EE + P_NN) with 2 x 1.335^2 added, so at least 1.888 m, whatever
- * the fixes' average says; with 1 s (the inflation) it is the filter's own. */
+ * the fixes' average says, and one more fix declared 60 m leaves it below 3 m (the recent
+ * fixes' information-weighted correlated sigma); with 1 s (the inflation) it is the
+ * filter's own. */
 static void test_reported_accuracy_keeps_the_correlated_error(void **state)
 {
     for (int as_state = 0; as_state < 2; as_state++) {
@@ -603,46 +605,73 @@ static void test_reported_accuracy_keeps_the_correlated_error(void **state)
         if (as_state) {
             assert_true(fusion_sigma_h_m(&fu, &cfg) > 1.888f);
             assert_true(ekf_sigma_h_m(&fu.ekf) < 1.888f);
+            /* one more fix, declared 60 m: it weighs as little in the claim as in the
+             * updates (the last fix's own 56 m would make it 57 m) */
+            for (int j = 0; j < 20; j++) {
+                (void)rest_sample();
+            }
+            const nav_real_t v0[3] = {0.0f, 0.0f, 0.0f};
+            gnss_fix_t f = fix_at(450000000, 100000000, v0);
+            f.hacc_m = 60.0f;
+            f.tow_ms = 100000u + 51u * 200u;
+            int adopt;
+            assert_int_equal(fusion_gnss(&fu, &ctx, &PRIOR, &f, &adopt), FUSION_GO_ON);
+            assert_true(fusion_sigma_h_m(&fu, &cfg) < 3.0f);
+            assert_true(fusion_sigma_h_m(&fu, &cfg) > ekf_sigma_h_m(&fu.ekf));
         }
     }
 }
 
-/* GIVEN the filter started on a car driving north at 10 m/s, braking at 2 m/s^2 from then
- * on, and a wheel-speed reading that describes the car 0.2 s before the update: 10.2 m/s,
- * received one sample (0.01 s) before it, odo_latency_s 0.19 s WHEN the interval's
- * prediction makes the odometer update THEN the reading moved on by 0.2 s x -2 m/s^2 is
- * the navigator's 9.8 m/s: the velocity stays within 0.01 m/s. With odo_latency_s 0 only
- * its age (0.01 s) is moved on, and the update pulls the velocity up by more than 0.1 m/s
- * (its gain on the 0.38 m/s innovation is about 0.4: 9.94 m/s; the first case gives that
- * too without the compensation). */
+/* the filter started at P0 on a car heading north with north velocity v_n_mps, 10
+ * samples of braking at brake_mps2 (along the heading), wheel speeds reading_mps arriving
+ * after the 5th; returns the north velocity after the 10th (the interval's prediction and
+ * updates) */
+static double moved_on(double v_n_mps, double brake_mps2, float reading_mps, float latency_s)
+{
+    static const fusion_prior_t still = {0.0f, 0.0f, 1u, 0.0f, {0.0f, 0.0f}};
+    const nav_real_t v[3] = {0.0f, (nav_real_t)v_n_mps, 0.0f};
+    start_at(0.0, v);
+    cfg.odo_latency_s = latency_s;
+    const gnss_fix_t f = fix_at(450000000, 100000000, v);
+    int adopt = 0;
+    assert_int_equal(fusion_gnss(&fu, &ctx, &still, &f, &adopt), FUSION_GO_ON);
+    assert_int_equal(fu.on, 1);
+    for (int k = 0; k < 10; k++) {
+        if (k == 5) {
+            const nav_real_t w[4] = {reading_mps, reading_mps, reading_mps, reading_mps};
+            assert_int_equal(odo_wheels(&odo, w, 0.0f), NAV_OK);
+        }
+        assert_int_equal(braking_sample(brake_mps2), FUSION_GO_ON);
+    }
+    assert_int_equal(fu.pred_n, 0u); /* the interval's prediction and updates ran */
+    assert_int_equal(fu.odo_frames_used, odo.n_frames);
+    assert_int_equal(health.odo_rejected, 0u);
+    return (double)nav.v_n_mps[1];
+}
+
+/* GIVEN a car driving north at 10 m/s, braking at 2 m/s^2, and a wheel-speed reading that
+ * describes it 0.2 s before the update (10.2 m/s) arriving 5 samples (0.05 s) before it,
+ * odo_latency_s 0.15 s WHEN the update comes THEN the reading moved on by its latency and
+ * its age, 0.2 s x -2 m/s^2, is the navigator's 9.8 m/s: the velocity stays within
+ * 0.01 m/s (without the age, 0.1 m/s off, it moves 0.04 m/s). With odo_latency_s 0 the
+ * update pulls it up by more than 0.1 m/s (its gain on the 0.3 m/s innovation is about
+ * 0.4). A reversing car (-10 m/s north, heading north, braking: -10.2 read) the other way:
+ * -9.8 m/s within 0.01. */
 static void test_odometer_reading_moved_on_by_its_latency(void **state)
 {
     (void)state;
-    static const fusion_prior_t still = {0.0f, 0.0f, 1u, 0.0f, {0.0f, 0.0f}};
-    const float latency_s[2] = {0.19f, 0.0f};
-    for (int i = 0; i < 2; i++) {
-        const nav_real_t v[3] = {0.0f, 10.0f, 0.0f};
-        start_at(0.0, v);
-        cfg.odo_latency_s = latency_s[i];
-        const gnss_fix_t f = fix_at(450000000, 100000000, v);
-        int adopt = 0;
-        assert_int_equal(fusion_gnss(&fu, &ctx, &still, &f, &adopt), FUSION_GO_ON);
-        assert_int_equal(fu.on, 1);
-        for (int k = 0; k < 9; k++) {
-            assert_int_equal(braking_sample(2.0), FUSION_GO_ON);
-        }
-        const nav_real_t w[4] = {10.2f, 10.2f, 10.2f, 10.2f};
-        assert_int_equal(odo_wheels(&odo, w, 0.0f), NAV_OK);
-        assert_int_equal(braking_sample(2.0), FUSION_GO_ON);
-        assert_int_equal(fu.pred_n, 0u); /* the interval's prediction and updates ran */
-        assert_int_equal(fu.odo_frames_used, odo.n_frames);
-        assert_int_equal(health.odo_rejected, 0u);
-        if (i == 0) {
-            assert_near(nav.v_n_mps[1], 9.8, 0.01);
-        } else {
-            assert_true(nav.v_n_mps[1] > 9.9f);
-        }
-    }
+    assert_near(moved_on(10.0, 2.0, 10.2f, 0.15f), 9.8, 0.01);
+    assert_true(moved_on(10.0, 2.0, 10.2f, 0.0f) > 9.9);
+    assert_near(moved_on(-10.0, -2.0, -10.2f, 0.15f), -9.8, 0.01);
+}
+
+/* GIVEN a car braking at 2 m/s^2 at 1 m/s and a reading of 0.6 m/s 0.5 s late (the
+ * parameter's maximum) WHEN moved on it would cross zero (0.6 - 0.55 x 2) THEN there is no
+ * speed update (none refused either): the velocity is the navigator's own 0.8 m/s. */
+static void test_odometer_reading_moved_through_a_stop_not_used(void **state)
+{
+    (void)state;
+    assert_near(moved_on(1.0, 2.0, 0.6f, 0.5f), 0.8, 0.002);
 }
 
 int main(void)
@@ -667,6 +696,7 @@ int main(void)
         cmocka_unit_test_setup(test_outlier_fix_refused, setup),
         cmocka_unit_test_setup(test_correlated_error_model_by_fix_rate, setup),
         cmocka_unit_test_setup(test_odometer_reading_moved_on_by_its_latency, setup),
+        cmocka_unit_test_setup(test_odometer_reading_moved_through_a_stop_not_used, setup),
         cmocka_unit_test(test_reported_accuracy_keeps_the_correlated_error),
     };
     return cmocka_run_group_tests_name("fusion", tests, NULL, NULL);

@@ -201,12 +201,17 @@ static void odometer_updates(fusion_t *fu, const fusion_ctx_t *c, nav_real_t T,
          * (the horizontal specific force along the navigator's velocity; issue #18) */
         const nav_real_t v_h = nav_sqrt(c->nav->v_n_mps[0] * c->nav->v_n_mps[0] +
                                         c->nav->v_n_mps[1] * c->nav->v_n_mps[1]);
+        const uint8_t ahead = odo->speed_mps > NAV_C(0.0) ? 1u : 0u;
         nav_real_t speed = odo->speed_mps;
         if (v_h > APP_ODO_MIN_SPEED_MPS) {
             const nav_real_t a_along = (f_mean_n[0] * c->nav->v_n_mps[0] +
                                         f_mean_n[1] * c->nav->v_n_mps[1]) / v_h;
             const nav_real_t lag_s = c->cfg->odo_latency_s + odo->age_s;
-            speed += (speed < NAV_C(0.0) ? -lag_s : lag_s) * a_along;
+            speed += (ahead != 0u ? lag_s : -lag_s) * a_along;
+        }
+        /* moved on to a stop or through it, the reading tells no speed to update with */
+        if (!(ahead != 0u ? speed > APP_ODO_MIN_SPEED_MPS : speed < -APP_ODO_MIN_SPEED_MPS)) {
+            return;
         }
         nav_real_t sf = APP_ODO_SIGMA_MPS + APP_ODO_SIGMA_SPEED_FRAC * nav_fabs(odo->speed_mps) +
                         APP_ODO_SIGMA_ACC_PERIOD * acc * per;
@@ -432,13 +437,14 @@ static int bias_is_state(const fusion_t *fu, const app_config_t *cfg)
  * (multipath of one street, the atmosphere's residual) are not zero over them. On the
  * simulator's default drive one seed's receiver error stayed 3-7 m east for 8 minutes
  * against its 2 m per axis, and 77 % of the epochs were within twice the filter's sigma.
- * The claim adds, per axis, a constant error as large as the correlated part, which no
- * fix can tell from the car's position (docs/kalman.md, correlated GNSS errors). */
+ * The claim adds, per axis, a constant error as large as the recent fixes' correlated
+ * part (ekf_gnss_sc_m), which no fix can tell from the car's position (docs/kalman.md,
+ * correlated GNSS errors). */
 nav_real_t fusion_sigma_h_m(const fusion_t *fu, const app_config_t *cfg)
 {
-    const nav_real_t c = bias_is_state(fu, cfg) ? fu->gnss_sc_prev_m : NAV_C(0.0);
-    const ekf_t *k = &fu->ekf;
-    return nav_sqrt(k->P[EKF_DR][EKF_DR] + k->P[EKF_DR + 1][EKF_DR + 1] + NAV_C(2.0) * c * c);
+    const nav_real_t s = ekf_sigma_h_m(&fu->ekf);
+    const nav_real_t sc = bias_is_state(fu, cfg) ? ekf_gnss_sc_m(&fu->ekf) : NAV_C(0.0);
+    return nav_sqrt(s * s + NAV_C(2.0) * sc * sc);
 }
 
 /* the correlated error state moved on to sample n, its stationary sigma now shc_m */

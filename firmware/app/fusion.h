@@ -151,8 +151,9 @@ void fusion_stop(fusion_t *fu);
 uint32_t fusion_pred_div(uint32_t imu_rate_hz);
 
 /* The horizontal accuracy the navigator reports (NAV_Status HorizAccuracy), m: the
- * filter's sqrt(P_EE + P_NN), never below that of the receiver's correlated error while
- * it is the filter's state (docs/kalman.md, honest accuracy). */
+ * filter's sqrt(P_EE + P_NN) with, while the receiver's correlated error is the filter's
+ * state, twice the recent fixes' correlated variance per axis added (ekf_gnss_sc_m;
+ * docs/kalman.md, correlated GNSS errors). */
 nav_real_t fusion_sigma_h_m(const fusion_t *fu, const app_config_t *cfg);
 
 #endif /* NAVECU_FUSION_H */

@@ -117,6 +117,8 @@ int ekf_init(ekf_t *k, const ekf_config_t *cfg, nav_real_t heading_sigma_rad)
     k->mount_yaw_rad = NAV_C(0.0);
     k->gnss_bias_m[0] = NAV_C(0.0);
     k->gnss_bias_m[1] = NAV_C(0.0);
+    k->gnss_sc_count = NAV_C(0.0);
+    k->gnss_sc_info = NAV_C(0.0);
     k->clock_dmm = 0;
     k->clock_drift_mps = NAV_C(0.0);
     k->n_updates = 0u;
@@ -470,6 +472,12 @@ static nav_real_t exp_neg(nav_real_t x_in)
     return e;
 }
 
+/* a correlated part's variance as a weight's denominator: at least 1 mm^2 */
+static nav_real_t sc_var(nav_real_t s2)
+{
+    return s2 > NAV_C(1e-6) ? s2 : NAV_C(1e-6);
+}
+
 void ekf_gnss_bias_step(ekf_t *k, nav_real_t dt_s, nav_real_t tau_s, nav_real_t sigma_c_m,
                         nav_real_t prev_sigma_c_m)
 {
@@ -485,6 +493,8 @@ void ekf_gnss_bias_step(ekf_t *k, nav_real_t dt_s, nav_real_t tau_s, nav_real_t 
     const nav_real_t shrink = sigma_c_m < prev_sigma_c_m && prev_sigma_c_m > NAV_C(0.0)
                                   ? sigma_c_m / prev_sigma_c_m
                                   : NAV_C(1.0);
+    k->gnss_sc_count = k->gnss_sc_count * phi + NAV_C(1.0);
+    k->gnss_sc_info = k->gnss_sc_info * phi + NAV_C(1.0) / sc_var(s2);
     for (int a = 0; a < 2; a++) {
         const int i = EKF_GB + a;
         k->gnss_bias_m[a] *= phi * shrink;
@@ -506,6 +516,8 @@ void ekf_gnss_bias_step(ekf_t *k, nav_real_t dt_s, nav_real_t tau_s, nav_real_t 
 void ekf_gnss_bias_start(ekf_t *k, nav_real_t sigma_c_m)
 {
     const nav_real_t s2 = sigma_c_m * sigma_c_m;
+    k->gnss_sc_count = NAV_C(1.0);
+    k->gnss_sc_info = NAV_C(1.0) / sc_var(s2);
     for (int a = 0; a < 2; a++) {
         const int i = EKF_GB + a;
         for (int j = 0; j < EKF_N; j++) {
@@ -520,6 +532,12 @@ void ekf_gnss_bias_start(ekf_t *k, nav_real_t sigma_c_m)
         k->P[EKF_DR + a][i] = -c;
         k->P[i][EKF_DR + a] = -c;
     }
+}
+
+nav_real_t ekf_gnss_sc_m(const ekf_t *k)
+{
+    return k->gnss_sc_info > NAV_C(0.0) ? nav_sqrt(k->gnss_sc_count / k->gnss_sc_info)
+                                        : NAV_C(0.0);
 }
 
 void ekf_clock_start(ekf_t *k, nav_real_t shift_m, nav_real_t drift_shift_mps,

@@ -112,6 +112,11 @@ typedef struct {
     /* the receiver's correlated horizontal position error (E, N, m) as estimated: what
      * the fixes are corrected by before their update (ekf_gnss_position) */
     nav_real_t gnss_bias_m[2];
+    /* the fixes' correlated sigmas over about one correlation time, information-weighted:
+     * their count and their sum of 1 / sigma_c^2, both decaying by phi at each
+     * ekf_gnss_bias_step (ekf_gnss_sc_m) */
+    nav_real_t gnss_sc_count;
+    nav_real_t gnss_sc_info;
     /* the receiver clock as estimated: its bias in 0.1 mm units (c times seconds: a clock of
      * 1 ms is 3e5 m, beyond what float32 keeps to millimetres) and its drift, m/s */
     int64_t clock_dmm;
@@ -305,6 +310,12 @@ void ekf_gnss_bias_step(ekf_t *k, nav_real_t dt_s, nav_real_t tau_s, nav_real_t 
  * -sigma_c^2. */
 #define ekf_gnss_bias_start NAV_SYM(ekf_gnss_bias_start)
 void ekf_gnss_bias_start(ekf_t *k, nav_real_t sigma_c_m);
+
+/* The correlated part's sigma of the recent fixes (m per axis): sqrt(count / sum of
+ * 1 / sigma_c^2) over about one correlation time, so that one poorly declared fix among
+ * many good ones weighs as little as it did in the updates; 0 before any. */
+#define ekf_gnss_sc_m NAV_SYM(ekf_gnss_sc_m)
+nav_real_t ekf_gnss_sc_m(const ekf_t *k);
 
 /* GNSS velocity (ENU m/s) against the navigator's velocity at the fix's time v_then. */
 int ekf_gnss_velocity(ekf_t *k, const nav_real_t v_then_mps[3], const nav_real_t meas_mps[3],

@@ -99,7 +99,8 @@ def drive(tmp_path_factory):
     tsw, thsw, vsw = _resample(truth, dth, dv,
                                lambda t: [r for t0, r in SWITCH if t > t0][-1])
     logs["switch"] = _write_log(out / "switch.log", tsw, thsw, vsw, wheels, gnss)
-    fw = run.firmware_args(sensors.PRESETS["mid-grade"], sensors.GNSS_PRESETS["standalone"])
+    fw = run.firmware_args(sensors.PRESETS["mid-grade"], sensors.GNSS_PRESETS["standalone"],
+                           odo)
     return {"dir": out, "logs": logs, "fw": fw + ["--level-s", "10"], "truth": truth}
 
 

@@ -176,15 +176,19 @@ def odometer_error_model(drive) -> dict:
             "residual_rms_by_shift_s": odometer_shift_fit(drive)}
 
 
-def odometer_shift_fit(drive, shifts_s=np.round(np.arange(-1.0, 1.01, 0.1), 1)) -> dict:
+SHIFTS_S = tuple(round(0.1 * k, 1) for k in range(-10, 11))
+
+
+def odometer_shift_fit(drive, shifts_s=SHIFTS_S) -> dict:
     """The residual RMS (m/s) of reading = scale x reference speed + offset over the moving
-    epochs (reading above 0.5 m/s) with the reference's 3-D speed taken shift s after the
-    reading's time stamp, for shifts in 0.1 s steps: where it is smallest the reading
+    epochs (odometer_error_model's: reference above 0.5 m/s at the stamp, reading above 0;
+    1 s inside the reference's span) with the reference's 3-D speed taken shift s after
+    the reading's time stamp, for shifts in 0.1 s steps: where it is smallest the reading
     describes the car (a latency of -shift; docs/kalman.md, the odometer's latency)."""
     r, o = drive.ref, drive.odo
     vr = np.sqrt(r["ve_mps"] ** 2 + r["vn_mps"] ** 2 + r["vu_mps"] ** 2)
-    sel = ((o["time_s"] > r["time_s"][0] + 2.0) & (o["time_s"] < r["time_s"][-1] - 2.0)
-           & (o["speed_mps"] > 0.5))
+    sel = ((o["time_s"] >= r["time_s"][0] + 1.0) & (o["time_s"] <= r["time_s"][-1] - 1.0)
+           & (np.interp(o["time_s"], r["time_s"], vr) > 0.5) & (o["speed_mps"] > 0.0))
     t, reading = o["time_s"][sel], o["speed_mps"][sel]
     out = {}
     for s in shifts_s:
@@ -434,7 +438,8 @@ def text(a: dict) -> str:
         "  residual RMS with the reference's speed taken s after the reading's stamp: "
         + ", ".join(f"{k:+.1f} s {v:.3f}" for k, v in om["residual_rms_by_shift_s"].items()
                     if abs(k) <= 0.5)
-        + f" m/s; smallest at {min(om['residual_rms_by_shift_s'], key=om['residual_rms_by_shift_s'].get):+.1f} s",
+        + " m/s; smallest of -1..+1 s at "
+        + f"{min(om['residual_rms_by_shift_s'], key=om['residual_rms_by_shift_s'].get):+.1f} s",
     ]
     gv, rc = a["gnss_velocity_errors"], a["reference_consistency"]
     lines += [

@@ -265,8 +265,8 @@ def latest_at(t_src, v_src, t, max_age_s=math.inf):
 
 def sigma_consistency(t, herr, status) -> dict:
     """The firmware's own accuracy claim against its error: at each NAV_Position time the
-    latest NAV_Status page-0 HorizAccuracy (the filter's 1-sigma horizontal, from its
-    covariance; at most SIGMA_MAX_AGE_S old; NAV_Status takes the time of the NAV_Height
+    latest NAV_Status page-0 HorizAccuracy (the firmware's horizontal accuracy claim,
+    docs/can.md; at most SIGMA_MAX_AGE_S old; NAV_Status takes the time of the NAV_Height
     before it, read_nav_log), epochs whose sigma is 655.35 ("unknown") or 0 skipped.
     frac_within_2sigma: share of the epochs with error <= 2 sigma; median_error_over_sigma:
     median of error / sigma. status "unknown" when no epoch has a sigma. The values a
