@@ -138,7 +138,7 @@ int host_options_parse_over(int argc, char **argv, const app_config_t *base, hos
         if (strcmp(argv[i], "--imu-preset") == 0) {
             int found = 0;
             for (int k = 0; k < (int)APP_PRESET_N; k++) {
-                if (strcmp(argv[i + 1], app_presets[k].name) == 0) {
+                if (strcmp(argv[i + 1], app_preset_names[k]) == 0) {
                     found = app_config_preset(&o->cfg, (app_preset_id_t)k) == 0;
                 }
             }

@@ -73,9 +73,9 @@ void host_usage(FILE *out)
         fprintf(out, "                         %s\n", c->description);
     }
     fprintf(out, "\nIMU presets (--imu-preset NAME; default %s):\n",
-            app_presets[APP_PRESET_DEFAULT].name);
+            app_preset_names[APP_PRESET_DEFAULT]);
     for (int k = 0; k < (int)APP_PRESET_N; k++) {
-        fprintf(out, "  %-12s %s\n", app_presets[k].name, params_cli_preset_about[k]);
+        fprintf(out, "  %-12s %s\n", app_preset_names[k], params_cli_preset_about[k]);
     }
 }
 

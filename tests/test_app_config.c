@@ -162,8 +162,8 @@ static void test_every_table_range(void **state)
             const int set = app_param_set(&c, id, v);
             const int valid = set == 0 && app_config_valid(&c);
             if (valid != want || (set != 0) != !app_param_in_range(id, v)) {
-                fail_msg("%s = %g: valid %d (set %d), expected %d", p->name, (double)v[0],
-                         valid, set, want);
+                fail_msg("%s = %g: valid %d (set %d), expected %d", app_param_names[k],
+                         (double)v[0], valid, set, want);
             }
         }
     }

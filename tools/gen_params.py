@@ -194,14 +194,9 @@ def gen_h(params, pre) -> str:
          '#include "nav_types.h"', "",
          "/* what a parameter holds: one value (APP_PARAM_U16, an integer; APP_PARAM_ENUM, the",
          " * index of its value name; APP_PARAM_REAL) or three (APP_PARAM_VEC3) */",
-         "/* the names are the hosts' (the command line, its reports, the tests): an ECU build",
-         " * defines APP_PARAM_NO_NAMES and keeps none of their bytes in its flash */",
-         "#ifdef APP_PARAM_NO_NAMES", "#define APP_PARAM_NAME(s) NULL", "#else",
-         "#define APP_PARAM_NAME(s) (s)", "#endif", "",
          "typedef enum {", "    APP_PARAM_U16 = 0,", "    APP_PARAM_REAL = 1,",
          "    APP_PARAM_VEC3 = 2,", "    APP_PARAM_ENUM = 3,", "} app_param_type_t;", "",
          "typedef struct {",
-         "    const char *name;       /* the app_config_t field (NULL: APP_PARAM_NO_NAMES) */",
          "    uint16_t did;           /* UDS data identifier */",
          "    app_param_type_t type;",
          "    uint8_t min_exclusive;  /* the range excludes min */",
@@ -215,17 +210,25 @@ def gen_h(params, pre) -> str:
          "/* the parameters, in the table's order */", "typedef enum {"]
     L += [f"    {_const(p)} = {k}," for k, p in enumerate(params)]
     L += ["    APP_PARAM_N = %d" % len(params), "} app_param_id_t;", "",
-          "extern const app_param_t app_params[APP_PARAM_N];", ""]
+          "extern const app_param_t app_params[APP_PARAM_N];", "",
+          "/* the names are the hosts' (the command line, its reports, the tests): tables of",
+          " * their own, which an ECU build (APP_PARAM_NO_NAMES) leaves out, so that its flash",
+          " * keeps neither their bytes nor a pointer per parameter and preset */",
+          "#ifndef APP_PARAM_NO_NAMES",
+          "extern const char *const app_param_names[APP_PARAM_N]; /* the app_config_t fields' */",
+          "#endif", ""]
     names, lst, dflt = pre
     L += ["/* IMU presets: the values (SI) of the parameters app_preset_params names, together */",
           f"#define APP_PRESET_PARAMS {len(names)}", "typedef enum {"]
     L += [f"    APP_PRESET_{n.upper()} = {k}," for k, (n, _, _, _) in enumerate(lst)]
     L += [f"    APP_PRESET_N = {len(lst)}", "} app_preset_id_t;",
           f"#define APP_PRESET_DEFAULT APP_PRESET_{dflt.upper()}", "",
-          "typedef struct {", "    const char *name;",
+          "typedef struct {",
           "    nav_real_t value_si[APP_PRESET_PARAMS];", "} app_preset_t;", "",
           "extern const app_param_id_t app_preset_params[APP_PRESET_PARAMS];",
-          "extern const app_preset_t app_presets[APP_PRESET_N];", "",
+          "extern const app_preset_t app_presets[APP_PRESET_N];",
+          "#ifndef APP_PARAM_NO_NAMES", "extern const char *const app_preset_names[APP_PRESET_N];",
+          "#endif", "",
           "#endif /* NAVECU_APP_PARAMS_H */", ""]
     return "\n".join(L)
 
@@ -244,20 +247,24 @@ def gen_c(params, pre) -> str:
             d = [_si(p, p["default"]), 0.0, 0.0]
         typ = {"u16": "APP_PARAM_U16", "real": "APP_PARAM_REAL", "vec3": "APP_PARAM_VEC3",
                "enum": "APP_PARAM_ENUM"}[p["type"]]
-        L.append(f"    [{_const(p)}] = {{APP_PARAM_NAME(\"{p['name']}\"), 0x{int(p['did']):04X}u, {typ}, "
+        L.append(f"    [{_const(p)}] = {{0x{int(p['did']):04X}u, {typ}, "
                  f"{int(p['min_exclusive'])}u, {int(p['vehicle_default'])}u, "
                  f"{int(p['at_reset'])}u, {int(p['uds_read_only'])}u, "
                  f"{_c_real(_si(p, p['min']))}, {_c_real(_si(p, p['max']))}, "
                  f"{{{', '.join(_c_real(x) for x in d)}}}}},")
     names, lst, _ = pre
     by_name = {p["name"]: p for p in params}
-    L += ["};", "", "const app_param_id_t app_preset_params[APP_PRESET_PARAMS] = {"]
+    L += ["};", "", "#ifndef APP_PARAM_NO_NAMES", "const char *const app_param_names[APP_PARAM_N] = {"]
+    L += [f"    [{_const(p)}] = \"{p['name']}\"," for p in params]
+    L += ["};", "#endif", "", "const app_param_id_t app_preset_params[APP_PRESET_PARAMS] = {"]
     L += [f"    APP_PARAM_{n.upper()}," for n in names]
     L += ["};", "", "const app_preset_t app_presets[APP_PRESET_N] = {"]
     for n, _, _, vals in lst:
         v = ", ".join(_c_real(_si(by_name[k], vals[k])) for k in names)
-        L.append(f"    [APP_PRESET_{n.upper()}] = {{APP_PARAM_NAME(\"{n}\"), {{{v}}}}},")
-    L += ["};", "", "void app_param_get(const app_config_t *cfg, app_param_id_t id, nav_real_t v[3])",
+        L.append(f"    [APP_PRESET_{n.upper()}] = {{{{{v}}}}},")
+    L += ["};", "", "#ifndef APP_PARAM_NO_NAMES", "const char *const app_preset_names[APP_PRESET_N] = {"]
+    L += [f"    [APP_PRESET_{n.upper()}] = \"{n}\"," for n, _, _, _ in lst]
+    L += ["};", "#endif", "", "void app_param_get(const app_config_t *cfg, app_param_id_t id, nav_real_t v[3])",
           "{", "    v[0] = NAV_C(0.0);", "    v[1] = NAV_C(0.0);", "    v[2] = NAV_C(0.0);",
           "    switch (id) {"]
     for p in params:

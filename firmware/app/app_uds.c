@@ -124,16 +124,24 @@ uint8_t app_uds_param_decode(app_config_t *cfg, app_param_id_t id, const uint8_t
     return UDS_NRC_OK;
 }
 
-/* the string's characters without a terminator (a DID's ASCII value) */
+/* the string's characters without a terminator (a DID's ASCII value), if they fit; its
+ * length, or cap + 1 if it is longer: the server answers 0x14 for any length > cap. Its
+ * own bounded count, not strlen: this was the ECU image's only strlen, newlib-nano's
+ * word-at-a-time assembly of 220 bytes of flash, for four strings of under 50 characters
+ * read by a diagnostic request (and GCC makes a plain count to the terminator a call of
+ * strlen again). */
 static size_t put_string(uint8_t *buf, size_t cap, const char *s)
 {
-    const size_t n = strlen(s);
+    size_t n = 0u;
+    while (n <= cap && s[n] != '\0') {
+        n++;
+    }
     if (n <= cap) {
         for (size_t i = 0u; i < n; i++) {
             buf[i] = (uint8_t)s[i];
         }
     }
-    return n; /* > cap: the server answers 0x14 */
+    return n;
 }
 
 static size_t put_mount_est(const app_t *a, uint8_t *buf, size_t cap)

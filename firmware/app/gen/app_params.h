@@ -11,14 +11,6 @@
 
 /* what a parameter holds: one value (APP_PARAM_U16, an integer; APP_PARAM_ENUM, the
  * index of its value name; APP_PARAM_REAL) or three (APP_PARAM_VEC3) */
-/* the names are the hosts' (the command line, its reports, the tests): an ECU build
- * defines APP_PARAM_NO_NAMES and keeps none of their bytes in its flash */
-#ifdef APP_PARAM_NO_NAMES
-#define APP_PARAM_NAME(s) NULL
-#else
-#define APP_PARAM_NAME(s) (s)
-#endif
-
 typedef enum {
     APP_PARAM_U16 = 0,
     APP_PARAM_REAL = 1,
@@ -27,7 +19,6 @@ typedef enum {
 } app_param_type_t;
 
 typedef struct {
-    const char *name;       /* the app_config_t field (NULL: APP_PARAM_NO_NAMES) */
     uint16_t did;           /* UDS data identifier */
     app_param_type_t type;
     uint8_t min_exclusive;  /* the range excludes min */
@@ -86,6 +77,13 @@ typedef enum {
 
 extern const app_param_t app_params[APP_PARAM_N];
 
+/* the names are the hosts' (the command line, its reports, the tests): tables of
+ * their own, which an ECU build (APP_PARAM_NO_NAMES) leaves out, so that its flash
+ * keeps neither their bytes nor a pointer per parameter and preset */
+#ifndef APP_PARAM_NO_NAMES
+extern const char *const app_param_names[APP_PARAM_N]; /* the app_config_t fields' */
+#endif
+
 /* IMU presets: the values (SI) of the parameters app_preset_params names, together */
 #define APP_PRESET_PARAMS 8
 typedef enum {
@@ -98,11 +96,13 @@ typedef enum {
 #define APP_PRESET_DEFAULT APP_PRESET_AUTOMOTIVE
 
 typedef struct {
-    const char *name;
     nav_real_t value_si[APP_PRESET_PARAMS];
 } app_preset_t;
 
 extern const app_param_id_t app_preset_params[APP_PRESET_PARAMS];
 extern const app_preset_t app_presets[APP_PRESET_N];
+#ifndef APP_PARAM_NO_NAMES
+extern const char *const app_preset_names[APP_PRESET_N];
+#endif
 
 #endif /* NAVECU_APP_PARAMS_H */
