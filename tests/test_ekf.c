@@ -373,6 +373,35 @@ static void test_state_ok_sees_the_estimates(void **state)
     f.gyro_scale_z = NAV_C(0.0);
     f.odo_offset_mps = (nav_real_t)INFINITY;
     assert_false(ekf_state_ok(&f));
+    f.odo_offset_mps = NAV_C(0.0);
+    f.gnss_bias_m[1] = (nav_real_t)NAN; /* subtracted from every fix (ekf_gnss_position) */
+    assert_false(ekf_state_ok(&f));
+}
+
+/* The recent fixes' correlated sigma (ekf_gnss_sc_m): GIVEN a fresh filter THEN 0; GIVEN a
+ * start at sigma_c 2 m and a fix of 4 m at once (dt 0: no decay) THEN the two weigh
+ * equally, sqrt(2 / (1/4 + 1/16)) = 2.53 m; a fix of 4 m after 40 correlation times THEN
+ * only it counts: 4 m; and with the correlation time between them halfway, phi = e^-1. */
+static void test_recent_correlated_sigma(void **state)
+{
+    (void)state;
+    ekf_t f;
+    const ekf_config_t c = ekf_default_config();
+    assert_int_equal(ekf_init(&f, &c, NAV_C(0.0)), NAV_OK);
+    assert_near(ekf_gnss_sc_m(&f), 0.0, 0.0);
+    ekf_gnss_bias_start(&f, NAV_C(2.0));
+    assert_near(ekf_gnss_sc_m(&f), 2.0, 1e-6);
+    ekf_gnss_bias_step(&f, NAV_C(0.0), NAV_C(20.0), NAV_C(4.0), NAV_C(2.0));
+    assert_near(ekf_gnss_sc_m(&f), sqrt(2.0 / (0.25 + 1.0 / 16.0)), 1e-5);
+    ekf_gnss_bias_start(&f, NAV_C(2.0));
+    ekf_gnss_bias_step(&f, NAV_C(800.0), NAV_C(20.0), NAV_C(4.0), NAV_C(2.0));
+    assert_near(ekf_gnss_sc_m(&f), 4.0, 1e-5);
+    ekf_gnss_bias_start(&f, NAV_C(2.0));
+    ekf_gnss_bias_step(&f, NAV_C(20.0), NAV_C(20.0), NAV_C(4.0), NAV_C(2.0));
+    /* phi by the filter's exp_neg: within 5.2e-4 of e^-1 at x = 1 (2 y^5 / 120, y = 0.5) */
+    const double phi = exp(-1.0);
+    const double sc = sqrt((phi + 1.0) / (phi * 0.25 + 1.0 / 16.0));
+    assert_near(ekf_gnss_sc_m(&f), sc, 5.2e-4 * sc);
 }
 
 /* The heading error shows in the lever arm: an antenna 2 m ahead, the heading 2 deg off,
@@ -569,6 +598,7 @@ int main(void)
         cmocka_unit_test(test_lever_arm_observes_heading),
         cmocka_unit_test(test_gnss_correlated_error_state),
         cmocka_unit_test(test_state_ok_sees_the_estimates),
+        cmocka_unit_test(test_recent_correlated_sigma),
         cmocka_unit_test(test_odometer_scale_and_mounting),
         cmocka_unit_test(test_odometer_lever_arm_in_a_turn),
         cmocka_unit_test(test_standstill_updates),

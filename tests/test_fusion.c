@@ -667,7 +667,8 @@ static void test_odometer_reading_moved_on_by_its_latency(void **state)
 
 /* GIVEN a car braking at 2 m/s^2 at 1 m/s and a reading of 0.6 m/s 0.5 s late (the
  * parameter's maximum) WHEN moved on it would cross zero (0.6 - 0.55 x 2) THEN there is no
- * speed update (none refused either): the velocity is the navigator's own 0.8 m/s. */
+ * odometer update (none refused either: without the guard the 1.3 m/s innovation is
+ * refused at 5 sigma): the velocity is the navigator's own 0.8 m/s. */
 static void test_odometer_reading_moved_through_a_stop_not_used(void **state)
 {
     (void)state;

@@ -593,7 +593,7 @@ int ekf_state_ok(const ekf_t *k)
     const nav_real_t scalars[6] = {k->k, k->mount_yaw_rad, k->mount_pitch_rad,
                                    k->clock_drift_mps, k->odo_offset_mps, k->gyro_scale_z};
     if (!finite_n(k->x, EKF_N) || !finite_n(k->bg_rps, 3) || !finite_n(k->ba_mps2, 3) ||
-        !finite_n(scalars, 6)) {
+        !finite_n(scalars, 6) || !finite_n(k->gnss_bias_m, 2)) {
         return 0;
     }
     for (int i = 0; i < EKF_N; i++) {
