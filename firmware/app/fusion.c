@@ -176,6 +176,24 @@ static void standstill_updates(fusion_t *fu, const fusion_ctx_t *c, nav_real_t T
     (void)ekf_zero_rate(&fu->ekf, resid, c->cfg->gyro_arw_rad_rts / nav_sqrt(T));
 }
 
+/* The odometer's reading moved on to now: it describes the car odo_latency_s before it
+ * arrived, and it arrived age_s ago; moved with the interval's mean along-track
+ * acceleration (the horizontal specific force along the navigator's velocity; a reading
+ * ahead (1) or reversing (0); issue #18). */
+static nav_real_t odo_speed_now(const fusion_ctx_t *c, const nav_real_t f_mean_n[3],
+                                uint8_t ahead)
+{
+    const nav_real_t *v = c->nav->v_n_mps;
+    const nav_real_t v_h = nav_sqrt(v[0] * v[0] + v[1] * v[1]);
+    nav_real_t speed = c->odo->speed_mps;
+    if (v_h > APP_ODO_MIN_SPEED_MPS) {
+        const nav_real_t a_along = (f_mean_n[0] * v[0] + f_mean_n[1] * v[1]) / v_h;
+        const nav_real_t lag_s = c->cfg->odo_latency_s + c->odo->age_s;
+        speed += (ahead != 0u ? lag_s : -lag_s) * a_along;
+    }
+    return speed;
+}
+
 /* The odometer or standstill updates of one prediction interval T (s) with the mean body
  * rate over it: a slow wheel-speed source is a late, averaged speed, its noise grows with
  * the acceleration times its period, and its zero hides a car creeping below one step. */
@@ -196,19 +214,8 @@ static void odometer_updates(fusion_t *fu, const fusion_ctx_t *c, nav_real_t T,
     } else if (odo->valid && odo->n_frames != fu->odo_frames_used &&
                nav_fabs(odo->speed_mps) > APP_ODO_MIN_SPEED_MPS) {
         fu->odo_frames_used = odo->n_frames;
-        /* the reading describes the car odo_latency_s before it arrived, and it arrived
-         * age_s ago: moved on to now with the interval's mean along-track acceleration
-         * (the horizontal specific force along the navigator's velocity; issue #18) */
-        const nav_real_t v_h = nav_sqrt(c->nav->v_n_mps[0] * c->nav->v_n_mps[0] +
-                                        c->nav->v_n_mps[1] * c->nav->v_n_mps[1]);
         const uint8_t ahead = odo->speed_mps > NAV_C(0.0) ? 1u : 0u;
-        nav_real_t speed = odo->speed_mps;
-        if (v_h > APP_ODO_MIN_SPEED_MPS) {
-            const nav_real_t a_along = (f_mean_n[0] * c->nav->v_n_mps[0] +
-                                        f_mean_n[1] * c->nav->v_n_mps[1]) / v_h;
-            const nav_real_t lag_s = c->cfg->odo_latency_s + odo->age_s;
-            speed += (ahead != 0u ? lag_s : -lag_s) * a_along;
-        }
+        const nav_real_t speed = odo_speed_now(c, f_mean_n, ahead);
         /* moved on to a stop or through it, the reading tells no speed to update with */
         if (!(ahead != 0u ? speed > APP_ODO_MIN_SPEED_MPS : speed < -APP_ODO_MIN_SPEED_MPS)) {
             return;

@@ -144,6 +144,11 @@ SPEED_BINS_MPS = ((0.5, 2.0), (2.0, 4.0), (4.0, 6.0), (6.0, 8.0), (8.0, 10.0), (
                   (12.0, 14.0), (14.0, 16.0))
 
 
+def reference_speed_3d(ref) -> np.ndarray:
+    """The reference's 3-D speed at its epochs, m/s (what an odometer measures)."""
+    return np.sqrt(ref["ve_mps"] ** 2 + ref["vn_mps"] ** 2 + ref["vu_mps"] ** 2)
+
+
 def odometer_error_model(drive) -> dict:
     """The OBD speed against the reference's 3-D speed at the same time stamp (issue #18):
     a least-squares reading = scale x true + offset over the moving epochs (reference above
@@ -151,7 +156,7 @@ def odometer_error_model(drive) -> dict:
     m/s^2: no lag effect), the residual's RMS by acceleration and its autocorrelation from
     one 1-s reading to the next."""
     r, o = drive.ref, drive.odo
-    vr = np.sqrt(r["ve_mps"] ** 2 + r["vn_mps"] ** 2 + r["vu_mps"] ** 2)
+    vr = reference_speed_3d(r)
     v = np.interp(o["time_s"], r["time_s"], vr)
     acc = np.gradient(v, o["time_s"])
     m = (v > 0.5) & (o["speed_mps"] > 0.0)
@@ -186,7 +191,7 @@ def odometer_shift_fit(drive, shifts_s=SHIFTS_S) -> dict:
     the reading's time stamp, for shifts in 0.1 s steps: where it is smallest the reading
     describes the car (a latency of -shift; docs/kalman.md, the odometer's latency)."""
     r, o = drive.ref, drive.odo
-    vr = np.sqrt(r["ve_mps"] ** 2 + r["vn_mps"] ** 2 + r["vu_mps"] ** 2)
+    vr = reference_speed_3d(r)
     sel = ((o["time_s"] >= r["time_s"][0] + 1.0) & (o["time_s"] <= r["time_s"][-1] - 1.0)
            & (np.interp(o["time_s"], r["time_s"], vr) > 0.5) & (o["speed_mps"] > 0.0))
     t, reading = o["time_s"][sel], o["speed_mps"][sel]
