@@ -113,12 +113,13 @@ void host_summary(FILE *out, const app_t *app, const hal_t *hal, unsigned long f
         const fusion_raw_counts_t *r = &app->keep.raw_counts;
         fprintf(out, "navecu: raw GNSS epochs %lu, satellites %lu; fused epochs %lu: "
                 "pseudoranges %lu, range rates %lu used, %lu excluded (fault exclusion), %lu "
-                "gated; clock starts %lu, clock jumps %lu\n",
+                "gated; clock starts %lu, clock jumps %lu; pseudoranges with a learnt bias "
+                "removed %lu\n",
                 (unsigned long)app->keep.raw_epochs, (unsigned long)app->keep.raw_sats,
                 (unsigned long)r->epochs_used, (unsigned long)r->pr_used,
                 (unsigned long)r->rr_used, (unsigned long)r->excluded,
                 (unsigned long)r->gated, (unsigned long)r->clock_starts,
-                (unsigned long)r->clock_jumps);
+                (unsigned long)r->clock_jumps, (unsigned long)r->corrected);
     }
     if (h->imu_rate_mismatch != 0u) {
         fprintf(out,

@@ -6,6 +6,7 @@
  * of another epoch, a repeated epoch, a slot beyond NumMeas, a bad CRC, an invalid epoch
  * number, an elevation out of range; and through the application, what is counted where.
  */
+#include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -18,8 +19,10 @@
 #include "can_frames.h"
 #include "e2e.h"
 #include "fake_hal.h"
+#include "app_tuning.h"
 #include "gnss_raw.h"
 #include "navecu_can.h"
+#include "raw_bias.h"
 
 static gnss_raw_asm_t g;
 static rx_state_t rx;
@@ -355,6 +358,105 @@ static void test_counted_by_the_application(void **state)
     assert_int_equal(app.keep.health.bad_counter, h0.bad_counter + 1u);
 }
 
+/* ---- each satellite's learnt range bias (raw_bias.h) ---- */
+
+/* A satellite 1.5 m long with +-0.5 m of alternating noise, learnt at 1 s epochs: after the
+ * running mean of the first APP_RAW_BIAS_TAU_S and as long again of the exponential average,
+ * within the noise's remainder (the average of 300 alternating values: 0; the exponential
+ * average leaves at most 0.5 x 1 / 300 of the last one) of 1.5 m; not usable before
+ * APP_RAW_BIAS_MIN_S of learning, usable from it on; another satellite (or system) has none */
+static void test_bias_learnt_as_the_average(void **state)
+{
+    (void)state;
+    raw_bias_t b;
+    memset(&b, 0, sizeof b);
+    const uint32_t t0 = 100000u;
+    nav_real_t got = NAV_C(9.0);
+    const int min_epochs = (int)APP_RAW_BIAS_MIN_S;
+    for (int k = 0; k < 2 * (int)APP_RAW_BIAS_TAU_S; k++) {
+        const nav_real_t noise = (k % 2) == 0 ? NAV_C(0.5) : NAV_C(-0.5);
+        raw_bias_learn(&b, 0u, 7u, t0 + 1000u * (uint32_t)k, NAV_C(1.5) + noise, NAV_C(1.0));
+        const int usable = raw_bias_of(&b, 0u, 7u, t0 + 1000u * (uint32_t)k, &got);
+        assert_int_equal(usable, k + 1 >= min_epochs ? 1 : 0);
+        if (!usable) {
+            assert_float_equal(got, 0.0, 0.0);
+        }
+    }
+    assert_float_equal(got, 1.5, 0.01);
+    assert_int_equal(raw_bias_of(&b, 0u, 8u, t0, &got), 0);
+    assert_int_equal(raw_bias_of(&b, 1u, 7u, t0, &got), 0);
+}
+
+/* Not learnt for APP_RAW_BIAS_KEEP_MS: forgotten, and learnt afresh (the old value gone);
+ * a time before the last learnt one (a replay) is not used either; across the week's end
+ * the age is the time between (gnss_tow_diff_ms) */
+static void test_bias_forgotten_and_across_the_week(void **state)
+{
+    (void)state;
+    raw_bias_t b;
+    memset(&b, 0, sizeof b);
+    const uint32_t week = APP_WEEK_MS;
+    const uint32_t t0 = week - 30000u; /* 30 s before the week's end */
+    for (uint32_t k = 0u; k < 60u; k++) {
+        raw_bias_learn(&b, 0u, 3u, t0 + 1000u * k < week ? t0 + 1000u * k
+                                                         : t0 + 1000u * k - week,
+                       NAV_C(-2.0), NAV_C(1.0));
+    }
+    const uint32_t last = 29000u; /* t0 + 59 s, in the next week */
+    nav_real_t got;
+    assert_int_equal(raw_bias_of(&b, 0u, 3u, last, &got), 1);
+    assert_float_equal(got, -2.0, 1e-5);
+    assert_int_equal(raw_bias_of(&b, 0u, 3u, last + (uint32_t)APP_RAW_BIAS_KEEP_MS, &got), 1);
+    assert_int_equal(raw_bias_of(&b, 0u, 3u, last + (uint32_t)APP_RAW_BIAS_KEEP_MS + 1u, &got),
+                     0);
+    assert_float_equal(got, 0.0, 0.0);
+    assert_int_equal(raw_bias_of(&b, 0u, 3u, last - 1000u, &got), 0);
+    /* learnt afresh after the gap: the first value is the bias, not usable for a minute */
+    const uint32_t t1 = last + (uint32_t)APP_RAW_BIAS_KEEP_MS + 1000u;
+    raw_bias_learn(&b, 0u, 3u, t1, NAV_C(4.0), NAV_C(1.0));
+    assert_int_equal(raw_bias_of(&b, 0u, 3u, t1, &got), 0);
+    for (uint32_t k = 1u; k < 60u; k++) {
+        raw_bias_learn(&b, 0u, 3u, t1 + 1000u * k, NAV_C(4.0), NAV_C(1.0));
+    }
+    assert_int_equal(raw_bias_of(&b, 0u, 3u, t1 + 59000u, &got), 1);
+    assert_float_equal(got, 4.0, 1e-5);
+}
+
+/* A residual that is not finite, satellite number 0 or no time step is not learnt; the
+ * table full, a new satellite takes the place of the one learnt longest ago, the others stay */
+static void test_bias_table_and_refusals(void **state)
+{
+    (void)state;
+    raw_bias_t b;
+    memset(&b, 0, sizeof b);
+    const uint32_t t0 = 5000000u;
+    nav_real_t got;
+    for (uint32_t k = 0u; k < 80u; k++) {
+        for (uint8_t sv = 1u; sv <= (uint8_t)GNSS_RAW_MAX_SATS; sv++) {
+            /* satellite sv learnt until epoch 80 - sv (65 epochs at least): satellite 16 the
+             * longest ago */
+            if (k + sv <= 80u) {
+                raw_bias_learn(&b, 0u, sv, t0 + 1000u * k, (nav_real_t)sv, NAV_C(1.0));
+            }
+        }
+        raw_bias_learn(&b, 0u, 1u, t0 + 1000u * k, (nav_real_t)NAN, NAV_C(1.0));
+        raw_bias_learn(&b, 0u, 0u, t0 + 1000u * k, NAV_C(9.0), NAV_C(1.0));
+        raw_bias_learn(&b, 0u, 2u, t0 + 1000u * k, NAV_C(99.0), NAV_C(0.0));
+    }
+    const uint32_t t = t0 + 80000u;
+    assert_int_equal(raw_bias_of(&b, 0u, 1u, t, &got), 1);
+    assert_float_equal(got, 1.0, 1e-6);
+    assert_int_equal(raw_bias_of(&b, 0u, 2u, t, &got), 1);
+    assert_float_equal(got, 2.0, 1e-6);
+    assert_int_equal(raw_bias_of(&b, 0u, 0u, t, &got), 0);
+    raw_bias_learn(&b, 0u, 17u, t, NAV_C(17.0), NAV_C(1.0));
+    assert_int_equal(raw_bias_of(&b, 0u, 16u, t, &got), 0); /* replaced */
+    for (uint8_t sv = 1u; sv < 16u; sv++) {
+        assert_int_equal(raw_bias_of(&b, 0u, sv, t, &got), 1);
+        assert_float_equal(got, (double)sv, 1e-6);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -366,6 +468,9 @@ int main(void)
         cmocka_unit_test_setup(test_repeat_extra_and_empty, setup),
         cmocka_unit_test_setup(test_frame_checks, setup),
         cmocka_unit_test_setup(test_counted_by_the_application, setup),
+        cmocka_unit_test(test_bias_learnt_as_the_average),
+        cmocka_unit_test(test_bias_forgotten_and_across_the_week),
+        cmocka_unit_test(test_bias_table_and_refusals),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -208,6 +208,19 @@
 #define APP_RAW_PR_PLAUSIBLE_M NAV_C(1.0e6)
 /* fault exclusion: a residual this many sigmas from the epoch's median */
 #define APP_RAW_FDE_SIGMAS NAV_C(5.0)
+/* each satellite's range bias learnt while fixes come (raw_bias.h, gnss_input = both):
+ * averaged over APP_RAW_BIAS_TAU_S of driving, ten times the tens of seconds a moving car's
+ * multipath lasts (Kingston: 27 s median) and short against the biases' tens of minutes
+ * (orbit and clock 1 h, atmosphere 30 min); used once learnt for a minute (the average of
+ * several multipath times), for up to 10 min after it was last learnt (a street canyon of
+ * minutes; the slow errors still about 0.7 correlated); learnt from epochs of at least
+ * APP_RAW_BIAS_MIN_SATS satellites (their median is the clock) at APP_RAW_BIAS_SPEED_MPS or
+ * more (parked, a satellite's multipath is the spot's constant, not its bias) */
+#define APP_RAW_BIAS_TAU_S NAV_C(300.0)
+#define APP_RAW_BIAS_MIN_S NAV_C(60.0)
+#define APP_RAW_BIAS_KEEP_MS 600000
+#define APP_RAW_BIAS_MIN_SATS 4
+#define APP_RAW_BIAS_SPEED_MPS NAV_C(2.0)
 
 /* ---- filter supervision (docs/reliability.md) ---- */
 #define APP_FILTER_REOPEN_LIMIT 3u /* covariance reopens without a fix taken: diverged */

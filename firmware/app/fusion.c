@@ -668,6 +668,9 @@ static int raw_row(const fusion_t *fu, const raw_epoch_t *e, int i, int rate,
                             (nav_real_t)m->rr_lsb * NAV_C(0.01), h, z);
     } else {
         ekf_rows_pseudorange(&fu->ekf, &e->ant, &fu->raw_geo[i], m->pr_lsb, e->use_bias, h, z);
+        if (fu->raw_corr_on[i] != 0u) {
+            *z += fu->raw_corr_m[i]; /* computed minus (measured less its learnt bias) */
+        }
     }
     return nav_isfinite(*z) ? 1 : 0;
 }
@@ -770,7 +773,7 @@ static int raw_exclude(const raw_epoch_t *e, const nav_real_t *z, uint8_t *ok, i
 /* the scalar updates of the usable measurements (rate = 0 pseudoranges, 1 range rates);
  * returns the number applied, *gated the number the gate refused */
 static int raw_updates(fusion_t *fu, const raw_epoch_t *e, const uint8_t *ok, int rate,
-                       nav_real_t r_scale, int *gated)
+                       nav_real_t r_scale, int *gated, int *corrected)
 {
     const app_config_t *cfg = e->c->cfg;
     int used = 0;
@@ -797,6 +800,9 @@ static int raw_updates(fusion_t *fu, const raw_epoch_t *e, const uint8_t *ok, in
         const int rc = ekf_update(&fu->ekf, h, z, r, APP_GNSS_GATE_SIGMA);
         if (rc == 1) {
             used++;
+            if (rate == 0 && fu->raw_corr_on[i] != 0u) {
+                (*corrected)++;
+            }
         } else if (rc == 0) {
             (*gated)++;
         } else {
@@ -851,6 +857,38 @@ static int raw_interval(fusion_t *fu, const fusion_ctx_t *c, uint32_t tow_ms, na
     return 1;
 }
 
+/* gnss_input = both while the receiver gives fixes: the epoch's satellites' residuals
+ * against the filter's position, which follows the fixes, learnt as their biases
+ * (raw_bias.h); nothing is fused or counted (the epoch's fix is). Not learnt: a car below
+ * APP_RAW_BIAS_SPEED_MPS, fewer than APP_RAW_BIAS_MIN_SATS usable pseudoranges. */
+static void raw_learn(fusion_t *fu, const raw_epoch_t *e, uint32_t tow_ms)
+{
+    const nav_real_t v2 = e->v_then[0] * e->v_then[0] + e->v_then[1] * e->v_then[1];
+    if (v2 < APP_RAW_BIAS_SPEED_MPS * APP_RAW_BIAS_SPEED_MPS) {
+        return;
+    }
+    nav_real_t z[RAW_MAX];
+    uint8_t ok[RAW_MAX];
+    for (int i = 0; i < RAW_MAX; i++) {
+        z[i] = NAV_C(0.0);
+        ok[i] = 0u;
+    }
+    raw_residuals(fu, e, 0, z, ok);
+    int n_ok;
+    const nav_real_t med = median_ok(z, ok, e->n, &n_ok);
+    if (n_ok < APP_RAW_BIAS_MIN_SATS) {
+        return;
+    }
+    for (int i = 0; i < e->n; i++) {
+        const gnss_raw_sat_t *m = &e->g->sat[e->slot[i]];
+        if (ok[i] != 0u) {
+            /* z is computed minus measured */
+            raw_bias_learn(&fu->raw_bias, m->system, m->sv_id, tow_ms, med - z[i],
+                           fu->gnss_ep_typ_s);
+        }
+    }
+}
+
 fusion_action_t fusion_raw(fusion_t *fu, const fusion_ctx_t *c, const gnss_raw_asm_t *g,
                            const gnss_raw_close_t *closed, uint32_t tow_ms, int clock_reset,
                            int *adopt)
@@ -864,24 +902,55 @@ fusion_action_t fusion_raw(fusion_t *fu, const fusion_ctx_t *c, const gnss_raw_a
     /* gnss_input = both: the raw measurements only while the receiver gives no fixes (none
      * offered for APP_RAW_BOTH_GAP_EPOCHS of its usual intervals): an epoch's fix and its raw
      * measurements are the same information, whichever comes first on the bus */
-    if (cfg->gnss_input == GNSS_INPUT_BOTH && fu->gnss_ep_typ_s > NAV_C(0.0) &&
+    const int fixes_come =
+        cfg->gnss_input == GNSS_INPUT_BOTH && fu->gnss_ep_typ_s > NAV_C(0.0) &&
         (nav_real_t)(n - fu->prev_fix_sample) <
-            APP_RAW_BOTH_GAP_EPOCHS * fu->gnss_ep_typ_s * (nav_real_t)cfg->imu_rate_hz) {
-        return FUSION_GO_ON;
-    }
-    nav_real_t dt_s;
-    if (!raw_interval(fu, c, tow_ms, &dt_s)) {
+            APP_RAW_BOTH_GAP_EPOCHS * fu->gnss_ep_typ_s * (nav_real_t)cfg->imu_rate_hz;
+    nav_real_t dt_s = NAV_C(0.0);
+    if (!fixes_come && !raw_interval(fu, c, tow_ms, &dt_s)) {
         app_diag_reject(c->diag, &c->diag->health->bad_counter);
         return FUSION_GO_ON;
     }
-    gnss_when_t when = gnss_time_align(c->time, c->diag->t_us, cfg->imu_rate_hz, tow_ms,
-                                       gnss_time_latency(c->time, cfg->gnss_latency_s));
-    if (when.jumped) {
-        app_count(&c->diag->health->time_jumps);
+    const nav_real_t latency_s = gnss_time_latency(c->time, cfg->gnss_latency_s);
+    gnss_when_t when;
+    if (fixes_come) {
+        /* the epoch's fix is the one that aligns the receiver's time */
+        when = gnss_time_peek(c->time, c->diag->t_us, cfg->imu_rate_hz, tow_ms, latency_s);
+    } else {
+        when = gnss_time_align(c->time, c->diag->t_us, cfg->imu_rate_hz, tow_ms, latency_s);
+        if (when.jumped) {
+            app_count(&c->diag->health->time_jumps);
+        }
     }
     raw_epoch_t e;
     nav_real_t d[3];
-    if (!epoch_then(c, &when, d, &e.then)) {
+    /* an epoch only learnt from is not refused (its fix is the one that counts) */
+    if ((fixes_come && !when.in_history) || !epoch_then(c, &when, d, &e.then)) {
+        return FUSION_GO_ON;
+    }
+    e.c = c;
+    e.g = g;
+    e.v_then = gnss_time_velocity_then(c->time, &when);
+    if (ekf_antenna(c->nav, &e.then, cfg->gnss_lever_b_m, &e.ant) != NAV_OK) {
+        if (!fixes_come) {
+            app_diag_reject(c->diag, &c->diag->health->gnss_rejected);
+        }
+        return FUSION_GO_ON;
+    }
+    raw_order(&e, closed);
+    raw_geometry(fu, &e);
+    /* each satellite's learnt bias, removed from its range when fused (none learnt from) */
+    for (int i = 0; i < e.n; i++) {
+        const gnss_raw_sat_t *m = &g->sat[e.slot[i]];
+        fu->raw_corr_on[i] = (!fixes_come && raw_bias_of(&fu->raw_bias, m->system, m->sv_id,
+                                                         tow_ms, &fu->raw_corr_m[i]) != 0)
+                                 ? 1u
+                                 : 0u;
+    }
+    /* the correlated errors as the fixes' state db when it is one */
+    e.use_bias = bias_is_state(fu, cfg);
+    if (fixes_come) {
+        raw_learn(fu, &e, tow_ms);
         return FUSION_GO_ON;
     }
     /* a reopened filter (here or by a fix) forgot the position the clock went with */
@@ -889,17 +958,6 @@ fusion_action_t fusion_raw(fusion_t *fu, const fusion_ctx_t *c, const gnss_raw_a
         fu->raw_reopens = fu->ekf.n_reopened;
         fu->clock_valid = 0u;
     }
-    e.c = c;
-    e.g = g;
-    e.v_then = gnss_time_velocity_then(c->time, &when);
-    if (ekf_antenna(c->nav, &e.then, cfg->gnss_lever_b_m, &e.ant) != NAV_OK) {
-        app_diag_reject(c->diag, &c->diag->health->gnss_rejected);
-        return FUSION_GO_ON;
-    }
-    raw_order(&e, closed);
-    raw_geometry(fu, &e);
-    /* the correlated errors as the fixes' state db when it is one */
-    e.use_bias = bias_is_state(fu, cfg);
     /* 2. the clock */
     if (fu->clock_valid != 0u && dt_s <= APP_RAW_CLOCK_KEEP_S) {
         ekf_clock_advance(&fu->ekf, dt_s);
@@ -960,13 +1018,15 @@ fusion_action_t fusion_raw(fusion_t *fu, const fusion_ctx_t *c, const gnss_raw_a
     const nav_real_t v_min = APP_GNSS_HEADING_SPEED_SIGMAS * APP_RAW_RR_SIGMA_MIN_MPS;
     fu->ekf.hold_heading = v2 < v_min * v_min ? 1u : 0u;
     int gated = 0;
-    const int pr_used = raw_updates(fu, &e, ok_pr, 0, r_scale, &gated);
-    const int rr_used = raw_updates(fu, &e, ok_rr, 1, NAV_C(1.0), &gated);
+    int corrected = 0;
+    const int pr_used = raw_updates(fu, &e, ok_pr, 0, r_scale, &gated, &corrected);
+    const int rr_used = raw_updates(fu, &e, ok_rr, 1, NAV_C(1.0), &gated, &corrected);
     fu->ekf.hold_heading = 0u;
     app_count_n(&c->raw->pr_used, (uint32_t)pr_used);
     app_count_n(&c->raw->rr_used, (uint32_t)rr_used);
     app_count_n(&c->raw->excluded, (uint32_t)out);
     app_count_n(&c->raw->gated, (uint32_t)gated);
+    app_count_n(&c->raw->corrected, (uint32_t)corrected);
     if (pr_used > 0) {
         app_count(&c->raw->epochs_used);
     }

@@ -31,6 +31,7 @@
 #include "ekf.h"
 #include "gnss_epoch.h"
 #include "gnss_raw.h"
+#include "raw_bias.h"
 #include "gnss_time.h"
 #include "landnav.h"
 #include "odo.h"
@@ -50,6 +51,8 @@ typedef struct {
                                counted in clock_jumps too) */
     uint32_t clock_jumps;   /* receiver clock resets (flagged in GNSS_RawEpoch, or found:
                                every satellite off by the same beyond the clock's sigma) */
+    uint32_t corrected;     /* pseudorange updates with their satellite's learnt bias
+                               removed (raw_bias.h; gnss_input = both) */
 } fusion_raw_counts_t;
 
 typedef struct {
@@ -86,6 +89,9 @@ typedef struct {
      * once per epoch; here, not on the stack (64 bytes each) */
     ekf_sat_t raw_geo[GNSS_RAW_MAX_SATS];
     uint8_t raw_geo_ok[GNSS_RAW_MAX_SATS];
+    nav_real_t raw_corr_m[GNSS_RAW_MAX_SATS]; /* the epoch's satellites' learnt biases */
+    uint8_t raw_corr_on[GNSS_RAW_MAX_SATS];   /* 1: learnt (raw_bias_of) */
+    raw_bias_t raw_bias;        /* each satellite's, learnt while fixes come (raw_bias.h) */
 } fusion_t;
 
 /* What the caller does after a fusion step. */

@@ -63,6 +63,22 @@ gnss_when_t gnss_time_align(gnss_time_t *g, uint64_t imu_t_us, uint32_t imu_rate
     return w;
 }
 
+gnss_when_t gnss_time_peek(const gnss_time_t *g, uint64_t imu_t_us, uint32_t imu_rate_hz,
+                           uint32_t tow_ms, nav_real_t latency_s)
+{
+    gnss_when_t w;
+    const int64_t late = (int64_t)imu_t_us - (int64_t)tow_ms * 1000 - g->off_min_us;
+    w.jumped = 0u;
+    w.late_s = late > 0 ? (nav_real_t)late * NAV_C(1e-6) : NAV_C(0.0);
+    w.entry_s = (nav_real_t)vhist_div(imu_rate_hz) / (nav_real_t)imu_rate_hz;
+    gnss_time_reach(g, &w, latency_s);
+    if (g->off_valid == 0u || late > APP_GNSS_LATE_US) {
+        w.in_history = 0u;
+        w.before_history = 0u;
+    }
+    return w;
+}
+
 /* does the history reach back entries back (one more for the interpolation)? */
 static int reaches(const gnss_time_t *g, nav_real_t back)
 {

@@ -56,6 +56,12 @@ void gnss_time_record(gnss_time_t *g, uint64_t n_samples, uint32_t imu_rate_hz,
 gnss_when_t gnss_time_align(gnss_time_t *g, uint64_t imu_t_us, uint32_t imu_rate_hz,
                             uint32_t tow_ms, nav_real_t latency_s);
 
+/* gnss_time_align's answer for an epoch without learning from it (nothing in g changes):
+ * an epoch that align would find late (beyond APP_GNSS_LATE_US) or a first one is not
+ * in_history. For a second use of an epoch already aligned (fusion.c, raw_learn). */
+gnss_when_t gnss_time_peek(const gnss_time_t *g, uint64_t imu_t_us, uint32_t imu_rate_hz,
+                           uint32_t tow_ms, nav_real_t latency_s);
+
 /* Set w's reach back for a latency latency_s (w from gnss_time_align). */
 void gnss_time_reach(const gnss_time_t *g, gnss_when_t *w, nav_real_t latency_s);
 
