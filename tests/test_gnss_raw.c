@@ -360,6 +360,21 @@ static void test_counted_by_the_application(void **state)
 
 /* ---- each satellite's learnt range bias (raw_bias.h) ---- */
 
+/* an epoch's satellites for raw_bias_learn: satellite i in slot i, all usable */
+static gnss_raw_sat_t bsat[GNSS_RAW_MAX_SATS];
+static const uint8_t bslot[GNSS_RAW_MAX_SATS] = {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13,
+                                                  14, 15};
+static const uint8_t bok[GNSS_RAW_MAX_SATS] = {1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1};
+
+/* learn one satellite's residual at tow_ms (an epoch of one) */
+static void learn1(raw_bias_t *b, uint8_t system, uint8_t sv, uint32_t tow_ms, nav_real_t r,
+                   nav_real_t step_s)
+{
+    bsat[0].system = system;
+    bsat[0].sv_id = sv;
+    raw_bias_learn(b, bsat, bslot, &r, bok, 1, tow_ms, step_s);
+}
+
 /* A satellite 1.5 m long with +-0.5 m of alternating noise, learnt at 1 s epochs: after the
  * running mean of the first APP_RAW_BIAS_TAU_S and as long again of the exponential average,
  * within the noise's remainder (the average of 300 alternating values: 0; the exponential
@@ -375,7 +390,7 @@ static void test_bias_learnt_as_the_average(void **state)
     const int min_epochs = (int)APP_RAW_BIAS_MIN_S;
     for (int k = 0; k < 2 * (int)APP_RAW_BIAS_TAU_S; k++) {
         const nav_real_t noise = (k % 2) == 0 ? NAV_C(0.5) : NAV_C(-0.5);
-        raw_bias_learn(&b, 0u, 7u, t0 + 1000u * (uint32_t)k, NAV_C(1.5) + noise, NAV_C(1.0));
+        learn1(&b, 0u, 7u, t0 + 1000u * (uint32_t)k, NAV_C(1.5) + noise, NAV_C(1.0));
         const int usable = raw_bias_of(&b, 0u, 7u, t0 + 1000u * (uint32_t)k, &got);
         assert_int_equal(usable, k + 1 >= min_epochs ? 1 : 0);
         if (!usable) {
@@ -385,6 +400,29 @@ static void test_bias_learnt_as_the_average(void **state)
     assert_float_equal(got, 1.5, 0.01);
     assert_int_equal(raw_bias_of(&b, 0u, 8u, t0, &got), 0);
     assert_int_equal(raw_bias_of(&b, 1u, 7u, t0, &got), 0);
+}
+
+/* Each epoch counts for the receiver's time since the satellite's last one: at 2 s epochs
+ * (a receiver whose fixes come faster than its raw epochs) usable after 30 of them, not 60;
+ * the same epoch again, or one before it (out of order), learns nothing */
+static void test_bias_learnt_over_the_receivers_time(void **state)
+{
+    (void)state;
+    raw_bias_t b;
+    memset(&b, 0, sizeof b);
+    const uint32_t t0 = 100000u;
+    nav_real_t got;
+    for (uint32_t k = 0u; k < 30u; k++) {
+        learn1(&b, 0u, 9u, t0 + 2000u * k, NAV_C(2.0), NAV_C(1.0));
+    }
+    /* learnt 1 s (the first epoch) + 29 x 2 s = 59 s */
+    assert_int_equal(raw_bias_of(&b, 0u, 9u, t0 + 58000u, &got), 0);
+    learn1(&b, 0u, 9u, t0 + 58000u, NAV_C(50.0), NAV_C(1.0)); /* a repeat */
+    learn1(&b, 0u, 9u, t0 + 57500u, NAV_C(50.0), NAV_C(1.0)); /* out of order */
+    assert_int_equal(raw_bias_of(&b, 0u, 9u, t0 + 58000u, &got), 0);
+    learn1(&b, 0u, 9u, t0 + 60000u, NAV_C(2.0), NAV_C(1.0));
+    assert_int_equal(raw_bias_of(&b, 0u, 9u, t0 + 60000u, &got), 1);
+    assert_float_equal(got, 2.0, 1e-5);
 }
 
 /* Not learnt for APP_RAW_BIAS_KEEP_MS: forgotten, and learnt afresh (the old value gone);
@@ -398,32 +436,31 @@ static void test_bias_forgotten_and_across_the_week(void **state)
     const uint32_t week = APP_WEEK_MS;
     const uint32_t t0 = week - 30000u; /* 30 s before the week's end */
     for (uint32_t k = 0u; k < 60u; k++) {
-        raw_bias_learn(&b, 0u, 3u, t0 + 1000u * k < week ? t0 + 1000u * k
-                                                         : t0 + 1000u * k - week,
-                       NAV_C(-2.0), NAV_C(1.0));
+        learn1(&b, 0u, 3u, t0 + 1000u * k < week ? t0 + 1000u * k : t0 + 1000u * k - week,
+               NAV_C(-2.0), NAV_C(1.0));
     }
     const uint32_t last = 29000u; /* t0 + 59 s, in the next week */
     nav_real_t got;
     assert_int_equal(raw_bias_of(&b, 0u, 3u, last, &got), 1);
     assert_float_equal(got, -2.0, 1e-5);
-    assert_int_equal(raw_bias_of(&b, 0u, 3u, last + (uint32_t)APP_RAW_BIAS_KEEP_MS, &got), 1);
-    assert_int_equal(raw_bias_of(&b, 0u, 3u, last + (uint32_t)APP_RAW_BIAS_KEEP_MS + 1u, &got),
-                     0);
+    assert_int_equal(raw_bias_of(&b, 0u, 3u, last + APP_RAW_BIAS_KEEP_MS, &got), 1);
+    assert_int_equal(raw_bias_of(&b, 0u, 3u, last + APP_RAW_BIAS_KEEP_MS + 1u, &got), 0);
     assert_float_equal(got, 0.0, 0.0);
     assert_int_equal(raw_bias_of(&b, 0u, 3u, last - 1000u, &got), 0);
     /* learnt afresh after the gap: the first value is the bias, not usable for a minute */
-    const uint32_t t1 = last + (uint32_t)APP_RAW_BIAS_KEEP_MS + 1000u;
-    raw_bias_learn(&b, 0u, 3u, t1, NAV_C(4.0), NAV_C(1.0));
+    const uint32_t t1 = last + APP_RAW_BIAS_KEEP_MS + 1000u;
+    learn1(&b, 0u, 3u, t1, NAV_C(4.0), NAV_C(1.0));
     assert_int_equal(raw_bias_of(&b, 0u, 3u, t1, &got), 0);
     for (uint32_t k = 1u; k < 60u; k++) {
-        raw_bias_learn(&b, 0u, 3u, t1 + 1000u * k, NAV_C(4.0), NAV_C(1.0));
+        learn1(&b, 0u, 3u, t1 + 1000u * k, NAV_C(4.0), NAV_C(1.0));
     }
     assert_int_equal(raw_bias_of(&b, 0u, 3u, t1 + 59000u, &got), 1);
     assert_float_equal(got, 4.0, 1e-5);
 }
 
 /* A residual that is not finite, satellite number 0 or no time step is not learnt; the
- * table full, a new satellite takes the place of the one learnt longest ago, the others stay */
+ * table full, a new satellite takes the place of the one learnt longest ago, the others
+ * stay */
 static void test_bias_table_and_refusals(void **state)
 {
     (void)state;
@@ -436,12 +473,12 @@ static void test_bias_table_and_refusals(void **state)
             /* satellite sv learnt until epoch 80 - sv (65 epochs at least): satellite 16 the
              * longest ago */
             if (k + sv <= 80u) {
-                raw_bias_learn(&b, 0u, sv, t0 + 1000u * k, (nav_real_t)sv, NAV_C(1.0));
+                learn1(&b, 0u, sv, t0 + 1000u * k, (nav_real_t)sv, NAV_C(1.0));
             }
         }
-        raw_bias_learn(&b, 0u, 1u, t0 + 1000u * k, (nav_real_t)NAN, NAV_C(1.0));
-        raw_bias_learn(&b, 0u, 0u, t0 + 1000u * k, NAV_C(9.0), NAV_C(1.0));
-        raw_bias_learn(&b, 0u, 2u, t0 + 1000u * k, NAV_C(99.0), NAV_C(0.0));
+        learn1(&b, 0u, 1u, t0 + 1000u * k + 500u, (nav_real_t)NAN, NAV_C(1.0));
+        learn1(&b, 0u, 0u, t0 + 1000u * k + 500u, NAV_C(9.0), NAV_C(1.0));
+        learn1(&b, 0u, 2u, t0 + 1000u * k + 500u, NAV_C(99.0), NAV_C(0.0));
     }
     const uint32_t t = t0 + 80000u;
     assert_int_equal(raw_bias_of(&b, 0u, 1u, t, &got), 1);
@@ -449,11 +486,54 @@ static void test_bias_table_and_refusals(void **state)
     assert_int_equal(raw_bias_of(&b, 0u, 2u, t, &got), 1);
     assert_float_equal(got, 2.0, 1e-6);
     assert_int_equal(raw_bias_of(&b, 0u, 0u, t, &got), 0);
-    raw_bias_learn(&b, 0u, 17u, t, NAV_C(17.0), NAV_C(1.0));
+    learn1(&b, 0u, 17u, t, NAV_C(17.0), NAV_C(1.0));
     assert_int_equal(raw_bias_of(&b, 0u, 16u, t, &got), 0); /* replaced */
     for (uint8_t sv = 1u; sv < 16u; sv++) {
         assert_int_equal(raw_bias_of(&b, 0u, sv, t, &got), 1);
         assert_float_equal(got, (double)sv, 1e-6);
+    }
+}
+
+/* The table full of the last epoch's 16 satellites, all learnt at the same time: the next
+ * epoch brings a new satellite first and 15 of the 16. The new one takes the entry of the
+ * satellite that left, whatever the order of the epoch; the 15 keep what they learnt (the
+ * review of 7fb48b2 found each evicting the next down the table) */
+static void test_bias_new_satellite_takes_the_one_that_left(void **state)
+{
+    (void)state;
+    raw_bias_t b;
+    memset(&b, 0, sizeof b);
+    const uint32_t t0 = 200000u;
+    nav_real_t r[GNSS_RAW_MAX_SATS];
+    for (uint32_t k = 0u; k < 100u; k++) {
+        for (int i = 0; i < (int)GNSS_RAW_MAX_SATS; i++) {
+            bsat[i].system = 0u;
+            bsat[i].sv_id = (uint8_t)(i + 1);
+            r[i] = (nav_real_t)(i + 1);
+        }
+        raw_bias_learn(&b, bsat, bslot, r, bok, (int)GNSS_RAW_MAX_SATS, t0 + 1000u * k,
+                       NAV_C(1.0));
+    }
+    /* the next epoch: satellite 20 first, then 1..15 (16 has set) */
+    bsat[0].sv_id = 20u;
+    r[0] = NAV_C(-3.0);
+    for (int i = 1; i < (int)GNSS_RAW_MAX_SATS; i++) {
+        bsat[i].sv_id = (uint8_t)i;
+        r[i] = (nav_real_t)i;
+    }
+    const uint32_t t = t0 + 100000u;
+    raw_bias_learn(&b, bsat, bslot, r, bok, (int)GNSS_RAW_MAX_SATS, t, NAV_C(1.0));
+    nav_real_t got;
+    for (uint8_t sv = 1u; sv < 16u; sv++) {
+        assert_int_equal(raw_bias_of(&b, 0u, sv, t, &got), 1);
+        assert_float_equal(got, (double)sv, 1e-5);
+    }
+    assert_int_equal(raw_bias_of(&b, 0u, 16u, t, &got), 0);
+    assert_int_equal(raw_bias_of(&b, 0u, 20u, t, &got), 0); /* learnt, not for a minute */
+    /* a 17th satellite of the same epoch finds no entry that is not this epoch's */
+    learn1(&b, 0u, 21u, t, NAV_C(5.0), NAV_C(1.0));
+    for (uint8_t sv = 1u; sv < 16u; sv++) {
+        assert_int_equal(raw_bias_of(&b, 0u, sv, t, &got), 1);
     }
 }
 
@@ -469,8 +549,10 @@ int main(void)
         cmocka_unit_test_setup(test_frame_checks, setup),
         cmocka_unit_test_setup(test_counted_by_the_application, setup),
         cmocka_unit_test(test_bias_learnt_as_the_average),
+        cmocka_unit_test(test_bias_learnt_over_the_receivers_time),
         cmocka_unit_test(test_bias_forgotten_and_across_the_week),
         cmocka_unit_test(test_bias_table_and_refusals),
+        cmocka_unit_test(test_bias_new_satellite_takes_the_one_that_left),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

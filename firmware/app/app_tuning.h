@@ -218,9 +218,13 @@
  * more (parked, a satellite's multipath is the spot's constant, not its bias) */
 #define APP_RAW_BIAS_TAU_S NAV_C(300.0)
 #define APP_RAW_BIAS_MIN_S NAV_C(60.0)
-#define APP_RAW_BIAS_KEEP_MS 600000
+#define APP_RAW_BIAS_KEEP_MS 600000u
 #define APP_RAW_BIAS_MIN_SATS 4
 #define APP_RAW_BIAS_SPEED_MPS NAV_C(2.0)
+/* ... and while the filter takes the fixes with its horizontal position known better than
+ * a zenith range (a position error along each line of sight would be learnt as the
+ * satellites' biases: after a canyon, while the fixes pull the filter back) */
+#define APP_RAW_BIAS_POS_SIGMA_M APP_RAW_PR_SIGMA_ZENITH_M
 
 /* ---- filter supervision (docs/reliability.md) ---- */
 #define APP_FILTER_REOPEN_LIMIT 3u /* covariance reopens without a fix taken: diverged */

@@ -82,6 +82,10 @@ static fusion_action_t reset(fusion_t *fu, const fusion_ctx_t *c)
     fu->gated_run = 0u;
     fu->reopen_run = 0u;
     fu->fix.seen = 0u;
+    /* the satellites' biases were learnt against the filter that diverged */
+    for (int i = 0; i < (int)GNSS_RAW_MAX_SATS; i++) {
+        fu->raw_bias.sat[i].sv_id = 0u; /* free */
+    }
     if (!sins_finite(c->nav)) {
         return FUSION_RESTART;
     }
@@ -678,8 +682,8 @@ static int raw_row(const fusion_t *fu, const raw_epoch_t *e, int i, int rate,
 /* every satellite's geometry from the epoch's antenna, once; a satellite whose position
  * is not a GNSS satellite's (gnss_geom_sat), or whose pseudorange is not its range within
  * APP_RAW_PR_PLAUSIBLE_M (a receiver clock within 3 ms of GPS time; a range of 0 or a
- * corrupt one) is refused and counted in bad_value */
-static void raw_geometry(fusion_t *fu, const raw_epoch_t *e)
+ * corrupt one) is refused, and counted in bad_value when count is set (an epoch fused) */
+static void raw_geometry(fusion_t *fu, const raw_epoch_t *e, int count)
 {
     for (int i = 0; i < e->n; i++) {
         const gnss_raw_sat_t *m = &e->g->sat[e->slot[i]];
@@ -690,7 +694,7 @@ static void raw_geometry(fusion_t *fu, const raw_epoch_t *e)
                                                                       0)) <=
                                          APP_RAW_PR_PLAUSIBLE_M);
         fu->raw_geo_ok[i] = (uint8_t)(pr_ok ? 1u : 0u);
-        if (!pr_ok) {
+        if (!pr_ok && count != 0) {
             app_diag_reject(e->c->diag, &e->c->diag->health->bad_value);
         }
     }
@@ -858,35 +862,39 @@ static int raw_interval(fusion_t *fu, const fusion_ctx_t *c, uint32_t tow_ms, na
 }
 
 /* gnss_input = both while the receiver gives fixes: the epoch's satellites' residuals
- * against the filter's position, which follows the fixes, learnt as their biases
- * (raw_bias.h); nothing is fused or counted (the epoch's fix is). Not learnt: a car below
- * APP_RAW_BIAS_SPEED_MPS, fewer than APP_RAW_BIAS_MIN_SATS usable pseudoranges. */
-static void raw_learn(fusion_t *fu, const raw_epoch_t *e, uint32_t tow_ms)
+ * against the filter's position, which follows the fixes (with the correlated error state
+ * db along each line of sight when it is one, as the fused ranges are), learnt as their
+ * biases (raw_bias.h); nothing is fused, refused or counted (the epoch's fix is). Learnt
+ * only while the filter takes the fixes (one within APP_RAW_BOTH_GAP_EPOCHS of their
+ * interval) with its horizontal sigma below APP_RAW_BIAS_POS_SIGMA_M and the car at
+ * APP_RAW_BIAS_SPEED_MPS or more (raw_learning), from the satellites the fault exclusion
+ * keeps, when at least APP_RAW_BIAS_MIN_SATS are left (raw_learn). */
+static int raw_learning(const fusion_t *fu, const raw_epoch_t *e)
 {
+    const fusion_ctx_t *c = e->c;
+    const nav_real_t window_samples =
+        APP_RAW_BOTH_GAP_EPOCHS * fu->gnss_ep_typ_s * (nav_real_t)c->cfg->imu_rate_hz;
+    const uint64_t window = (uint64_t)window_samples;
     const nav_real_t v2 = e->v_then[0] * e->v_then[0] + e->v_then[1] * e->v_then[1];
-    if (v2 < APP_RAW_BIAS_SPEED_MPS * APP_RAW_BIAS_SPEED_MPS) {
-        return;
-    }
-    nav_real_t z[RAW_MAX];
-    uint8_t ok[RAW_MAX];
-    for (int i = 0; i < RAW_MAX; i++) {
-        z[i] = NAV_C(0.0);
-        ok[i] = 0u;
-    }
-    raw_residuals(fu, e, 0, z, ok);
+    return app_stamp_within(&fu->fix, c->diag->n_samples, window) &&
+           ekf_sigma_h_m(&fu->ekf) < APP_RAW_BIAS_POS_SIGMA_M &&
+           v2 >= APP_RAW_BIAS_SPEED_MPS * APP_RAW_BIAS_SPEED_MPS;
+}
+
+/* z: the pseudoranges' residuals (computed minus measured), ok after the fault exclusion;
+ * z becomes the residuals learnt from */
+static void raw_learn(fusion_t *fu, const raw_epoch_t *e, nav_real_t *z, const uint8_t *ok,
+                      uint32_t tow_ms)
+{
     int n_ok;
     const nav_real_t med = median_ok(z, ok, e->n, &n_ok);
     if (n_ok < APP_RAW_BIAS_MIN_SATS) {
         return;
     }
     for (int i = 0; i < e->n; i++) {
-        const gnss_raw_sat_t *m = &e->g->sat[e->slot[i]];
-        if (ok[i] != 0u) {
-            /* z is computed minus measured */
-            raw_bias_learn(&fu->raw_bias, m->system, m->sv_id, tow_ms, med - z[i],
-                           fu->gnss_ep_typ_s);
-        }
+        z[i] = med - z[i]; /* measured minus computed, less the median */
     }
+    raw_bias_learn(&fu->raw_bias, e->g->sat, e->slot, z, ok, e->n, tow_ms, fu->gnss_ep_typ_s);
 }
 
 fusion_action_t fusion_raw(fusion_t *fu, const fusion_ctx_t *c, const gnss_raw_asm_t *g,
@@ -938,7 +946,7 @@ fusion_action_t fusion_raw(fusion_t *fu, const fusion_ctx_t *c, const gnss_raw_a
         return FUSION_GO_ON;
     }
     raw_order(&e, closed);
-    raw_geometry(fu, &e);
+    raw_geometry(fu, &e, !fixes_come);
     /* each satellite's learnt bias, removed from its range when fused (none learnt from) */
     for (int i = 0; i < e.n; i++) {
         const gnss_raw_sat_t *m = &g->sat[e.slot[i]];
@@ -950,23 +958,25 @@ fusion_action_t fusion_raw(fusion_t *fu, const fusion_ctx_t *c, const gnss_raw_a
     /* the correlated errors as the fixes' state db when it is one */
     e.use_bias = bias_is_state(fu, cfg);
     if (fixes_come) {
-        raw_learn(fu, &e, tow_ms);
-        return FUSION_GO_ON;
-    }
-    /* a reopened filter (here or by a fix) forgot the position the clock went with */
-    if (fu->ekf.n_reopened != fu->raw_reopens) {
-        fu->raw_reopens = fu->ekf.n_reopened;
-        fu->clock_valid = 0u;
-    }
-    /* 2. the clock */
-    if (fu->clock_valid != 0u && dt_s <= APP_RAW_CLOCK_KEEP_S) {
-        ekf_clock_advance(&fu->ekf, dt_s);
+        if (raw_learning(fu, &e) == 0) {
+            return FUSION_GO_ON;
+        }
     } else {
-        fu->clock_valid = 0u;
+        /* a reopened filter (here or by a fix) forgot the position the clock went with */
+        if (fu->ekf.n_reopened != fu->raw_reopens) {
+            fu->raw_reopens = fu->ekf.n_reopened;
+            fu->clock_valid = 0u;
+        }
+        /* 2. the clock */
+        if (fu->clock_valid != 0u && dt_s <= APP_RAW_CLOCK_KEEP_S) {
+            ekf_clock_advance(&fu->ekf, dt_s);
+        } else {
+            fu->clock_valid = 0u;
+        }
+        fu->raw_tow_ms = tow_ms;
+        fu->raw_have_tow = 1u;
+        fu->raw_sample = n;
     }
-    fu->raw_tow_ms = tow_ms;
-    fu->raw_have_tow = 1u;
-    fu->raw_sample = n;
     nav_real_t z_pr[RAW_MAX], z_rr[RAW_MAX];
     uint8_t ok_pr[RAW_MAX], ok_rr[RAW_MAX];
     for (int i = 0; i < RAW_MAX; i++) {
@@ -976,28 +986,36 @@ fusion_action_t fusion_raw(fusion_t *fu, const fusion_ctx_t *c, const gnss_raw_a
         ok_rr[i] = 0u;
     }
     raw_residuals(fu, &e, 0, z_pr, ok_pr);
-    raw_residuals(fu, &e, 1, z_rr, ok_rr);
+    if (!fixes_come) {
+        raw_residuals(fu, &e, 1, z_rr, ok_rr);
+    }
     int n_pr, n_rr;
     const nav_real_t med_pr = median_ok(z_pr, ok_pr, e.n, &n_pr);
     const nav_real_t med_rr = median_ok(z_rr, ok_rr, e.n, &n_rr);
     if (n_pr == 0) {
         return FUSION_GO_ON; /* nothing to measure with */
     }
-    const nav_real_t s_clk = ekf_state_sigma(&fu->ekf, EKF_CB);
-    const int jumped = fu->clock_valid != 0u && n_pr >= 2 &&
-                       nav_fabs(med_pr) > APP_RAW_CLOCK_JUMP_M &&
-                       nav_fabs(med_pr) > APP_RAW_CLOCK_JUMP_SIGMAS * s_clk;
-    if (clock_reset != 0 || jumped) {
-        app_count(&c->raw->clock_jumps);
-        fu->clock_valid = 0u;
-    }
-    if (fu->clock_valid == 0u) {
-        raw_clock_start(fu, &e, med_pr, med_rr, n_rr);
-        raw_residuals(fu, &e, 0, z_pr, ok_pr);
-        raw_residuals(fu, &e, 1, z_rr, ok_rr);
+    if (!fixes_come) {
+        const nav_real_t s_clk = ekf_state_sigma(&fu->ekf, EKF_CB);
+        const int jumped = fu->clock_valid != 0u && n_pr >= 2 &&
+                           nav_fabs(med_pr) > APP_RAW_CLOCK_JUMP_M &&
+                           nav_fabs(med_pr) > APP_RAW_CLOCK_JUMP_SIGMAS * s_clk;
+        if (clock_reset != 0 || jumped) {
+            app_count(&c->raw->clock_jumps);
+            fu->clock_valid = 0u;
+        }
+        if (fu->clock_valid == 0u) {
+            raw_clock_start(fu, &e, med_pr, med_rr, n_rr);
+            raw_residuals(fu, &e, 0, z_pr, ok_pr);
+            raw_residuals(fu, &e, 1, z_rr, ok_rr);
+        }
     }
     /* 3. fault exclusion */
     int out = raw_exclude(&e, z_pr, ok_pr, 0, sigma3(&fu->ekf, EKF_DR));
+    if (fixes_come) {
+        raw_learn(fu, &e, z_pr, ok_pr, tow_ms);
+        return FUSION_GO_ON;
+    }
     out += raw_exclude(&e, z_rr, ok_rr, 1, sigma3(&fu->ekf, EKF_DV));
     /* 4. the updates: the pseudoranges' errors correlated over gnss_corr_s, as the state
      * db (its stationary sigma the correlated part of the epoch's median range sigma) or

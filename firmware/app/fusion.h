@@ -31,10 +31,10 @@
 #include "ekf.h"
 #include "gnss_epoch.h"
 #include "gnss_raw.h"
-#include "raw_bias.h"
 #include "gnss_time.h"
 #include "landnav.h"
 #include "odo.h"
+#include "raw_bias.h"
 #include "sins.h"
 
 /* What the tightly coupled updates did (issue #20), kept over navigation restarts

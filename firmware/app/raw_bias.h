@@ -38,12 +38,20 @@ typedef struct {
     raw_bias_sat_t sat[GNSS_RAW_MAX_SATS];
 } raw_bias_t;
 
-/* One epoch's residual of one satellite (measured minus computed, less the epoch's median,
- * m) at tow_ms, the epoch counting for step_s (the receiver's usual fix interval): the
- * running mean over the first APP_RAW_BIAS_TAU_S, then an exponential average of that time
- * constant. A residual that is not finite is not learnt. */
-void raw_bias_learn(raw_bias_t *b, uint8_t system, uint8_t sv_id, uint32_t tow_ms,
-                    nav_real_t resid_m, nav_real_t step_s);
+/* One epoch's residuals at tow_ms: of satellite sat[slot[i]], resid_m[i] (measured minus
+ * computed range, less the epoch's median, m) where ok[i] is set, i < n; each learnt: the
+ * running mean over the first APP_RAW_BIAS_TAU_S of learning, then an exponential average
+ * of that time constant. Each epoch counts for the receiver's time since the satellite was
+ * last learnt, or for step_s (the receiver's usual epoch interval) for a new satellite and
+ * after a gap of over two intervals. Not learnt: a residual that is not finite, satellite
+ * number 0, all of them for a step_s not in (0, APP_RAW_BIAS_TAU_S], an epoch not after
+ * the satellite's last one (a repeat, one out of order); a satellite not learnt for
+ * APP_RAW_BIAS_KEEP_MS is learnt afresh. The satellites already in the table are learnt
+ * first; a new one takes the entry learnt longest ago, never one of this epoch's (none
+ * when all are). */
+void raw_bias_learn(raw_bias_t *b, const gnss_raw_sat_t *sat, const uint8_t *slot,
+                    const nav_real_t *resid_m, const uint8_t *ok, int n, uint32_t tow_ms,
+                    nav_real_t step_s);
 
 /* The bias to remove from the satellite's range at tow_ms into *bias_m: 1; 0 (and
  * *bias_m = 0) when it was learnt for less than APP_RAW_BIAS_MIN_S, or not within

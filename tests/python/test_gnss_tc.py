@@ -123,7 +123,8 @@ def test_a_satellite_bias_learnt_before_a_canyon_is_removed_in_it(tmp_path):
     the uncorrected fault (measured with the firmware before the learning: the canyon ended
     18.3 m off instead of 6.5 m and peaked at 39.2 m instead of 10.4 m, 134 ranges gated).
     Nearly every canyon range carries its bias (the two satellites were in view and the car
-    driving for minutes before it)."""
+    driving for minutes before it). And the learning itself changes nothing: until the
+    canyon the outputs are byte for byte those of gnss_input = fix."""
     if not NAVECU.exists():
         pytest.skip("build/host/navecu not built (make build/host/navecu)")
     canyon = ROOT / "tools" / "sim" / "scenarios" / "canyon5-raw.toml"
@@ -135,7 +136,15 @@ def test_a_satellite_bias_learnt_before_a_canyon_is_removed_in_it(tmp_path):
                       'error_m = 6.0}]\n')
     clean = run(tmp_path, canyon, "clean", "both")
     fault = run(tmp_path, biased, "bias", "both")
+    fix = run(tmp_path, canyon, "fix", "fix")
     print(f"\nclean {clean}\nbias  {fault}")
+    # learning changes nothing before a raw epoch is fused: the drive's outputs up to the
+    # canyon (800 s) are those of gnss_input = fix, byte for byte
+    def before_canyon(r):
+        lines = (r["log"].parent / "nav.log").read_text().splitlines()
+        return [ln for ln in lines if float(ln[1:ln.index(")")]) < 800.0]
+    ref = before_canyon(fix)
+    assert len(ref) > 100000 and before_canyon(clean) == ref
     assert abs(fault["canyon_end_m"] - clean["canyon_end_m"]) <= 0.5
     assert abs(fault["canyon_max_m"] - clean["canyon_max_m"]) <= 0.5
     for r in (clean, fault):
