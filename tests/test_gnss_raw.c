@@ -402,9 +402,10 @@ static void test_bias_learnt_as_the_average(void **state)
     assert_int_equal(raw_bias_of(&b, 1u, 7u, t0, &got), 0);
 }
 
-/* Each epoch counts for the receiver's time since the satellite's last one: at 2 s epochs
- * (a receiver whose fixes come faster than its raw epochs) usable after 30 of them, not 60;
- * the same epoch again, or one before it (out of order), learns nothing */
+/* Each epoch counts for the receiver's time since the satellite's last one, whatever the
+ * fix interval: raw epochs every 2 s with fixes at 5 Hz (step_s 0.2 s: the simulator's
+ * receiver) usable after 30 of them, not 60 (nor 300 counted as fix intervals, as a
+ * version did); the same epoch again, or one before it (out of order), learns nothing */
 static void test_bias_learnt_over_the_receivers_time(void **state)
 {
     (void)state;
@@ -413,14 +414,14 @@ static void test_bias_learnt_over_the_receivers_time(void **state)
     const uint32_t t0 = 100000u;
     nav_real_t got;
     for (uint32_t k = 0u; k < 30u; k++) {
-        learn1(&b, 0u, 9u, t0 + 2000u * k, NAV_C(2.0), NAV_C(1.0));
+        learn1(&b, 0u, 9u, t0 + 2000u * k, NAV_C(2.0), NAV_C(0.2));
     }
-    /* learnt 1 s (the first epoch) + 29 x 2 s = 59 s */
+    /* learnt 0.2 s (the first epoch) + 29 x 2 s = 58.2 s */
     assert_int_equal(raw_bias_of(&b, 0u, 9u, t0 + 58000u, &got), 0);
-    learn1(&b, 0u, 9u, t0 + 58000u, NAV_C(50.0), NAV_C(1.0)); /* a repeat */
-    learn1(&b, 0u, 9u, t0 + 57500u, NAV_C(50.0), NAV_C(1.0)); /* out of order */
+    learn1(&b, 0u, 9u, t0 + 58000u, NAV_C(50.0), NAV_C(0.2)); /* a repeat */
+    learn1(&b, 0u, 9u, t0 + 57500u, NAV_C(50.0), NAV_C(0.2)); /* out of order */
     assert_int_equal(raw_bias_of(&b, 0u, 9u, t0 + 58000u, &got), 0);
-    learn1(&b, 0u, 9u, t0 + 60000u, NAV_C(2.0), NAV_C(1.0));
+    learn1(&b, 0u, 9u, t0 + 60000u, NAV_C(2.0), NAV_C(0.2));
     assert_int_equal(raw_bias_of(&b, 0u, 9u, t0 + 60000u, &got), 1);
     assert_float_equal(got, 2.0, 1e-5);
 }

@@ -217,6 +217,9 @@
  * APP_RAW_BIAS_MIN_SATS satellites (their median is the clock) at APP_RAW_BIAS_SPEED_MPS or
  * more (parked, a satellite's multipath is the spot's constant, not its bias) */
 #define APP_RAW_BIAS_TAU_S NAV_C(300.0)
+/* an epoch counts for the receiver's time since the satellite's last one, at most this: a
+ * residual after a gap is one sample of a multipath that lasts tens of seconds */
+#define APP_RAW_BIAS_STEP_MAX_S NAV_C(10.0)
 #define APP_RAW_BIAS_MIN_S NAV_C(60.0)
 #define APP_RAW_BIAS_KEEP_MS 600000u
 #define APP_RAW_BIAS_MIN_SATS 4

@@ -58,10 +58,10 @@ static void learn_one(raw_bias_t *b, uint8_t system, uint8_t sv_id, nav_real_t r
         b->sat[k].system = system;
         b->sat[k].sv_id = sv_id;
         b->sat[k].learnt_s = NAV_C(0.0);
-    } else if ((nav_real_t)age <= NAV_C(2000.0) * step_s) {
-        step = (nav_real_t)age * NAV_C(0.001); /* the receiver's time since it was learnt */
     } else {
-        /* after a gap: one epoch's worth */
+        /* the receiver's time since it was learnt, at most APP_RAW_BIAS_STEP_MAX_S */
+        const nav_real_t since_s = (nav_real_t)age * NAV_C(0.001);
+        step = since_s < APP_RAW_BIAS_STEP_MAX_S ? since_s : APP_RAW_BIAS_STEP_MAX_S;
     }
     raw_bias_sat_t *s = &b->sat[k];
     s->learnt_s = s->learnt_s + step < APP_RAW_BIAS_TAU_S ? s->learnt_s + step

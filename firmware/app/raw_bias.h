@@ -42,8 +42,9 @@ typedef struct {
  * computed range, less the epoch's median, m) where ok[i] is set, i < n; each learnt: the
  * running mean over the first APP_RAW_BIAS_TAU_S of learning, then an exponential average
  * of that time constant. Each epoch counts for the receiver's time since the satellite was
- * last learnt, or for step_s (the receiver's usual epoch interval) for a new satellite and
- * after a gap of over two intervals. Not learnt: a residual that is not finite, satellite
+ * last learnt, at most APP_RAW_BIAS_STEP_MAX_S (after a gap, one epoch is one sample of the
+ * multipath), and a new satellite's first for step_s (the receiver's usual fix interval).
+ * Not learnt: a residual that is not finite, satellite
  * number 0, all of them for a step_s not in (0, APP_RAW_BIAS_TAU_S], an epoch not after
  * the satellite's last one (a repeat, one out of order); a satellite not learnt for
  * APP_RAW_BIAS_KEEP_MS is learnt afresh. The satellites already in the table are learnt
