@@ -82,10 +82,7 @@ static fusion_action_t reset(fusion_t *fu, const fusion_ctx_t *c)
     fu->gated_run = 0u;
     fu->reopen_run = 0u;
     fu->fix.seen = 0u;
-    /* the satellites' biases were learnt against the filter that diverged */
-    for (int i = 0; i < (int)GNSS_RAW_MAX_SATS; i++) {
-        fu->raw_bias.sat[i].sv_id = 0u; /* free */
-    }
+    raw_bias_forget(&fu->raw_bias); /* learnt against the filter that diverged */
     if (!sins_finite(c->nav)) {
         return FUSION_RESTART;
     }
@@ -865,18 +862,14 @@ static int raw_interval(fusion_t *fu, const fusion_ctx_t *c, uint32_t tow_ms, na
  * against the filter's position, which follows the fixes (with the correlated error state
  * db along each line of sight when it is one, as the fused ranges are), learnt as their
  * biases (raw_bias.h); nothing is fused, refused or counted (the epoch's fix is). Learnt
- * only while the filter takes the fixes (one within APP_RAW_BOTH_GAP_EPOCHS of their
- * interval) with its horizontal sigma below APP_RAW_BIAS_POS_SIGMA_M and the car at
+ * only while the filter takes the fixes (one within gap_samples: APP_RAW_BOTH_GAP_EPOCHS of
+ * their interval) with its horizontal sigma below APP_RAW_BIAS_POS_SIGMA_M and the car at
  * APP_RAW_BIAS_SPEED_MPS or more (raw_learning), from the satellites the fault exclusion
  * keeps, when at least APP_RAW_BIAS_MIN_SATS are left (raw_learn). */
-static int raw_learning(const fusion_t *fu, const raw_epoch_t *e)
+static int raw_learning(const fusion_t *fu, const raw_epoch_t *e, nav_real_t gap_samples)
 {
-    const fusion_ctx_t *c = e->c;
-    const nav_real_t window_samples =
-        APP_RAW_BOTH_GAP_EPOCHS * fu->gnss_ep_typ_s * (nav_real_t)c->cfg->imu_rate_hz;
-    const uint64_t window = (uint64_t)window_samples;
     const nav_real_t v2 = e->v_then[0] * e->v_then[0] + e->v_then[1] * e->v_then[1];
-    return app_stamp_within(&fu->fix, c->diag->n_samples, window) &&
+    return app_stamp_within(&fu->fix, e->c->diag->n_samples, (uint64_t)gap_samples) &&
            ekf_sigma_h_m(&fu->ekf) < APP_RAW_BIAS_POS_SIGMA_M &&
            v2 >= APP_RAW_BIAS_SPEED_MPS * APP_RAW_BIAS_SPEED_MPS;
 }
@@ -910,10 +903,11 @@ fusion_action_t fusion_raw(fusion_t *fu, const fusion_ctx_t *c, const gnss_raw_a
     /* gnss_input = both: the raw measurements only while the receiver gives no fixes (none
      * offered for APP_RAW_BOTH_GAP_EPOCHS of its usual intervals): an epoch's fix and its raw
      * measurements are the same information, whichever comes first on the bus */
-    const int fixes_come =
-        cfg->gnss_input == GNSS_INPUT_BOTH && fu->gnss_ep_typ_s > NAV_C(0.0) &&
-        (nav_real_t)(n - fu->prev_fix_sample) <
-            APP_RAW_BOTH_GAP_EPOCHS * fu->gnss_ep_typ_s * (nav_real_t)cfg->imu_rate_hz;
+    const nav_real_t gap_samples =
+        APP_RAW_BOTH_GAP_EPOCHS * fu->gnss_ep_typ_s * (nav_real_t)cfg->imu_rate_hz;
+    const int fixes_come = cfg->gnss_input == GNSS_INPUT_BOTH &&
+                           fu->gnss_ep_typ_s > NAV_C(0.0) &&
+                           (nav_real_t)(n - fu->prev_fix_sample) < gap_samples;
     nav_real_t dt_s = NAV_C(0.0);
     if (!fixes_come && !raw_interval(fu, c, tow_ms, &dt_s)) {
         app_diag_reject(c->diag, &c->diag->health->bad_counter);
@@ -958,7 +952,7 @@ fusion_action_t fusion_raw(fusion_t *fu, const fusion_ctx_t *c, const gnss_raw_a
     /* the correlated errors as the fixes' state db when it is one */
     e.use_bias = bias_is_state(fu, cfg);
     if (fixes_come) {
-        if (raw_learning(fu, &e) == 0) {
+        if (raw_learning(fu, &e, gap_samples) == 0) {
             return FUSION_GO_ON;
         }
     } else {

@@ -24,6 +24,16 @@ void gnss_time_record(gnss_time_t *g, uint64_t n_samples, uint32_t imu_rate_hz,
     g->vhist_n++;
 }
 
+/* w's lateness (late_us beyond the on-time epochs' offset; none if below), entry spacing
+ * and reach back */
+static void when_late(const gnss_time_t *g, gnss_when_t *w, int64_t late_us,
+                      uint32_t imu_rate_hz, nav_real_t latency_s)
+{
+    w->late_s = late_us > 0 ? (nav_real_t)late_us * NAV_C(1e-6) : NAV_C(0.0);
+    w->entry_s = (nav_real_t)vhist_div(imu_rate_hz) / (nav_real_t)imu_rate_hz;
+    gnss_time_reach(g, w, latency_s);
+}
+
 gnss_when_t gnss_time_align(gnss_time_t *g, uint64_t imu_t_us, uint32_t imu_rate_hz,
                             uint32_t tow_ms, nav_real_t latency_s)
 {
@@ -57,9 +67,7 @@ gnss_when_t gnss_time_align(gnss_time_t *g, uint64_t imu_t_us, uint32_t imu_rate
     if (jumped) {
         gnss_time_unlearn(g); /* a receiver reset: its latency may be another */
     }
-    w.late_s = (nav_real_t)(off - g->off_min_us) * NAV_C(1e-6);
-    w.entry_s = (nav_real_t)vhist_div(imu_rate_hz) / (nav_real_t)imu_rate_hz;
-    gnss_time_reach(g, &w, latency_s);
+    when_late(g, &w, off - g->off_min_us, imu_rate_hz, latency_s); /* off >= off_min_us */
     return w;
 }
 
@@ -69,9 +77,7 @@ gnss_when_t gnss_time_peek(const gnss_time_t *g, uint64_t imu_t_us, uint32_t imu
     gnss_when_t w;
     const int64_t late = (int64_t)imu_t_us - (int64_t)tow_ms * 1000 - g->off_min_us;
     w.jumped = 0u;
-    w.late_s = late > 0 ? (nav_real_t)late * NAV_C(1e-6) : NAV_C(0.0);
-    w.entry_s = (nav_real_t)vhist_div(imu_rate_hz) / (nav_real_t)imu_rate_hz;
-    gnss_time_reach(g, &w, latency_s);
+    when_late(g, &w, late, imu_rate_hz, latency_s);
     if (g->off_valid == 0u || late > APP_GNSS_LATE_US) {
         w.in_history = 0u;
         w.before_history = 0u;

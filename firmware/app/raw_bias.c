@@ -40,11 +40,11 @@ static int entry_for_new(const raw_bias_t *b, uint32_t tow_ms)
     return k;
 }
 
-/* one satellite's residual (raw_bias_learn) */
-static void learn_one(raw_bias_t *b, uint8_t system, uint8_t sv_id, nav_real_t resid_m,
-                      uint32_t tow_ms, nav_real_t step_s)
+/* one satellite's residual (raw_bias_learn); k its entry, -1: none yet */
+static void learn_one(raw_bias_t *b, int k_in, uint8_t system, uint8_t sv_id,
+                      nav_real_t resid_m, uint32_t tow_ms, nav_real_t step_s)
 {
-    int k = index_of(b, system, sv_id);
+    int k = k_in;
     const int64_t age = k >= 0 ? age_ms(&b->sat[k], tow_ms) : INT64_MAX;
     if (k >= 0 && age <= 0) {
         return; /* this epoch again, or one before the last learnt: nothing new */
@@ -82,12 +82,20 @@ void raw_bias_learn(raw_bias_t *b, const gnss_raw_sat_t *sat, const uint8_t *slo
     for (int pass = 0; pass < 2; pass++) {
         for (int i = 0; i < n && i < (int)GNSS_RAW_MAX_SATS; i++) {
             const gnss_raw_sat_t *m = &sat[slot[i] % GNSS_RAW_MAX_SATS];
-            const uint8_t known = index_of(b, m->system, m->sv_id) >= 0 ? 1u : 0u;
+            const int k = index_of(b, m->system, m->sv_id);
+            const uint8_t known = k >= 0 ? 1u : 0u;
             const uint8_t wanted = pass == 0 ? 1u : 0u;
             if (ok[i] != 0u && m->sv_id != 0u && nav_isfinite(resid_m[i]) && known == wanted) {
-                learn_one(b, m->system, m->sv_id, resid_m[i], tow_ms, step_s);
+                learn_one(b, k, m->system, m->sv_id, resid_m[i], tow_ms, step_s);
             }
         }
+    }
+}
+
+void raw_bias_forget(raw_bias_t *b)
+{
+    for (int i = 0; i < (int)GNSS_RAW_MAX_SATS; i++) {
+        b->sat[i].sv_id = 0u; /* free */
     }
 }
 

@@ -54,6 +54,9 @@ void raw_bias_learn(raw_bias_t *b, const gnss_raw_sat_t *sat, const uint8_t *slo
                     const nav_real_t *resid_m, const uint8_t *ok, int n, uint32_t tow_ms,
                     nav_real_t step_s);
 
+/* Every satellite forgotten (the table empty). */
+void raw_bias_forget(raw_bias_t *b);
+
 /* The bias to remove from the satellite's range at tow_ms into *bias_m: 1; 0 (and
  * *bias_m = 0) when it was learnt for less than APP_RAW_BIAS_MIN_S, or not within
  * APP_RAW_BIAS_KEEP_MS before tow_ms. */
