@@ -698,12 +698,14 @@ static void raw_geometry(fusion_t *fu, const raw_epoch_t *e, int count)
 }
 
 /* residuals (computed minus measured) of every satellite's pseudorange (rate = 0) or
- * range rate (rate = 1) against the filter's estimates, ok[i] = 0 where none */
+ * range rate (rate = 1) against the filter's estimates, ok[i] = 0 where none (z[i] then 0,
+ * or not finite) */
 static void raw_residuals(const fusion_t *fu, const raw_epoch_t *e, int rate, nav_real_t *z,
                           uint8_t *ok)
 {
     for (int i = 0; i < e->n; i++) {
         nav_real_t h[EKF_N];
+        z[i] = NAV_C(0.0);
         ok[i] = (uint8_t)raw_row(fu, e, i, rate, h, &z[i]);
     }
 }
@@ -864,21 +866,21 @@ static int raw_interval(fusion_t *fu, const fusion_ctx_t *c, uint32_t tow_ms, na
  * biases (raw_bias.h); nothing is fused, refused or counted (the epoch's fix is). Learnt
  * only while the filter takes the fixes (one within gap_samples: APP_RAW_BOTH_GAP_EPOCHS of
  * their interval) with its horizontal sigma below APP_RAW_BIAS_POS_SIGMA_M and the car at
- * APP_RAW_BIAS_SPEED_MPS or more (raw_learning), from the satellites the fault exclusion
- * keeps, when at least APP_RAW_BIAS_MIN_SATS are left (raw_learn). */
-static int raw_learning(const fusion_t *fu, const raw_epoch_t *e, nav_real_t gap_samples)
-{
-    const nav_real_t v2 = e->v_then[0] * e->v_then[0] + e->v_then[1] * e->v_then[1];
-    return app_stamp_within(&fu->fix, e->c->diag->n_samples, (uint64_t)gap_samples) &&
-           ekf_sigma_h_m(&fu->ekf) < APP_RAW_BIAS_POS_SIGMA_M &&
-           v2 >= APP_RAW_BIAS_SPEED_MPS * APP_RAW_BIAS_SPEED_MPS;
-}
-
-/* z: the pseudoranges' residuals (computed minus measured), ok after the fault exclusion;
- * z becomes the residuals learnt from */
-static void raw_learn(fusion_t *fu, const raw_epoch_t *e, nav_real_t *z, const uint8_t *ok,
+ * APP_RAW_BIAS_SPEED_MPS or more, from the satellites the fault exclusion keeps, when at
+ * least APP_RAW_BIAS_MIN_SATS are left. */
+static void raw_learn(fusion_t *fu, const raw_epoch_t *e, nav_real_t gap_samples,
                       uint32_t tow_ms)
 {
+    const nav_real_t v2 = e->v_then[0] * e->v_then[0] + e->v_then[1] * e->v_then[1];
+    if (!app_stamp_within(&fu->fix, e->c->diag->n_samples, (uint64_t)gap_samples) ||
+        ekf_sigma_h_m(&fu->ekf) >= APP_RAW_BIAS_POS_SIGMA_M ||
+        v2 < APP_RAW_BIAS_SPEED_MPS * APP_RAW_BIAS_SPEED_MPS) {
+        return;
+    }
+    nav_real_t z[RAW_MAX];
+    uint8_t ok[RAW_MAX];
+    raw_residuals(fu, e, 0, z, ok);
+    (void)raw_exclude(e, z, ok, 0, sigma3(&fu->ekf, EKF_DR));
     int n_ok;
     const nav_real_t med = median_ok(z, ok, e->n, &n_ok);
     if (n_ok < APP_RAW_BIAS_MIN_SATS) {
@@ -890,149 +892,87 @@ static void raw_learn(fusion_t *fu, const raw_epoch_t *e, nav_real_t *z, const u
     raw_bias_learn(&fu->raw_bias, e->g->sat, e->slot, z, ok, e->n, tow_ms, fu->gnss_ep_typ_s);
 }
 
-fusion_action_t fusion_raw(fusion_t *fu, const fusion_ctx_t *c, const gnss_raw_asm_t *g,
-                           const gnss_raw_close_t *closed, uint32_t tow_ms, int clock_reset,
-                           int *adopt)
+/* Steps 2 and 3 of a fused epoch: the clock moved on (or estimated afresh), then the fault
+ * exclusion; the residuals and their usable flags in z_pr/ok_pr and z_rr/ok_rr. Returns the
+ * number excluded, or -1 when no pseudorange is usable (nothing to measure with). */
+static int raw_clock_exclude(fusion_t *fu, const raw_epoch_t *e, nav_real_t dt_s,
+                             uint32_t tow_ms, int clock_reset, nav_real_t *z_pr,
+                             uint8_t *ok_pr, nav_real_t *z_rr, uint8_t *ok_rr)
 {
+    /* a reopened filter (here or by a fix) forgot the position the clock went with */
+    if (fu->ekf.n_reopened != fu->raw_reopens) {
+        fu->raw_reopens = fu->ekf.n_reopened;
+        fu->clock_valid = 0u;
+    }
+    if (fu->clock_valid != 0u && dt_s <= APP_RAW_CLOCK_KEEP_S) {
+        ekf_clock_advance(&fu->ekf, dt_s);
+    } else {
+        fu->clock_valid = 0u;
+    }
+    fu->raw_tow_ms = tow_ms;
+    fu->raw_have_tow = 1u;
+    fu->raw_sample = e->c->diag->n_samples;
+    raw_residuals(fu, e, 0, z_pr, ok_pr);
+    raw_residuals(fu, e, 1, z_rr, ok_rr);
+    int n_pr, n_rr;
+    const nav_real_t med_pr = median_ok(z_pr, ok_pr, e->n, &n_pr);
+    const nav_real_t med_rr = median_ok(z_rr, ok_rr, e->n, &n_rr);
+    if (n_pr == 0) {
+        return -1;
+    }
+    const nav_real_t s_clk = ekf_state_sigma(&fu->ekf, EKF_CB);
+    const int jumped = fu->clock_valid != 0u && n_pr >= 2 &&
+                       nav_fabs(med_pr) > APP_RAW_CLOCK_JUMP_M &&
+                       nav_fabs(med_pr) > APP_RAW_CLOCK_JUMP_SIGMAS * s_clk;
+    if (clock_reset != 0 || jumped) {
+        app_count(&e->c->raw->clock_jumps);
+        fu->clock_valid = 0u;
+    }
+    if (fu->clock_valid == 0u) {
+        raw_clock_start(fu, e, med_pr, med_rr, n_rr);
+        raw_residuals(fu, e, 0, z_pr, ok_pr);
+        raw_residuals(fu, e, 1, z_rr, ok_rr);
+    }
+    const int out = raw_exclude(e, z_pr, ok_pr, 0, sigma3(&fu->ekf, EKF_DR));
+    return out + raw_exclude(e, z_rr, ok_rr, 1, sigma3(&fu->ekf, EKF_DV));
+}
+
+/* A fused epoch (gnss_input = raw, or both without fixes): steps 2 to 4 and the
+ * supervision after them */
+static fusion_action_t raw_fuse(fusion_t *fu, const raw_epoch_t *e, nav_real_t dt_s,
+                                uint32_t tow_ms, int clock_reset, int *adopt)
+{
+    const fusion_ctx_t *c = e->c;
     const app_config_t *cfg = c->cfg;
-    const uint64_t n = c->diag->n_samples;
-    *adopt = 0;
-    if (!fu->on || cfg->gnss_input == GNSS_INPUT_FIX) {
-        return FUSION_GO_ON;
-    }
-    /* gnss_input = both: the raw measurements only while the receiver gives no fixes (none
-     * offered for APP_RAW_BOTH_GAP_EPOCHS of its usual intervals): an epoch's fix and its raw
-     * measurements are the same information, whichever comes first on the bus */
-    const nav_real_t gap_samples =
-        APP_RAW_BOTH_GAP_EPOCHS * fu->gnss_ep_typ_s * (nav_real_t)cfg->imu_rate_hz;
-    const int fixes_come = cfg->gnss_input == GNSS_INPUT_BOTH &&
-                           fu->gnss_ep_typ_s > NAV_C(0.0) &&
-                           (nav_real_t)(n - fu->prev_fix_sample) < gap_samples;
-    nav_real_t dt_s = NAV_C(0.0);
-    if (!fixes_come && !raw_interval(fu, c, tow_ms, &dt_s)) {
-        app_diag_reject(c->diag, &c->diag->health->bad_counter);
-        return FUSION_GO_ON;
-    }
-    const nav_real_t latency_s = gnss_time_latency(c->time, cfg->gnss_latency_s);
-    gnss_when_t when;
-    if (fixes_come) {
-        /* the epoch's fix is the one that aligns the receiver's time */
-        when = gnss_time_peek(c->time, c->diag->t_us, cfg->imu_rate_hz, tow_ms, latency_s);
-    } else {
-        when = gnss_time_align(c->time, c->diag->t_us, cfg->imu_rate_hz, tow_ms, latency_s);
-        if (when.jumped) {
-            app_count(&c->diag->health->time_jumps);
-        }
-    }
-    raw_epoch_t e;
-    nav_real_t d[3];
-    /* an epoch only learnt from is not refused (its fix is the one that counts) */
-    if ((fixes_come && !when.in_history) || !epoch_then(c, &when, d, &e.then)) {
-        return FUSION_GO_ON;
-    }
-    e.c = c;
-    e.g = g;
-    e.v_then = gnss_time_velocity_then(c->time, &when);
-    if (ekf_antenna(c->nav, &e.then, cfg->gnss_lever_b_m, &e.ant) != NAV_OK) {
-        if (!fixes_come) {
-            app_diag_reject(c->diag, &c->diag->health->gnss_rejected);
-        }
-        return FUSION_GO_ON;
-    }
-    raw_order(&e, closed);
-    raw_geometry(fu, &e, !fixes_come);
-    /* each satellite's learnt bias, removed from its range when fused (none learnt from) */
-    for (int i = 0; i < e.n; i++) {
-        const gnss_raw_sat_t *m = &g->sat[e.slot[i]];
-        fu->raw_corr_on[i] = (!fixes_come && raw_bias_of(&fu->raw_bias, m->system, m->sv_id,
-                                                         tow_ms, &fu->raw_corr_m[i]) != 0)
-                                 ? 1u
-                                 : 0u;
-    }
-    /* the correlated errors as the fixes' state db when it is one */
-    e.use_bias = bias_is_state(fu, cfg);
-    if (fixes_come) {
-        if (raw_learning(fu, &e, gap_samples) == 0) {
-            return FUSION_GO_ON;
-        }
-    } else {
-        /* a reopened filter (here or by a fix) forgot the position the clock went with */
-        if (fu->ekf.n_reopened != fu->raw_reopens) {
-            fu->raw_reopens = fu->ekf.n_reopened;
-            fu->clock_valid = 0u;
-        }
-        /* 2. the clock */
-        if (fu->clock_valid != 0u && dt_s <= APP_RAW_CLOCK_KEEP_S) {
-            ekf_clock_advance(&fu->ekf, dt_s);
-        } else {
-            fu->clock_valid = 0u;
-        }
-        fu->raw_tow_ms = tow_ms;
-        fu->raw_have_tow = 1u;
-        fu->raw_sample = n;
-    }
     nav_real_t z_pr[RAW_MAX], z_rr[RAW_MAX];
     uint8_t ok_pr[RAW_MAX], ok_rr[RAW_MAX];
-    for (int i = 0; i < RAW_MAX; i++) {
-        z_pr[i] = NAV_C(0.0);
-        z_rr[i] = NAV_C(0.0);
-        ok_pr[i] = 0u;
-        ok_rr[i] = 0u;
-    }
-    raw_residuals(fu, &e, 0, z_pr, ok_pr);
-    if (!fixes_come) {
-        raw_residuals(fu, &e, 1, z_rr, ok_rr);
-    }
-    int n_pr, n_rr;
-    const nav_real_t med_pr = median_ok(z_pr, ok_pr, e.n, &n_pr);
-    const nav_real_t med_rr = median_ok(z_rr, ok_rr, e.n, &n_rr);
-    if (n_pr == 0) {
-        return FUSION_GO_ON; /* nothing to measure with */
-    }
-    if (!fixes_come) {
-        const nav_real_t s_clk = ekf_state_sigma(&fu->ekf, EKF_CB);
-        const int jumped = fu->clock_valid != 0u && n_pr >= 2 &&
-                           nav_fabs(med_pr) > APP_RAW_CLOCK_JUMP_M &&
-                           nav_fabs(med_pr) > APP_RAW_CLOCK_JUMP_SIGMAS * s_clk;
-        if (clock_reset != 0 || jumped) {
-            app_count(&c->raw->clock_jumps);
-            fu->clock_valid = 0u;
-        }
-        if (fu->clock_valid == 0u) {
-            raw_clock_start(fu, &e, med_pr, med_rr, n_rr);
-            raw_residuals(fu, &e, 0, z_pr, ok_pr);
-            raw_residuals(fu, &e, 1, z_rr, ok_rr);
-        }
-    }
-    /* 3. fault exclusion */
-    int out = raw_exclude(&e, z_pr, ok_pr, 0, sigma3(&fu->ekf, EKF_DR));
-    if (fixes_come) {
-        raw_learn(fu, &e, z_pr, ok_pr, tow_ms);
+    const int out =
+        raw_clock_exclude(fu, e, dt_s, tow_ms, clock_reset, z_pr, ok_pr, z_rr, ok_rr);
+    if (out < 0) {
         return FUSION_GO_ON;
     }
-    out += raw_exclude(&e, z_rr, ok_rr, 1, sigma3(&fu->ekf, EKF_DV));
     /* 4. the updates: the pseudoranges' errors correlated over gnss_corr_s, as the state
      * db (its stationary sigma the correlated part of the epoch's median range sigma) or
      * by inflating their variance */
     const nav_real_t ep_s = dt_s > APP_GNSS_EPOCH_MIN_S ? dt_s : APP_GNSS_EPOCH_MIN_S;
     nav_real_t r_scale = corr_spans(cfg->gnss_corr_s, ep_s);
-    if (e.use_bias != 0) {
+    if (e->use_bias != 0) {
         nav_real_t sg[RAW_MAX];
-        for (int i = 0; i < e.n; i++) {
-            sg[i] = pr_sigma_m(&g->sat[e.slot[i]]);
+        for (int i = 0; i < e->n; i++) {
+            sg[i] = pr_sigma_m(&e->g->sat[e->slot[i]]);
         }
-        bias_step(fu, cfg, n,
-                  median_of(sg, e.n) *
+        bias_step(fu, cfg, c->diag->n_samples,
+                  median_of(sg, e->n) *
                       nav_sqrt(NAV_C(1.0) - cfg->gnss_white_ratio * cfg->gnss_white_ratio));
         r_scale = NAV_C(1.0);
     }
-    const nav_real_t v2 = e.v_then[0] * e.v_then[0] + e.v_then[1] * e.v_then[1];
+    const nav_real_t v2 = e->v_then[0] * e->v_then[0] + e->v_then[1] * e->v_then[1];
     const nav_real_t v_min = APP_GNSS_HEADING_SPEED_SIGMAS * APP_RAW_RR_SIGMA_MIN_MPS;
     fu->ekf.hold_heading = v2 < v_min * v_min ? 1u : 0u;
     int gated = 0;
     int corrected = 0;
-    const int pr_used = raw_updates(fu, &e, ok_pr, 0, r_scale, &gated, &corrected);
-    const int rr_used = raw_updates(fu, &e, ok_rr, 1, NAV_C(1.0), &gated, &corrected);
+    const int pr_used = raw_updates(fu, e, ok_pr, 0, r_scale, &gated, &corrected);
+    const int rr_used = raw_updates(fu, e, ok_rr, 1, NAV_C(1.0), &gated, &corrected);
     fu->ekf.hold_heading = 0u;
     app_count_n(&c->raw->pr_used, (uint32_t)pr_used);
     app_count_n(&c->raw->rr_used, (uint32_t)rr_used);
@@ -1051,4 +991,73 @@ fusion_action_t fusion_raw(fusion_t *fu, const fusion_ctx_t *c, const gnss_raw_a
     const fusion_action_t act = supervise(fu, c, &was_reset);
     *adopt = !was_reset;
     return act;
+}
+
+fusion_action_t fusion_raw(fusion_t *fu, const fusion_ctx_t *c, const gnss_raw_asm_t *g,
+                           const gnss_raw_close_t *closed, uint32_t tow_ms, int clock_reset,
+                           int *adopt)
+{
+    const app_config_t *cfg = c->cfg;
+    *adopt = 0;
+    if (!fu->on || cfg->gnss_input == GNSS_INPUT_FIX) {
+        return FUSION_GO_ON;
+    }
+    /* gnss_input = both: the raw measurements only while the receiver gives no fixes (none
+     * offered for APP_RAW_BOTH_GAP_EPOCHS of its usual intervals): an epoch's fix and its raw
+     * measurements are the same information, whichever comes first on the bus */
+    const nav_real_t gap_samples =
+        APP_RAW_BOTH_GAP_EPOCHS * fu->gnss_ep_typ_s * (nav_real_t)cfg->imu_rate_hz;
+    const int fixes_come = cfg->gnss_input == GNSS_INPUT_BOTH &&
+                           fu->gnss_ep_typ_s > NAV_C(0.0) &&
+                           (nav_real_t)(c->diag->n_samples - fu->prev_fix_sample) < gap_samples;
+    const int fuse = !fixes_come;
+    nav_real_t dt_s = NAV_C(0.0);
+    if (fuse && !raw_interval(fu, c, tow_ms, &dt_s)) {
+        app_diag_reject(c->diag, &c->diag->health->bad_counter);
+        return FUSION_GO_ON;
+    }
+    /* 1. the epoch's time of validity: a fused epoch aligns the receiver's time, one only
+     * learnt from peeks (the epoch's fix is the one that aligns it) */
+    const nav_real_t latency_s = gnss_time_latency(c->time, cfg->gnss_latency_s);
+    gnss_when_t when;
+    if (fixes_come) {
+        when = gnss_time_peek(c->time, c->diag->t_us, cfg->imu_rate_hz, tow_ms, latency_s);
+    } else {
+        when = gnss_time_align(c->time, c->diag->t_us, cfg->imu_rate_hz, tow_ms, latency_s);
+        if (when.jumped) {
+            app_count(&c->diag->health->time_jumps);
+        }
+    }
+    raw_epoch_t e;
+    nav_real_t d[3];
+    /* an epoch only learnt from is not refused (its fix is the one that counts) */
+    if ((fixes_come && !when.in_history) || !epoch_then(c, &when, d, &e.then)) {
+        return FUSION_GO_ON;
+    }
+    e.c = c;
+    e.g = g;
+    e.v_then = gnss_time_velocity_then(c->time, &when);
+    if (ekf_antenna(c->nav, &e.then, cfg->gnss_lever_b_m, &e.ant) != NAV_OK) {
+        if (fuse) {
+            app_diag_reject(c->diag, &c->diag->health->gnss_rejected);
+        }
+        return FUSION_GO_ON;
+    }
+    raw_order(&e, closed);
+    raw_geometry(fu, &e, fuse);
+    /* each satellite's learnt bias, removed from its range when fused (none learnt from) */
+    for (int i = 0; i < e.n; i++) {
+        const gnss_raw_sat_t *m = &g->sat[e.slot[i]];
+        fu->raw_corr_on[i] = (fuse && raw_bias_of(&fu->raw_bias, m->system, m->sv_id, tow_ms,
+                                                  &fu->raw_corr_m[i]) != 0)
+                                 ? 1u
+                                 : 0u;
+    }
+    /* the correlated errors as the fixes' state db when it is one */
+    e.use_bias = bias_is_state(fu, cfg);
+    if (fixes_come) {
+        raw_learn(fu, &e, gap_samples, tow_ms);
+        return FUSION_GO_ON;
+    }
+    return raw_fuse(fu, &e, dt_s, tow_ms, clock_reset, adopt);
 }
