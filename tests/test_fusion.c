@@ -675,6 +675,125 @@ static void test_odometer_reading_moved_through_a_stop_not_used(void **state)
     assert_near(moved_on(1.0, 2.0, 0.6f, 0.5f), 0.8, 0.002);
 }
 
+
+/* ---- gnss_input = both: the satellites' biases learnt while the fixes come (raw_bias.h) */
+
+#define LEARN_SATS 5
+#define LEARN_TOW0_MS 100000u
+
+/* satellite i of an epoch at P0's sky: elevation and azimuth (deg), system 0, PRN 10 + i */
+static const double LEARN_EL_AZ[LEARN_SATS][2] = {
+    {80.0, 0.0}, {50.0, 90.0}, {40.0, 200.0}, {30.0, 300.0}, {20.0, 150.0}};
+
+/* An epoch of the first n satellites whose pseudoranges are their ranges from the
+ * navigator's antenna now (the filter's own computation, ekf_rows_pseudorange) plus
+ * bias_m[i]: the residual the filter forms is then -bias_m[i] to the 0.02 m unit. */
+static void learn_epoch(gnss_raw_asm_t *g, gnss_raw_close_t *cl, int n, const double *bias_m)
+{
+    memset(g, 0, sizeof *g);
+    memset(cl, 0, sizeof *cl);
+    int64_t rx_dmm[3];
+    geo_to_ecef_dmm(&nav.pos, rx_dmm);
+    const double lat = 45.0 * DEG, lon = 10.0 * DEG;
+    const double sl = sin(lat), clat = cos(lat), so = sin(lon), co = cos(lon);
+    const double E[3][3] = {{-so, co, 0.0}, {-sl * co, -sl * so, clat}, {clat * co, clat * so, sl}};
+    ekf_antenna_t a;
+    assert_int_equal(ekf_antenna(&nav, &nav.pos, cfg.gnss_lever_b_m, &a), NAV_OK);
+    for (int i = 0; i < n; i++) {
+        const double el = LEARN_EL_AZ[i][0] * DEG, az = LEARN_EL_AZ[i][1] * DEG;
+        const double los_n[3] = {cos(el) * sin(az), cos(el) * cos(az), sin(el)};
+        double rx[3], los[3], b = 0.0, r2 = 0.0;
+        for (int j = 0; j < 3; j++) {
+            rx[j] = (double)rx_dmm[j] / GNSS_GEOM_DMM_PER_M;
+            los[j] = E[0][j] * los_n[0] + E[1][j] * los_n[1] + E[2][j] * los_n[2];
+        }
+        for (int j = 0; j < 3; j++) {
+            b += rx[j] * los[j];
+            r2 += rx[j] * rx[j];
+        }
+        const double rho = -b + sqrt(b * b - r2 + 26.56e6 * 26.56e6);
+        gnss_raw_sat_t *m = &g->sat[i];
+        for (int j = 0; j < 3; j++) {
+            m->pos_lsb[j] = (int32_t)llround((rx[j] + rho * los[j]) / 0.02);
+        }
+        m->pr_lsb = (uint32_t)llround(rho / 0.02);
+        ekf_sat_t sat;
+        assert_int_equal(ekf_sat_geometry(&a, m->pos_lsb, m->vel_lsb, &sat), NAV_OK);
+        nav_real_t h[EKF_N], z;
+        ekf_rows_pseudorange(&fu.ekf, &a, &sat, m->pr_lsb, 0, h, &z);
+        /* z is computed minus measured: measured longer by z + bias */
+        m->pr_lsb = (uint32_t)((int64_t)m->pr_lsb + llround(((double)z + bias_m[i]) / 0.02));
+        m->system = 0u;
+        m->sv_id = (uint8_t)(10 + i);
+        m->elevation_deg = (uint8_t)LEARN_EL_AZ[i][0];
+        m->pr_valid = 1u;
+        m->rr_valid = 0u;
+        cl->complete = (uint16_t)(cl->complete | (1u << i));
+    }
+    cl->n_sats = (uint8_t)n;
+    cl->usable = 1u;
+}
+
+/* GIVEN gnss_input = both, a car at speed_mps north with its history, a fix each 10 s
+ * declared hacc_m (taken: the filter follows them), and each fix's raw epoch of n_sats
+ * satellites, the fifth 4 m long, for 80 s WHEN the epochs come THEN per satellite
+ * whether a bias is in use, and its value (4 m less the median, 0, for the fifth) */
+static int learnt_after(double speed_mps, float hacc_m, int n_sats, nav_real_t *bias5_m)
+{
+    const nav_real_t v[3] = {0.0f, (nav_real_t)speed_mps, 0.0f};
+    start_at(0.0, v);
+    cfg.gnss_input = GNSS_INPUT_BOTH;
+    cfg.gnss_latency_s = 0.0f;
+    static const double bias_m[LEARN_SATS] = {0.0, 0.0, 0.0, 0.0, 4.0};
+    static gnss_raw_asm_t g;
+    gnss_raw_close_t cl;
+    uint32_t tow = LEARN_TOW0_MS;
+    for (int k = 0; k <= 8; k++, tow += 10000u) {
+        gnss_fix_t f = fix_at(450000000, 100000000, v);
+        f.hacc_m = hacc_m;
+        f.tow_ms = tow;
+        int adopt;
+        assert_int_equal(fusion_gnss(&fu, &ctx, &PRIOR, &f, &adopt), FUSION_GO_ON);
+        assert_int_equal(fu.on, 1);
+        learn_epoch(&g, &cl, n_sats, bias_m);
+        assert_int_equal(fusion_raw(&fu, &ctx, &g, &cl, tow, 0, &adopt), FUSION_GO_ON);
+        /* learnt, never fused: nothing counted */
+        assert_int_equal(ctx.raw->epochs_used, 0u);
+    }
+    int n_in_use = 0;
+    for (int i = 0; i < n_sats; i++) {
+        nav_real_t b;
+        if (raw_bias_of(&fu.raw_bias, 0u, (uint8_t)(10 + i), tow - 10000u, &b) != 0) {
+            n_in_use++;
+            if (i == 4) {
+                *bias5_m = b;
+            } else {
+                assert_true(fabsf(b) < 0.05f);
+            }
+        }
+    }
+    return n_in_use;
+}
+
+/* The learning's conditions (fusion.c raw_learn): GIVEN five satellites, one 4 m long,
+ * at 10 m/s with fixes declared 2 m THEN after 80 s each has its bias, the long one 4 m
+ * (to the ranges' 0.02 m unit and the float32 average); standing (1 m/s, under
+ * APP_RAW_BIAS_SPEED_MPS), with the filter's horizontal sigma above
+ * APP_RAW_BIAS_POS_SIGMA_M (fixes declared 30 m), or with three satellites (under
+ * APP_RAW_BIAS_MIN_SATS) THEN none is learnt. */
+static void test_biases_learnt_only_moving_with_good_fixes(void **state)
+{
+    (void)state;
+    nav_real_t b5 = 0.0f;
+    assert_int_equal(learnt_after(10.0, 2.0f, LEARN_SATS, &b5), LEARN_SATS);
+    assert_near(b5, 4.0, 0.05);
+    assert_true(ekf_sigma_h_m(&fu.ekf) < APP_RAW_BIAS_POS_SIGMA_M);
+    assert_int_equal(learnt_after(1.0, 2.0f, LEARN_SATS, &b5), 0);
+    assert_int_equal(learnt_after(10.0, 30.0f, LEARN_SATS, &b5), 0);
+    assert_true(ekf_sigma_h_m(&fu.ekf) >= APP_RAW_BIAS_POS_SIGMA_M);
+    assert_int_equal(learnt_after(10.0, 2.0f, 3, &b5), 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -699,6 +818,7 @@ int main(void)
         cmocka_unit_test_setup(test_odometer_reading_moved_on_by_its_latency, setup),
         cmocka_unit_test_setup(test_odometer_reading_moved_through_a_stop_not_used, setup),
         cmocka_unit_test(test_reported_accuracy_keeps_the_correlated_error),
+        cmocka_unit_test(test_biases_learnt_only_moving_with_good_fixes),
     };
     return cmocka_run_group_tests_name("fusion", tests, NULL, NULL);
 }
