@@ -240,3 +240,21 @@ def test_docs_test_vector_is_what_the_encoder_sends():
     for msg in gr.encode_epoch(nc.E2ESender(db), ep, 3, 0.0):
         name = db.get_message_by_frame_id(msg.arbitration_id).name
         assert msg.data.hex(" ").upper() == rows[name], name
+
+
+def test_a_scenario_sets_the_receivers_figures():
+    """[gnss_raw] receiver = {...} sets ReceiverSpec's figures (tools/sim/scenario.py): a
+    scenario based on canyon5-raw keeps its canyon (the table merged key by key) and has
+    the errors it switches off at zero, the others at their defaults; an unknown figure,
+    or the canyons given there, is refused."""
+    base = receiver.spec_of(scenario.load("canyon5-raw")["gnss_raw"])
+    exact = receiver.spec_of(scenario.load("canyon5-raw-exact")["gnss_raw"])
+    assert exact.canyons == base.canyons == [(800, 1100, 4.0, 2)]
+    assert base.orbit_clock_m > 0.0 and base.code_noise_m > 0.0
+    for f in ("tropo_zenith_m", "iono_zenith_m", "orbit_clock_m", "multipath_floor_m",
+              "multipath_low_m", "code_noise_m", "doppler_noise_mps"):
+        assert getattr(exact, f) == 0.0
+    assert (exact.h0, exact.h_2) == (base.h0, base.h_2)   # the clock as it is
+    for bad in ({"orbit_m": 0.0}, {"canyons": []}):
+        with pytest.raises(ValueError):
+            receiver.spec_of({"enabled": True, "receiver": bad})

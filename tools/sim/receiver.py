@@ -35,6 +35,7 @@ model (what a receiver's RAIM-grade sigma holds), and the range-rate sigma likew
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -110,6 +111,20 @@ def satellite_ecef(t_s):
     w = geodesy.WGS84_OMEGA_IE_RPS
     v_e = rot(v_i) - np.stack([-w * r_e[:, 1], w * r_e[:, 0], np.zeros_like(t)], 1)
     return r_e, v_e, PRNS
+
+
+def spec_of(table: dict) -> ReceiverSpec:
+    """The receiver of a scenario's [gnss_raw] table (tools/sim/scenario.py): its canyons
+    and faults, and `receiver`, ReceiverSpec's figures other than the defaults (an unknown
+    name, or canyons and faults given there, is refused: ValueError)."""
+    over = dict(table.get("receiver", {}))
+    known = {f.name for f in dataclasses.fields(ReceiverSpec)} - {"canyons", "faults"}
+    unknown = set(over) - known
+    if unknown:
+        raise ValueError(f"[gnss_raw] receiver: unknown figures {sorted(unknown)} "
+                         f"(ReceiverSpec: {', '.join(sorted(known))})")
+    return ReceiverSpec(canyons=[tuple(c) for c in table.get("canyons", [])],
+                        faults=list(table.get("faults", [])), **over)
 
 
 def canyon_at(t_s: float, canyons) -> tuple:

@@ -336,9 +336,7 @@ def main(argv=None) -> int:
     raw = []
     if scen.get("gnss_raw", {}).get("enabled"):
         from tools.sim import receiver
-        spec = receiver.ReceiverSpec(canyons=[tuple(c) for c in
-                                              scen["gnss_raw"].get("canyons", [])],
-                                     faults=list(scen["gnss_raw"].get("faults", [])))
+        spec = receiver.spec_of(scen["gnss_raw"])
         # no raw epoch in an outage of every signal (a tunnel), but one that a canyon
         # covers: there the fixes stop and the satellites along the street stay
         dark = [(o0, o1) for (o0, o1, *_r) in truth.outages

@@ -110,6 +110,9 @@ Scenario file (TOML, read by :func:`load_scenario`)
     faults = [{kind = "multipath", start_s = 100, end_s = 160, rank = 1, error_m = 50.0},
               {kind = "clock_step", at_s = 200, step_m = 3000.0, flagged = false}]
                                   # receiver faults (tools/sim/receiver.py ReceiverSpec)
+    receiver = {orbit_clock_m = 0.0}
+                                  # the receiver model's figures other than its defaults
+                                  # (ReceiverSpec's fields, e.g. an error switched off)
 
 Inheritance: a top-level ``base = "default"`` (a scenario name in the same folder, or a
 .toml path relative to this file's folder) starts from that scenario: its tables ([start],
@@ -160,7 +163,7 @@ _OPTIONAL_TABLES = {
     "initialization": set(INITIALIZATION_DEFAULTS),
     "calibration": {"at_s", "source", "gnss"},
     "gnss_faults": {"jumps", "freeze", "latency_spike"},
-    "gnss_raw": {"enabled", "canyons", "faults"},
+    "gnss_raw": {"enabled", "canyons", "faults", "receiver"},
 }
 GNSS_JUMP_AZIMUTH_DEG_DEFAULT = 0.0   # a jump without an azimuth moves the fix north
 
@@ -204,7 +207,7 @@ def _gnss_faults(path, table: dict) -> dict:
 
 # tables a scenario with `base` merges key by key over its base's (the rest: replaced)
 _MERGED_TABLES = ("start", "vehicle", "sim", "imu_mounting", "odometer", "initialization",
-                  "calibration", "gnss_faults")
+                  "calibration", "gnss_faults", "gnss_raw")
 # top-level keys that belong to the file itself, never inherited
 _OWN_KEYS = ("name", "description", "base")
 
