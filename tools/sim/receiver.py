@@ -3,9 +3,13 @@ the true trajectory into pseudoranges and pseudorange rates with orbit, clock an
 atmospheric errors): what a tightly coupled filter reads, satellite by satellite.
 
     python -m tools.sim.receiver [--scenario default] [--canyon A-B:RATIO ...] [--seed 1]
+                                 [--list T0 T1 [--every 15]]
 
 prints, for the scenario's drive, the satellites in view and the least-squares solution of
-the simulated measurements (tools/gnss_raw.solve) against the truth.
+the simulated measurements (tools/gnss_raw.solve) against the truth; with --list, each
+epoch's satellites (PRN:elevation/azimuth, deg; the satellite position is that of the
+transmit time, a few arcseconds off) from T0 to T1 s. The scenario's own [gnss_raw]
+receiver is used unless --canyon is given.
 
 The model, each part from the physics or a published figure (docs/simulator.md):
 - constellation: a GPS-like Walker 24/6/1 (24 satellites, 6 planes 60 deg apart in right
@@ -295,10 +299,35 @@ def main(argv=None) -> int:
                          "MAX satellites (repeatable)")
     ap.add_argument("--imu-rate-hz", type=int, default=10,
                     help="the truth's sample rate (the receiver interpolates it)")
+    ap.add_argument("--list", type=float, nargs=2, default=None, metavar=("T0", "T1"),
+                    help="print the satellites (PRN, elevation, azimuth in deg) of the epochs "
+                         "from T0 to T1 s, every --every s")
+    ap.add_argument("--every", type=float, default=15.0)
     a = ap.parse_args(argv)
-    truth = trajectory.generate(scen_mod.load(a.scenario), a.imu_rate_hz)
-    spec = ReceiverSpec(canyons=list(a.canyon))
-    eps = simulate(truth, spec, a.seed)
+    scen = scen_mod.load(a.scenario)
+    truth = trajectory.generate(scen, a.imu_rate_hz)
+    # the scenario's own receiver (its canyons, faults, figures) unless --canyon is given;
+    # as tools.sim.run: no epoch in an outage a canyon does not cover
+    spec = (ReceiverSpec(canyons=list(a.canyon)) if a.canyon or "gnss_raw" not in scen
+            else spec_of(scen["gnss_raw"]))
+    dark = [(o0, o1) for (o0, o1, *_r) in truth.outages
+            if not any(c[0] <= o0 and o1 <= c[1] for c in spec.canyons)]
+    from tools.sim.run import GPS_TOW0_S   # the drive's GPS time, as tools.sim.run sends it
+    eps = simulate(truth, spec, a.seed, t0_gps_s=GPS_TOW0_S, outages=dark)
+    if a.list:
+        last = -math.inf
+        for t, ep, tr in eps:
+            if not a.list[0] <= t <= a.list[1] or t < last + a.every - 1e-9:
+                continue
+            last = t
+            lat, lon, _ = gr.geodetic_from_ecef(tr.rx_m)
+            enu = gr.enu_axes(lat, lon)
+            sats = []
+            for m in ep.meas:
+                d = enu @ (np.asarray(m.sat_pos_m, dtype=float) - tr.rx_m)
+                sats.append(f"{m.sv_id}:{m.elevation_deg:.0f}/"
+                            f"{math.degrees(math.atan2(d[0], d[1])) % 360.0:.0f}")
+            print(f"{t:7.1f} s  {len(ep.meas)} of {tr.in_view} in view  " + " ".join(sats))
     n_view = np.array([len(ep.meas) for _, ep, _ in eps])
     errs = []
     x0 = None
