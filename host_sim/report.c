@@ -62,13 +62,13 @@ void host_usage(FILE *out)
                     (double)v[0] / c->to_si);
         } else if (p->type == APP_PARAM_ENUM) {
             const char *v = c->values;
-            for (int i = 0; i < (int)p->default_si[0] && strchr(v, '|') != NULL; i++) {
+            for (int i = 0; i < (int)p->default_si && strchr(v, '|') != NULL; i++) {
                 v = strchr(v, '|') + 1;
             }
             const char *bar = strchr(v, '|');
             fprintf(out, ", default %.*s\n", (int)(bar != NULL ? (size_t)(bar - v) : strlen(v)), v);
         } else {
-            fprintf(out, ", default %g\n", (double)p->default_si[0] / c->to_si);
+            fprintf(out, ", default %g\n", (double)p->default_si / c->to_si);
         }
         fprintf(out, "                         %s\n", c->description);
     }

@@ -158,6 +158,11 @@ def load(path: Path = TABLE) -> list:
                 d = p["default"] if p["type"] == "vec3" else [p["default"]]
                 if p["type"] == "vec3" and (not isinstance(d, list) or len(d) != 3):
                     raise TableError(f"{where}: a vec3 default is [x, y, z]")
+                # app_param_t keeps one default value (4 bytes of flash a parameter,
+                # not 12): a vec3's is the same on each axis
+                if p["type"] == "vec3" and not d[0] == d[1] == d[2]:
+                    raise TableError(f"{where}: a vec3 default is [x, x, x], one value for "
+                                     "x, y and z (app_param_t.default_si)")
                 for x in d:
                     lo_ok = x > p["min"] if q["min_exclusive"] else x >= p["min"]
                     if not (lo_ok and x <= p["max"]):
@@ -205,7 +210,8 @@ def gen_h(params, pre) -> str:
          "                               needs navigation stopped and is in force after ECUReset */",
          "    uint8_t uds_read_only;  /* uds_write = false: ReadDataByIdentifier only */",
          "    nav_real_t min_si, max_si; /* range, SI units (enum: 0..values - 1) */",
-         "    nav_real_t default_si[3];  /* default, SI (vehicle_default: unused) */",
+         "    nav_real_t default_si;  /* default, SI; a vec3's x, y and z alike (vehicle_default:",
+         "                               unused) */",
          "} app_param_t;", "",
          "/* the parameters, in the table's order */", "typedef enum {"]
     L += [f"    {_const(p)} = {k}," for k, p in enumerate(params)]
@@ -238,20 +244,20 @@ def gen_c(params, pre) -> str:
          "const app_param_t app_params[APP_PARAM_N] = {"]
     for p in params:
         if p["vehicle_default"]:
-            d = [0.0, 0.0, 0.0]
+            d = 0.0
         elif p["type"] == "enum":
-            d = [float(p["default_index"]), 0.0, 0.0]
+            d = float(p["default_index"])
         elif p["type"] == "vec3":
-            d = [_si(p, x) for x in p["default"]]
+            d = _si(p, p["default"][0])  # x = y = z (load)
         else:
-            d = [_si(p, p["default"]), 0.0, 0.0]
+            d = _si(p, p["default"])
         typ = {"u16": "APP_PARAM_U16", "real": "APP_PARAM_REAL", "vec3": "APP_PARAM_VEC3",
                "enum": "APP_PARAM_ENUM"}[p["type"]]
         L.append(f"    [{_const(p)}] = {{0x{int(p['did']):04X}u, {typ}, "
                  f"{int(p['min_exclusive'])}u, {int(p['vehicle_default'])}u, "
                  f"{int(p['at_reset'])}u, {int(p['uds_read_only'])}u, "
                  f"{_c_real(_si(p, p['min']))}, {_c_real(_si(p, p['max']))}, "
-                 f"{{{', '.join(_c_real(x) for x in d)}}}}},")
+                 f"{_c_real(d)}}},")
     names, lst, _ = pre
     by_name = {p["name"]: p for p in params}
     L += ["};", "", "#ifndef APP_PARAM_NO_NAMES", "const char *const app_param_names[APP_PARAM_N] = {"]

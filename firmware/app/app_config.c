@@ -15,7 +15,9 @@ void app_config_defaults(app_config_t *out)
 {
     for (int k = 0; k < (int)APP_PARAM_N; k++) {
         const app_param_id_t id = (app_param_id_t)k;
-        (void)app_param_set(out, id, app_params[k].default_si);
+        const nav_real_t d = app_params[k].default_si; /* a vec3's x, y and z alike */
+        const nav_real_t v[3] = {d, d, d};
+        (void)app_param_set(out, id, v);
     }
     out->odo_track_m = vehicle_profile.track_m;
     out->odo_wheelbase_m = vehicle_profile.wheelbase_m;

@@ -161,7 +161,10 @@ int gnss_time_learn(gnss_time_t *g, gnss_when_t *w, const nav_real_t v_enu_mps[3
     return 1;
 }
 
-nav_real_t gnss_time_latency(const gnss_time_t *g, nav_real_t latency_cfg_s)
+/* Out of line (noinline), as gnss_tow_diff_ms: GCC inlined it at its six calls (the GNSS
+ * updates, NAV_Time); one copy is 128 bytes less of the ECU's flash (docs/target.md) */
+__attribute__((noinline)) nav_real_t gnss_time_latency(const gnss_time_t *g,
+                                                       nav_real_t latency_cfg_s)
 {
     return g->lat_learnt ? APP_GNSS_LAT_STEP_S * (nav_real_t)g->lat_bin : latency_cfg_s;
 }
@@ -198,7 +201,7 @@ void gnss_time_week(gnss_time_t *g, uint16_t gps_week)
 
 #define US_PER_WEEK ((int64_t)APP_WEEK_MS * INT64_C(1000))
 
-int64_t gnss_tow_diff_ms(uint32_t a_ms, uint32_t b_ms)
+__attribute__((noinline)) int64_t gnss_tow_diff_ms(uint32_t a_ms, uint32_t b_ms)
 {
     const int64_t week = (int64_t)APP_WEEK_MS;
     const int64_t half = week / 2;

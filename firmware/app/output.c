@@ -26,8 +26,11 @@ static void send(tx_state_t *tx, hal_t *hal, uint32_t id, const uint8_t data[8])
     }
 }
 
-/* E2E-protect and send; the alive counter of output `which` is taken and advanced */
-static uint8_t next_counter(tx_state_t *tx, int which)
+/* E2E-protect and send; the alive counter of output `which` is taken and advanced.
+ * Out of line (noinline), as accuracy_raw and accuracy_lsb: GCC inlined these small helpers
+ * at each of their 14, 3 and 4 calls, 304 bytes of the ECU's flash more in all
+ * (docs/target.md); they run per output frame (at most 50 Hz), not per IMU sample. */
+__attribute__((noinline)) static uint8_t next_counter(tx_state_t *tx, int which)
 {
     const uint8_t c = tx->counter[which];
     tx->counter[which] = e2e_counter_next(c);
@@ -48,7 +51,7 @@ static int64_t lsb_div_round(int64_t x, int64_t div)
 
 /* a 1-sigma (scaled to the signal's LSB) rounded into an accuracy signal whose largest
  * raw value means "unknown": saturates one below it */
-static uint32_t accuracy_raw(nav_real_t sigma_lsb, uint32_t raw_max)
+__attribute__((noinline)) static uint32_t accuracy_raw(nav_real_t sigma_lsb, uint32_t raw_max)
 {
     const nav_real_t top = (nav_real_t)(raw_max - 1u);
     return sigma_lsb < top ? (uint32_t)(sigma_lsb + NAV_C(0.5)) : raw_max - 1u;
@@ -206,7 +209,7 @@ static void emit_dynamics(app_t *a, hal_t *hal)
 
 /* an accuracy of NAV_Accuracy: never below one LSB (a sigma smaller than the resolution is
  * sent as the resolution, not as zero) */
-static uint16_t accuracy_lsb(nav_real_t sigma_lsb, uint32_t raw_max)
+__attribute__((noinline)) static uint16_t accuracy_lsb(nav_real_t sigma_lsb, uint32_t raw_max)
 {
     return (uint16_t)accuracy_raw(sigma_lsb > NAV_C(1.0) ? sigma_lsb : NAV_C(1.0), raw_max);
 }

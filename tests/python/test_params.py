@@ -77,6 +77,20 @@ def test_help_lists_every_parameter_and_preset(table):
     assert f"default {dflt}" in out
 
 
+def test_a_vec3_default_is_one_value_for_x_y_z(tmp_path):
+    """app_param_t keeps one default a parameter (the ECU's flash): the generator refuses a
+    vec3 whose default differs between the axes, and takes one that does not"""
+    text = (ROOT / "firmware/app/params.toml").read_text(encoding="utf-8")
+    same = "[0.0, 0.0, 0.0]"
+    assert same in text
+    p = tmp_path / "params.toml"
+    p.write_text(text.replace(same, "[0.5, 0.5, 0.5]", 1), encoding="utf-8")
+    assert any(q["type"] == "vec3" and q["default"] == [0.5] * 3 for q in gen_params.load(p))
+    p.write_text(text.replace(same, "[0.0, 0.0, 0.5]", 1), encoding="utf-8")
+    with pytest.raises(gen_params.TableError, match="one value for x, y and z"):
+        gen_params.load(p)
+
+
 def test_unknown_preset_refused(one_frame_log):
     res = _run(one_frame_log, "--imu-preset", "phone")
     assert res.returncode == 2 and "unknown --imu-preset 'phone'" in res.stderr

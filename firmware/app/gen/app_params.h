@@ -27,7 +27,8 @@ typedef struct {
                                needs navigation stopped and is in force after ECUReset */
     uint8_t uds_read_only;  /* uds_write = false: ReadDataByIdentifier only */
     nav_real_t min_si, max_si; /* range, SI units (enum: 0..values - 1) */
-    nav_real_t default_si[3];  /* default, SI (vehicle_default: unused) */
+    nav_real_t default_si;  /* default, SI; a vec3's x, y and z alike (vehicle_default:
+                               unused) */
 } app_param_t;
 
 /* the parameters, in the table's order */
