@@ -127,10 +127,10 @@ help:
 
 # $(1) = flavour (host | asan | plainacc), $(2) = extra flags
 define FLAVOUR
-$(BUILD)/$(1)/f32/%.o: %.c
+$(BUILD)/$(1)/f32/%.o: %.c Makefile
 	@mkdir -p $$(@D)
 	$$(CC) $$(CFLAGS_BASE) -D_DEFAULT_SOURCE $(2) $$(HOST_INC) -MMD -MP -c $$< -o $$@
-$(BUILD)/$(1)/f64/%.o: %.c
+$(BUILD)/$(1)/f64/%.o: %.c Makefile
 	@mkdir -p $$(@D)
 	$$(CC) $$(CFLAGS_BASE) -D_DEFAULT_SOURCE $(2) -DNAV_REAL_DOUBLE $$(HOST_INC) -MMD -MP -c $$< -o $$@
 
@@ -330,7 +330,7 @@ ARM_NM := arm-none-eabi-nm
 M4_DEFS := -DISOTP_MAX_LEN=512u -DAPP_PARAM_NO_NAMES
 M4_FLAGS := -mcpu=cortex-m4 -mfpu=fpv4-sp-d16 -mfloat-abi=hard -mthumb $(M4_DEFS)
 M4_SRC := $(CORE_SRC) $(APP_SRC) $(HAL_M4_SRC) $(call VEH_SRC,$(VEHICLE))
-$(BUILD)/m4/%.o: %.c
+$(BUILD)/m4/%.o: %.c Makefile
 	@mkdir -p $(@D)
 	$(ARM_CC) $(CFLAGS_BASE) $(M4_FLAGS) $(FW_INC) -I$(VEH_OUT)/$(VEHICLE) -MMD -MP -c $< -o $@
 $(BUILD)/m4/libnavecu.a: $(M4_SRC:%.c=$(BUILD)/m4/%.o)
@@ -373,7 +373,9 @@ QEMU_SRC := $(CORE_SRC) $(APP_SRC) $(call VEH_SRC,$(VEHICLE)) $(M4_BOARD_SRC) ha
             hal/cortex_m4f/semihost.c \
             hal/cortex_m4f/hal_semihost.c \
             boards/qemu/main.c boards/qemu/bench_trace.c
-$(TGT)/obj/%.o: %.c
+# every object depends on this Makefile too: a changed flag (-Os, -fno-reorder-blocks, ...)
+# rebuilds what it applies to, so a budget or a benchmark never measures a mix of flags
+$(TGT)/obj/%.o: %.c Makefile
 	@mkdir -p $(@D)
 	$(ARM_CC) $(M4_TGT_CFLAGS) $(M4_LTO) $(M4_TGT_INC) -MMD -MP -c $< -o $@
 # On the ECU everything but f2l.c and u64div.c is built for size (at first the
@@ -678,7 +680,7 @@ fuzz_cmdline_SRC := tests/fuzz/fuzz_cmdline.c tests/fuzz/fuzz_fail.c host_sim/op
                     $(CORE_SRC)
 
 # every object instrumented for coverage (fuzzer-no-link); the harness links libFuzzer
-$(FUZZ)/obj/%.o: %.c
+$(FUZZ)/obj/%.o: %.c Makefile
 	@mkdir -p $(@D)
 	$(FUZZ_CC) $(FUZZ_CFLAGS) $(FUZZ_EXTRA) -fsanitize=fuzzer-no-link $(FUZZ_INC) -MMD -MP -c $< -o $@
 # the generated codec passes floats to a double parameter (cantools_unsigned_from_double),
