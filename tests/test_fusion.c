@@ -65,6 +65,7 @@ static void start_at(double heading_deg, const nav_real_t v[3])
     diag.events = &events;
     diag.n_samples = N0;
     static fusion_raw_counts_t raw;
+    memset(&raw, 0, sizeof raw);
     const fusion_ctx_t c = {&nav, &dr, &odo, &land, &cfg, &diag, &filter_reset, &gnss, &gtime,
                             &raw};
     ctx = c;
@@ -734,34 +735,60 @@ static void learn_epoch(gnss_raw_asm_t *g, gnss_raw_close_t *cl, int n, const do
     cl->usable = 1u;
 }
 
-/* GIVEN gnss_input = both, a car at speed_mps north with its history, a fix each 10 s
- * declared hacc_m (taken: the filter follows them), and each fix's raw epoch of n_sats
- * satellites, the fifth 4 m long, for 80 s WHEN the epochs come THEN per satellite
- * whether a bias is in use, and its value (4 m less the median, 0, for the fifth) */
-static int learnt_after(double speed_mps, float hacc_m, int n_sats, nav_real_t *bias5_m)
+/* How a learning drive goes (learnt_after). */
+typedef struct {
+    double speed_mps;  /* the car's speed, north (the navigator's and its history's) */
+    float hacc_m;      /* the fixes' declared horizontal accuracy */
+    int n_sats;        /* satellites per epoch (the first n of LEARN_EL_AZ) */
+    double fault_m;    /* the fifth satellite's range error */
+    int refused_after; /* from this epoch on the fixes are 500 m off (refused): -1 never */
+} learn_drive_t;
+
+/* GIVEN gnss_input = both, the drive d: a fix each 10 s of IMU samples and of the
+ * receiver's time (the filter following them, the velocity history recorded), each with
+ * its raw epoch, for 80 s WHEN the epochs come THEN nothing is fused or counted, and the
+ * result is how many satellites have a bias in use (*bias5_m the fifth's: its error less
+ * the median, 0) and how many are in the table at all. */
+static int learnt_after(const learn_drive_t *d, nav_real_t *bias5_m, int *n_entries)
 {
-    const nav_real_t v[3] = {0.0f, (nav_real_t)speed_mps, 0.0f};
+    const nav_real_t v[3] = {0.0f, (nav_real_t)d->speed_mps, 0.0f};
     start_at(0.0, v);
     cfg.gnss_input = GNSS_INPUT_BOTH;
     cfg.gnss_latency_s = 0.0f;
-    static const double bias_m[LEARN_SATS] = {0.0, 0.0, 0.0, 0.0, 4.0};
+    const double bias_m[LEARN_SATS] = {0.0, 0.0, 0.0, 0.0, d->fault_m};
     static gnss_raw_asm_t g;
     gnss_raw_close_t cl;
     uint32_t tow = LEARN_TOW0_MS;
+    diag.t_us = 0u;
     for (int k = 0; k <= 8; k++, tow += 10000u) {
-        gnss_fix_t f = fix_at(450000000, 100000000, v);
-        f.hacc_m = hacc_m;
+        if (k > 0) {
+            for (int j = 0; j < 1000; j++) { /* 10 s at 100 Hz */
+                diag.n_samples++;
+                gnss_time_record(&gtime, diag.n_samples, cfg.imu_rate_hz, v);
+            }
+            diag.t_us += 10000000u;
+        }
+        const int refused = d->refused_after >= 0 && k >= d->refused_after;
+        gnss_fix_t f = fix_at(refused ? 450045000 : 450000000, 100000000, v);
+        f.hacc_m = d->hacc_m;
         f.tow_ms = tow;
         int adopt;
         assert_int_equal(fusion_gnss(&fu, &ctx, &PRIOR, &f, &adopt), FUSION_GO_ON);
         assert_int_equal(fu.on, 1);
-        learn_epoch(&g, &cl, n_sats, bias_m);
+        learn_epoch(&g, &cl, d->n_sats, bias_m);
         assert_int_equal(fusion_raw(&fu, &ctx, &g, &cl, tow, 0, &adopt), FUSION_GO_ON);
-        /* learnt, never fused: nothing counted */
-        assert_int_equal(ctx.raw->epochs_used, 0u);
+    }
+    /* learnt, never fused: nothing counted; the receiver's time kept pace with the IMU's */
+    assert_int_equal(ctx.raw->epochs_used, 0u);
+    assert_int_equal(ctx.raw->excluded, 0u);
+    assert_int_equal(health.time_jumps, 0u);
+    assert_true(fu.gnss_ep_typ_s > 9.0f && fu.gnss_ep_typ_s < 11.0f);
+    *n_entries = 0;
+    for (unsigned i = 0u; i < GNSS_RAW_MAX_SATS; i++) {
+        *n_entries += fu.raw_bias.sat[i].sv_id != 0u ? 1 : 0;
     }
     int n_in_use = 0;
-    for (int i = 0; i < n_sats; i++) {
+    for (int i = 0; i < d->n_sats; i++) {
         nav_real_t b;
         if (raw_bias_of(&fu.raw_bias, 0u, (uint8_t)(10 + i), tow - 10000u, &b) != 0) {
             n_in_use++;
@@ -777,21 +804,55 @@ static int learnt_after(double speed_mps, float hacc_m, int n_sats, nav_real_t *
 
 /* The learning's conditions (fusion.c raw_learn): GIVEN five satellites, one 4 m long,
  * at 10 m/s with fixes declared 2 m THEN after 80 s each has its bias, the long one 4 m
- * (to the ranges' 0.02 m unit and the float32 average); standing (1 m/s, under
- * APP_RAW_BIAS_SPEED_MPS), with the filter's horizontal sigma above
- * APP_RAW_BIAS_POS_SIGMA_M (fixes declared 30 m), or with three satellites (under
- * APP_RAW_BIAS_MIN_SATS) THEN none is learnt. */
+ * (to the ranges' 0.02 m unit and the float32 average). THEN nothing is learnt at all
+ * (an empty table): standing (1 m/s, under APP_RAW_BIAS_SPEED_MPS), with the filter's
+ * horizontal sigma above APP_RAW_BIAS_POS_SIGMA_M (fixes declared 30 m), or with three
+ * satellites (under APP_RAW_BIAS_MIN_SATS). A satellite 60 m long (beyond the fault
+ * exclusion's 5 sigma at its 20 deg: about 44 m) is never learnt, the others are. With
+ * the fixes refused from the third epoch on (500 m off: offered, so the raw epochs are
+ * not fused, but not taken) the learning stops: three epochs, 30 s learnt (a satellite's
+ * first epoch counts for the fix interval), no bias in use. (At a 10 s fix interval the
+ * filter reopens after two refused fixes and its sigma, above the gate, stops it too: this
+ * case does not tell the fix-taken condition from the sigma one.) */
 static void test_biases_learnt_only_moving_with_good_fixes(void **state)
 {
     (void)state;
     nav_real_t b5 = 0.0f;
-    assert_int_equal(learnt_after(10.0, 2.0f, LEARN_SATS, &b5), LEARN_SATS);
+    int n_entries;
+    const learn_drive_t good = {10.0, 2.0f, LEARN_SATS, 4.0, -1};
+    assert_int_equal(learnt_after(&good, &b5, &n_entries), LEARN_SATS);
     assert_near(b5, 4.0, 0.05);
     assert_true(ekf_sigma_h_m(&fu.ekf) < APP_RAW_BIAS_POS_SIGMA_M);
-    assert_int_equal(learnt_after(1.0, 2.0f, LEARN_SATS, &b5), 0);
-    assert_int_equal(learnt_after(10.0, 30.0f, LEARN_SATS, &b5), 0);
+
+    learn_drive_t d = good;
+    d.speed_mps = 1.0;
+    assert_int_equal(learnt_after(&d, &b5, &n_entries), 0);
+    assert_int_equal(n_entries, 0);
+    d = good;
+    d.hacc_m = 30.0f;
+    assert_int_equal(learnt_after(&d, &b5, &n_entries), 0);
+    assert_int_equal(n_entries, 0);
     assert_true(ekf_sigma_h_m(&fu.ekf) >= APP_RAW_BIAS_POS_SIGMA_M);
-    assert_int_equal(learnt_after(10.0, 2.0f, 3, &b5), 0);
+    d = good;
+    d.n_sats = 3;
+    assert_int_equal(learnt_after(&d, &b5, &n_entries), 0);
+    assert_int_equal(n_entries, 0);
+
+    d = good;
+    d.fault_m = 60.0;
+    assert_int_equal(learnt_after(&d, &b5, &n_entries), LEARN_SATS - 1);
+    assert_int_equal(n_entries, LEARN_SATS - 1);
+    nav_real_t b;
+    assert_int_equal(raw_bias_of(&fu.raw_bias, 0u, 14u, LEARN_TOW0_MS + 80000u, &b), 0);
+
+    d = good;
+    d.refused_after = 2;
+    assert_int_equal(learnt_after(&d, &b5, &n_entries), 0);
+    assert_int_equal(n_entries, LEARN_SATS);
+    assert_true(health.gnss_rejected >= 1u);
+    for (unsigned i = 0u; i < GNSS_RAW_MAX_SATS; i++) {
+        assert_true(fu.raw_bias.sat[i].learnt_s < 30.5f);
+    }
 }
 
 int main(void)

@@ -872,9 +872,14 @@ static void raw_learn(fusion_t *fu, const raw_epoch_t *e, nav_real_t gap_samples
                       uint32_t tow_ms)
 {
     const nav_real_t v2 = e->v_then[0] * e->v_then[0] + e->v_then[1] * e->v_then[1];
-    if (!app_stamp_within(&fu->fix, e->c->diag->n_samples, (uint64_t)gap_samples) ||
-        ekf_sigma_h_m(&fu->ekf) >= APP_RAW_BIAS_POS_SIGMA_M ||
-        v2 < APP_RAW_BIAS_SPEED_MPS * APP_RAW_BIAS_SPEED_MPS) {
+    /* as a positive test: a sigma or speed that is not a number learns nothing */
+    const uint8_t learning =
+        (app_stamp_within(&fu->fix, e->c->diag->n_samples, (uint64_t)gap_samples) &&
+         ekf_sigma_h_m(&fu->ekf) < APP_RAW_BIAS_POS_SIGMA_M &&
+         v2 >= APP_RAW_BIAS_SPEED_MPS * APP_RAW_BIAS_SPEED_MPS)
+            ? 1u
+            : 0u;
+    if (learning == 0u) {
         return;
     }
     nav_real_t z[RAW_MAX];
@@ -892,9 +897,11 @@ static void raw_learn(fusion_t *fu, const raw_epoch_t *e, nav_real_t gap_samples
     raw_bias_learn(&fu->raw_bias, e->g->sat, e->slot, z, ok, e->n, tow_ms, fu->gnss_ep_typ_s);
 }
 
-/* Steps 2 and 3 of a fused epoch: the clock moved on (or estimated afresh), then the fault
- * exclusion; the residuals and their usable flags in z_pr/ok_pr and z_rr/ok_rr. Returns the
- * number excluded, or -1 when no pseudorange is usable (nothing to measure with). */
+/* Steps 2 and 3 of a fused epoch: the clock moved on (or estimated afresh: counted in
+ * clock_starts, and a receiver clock reset or jump in clock_jumps), the epoch recorded as
+ * the last fused one (raw_tow_ms, raw_sample), then the fault exclusion; the residuals and
+ * their usable flags in z_pr/ok_pr and z_rr/ok_rr. Returns the number excluded, or -1 when
+ * no pseudorange is usable (nothing to measure with). */
 static int raw_clock_exclude(fusion_t *fu, const raw_epoch_t *e, nav_real_t dt_s,
                              uint32_t tow_ms, int clock_reset, nav_real_t *z_pr,
                              uint8_t *ok_pr, nav_real_t *z_rr, uint8_t *ok_rr)
