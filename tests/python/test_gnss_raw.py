@@ -258,3 +258,24 @@ def test_a_scenario_sets_the_receivers_figures():
     for bad in ({"orbit_m": 0.0}, {"canyons": []}):
         with pytest.raises(ValueError):
             receiver.spec_of({"enabled": True, "receiver": bad})
+
+
+def test_a_scenario_receivers_figures_are_checked():
+    """The receiver's figures must be numbers, not negative, and the ones that divide
+    (rates, correlation times) positive: refused with the figure named."""
+    for bad in ({"orbit_clock_m": -1.0}, {"orbit_clock_m": "1"}, {"multipath_corr_s": 0.0},
+                {"code_noise_m": True}, {"code_noise_m": float("nan")}):
+        with pytest.raises(ValueError, match=next(iter(bad))):
+            receiver.spec_of({"enabled": True, "receiver": bad})
+    with pytest.raises(ValueError):
+        receiver.spec_of({"enabled": True, "receiver": 5})
+    assert receiver.spec_of({"receiver": {"orbit_clock_m": 0}}).orbit_clock_m == 0.0
+    # and when the scenario is read
+    import tempfile
+    from pathlib import Path
+    with tempfile.TemporaryDirectory() as d:
+        f = Path(d) / "bad.toml"
+        f.write_text(f'base = "{scenario.scenario_path("canyon5-raw")}"\n'
+                     '[gnss_raw]\nreceiver = {orbit_clock_m = -1.0}\n')
+        with pytest.raises(ValueError, match="orbit_clock_m"):
+            scenario.load_scenario(f)

@@ -9,7 +9,8 @@ prints, for the scenario's drive, the satellites in view and the least-squares s
 the simulated measurements (tools/gnss_raw.solve) against the truth; with --list, each
 epoch's satellites (PRN:elevation/azimuth, deg; the satellite position is that of the
 transmit time, a few arcseconds off) from T0 to T1 s. The scenario's own [gnss_raw]
-receiver is used unless --canyon is given.
+receiver is used unless --canyon is given; --seed N draws what tools.sim.run's seed N
+draws.
 
 The model, each part from the physics or a published figure (docs/simulator.md):
 - constellation: a GPS-like Walker 24/6/1 (24 satellites, 6 planes 60 deg apart in right
@@ -117,16 +118,32 @@ def satellite_ecef(t_s):
     return r_e, v_e, PRNS
 
 
+# ReceiverSpec's figures that divide: never 0
+POSITIVE_FIGURES = frozenset({"rate_hz", "atmo_corr_s", "orbit_corr_s", "multipath_corr_s",
+                              "multipath_el_scale_deg", "clock_step_s"})
+
+
 def spec_of(table: dict) -> ReceiverSpec:
     """The receiver of a scenario's [gnss_raw] table (tools/sim/scenario.py): its canyons
     and faults, and `receiver`, ReceiverSpec's figures other than the defaults (an unknown
     name, or canyons and faults given there, is refused: ValueError)."""
-    over = dict(table.get("receiver", {}))
+    over = table.get("receiver", {})
+    if not isinstance(over, dict):
+        raise ValueError("[gnss_raw] receiver must be a table of ReceiverSpec's figures")
     known = {f.name for f in dataclasses.fields(ReceiverSpec)} - {"canyons", "faults"}
     unknown = set(over) - known
     if unknown:
         raise ValueError(f"[gnss_raw] receiver: unknown figures {sorted(unknown)} "
                          f"(ReceiverSpec: {', '.join(sorted(known))})")
+    for k, v in over.items():
+        # every figure is a size (>= 0); a rate, a correlation time, a step or a scale
+        # divides (> 0)
+        positive = k in POSITIVE_FIGURES
+        if (isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v)
+                or v < 0.0 or (positive and v == 0.0)):
+            raise ValueError(f"[gnss_raw] receiver: {k} = {v!r} is not a number "
+                             f"{'> 0' if positive else '>= 0'}")
+    over = {k: float(v) for k, v in over.items()}
     return ReceiverSpec(canyons=[tuple(c) for c in table.get("canyons", [])],
                         faults=list(table.get("faults", [])), **over)
 
@@ -297,8 +314,9 @@ def main(argv=None) -> int:
     ap.add_argument("--canyon", action="append", default=[], type=parse_canyon,
                     help="START-END:RATIO[:MAX], a street canyon of 2H/W = RATIO leaving at most "
                          "MAX satellites (repeatable)")
-    ap.add_argument("--imu-rate-hz", type=int, default=10,
-                    help="the truth's sample rate (the receiver interpolates it)")
+    ap.add_argument("--imu-rate-hz", type=int, default=100,
+                    help="the truth's sample rate (the receiver interpolates it; tools.sim.run's "
+                         "default)")
     ap.add_argument("--list", type=float, nargs=2, default=None, metavar=("T0", "T1"),
                     help="print the satellites (PRN, elevation, azimuth in deg) of the epochs "
                          "from T0 to T1 s, every --every s")
@@ -308,12 +326,14 @@ def main(argv=None) -> int:
     truth = trajectory.generate(scen, a.imu_rate_hz)
     # the scenario's own receiver (its canyons, faults, figures) unless --canyon is given;
     # as tools.sim.run: no epoch in an outage a canyon does not cover
-    spec = (ReceiverSpec(canyons=list(a.canyon)) if a.canyon or "gnss_raw" not in scen
-            else spec_of(scen["gnss_raw"]))
+    own = scen.get("gnss_raw", {})
+    spec = (spec_of(own) if own.get("enabled") and not a.canyon
+            else ReceiverSpec(canyons=list(a.canyon)))
     dark = [(o0, o1) for (o0, o1, *_r) in truth.outages
             if not any(c[0] <= o0 and o1 <= c[1] for c in spec.canyons)]
-    from tools.sim.run import GPS_TOW0_S   # the drive's GPS time, as tools.sim.run sends it
-    eps = simulate(truth, spec, a.seed, t0_gps_s=GPS_TOW0_S, outages=dark)
+    # the drive's GPS time and the receiver's seed as tools.sim.run sends them for --seed
+    from tools.sim.run import GPS_TOW0_S, raw_seed
+    eps = simulate(truth, spec, raw_seed(a.seed), t0_gps_s=GPS_TOW0_S, outages=dark)
     if a.list:
         last = -math.inf
         for t, ep, tr in eps:

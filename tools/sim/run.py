@@ -39,6 +39,12 @@ GPS_TOW0_S = 302400.0  # GNSS time of week at t = 0 (Wednesday noon)
 GPS_WEEK = 2400        # its GPS week (2026-01-04 .. 2026-01-10)
 
 
+def raw_seed(seed: int) -> int:
+    """The receiver model's seed for the run's --seed (its own stream: the IMU, the fixes
+    and the wheels draw from others)."""
+    return 3 * seed + 2
+
+
 class Stages:
     """Progress lines: '[2/5] sensor models ... 1.3 s'."""
 
@@ -341,7 +347,7 @@ def main(argv=None) -> int:
         # covers: there the fixes stop and the satellites along the street stay
         dark = [(o0, o1) for (o0, o1, *_r) in truth.outages
                 if not any(c[0] <= o0 and o1 <= c[1] for c in spec.canyons)]
-        raw = [(t, ep) for t, ep, _ in receiver.simulate(truth, spec, 3 * a.seed + 2,
+        raw = [(t, ep) for t, ep, _ in receiver.simulate(truth, spec, raw_seed(a.seed),
                                                          t0_gps_s=GPS_TOW0_S, outages=dark)]
     fr = frames(truth, dtheta, dv, wheels, gnss, db, heading_deg=hdg_cmd, calibration=cal,
                 car=car, power_on_s=a.power_on_s, reset_s=a.reset_s,

@@ -311,6 +311,12 @@ def load_scenario(path) -> dict:
         sc["calibration"] = cal
     if "gnss_faults" in sc:
         sc["gnss_faults"] = _gnss_faults(path, sc["gnss_faults"])
+    if "gnss_raw" in sc:
+        from tools.sim import receiver   # its figures checked now, not when a run uses them
+        try:
+            receiver.spec_of(sc["gnss_raw"])
+        except ValueError as e:
+            raise ValueError(f"{path}: {e}") from None
     return sc
 
 
