@@ -813,7 +813,8 @@ static int learnt_after(const learn_drive_t *d, nav_real_t *bias5_m, int *n_entr
  * not fused, but not taken) the learning stops: three epochs, 30 s learnt (a satellite's
  * first epoch counts for the fix interval), no bias in use. (At a 10 s fix interval the
  * filter reopens after two refused fixes and its sigma, above the gate, stops it too: this
- * case does not tell the fix-taken condition from the sigma one.) */
+ * case does not tell the fix-taken condition from the sigma one;
+ * test_learning_needs_a_fix_taken does.) */
 static void test_biases_learnt_only_moving_with_good_fixes(void **state)
 {
     (void)state;
@@ -855,6 +856,53 @@ static void test_biases_learnt_only_moving_with_good_fixes(void **state)
     }
 }
 
+
+/* The learning needs a fix taken within 1.5 of the receiver's usual intervals, not only
+ * one offered (fusion.c raw_learn): GIVEN 1-s fixes and raw epochs of five satellites at
+ * 10 m/s (ten taken: the usual interval down to about 1 s), then fixes 500 m off (offered,
+ * so the raw epochs are still learnt from, not fused, but refused) WHEN the first refused
+ * one's epoch comes (1 s after the last taken) THEN each satellite learns 1 s more; WHEN
+ * the second's comes (2 s after it: beyond 1.5 intervals) THEN nothing more is learnt,
+ * while the filter has not reopened yet (its sigma still under the gate: only the
+ * fix-taken condition stops it). */
+static void test_learning_needs_a_fix_taken(void **state)
+{
+    (void)state;
+    const nav_real_t v[3] = {0.0f, 10.0f, 0.0f};
+    start_at(0.0, v);
+    cfg.gnss_input = GNSS_INPUT_BOTH;
+    cfg.gnss_latency_s = 0.0f;
+    static const double no_bias[LEARN_SATS] = {0.0, 0.0, 0.0, 0.0, 0.0};
+    static gnss_raw_asm_t g;
+    gnss_raw_close_t cl;
+    uint32_t tow = LEARN_TOW0_MS;
+    diag.t_us = 0u;
+    nav_real_t learnt[13];
+    for (int k = 0; k < 13; k++, tow += 1000u) {
+        if (k > 0) {
+            for (int j = 0; j < 100; j++) { /* 1 s at 100 Hz */
+                diag.n_samples++;
+                gnss_time_record(&gtime, diag.n_samples, cfg.imu_rate_hz, v);
+            }
+            diag.t_us += 1000000u;
+        }
+        gnss_fix_t f = fix_at(k >= 11 ? 450045000 : 450000000, 100000000, v);
+        f.tow_ms = tow;
+        int adopt;
+        assert_int_equal(fusion_gnss(&fu, &ctx, &PRIOR, &f, &adopt), FUSION_GO_ON);
+        learn_epoch(&g, &cl, LEARN_SATS, no_bias);
+        assert_int_equal(fusion_raw(&fu, &ctx, &g, &cl, tow, 0, &adopt), FUSION_GO_ON);
+        learnt[k] = fu.raw_bias.sat[0].learnt_s;
+    }
+    assert_int_equal(health.time_jumps, 0u);
+    assert_int_equal(ctx.raw->epochs_used, 0u);
+    assert_true(fu.gnss_ep_typ_s < 1.05f);
+    assert_int_equal(health.gnss_rejected, 2u);
+    assert_true(ekf_sigma_h_m(&fu.ekf) < APP_RAW_BIAS_POS_SIGMA_M); /* not reopened */
+    assert_near(learnt[11], learnt[10] + 1.0f, 1e-4);
+    assert_near(learnt[12], learnt[11], 0.0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -880,6 +928,7 @@ int main(void)
         cmocka_unit_test_setup(test_odometer_reading_moved_through_a_stop_not_used, setup),
         cmocka_unit_test(test_reported_accuracy_keeps_the_correlated_error),
         cmocka_unit_test(test_biases_learnt_only_moving_with_good_fixes),
+        cmocka_unit_test(test_learning_needs_a_fix_taken),
     };
     return cmocka_run_group_tests_name("fusion", tests, NULL, NULL);
 }
