@@ -646,6 +646,7 @@ typedef struct {
     const gnss_raw_asm_t *g;
     geo_pos_t then;
     const nav_real_t *v_then;
+    nav_real_t v2_then;       /* its horizontal speed squared, m^2/s^2 */
     int n;                    /* satellites */
     uint8_t slot[RAW_MAX];    /* their slots, highest first */
     int use_bias;             /* the ranges' correlated errors are the state db */
@@ -871,12 +872,11 @@ static int raw_interval(fusion_t *fu, const fusion_ctx_t *c, uint32_t tow_ms, na
 static void raw_learn(fusion_t *fu, const raw_epoch_t *e, nav_real_t gap_samples,
                       uint32_t tow_ms)
 {
-    const nav_real_t v2 = e->v_then[0] * e->v_then[0] + e->v_then[1] * e->v_then[1];
     /* as a positive test: a sigma or speed that is not a number learns nothing */
     const uint8_t learning =
         (app_stamp_within(&fu->fix, e->c->diag->n_samples, (uint64_t)gap_samples) &&
          ekf_sigma_h_m(&fu->ekf) < APP_RAW_BIAS_POS_SIGMA_M &&
-         v2 >= APP_RAW_BIAS_SPEED_MPS * APP_RAW_BIAS_SPEED_MPS)
+         e->v2_then >= APP_RAW_BIAS_SPEED_MPS * APP_RAW_BIAS_SPEED_MPS)
             ? 1u
             : 0u;
     if (learning == 0u) {
@@ -897,14 +897,20 @@ static void raw_learn(fusion_t *fu, const raw_epoch_t *e, nav_real_t gap_samples
     raw_bias_learn(&fu->raw_bias, e->g->sat, e->slot, z, ok, e->n, tow_ms, fu->gnss_ep_typ_s);
 }
 
+/* A fused epoch's residuals (computed minus measured) and their usable flags, indexed by
+ * rate: 0 the pseudoranges (m), 1 the range rates (m/s) */
+typedef struct {
+    nav_real_t z[2][RAW_MAX];
+    uint8_t ok[2][RAW_MAX];
+} raw_resid_t;
+
 /* Steps 2 and 3 of a fused epoch: the clock moved on (or estimated afresh: counted in
  * clock_starts, and a receiver clock reset or jump in clock_jumps), the epoch recorded as
  * the last fused one (raw_tow_ms, raw_sample), then the fault exclusion; the residuals and
- * their usable flags in z_pr/ok_pr and z_rr/ok_rr. Returns the number excluded, or -1 when
- * no pseudorange is usable (nothing to measure with). */
+ * their usable flags in r. Returns the number excluded, or -1 when no pseudorange is
+ * usable (nothing to measure with). */
 static int raw_clock_exclude(fusion_t *fu, const raw_epoch_t *e, nav_real_t dt_s,
-                             uint32_t tow_ms, int clock_reset, nav_real_t *z_pr,
-                             uint8_t *ok_pr, nav_real_t *z_rr, uint8_t *ok_rr)
+                             uint32_t tow_ms, int clock_reset, raw_resid_t *r)
 {
     /* a reopened filter (here or by a fix) forgot the position the clock went with */
     if (fu->ekf.n_reopened != fu->raw_reopens) {
@@ -919,11 +925,11 @@ static int raw_clock_exclude(fusion_t *fu, const raw_epoch_t *e, nav_real_t dt_s
     fu->raw_tow_ms = tow_ms;
     fu->raw_have_tow = 1u;
     fu->raw_sample = e->c->diag->n_samples;
-    raw_residuals(fu, e, 0, z_pr, ok_pr);
-    raw_residuals(fu, e, 1, z_rr, ok_rr);
+    raw_residuals(fu, e, 0, r->z[0], r->ok[0]);
+    raw_residuals(fu, e, 1, r->z[1], r->ok[1]);
     int n_pr, n_rr;
-    const nav_real_t med_pr = median_ok(z_pr, ok_pr, e->n, &n_pr);
-    const nav_real_t med_rr = median_ok(z_rr, ok_rr, e->n, &n_rr);
+    const nav_real_t med_pr = median_ok(r->z[0], r->ok[0], e->n, &n_pr);
+    const nav_real_t med_rr = median_ok(r->z[1], r->ok[1], e->n, &n_rr);
     if (n_pr == 0) {
         return -1;
     }
@@ -937,11 +943,11 @@ static int raw_clock_exclude(fusion_t *fu, const raw_epoch_t *e, nav_real_t dt_s
     }
     if (fu->clock_valid == 0u) {
         raw_clock_start(fu, e, med_pr, med_rr, n_rr);
-        raw_residuals(fu, e, 0, z_pr, ok_pr);
-        raw_residuals(fu, e, 1, z_rr, ok_rr);
+        raw_residuals(fu, e, 0, r->z[0], r->ok[0]);
+        raw_residuals(fu, e, 1, r->z[1], r->ok[1]);
     }
-    const int out = raw_exclude(e, z_pr, ok_pr, 0, sigma3(&fu->ekf, EKF_DR));
-    return out + raw_exclude(e, z_rr, ok_rr, 1, sigma3(&fu->ekf, EKF_DV));
+    const int out = raw_exclude(e, r->z[0], r->ok[0], 0, sigma3(&fu->ekf, EKF_DR));
+    return out + raw_exclude(e, r->z[1], r->ok[1], 1, sigma3(&fu->ekf, EKF_DV));
 }
 
 /* A fused epoch (gnss_input = raw, or both without fixes): steps 2 to 4 and the
@@ -951,10 +957,8 @@ static fusion_action_t raw_fuse(fusion_t *fu, const raw_epoch_t *e, nav_real_t d
 {
     const fusion_ctx_t *c = e->c;
     const app_config_t *cfg = c->cfg;
-    nav_real_t z_pr[RAW_MAX], z_rr[RAW_MAX];
-    uint8_t ok_pr[RAW_MAX], ok_rr[RAW_MAX];
-    const int out =
-        raw_clock_exclude(fu, e, dt_s, tow_ms, clock_reset, z_pr, ok_pr, z_rr, ok_rr);
+    raw_resid_t r;
+    const int out = raw_clock_exclude(fu, e, dt_s, tow_ms, clock_reset, &r);
     if (out < 0) {
         return FUSION_GO_ON;
     }
@@ -973,13 +977,12 @@ static fusion_action_t raw_fuse(fusion_t *fu, const raw_epoch_t *e, nav_real_t d
                       nav_sqrt(NAV_C(1.0) - cfg->gnss_white_ratio * cfg->gnss_white_ratio));
         r_scale = NAV_C(1.0);
     }
-    const nav_real_t v2 = e->v_then[0] * e->v_then[0] + e->v_then[1] * e->v_then[1];
     const nav_real_t v_min = APP_GNSS_HEADING_SPEED_SIGMAS * APP_RAW_RR_SIGMA_MIN_MPS;
-    fu->ekf.hold_heading = v2 < v_min * v_min ? 1u : 0u;
+    fu->ekf.hold_heading = e->v2_then < v_min * v_min ? 1u : 0u;
     int gated = 0;
     int corrected = 0;
-    const int pr_used = raw_updates(fu, e, ok_pr, 0, r_scale, &gated, &corrected);
-    const int rr_used = raw_updates(fu, e, ok_rr, 1, NAV_C(1.0), &gated, &corrected);
+    const int pr_used = raw_updates(fu, e, r.ok[0], 0, r_scale, &gated, &corrected);
+    const int rr_used = raw_updates(fu, e, r.ok[1], 1, NAV_C(1.0), &gated, &corrected);
     fu->ekf.hold_heading = 0u;
     app_count_n(&c->raw->pr_used, (uint32_t)pr_used);
     app_count_n(&c->raw->rr_used, (uint32_t)rr_used);
@@ -1044,6 +1047,7 @@ fusion_action_t fusion_raw(fusion_t *fu, const fusion_ctx_t *c, const gnss_raw_a
     e.c = c;
     e.g = g;
     e.v_then = gnss_time_velocity_then(c->time, &when);
+    e.v2_then = e.v_then[0] * e.v_then[0] + e.v_then[1] * e.v_then[1];
     if (ekf_antenna(c->nav, &e.then, cfg->gnss_lever_b_m, &e.ant) != NAV_OK) {
         if (fuse) {
             app_diag_reject(c->diag, &c->diag->health->gnss_rejected);
