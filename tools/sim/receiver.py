@@ -118,6 +118,12 @@ def satellite_ecef(t_s):
     return r_e, v_e, PRNS
 
 
+def raw_seed(seed: int) -> int:
+    """The receiver model's seed for tools.sim.run's --seed (its own stream: the IMU, the
+    fixes and the wheels draw from others)."""
+    return 3 * seed + 2
+
+
 # ReceiverSpec's figures that divide: never 0
 POSITIVE_FIGURES = frozenset({"rate_hz", "atmo_corr_s", "orbit_corr_s", "multipath_corr_s",
                               "multipath_el_scale_deg", "clock_step_s"})
@@ -331,9 +337,8 @@ def main(argv=None) -> int:
             else ReceiverSpec(canyons=list(a.canyon)))
     dark = [(o0, o1) for (o0, o1, *_r) in truth.outages
             if not any(c[0] <= o0 and o1 <= c[1] for c in spec.canyons)]
-    # the drive's GPS time and the receiver's seed as tools.sim.run sends them for --seed
-    from tools.sim.run import GPS_TOW0_S, raw_seed
-    eps = simulate(truth, spec, raw_seed(a.seed), t0_gps_s=GPS_TOW0_S, outages=dark)
+    # the drive's GPS time and the receiver's seed as tools.sim.run makes them for --seed
+    eps = simulate(truth, spec, raw_seed(a.seed), t0_gps_s=scen_mod.GPS_TOW0_S, outages=dark)
     if a.list:
         last = -math.inf
         for t, ep, tr in eps:

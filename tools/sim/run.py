@@ -35,14 +35,9 @@ from tools import navecu_can as nc
 from tools.sim import report, scenario, sensors, trajectory
 
 ROOT = Path(__file__).resolve().parents[2]
-GPS_TOW0_S = 302400.0  # GNSS time of week at t = 0 (Wednesday noon)
-GPS_WEEK = 2400        # its GPS week (2026-01-04 .. 2026-01-10)
-
-
-def raw_seed(seed: int) -> int:
-    """The receiver model's seed for the run's --seed (its own stream: the IMU, the fixes
-    and the wheels draw from others)."""
-    return 3 * seed + 2
+# the drive's GPS time (tools/sim/scenario.py), named here too for the run's users
+GPS_TOW0_S = scenario.GPS_TOW0_S
+GPS_WEEK = scenario.GPS_WEEK
 
 
 class Stages:
@@ -347,7 +342,7 @@ def main(argv=None) -> int:
         # covers: there the fixes stop and the satellites along the street stay
         dark = [(o0, o1) for (o0, o1, *_r) in truth.outages
                 if not any(c[0] <= o0 and o1 <= c[1] for c in spec.canyons)]
-        raw = [(t, ep) for t, ep, _ in receiver.simulate(truth, spec, raw_seed(a.seed),
+        raw = [(t, ep) for t, ep, _ in receiver.simulate(truth, spec, receiver.raw_seed(a.seed),
                                                          t0_gps_s=GPS_TOW0_S, outages=dark)]
     fr = frames(truth, dtheta, dv, wheels, gnss, db, heading_deg=hdg_cmd, calibration=cal,
                 car=car, power_on_s=a.power_on_s, reset_s=a.reset_s,

@@ -166,6 +166,10 @@ _OPTIONAL_TABLES = {
     "gnss_raw": {"enabled", "canyons", "faults", "receiver"},
 }
 GNSS_JUMP_AZIMUTH_DEG_DEFAULT = 0.0   # a jump without an azimuth moves the fix north
+# every simulated drive's GPS time at its t = 0 (tools.sim.run sends it, tools.sim.receiver
+# places the constellation by it)
+GPS_TOW0_S = 302400.0  # GNSS time of week at t = 0 (Wednesday noon)
+GPS_WEEK = 2400        # its GPS week (2026-01-04 .. 2026-01-10)
 
 
 def _gnss_faults(path, table: dict) -> dict:
