@@ -869,19 +869,20 @@ static int raw_interval(fusion_t *fu, const fusion_ctx_t *c, uint32_t tow_ms, na
  * their interval) with its horizontal sigma below APP_RAW_BIAS_POS_SIGMA_M and the car at
  * APP_RAW_BIAS_SPEED_MPS or more, from the satellites the fault exclusion keeps, when at
  * least APP_RAW_BIAS_MIN_SATS are left. */
-static void raw_learn(fusion_t *fu, const raw_epoch_t *e, nav_real_t gap_samples,
-                      uint32_t tow_ms)
+static uint8_t raw_learning(const fusion_t *fu, uint64_t n_samples, nav_real_t v2_then,
+                            nav_real_t gap_samples)
 {
     /* as a positive test: a sigma or speed that is not a number learns nothing */
-    const uint8_t learning =
-        (app_stamp_within(&fu->fix, e->c->diag->n_samples, (uint64_t)gap_samples) &&
-         ekf_sigma_h_m(&fu->ekf) < APP_RAW_BIAS_POS_SIGMA_M &&
-         e->v2_then >= APP_RAW_BIAS_SPEED_MPS * APP_RAW_BIAS_SPEED_MPS)
-            ? 1u
-            : 0u;
-    if (learning == 0u) {
-        return;
-    }
+    return (app_stamp_within(&fu->fix, n_samples, (uint64_t)gap_samples) &&
+            ekf_sigma_h_m(&fu->ekf) < APP_RAW_BIAS_POS_SIGMA_M &&
+            v2_then >= APP_RAW_BIAS_SPEED_MPS * APP_RAW_BIAS_SPEED_MPS)
+               ? 1u
+               : 0u;
+}
+
+/* the learning of an epoch raw_learning lets learn (its geometry formed) */
+static void raw_learn(fusion_t *fu, const raw_epoch_t *e, uint32_t tow_ms)
+{
     nav_real_t z[RAW_MAX];
     uint8_t ok[RAW_MAX];
     raw_residuals(fu, e, 0, z, ok);
@@ -1048,6 +1049,10 @@ fusion_action_t fusion_raw(fusion_t *fu, const fusion_ctx_t *c, const gnss_raw_a
     e.g = g;
     e.v_then = gnss_time_velocity_then(c->time, &when);
     e.v2_then = e.v_then[0] * e.v_then[0] + e.v_then[1] * e.v_then[1];
+    /* an epoch only learnt from: nothing to form when it would not be (a parked car) */
+    if (fixes_come && raw_learning(fu, c->diag->n_samples, e.v2_then, gap_samples) == 0u) {
+        return FUSION_GO_ON;
+    }
     if (ekf_antenna(c->nav, &e.then, cfg->gnss_lever_b_m, &e.ant) != NAV_OK) {
         if (fuse) {
             app_diag_reject(c->diag, &c->diag->health->gnss_rejected);
@@ -1067,7 +1072,7 @@ fusion_action_t fusion_raw(fusion_t *fu, const fusion_ctx_t *c, const gnss_raw_a
     /* the correlated errors as the fixes' state db when it is one */
     e.use_bias = bias_is_state(fu, cfg);
     if (fixes_come) {
-        raw_learn(fu, &e, gap_samples, tow_ms);
+        raw_learn(fu, &e, tow_ms);
         return FUSION_GO_ON;
     }
     return raw_fuse(fu, &e, dt_s, tow_ms, clock_reset, adopt);

@@ -34,12 +34,18 @@ static void when_late(const gnss_time_t *g, gnss_when_t *w, int64_t late_us,
     gnss_time_reach(g, w, latency_s);
 }
 
+/* the epoch's offset: IMU time less the receiver's time of week, us */
+static int64_t offset_us(uint64_t imu_t_us, uint32_t tow_ms)
+{
+    return (int64_t)imu_t_us - (int64_t)tow_ms * 1000;
+}
+
 gnss_when_t gnss_time_align(gnss_time_t *g, uint64_t imu_t_us, uint32_t imu_rate_hz,
                             uint32_t tow_ms, nav_real_t latency_s)
 {
     gnss_when_t w;
     const int64_t t_imu_us = (int64_t)imu_t_us;
-    const int64_t off = t_imu_us - (int64_t)tow_ms * 1000;
+    const int64_t off = offset_us(imu_t_us, tow_ms);
     /* A step earlier by more than 1 s, later by more than 10 s, or later by more than
      * 0.5 s three epochs in a row is a time jump; a late epoch moves the offset once. */
     const int64_t excess = off - g->off_min_us;
@@ -75,7 +81,7 @@ gnss_when_t gnss_time_peek(const gnss_time_t *g, uint64_t imu_t_us, uint32_t imu
                            uint32_t tow_ms, nav_real_t latency_s)
 {
     gnss_when_t w;
-    const int64_t late = (int64_t)imu_t_us - (int64_t)tow_ms * 1000 - g->off_min_us;
+    const int64_t late = offset_us(imu_t_us, tow_ms) - g->off_min_us;
     w.jumped = 0u;
     when_late(g, &w, late, imu_rate_hz, latency_s);
     if (g->off_valid == 0u || late > APP_GNSS_LATE_US) {
