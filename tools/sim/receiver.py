@@ -124,6 +124,14 @@ def raw_seed(seed: int) -> int:
     return 3 * seed + 2
 
 
+def dark_outages(truth, spec: ReceiverSpec) -> list:
+    """[(start_s, end_s)] of the drive's outages with no raw epoch: a tunnel, not the
+    outage of the fixes that a canyon of spec covers (there the receiver computes no fix
+    from under four satellites, but tracks the ones along the street)."""
+    return [(o0, o1) for (o0, o1, *_r) in truth.outages
+            if not any(c[0] <= o0 and o1 <= c[1] for c in spec.canyons)]
+
+
 # ReceiverSpec's figures that divide: never 0
 POSITIVE_FIGURES = frozenset({"rate_hz", "atmo_corr_s", "orbit_corr_s", "multipath_corr_s",
                               "multipath_el_scale_deg", "clock_step_s"})
@@ -335,10 +343,9 @@ def main(argv=None) -> int:
     own = scen.get("gnss_raw", {})
     spec = (spec_of(own) if own.get("enabled") and not a.canyon
             else ReceiverSpec(canyons=list(a.canyon)))
-    dark = [(o0, o1) for (o0, o1, *_r) in truth.outages
-            if not any(c[0] <= o0 and o1 <= c[1] for c in spec.canyons)]
-    # the drive's GPS time and the receiver's seed as tools.sim.run makes them for --seed
-    eps = simulate(truth, spec, raw_seed(a.seed), t0_gps_s=scen_mod.GPS_TOW0_S, outages=dark)
+    # the drive's GPS time, outages and the receiver's seed as tools.sim.run makes them
+    eps = simulate(truth, spec, raw_seed(a.seed), t0_gps_s=scen_mod.GPS_TOW0_S,
+                   outages=dark_outages(truth, spec))
     if a.list:
         last = -math.inf
         for t, ep, tr in eps:

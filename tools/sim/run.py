@@ -338,10 +338,7 @@ def main(argv=None) -> int:
     if scen.get("gnss_raw", {}).get("enabled"):
         from tools.sim import receiver
         spec = receiver.spec_of(scen["gnss_raw"])
-        # no raw epoch in an outage of every signal (a tunnel), but one that a canyon
-        # covers: there the fixes stop and the satellites along the street stay
-        dark = [(o0, o1) for (o0, o1, *_r) in truth.outages
-                if not any(c[0] <= o0 and o1 <= c[1] for c in spec.canyons)]
+        dark = receiver.dark_outages(truth, spec)   # a tunnel has no raw epoch, a canyon has
         raw = [(t, ep) for t, ep, _ in receiver.simulate(truth, spec, receiver.raw_seed(a.seed),
                                                          t0_gps_s=GPS_TOW0_S, outages=dark)]
     fr = frames(truth, dtheta, dv, wheels, gnss, db, heading_deg=hdg_cmd, calibration=cal,
