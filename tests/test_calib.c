@@ -299,7 +299,9 @@ static void filter_says(float k, float sk, float yaw, float sy)
 }
 
 /* GIVEN the filter's scale k 0.001 (sigma 0.0019) and speed offset -0.12 m/s (sigma 0.019
- * m/s) correlated -0.94 (the Kingston drive's figures at its end), and a trip at 10 m/s
+ * m/s) correlated -0.94 (the kind of figures a drive with an offset-type odometer gives:
+ * Kingston's ends at k sigma 0.0026 and offset sigma 0.026 m/s, navecu's summary of `make
+ * kingston OUTAGES=none`), and a trip at 10 m/s
  * mean (and 0.3 m/s of creeping, which is not counted) THEN the calibration adopted is the
  * scale the trip's distance implies, k + o / 10 = -0.011, its sigma 0.00066 (the two
  * estimates' errors cancel: below APP_CAL_ADOPT_SIGMA); uncorrelated its sigma would be

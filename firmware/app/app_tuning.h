@@ -240,9 +240,11 @@
 /* The filter's odometer scale and mounting yaw are adopted once each one's 1-sigma is
  * below 0.1 % of the distance driven (a scale error of 0.001; a heading error of 1 mrad,
  * 0.057 deg, turns 0.1 % of it into cross-track error): together within the 0.15 % of
- * distance a dead reckoning after calibration is held to (issue #18), and reachable on a
- * real drive (Kingston, 1 Hz OBD speed: 0.061 % and 0.042 deg after an hour; the 0.05 %
- * and 0.03 deg before never were). Stored when they moved by more than 2 sigma. */
+ * distance a dead reckoning after calibration is held to (issue #18). The scale's sigma is
+ * that of k + o / v_mean (calib_filter_scale): on the Kingston drive (1 Hz whole-km/h OBD
+ * speed) it ends the hour at 0.116 % with the mounting yaw's at 0.049 deg, so nothing is
+ * adopted there (navecu's summary, `make kingston OUTAGES=none`; docs/kingston.md).
+ * Stored when they moved by more than 2 sigma. */
 #define APP_CAL_ADOPT_SIGMA NAV_C(0.001)
 #define APP_CAL_CHANGED_SIGMAS NAV_C(2.0)
 #define APP_CAL_SAVE_MIN_S 600u /* filter calibration saves: flash wear, 10 k cycles */
