@@ -279,3 +279,36 @@ def test_a_scenario_receivers_figures_are_checked():
                      '[gnss_raw]\nreceiver = {orbit_clock_m = -1.0}\n')
         with pytest.raises(ValueError, match="orbit_clock_m"):
             scenario.load_scenario(f)
+
+
+def test_residuals_against_the_reference_show_one_satellites_error():
+    """tools.kingston.raw --residuals: ranges made from a known position, the receiver's
+    clock 1234.5 m and the corrections gnss_raw.csv carries, one satellite 5 m long: less
+    the median the others are 0 and it is +5 m (1 mm: float64); less that satellite's,
+    the others are -5 m; an epoch without it is left out."""
+    p = gr.ecef_from_geodetic(math.radians(44.23), math.radians(-76.5), 40.0)
+    sats = [np.array(s) for s in ([2.0e7, 0.5e7, 1.2e7], [0.3e7, -2.1e7, 1.5e7],
+                                  [1.1e7, -1.0e7, 2.1e7], [2.2e7, -0.4e7, 1.0e7],
+                                  [0.9e7, -1.6e7, 1.9e7])]
+    names = ["time_s", "prn", "sat_x_m", "sat_y_m", "sat_z_m", "sat_clock_corr_m",
+             "iono_corr_m", "tropo_corr_m", "pseudorange_m", "elevation"]
+    rows = []
+    for t in (100.0, 101.0):
+        for i, s in enumerate(sats):
+            if t == 101.0 and i == 4:
+                continue
+            geo = float(np.linalg.norm(s - p))
+            corr = (20.0 + i, 3.0 + 0.5 * i, 2.5 + 0.3 * i)  # clock, iono, tropo
+            pr = geo + 1234.5 - corr[0] + corr[1] + corr[2] + (5.0 if i == 4 else 0.0)
+            rows.append((t, i + 1, *s, *corr, pr, 0.5))
+    raw = np.array(rows, dtype=[(n, float) for n in names])
+    ref = np.array([(99.0, 44.23, -76.5, 40.0), (102.0, 44.23, -76.5, 40.0)],
+                   dtype=[(n, float) for n in ("time_s", "lat_deg", "lon_deg", "height_m")])
+    med = kraw.residuals(raw, ref, 90.0, 0.0, 20.0)
+    assert [t for t, _ in med] == [10.0, 11.0]
+    for prn, _, v in med[0][1]:
+        assert v == pytest.approx(5.0 if prn == 5 else 0.0, abs=1e-3)
+    rel = kraw.residuals(raw, ref, 90.0, 0.0, 20.0, relative_to=5)
+    assert len(rel) == 1
+    for prn, _, v in rel[0][1]:
+        assert v == pytest.approx(0.0 if prn == 5 else -5.0, abs=1e-3)

@@ -15,9 +15,24 @@ corrections (m), the pseudorange and its sigma, the L1 Doppler (Hz), elevation a
   satellites': median residual 0.016 m/s after the common clock drift).
 The receiver's reported pseudorange sigma (0.05 to 9.5 m) is sent as it is; it gives no
 Doppler sigma or C/N0 (sent as 0: unknown, the ECU's parameters apply).
+
+Each satellite's corrected range against the SPAN reference, per epoch:
+
+    python -m tools.kingston.raw --residuals T0 T1 [--relative-to PRN] [--data DIR]
+
+prints, for every raw epoch from T0 to T1 s of the drive (the log's time base, as
+tools.kingston.run and compare), the satellites (PRN at elevation, degrees) and each one's
+corrected pseudorange less its geometric range from the reference position (interpolated
+to the epoch; ellipsoidal height, as reference.csv), less the epoch's median: what the
+firmware's bias learning (firmware/app/raw_bias.h) averages, with the reference in place
+of the filter's position. With --relative-to, less that satellite's instead (epochs
+without it are skipped: the median moves with the satellites in view, a difference does
+not), and then each satellite's mean over the window.
 """
 from __future__ import annotations
 
+import argparse
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -57,10 +72,83 @@ def epochs(raw: np.ndarray, fixes: np.ndarray, height_offset_m: float = 0.0) -> 
             ep.meas.append(gr.RawMeas(
                 sv_id=int(r["prn"]), sat_pos_m=gr.rotate_z(s_rx, a),
                 sat_vel_mps=gr.rotate_z(v_rx, a),
-                pseudorange_m=float(r["pseudorange_m"] + r["sat_clock_corr_m"]
-                                    - r["iono_corr_m"] - r["tropo_corr_m"]),
+                pseudorange_m=corrected_pseudorange_m(r),
                 range_rate_mps=float(-r["doppler"] * gr.GPS_L1_WAVELENGTH_M),
                 pr_sigma_m=float(r["pseudorange_std_m"]),
                 elevation_deg=float(np.degrees(r["elevation"]))))
         out.append((float(t), ep))
     return out
+
+
+def corrected_pseudorange_m(r) -> float:
+    """The module docstring's sign combination: pseudorange + satellite clock - iono -
+    tropo, m."""
+    return float(r["pseudorange_m"] + r["sat_clock_corr_m"] - r["iono_corr_m"]
+                 - r["tropo_corr_m"])
+
+
+def residuals(raw: np.ndarray, ref: np.ndarray, t0_gps_s: float, t0_s: float,
+              t1_s: float, relative_to: int = 0) -> list:
+    """[(t s of the drive, [(prn, elevation deg, residual m less the epoch's median)])] for
+    the raw epochs from t0_s to t1_s; ref: reference.csv rows (GPS time, lat, lon,
+    ellipsoidal height). The satellites are in the receive time's axes (module docstring),
+    so the geometric range is |sat - receiver|. relative_to: a PRN whose residual replaces
+    the median (epochs without it left out)."""
+    out = []
+    for t in np.unique(raw["time_s"]):
+        t_s = float(t) - t0_gps_s
+        if t_s < t0_s or t_s > t1_s:
+            continue
+        if t < ref["time_s"][0] or t > ref["time_s"][-1]:
+            continue
+        rx = gr.ecef_from_geodetic(
+            np.radians(np.interp(t, ref["time_s"], ref["lat_deg"])),
+            np.radians(np.interp(t, ref["time_s"], ref["lon_deg"])),
+            float(np.interp(t, ref["time_s"], ref["height_m"])))
+        rows = raw[raw["time_s"] == t]
+        rows = rows[np.argsort(rows["prn"])]
+        res = np.array([corrected_pseudorange_m(r) - float(np.linalg.norm(
+            np.array([r["sat_x_m"], r["sat_y_m"], r["sat_z_m"]]) - rx)) for r in rows])
+        if relative_to:
+            own = res[rows["prn"] == relative_to]
+            if own.size == 0:
+                continue
+            med = float(own[0])
+        else:
+            med = float(np.median(res))
+        out.append((t_s, [(int(r["prn"]), float(np.degrees(r["elevation"])), float(v - med))
+                          for r, v in zip(rows, res)]))
+    return out
+
+
+def main(argv=None) -> int:
+    from tools.kingston import convert  # the drive's time base; not needed by epochs()
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--residuals", nargs=2, type=float, metavar=("T0", "T1"), required=True,
+                    help="window, s of the drive")
+    ap.add_argument("--relative-to", type=int, default=0, metavar="PRN",
+                    help="less this satellite's residual instead of the epoch's median")
+    ap.add_argument("--data", default=None, help=f"data folder (default {convert.DATA_DIR})")
+    a = ap.parse_args(argv)
+    drive = convert.load(a.data)
+    raw = read(Path(a.data) if a.data else convert.DATA_DIR)
+    rows = residuals(raw, drive.ref, drive.t0_gps, a.residuals[0], a.residuals[1],
+                     a.relative_to)
+    less = f"PRN {a.relative_to}'s" if a.relative_to else "the epoch's median"
+    print(f"corrected pseudorange less the range from the reference, less {less} (m): "
+          "PRN@elevation residual")
+    for t_s, sats in rows:
+        print(f"{t_s:8.1f} s  {len(sats)}: " +
+              "  ".join(f"{p:2d}@{el:2.0f} {v:+5.1f}" for p, el, v in sats))
+    if a.relative_to:
+        per = {}
+        for _, sats in rows:
+            for p, _, v in sats:
+                per.setdefault(p, []).append(v)
+        print(f"mean over {len(rows)} epochs with PRN {a.relative_to}: " +
+              "  ".join(f"{p}: {np.mean(v):+.2f} m ({len(v)})" for p, v in sorted(per.items())))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
