@@ -1565,7 +1565,7 @@ struct navecu_can_nav_status_t {
     uint8_t status_page;
 
     /**
-     * 0 waiting for initial state, 1 levelling, 2 inertial only (free SINS is the output), 3 fault, 4 dead reckoning (odometer and SINS, no GNSS: the seed 000 solution before any GNSS fix, the Kalman filter with odometer aiding in a GNSS outage), 5 GNSS+INS (the Kalman filter with a GNSS fix in the last 2 s).
+     * 0 waiting for initial state, 1 levelling, 2 inertial only (free SINS is the output), 3 fault, 4 dead reckoning (odometer and SINS, no GNSS: the seed 000 solution before any GNSS fix, the Kalman filter with odometer aiding in a GNSS outage), 5 GNSS+INS (the Kalman filter with a GNSS fix taken, or a raw GNSS epoch fused, in the last 2 s).
      *
      * Range: 0..15 (0..15 -)
      * Scale: 1
