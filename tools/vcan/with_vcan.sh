@@ -198,10 +198,22 @@ if [ "$cpu" != none ]; then
     if command -v taskset >/dev/null 2>&1; then pin=(taskset -c "$cpu")
     else vsay "no taskset (util-linux): UML not pinned"; cpu=none; fi
 fi
+# Debian's UML kernel (6.1) restores its guests' FPU state through a buffer of its own size,
+# which a host CPU with a larger XSAVE area (AMX) refuses: UML then panics at its first
+# process ("ptrace set fp regs failed, errno = 14"). tools/vcan/uml_xstate_shim.c, built
+# here and preloaded into the UML kernel (not into the guest), gives it the host's size.
+preload=()
+shim_src="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd -P)/uml_xstate_shim.c"
+if [ -f "$shim_src" ] && command -v cc >/dev/null 2>&1 &&
+   cc -shared -fPIC -O2 -o "$work/uml_xstate_shim.so" "$shim_src" -ldl >"$work/shim_build.log" 2>&1; then
+    preload=(env LD_PRELOAD="$work/uml_xstate_shim.so")
+else
+    say "warning: the UML xstate shim did not build ($shim_src, cc; $work/shim_build.log): UML runs without it"
+fi
 vsay "booting $uml (mem=$mem, nice $nice_n, cpu $cpu, timeout ${timeout_s}s, exchange dir $work)"
 t0=$(date +%s.%N)
 # UML's own exit status does not carry the guest's; TMPDIR for UML's memory file is the host's.
-"${pin[@]}" nice -n "$nice_n" timeout -k 10 "$timeout_s" "$uml" mem="$mem" root=/dev/root rootfstype=hostfs rootflags=/ rw \
+"${pin[@]}" nice -n "$nice_n" timeout -k 10 "$timeout_s" "${preload[@]}" "$uml" mem="$mem" root=/dev/root rootfstype=hostfs rootflags=/ rw \
     init="$work/init.sh" con=null con0=fd:0,fd:1 </dev/null >"$work/console.log" 2>&1 &
 uml_pid=$!
 wait "$uml_pid"
