@@ -1088,14 +1088,22 @@ static void send_command(uint8_t command)
  *      and after a reboot nothing is loaded. A point closer than the base is refused with
  *      its reason, and CalibrateHere without a new CMD_KnownPosition is refused.
  */
-static void test_one_point_calibration_and_nvm(void **state)
+/* the defaults but a one-point calibration's minimum base of base_m; booted, navigating
+ * from start_perfect; returns the configuration */
+static app_config_t start_with_min_base(nav_real_t base_m)
 {
-    (void)state;
     app_config_t cfg = app_default_config();
-    cfg.cal_min_base_m = NAV_C(250.0);
+    cfg.cal_min_base_m = base_m;
     assert_int_equal(app_init(&app, &cfg), NAV_OK);
     app_boot(&app, &hal);
     start_perfect();
+    return cfg;
+}
+
+static void test_one_point_calibration_and_nvm(void **state)
+{
+    (void)state;
+    const app_config_t cfg = start_with_min_base(NAV_C(250.0));
     run_wheels(20 * RATE_HZ, 10.0, 0);
     int32_t lat_e7, lon_e7;
     known_point(0.0, 1.0, &lat_e7, &lon_e7);
@@ -1158,6 +1166,89 @@ static void test_one_point_calibration_and_nvm(void **state)
     app_boot(&app, &hal);
     assert_int_equal(app.keep.cal.status, NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_NONE_CHOICE);
     assert_near(app.keep.cal.mu, 0.0, 0.0);
+}
+
+/* the last NAV_Status page 0's HorizAccuracy (m; 655.35 "unknown") and NAV_Accuracy's
+ * HeadingAccuracy (deg; 40.95 "unknown") */
+static double last_horiz_accuracy(void)
+{
+    for (uint32_t i = hal.tx_n; i > 0u; i--) {
+        if (hal.tx[i - 1u].id == NAVECU_CAN_NAV_STATUS_FRAME_ID &&
+            (hal.tx[i - 1u].data[0] & 15u) == 0u) {
+            struct navecu_can_nav_status_t st;
+            memset(&st, 0, sizeof st);
+            navecu_can_nav_status_unpack(&st, hal.tx[i - 1u].data, 8u);
+            return st.horiz_accuracy * 0.01;
+        }
+    }
+    fail_msg("no NAV_Status page 0");
+    return -1.0;
+}
+
+static double last_heading_accuracy(void)
+{
+    struct navecu_can_nav_accuracy_t m;
+    navecu_can_nav_accuracy_unpack(&m, last_tx(NAVECU_CAN_NAV_ACCURACY_FRAME_ID)->data, 8u);
+    return m.heading_accuracy * 0.01;
+}
+
+/*
+ * GIVEN a commanded start (the point known to APP_KNOWN_POS_SIGMA_M per axis, the
+ *      commanded heading to the filter's prior, the uncalibrated car's scale and mounting
+ *      to the filter's priors: ekf_default_config) and no GNSS
+ * WHEN the car dead-reckons straight at 10 m/s
+ * THEN HorizAccuracy is the dead reckoning's (dr_acc.h, seed 000 eqs 5-6):
+ *      sqrt(2 s_p^2 + D^2 (s_k^2 + s_psi^2) + (s_b v t^2 / 2)^2) after D = 100 and 300 m,
+ *      and HeadingAccuracy sqrt(s_psi^2 + (s_b t)^2), to 2 % (s_b the z gyro's turn-on
+ *      bias prior: nothing learnt at a standstill yet; its noise adds less)
+ * WHEN a one-point calibration resets the position to a known point
+ * THEN it is that point's, sqrt(2) s_p, and grows again from there with the calibration's
+ *      errors over its 300 m base and the bias's drift, to 5 %.
+ */
+static void test_dead_reckoning_reports_its_accuracy(void **state)
+{
+    (void)state;
+    const app_config_t cfg = start_with_min_base(NAV_C(250.0));
+    run_wheels(RATE_HZ / 2, 0.0, 0);
+    const double sp = (double)APP_KNOWN_POS_SIGMA_M;
+    assert_near(last_horiz_accuracy(), sqrt(2.0) * sp, 0.011);
+    const ekf_config_t ec = ekf_default_config();
+    const double s_psi = sqrt((double)ec.heading_rad * (double)ec.heading_rad +
+                              (double)ec.mount_rad * (double)ec.mount_rad);
+    const double s2 = (double)ec.k * (double)ec.k + s_psi * s_psi;
+    /* no standstill yet: the z bias is its turn-on prior, turning the heading by sb t
+     * and moving the car sideways by sb v t^2 / 2 after t s at v */
+    const double sb = (double)cfg.gyro_bias_rps;
+    double prev = 0.0;
+    for (int leg = 0; leg < 2; leg++) {
+        run_wheels((leg == 0 ? 10 : 20) * RATE_HZ, 10.0, 0);
+        const double t = leg == 0 ? 10.0 : 30.0;
+        double lat, lon, e, n;
+        last_position(&lat, &lon);
+        local_en(lat, lon, &e, &n);
+        const double d2 = e * e + n * n, side = sb * 10.0 * t * t / 2.0;
+        const double expect = sqrt(2.0 * sp * sp + d2 * s2 + side * side);
+        assert_near(last_horiz_accuracy(), expect, 0.02 * expect);
+        assert_true(last_horiz_accuracy() > prev);
+        prev = last_horiz_accuracy();
+        const double head = sqrt(s_psi * s_psi + sb * t * sb * t) / DEG;
+        assert_near(last_heading_accuracy(), head, 0.02 * head);
+    }
+    int32_t lat_e7, lon_e7;
+    known_point(0.0, 1.0, &lat_e7, &lon_e7);
+    send_known_position(lat_e7, lon_e7);
+    send_command(NAVECU_CAN_CMD_CONTROL_COMMAND_CALIBRATE_HERE_CHOICE);
+    assert_int_equal(app.keep.cal.count, 1); /* performed */
+    run_wheels(RATE_HZ / 5, 10.0, 0); /* 2 m, two NAV_Status */
+    assert_near(last_horiz_accuracy(), sqrt(2.0) * sp, 0.011);
+    run_wheels(30 * RATE_HZ, 10.0, 0);
+    /* 300 m on: the calibration's scale and heading errors, (2 s_p^2) / base^2 each; the
+     * heading's also the leg's drift, s_b 30 s (dr_acc.h); and the bias's 30 s more */
+    const double base2 = 300.0 * 300.0, geo = 2.0 * sp * sp / base2, drift = sb * 30.0;
+    const double side = sb * 10.0 * 30.0 * 30.0 / 2.0;
+    const double after = sqrt(2.0 * sp * sp + base2 * (2.0 * geo + drift * drift) + side * side);
+    assert_near(last_horiz_accuracy(), after, 0.05 * after);
+    assert_true(last_horiz_accuracy() < prev);
 }
 
 /* Both NVM slots corrupt at boot: defaults, CalStatus NvmCorrupt, the NVM flag raised. */
@@ -1630,6 +1721,7 @@ int main(void)
         cmocka_unit_test_setup(test_diverged_filter_is_reset, setup),
         cmocka_unit_test_setup(test_task_supervision, setup),
         cmocka_unit_test_setup(test_calibrate_at_gnss, setup),
+        cmocka_unit_test_setup(test_dead_reckoning_reports_its_accuracy, setup),
         cmocka_unit_test_setup(test_filter_with_gnss, setup),
         cmocka_unit_test_setup(test_longitude_minus_180, setup),
         cmocka_unit_test_setup(test_gnss_epoch_counter_round_an_outage, setup),

@@ -24,6 +24,7 @@
 #include <cmocka.h>
 
 #include "dr.h"
+#include "dr_acc.h"
 #include "odo.h"
 #include "test_util.h"
 
@@ -335,6 +336,130 @@ static void test_odo_standstill(void **state)
     assert_false(o.standing); /* one wheel moves: not standing */
 }
 
+/* ------------------------------------------------ the dead reckoning's accuracy ----
+ * dr_acc.h propagates a covariance of linear errors. With a single error source of size
+ * x given as its sigma (the others 0), the covariance is rank one, J x^2 J', and its
+ * sqrt(P_EE + P_NN) is |J x|: the position error that source makes. So each source, put
+ * into a real dead reckoning (dr_step) over DRIVE, must leave an error of that size: the
+ * check of the model's signs and couplings against the navigator itself. Errors small
+ * (second-order terms x^2 D below 1 cm); the steps are 10 m at 10 m/s (1 s).
+ */
+enum { SRC_MU, SRC_PSI, SRC_BIAS, SRC_SCALE };
+
+static double leg_heading_rad(int i)
+{
+    return DRIVE[i].heading_deg * DEG;
+}
+
+static double acc_vs_drive(int src, double x, double *err_m, double *pen_err, double *pen_acc)
+{
+    const geo_pos_t p0 = start_pos();
+    dr_t truth, dr;
+    assert_int_equal(dr_init(&truth, &p0, NAV_C(0.0), NAV_C(0.0)), NAV_OK);
+    assert_int_equal(dr_init(&dr, &p0, NAV_C(0.0), NAV_C(0.0)), NAV_OK);
+    dr_acc_t a;
+    const nav_real_t xs = (nav_real_t)x, z = NAV_C(0.0);
+    dr_acc_start(&a, z, src == SRC_MU ? xs : z, src == SRC_PSI ? xs : z,
+                 src == SRC_BIAS ? xs : z, src == SRC_SCALE ? xs : z);
+    const double dt = 1.0;
+    double t = 0.0, turned = 0.0;
+    for (int i = 0; i < (int)N_LEGS; i++) {
+        const int n = (int)(DRIVE[i].length_m / STEP_M);
+        for (int k = 0; k < n; k++) {
+            const double hd = leg_heading_rad(i);
+            double err_h = 0.0; /* the heading error of this step, by source */
+            if (src == SRC_PSI) {
+                err_h = x;
+            } else if (src == SRC_BIAS) {
+                err_h = x * t;
+            } else if (src == SRC_SCALE) {
+                err_h = x * turned;
+            }
+            const double ds = STEP_M * (src == SRC_MU ? 1.0 + x : 1.0);
+            assert_int_equal(dr_step(&truth, (nav_real_t)STEP_M, (nav_real_t)hd, z), NAV_OK);
+            assert_int_equal(dr_step(&dr, (nav_real_t)ds, (nav_real_t)(hd + err_h), z), NAV_OK);
+            /* the turn to the next step's heading, made after this step's move */
+            double next = hd;
+            if (k == n - 1 && i + 1 < (int)N_LEGS) {
+                next = leg_heading_rad(i + 1);
+            }
+            double dth = next - hd;
+            dth -= 2.0 * PI * floor(dth / (2.0 * PI) + 0.5);
+            dr_acc_move(&a, dr.step_e_m, dr.step_n_m, (nav_real_t)dth, (nav_real_t)dt, z, z);
+            t += dt;
+            turned += dth;
+        }
+    }
+    nav_real_t e, nn;
+    dr_local_m(&truth.pos, &dr.pos, &e, &nn);
+    *err_m = sqrt((double)e * (double)e + (double)nn * (double)nn);
+    *pen_err = (double)e * (double)nn;
+    *pen_acc = (double)a.P[DR_ACC_E][DR_ACC_N];
+    return (double)dr_acc_sigma_h_m(&a);
+}
+
+/* GIVEN one error at a time in the dead reckoning over DRIVE's 7.5 km: scale 1e-3,
+ * heading 1e-3 rad, z gyro bias 1e-6 rad/s (0.2 deg/h; 0.043 deg over its 750 s),
+ * z gyro scale factor 1e-3 THEN the accuracy of that source alone is the error it made,
+ * to 1 % (second-order terms and the flat local frame), and P_EN its east times its north
+ * error */
+static void test_acc_single_errors_are_the_drive_error(void **state)
+{
+    (void)state;
+    const int srcs[] = {SRC_MU, SRC_PSI, SRC_BIAS, SRC_SCALE};
+    const double xs[] = {1e-3, 1e-3, 1e-6, 1e-3};
+    for (int i = 0; i < 4; i++) {
+        double err, pen_err, pen_acc;
+        const double sig = acc_vs_drive(srcs[i], xs[i], &err, &pen_err, &pen_acc);
+        assert_true(err > 0.5); /* a real error: metres */
+        assert_near(sig, err, 0.01 * err);
+        /* and its direction: the east-north covariance is the product of the two errors
+         * (a sign wrong in eqs 5-6 turns it) */
+        assert_near(pen_acc, pen_err, 0.02 * err * err);
+    }
+}
+
+/* The standstill's bias estimate (gain K, sample variance R) and a calibration reset what
+ * dr_acc.h says: b's error (1 - K) e_b - K noise; the point's sigma and the calibration's
+ * geometry with the leg's drift; a non-finite step ends the model. */
+static void test_acc_hold_and_calibration(void **state)
+{
+    (void)state;
+    dr_acc_t a;
+    dr_acc_start(&a, NAV_C(2.0), NAV_C(0.01), NAV_C(0.05), NAV_C(1e-4), NAV_C(0.0));
+    assert_near(dr_acc_sigma_h_m(&a), sqrt(8.0), 1e-5);
+    /* 100 s east at 10 m/s: the bias turns the heading, the heading moves the position */
+    for (int k = 0; k < 100; k++) {
+        dr_acc_move(&a, NAV_C(10.0), NAV_C(0.0), NAV_C(0.0), NAV_C(1.0), NAV_C(0.0), NAV_C(0.0));
+    }
+    const double pbb = 1e-8, pnb = (double)a.P[DR_ACC_N][DR_ACC_B];
+    assert_true(pnb < 0.0); /* north error -psi dE, psi grown by +b: negative */
+    const double K = 0.25, R = 4e-8, q = 1e-12;
+    dr_acc_hold(&a, NAV_C(1.0), (nav_real_t)sqrt(q), (nav_real_t)K, (nav_real_t)R);
+    assert_near(a.P[DR_ACC_B][DR_ACC_B], (1 - K) * (1 - K) * pbb + K * K * R + q, 1e-14);
+    assert_near(a.P[DR_ACC_N][DR_ACC_B], (1 - K) * pnb, 1e-6 * fabs(pnb));
+    assert_near(a.P[DR_ACC_B][DR_ACC_N], a.P[DR_ACC_N][DR_ACC_B], 0.0);
+    /* the heading's drift over the leg: its variance less the start's 0.05^2 */
+    const double drift = (double)a.P[DR_ACC_PSI][DR_ACC_PSI] - 0.0025;
+    assert_true(drift > 1e-5);
+    const double var_b = (double)a.P[DR_ACC_B][DR_ACC_B];
+    dr_acc_calibrated(&a, NAV_C(3.0), NAV_C(1000.0));
+    assert_near(a.P[DR_ACC_E][DR_ACC_E], 9.0, 1e-5);
+    assert_near(a.P[DR_ACC_N][DR_ACC_N], 9.0, 1e-5);
+    const double geo = (9.0 + 4.0) / 1e6; /* (point^2 + base^2) / base length^2 */
+    assert_near(a.P[DR_ACC_MU][DR_ACC_MU], geo, 1e-6 * geo);
+    assert_near(a.P[DR_ACC_PSI][DR_ACC_PSI], geo + drift, 1e-4 * (geo + drift));
+    assert_near(a.P[DR_ACC_B][DR_ACC_B], var_b, 0.0);
+    assert_near(a.P[DR_ACC_N][DR_ACC_B], 0.0, 0.0);
+    assert_near(a.base_var_m2, 9.0, 1e-5);
+    /* the next calibration's geometry uses this point's 3 m as its base's */
+    dr_acc_calibrated(&a, NAV_C(1.0), NAV_C(1000.0));
+    assert_near(a.P[DR_ACC_MU][DR_ACC_MU], (1.0 + 9.0) / 1e6, 1e-11);
+    dr_acc_move(&a, NAV_C(NAN), NAV_C(0.0), NAV_C(0.0), NAV_C(1.0), NAV_C(0.0), NAV_C(0.0));
+    assert_int_equal(a.valid, 0);
+    assert_near(dr_acc_sigma_h_m(&a), -1.0, 0.0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -349,6 +474,8 @@ int main(void)
         cmocka_unit_test(test_odo_axles),
         cmocka_unit_test(test_odo_refusals_and_timeout),
         cmocka_unit_test(test_odo_standstill),
+        cmocka_unit_test(test_acc_single_errors_are_the_drive_error),
+        cmocka_unit_test(test_acc_hold_and_calibration),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

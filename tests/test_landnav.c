@@ -27,7 +27,7 @@ static zbias_t zb;
 static sins_t nav;
 static dr_t dr;
 static odo_t odo;
-static const zbias_prior_t PRIOR = {1e-3f, 1e-2f};
+static const zbias_prior_t PRIOR = {1e-3f, 1e-2f, 0.0f};
 static geo_pos_t start;
 static float g0;
 
@@ -243,6 +243,59 @@ static void test_refused_step_counted(void **state)
     assert_int_equal(landnav_step(&ln, &zb, &PRIOR, &nav, &dr, &odo, &inc, &yaw), 1);
 }
 
+/* GIVEN the dead reckoning's accuracy started at 1 m per axis, scale 0.02, heading 0.05
+ * rad WHEN the car drives north for 1 s THEN (seed 000 eqs 5-6) the north error's
+ * variance is 1 + (0.02 D)^2 and the east's 1 + (0.05 D)^2, D the distance driven (the
+ * gyro's ARW, 1e-3 rad/sqrt(s) over 1 s, adds 3e-5 m^2); GIVEN it restarted with the z
+ * bias's prior WHEN the car then stands THEN the accuracy holds and the bias's variance
+ * is the estimator's own, sigma_b^2 n0 / (n + n0) (zbias_sigma_rps: the accuracy's model
+ * of the estimate is the estimate's) */
+static void test_accuracy_of_the_dead_reckoning(void **state)
+{
+    (void)state;
+    dr_acc_start(&ln.acc, 1.0f, 0.02f, 0.05f, 0.0f, 0.0f);
+    nav_real_t e, n;
+    drive_1s_at_10mps(&e, &n);
+    assert_true(n > 9.0f);
+    assert_near(ln.acc.P[DR_ACC_N][DR_ACC_N], 1.0 + 0.0004 * (double)n * (double)n, 1e-3);
+    assert_near(ln.acc.P[DR_ACC_E][DR_ACC_E], 1.0 + 0.0025 * (double)n * (double)n, 1e-3);
+    /* the bias's prior from here, nothing learnt yet (zb.n 0) */
+    assert_int_equal(zb.n, 0u);
+    dr_acc_start(&ln.acc, 1.0f, 0.02f, 0.05f, PRIOR.gyro_bias_rps, 0.0f);
+    const nav_real_t moving = dr_acc_sigma_h_m(&ln.acc);
+    for (int k = 0; k < 400; k++) {
+        if (k % 10 == 0) {
+            wheels(0.0f);
+        }
+        step(2e-4f, 0.0f);
+    }
+    assert_true(zb.n > 300u);
+    assert_near(dr_acc_sigma_h_m(&ln.acc), moving, 1e-6);
+    const double sb = (double)zbias_sigma_rps(&zb, &PRIOR, DT);
+    assert_near(sqrt((double)ln.acc.P[DR_ACC_B][DR_ACC_B]), sb, 1e-4 * sb);
+    assert_int_equal(ln.acc.valid, 1);
+}
+
+/* Without an odometer the accuracy holds while the free SINS stands (the first samples
+ * before the first wheel frame) and ends once it carries the car (above 0.5 m/s) */
+static void test_accuracy_ends_with_the_free_sins(void **state)
+{
+    (void)state;
+    dr_acc_start(&ln.acc, 1.0f, 0.02f, 0.05f, 0.0f, 0.0f);
+    for (int k = 0; k < 20; k++) {
+        step(0.0f, 0.0f);
+    }
+    assert_int_equal(ln.output_dr, 0);
+    assert_int_equal(ln.acc.valid, 1);
+    for (int k = 0; k < 100; k++) {
+        step(0.0f, 1.0f);
+    }
+    assert_int_equal(ln.acc.valid, 0);
+    assert_near(dr_acc_sigma_h_m(&ln.acc), -1.0, 0.0);
+    landnav_restart(&ln);
+    assert_int_equal(ln.acc.valid, 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -253,6 +306,8 @@ int main(void)
         cmocka_unit_test_setup(test_no_odometer_dr_follows_sins, setup),
         cmocka_unit_test_setup(test_release_and_restart, setup),
         cmocka_unit_test_setup(test_refused_step_counted, setup),
+        cmocka_unit_test_setup(test_accuracy_of_the_dead_reckoning, setup),
+        cmocka_unit_test_setup(test_accuracy_ends_with_the_free_sins, setup),
     };
     return cmocka_run_group_tests_name("landnav", tests, NULL, NULL);
 }

@@ -348,7 +348,8 @@ static void process_sample(app_t *a, hal_t *hal, const int32_t w_raw[3], const i
             const fusion_ctx_t c = fusion_ctx(a, &d);
             after_fusion(a, fusion_imu_step(&a->run.fusion, &c, &inc, &a->run.yaw_rate_rps));
         } else {
-            const zbias_prior_t prior = {a->cfg.gyro_arw_rad_rts, a->cfg.gyro_bias_rps};
+            const zbias_prior_t prior = {a->cfg.gyro_arw_rad_rts, a->cfg.gyro_bias_rps,
+                                         a->cfg.gyro_bias_rw_rps_rts};
             const int refused = landnav_step(&a->run.land, &a->keep.zbias, &prior, &a->run.nav,
                                              &a->run.dr, &a->keep.odo, &inc, &a->run.yaw_rate_rps);
             for (int i = 0; i < refused; i++) {

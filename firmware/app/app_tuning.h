@@ -163,6 +163,10 @@
 #define APP_ODO_REVERSE_MPS NAV_C(0.25)
 #define APP_ODO_GATE_SIGMA NAV_C(5.0)    /* odometer and standstill innovation gate */
 #define APP_EKF_POS_SIGMA_MIN_M NAV_C(1.0) /* the filter's initial position sigma floor */
+/* a commanded known position (CMD_KnownPosition: a map's or a surveyed point), 1 sigma per
+ * axis: the dead reckoning's accuracy at its start and at a one-point calibration
+ * (dr_acc.h, calib_sigmas) */
+#define APP_KNOWN_POS_SIGMA_M NAV_C(1.0)
 /* GNSS innovation gate (position and velocity), in sigmas: 3, for receivers' multipath
  * outliers that are far from Gaussian. Refusals in a row for longer than
  * APP_GNSS_REOPEN_S reopen the filter's position (3 x the fix's sigma) and velocity

@@ -187,3 +187,24 @@ int calib_start_dr(const calib_t *c, dr_t *dr, const geo_pos_t *pos)
 {
     return dr_init(dr, pos, c->dh_rad, c->mu);
 }
+
+void calib_sigmas(const calib_t *c, nav_real_t gnss_hacc_m, nav_real_t *mu_sigma,
+                  nav_real_t *mount_sigma_rad)
+{
+    const ekf_config_t ec = ekf_default_config();
+    *mu_sigma = ec.k;
+    *mount_sigma_rad = ec.mount_rad;
+    if (c->source == CAL_SRC_FILTER) {
+        *mu_sigma = APP_CAL_ADOPT_SIGMA;
+        *mount_sigma_rad = APP_CAL_ADOPT_SIGMA;
+    } else if ((c->source == CAL_SRC_KNOWN_POSITION || c->source == CAL_SRC_GNSS) &&
+               c->base_m > NAV_C(0.0)) {
+        const nav_real_t s_pt = c->source == CAL_SRC_GNSS
+                                    ? gnss_hacc_m * APP_GNSS_HACC_PER_AXIS
+                                    : APP_KNOWN_POS_SIGMA_M;
+        *mu_sigma = NAV_C(1.4142135) * s_pt / c->base_m;
+        *mount_sigma_rad = *mu_sigma;
+    } else {
+        /* nothing calibrated: the priors */
+    }
+}

@@ -67,6 +67,22 @@ void commands_start_navigation(app_t *a, nav_real_t roll_rad, nav_real_t pitch_r
         return;
     }
     landnav_restart(&a->run.land);
+    if (a->run.align.commanded != 0u) {
+        /* the dead reckoning's accuracy from the commanded point and heading (the filter's
+         * prior for a commanded heading, with the mounting's part of dH), the calibration
+         * in use and the z gyro as far as it is known (dr_acc.h); a start from GNSS has
+         * the filter at once, and the accuracy is its */
+        nav_real_t s_mu, s_mount;
+        calib_sigmas(&a->keep.cal, a->cfg.gnss_hacc_m, &s_mu, &s_mount);
+        const ekf_config_t ec = ekf_default_config();
+        const zbias_prior_t zp = {a->cfg.gyro_arw_rad_rts, a->cfg.gyro_bias_rps,
+                                  a->cfg.gyro_bias_rw_rps_rts};
+        dr_acc_start(&a->run.land.acc, APP_KNOWN_POS_SIGMA_M, s_mu,
+                     nav_sqrt(ec.heading_rad * ec.heading_rad + s_mount * s_mount),
+                     zbias_sigma_rps(&a->keep.zbias, &zp,
+                                     NAV_C(1.0) / (nav_real_t)a->cfg.imu_rate_hz),
+                     a->cfg.gyro_scale);
+    }
     a->run.mode = APP_MODE_NAVIGATING;
 }
 
@@ -77,7 +93,12 @@ void commands_calibrate_at(app_t *a, hal_t *hal, const geo_pos_t *point, uint8_t
     if (calib_one_point(&a->keep.cal, &a->run.cal, hal, a->keep.n_samples, ready, &a->run.dr,
                         &a->run.nav, point, source, a->cfg.cal_min_base_m) != 0) {
         refuse(a, CMD_REFUSAL_NOT_NOW);
+        return;
     }
+    dr_acc_calibrated(&a->run.land.acc,
+                      source == CAL_SRC_GNSS ? a->cfg.gnss_hacc_m * APP_GNSS_HACC_PER_AXIS
+                                             : APP_KNOWN_POS_SIGMA_M,
+                      a->keep.cal.base_m);
 }
 
 static void set_initial_position(app_t *a, const rx_input_t *in)

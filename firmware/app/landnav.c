@@ -1,6 +1,8 @@
 /* landnav.c - standstill and dead reckoning without the filter; see landnav.h. */
 #include "landnav.h"
 
+#include "app_tuning.h"
+
 static void standstill_step(landnav_t *ln, zbias_t *zb, const zbias_prior_t *prior,
                             sins_t *nav, nav_real_t raw_rate_z_rad, nav_real_t dt)
 {
@@ -29,10 +31,23 @@ static void standstill_step(landnav_t *ln, zbias_t *zb, const zbias_prior_t *pri
     const nav_real_t sb = prior->gyro_bias_rps;
     const nav_real_t n0 = arw * arw / (dt * sb * sb);
     zb->bias_rps = (zb->sum_rps + zb->sum_lo_rps) / ((nav_real_t)zb->n + n0);
+    /* the estimate moved by 1 / (n + n0) of this sample's difference from it (dr_acc.h) */
+    dr_acc_hold(&ln->acc, dt, prior->gyro_bias_rw_rps_rts,
+                NAV_C(1.0) / ((nav_real_t)zb->n + n0), arw * arw / dt);
+}
+
+nav_real_t zbias_sigma_rps(const zbias_t *zb, const zbias_prior_t *prior, nav_real_t dt_s)
+{
+    /* sb^2 n0 / (n + n0): the prior's weight n0 against n samples of variance ARW^2 / dt */
+    const nav_real_t arw = prior->gyro_arw_rad_rts;
+    const nav_real_t sb = prior->gyro_bias_rps;
+    const nav_real_t n0 = arw * arw / (dt_s * sb * sb);
+    return sb * nav_sqrt(n0 / ((nav_real_t)zb->n + n0));
 }
 
 /* returns 1 if the dead reckoning refused the step */
-static int odometer_step(sins_t *nav, dr_t *dr, const odo_t *odo, nav_real_t dt)
+static int odometer_step(landnav_t *ln, const zbias_prior_t *prior, sins_t *nav, dr_t *dr,
+                         const odo_t *odo, nav_real_t dtheta_z_rad, nav_real_t dt)
 {
     nav_real_t roll, pitch, heading;
     sins_euler(nav, &roll, &pitch, &heading);
@@ -40,6 +55,8 @@ static int odometer_step(sins_t *nav, dr_t *dr, const odo_t *odo, nav_real_t dt)
     if (dr_step(dr, ds, heading, pitch) != NAV_OK) {
         return 1;
     }
+    dr_acc_move(&ln->acc, dr->step_e_m, dr->step_n_m, dtheta_z_rad, dt,
+                prior->gyro_arw_rad_rts, prior->gyro_bias_rw_rps_rts);
     const nav_real_t v = odo->speed_mps / (NAV_C(1.0) + dr->mu) * nav_cos(pitch);
     const nav_real_t hc = heading - dr->dh_rad;
     const nav_real_t v_n[3] = {v * nav_sin(hc), v * nav_cos(hc), nav->v_n_mps[2]};
@@ -66,12 +83,19 @@ int landnav_step(landnav_t *ln, zbias_t *zb, const zbias_prior_t *prior, sins_t 
     } else {
         ln->holding = 0u;
         if (odo->valid) {
-            refused += odometer_step(nav, dr, odo, inc->dt_s);
+            refused += odometer_step(ln, prior, nav, dr, odo, inc->dtheta_b_rad[2], inc->dt_s);
             ln->output_dr = 1u;
         } else {
-            /* no odometer: the free SINS carries on, dead reckoning follows it */
+            /* no odometer: the free SINS carries on, dead reckoning follows it; once it
+             * carried the car (its own speed above APP_ODO_MIN_SPEED_MPS: not the first
+             * samples at rest before the first wheel frame) the dead reckoning's error
+             * model no longer holds */
             dr_set_position(dr, &nav->pos);
             ln->output_dr = 0u;
+            const nav_real_t *v = nav->v_n_mps;
+            if (v[0] * v[0] + v[1] * v[1] > APP_ODO_MIN_SPEED_MPS * APP_ODO_MIN_SPEED_MPS) {
+                ln->acc.valid = 0u;
+            }
         }
     }
     return refused;
@@ -81,6 +105,7 @@ void landnav_restart(landnav_t *ln)
 {
     ln->output_dr = 0u;
     ln->holding = 0u;
+    ln->acc.valid = 0u;
 }
 
 void landnav_release_hold(landnav_t *ln)

@@ -23,6 +23,7 @@
 #include <stdint.h>
 
 #include "dr.h"
+#include "dr_acc.h"
 #include "odo.h"
 #include "sins.h"
 
@@ -38,13 +39,21 @@ typedef struct {
     uint8_t output_dr;          /* the dead-reckoned solution is the output (mode 4) */
     uint8_t holding;            /* standstill: heading held at hold_heading_rad */
     nav_real_t hold_heading_rad;
+    dr_acc_t acc;               /* the dead reckoning's accuracy (dr_acc.h), started by
+                                   the application with the navigation */
 } landnav_t;
 
-/* The gyro's noise for the bias estimate: ARW (rad/sqrt(s)), turn-on bias 1-sigma (rad/s). */
+/* The gyro's noise for the bias estimate: ARW (rad/sqrt(s)), turn-on bias 1-sigma (rad/s);
+ * and for the accuracy, its in-run instability (rad/s/sqrt(s)). */
 typedef struct {
     nav_real_t gyro_arw_rad_rts;
     nav_real_t gyro_bias_rps;
+    nav_real_t gyro_bias_rw_rps_rts;
 } zbias_prior_t;
+
+/* The z bias estimate's 1-sigma (rad/s): the posterior of a constant from its prior and
+ * the standstill samples so far (dt_s the IMU interval). */
+nav_real_t zbias_sigma_rps(const zbias_t *zb, const zbias_prior_t *prior, nav_real_t dt_s);
 
 /* One IMU sample (SI increments; the z angle is bias-compensated here) without the
  * filter: the strapdown step, then standstill, dead reckoning, or the free SINS. *yaw_rate
@@ -57,7 +66,7 @@ int landnav_step(landnav_t *ln, zbias_t *zb, const zbias_prior_t *prior, sins_t 
 void landnav_release_hold(landnav_t *ln);
 
 /* A new navigator: no heading held, the free SINS is the output until the odometer says
- * otherwise. */
+ * otherwise; the accuracy not known until the application starts it. */
 void landnav_restart(landnav_t *ln);
 
 #endif /* NAVECU_LANDNAV_H */

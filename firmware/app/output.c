@@ -215,13 +215,15 @@ __attribute__((noinline)) static uint16_t accuracy_lsb(nav_real_t sigma_lsb, uin
 }
 
 /* NAV_Accuracy: the filter's 1-sigma of the velocity and of the car's heading (the
- * IMU's heading error psi_U less the mounting yaw's, with their covariance) */
+ * IMU's heading error psi_U less the mounting yaw's, with their covariance); without the
+ * filter, the dead reckoning's heading sigma while its error model holds (dr_acc.h) */
 static void emit_accuracy(app_t *a, hal_t *hal)
 {
     const ekf_t *ekf = a->run.mode == APP_MODE_NAVIGATING ? app_filter(a) : NULL;
     const uint32_t unknown = NAVECU_NAV_ACCURACY_VEL_ACC_EAST_RAW_MAX;
     struct navecu_can_nav_accuracy_t m;
     m.vel_acc_east = m.vel_acc_north = m.vel_acc_up = m.heading_accuracy = (uint16_t)unknown;
+    nav_real_t head_var = NAV_C(-1.0); /* the car's heading's variance, rad^2; < 0 unknown */
     if (ekf != NULL) {
         m.vel_acc_east = accuracy_lsb(ekf_state_sigma(ekf, EKF_DV) * NAV_C(100.0), unknown);
         m.vel_acc_north = accuracy_lsb(ekf_state_sigma(ekf, EKF_DV + 1) * NAV_C(100.0), unknown);
@@ -229,8 +231,17 @@ static void emit_accuracy(app_t *a, hal_t *hal)
         const nav_real_t var = ekf_state_cov(ekf, EKF_PSI + 2, EKF_PSI + 2) +
                                ekf_state_cov(ekf, EKF_MY, EKF_MY) -
                                NAV_C(2.0) * ekf_state_cov(ekf, EKF_PSI + 2, EKF_MY);
-        m.heading_accuracy = accuracy_lsb(
-            nav_sqrt(var > NAV_C(0.0) ? var : NAV_C(0.0)) * NAV_DEG_PER_RAD * NAV_C(100.0), unknown);
+        head_var = var > NAV_C(0.0) ? var : NAV_C(0.0);
+    } else if (a->run.mode == APP_MODE_NAVIGATING && a->run.land.output_dr != 0u &&
+               a->run.land.acc.valid != 0u) {
+        /* the dead reckoning's heading (the SINS's less dH): its error psi (dr_acc.h) */
+        head_var = a->run.land.acc.P[DR_ACC_PSI][DR_ACC_PSI];
+    } else {
+        /* no filter and no dead reckoning's model: unknown */
+    }
+    if (head_var >= NAV_C(0.0)) {
+        m.heading_accuracy =
+            accuracy_lsb(nav_sqrt(head_var) * NAV_DEG_PER_RAD * NAV_C(100.0), unknown);
     }
     m.nav_counter = next_counter(&a->keep.tx, TX_ACCURACY);
     m.nav_crc = 0u;
@@ -391,11 +402,18 @@ void output_status(app_t *a, hal_t *hal)
     tx->last_mode = st.mode;
     st.health_flags = health_flags(a, hal);
     app_dtc_cycle(a, hal, st.health_flags); /* the DTCs' tests (app_dtc.h) */
-    st.horiz_accuracy = NAVECU_NAV_STATUS_HORIZ_ACCURACY_RAW_MAX; /* "unknown" w/o the filter */
-    if (ekf != NULL && a->run.mode == APP_MODE_NAVIGATING) {
-        st.horiz_accuracy = (uint16_t)accuracy_raw(fusion_sigma_h_m(&a->run.fusion, &a->cfg) *
-                                                       NAV_C(100.0),
-                                                   NAVECU_NAV_STATUS_HORIZ_ACCURACY_RAW_MAX);
+    /* the filter's; without it the dead reckoning's while it is the output and its error
+     * model holds (dr_acc.h); else "unknown" */
+    st.horiz_accuracy = NAVECU_NAV_STATUS_HORIZ_ACCURACY_RAW_MAX;
+    if (a->run.mode == APP_MODE_NAVIGATING) {
+        const nav_real_t sh =
+            ekf != NULL ? fusion_sigma_h_m(&a->run.fusion, &a->cfg)
+            : a->run.land.output_dr != 0u ? dr_acc_sigma_h_m(&a->run.land.acc)
+                                          : NAV_C(-1.0);
+        if (sh >= NAV_C(0.0)) {
+            st.horiz_accuracy = (uint16_t)accuracy_raw(
+                sh * NAV_C(100.0), NAVECU_NAV_STATUS_HORIZ_ACCURACY_RAW_MAX);
+        }
     }
     /* the IMU rate measured from the data while it disagrees with the configured one */
     const uint32_t chz = imu_rate_measured_chz(&a->keep.rate);

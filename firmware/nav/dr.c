@@ -25,6 +25,8 @@ int dr_init(dr_t *d, const geo_pos_t *pos, nav_real_t dh_rad, nav_real_t mu)
     d->mu = mu;
     d->dist_m = NAV_C(0.0);
     d->dist_total_m = NAV_C(0.0);
+    d->step_e_m = NAV_C(0.0);
+    d->step_n_m = NAV_C(0.0);
     return NAV_OK;
 }
 
@@ -51,6 +53,8 @@ int dr_step(dr_t *d, nav_real_t ds_m, nav_real_t heading_rad, nav_real_t pitch_r
     }
     d->dist_m += nav_fabs(ds_c);
     d->dist_total_m += nav_fabs(ds_c);
+    d->step_e_m = de;
+    d->step_n_m = dn;
     return NAV_OK;
 }
 

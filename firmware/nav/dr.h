@@ -41,6 +41,8 @@ typedef struct {
     nav_real_t mu;          /* odometer scale error in use, mu (eqs 10, 11-12) */
     nav_real_t dist_m;      /* path length since the base (compensated odometer) */
     nav_real_t dist_total_m;/* path length since dr_init */
+    nav_real_t step_e_m;    /* the last step's compensated horizontal move, east */
+    nav_real_t step_n_m;    /* and north (eqs 3-4; dr_acc.h's dE, dN) */
 } dr_t;
 
 /* Result of one calibration: the residual errors found (composed into dr_t's). */

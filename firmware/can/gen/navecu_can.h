@@ -1631,7 +1631,7 @@ struct navecu_can_nav_status_t {
     uint16_t cnt_imu_saturated;
 
     /**
-     * Page 0: the horizontal accuracy, the filter's sqrt(sigmaE^2 + sigmaN^2) with, while the receiver's correlated error is a filter state, twice its recent correlated variance per axis added (docs/kalman.md); 655.35 (raw 65535) unknown (the filter not running), a known value saturates at 655.34.
+     * Page 0: the horizontal accuracy, the filter's sqrt(sigmaE^2 + sigmaN^2) with, while the receiver's correlated error is a filter state, twice its recent correlated variance per axis added (docs/kalman.md); before the filter runs, after a commanded start and while the dead reckoning is the output, the dead reckoning's own sqrt(sigmaE^2 + sigmaN^2) (seed 000's error model with the z gyro's drift, docs/odometry.md); 655.35 (raw 65535) unknown (neither), a known value saturates at 655.34.
      *
      * Range: 0..65535 (0..655.35 m)
      * Scale: 0.01
