@@ -59,21 +59,33 @@ static size_t host_xstate_size(pid_t pid)
     return size;
 }
 
+/* the components (bits) that do not lie wholly inside the first len bytes of the
+ * standard format (CPUID leaf 0xD: size in EAX, offset in EBX), read once per len (a
+ * CPUID under a hypervisor is slow, and a SETREGSET comes at every UML context switch) */
+static uint64_t outside_mask(size_t len)
+{
+    static size_t for_len;
+    static uint64_t mask;
+    if (for_len != len) {
+        mask = 0u;
+        for (unsigned i = 2u; i < 64u; i++) {
+            unsigned eax = 0u, ebx = 0u, ecx = 0u, edx = 0u;
+            __cpuid_count(0xD, i, eax, ebx, ecx, edx);
+            if (eax == 0u || (size_t)ebx + (size_t)eax > len) {
+                mask |= 1ull << i;
+            }
+        }
+        for_len = len;
+    }
+    return mask;
+}
+
 /* clear the XSTATE_BV bits of the components not wholly inside the first len bytes */
 static void clear_outside(unsigned char *buf, size_t len)
 {
     uint64_t bv;
     memcpy(&bv, buf + XSTATE_BV_OFFSET, sizeof bv);
-    for (unsigned i = 2u; i < 64u; i++) {
-        if ((bv & (1ull << i)) == 0u) {
-            continue;
-        }
-        unsigned eax = 0u, ebx = 0u, ecx = 0u, edx = 0u;
-        __cpuid_count(0xD, i, eax, ebx, ecx, edx);
-        if ((size_t)ebx + (size_t)eax > len || eax == 0u) {
-            bv &= ~(1ull << i);
-        }
-    }
+    bv &= ~outside_mask(len);
     memcpy(buf + XSTATE_BV_OFFSET, &bv, sizeof bv);
 }
 

@@ -204,12 +204,18 @@ fi
 # here and preloaded into the UML kernel (not into the guest), gives it the host's size.
 preload=()
 shim_src="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd -P)/uml_xstate_shim.c"
-if [ -f "$shim_src" ] && command -v cc >/dev/null 2>&1 &&
-   cc -shared -fPIC -O2 -o "$work/uml_xstate_shim.so" "$shim_src" -ldl >"$work/shim_build.log" 2>&1; then
-    preload=(env LD_PRELOAD="$work/uml_xstate_shim.so")
-else
-    say "warning: the UML xstate shim did not build ($shim_src, cc; $work/shim_build.log): UML runs without it"
-fi
+case $work in
+*[[:space:]:]*)
+    # the loader splits LD_PRELOAD at spaces and colons
+    say "warning: no UML xstate shim: its directory $work has a space or a colon" ;;
+*)
+    if [ -f "$shim_src" ] && command -v cc >/dev/null 2>&1 &&
+       cc -shared -fPIC -O2 -o "$work/uml_xstate_shim.so" "$shim_src" -ldl >"$work/shim_build.log" 2>&1; then
+        preload=(env LD_PRELOAD="${LD_PRELOAD:+$LD_PRELOAD:}$work/uml_xstate_shim.so")
+    else
+        say "warning: the UML xstate shim did not build ($shim_src, cc; $work/shim_build.log): UML runs without it"
+    fi ;;
+esac
 vsay "booting $uml (mem=$mem, nice $nice_n, cpu $cpu, timeout ${timeout_s}s, exchange dir $work)"
 t0=$(date +%s.%N)
 # UML's own exit status does not carry the guest's; TMPDIR for UML's memory file is the host's.
