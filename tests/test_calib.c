@@ -230,7 +230,7 @@ static void test_one_point(void **state)
     drive_north_3000();
     const geo_pos_t p = point_at(-1.0, 3000.0 / 1.02);
     assert_int_equal(calib_one_point(&c, &trip, &hal, 5000u, 1, &dr, &nav, &p,
-                                     CAL_SRC_KNOWN_POSITION, 2000.0f),
+                                     CAL_SRC_KNOWN_POSITION, 2000.0f, NULL),
                      0);
     assert_near(c.dh_rad, 1.0 * DEG, 2e-5);
     assert_near(c.mu, 0.02, 2e-5);
@@ -260,15 +260,15 @@ static void test_one_point_refusals(void **state)
     const geo_pos_t p = point_at(-1.0, 3000.0 / 1.02);
     const geo_pos_t before = dr.pos;
     assert_int_equal(calib_one_point(&c, &trip, &hal, 5000u, 0, &dr, &nav, &p, CAL_SRC_GNSS,
-                                     2000.0f),
+                                     2000.0f, NULL),
                      -1);
     assert_int_equal(c.status, NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_REFUSED_NOT_READY_CHOICE);
     assert_int_equal(calib_one_point(&c, &trip, &hal, 5000u, 1, &dr, &nav, &p, CAL_SRC_GNSS,
-                                     3000.0f),
+                                     3000.0f, NULL),
                      -1);
     assert_int_equal(c.status, NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_REFUSED_TOO_CLOSE_CHOICE);
     assert_int_equal(calib_one_point(&c, &trip, &hal, 5000u, 1, &dr, &nav, &base, CAL_SRC_GNSS,
-                                     0.0f),
+                                     0.0f, NULL),
                      -1);
     assert_int_equal(c.status, NAVECU_CAN_NAV_CALIBRATION_CAL_STATUS_REFUSED_NOT_READY_CHOICE);
     assert_int_equal(c.count, 0);

@@ -419,9 +419,64 @@ static void test_acc_single_errors_are_the_drive_error(void **state)
     }
 }
 
+/* dr_acc_move's in-place row and column operations are F P F' for F = I + G (dr_acc.h's
+ * G: eqs 5-6 and the heading's drift), on a full covariance with every entry set: against
+ * the product written out in double, to float32's rounding */
+static void test_acc_move_is_f_p_ft(void **state)
+{
+    (void)state;
+    dr_acc_t a;
+    dr_acc_start(&a, NAV_C(1.0), NAV_C(0.0), NAV_C(0.0), NAV_C(0.0), NAV_C(0.0));
+    double P[DR_ACC_NX][DR_ACC_NX];
+    for (int i = 0; i < DR_ACC_NX; i++) { /* A A' + I: symmetric, positive, all entries */
+        for (int j = 0; j < DR_ACC_NX; j++) {
+            double sum = i == j ? 1.0 : 0.0;
+            for (int k = 0; k < DR_ACC_NX; k++) {
+                sum += sin(1.0 + i * 7.0 + k) * sin(1.0 + j * 7.0 + k);
+            }
+            P[i][j] = sum;
+            a.P[i][j] = (nav_real_t)sum;
+        }
+    }
+    const double de = 0.7, dn = -1.3, dth = 0.05, dt = 0.1;
+    double G[DR_ACC_NX][DR_ACC_NX] = {{0.0}};
+    G[DR_ACC_E][DR_ACC_MU] = de;
+    G[DR_ACC_E][DR_ACC_PSI] = dn;
+    G[DR_ACC_N][DR_ACC_MU] = dn;
+    G[DR_ACC_N][DR_ACC_PSI] = -de;
+    G[DR_ACC_PSI][DR_ACC_B] = dt;
+    G[DR_ACC_PSI][DR_ACC_S] = dth;
+    double F[DR_ACC_NX][DR_ACC_NX], FP[DR_ACC_NX][DR_ACC_NX];
+    for (int i = 0; i < DR_ACC_NX; i++) {
+        for (int j = 0; j < DR_ACC_NX; j++) {
+            F[i][j] = (i == j ? 1.0 : 0.0) + G[i][j];
+        }
+    }
+    for (int i = 0; i < DR_ACC_NX; i++) {
+        for (int j = 0; j < DR_ACC_NX; j++) {
+            FP[i][j] = 0.0;
+            for (int k = 0; k < DR_ACC_NX; k++) {
+                FP[i][j] += F[i][k] * P[k][j];
+            }
+        }
+    }
+    dr_acc_move(&a, (nav_real_t)de, (nav_real_t)dn, (nav_real_t)dth, (nav_real_t)dt, NAV_C(0.0),
+                NAV_C(0.0));
+    for (int i = 0; i < DR_ACC_NX; i++) {
+        for (int j = 0; j < DR_ACC_NX; j++) {
+            double want = 0.0;
+            for (int k = 0; k < DR_ACC_NX; k++) {
+                want += FP[i][k] * F[j][k];
+            }
+            assert_near(a.P[i][j], want, 1e-5 * (1.0 + fabs(want)));
+        }
+    }
+}
+
 /* The standstill's bias estimate (gain K, sample variance R) and a calibration reset what
  * dr_acc.h says: b's error (1 - K) e_b - K noise; the point's sigma and the calibration's
- * geometry with the leg's drift; a non-finite step ends the model. */
+ * geometry with the leg's drift; a non-finite step ends the model, and a calibration then
+ * leaves it unknown. */
 static void test_acc_hold_and_calibration(void **state)
 {
     (void)state;
@@ -443,21 +498,45 @@ static void test_acc_hold_and_calibration(void **state)
     const double drift = (double)a.P[DR_ACC_PSI][DR_ACC_PSI] - 0.0025;
     assert_true(drift > 1e-5);
     const double var_b = (double)a.P[DR_ACC_B][DR_ACC_B];
-    dr_acc_calibrated(&a, NAV_C(3.0), NAV_C(1000.0));
+    dr_acc_calibrated(&a, NAV_C(3.0), NAV_C(600.0), NAV_C(800.0)); /* |t| 1000 m */
     assert_near(a.P[DR_ACC_E][DR_ACC_E], 9.0, 1e-5);
     assert_near(a.P[DR_ACC_N][DR_ACC_N], 9.0, 1e-5);
     const double geo = (9.0 + 4.0) / 1e6; /* (point^2 + base^2) / base length^2 */
     assert_near(a.P[DR_ACC_MU][DR_ACC_MU], geo, 1e-6 * geo);
     assert_near(a.P[DR_ACC_PSI][DR_ACC_PSI], geo + drift, 1e-4 * (geo + drift));
+    /* the point's error in both estimates: 9 t / |t|^2 */
+    assert_near(a.P[DR_ACC_E][DR_ACC_MU], 9.0 * 600.0 / 1e6, 1e-9);
+    assert_near(a.P[DR_ACC_N][DR_ACC_PSI], -9.0 * 600.0 / 1e6, 1e-9);
+    assert_near(a.P[DR_ACC_E][DR_ACC_PSI], 9.0 * 800.0 / 1e6, 1e-9);
     assert_near(a.P[DR_ACC_B][DR_ACC_B], var_b, 0.0);
     assert_near(a.P[DR_ACC_N][DR_ACC_B], 0.0, 0.0);
     assert_near(a.base_var_m2, 9.0, 1e-5);
     /* the next calibration's geometry uses this point's 3 m as its base's */
-    dr_acc_calibrated(&a, NAV_C(1.0), NAV_C(1000.0));
+    dr_acc_calibrated(&a, NAV_C(1.0), NAV_C(0.0), NAV_C(1000.0));
     assert_near(a.P[DR_ACC_MU][DR_ACC_MU], (1.0 + 9.0) / 1e6, 1e-11);
     dr_acc_move(&a, NAV_C(NAN), NAV_C(0.0), NAV_C(0.0), NAV_C(1.0), NAV_C(0.0), NAV_C(0.0));
     assert_int_equal(a.valid, 0);
     assert_near(dr_acc_sigma_h_m(&a), -1.0, 0.0);
+    dr_acc_calibrated(&a, NAV_C(1.0), NAV_C(0.0), NAV_C(1000.0));
+    assert_int_equal(a.valid, 0); /* its leg was not the model's */
+    assert_near(dr_acc_sigma_h_m(&a), -1.0, 0.0);
+}
+
+/* GIVEN an exact base and a point known to 1 m per axis, 1 km east of it, nothing else
+ * uncertain WHEN the car drives on 1 km east THEN each position error is twice the
+ * point's: the point's error e went into the calibration too (mu's error e_E / 1000, psi's
+ * -e_N / 1000), and 1 km on they add e again (variance 4 per axis, not 1 + 1 = 2) */
+static void test_acc_calibration_error_carries_on(void **state)
+{
+    (void)state;
+    dr_acc_t a;
+    dr_acc_start(&a, NAV_C(0.0), NAV_C(0.0), NAV_C(0.0), NAV_C(0.0), NAV_C(0.0));
+    dr_acc_calibrated(&a, NAV_C(1.0), NAV_C(1000.0), NAV_C(0.0));
+    for (int k = 0; k < 100; k++) {
+        dr_acc_move(&a, NAV_C(10.0), NAV_C(0.0), NAV_C(0.0), NAV_C(1.0), NAV_C(0.0), NAV_C(0.0));
+    }
+    assert_near(a.P[DR_ACC_E][DR_ACC_E], 4.0, 1e-4);
+    assert_near(a.P[DR_ACC_N][DR_ACC_N], 4.0, 1e-4);
 }
 
 int main(void)
@@ -475,7 +554,9 @@ int main(void)
         cmocka_unit_test(test_odo_refusals_and_timeout),
         cmocka_unit_test(test_odo_standstill),
         cmocka_unit_test(test_acc_single_errors_are_the_drive_error),
+        cmocka_unit_test(test_acc_move_is_f_p_ft),
         cmocka_unit_test(test_acc_hold_and_calibration),
+        cmocka_unit_test(test_acc_calibration_error_carries_on),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -271,9 +271,14 @@ static void test_accuracy_of_the_dead_reckoning(void **state)
     }
     assert_true(zb.n > 300u);
     assert_near(dr_acc_sigma_h_m(&ln.acc), moving, 1e-6);
-    const double sb = (double)zbias_sigma_rps(&zb, &PRIOR, DT);
+    const double sb = (double)zbias_sigma_rps(&zb, &PRIOR, DT, 0.0f);
     assert_near(sqrt((double)ln.acc.P[DR_ACC_B][DR_ACC_B]), sb, 1e-4 * sb);
     assert_int_equal(ln.acc.valid, 1);
+    /* learnt long ago, the bias has walked on (instability 1e-5 rad/s/sqrt(s) over 100 s
+     * adds 1e-8), but never beyond its turn-on prior */
+    const zbias_prior_t walk = {PRIOR.gyro_arw_rad_rts, PRIOR.gyro_bias_rps, 1e-5f};
+    assert_near(zbias_sigma_rps(&zb, &walk, DT, 100.0f), sqrt(sb * sb + 1e-8), 1e-4 * sb);
+    assert_near(zbias_sigma_rps(&zb, &walk, DT, 1e9f), PRIOR.gyro_bias_rps, 1e-9);
 }
 
 /* Without an odometer the accuracy holds while the free SINS stands (the first samples

@@ -350,8 +350,12 @@ static void process_sample(app_t *a, hal_t *hal, const int32_t w_raw[3], const i
         } else {
             const zbias_prior_t prior = {a->cfg.gyro_arw_rad_rts, a->cfg.gyro_bias_rps,
                                          a->cfg.gyro_bias_rw_rps_rts};
+            const uint32_t zn = a->keep.zbias.n;
             const int refused = landnav_step(&a->run.land, &a->keep.zbias, &prior, &a->run.nav,
                                              &a->run.dr, &a->keep.odo, &inc, &a->run.yaw_rate_rps);
+            if (a->keep.zbias.n != zn) {
+                a->keep.zbias_sample = a->keep.n_samples;
+            }
             for (int i = 0; i < refused; i++) {
                 reject(a, &a->keep.health.nav_rejected);
             }
@@ -519,7 +523,9 @@ static void on_gnss_status(app_t *a, hal_t *hal, const rx_input_t *in)
         /* the fix marked as the calibration point is that and nothing else: it neither
          * starts the filter nor feeds it */
         a->run.cal.at_gnss = 0u;
-        commands_calibrate_at(a, hal, &fix.pos, NAVECU_CAN_NAV_CALIBRATION_CAL_SOURCE_GNSS_CHOICE);
+        commands_calibrate_at(a, hal, &fix.pos, NAVECU_CAN_NAV_CALIBRATION_CAL_SOURCE_GNSS_CHOICE,
+                              nav_clamp(fix.hacc_m * APP_GNSS_HACC_PER_AXIS,
+                                        APP_GNSS_SIGMA_FLOOR_M, APP_GNSS_SIGMA_MAX_M));
         return;
     }
     if (a->run.align.reacquire && a->run.mode == APP_MODE_FAULT) {

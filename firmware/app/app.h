@@ -89,6 +89,7 @@ typedef struct {
                                is forgotten at each navigation (re)start */
     calib_t cal;            /* the car's calibration and the NVM */
     zbias_t zbias;          /* the z gyro bias learnt at standstill (the IMU's) */
+    uint64_t zbias_sample;  /* n_samples at its last standstill sample */
     odo_t odo;              /* the car's odometer */
     mounting_t mount;       /* the IMU's configured rotation into the vehicle's axes */
     mount_est_t mest;       /* the automatic mounting estimate (imu_mount_source automatic) */

@@ -88,7 +88,8 @@ void calib_not_ready(calib_t *c)
 }
 
 int calib_one_point(calib_t *c, calib_trip_t *t, hal_t *hal, uint64_t n, int ready, dr_t *dr,
-                    sins_t *nav, const geo_pos_t *point, uint8_t source, nav_real_t min_base_m)
+                    sins_t *nav, const geo_pos_t *point, uint8_t source, nav_real_t min_base_m,
+                    dr_cal_t *out)
 {
     /* with the filter running, GNSS calibrates the odometer and the mounting: the
      * one-point calibration is for GNSS-denied driving */
@@ -117,6 +118,9 @@ int calib_one_point(calib_t *c, calib_trip_t *t, hal_t *hal, uint64_t n, int rea
     }
     (void)sins_set_position(nav, &dr->pos);
     calib_store(c, t, hal, n);
+    if (out != NULL) {
+        *out = res;
+    }
     return 0;
 }
 

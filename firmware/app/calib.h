@@ -69,10 +69,11 @@ void calib_erase(calib_t *c, hal_t *hal, dr_t *dr);
 /* One-point calibration (seed 000 eqs 7-12) at the true latitude and longitude of point
  * (its height is not used) with CalSource source, when `ready` (navigating on the odometer
  * without the filter): the dead reckoning's estimates composed, the position reset to the
- * point (dr and nav), the result stored. Refused with a reason in CalStatus otherwise
- * (returns -1: count it). */
+ * point (dr and nav), the result stored, and in *out (if not NULL) dr_calibrate's. Refused
+ * with a reason in CalStatus otherwise (returns -1: count it). */
 int calib_one_point(calib_t *c, calib_trip_t *t, hal_t *hal, uint64_t n, int ready, dr_t *dr,
-                    sins_t *nav, const geo_pos_t *point, uint8_t source, nav_real_t min_base_m);
+                    sins_t *nav, const geo_pos_t *point, uint8_t source, nav_real_t min_base_m,
+                    dr_cal_t *out);
 
 /* A calibration asked for when it cannot be done (CalStatus RefusedNotReady). */
 void calib_not_ready(calib_t *c);

@@ -77,28 +77,30 @@ void commands_start_navigation(app_t *a, nav_real_t roll_rad, nav_real_t pitch_r
         const ekf_config_t ec = ekf_default_config();
         const zbias_prior_t zp = {a->cfg.gyro_arw_rad_rts, a->cfg.gyro_bias_rps,
                                   a->cfg.gyro_bias_rw_rps_rts};
+        const nav_real_t dt = NAV_C(1.0) / (nav_real_t)a->cfg.imu_rate_hz;
+        /* the bias walked on since it was last learnt (the filter's drives do not teach
+         * the standstill estimate) */
+        const uint64_t since_n = a->keep.n_samples - a->keep.zbias_sample;
+        const nav_real_t since_s = a->keep.zbias.n > 0u ? (nav_real_t)since_n * dt : NAV_C(0.0);
         dr_acc_start(&a->run.land.acc, APP_KNOWN_POS_SIGMA_M, s_mu,
                      nav_sqrt(ec.heading_rad * ec.heading_rad + s_mount * s_mount),
-                     zbias_sigma_rps(&a->keep.zbias, &zp,
-                                     NAV_C(1.0) / (nav_real_t)a->cfg.imu_rate_hz),
-                     a->cfg.gyro_scale);
+                     zbias_sigma_rps(&a->keep.zbias, &zp, dt, since_s), a->cfg.gyro_scale);
     }
     a->run.mode = APP_MODE_NAVIGATING;
 }
 
-void commands_calibrate_at(app_t *a, hal_t *hal, const geo_pos_t *point, uint8_t source)
+void commands_calibrate_at(app_t *a, hal_t *hal, const geo_pos_t *point, uint8_t source,
+                           nav_real_t point_sigma_m)
 {
     const int ready = a->run.mode == APP_MODE_NAVIGATING && a->run.land.output_dr &&
                       !a->run.fusion.on;
+    dr_cal_t res;
     if (calib_one_point(&a->keep.cal, &a->run.cal, hal, a->keep.n_samples, ready, &a->run.dr,
-                        &a->run.nav, point, source, a->cfg.cal_min_base_m) != 0) {
+                        &a->run.nav, point, source, a->cfg.cal_min_base_m, &res) != 0) {
         refuse(a, CMD_REFUSAL_NOT_NOW);
         return;
     }
-    dr_acc_calibrated(&a->run.land.acc,
-                      source == CAL_SRC_GNSS ? a->cfg.gnss_hacc_m * APP_GNSS_HACC_PER_AXIS
-                                             : APP_KNOWN_POS_SIGMA_M,
-                      a->keep.cal.base_m);
+    dr_acc_calibrated(&a->run.land.acc, point_sigma_m, res.t_e_m, res.t_n_m);
 }
 
 static void set_initial_position(app_t *a, const rx_input_t *in)
@@ -160,7 +162,8 @@ static void control(app_t *a, hal_t *hal, const rx_input_t *in)
         al->known_valid = 0u; /* a point is used once: the next needs its own */
         const geo_pos_t point = align_pos_of(al->known_lat_e7, al->known_lon_e7, 0);
         commands_calibrate_at(a, hal, &point,
-                              NAVECU_CAN_NAV_CALIBRATION_CAL_SOURCE_KNOWN_POSITION_CHOICE);
+                              NAVECU_CAN_NAV_CALIBRATION_CAL_SOURCE_KNOWN_POSITION_CHOICE,
+                              APP_KNOWN_POS_SIGMA_M);
         break;
     case RX_CMD_CALIBRATE_AT_GNSS: /* at the next accepted fix */
         if (a->run.mode != APP_MODE_NAVIGATING) {

@@ -41,7 +41,8 @@ void commands_handle(app_t *a, hal_t *hal, const rx_input_t *in);
 
 /* A one-point calibration at the latitude and longitude of point with CalSource source
  * (CalibrateHere, or the fix CalibrateAtGnss marked). */
-void commands_calibrate_at(app_t *a, hal_t *hal, const geo_pos_t *point, uint8_t source);
+void commands_calibrate_at(app_t *a, hal_t *hal, const geo_pos_t *point, uint8_t source,
+                           nav_real_t point_sigma_m);
 
 /* Navigate from the initial state with this roll and pitch (rad): mode Navigating, or
  * Fault (counted in bad_value) if the core refuses the state. */

@@ -36,13 +36,16 @@ static void standstill_step(landnav_t *ln, zbias_t *zb, const zbias_prior_t *pri
                 NAV_C(1.0) / ((nav_real_t)zb->n + n0), arw * arw / dt);
 }
 
-nav_real_t zbias_sigma_rps(const zbias_t *zb, const zbias_prior_t *prior, nav_real_t dt_s)
+nav_real_t zbias_sigma_rps(const zbias_t *zb, const zbias_prior_t *prior, nav_real_t dt_s,
+                           nav_real_t elapsed_s)
 {
     /* sb^2 n0 / (n + n0): the prior's weight n0 against n samples of variance ARW^2 / dt */
     const nav_real_t arw = prior->gyro_arw_rad_rts;
     const nav_real_t sb = prior->gyro_bias_rps;
     const nav_real_t n0 = arw * arw / (dt_s * sb * sb);
-    return sb * nav_sqrt(n0 / ((nav_real_t)zb->n + n0));
+    const nav_real_t rw = prior->gyro_bias_rw_rps_rts;
+    const nav_real_t var = sb * sb * n0 / ((nav_real_t)zb->n + n0) + rw * rw * elapsed_s;
+    return nav_sqrt(var < sb * sb ? var : sb * sb);
 }
 
 /* returns 1 if the dead reckoning refused the step */

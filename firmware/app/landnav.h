@@ -52,8 +52,11 @@ typedef struct {
 } zbias_prior_t;
 
 /* The z bias estimate's 1-sigma (rad/s): the posterior of a constant from its prior and
- * the standstill samples so far (dt_s the IMU interval). */
-nav_real_t zbias_sigma_rps(const zbias_t *zb, const zbias_prior_t *prior, nav_real_t dt_s);
+ * the standstill samples so far (dt_s the IMU interval), and the bias's walk (the
+ * instability) over elapsed_s since the last of them, no wider than the prior (a bias
+ * stays within its turn-on spread). */
+nav_real_t zbias_sigma_rps(const zbias_t *zb, const zbias_prior_t *prior, nav_real_t dt_s,
+                           nav_real_t elapsed_s);
 
 /* One IMU sample (SI increments; the z angle is bias-compensated here) without the
  * filter: the strapdown step, then standstill, dead reckoning, or the free SINS. *yaw_rate

@@ -147,6 +147,8 @@ int dr_calibrate(dr_t *d, const geo_pos_t *true_pos, nav_real_t min_base_m, dr_c
         out->base_m = base_m;
         out->err_e_m = d_e - t_e;
         out->err_n_m = d_n - t_n;
+        out->t_e_m = t_e;
+        out->t_n_m = t_n;
     }
     d->dh_rad = dh_new;
     d->mu = mu_new;

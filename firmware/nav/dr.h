@@ -52,6 +52,8 @@ typedef struct {
     nav_real_t base_m;      /* |t|: straight-line distance from the base to the point */
     nav_real_t err_e_m;     /* dead-reckoning error at the point before the reset, east */
     nav_real_t err_n_m;     /* and north (eqs 7-8) */
+    nav_real_t t_e_m;       /* t, the point less the base, east */
+    nav_real_t t_n_m;       /* and north (eqs 7-8) */
 } dr_cal_t;
 
 #define dr_init NAV_SYM(dr_init)

@@ -91,11 +91,16 @@ void dr_acc_hold(dr_acc_t *a, nav_real_t dt_s, nav_real_t b_rw_rps_rts, nav_real
                                b_rw_rps_rts * b_rw_rps_rts * dt_s;
 }
 
-void dr_acc_calibrated(dr_acc_t *a, nav_real_t point_sigma_m, nav_real_t base_m)
+void dr_acc_calibrated(dr_acc_t *a, nav_real_t point_sigma_m, nav_real_t t_e_m,
+                       nav_real_t t_n_m)
 {
+    if (a->valid == 0u) {
+        return;
+    }
     const nav_real_t var_pt = point_sigma_m * point_sigma_m;
-    const nav_real_t b2 = base_m > NAV_C(1.0) ? base_m * base_m : NAV_C(1.0);
-    const nav_real_t var_geo = (var_pt + a->base_var_m2) / b2;
+    nav_real_t t2 = t_e_m * t_e_m + t_n_m * t_n_m;
+    t2 = t2 > NAV_C(1.0) ? t2 : NAV_C(1.0);
+    const nav_real_t var_geo = (var_pt + a->base_var_m2) / t2;
     nav_real_t drift = a->P[DR_ACC_PSI][DR_ACC_PSI] - a->psi_var_base;
     drift = drift > NAV_C(0.0) ? drift : NAV_C(0.0);
     const nav_real_t var_b = a->P[DR_ACC_B][DR_ACC_B];
@@ -105,11 +110,20 @@ void dr_acc_calibrated(dr_acc_t *a, nav_real_t point_sigma_m, nav_real_t base_m)
     a->P[DR_ACC_N][DR_ACC_N] = var_pt;
     a->P[DR_ACC_MU][DR_ACC_MU] = var_geo;
     a->P[DR_ACC_PSI][DR_ACC_PSI] = var_geo + drift;
+    /* the point's error in the position and in both estimates (dr_acc.h) */
+    const nav_real_t ce = var_pt * t_e_m / t2, cn = var_pt * t_n_m / t2;
+    a->P[DR_ACC_E][DR_ACC_MU] = ce;
+    a->P[DR_ACC_N][DR_ACC_MU] = cn;
+    a->P[DR_ACC_E][DR_ACC_PSI] = cn;
+    a->P[DR_ACC_N][DR_ACC_PSI] = -ce;
+    for (int i = DR_ACC_E; i <= DR_ACC_N; i++) {
+        a->P[DR_ACC_MU][i] = a->P[i][DR_ACC_MU];
+        a->P[DR_ACC_PSI][i] = a->P[i][DR_ACC_PSI];
+    }
     a->P[DR_ACC_B][DR_ACC_B] = var_b;
     a->P[DR_ACC_S][DR_ACC_S] = var_s;
     a->psi_var_base = a->P[DR_ACC_PSI][DR_ACC_PSI];
     a->base_var_m2 = var_pt;
-    a->valid = 1u;
 }
 
 nav_real_t dr_acc_sigma_h_m(const dr_acc_t *a)

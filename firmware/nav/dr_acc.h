@@ -21,7 +21,9 @@
  * A one-point calibration (dr.h) resets the position to the point (its sigma) and replaces
  * mu and psi by the calibration's own errors: the point's and the base's position errors
  * over the base length (eqs 9-10 to first order: sqrt(s_point^2 + s_base^2) / base per
- * axis, for mu and for dH alike), and for psi also the heading's drift over the leg (dH is
+ * axis, for mu and for dH alike), correlated with the position's through the point's error
+ * e (mu's error e.t / |t|^2, psi's (e_E t_N - e_N t_E) / |t|^2: driving on along t, the
+ * scale's error adds to the point's), and for psi also the heading's drift over the leg (dH is
  * the leg's heading error averaged over its distance; the heading at the point is off it by
  * up to all of the drift: half for a drift that grew linearly along a uniformly driven
  * leg, all of it when the leg's distance was driven at its start). The gyro's errors stay;
@@ -72,9 +74,11 @@ void dr_acc_move(dr_acc_t *a, nav_real_t de_m, nav_real_t dn_m, nav_real_t dthet
 void dr_acc_hold(dr_acc_t *a, nav_real_t dt_s, nav_real_t b_rw_rps_rts, nav_real_t gain,
                  nav_real_t sample_var);
 
-/* A one-point calibration at a point known to point_sigma_m per axis, base_m from the
- * base (dr_calibrate's base_m > 0): the point is the new base. */
-void dr_acc_calibrated(dr_acc_t *a, nav_real_t point_sigma_m, nav_real_t base_m);
+/* A one-point calibration at a point known to point_sigma_m per axis, t (t_e_m, t_n_m) the
+ * point less the base (dr_cal_t): the point is the new base. Nothing while the model does
+ * not hold (valid 0: it stays unknown; the calibration's leg was not the model's). */
+void dr_acc_calibrated(dr_acc_t *a, nav_real_t point_sigma_m, nav_real_t t_e_m,
+                       nav_real_t t_n_m);
 
 /* The horizontal accuracy, sqrt(P_EE + P_NN) (m, as HorizAccuracy); -1 when not valid. */
 nav_real_t dr_acc_sigma_h_m(const dr_acc_t *a);
