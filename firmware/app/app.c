@@ -348,8 +348,7 @@ static void process_sample(app_t *a, hal_t *hal, const int32_t w_raw[3], const i
             const fusion_ctx_t c = fusion_ctx(a, &d);
             after_fusion(a, fusion_imu_step(&a->run.fusion, &c, &inc, &a->run.yaw_rate_rps));
         } else {
-            const zbias_prior_t prior = {a->cfg.gyro_arw_rad_rts, a->cfg.gyro_bias_rps,
-                                         a->cfg.gyro_bias_rw_rps_rts};
+            const zbias_prior_t prior = app_zbias_prior(&a->cfg);
             const uint32_t zn = a->keep.zbias.n;
             const int refused = landnav_step(&a->run.land, &a->keep.zbias, &prior, &a->run.nav,
                                              &a->run.dr, &a->keep.odo, &inc, &a->run.yaw_rate_rps);
@@ -524,8 +523,7 @@ static void on_gnss_status(app_t *a, hal_t *hal, const rx_input_t *in)
          * starts the filter nor feeds it */
         a->run.cal.at_gnss = 0u;
         commands_calibrate_at(a, hal, &fix.pos, NAVECU_CAN_NAV_CALIBRATION_CAL_SOURCE_GNSS_CHOICE,
-                              nav_clamp(fix.hacc_m * APP_GNSS_HACC_PER_AXIS,
-                                        APP_GNSS_SIGMA_FLOOR_M, APP_GNSS_SIGMA_MAX_M));
+                              fusion_fix_sigma_axis_m(fix.hacc_m));
         return;
     }
     if (a->run.align.reacquire && a->run.mode == APP_MODE_FAULT) {

@@ -239,6 +239,14 @@ static inline uint64_t app_time_us(const app_t *app)
 }
 static inline const app_health_t *app_health(const app_t *app) { return &app->keep.health; }
 static inline const calib_t *app_calibration(const app_t *app) { return &app->keep.cal; }
+
+/* The configured gyro figures the standstill bias estimate and its accuracy use. */
+static inline zbias_prior_t app_zbias_prior(const app_config_t *cfg)
+{
+    const zbias_prior_t p = {cfg->gyro_arw_rad_rts, cfg->gyro_bias_rps,
+                             cfg->gyro_bias_rw_rps_rts};
+    return p;
+}
 /* Kalman updates applied so far (a board's trace) */
 static inline uint32_t app_filter_updates(const app_t *app) { return app->run.fusion.ekf.n_updates; }
 /* the filter, or NULL when it does not run */

@@ -75,8 +75,7 @@ void commands_start_navigation(app_t *a, nav_real_t roll_rad, nav_real_t pitch_r
         nav_real_t s_mu, s_mount;
         calib_sigmas(&a->keep.cal, a->cfg.gnss_hacc_m, &s_mu, &s_mount);
         const ekf_config_t ec = ekf_default_config();
-        const zbias_prior_t zp = {a->cfg.gyro_arw_rad_rts, a->cfg.gyro_bias_rps,
-                                  a->cfg.gyro_bias_rw_rps_rts};
+        const zbias_prior_t zp = app_zbias_prior(&a->cfg);
         const nav_real_t dt = NAV_C(1.0) / (nav_real_t)a->cfg.imu_rate_hz;
         /* the bias walked on since it was last learnt (the filter's drives do not teach
          * the standstill estimate) */

@@ -487,8 +487,7 @@ fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_pr
     if (!epoch_then(c, &when, d, &then)) {
         return FUSION_GO_ON;
     }
-    const nav_real_t sh = nav_clamp(fix->hacc_m * APP_GNSS_HACC_PER_AXIS, APP_GNSS_SIGMA_FLOOR_M,
-                                 APP_GNSS_SIGMA_MAX_M);
+    const nav_real_t sh = fusion_fix_sigma_axis_m(fix->hacc_m);
     const nav_real_t sv = nav_clamp(fix->vacc_m, APP_GNSS_SIGMA_V_MIN_M, APP_GNSS_SIGMA_MAX_M);
     /* A receiver's position errors are correlated over tens of seconds (multipath,
      * atmosphere, orbits), and N fixes within the correlation time carry the information
@@ -1002,6 +1001,11 @@ static fusion_action_t raw_fuse(fusion_t *fu, const raw_epoch_t *e, nav_real_t d
     const fusion_action_t act = supervise(fu, c, &was_reset);
     *adopt = !was_reset;
     return act;
+}
+
+nav_real_t fusion_fix_sigma_axis_m(nav_real_t hacc_m)
+{
+    return nav_clamp(hacc_m * APP_GNSS_HACC_PER_AXIS, APP_GNSS_SIGMA_FLOOR_M, APP_GNSS_SIGMA_MAX_M);
 }
 
 fusion_action_t fusion_raw(fusion_t *fu, const fusion_ctx_t *c, const gnss_raw_asm_t *g,

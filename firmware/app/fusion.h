@@ -162,4 +162,9 @@ uint32_t fusion_pred_div(uint32_t imu_rate_hz);
  * docs/kalman.md, correlated GNSS errors). */
 nav_real_t fusion_sigma_h_m(const fusion_t *fu, const app_config_t *cfg);
 
+/* A fix's horizontal sigma per axis (m) from its HorizAccuracy (the radial 1-sigma),
+ * clamped to APP_GNSS_SIGMA_FLOOR_M..APP_GNSS_SIGMA_MAX_M: the filter's, and a GNSS
+ * calibration point's */
+nav_real_t fusion_fix_sigma_axis_m(nav_real_t hacc_m);
+
 #endif /* NAVECU_FUSION_H */

@@ -3,6 +3,14 @@
 
 #include "app_tuning.h"
 
+/* the prior's weight in samples of the standstill average: n0 = ARW^2 / (dt sigma_b^2) */
+static nav_real_t zbias_n0(const zbias_prior_t *prior, nav_real_t dt_s)
+{
+    const nav_real_t arw = prior->gyro_arw_rad_rts;
+    const nav_real_t sb = prior->gyro_bias_rps;
+    return arw * arw / (dt_s * sb * sb);
+}
+
 static void standstill_step(landnav_t *ln, zbias_t *zb, const zbias_prior_t *prior,
                             sins_t *nav, nav_real_t raw_rate_z_rad, nav_real_t dt)
 {
@@ -28,8 +36,7 @@ static void standstill_step(landnav_t *ln, zbias_t *zb, const zbias_prior_t *pri
         zb->n++;
     }
     const nav_real_t arw = prior->gyro_arw_rad_rts;
-    const nav_real_t sb = prior->gyro_bias_rps;
-    const nav_real_t n0 = arw * arw / (dt * sb * sb);
+    const nav_real_t n0 = zbias_n0(prior, dt);
     zb->bias_rps = (zb->sum_rps + zb->sum_lo_rps) / ((nav_real_t)zb->n + n0);
     /* the estimate moved by 1 / (n + n0) of this sample's difference from it (dr_acc.h) */
     dr_acc_hold(&ln->acc, dt, prior->gyro_bias_rw_rps_rts,
@@ -40,9 +47,8 @@ nav_real_t zbias_sigma_rps(const zbias_t *zb, const zbias_prior_t *prior, nav_re
                            nav_real_t elapsed_s)
 {
     /* sb^2 n0 / (n + n0): the prior's weight n0 against n samples of variance ARW^2 / dt */
-    const nav_real_t arw = prior->gyro_arw_rad_rts;
     const nav_real_t sb = prior->gyro_bias_rps;
-    const nav_real_t n0 = arw * arw / (dt_s * sb * sb);
+    const nav_real_t n0 = zbias_n0(prior, dt_s);
     const nav_real_t rw = prior->gyro_bias_rw_rps_rts;
     const nav_real_t var = sb * sb * n0 / ((nav_real_t)zb->n + n0) + rw * rw * elapsed_s;
     return nav_sqrt(var < sb * sb ? var : sb * sb);

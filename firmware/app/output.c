@@ -223,7 +223,7 @@ static void emit_accuracy(app_t *a, hal_t *hal)
     const uint32_t unknown = NAVECU_NAV_ACCURACY_VEL_ACC_EAST_RAW_MAX;
     struct navecu_can_nav_accuracy_t m;
     m.vel_acc_east = m.vel_acc_north = m.vel_acc_up = m.heading_accuracy = (uint16_t)unknown;
-    nav_real_t head_var = NAV_C(-1.0); /* the car's heading's variance, rad^2; < 0 unknown */
+    nav_real_t head_sigma = NAV_C(-1.0); /* the car's heading's 1-sigma, rad; < 0 unknown */
     if (ekf != NULL) {
         m.vel_acc_east = accuracy_lsb(ekf_state_sigma(ekf, EKF_DV) * NAV_C(100.0), unknown);
         m.vel_acc_north = accuracy_lsb(ekf_state_sigma(ekf, EKF_DV + 1) * NAV_C(100.0), unknown);
@@ -231,17 +231,16 @@ static void emit_accuracy(app_t *a, hal_t *hal)
         const nav_real_t var = ekf_state_cov(ekf, EKF_PSI + 2, EKF_PSI + 2) +
                                ekf_state_cov(ekf, EKF_MY, EKF_MY) -
                                NAV_C(2.0) * ekf_state_cov(ekf, EKF_PSI + 2, EKF_MY);
-        head_var = var > NAV_C(0.0) ? var : NAV_C(0.0);
-    } else if (a->run.mode == APP_MODE_NAVIGATING && a->run.land.output_dr != 0u &&
-               a->run.land.acc.valid != 0u) {
+        head_sigma = nav_sqrt(var > NAV_C(0.0) ? var : NAV_C(0.0));
+    } else if (a->run.mode == APP_MODE_NAVIGATING && a->run.land.output_dr != 0u) {
         /* the dead reckoning's heading (the SINS's less dH): its error psi (dr_acc.h) */
-        head_var = a->run.land.acc.P[DR_ACC_PSI][DR_ACC_PSI];
+        head_sigma = dr_acc_sigma_heading_rad(&a->run.land.acc);
     } else {
-        /* no filter and no dead reckoning's model: unknown */
+        /* no filter and no dead reckoning: unknown */
     }
-    if (head_var >= NAV_C(0.0)) {
+    if (head_sigma >= NAV_C(0.0)) {
         m.heading_accuracy =
-            accuracy_lsb(nav_sqrt(head_var) * NAV_DEG_PER_RAD * NAV_C(100.0), unknown);
+            accuracy_lsb(head_sigma * NAV_DEG_PER_RAD * NAV_C(100.0), unknown);
     }
     m.nav_counter = next_counter(&a->keep.tx, TX_ACCURACY);
     m.nav_crc = 0u;

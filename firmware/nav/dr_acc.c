@@ -126,11 +126,18 @@ void dr_acc_calibrated(dr_acc_t *a, nav_real_t point_sigma_m, nav_real_t t_e_m,
     a->base_var_m2 = var_pt;
 }
 
+/* sqrt(v) of a valid model's variance v; -1 when not valid or v is not a variance */
+static nav_real_t sigma_of(const dr_acc_t *a, nav_real_t v)
+{
+    return a->valid != 0u && v >= NAV_C(0.0) && nav_isfinite(v) ? nav_sqrt(v) : NAV_C(-1.0);
+}
+
 nav_real_t dr_acc_sigma_h_m(const dr_acc_t *a)
 {
-    if (a->valid == 0u) {
-        return NAV_C(-1.0);
-    }
-    const nav_real_t v = a->P[DR_ACC_E][DR_ACC_E] + a->P[DR_ACC_N][DR_ACC_N];
-    return v > NAV_C(0.0) && nav_isfinite(v) ? nav_sqrt(v) : NAV_C(-1.0);
+    return sigma_of(a, a->P[DR_ACC_E][DR_ACC_E] + a->P[DR_ACC_N][DR_ACC_N]);
+}
+
+nav_real_t dr_acc_sigma_heading_rad(const dr_acc_t *a)
+{
+    return sigma_of(a, a->P[DR_ACC_PSI][DR_ACC_PSI]);
 }

@@ -55,6 +55,7 @@ typedef struct {
 #define dr_acc_hold NAV_SYM(dr_acc_hold)
 #define dr_acc_calibrated NAV_SYM(dr_acc_calibrated)
 #define dr_acc_sigma_h_m NAV_SYM(dr_acc_sigma_h_m)
+#define dr_acc_sigma_heading_rad NAV_SYM(dr_acc_sigma_heading_rad)
 
 /* Start at the base: the position's sigma per axis (m), the scale's and the heading's
  * errors (1 sigma), the z gyro bias's (rad/s) and scale factor's; uncorrelated. */
@@ -82,5 +83,8 @@ void dr_acc_calibrated(dr_acc_t *a, nav_real_t point_sigma_m, nav_real_t t_e_m,
 
 /* The horizontal accuracy, sqrt(P_EE + P_NN) (m, as HorizAccuracy); -1 when not valid. */
 nav_real_t dr_acc_sigma_h_m(const dr_acc_t *a);
+
+/* The heading's accuracy, sqrt(P_psi,psi) (rad, as HeadingAccuracy); -1 when not valid. */
+nav_real_t dr_acc_sigma_heading_rad(const dr_acc_t *a);
 
 #endif /* NAVECU_DR_ACC_H */
