@@ -72,9 +72,10 @@ def test_sweep_writes_every_seed_and_its_summary(sweep):
         assert r["error"] is None and r["rc"] == 0
         assert (out / "tiny" / f"seed{r['seed']}" / "report.json").exists()
         for k in ("rms_m", "outage_pct", "within_2sigma_pct", "hacc_spearman",
-                  "hacc_cv_ratio", "epochs", "run_s"):
+                  "hacc_cv_ratio", "epochs", "run_s", "ideal_rms_m"):
             assert k in r, k
         assert r["rms_m"] is not None and r["outage_pct"] is not None
+        assert r["ideal_rms_m"] is not None and r["ideal_rms_m"] > 0.0
         assert r["epochs"] > 0
     # the two seeds are different drives' sensor errors
     assert sc["seeds"][0]["rms_m"] != sc["seeds"][1]["rms_m"]

@@ -24,6 +24,12 @@ truth.npz over the same epochs as the sigma consistency):
 and across the seeds of a scenario (across_seeds): the range of the seeds' mean
 HorizAccuracy beside that of their RMS errors, and the ratio of the two coefficients of
 variation over the seeds: 0 when every seed reports the same sigma whatever its error.
+  ideal_rms_m   what the seed's receiver alone allows: the RMS horizontal error of a
+                navigator with a perfect dead reckoning and the simulator's own receiver
+                model (tools/sim/ideal.py), beside rms_m; a limit it does not meet is not
+                one the firmware can be sure to meet on that seed
+  ideal_outage_m  that navigator's error at the longest outage's end (the one it had at
+                its start), beside outage_m: the receiver's share of it
 For each scenario the median and the worst (largest error, smallest share or correlation)
 over the seeds, beside issue #18's limits with PASS / FAIL. Writes OUT/seeds.json and prints
 the tables (also to --md). It is a benchmark: the exit status is 0 when a limit is not met,
@@ -42,6 +48,8 @@ from pathlib import Path
 
 import numpy as np
 
+from tools.sim import ideal
+
 ROOT = Path(__file__).resolve().parents[2]
 SCENARIOS = ["default", "dgnss", "outage5", "outage5-automotive"]
 DEFAULT_SEEDS = "1-8"
@@ -49,6 +57,7 @@ DEFAULT_SEEDS = "1-8"
 # figure -> (how the worst is taken: max or min, unit, label)
 FIGURES = {
     "rms_m": (max, "m", "RMS horizontal error"),
+    "ideal_rms_m": (max, "m", "RMS of a perfect dead reckoning (the receiver's own limit)"),
     "outage_pct": (max, "%", "error at the outage's end, % of its distance"),
     "within_2sigma_pct": (min, "%", "epochs within 2 x HorizAccuracy"),
     "hacc_spearman": (min, "", "Spearman(HorizAccuracy, error)"),
@@ -175,6 +184,9 @@ def run_one(scen: str, seed: int, out: Path, navecu: str) -> dict:
         rep = json.loads((out / "report.json").read_text())
         row.update(figures_of(rep))
         row.update(sigma_follows_error(*epoch_sigma_and_error(out)))
+        ref = ideal.receiver_limited(scen, seed) or {}
+        row["ideal_rms_m"] = ref.get("rms_m")
+        row["ideal_outage_m"] = ref.get("outage_end_m")
     except Exception as e:   # noqa: BLE001 - a crash of the analysis is reported, exit 1
         row["error"] = f"analysis: {type(e).__name__}: {e}"
     return row
@@ -254,18 +266,20 @@ def tables(result: dict) -> str:
             continue
         lines.append(f"| {name} | {a['sigma_mean_m'][0]:.3f}-{a['sigma_mean_m'][1]:.3f} m "
                      f"| {a['rms_m'][0]:.2f}-{a['rms_m'][1]:.2f} m | {_f(a['cv_ratio'], '.4f')} |")
-    lines += ["", "| scenario | seed | RMS | outage end | within 2 sigma | Spearman(sigma, error) "
-              "| CV ratio | sigma min-max | error min-max | run |",
-              "|---|---|---|---|---|---|---|---|---|---|"]
+    lines += ["", "| scenario | seed | RMS | perfect DR's RMS | outage end | within 2 sigma "
+              "| Spearman(sigma, error) | CV ratio | sigma min-max | error min-max | run |",
+              "|---|---|---|---|---|---|---|---|---|---|---|"]
     for name, sc in result["scenarios"].items():
         for r in sc["seeds"]:
             if r.get("error"):
-                lines.append(f"| {name} | {r['seed']} | ERROR: {r['error']} |||||||| ")
+                lines.append(f"| {name} | {r['seed']} | ERROR: {r['error']} ||||||||| ")
                 continue
             outage = ("-" if r.get("outage_pct") is None else
-                      f"{r['outage_m']:.2f} m, {r['outage_pct']:.3f} %")
+                      f"{r['outage_m']:.2f} m, {r['outage_pct']:.3f} % "
+                      f"(perfect DR {_f(r.get('ideal_outage_m'))} m)")
             lines.append(
-                f"| {name} | {r['seed']} | {_f(r['rms_m'])} m | {outage} "
+                f"| {name} | {r['seed']} | {_f(r['rms_m'])} m | {_f(r.get('ideal_rms_m'))} m "
+                f"| {outage} "
                 f"| {_f(r['within_2sigma_pct'], '.1f')} % | {_f(r['hacc_spearman'])} "
                 f"| {_f(r['hacc_cv_ratio'])} | {_f(r['sigma_min_m'])}-{_f(r['sigma_max_m'])} m "
                 f"| {_f(r['error_min_m'])}-{_f(r['error_max_m'])} m | {r['run_s']:.0f} s |")
