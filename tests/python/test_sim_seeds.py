@@ -145,3 +145,25 @@ def test_a_failed_run_is_exit_1(tmp_path):
     assert rc == 1
     res = json.loads((tmp_path / "out" / "seeds.json").read_text())
     assert "exit status" in res["scenarios"]["tiny"]["seeds"][0]["error"]
+
+
+def test_merge_joins_the_seeds_of_several_sweeps(tmp_path):
+    def sweep(path, rows):
+        res = {"command": f"sweep {path}",
+               "scenarios": {"default": {"seeds": rows}}}
+        (tmp_path / path).write_text(json.dumps(res))
+        return tmp_path / path
+    a = sweep("a.json", [{"seed": 1, "rms_m": 1.0, "ideal_rms_m": 0.9},
+                         {"seed": 2, "rms_m": 3.0, "ideal_rms_m": 2.0}])
+    b = sweep("b.json", [{"seed": 2, "rms_m": 2.0, "ideal_rms_m": 1.5},
+                         {"seed": 5, "rms_m": 1.2, "ideal_rms_m": 1.1}])
+    res = seeds.merged([a, b])
+    sc = res["scenarios"]["default"]
+    assert [r["seed"] for r in sc["seeds"]] == [1, 2, 5]
+    assert sc["seeds"][1]["rms_m"] == 2.0            # the later file's seed 2
+    assert res["seeds"] == [1, 2, 5]
+    assert sc["summary"]["rms_m"]["median"] == pytest.approx(1.2)
+    assert sc["summary"]["rms_m"]["worst"] == 2.0 and sc["summary"]["rms_m"]["worst_seed"] == 2
+    assert sc["summary"]["rms_m"]["limits"]["worst"]["result"] == "PASS"
+    assert sc["summary"]["ideal_rms_m"]["worst"] == 1.5
+    assert res["commands"] == [f"sweep {a.name}", f"sweep {b.name}"]

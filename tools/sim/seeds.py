@@ -2,6 +2,7 @@
 
     python -m tools.sim.seeds [--seeds 1-8] [--scenarios default dgnss outage5 outage5-automotive]
                               [--jobs 2] [--out out/sim/seeds] [--md FILE]
+    python -m tools.sim.seeds --merge A/seeds.json B/seeds.json ... [--md FILE]
 
 Each scenario runs once per seed through tools.sim.run (a subprocess: `python -m
 tools.sim.run --scenario S --seed N --out OUT/S/seedN`, its stdout in OUT/S/seedN/run.txt),
@@ -30,7 +31,9 @@ variation over the seeds: 0 when every seed reports the same sigma whatever its 
                 one the firmware can be sure to meet on that seed
   ideal_outage_m  that navigator's error at the longest outage's end (the one it had at
                 its start), beside outage_m: the receiver's share of it
-For each scenario the median and the worst (largest error, smallest share or correlation)
+--merge runs nothing: it joins the seeds of earlier sweeps (each scenario's rows of every
+file, a seed given twice taken from the last file; the perfect dead reckoning computed for
+a sweep that did not report it) and prints the same tables over all of them. For each scenario the median and the worst (largest error, smallest share or correlation)
 over the seeds, beside issue #18's limits with PASS / FAIL. Writes OUT/seeds.json and prints
 the tables (also to --md). It is a benchmark: the exit status is 0 when a limit is not met,
 1 only when a run crashed or gave no report.
@@ -286,6 +289,32 @@ def tables(result: dict) -> str:
     return "\n".join(lines)
 
 
+def merged(paths) -> dict:
+    """The seeds.json of several sweeps as one result: per scenario the rows of every file
+    by seed (a later file's row replaces an earlier one's), summaries recomputed."""
+    rows, commands = {}, []
+    for path in paths:
+        res = json.loads(Path(path).read_text())
+        commands.append(res.get("command", str(path)))
+        for name, sc in res["scenarios"].items():
+            for r in sc["seeds"]:
+                rows.setdefault(name, {})[r["seed"]] = r
+    result = {"issue": 18, "merged": [str(p) for p in paths], "commands": commands,
+              "scenarios": {}}
+    for name, by_seed in rows.items():
+        srows = [by_seed[k] for k in sorted(by_seed)]
+        for r in srows:   # a sweep from before the reference was reported: computed now
+            if "ideal_rms_m" not in r and not r.get("error"):
+                ref = ideal.receiver_limited(name, r["seed"]) or {}
+                r["ideal_rms_m"], r["ideal_outage_m"] = ref.get("rms_m"), ref.get("outage_end_m")
+        result["scenarios"][name] = {"seeds": srows,
+                                     "summary": summarise(srows, LIMITS.get(name, {})),
+                                     "across_seeds": across_seeds(srows)}
+    result["seeds"] = sorted({r["seed"] for sc in result["scenarios"].values()
+                              for r in sc["seeds"]})
+    return result
+
+
 def _scenario_name(scen: str) -> str:
     from tools.sim import scenario
     return scenario.load(scen).get("name", Path(scen).stem)
@@ -303,7 +332,16 @@ def main(argv=None) -> int:
     ap.add_argument("--out", default=str(ROOT / "out" / "sim" / "seeds"))
     ap.add_argument("--navecu", default=str(ROOT / "build" / "host" / "navecu"))
     ap.add_argument("--md", default=None, help="also write the tables to this markdown file")
+    ap.add_argument("--merge", nargs="+", default=None, metavar="SEEDS_JSON",
+                    help="run nothing: the tables over the seeds of these seeds.json files")
     a = ap.parse_args(argv)
+    if a.merge:
+        result = merged(a.merge)
+        md = tables(result)
+        print(md)
+        if a.md:
+            Path(a.md).write_text(md + "\n")
+        return 0
     try:
         seeds = parse_seeds(a.seeds)
     except ValueError as e:
