@@ -1253,6 +1253,29 @@ static void test_dead_reckoning_reports_its_accuracy(void **state)
     assert_true(last_horiz_accuracy() < prev);
 }
 
+/*
+ * GIVEN a stored one-point calibration from GNSS over a 300 m base (its point's sigma is
+ *      not stored) and a receiver declared at gnss_hacc_m 0.5 m
+ * WHEN navigation starts from a commanded point
+ * THEN the dead reckoning's odometer scale sigma is sqrt(2) times the per-axis sigma the
+ *      filter would give such a fix, floor included (fusion_fix_sigma_axis_m: 1 m), over
+ *      the base, not sqrt(2) x 0.5 / sqrt(2) / 300 (the declared figure unclamped)
+ */
+static void test_stored_gnss_calibration_takes_the_fix_sigma(void **state)
+{
+    (void)state;
+    app_config_t cfg = app_default_config();
+    cfg.gnss_hacc_m = NAV_C(0.5);
+    assert_int_equal(app_init(&app, &cfg), NAV_OK);
+    app_boot(&app, &hal);
+    app.keep.cal.source = CAL_SRC_GNSS;
+    app.keep.cal.base_m = NAV_C(300.0);
+    start_perfect();
+    const double expect = sqrt(2.0) * (double)APP_GNSS_SIGMA_FLOOR_M / 300.0;
+    assert_near(fusion_fix_sigma_axis_m(cfg.gnss_hacc_m), APP_GNSS_SIGMA_FLOOR_M, 0.0);
+    assert_near(sqrt((double)app.run.land.acc.P[DR_ACC_MU][DR_ACC_MU]), expect, 1e-4 * expect);
+}
+
 /* Both NVM slots corrupt at boot: defaults, CalStatus NvmCorrupt, the NVM flag raised. */
 static void test_corrupt_nvm_at_boot(void **state)
 {
@@ -1724,6 +1747,7 @@ int main(void)
         cmocka_unit_test_setup(test_task_supervision, setup),
         cmocka_unit_test_setup(test_calibrate_at_gnss, setup),
         cmocka_unit_test_setup(test_dead_reckoning_reports_its_accuracy, setup),
+        cmocka_unit_test_setup(test_stored_gnss_calibration_takes_the_fix_sigma, setup),
         cmocka_unit_test_setup(test_filter_with_gnss, setup),
         cmocka_unit_test_setup(test_longitude_minus_180, setup),
         cmocka_unit_test_setup(test_gnss_epoch_counter_round_an_outage, setup),

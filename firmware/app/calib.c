@@ -192,7 +192,7 @@ int calib_start_dr(const calib_t *c, dr_t *dr, const geo_pos_t *pos)
     return dr_init(dr, pos, c->dh_rad, c->mu);
 }
 
-void calib_sigmas(const calib_t *c, nav_real_t gnss_hacc_m, nav_real_t *mu_sigma,
+void calib_sigmas(const calib_t *c, nav_real_t gnss_sigma_axis_m, nav_real_t *mu_sigma,
                   nav_real_t *mount_sigma_rad)
 {
     const ekf_config_t ec = ekf_default_config();
@@ -203,9 +203,8 @@ void calib_sigmas(const calib_t *c, nav_real_t gnss_hacc_m, nav_real_t *mu_sigma
         *mount_sigma_rad = APP_CAL_ADOPT_SIGMA;
     } else if ((c->source == CAL_SRC_KNOWN_POSITION || c->source == CAL_SRC_GNSS) &&
                c->base_m > NAV_C(0.0)) {
-        const nav_real_t s_pt = c->source == CAL_SRC_GNSS
-                                    ? gnss_hacc_m * APP_GNSS_HACC_PER_AXIS
-                                    : APP_KNOWN_POS_SIGMA_M;
+        const nav_real_t s_pt =
+            c->source == CAL_SRC_GNSS ? gnss_sigma_axis_m : APP_KNOWN_POS_SIGMA_M;
         *mu_sigma = NAV_C(1.4142135) * s_pt / c->base_m;
         *mount_sigma_rad = *mu_sigma;
     } else {
