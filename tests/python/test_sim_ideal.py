@@ -59,7 +59,7 @@ def test_the_drive_is_the_firmware_s():
     _, gname = scenario.preset_names(scen)
     spec = sensors.GNSS_PRESETS[gname]
     truth = trajectory.generate(scen, ideal.IMU_RATE_HZ)
-    g = sensors.gnss_epochs(truth, spec, 3 * 5 + 2)
+    g = sensors.gnss_epochs(truth, spec, sensors.drive_seeds(5)[2])
     r = ideal.receiver_limited("default", 5)
     # between the white part averaged away and the raw fixes' error
     raw = math.sqrt(np.mean(np.sum(g["err_enu_m"][g["valid"], :2] ** 2, axis=1)))
@@ -75,3 +75,14 @@ def test_the_drive_is_the_firmware_s():
                                                   spec.pos_gm_corr_time_s) for ax in (0, 1)])
     k = np.searchsorted(t, 715.0, side="right") - 1
     assert r["outage_end_m"] == pytest.approx(math.hypot(*est[k]))
+    # from the navigation's start: the first 30 s (the estimate still settling) left out
+    later = ideal.receiver_limited("default", 5, 30.0)
+    assert later["rms_m"] != r["rms_m"] and later["outage_end_m"] == r["outage_end_m"]
+
+
+def test_no_reference_where_the_fixes_are_more_than_the_preset_s():
+    # gnss-faults puts jumps and a frozen fix into the fixes, canyon5-raw adds raw epochs:
+    # the reference would not be from the firmware's fixes
+    assert ideal.receiver_limited("gnss-faults", 1) is None
+    assert ideal.receiver_limited("canyon5-raw", 1) is None
+

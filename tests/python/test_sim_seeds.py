@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tools.sim import scenario, seeds
+from tools.sim import ideal, scenario, seeds
 
 ROOT = Path(__file__).resolve().parents[2]
 NAVECU = os.environ.get("NAVECU_BIN", str(ROOT / "build" / "host" / "navecu"))
@@ -149,14 +149,13 @@ def test_a_failed_run_is_exit_1(tmp_path):
 
 def test_merge_joins_the_seeds_of_several_sweeps(tmp_path):
     def sweep(path, rows):
-        res = {"command": f"sweep {path}",
-               "scenarios": {"default": {"seeds": rows}}}
+        res = {"command": f"sweep {path}", "scenarios": {"default": {"seeds": rows}}}
         (tmp_path / path).write_text(json.dumps(res))
         return tmp_path / path
-    a = sweep("a.json", [{"seed": 1, "rms_m": 1.0, "ideal_rms_m": 0.9},
-                         {"seed": 2, "rms_m": 3.0, "ideal_rms_m": 2.0}])
-    b = sweep("b.json", [{"seed": 2, "rms_m": 2.0, "ideal_rms_m": 1.5},
-                         {"seed": 5, "rms_m": 1.2, "ideal_rms_m": 1.1}])
+    a = sweep("a.json", [{"seed": 1, "rms_m": 1.0, "navigation_start_s": 30.0},
+                         {"seed": 2, "rms_m": 3.0, "navigation_start_s": 30.0}])
+    b = sweep("b.json", [{"seed": 2, "rms_m": 2.0, "navigation_start_s": 30.0},
+                         {"seed": 5, "rms_m": 1.2, "navigation_start_s": 30.0}])
     res = seeds.merged([a, b])
     sc = res["scenarios"]["default"]
     assert [r["seed"] for r in sc["seeds"]] == [1, 2, 5]
@@ -165,5 +164,26 @@ def test_merge_joins_the_seeds_of_several_sweeps(tmp_path):
     assert sc["summary"]["rms_m"]["median"] == pytest.approx(1.2)
     assert sc["summary"]["rms_m"]["worst"] == 2.0 and sc["summary"]["rms_m"]["worst_seed"] == 2
     assert sc["summary"]["rms_m"]["limits"]["worst"]["result"] == "PASS"
-    assert sc["summary"]["ideal_rms_m"]["worst"] == 1.5
+    assert sc["summary"]["ideal_rms_m"]["seeds"] == 3
+    # the reference is computed afresh for every row: these made-up rows name the built-in
+    # default drive, so they get its seeds' perfect dead reckoning from 30 s on
+    for r in sc["seeds"]:
+        assert r["ideal_rms_m"] == pytest.approx(
+            ideal.receiver_limited("default", r["seed"], 30.0)["rms_m"])
     assert res["commands"] == [f"sweep {a.name}", f"sweep {b.name}"]
+
+
+def test_merge_survives_a_scenario_it_cannot_load(tmp_path, capsys):
+    res = {"command": "c", "scenarios": {"tiny": {"seeds": [
+        {"seed": 1, "rms_m": 1.0, "scenario_arg": str(tmp_path / "gone.toml"),
+         "navigation_start_s": 30.0, "outage_pct": None, "within_2sigma_pct": 100.0,
+         "hacc_spearman": 0.5, "hacc_cv_ratio": 0.1, "sigma_min_m": 1.0, "sigma_max_m": 2.0,
+         "error_min_m": 0.0, "error_max_m": 3.0, "run_s": 1.0},
+        {"seed": 2, "error": "tools.sim.run exit status 1"}]}}}
+    (tmp_path / "s.json").write_text(json.dumps(res))
+    sc = seeds.merged([tmp_path / "s.json"])["scenarios"]["tiny"]
+    assert sc["seeds"][0]["ideal_rms_m"] is None and "no perfect dead reckoning" in \
+        capsys.readouterr().err
+    assert seeds.main(["--merge", str(tmp_path / "s.json"), "--md",
+                       str(tmp_path / "new" / "t.md")]) == 1      # a failed run joined
+    assert (tmp_path / "new" / "t.md").exists()

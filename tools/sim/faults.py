@@ -112,9 +112,10 @@ def build_drive(name: str = "default", seed: int = 1, imu_rate_hz: int = 100,
     t = time.monotonic()
     truth = trajectory.generate(scen, imu_rate_hz)
     imu_spec, odo = scenario.sensor_specs(scen, imu_name, truth.vehicle)
-    dtheta, dv = sensors.apply_imu(truth, imu_spec, 3 * seed)
-    wheels = sensors.wheel_speeds(truth, odo, 3 * seed + 1)
-    gnss = sensors.gnss_epochs(truth, sensors.GNSS_PRESETS[gnss_name], 3 * seed + 2)
+    imu_seed, odo_seed, gnss_seed = sensors.drive_seeds(seed)
+    dtheta, dv = sensors.apply_imu(truth, imu_spec, imu_seed)
+    wheels = sensors.wheel_speeds(truth, odo, odo_seed)
+    gnss = sensors.gnss_epochs(truth, sensors.GNSS_PRESETS[gnss_name], gnss_seed)
     if scen.get("gnss_faults") or scen.get("calibration"):
         raise SystemExit(f"scenario '{name}': fault drives start from a drive without "
                          "[gnss_faults] or [calibration]")

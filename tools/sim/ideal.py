@@ -1,28 +1,32 @@
-"""What the simulated receiver alone allows: the horizontal RMS error of a navigator whose
-dead reckoning is perfect (issue #18, a reference for `make sim-seeds`).
+"""What the simulated receiver's fixes alone allow: the horizontal RMS error of a
+navigator whose dead reckoning is perfect (issue #18, a reference for `make sim-seeds`).
 
-    python -m tools.sim.ideal [--scenario default] [--seeds 1-8] [--above M]
+    python -m tools.sim.ideal [--scenario default] [--seeds 1-8] [--start-s 30] [--above M]
 
-A navigator that knows the car's motion exactly still has to place it on the Earth, and
-only the GNSS fixes do that. Its position error is then one constant c (where its dead
-reckoning started) and each fix measures y = b - c + w: b the receiver's correlated
-error (a first-order Gauss-Markov process, sigma_gm per axis, correlation time tau), w its
-white error (sigma_w). The best causal estimate of c from the fixes so far is the Kalman
-filter on the states (c, b) with exactly the simulator's model (tools/sim/sensors.py,
-gnss_epochs); its error is what no navigator fed those fixes can be sure to beat, whatever
-its IMU and odometer. It is not a strict bound for each seed (another estimator can be
-luckier on one realisation), but the model-matched estimator's error on that realisation:
-over a drive of T s the receiver's slow error still averages to about sqrt(2 tau / T)
-sigma_gm per axis, and on an unlucky seed much more. At the end of an outage its error is
-the one it had at the start: what the firmware's error there has beyond it is its own
-dead reckoning's.
+A navigator that knows the car's motion exactly still has to place it on the Earth. If
+only the GNSS fixes do that, its position error is one constant c (where its dead
+reckoning started) and each fix measures y = b - c + w: b the receiver's correlated error
+(a first-order Gauss-Markov process, sigma_gm per axis, correlation time tau), w its white
+error (sigma_w). The Kalman filter on the states (c, b) with exactly the simulator's model
+(tools/sim/sensors.py, gnss_epochs) is the best causal estimate of c from the fixes so far
+(it equals generalised least squares over them: tests/python/test_sim_ideal.py). Its error
+on a seed is the model-matched expectation for that seed's fixes, not a strict bound:
+another estimator can be luckier on one realisation, and the firmware gets more than the
+fixes (tools.sim.run commands its start at the true position). The end of a drive of T s
+leaves sigma_gm sqrt(2 tau / (T + 2 tau)) per axis (the best estimate of the process's
+mean); the RMS over the drive of the estimates as they come is larger, about sigma_gm
+sqrt((2 tau / T) ln(1 + T / (2 tau))) per axis. At the end of an outage the perfect dead
+reckoning's error is the one it had at the start: what the firmware's error there has
+beyond it is its own dead reckoning's.
 
-The epochs and their errors are those tools.sim.run gives the firmware (the same
-trajectory, preset and seed, 3 x seed + 2); the fixes the simulator marks as outliers are
-left out (this navigator knows them), fixes in an outage do not exist. The error is taken
-once per second from the first fix to the drive's end (in an outage the estimate is held:
-a perfect dead reckoning does not drift), the same span as the firmware's RMS while it
-navigates.
+The epochs and their errors are those tools.sim.run gives the firmware: the same
+trajectory at IMU_RATE_HZ (run.py's default), the scenario's GNSS preset and the fixes'
+seed (sensors.drive_seeds); the fixes the simulator marks as outliers are left out (this
+navigator knows them), fixes in an outage do not exist. Scenarios whose fixes are more
+than the preset's ([gnss_faults], a [calibration] epoch, [gnss_raw]) have no reference
+(None). The error is taken once per second from the navigation's start (report.json's
+navigation_start_s, or the first fix) to the drive's end (in an outage the estimate is
+held: a perfect dead reckoning does not drift), the span of the firmware's RMS.
 """
 from __future__ import annotations
 
@@ -68,22 +72,28 @@ def offset_estimates(t_s, y_m, use, sigma_w_m: float, sigma_gm_m: float,
 
 @functools.lru_cache(maxsize=4)
 def _drive(scen_name: str) -> tuple:
-    """(GNSS preset, trajectory) of a scenario; no trajectory without GNSS."""
+    """(GNSS preset, trajectory) of a scenario; no trajectory without a reference (no GNSS,
+    or fixes that are not only the preset's)."""
     scen = scenario.load(scen_name)
     _, gnss_name = scenario.preset_names(scen, None, None)
     spec = sensors.GNSS_PRESETS[gnss_name]
-    return spec, (trajectory.generate(scen, IMU_RATE_HZ) if spec.enabled else None)
+    more = (scen.get("gnss_faults") or scen.get("calibration")
+            or scen.get("gnss_raw", {}).get("enabled"))
+    if not spec.enabled or more:
+        return spec, None
+    return spec, trajectory.generate(scen, IMU_RATE_HZ)
 
 
-def receiver_limited(scen_name: str, seed: int) -> dict | None:
-    """The perfect dead reckoning on one seed of a scenario (None without GNSS):
-    rms_m, its horizontal RMS error; outage_end_m, its error at the end of the longest
-    GNSS outage (by distance, the one tools.sim.seeds reports; that at its start, as the
-    dead reckoning does not drift), None without an outage."""
+def receiver_limited(scen_name: str, seed: int, start_s: float | None = None) -> dict | None:
+    """The perfect dead reckoning on one seed of a scenario (None without a reference):
+    rms_m, its horizontal RMS error from start_s (the navigation's start; None: the first
+    usable fix) to the end; outage_end_m, its error at the end of the longest GNSS outage
+    (by distance, the one tools.sim.seeds reports; that at its start, as the dead reckoning
+    does not drift), None without an outage or when no fix came before its end."""
     spec, truth = _drive(scen_name)
     if truth is None:
         return None
-    g = sensors.gnss_epochs(truth, spec, 3 * seed + 2)
+    g = sensors.gnss_epochs(truth, spec, sensors.drive_seeds(seed)[2])
     use = np.asarray(g["valid"], dtype=bool) & ~np.asarray(g["outlier"], dtype=bool)
     t = np.asarray(g["t_s"], dtype=float)
     if not use.any():
@@ -92,18 +102,20 @@ def receiver_limited(scen_name: str, seed: int) -> dict | None:
                                             spec.pos_gm_h_m, spec.pos_gm_corr_time_s)
                            for ax in (0, 1)])
     herr = np.hypot(est[:, 0], est[:, 1])
+    first = float(t[np.argmax(use)])
 
     def at(when_s):       # the estimate of the latest epoch at each time
         return herr[np.clip(np.searchsorted(t, when_s, side="right") - 1, 0, None)]
 
-    first = t[np.argmax(use)]
-    grid = np.arange(first, float(truth.t_s[-1]) + 1e-9, EVAL_STEP_S)
+    t0 = first if start_s is None else max(first, float(start_s))
+    grid = np.arange(t0, float(truth.t_s[-1]) + 1e-9, EVAL_STEP_S)
     out = {"rms_m": float(math.sqrt(np.mean(at(grid) ** 2))), "outage_end_m": None}
     outs = [(a, b) for (a, b, *_label) in truth.outages]
     if outs:
         dist = np.interp(np.array(outs), truth.t_s, truth.dist_m)
         a, b = outs[int(np.argmax(dist[:, 1] - dist[:, 0]))]
-        out["outage_end_m"] = float(at(b))
+        if b >= first:
+            out["outage_end_m"] = float(at(b))
     return out
 
 
@@ -112,14 +124,18 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--scenario", default="default")
     ap.add_argument("--seeds", nargs="+", default=["1-8"])
+    ap.add_argument("--start-s", type=float, default=30.0,
+                    help="the navigation's start (s): the RMS from then on (default 30, "
+                         "tools.sim.run's levelling on the scenarios of make sim-seeds)")
     ap.add_argument("--above", type=float, default=None, metavar="M",
                     help="also count the seeds whose RMS is above M m (a limit)")
     a = ap.parse_args(argv)
     vals = {}
     for seed in parse_seeds(a.seeds):
-        r = receiver_limited(a.scenario, seed)
+        r = receiver_limited(a.scenario, seed, a.start_s)
         if r is None:
-            print(f"{a.scenario} seed {seed}: no GNSS")
+            print(f"{a.scenario} seed {seed}: no reference (no GNSS, or fixes beyond the "
+                  "preset's)")
             continue
         end = "" if r["outage_end_m"] is None else \
             f", at the longest outage's end {r['outage_end_m']:.2f} m"

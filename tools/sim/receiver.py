@@ -48,6 +48,7 @@ import numpy as np
 
 from tools import geodesy
 from tools import gnss_raw as gr
+from tools.sim import sensors
 
 # Walker 24/6/1, GPS-like (IS-GPS-200 nominal semi-major axis)
 N_PLANES = 6
@@ -119,9 +120,9 @@ def satellite_ecef(t_s):
 
 
 def raw_seed(seed: int) -> int:
-    """The receiver model's seed for tools.sim.run's --seed (its own stream: the IMU, the
-    fixes and the wheels draw from others)."""
-    return 3 * seed + 2
+    """The receiver model's seed for tools.sim.run's --seed (the fixes' own, sensors.
+    drive_seeds; the IMU and the wheels draw from others)."""
+    return sensors.drive_seeds(seed)[2]
 
 
 def dark_outages(truth, spec: ReceiverSpec) -> list:

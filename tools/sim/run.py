@@ -306,9 +306,10 @@ def main(argv=None) -> int:
     st.start(f"sensors: IMU {imu_name}, GNSS {gnss_name}, odometer")
     # one seed per model, distinct across --seed values
     imu_spec, odo = scenario.sensor_specs(scen, imu_name, truth.vehicle)
-    dtheta, dv = sensors.apply_imu(truth, imu_spec, 3 * a.seed)
-    wheels = sensors.wheel_speeds(truth, odo, 3 * a.seed + 1)
-    gnss = sensors.gnss_epochs(truth, sensors.GNSS_PRESETS[gnss_name], 3 * a.seed + 2)
+    imu_seed, odo_seed, gnss_seed = sensors.drive_seeds(a.seed)
+    dtheta, dv = sensors.apply_imu(truth, imu_spec, imu_seed)
+    wheels = sensors.wheel_speeds(truth, odo, odo_seed)
+    gnss = sensors.gnss_epochs(truth, sensors.GNSS_PRESETS[gnss_name], gnss_seed)
     fw_args = firmware_args(sensors.PRESETS[imu_name], sensors.GNSS_PRESETS[gnss_name], odo)
     mnt = scen["imu_mounting"]
     mount = a.mount
@@ -326,7 +327,7 @@ def main(argv=None) -> int:
         gnss, fault_log = sensors.apply_gnss_faults(gnss, scen["gnss_faults"])
     cal = scen.get("calibration")
     if cal is not None:
-        cal = dict(cal, gnss_epoch=calibration_epoch(truth, cal, gnss, 3 * a.seed + 2))
+        cal = dict(cal, gnss_epoch=calibration_epoch(truth, cal, gnss, gnss_seed))
     st.done(f"{len(gnss['t_s'])} GNSS epochs"
             + (f", {len(fault_log)} GNSS faults" if fault_log else "")
             + (f", calibration at {cal['at_s']:g} s ({cal['source']})" if cal else ""))

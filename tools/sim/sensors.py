@@ -191,6 +191,12 @@ def _gm_peak():
 GM_ADEV_PEAK_TAU_PER_T, GM_ADEV_PEAK_FACTOR = _gm_peak()
 
 
+def drive_seeds(seed: int) -> tuple:
+    """The seeds of one drive's IMU, odometer and GNSS errors for tools.sim.run's --seed:
+    one per model, distinct across seeds (3 seed, 3 seed + 1, 3 seed + 2)."""
+    return 3 * seed, 3 * seed + 1, 3 * seed + 2
+
+
 def _streams(seed, n):
     return [np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(n)]
 
@@ -775,4 +781,4 @@ def apply_gnss_faults(epochs: dict, faults: dict) -> tuple[dict, list]:
 __all__ = ["ImuSpec", "ImuErrors", "PRESETS", "draw_imu_errors", "apply_imu",
            "mounting_C_sb", "allan_deviation", "gm_allan_variance", "gauss_markov",
            "GM_ADEV_PEAK_FACTOR", "GM_ADEV_PEAK_TAU_PER_T", "OdoSpec", "wheel_speeds",
-           "GnssSpec", "GNSS_PRESETS", "gnss_epochs", "apply_gnss_faults"]
+           "GnssSpec", "GNSS_PRESETS", "gnss_epochs", "apply_gnss_faults", "drive_seeds"]
