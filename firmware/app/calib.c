@@ -192,12 +192,11 @@ int calib_start_dr(const calib_t *c, dr_t *dr, const geo_pos_t *pos)
     return dr_init(dr, pos, c->dh_rad, c->mu);
 }
 
-void calib_sigmas(const calib_t *c, nav_real_t gnss_sigma_axis_m, nav_real_t *mu_sigma,
-                  nav_real_t *mount_sigma_rad)
+void calib_sigmas(const calib_t *c, const ekf_config_t *ec, nav_real_t gnss_sigma_axis_m,
+                  nav_real_t *mu_sigma, nav_real_t *mount_sigma_rad)
 {
-    const ekf_config_t ec = ekf_default_config();
-    *mu_sigma = ec.k;
-    *mount_sigma_rad = ec.mount_rad;
+    *mu_sigma = ec->k;
+    *mount_sigma_rad = ec->mount_rad;
     if (c->source == CAL_SRC_FILTER) {
         *mu_sigma = APP_CAL_ADOPT_SIGMA;
         *mount_sigma_rad = APP_CAL_ADOPT_SIGMA;

@@ -102,12 +102,12 @@ int calib_start_dr(const calib_t *c, dr_t *dr, const geo_pos_t *pos);
 
 /* The calibration in use's errors, 1 sigma, for the dead reckoning's accuracy (dr_acc.h):
  * the odometer scale's and the mounting's part of dH. None: the filter's priors
- * (ekf_default_config: k, mount_rad); a one-point calibration: its point's and base's
+ * (ec's k and mount_rad: ekf_default_config); a one-point calibration: its point's and base's
  * position errors over its base length (seed 000 eqs 9-10 to first order, both points
  * known to APP_KNOWN_POS_SIGMA_M, or to gnss_sigma_axis_m per axis when GNSS gave them: the
  * caller's, a fix's per-axis sigma as the filter takes it, fusion_fix_sigma_axis_m); the
  * filter's: the bound it was adopted within (APP_CAL_ADOPT_SIGMA). */
-void calib_sigmas(const calib_t *c, nav_real_t gnss_sigma_axis_m, nav_real_t *mu_sigma,
-                  nav_real_t *mount_sigma_rad);
+void calib_sigmas(const calib_t *c, const ekf_config_t *ec, nav_real_t gnss_sigma_axis_m,
+                  nav_real_t *mu_sigma, nav_real_t *mount_sigma_rad);
 
 #endif /* NAVECU_CALIB_H */

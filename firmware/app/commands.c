@@ -72,11 +72,12 @@ void commands_start_navigation(app_t *a, nav_real_t roll_rad, nav_real_t pitch_r
          * prior for a commanded heading, with the mounting's part of dH), the calibration
          * in use and the z gyro as far as it is known (dr_acc.h); a start from GNSS has
          * the filter at once, and the accuracy is its */
+        const ekf_config_t ec = ekf_default_config();
         nav_real_t s_mu, s_mount;
         /* a stored GNSS point's sigma is not kept: the configured receiver accuracy's,
          * as the filter would take such a fix */
-        calib_sigmas(&a->keep.cal, fusion_fix_sigma_axis_m(a->cfg.gnss_hacc_m), &s_mu, &s_mount);
-        const ekf_config_t ec = ekf_default_config();
+        calib_sigmas(&a->keep.cal, &ec, fusion_fix_sigma_axis_m(a->cfg.gnss_hacc_m), &s_mu,
+                     &s_mount);
         const zbias_prior_t zp = app_zbias_prior(&a->cfg);
         const nav_real_t dt = NAV_C(1.0) / (nav_real_t)a->cfg.imu_rate_hz;
         /* the bias walked on since it was last learnt (the filter's drives do not teach

@@ -431,5 +431,6 @@ def main(argv=None) -> int:
     return _summary_line(result, f"{len(jobs)} runs in {result['wall_s']:.0f} s",
                          f" ({out / 'seeds.json'})")
 
+
 if __name__ == "__main__":
     sys.exit(main())
