@@ -1,5 +1,5 @@
 /*
- * test_ekf.c - the 18-state error-state filter against the strapdown core it models.
+ * test_ekf.c - the error-state filter against the strapdown core it models.
  * Built for both numeric variants.
  *
  * 1. Propagation: the error model F (ekf.h) is checked against the navigator itself. Two
@@ -531,6 +531,54 @@ static void test_standstill_updates(void **state)
     assert_near(s.v_n_mps[1], 8.0, 1e-6);
 }
 
+/* The z gyro's in-run bias (state 24, ekf.h) is a first-order Gauss-Markov process:
+ * GIVEN a level car standing still for 600 s, the in-run state at its steady sigma s
+ * (correlation time T = 100 s), every other state known and no other noise, and an estimate
+ * of 1e-4 rad/s WHEN the filter predicts at 10 Hz THEN the state's variance stays s^2 (a
+ * random walk would reach 7 s^2), the estimate decays as exp(-t / T), and the heading's
+ * variance is the integrated process's, the double integral of its autocorrelation
+ * s^2 exp(-|u - v| / T) over [0, t]^2 = 2 s^2 T (t - T (1 - exp(-t / T))): 10 s^2 T^2, where a bias held constant over the same time would
+ * give s^2 t^2 = 36 s^2 T^2. Tolerance 2 %: Phi = I + F dt's error is dt / (2 T) = 5e-4 per
+ * correlation time, and the Earth rate's coupling of the heading into the tilts is
+ * (w_ie t)^2 / 2 = 1e-3. */
+static void test_gyro_in_run_bias_is_gauss_markov(void **state)
+{
+    (void)state;
+    const double v[3] = {0.0, 0.0, 0.0};
+    sins_t s;
+    nav_at(&s, 0.0, 0.0, 0.0, v);
+    ekf_config_t c = quiet_config();
+    const double sigma = 1e-5, tau = 100.0, dt = 0.1, t_end = 600.0;
+    c.gz_sigma_rps = (nav_real_t)sigma;
+    c.gz_tau_s = (nav_real_t)tau;
+    ekf_t f;
+    assert_int_equal(ekf_init(&f, &c, NAV_C(0.0)), NAV_OK);
+    double sd[EKF_N];
+    sd_quiet(sd);
+    for (int i = 0; i < EKF_N; i++) {
+        for (int j = 0; j < EKF_N; j++) {
+            f.P[i][j] = NAV_C(0.0);
+        }
+        f.P[i][i] = (nav_real_t)(sd[i] * sd[i]);
+    }
+    f.P[EKF_GZ][EKF_GZ] = (nav_real_t)(sigma * sigma);
+    f.gz_rps = NAV_C(1e-4);
+    const nav_real_t fn[3] = {NAV_C(0.0), NAV_C(0.0), NAV_C(9.80665)};
+    const int n = (int)(t_end / dt + 0.5);
+    for (int k = 0; k < n; k++) {
+        ekf_predict(&f, &s, fn, NAV_C(0.0), (nav_real_t)dt);
+    }
+    const double var_gz = (double)f.P[EKF_GZ][EKF_GZ];
+    const double var_h = (double)f.P[EKF_PSI + 2][EKF_PSI + 2];
+    const double want_h = 2.0 * sigma * sigma * tau * (t_end - tau * (1.0 - exp(-t_end / tau)));
+    print_message("in-run z bias: variance %.4g (steady %.4g), heading variance %.4g (want %.4g), "
+                  "estimate %.4g (want %.4g)\n",
+                  var_gz, sigma * sigma, var_h, want_h, (double)f.gz_rps, 1e-4 * exp(-t_end / tau));
+    assert_near(var_gz, sigma * sigma, 0.02 * sigma * sigma);
+    assert_near(var_h, want_h, 0.02 * want_h);
+    assert_near((double)f.gz_rps, 1e-4 * exp(-t_end / tau), 0.02 * 1e-4 * exp(-t_end / tau));
+}
+
 /* The heading held (ekf_t.hold_heading: a zero-velocity update at standstill, a GNSS fix
  * below 10 speed sigmas): GIVEN the north velocity error correlated with the heading
  * (correlation 0.5, as a drive-off's acceleration makes it) WHEN a zero-velocity update
@@ -602,6 +650,7 @@ int main(void)
         cmocka_unit_test(test_odometer_scale_and_mounting),
         cmocka_unit_test(test_odometer_lever_arm_in_a_turn),
         cmocka_unit_test(test_standstill_updates),
+        cmocka_unit_test(test_gyro_in_run_bias_is_gauss_markov),
         cmocka_unit_test(test_hold_heading),
         cmocka_unit_test(test_covariance_health),
     };

@@ -75,7 +75,8 @@
 static const char *const STATE_NAME[EKF_N] = {
     "dr_E", "dr_N", "dr_U", "dv_E", "dv_N", "dv_U", "psi_E", "psi_N", "psi_U",
     "bg_x", "bg_y", "bg_z", "ba_x", "ba_y", "ba_z", "k", "mount_pitch", "mount_yaw",
-    "gnss_bias_E", "gnss_bias_N", "clock_bias", "clock_drift", "odo_offset", "gyro_scale_z"};
+    "gnss_bias_E", "gnss_bias_N", "clock_bias", "clock_drift", "odo_offset", "gyro_scale_z",
+    "gyro_bias_z_in_run"};
 
 /* A true state as the filter sees it at x = 0: the navigator, the estimates (k and the
  * mounting, in the ekf_t), the body rate the odometer rows get. */
@@ -334,6 +335,8 @@ static double perturb(const state_t *truth, int j, double d, state_t *comp)
         e = &comp->kf.clock_drift_mps;
     } else if (j == EKF_OB) {
         e = &comp->kf.odo_offset_mps;
+    } else if (j == EKF_GZ) {
+        e = &comp->w_b_rps[2]; /* the in-run part of the z bias, as bg_z */
     } else if (j == EKF_SG) {
         /* the compensated z rate = (1 + sg) x the true one: the step actually stored is
          * the ratio's */
@@ -358,7 +361,7 @@ static double step_of(int j)
         STEP_PSI_RAD, STEP_PSI_RAD, STEP_PSI_RAD, STEP_BG_RPS,  STEP_BG_RPS,  STEP_BG_RPS,
         STEP_BA_MPS2, STEP_BA_MPS2, STEP_BA_MPS2, STEP_K,       STEP_MOUNT_RAD,
         STEP_MOUNT_RAD, STEP_DR_M,    STEP_DR_M,    STEP_DR_M,    STEP_DV_MPS,  STEP_OB_MPS,
-        STEP_SG};
+        STEP_SG,      STEP_BG_RPS};
     return step[j];
 }
 
@@ -749,7 +752,7 @@ static double odo_allow_h(const void *ctx, const state_t *truth, int row, int co
         }
         return g * rho * (col < EKF_PSI ? 1.0 : norm_d(s.v_n_mps));
     }
-    if (col >= EKF_BG && col < EKF_BA) {
+    if ((col >= EKF_BG && col < EKF_BA) || col == EKF_GZ) {
         return g * c->lever_norm_m;
     }
     if (col == EKF_SG) { /* as the bias: the rate's error in the lever arm, w_z per unit */

@@ -1,5 +1,5 @@
 /*
- * ekf.c - the 24-state error-state Kalman filter (ekf.h, docs/kalman.md).
+ * ekf.c - the 25-state error-state Kalman filter (ekf.h, docs/kalman.md).
  */
 #include "ekf.h"
 
@@ -52,6 +52,8 @@ ekf_config_t ekf_default_config(void)
      * a factory trim well under 1 %), drifting with temperature by 0.05 % in an hour */
     c.gyro_scale = NAV_C(0.01);
     c.gyro_scale_rw_rts = NAV_C(8.3e-6);
+    c.gz_sigma_rps = NAV_C(0.005) / NAV_C(0.6174) * DEG_RAD / NAV_C(3600.0);
+    c.gz_tau_s = NAV_C(300.0);
     /* a TCXO (Brown & Hwang, 4th ed., table 9.2: h0 = 2e-19 s, h-2 = 2e-20 1/s):
      * c^2 h0 / 2 = 9.0e-3 m^2/s, 2 pi^2 c^2 h-2 = 3.5e-2 m^2/s^3 */
     c.clk_b_psd_m2ps = NAV_C(9.0e-3);
@@ -69,7 +71,8 @@ __attribute__((noinline)) static int cfg_ok(const ekf_config_t *c)
                             c->mount_rw_rad_rts, c->var_floor, c->gnss_bias_m,
                             c->clk_bias_m, c->clk_drift_mps, c->clk_b_psd_m2ps,
                             c->clk_d_psd_m2ps3, c->odo_offset_mps, c->odo_offset_rw_mps_rts,
-                            c->gyro_scale, c->gyro_scale_rw_rts};
+                            c->gyro_scale, c->gyro_scale_rw_rts, c->gz_sigma_rps,
+                            c->gz_tau_s};
     for (size_t i = 0u; i < sizeof v / sizeof v[0]; i++) {
         if (!(v[i] > NAV_C(0.0)) || !nav_isfinite(v[i])) {
             return 0;
@@ -92,7 +95,7 @@ static void reset_cov(ekf_t *k, nav_real_t heading_sigma_rad)
                                   c->ba_mps2,  c->ba_mps2,  c->ba_mps2,  c->k,
                                   c->mount_rad, c->mount_rad, c->gnss_bias_m, c->gnss_bias_m,
                                   c->clk_bias_m, c->clk_drift_mps, c->odo_offset_mps,
-                                  c->gyro_scale};
+                                  c->gyro_scale, c->gz_sigma_rps};
     for (int i = 0; i < EKF_N; i++) {
         k->P[i][i] = sd[i] * sd[i];
     }
@@ -114,6 +117,7 @@ int ekf_init(ekf_t *k, const ekf_config_t *cfg, nav_real_t heading_sigma_rad)
     k->k = NAV_C(0.0);
     k->odo_offset_mps = NAV_C(0.0);
     k->gyro_scale_z = NAV_C(0.0);
+    k->gz_rps = NAV_C(0.0);
     k->mount_pitch_rad = NAV_C(0.0);
     k->mount_yaw_rad = NAV_C(0.0);
     k->gnss_bias_m[0] = NAV_C(0.0);
@@ -149,7 +153,7 @@ typedef struct {
     nav_real_t v;
 } f_entry_t;
 
-#define F_MAX 48
+#define F_MAX 52
 
 static int add_entry(f_entry_t *f, int n, int r, int c, nav_real_t v)
 {
@@ -216,6 +220,10 @@ void ekf_predict(ekf_t *k, const sins_t *s, const nav_real_t f_n_mps2[3],
         n = add_entry(F, n, EKF_PSI + i, EKF_SG, -C.m[i][2] * w_bz_rps);
     }
     n = add_entry(F, n, EKF_CB, EKF_CD, NAV_C(1.0));             /* clock bias <- drift */
+    for (int i = 0; i < 3; i++) {                                /* -C_bn e_z gz */
+        n = add_entry(F, n, EKF_PSI + i, EKF_GZ, -C.m[i][2]);
+    }
+    n = add_entry(F, n, EKF_GZ, EKF_GZ, -NAV_C(1.0) / k->cfg.gz_tau_s); /* decay */
 
     /* P <- (I + F dt) P (I + F dt)^T = P + dt (FP + (FP)^T) + dt^2 F (FP)^T */
     nav_real_t (*fp)[EKF_N] = k->fp;
@@ -244,12 +252,18 @@ void ekf_predict(ekf_t *k, const sins_t *s, const nav_real_t f_n_mps2[3],
     for (int i = 0; i < 3; i++) {
         k->P[EKF_DV + i][EKF_DV + i] += c->vrw_mps_rts * c->vrw_mps_rts * dt_s;
         k->P[EKF_PSI + i][EKF_PSI + i] += c->arw_rad_rts * c->arw_rad_rts * dt_s;
-        k->P[EKF_BG + i][EKF_BG + i] += c->bg_rw_rps_rts * c->bg_rw_rps_rts * dt_s;
         k->P[EKF_BA + i][EKF_BA + i] += c->ba_rw_mps2_rts * c->ba_rw_mps2_rts * dt_s;
+    }
+    /* x and y: a random walk; z: the turn-on bias, constant, and its in-run part the
+     * Gauss-Markov state 24 (ekf.h) */
+    for (int i = 0; i < 2; i++) {
+        k->P[EKF_BG + i][EKF_BG + i] += c->bg_rw_rps_rts * c->bg_rw_rps_rts * dt_s;
     }
     k->P[EKF_K][EKF_K] += c->k_rw_rts * c->k_rw_rts * dt_s;
     k->P[EKF_OB][EKF_OB] += c->odo_offset_rw_mps_rts * c->odo_offset_rw_mps_rts * dt_s;
     k->P[EKF_SG][EKF_SG] += c->gyro_scale_rw_rts * c->gyro_scale_rw_rts * dt_s;
+    k->P[EKF_GZ][EKF_GZ] += NAV_C(2.0) * c->gz_sigma_rps * c->gz_sigma_rps * dt_s / c->gz_tau_s;
+    k->gz_rps -= k->gz_rps * dt_s / c->gz_tau_s; /* the estimate's mean decays as the state */
     k->P[EKF_MP][EKF_MP] += c->mount_rw_rad_rts * c->mount_rw_rad_rts * dt_s;
     k->P[EKF_MY][EKF_MY] += c->mount_rw_rad_rts * c->mount_rw_rad_rts * dt_s;
     /* the two-state clock's discrete noise (Brown & Hwang sec. 9.3): the drift's white
@@ -311,6 +325,7 @@ int ekf_update(ekf_t *k, const nav_real_t h[EKF_N], nav_real_t z, nav_real_t r,
         K[EKF_BG + 2] = NAV_C(0.0);
         K[EKF_MY] = NAV_C(0.0);
         K[EKF_SG] = NAV_C(0.0);
+        K[EKF_GZ] = NAV_C(0.0);
     }
     for (int i = 0; i < EKF_N; i++) {
         k->x[i] += K[i] * innov;
@@ -424,6 +439,7 @@ int ekf_feedback(ekf_t *k, sins_t *s)
     k->k -= x[EKF_K];
     k->odo_offset_mps -= x[EKF_OB];
     k->gyro_scale_z += x[EKF_SG];
+    k->gz_rps += x[EKF_GZ];
     k->mount_pitch_rad -= x[EKF_MP];
     k->mount_yaw_rad -= x[EKF_MY];
     k->gnss_bias_m[0] -= x[EKF_GB];
@@ -591,10 +607,11 @@ static int finite_n(const nav_real_t *v, int n)
 
 int ekf_state_ok(const ekf_t *k)
 {
-    const nav_real_t scalars[6] = {k->k, k->mount_yaw_rad, k->mount_pitch_rad,
-                                   k->clock_drift_mps, k->odo_offset_mps, k->gyro_scale_z};
+    const nav_real_t scalars[7] = {k->k, k->mount_yaw_rad, k->mount_pitch_rad,
+                                   k->clock_drift_mps, k->odo_offset_mps, k->gyro_scale_z,
+                                   k->gz_rps};
     if (!finite_n(k->x, EKF_N) || !finite_n(k->bg_rps, 3) || !finite_n(k->ba_mps2, 3) ||
-        !finite_n(scalars, 6) || !finite_n(k->gnss_bias_m, 2)) {
+        !finite_n(scalars, 7) || !finite_n(k->gnss_bias_m, 2)) {
         return 0;
     }
     for (int i = 0; i < EKF_N; i++) {

@@ -1,9 +1,9 @@
 /*
- * ekf.h - the compact error-state Kalman filter: 24 states, float32, fixed-size storage,
+ * ekf.h - the compact error-state Kalman filter: 25 states, float32, fixed-size storage,
  * closed loop (seed 001: "the INS solution is reconciled with the GNSS solution by a Kalman
  * filter with 18 parameters": those 18, the receiver's correlated horizontal error, the
  * receiver's clock for raw measurements (issue #20), the odometer's speed offset and the
- * yaw gyro's scale factor (issue #18); docs/kalman.md).
+ * yaw gyro's scale factor and its in-run bias (issue #18); docs/kalman.md).
  *
  * Error state x, all "computed minus true":
  *   0..2   dr    position error, ENU metres at the IMU
@@ -37,12 +37,26 @@
  *                about 1 %, and each 90 deg turn then turns the heading 0.9 deg wrong;
  *                the GNSS course through the turns observes it (u-blox's automotive dead
  *                reckoning calibrates it likewise)
+ *   24     gz    in-run bias of the body z gyro, rad/s: a first-order Gauss-Markov process
+ *                of steady-state sigma gz_sigma_rps and correlation time gz_tau_s (the
+ *                estimate gz_rps minus the truth). The data sheet's bias instability is
+ *                the floor of the gyro's Allan deviation, a bias that wanders over about
+ *                a minute and comes back (IEEE Std 952-1997 annex C; El-Sheimy, Hou & Niu,
+ *                "Analysis and modeling of inertial sensors using Allan variance", IEEE
+ *                Trans. Instrum. Meas. 57(1), 2008): a random walk in bg would hold a
+ *                wandering learnt just before GNSS is lost for the whole outage and keep
+ *                growing past what the gyro ever does; this state lets the estimate decay
+ *                with the process and bounds its variance. State 11 (bg z) is then the
+ *                turn-on bias, constant.
  * Dynamics (Titterton & Weston eqs 12.6, 12.8, 12.10, small terms of order v/R dropped):
  *   d(dr)/dt = dv
  *   d(dv)/dt = [f_n x] psi + C_bn ba - [(2 w_ie + w_en) x] dv + (0, 0, 2 g / R) dr_U
  *   d(psi)/dt = -[w_in x] psi - C_bn bg - C_bn e_z w_z sg  (w_z the compensated body z
  *   rate, the interval's mean)
- *   biases, k, mounting, sg: random walks.
+ *   d(psi)/dt also gets -C_bn e_z gz; d(gz)/dt = -gz / gz_tau_s + white (psd
+ *   2 gz_sigma^2 / gz_tau_s), the estimate gz_rps decaying with it.
+ *   x and y gyro biases, accelerometer biases, k, mounting, sg: random walks; the z gyro's
+ *   turn-on bias: constant.
  *   d(dcb)/dt = dcd + white (psd clk_b_psd), d(dcd)/dt = white (psd clk_d_psd): the clock
  *   states are coupled to nothing else until a raw measurement correlates them, so a filter
  *   fed only fixes computes the other states exactly as without them.
@@ -61,7 +75,7 @@
 #include "gnss_geom.h"
 #include "sins.h"
 
-#define EKF_N 24
+#define EKF_N 25
 enum {
     EKF_DR = 0,
     EKF_DV = 3,
@@ -76,6 +90,7 @@ enum {
     EKF_CD = 21, /* receiver clock drift, m/s */
     EKF_OB = 22, /* odometer speed offset, m/s */
     EKF_SG = 23, /* body z gyro scale factor error */
+    EKF_GZ = 24, /* body z gyro in-run bias, first-order Gauss-Markov */
 };
 
 typedef struct {
@@ -94,6 +109,8 @@ typedef struct {
     nav_real_t mount_rw_rad_rts; /* mounting random walk (load, suspension) */
     nav_real_t odo_offset_rw_mps_rts; /* odometer offset random walk, m/s/sqrt(s) */
     nav_real_t gyro_scale_rw_rts; /* z gyro scale factor random walk, 1/sqrt(s) */
+    nav_real_t gz_sigma_rps;     /* the z gyro's in-run bias: its steady-state 1-sigma */
+    nav_real_t gz_tau_s;         /* and its correlation time, s */
     nav_real_t clk_b_psd_m2ps;   /* clock bias white noise psd, m^2/s (c^2 h0 / 2) */
     nav_real_t clk_d_psd_m2ps3;  /* clock drift white noise psd, m^2/s^3 (2 pi^2 c^2 h-2) */
     nav_real_t var_floor;        /* smallest variance allowed on the diagonal */
@@ -107,6 +124,8 @@ typedef struct {
      * IMU increments and uses k and the mounting for the odometer */
     nav_real_t bg_rps[3], ba_mps2[3], k, mount_pitch_rad, mount_yaw_rad;
     nav_real_t odo_offset_mps; /* the odometer's speed offset, m/s (state 22) */
+    nav_real_t gz_rps;         /* the body z gyro's in-run bias (state 24), decaying
+                                  with gz_tau_s between updates */
     nav_real_t gyro_scale_z;   /* the body z gyro's scale factor error (state 23): the
                                   application divides the z increment by 1 + it */
     /* the receiver's correlated horizontal position error (E, N, m) as estimated: what

@@ -241,6 +241,7 @@ void ekf_rows_zero_rate(nav_real_t residual_rate_z_rps, nav_real_t h[EKF_ZARU_RO
 {
     zero_row(h[0]);
     h[0][EKF_BG + 2] = NAV_C(1.0);
+    h[0][EKF_GZ] = NAV_C(1.0);
     z_rps[0] = residual_rate_z_rps;
 }
 
@@ -354,6 +355,7 @@ void ekf_rows_range_rate(const ekf_t *k, const sins_t *s, const nav_real_t v_the
         h[EKF_PSI + i] = hp[i];
         h[EKF_BG + i] = hb[i];
     }
+    h[EKF_GZ] = hb[2];
     h[EKF_SG] = hb[2] * w_b_rps[2]; /* the z rate's scale error, as its bias (ekf.h) */
     h[EKF_CD] = NAV_C(1.0);
     *z_mps = rate;

@@ -18,7 +18,7 @@ typedef struct {
     const char *description;
 } params_cli_t;
 
-#define PARAMS_CLI_N 40
+#define PARAMS_CLI_N 41
 
 static const params_cli_t params_cli[PARAMS_CLI_N] = {
     {"--imu-rate-hz", APP_PARAM_IMU_RATE_HZ, "Hz", 10.0, 400.0, 1.0, "", "IMU sample rate: one IMU_Rate + IMU_Accel pair per sample"},
@@ -42,7 +42,8 @@ static const params_cli_t params_cli[PARAMS_CLI_N] = {
     {"--gyro-arw-dpsh", APP_PARAM_GYRO_ARW_RAD_RTS, "deg/sqrt(h)", 1e-06, 100.0, 0.0002908882086657216, "", "gyro angle random walk"},
     {"--gyro-bias-dph", APP_PARAM_GYRO_BIAS_RPS, "deg/h", 1e-06, 10000.0, 4.84813681109536e-06, "", "gyro turn-on bias, 1 sigma: weighs the bias estimate at standstill and in the filter"},
     {"--accel-bias-mg", APP_PARAM_ACCEL_BIAS_MPS2, "mg", 0.0001, 1000.0, 0.00980665, "", "accelerometer turn-on bias, 1 sigma"},
-    {"--gyro-instability-dph", APP_PARAM_GYRO_BIAS_RW_RPS_RTS, "deg/h", 1e-06, 10000.0, 3.9584871301292104e-07, "", "gyro in-run bias instability over a 300 s correlation time, taken by the filter as a random walk of sigma sqrt(2 / 300 s)"},
+    {"--gyro-instability-dph", APP_PARAM_GYRO_BIAS_RW_RPS_RTS, "deg/h", 1e-06, 10000.0, 3.9584871301292104e-07, "", "gyro in-run bias instability, the floor of its Allan deviation (the data sheet's figure): the filter takes the z gyro's as a first-order Gauss-Markov process whose Allan peak is this floor (sigma = it / 0.6174, IEEE Std 952 annex C) with the correlation time gyro_bias_corr_time_s, and the x and y gyros' as a random walk of sigma sqrt(2 / 300 s)"},
+    {"--gyro-bias-corr-time-s", APP_PARAM_GYRO_BIAS_CORR_TIME_S, "s", 10.0, 100000.0, 1.0, "", "the correlation time of the z gyro's in-run bias (the Gauss-Markov process of gyro_bias_rw_rps_rts; its Allan deviation peaks at 1.89 times it): how long the filter holds what it learnt of that bias once GNSS is lost (at least 10 s: a hundred of the filter's prediction intervals, 0.1 s, so that its step I + F dt follows the decay to 5e-5 per step)"},
     {"--accel-instability-mg", APP_PARAM_ACCEL_BIAS_RW_MPS2_RTS, "mg", 1e-05, 1000.0, 0.0008007096195354885, "", "accelerometer in-run bias instability over 300 s, as the gyro's"},
     {"--gyro-range-dps", APP_PARAM_GYRO_RANGE_RPS, "deg/s", 1.0, 5000.0, 0.017453292519943295, "", "the gyro's measurement range: a rate at or beyond it is saturated (counted, flagged)"},
     {"--accel-range-mps2", APP_PARAM_ACCEL_RANGE_MPS2, "m/s^2", 1.0, 2000.0, 1.0, "", "the accelerometer's measurement range (default 8 g)"},

@@ -51,7 +51,8 @@ RATES = ["--imu-rate-hz", "10", "--nav-rate-hz", "10", "--status-rate-hz", "10"]
 # 0.18..0.85 deg/sqrt(h), z bias about -2.4 deg/h; accelerometer bias of a low-grade MEMS
 # unit, a few mg); its in-run instabilities, not measured, a tenth of those turn-on figures
 # (the usual datasheet relation of a MEMS unit's bias instability to its turn-on bias:
-# 0.5 deg/h, 0.5 mg); ranges those of the automotive MEMS preset (the default,
+# 0.5 deg/h, 0.5 mg) with the MEMS class's correlation time, the automotive preset's 100 s
+# (not measured either); ranges those of that preset (the default,
 # firmware/app/params.toml); the receiver's fixes are stamped with their time of validity
 # (latency 0) and their errors against the reference decorrelate in 3..5 s (measured). The
 # speed is OBD-II's (PID 0x0D): a magnitude, the car reverses into its parking space at the

@@ -205,7 +205,7 @@ def firmware_args(imu: "sensors.ImuSpec", gnss: "sensors.GnssSpec",
                   odo: "sensors.OdoSpec | None" = None) -> list:
     """navecu options describing this drive's sensors, as an ECU is configured for the IMU
     and receiver it is installed with (docs/kalman.md): the IMU's noise, turn-on bias and
-    in-run instability, the receiver's latency, error correlation time and white part. Mounting, odometer
+    in-run instability with its correlation time, the receiver's latency, error correlation time and white part. Mounting, odometer
     scale and the errors' realisation stay unknown to the firmware. With odo, the wheel
     speeds' latency (an ABS module's data sheet figure)."""
     rad_dph = math.pi / 180.0 / 3600.0
@@ -214,6 +214,7 @@ def firmware_args(imu: "sensors.ImuSpec", gnss: "sensors.GnssSpec",
             "--gyro-bias-dph", f"{max(imu.gyro_bias_turnon_rps / rad_dph, 1e-3):.6g}",
             "--accel-bias-mg", f"{max(imu.accel_bias_turnon_mps2 / g * 1e3, 1e-3):.6g}",
             "--gyro-instability-dph", f"{max(imu.gyro_bias_instability_rps / rad_dph, 1e-4):.6g}",
+            "--gyro-bias-corr-time-s", f"{imu.gyro_bias_corr_time_s:.6g}",
             "--accel-instability-mg",
             f"{max(imu.accel_bias_instability_mps2 / g * 1e3, 1e-4):.6g}",
             "--gyro-scale-ppm", f"{max(imu.gyro_scale_factor_ppm, 0.1):.6g}",
