@@ -1,0 +1,138 @@
+"""What the z gyro's own noise allows through a GNSS outage: the horizontal error at the
+outage's end that no navigator can remove (issue #18, a reference for outage5 and
+outage5-automotive).
+
+    python -m tools.sim.gyro_floor [--scenario outage5-automotive] [--limit-pct 1.0 1.5]
+                                   [--seeds 24]
+
+Through an outage nothing observes the heading: the odometer and the car's constraints
+measure speed, not direction, and gravity says nothing of yaw. Whatever the z gyro's error
+does after the outage's start that cannot be predicted from before it turns into heading
+error, and the heading error into position error across the track. Two parts of the
+simulator's gyro (tools/sim/sensors.py) are such:
+
+* the angle random walk, white rate noise of psd q = ARW^2;
+* the in-run bias's wander, a first-order Gauss-Markov process of sigma_gm and correlation
+  time T: even a navigator that knew its value b0 at the outage's start exactly can only
+  predict b0 exp(-t/T); the rest has the covariance
+  sigma_gm^2 (exp(-|t1 - t2| / T) - exp(-(t1 + t2) / T)).
+
+With psi(t) the heading error they make (their integral from the outage's start), the
+position error at its end is the integral of psi(s) (v_N(s), -v_E(s)) ds along the
+scenario's own trajectory (a heading error turns the velocity: dv = psi x v), so its
+covariance is the double integral of w(s1) w(s2)^T C_psi(s1, s2) with w = (v_N, -v_E).
+Everything else (the turn-on bias, the scale factor, the odometer, the bias at the start)
+is taken as known exactly, so this is a floor under the expected squared error of any
+navigator with this IMU, not a typical figure; per seed it is a distribution: the error at
+the outage's end is at least this Gaussian's draw on average, and its median and the chance
+of exceeding a limit are printed. The firmware's own error adds everything the floor takes
+as known. No seed enters: the covariance is that of the model.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+
+import numpy as np
+
+from tools.sim import scenario, sensors, trajectory
+
+STEP_S = 0.5          # the integrals' step: 600 points over a 5-min outage
+DRAWS = 200_000       # draws of the 2-D Gaussian for its median and tail (fixed seed)
+RATE_HZ = 100         # tools.sim.run's default IMU rate; the trajectory does not depend on it
+
+
+def heading_cov(t_s: np.ndarray, arw_rad_rts: float, sigma_gm_rps: float,
+                corr_time_s: float) -> np.ndarray:
+    """Covariance of the heading error psi(t_i) (rad^2) from the outage's start t = 0 at
+    the times t_s (from 0, uniform step): the angle random walk plus the integral of the
+    Gauss-Markov bias's unpredictable part (its value at t = 0 known)."""
+    t = np.asarray(t_s, dtype=float)
+    t1, t2 = np.meshgrid(t, t, indexing="ij")
+    c = arw_rad_rts ** 2 * np.minimum(t1, t2)
+    if sigma_gm_rps > 0.0 and corr_time_s > 0.0:
+        dt = t[1] - t[0] if t.size > 1 else 0.0
+        ce = sigma_gm_rps ** 2 * (np.exp(-np.abs(t1 - t2) / corr_time_s)
+                                  - np.exp(-(t1 + t2) / corr_time_s))
+        # psi_i = sum over the intervals before t_i of the rate (trapezoid rule)
+        a = np.tril(np.ones((t.size, t.size)), 0) * dt
+        a[:, 0] *= 0.5
+        a[np.arange(t.size), np.arange(t.size)] *= 0.5
+        a[0, :] = 0.0
+        c = c + a @ ce @ a.T
+    return c
+
+
+def position_cov(t_s: np.ndarray, v_en_mps: np.ndarray, c_psi: np.ndarray) -> np.ndarray:
+    """2x2 covariance (m^2, E and N) of the position error at the last time from the heading
+    error covariance c_psi over t_s and the velocities v_en_mps (N x 2, E and N)."""
+    t = np.asarray(t_s, dtype=float)
+    dt = t[1] - t[0]
+    wgt = np.full(t.size, dt)
+    wgt[0] = wgt[-1] = 0.5 * dt
+    w = np.column_stack([v_en_mps[:, 1], -v_en_mps[:, 0]]) * wgt[:, None]
+    return w.T @ c_psi @ w
+
+
+def outage_floor(scen_name: str, limits_pct=(), outage: tuple | None = None) -> dict | None:
+    """The floor at the end of a scenario's longest outage (by distance; or outage = (a, b)
+    s): rms_m, rms_pct of its distance, median_m / median_pct of the 2-D error's size and,
+    for each limit in limits_pct, the chance p_above[limit] that it exceeds it. None for a
+    scenario without an outage."""
+    scen = scenario.load(scen_name)
+    imu_name, _ = scenario.preset_names(scen, None, None)
+    imu = sensors.PRESETS[imu_name]
+    truth = trajectory.generate(scen, RATE_HZ)
+    outs = [(a, b) for (a, b, *_label) in truth.outages]
+    if outage is not None:
+        outs = [tuple(outage)]
+    if not outs:
+        return None
+    dist = np.interp(np.array(outs), truth.t_s, truth.dist_m)
+    k = int(np.argmax(dist[:, 1] - dist[:, 0]))
+    a, b = outs[k]
+    d_m = float(dist[k, 1] - dist[k, 0])
+    t = np.arange(0.0, b - a + 1e-9, STEP_S)
+    v = np.column_stack([np.interp(a + t, truth.t_s, truth.v_enu_mps[:, i]) for i in (0, 1)])
+    c_psi = heading_cov(t, imu.gyro_arw_rad_per_rts, imu.gyro_gm_sigma_rps,
+                        imu.gyro_bias_corr_time_s)
+    cov = position_cov(t, v, c_psi)
+    draws = np.random.default_rng(0).multivariate_normal([0.0, 0.0], cov, size=DRAWS)
+    size = np.hypot(draws[:, 0], draws[:, 1])
+    rms = math.sqrt(float(np.trace(cov)))
+    med = float(np.median(size))
+    return {"imu": imu_name, "outage_s": (float(a), float(b)), "distance_m": d_m,
+            "rms_m": rms, "rms_pct": 100.0 * rms / d_m, "median_m": med,
+            "median_pct": 100.0 * med / d_m,
+            "p_above": {float(lim): float(np.mean(size > lim / 100.0 * d_m))
+                        for lim in limits_pct}}
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--scenario", default="outage5-automotive")
+    ap.add_argument("--limit-pct", type=float, nargs="*", default=[],
+                    help="limits (% of the outage's distance): the chance of exceeding each")
+    ap.add_argument("--seeds", type=int, default=None,
+                    help="with --limit-pct: the chance that at least one of this many seeds "
+                         "exceeds each limit")
+    a = ap.parse_args(argv)
+    r = outage_floor(a.scenario, a.limit_pct)
+    if r is None:
+        print(f"{a.scenario}: no outage")
+        return 1
+    s0, s1 = r["outage_s"]
+    print(f"{a.scenario} ({r['imu']} IMU), outage {s0:g}-{s1:g} s, {r['distance_m']:.0f} m: "
+          f"the z gyro's noise and bias wander alone leave {r['rms_m']:.1f} m RMS "
+          f"({r['rms_pct']:.3f} %), median {r['median_m']:.1f} m ({r['median_pct']:.3f} %)")
+    for lim, p in r["p_above"].items():
+        line = f"  above {lim:g} %: {100.0 * p:.1f} % of seeds"
+        if a.seeds:
+            any_p = 1.0 - (1.0 - p) ** a.seeds
+            line += f"; at least one of {a.seeds} seeds: {100.0 * any_p:.1f} %"
+        print(line)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
