@@ -533,14 +533,18 @@ static void test_standstill_updates(void **state)
 
 /* The z gyro's in-run bias (state 24, ekf.h) is a first-order Gauss-Markov process:
  * GIVEN a level car standing still for 600 s, the in-run state at its steady sigma s
- * (correlation time T = 100 s), every other state known and no other noise, and an estimate
- * of 1e-4 rad/s WHEN the filter predicts at 10 Hz THEN the state's variance stays s^2 (a
- * random walk would reach 7 s^2), the estimate decays as exp(-t / T), and the heading's
- * variance is the integrated process's, the double integral of its autocorrelation
- * s^2 exp(-|u - v| / T) over [0, t]^2 = 2 s^2 T (t - T (1 - exp(-t / T))): 10 s^2 T^2, where a bias held constant over the same time would
- * give s^2 t^2 = 36 s^2 T^2. Tolerance 2 %: Phi = I + F dt's error is dt / (2 T) = 5e-4 per
- * correlation time, and the Earth rate's coupling of the heading into the tilts is
- * (w_ie t)^2 / 2 = 1e-3. */
+ * (correlation time T = 100 s), every other state known and no other noise, and an
+ * estimate of 1e-4 rad/s WHEN the filter predicts at 10 Hz THEN
+ * - the state's variance stays s^2 (a random walk of the same driving noise would reach
+ *   13 s^2);
+ * - the estimate decays as exp(-t / T);
+ * - the heading's variance is the integrated process's, the double integral of its
+ *   autocorrelation s^2 exp(-|u - v| / T) over [0, t]^2 = 2 s^2 T (t - T (1 - exp(-t / T))):
+ *   10 s^2 T^2, where a bias held constant over the same time would give s^2 t^2 = 36 s^2 T^2;
+ * - the heading's covariance with the state has the sign of d(psi_U)/dt = -gz (ekf.h: the
+ *   residual bias turns the computed heading as bg_z does), -s^2 T (1 - exp(-t / T)).
+ * Tolerance 2 %: Phi = I + F dt's error is dt / (2 T) = 5e-4 per correlation time, and the
+ * Earth rate's coupling of the heading into the tilts is (w_ie t)^2 / 2 = 1e-3. */
 static void test_gyro_in_run_bias_is_gauss_markov(void **state)
 {
     (void)state;
@@ -577,6 +581,8 @@ static void test_gyro_in_run_bias_is_gauss_markov(void **state)
     assert_near(var_gz, sigma * sigma, 0.02 * sigma * sigma);
     assert_near(var_h, want_h, 0.02 * want_h);
     assert_near((double)f.gz_rps, 1e-4 * exp(-t_end / tau), 0.02 * 1e-4 * exp(-t_end / tau));
+    const double want_c = -sigma * sigma * tau * (1.0 - exp(-t_end / tau));
+    assert_near((double)f.P[EKF_PSI + 2][EKF_GZ], want_c, 0.02 * fabs(want_c));
 }
 
 /* The heading held (ekf_t.hold_heading: a zero-velocity update at standstill, a GNSS fix

@@ -331,6 +331,9 @@ static int start(fusion_t *fu, const fusion_ctx_t *c, const fusion_prior_t *prio
         app_diag_reject(c->diag, &c->diag->health->nav_rejected);
         return 0;
     }
+    /* the standstill's z bias, its in-run part at that moment included, goes to the
+     * constant turn-on state: the in-run state starts at 0 with its steady sigma, which
+     * covers the difference (ekf.h, state 24) */
     (void)ekf_set_gyro_bias(&fu->ekf, 2, prior->gyro_bias_z_rps);
     (void)ekf_set_odo_scale(&fu->ekf, prior->odo_scale);
     if (prior->have_mount_yaw) {

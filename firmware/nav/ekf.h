@@ -37,9 +37,10 @@
  *                about 1 %, and each 90 deg turn then turns the heading 0.9 deg wrong;
  *                the GNSS course through the turns observes it (u-blox's automotive dead
  *                reckoning calibrates it likewise)
- *   24     gz    in-run bias of the body z gyro, rad/s: a first-order Gauss-Markov process
- *                of steady-state sigma gz_sigma_rps and correlation time gz_tau_s (the
- *                estimate gz_rps minus the truth). The data sheet's bias instability is
+ *   24     gz    residual in-run bias of the body z gyro, rad/s, as bg (what the
+ *                compensated rate still has: the truth minus the estimate gz_rps, fed back
+ *                into it): a first-order Gauss-Markov process of steady-state sigma
+ *                gz_sigma_rps and correlation time gz_tau_s. The data sheet's bias instability is
  *                the floor of the gyro's Allan deviation, a bias that wanders over about
  *                a minute and comes back (IEEE Std 952-1997 annex C; El-Sheimy, Hou & Niu,
  *                "Analysis and modeling of inertial sensors using Allan variance", IEEE
@@ -65,7 +66,7 @@
  *   driving noise are applied once per fix by ekf_gnss_bias_step, which is exact since
  *   the decay is a scaling of its own rows and columns only.
  * Prediction uses Phi = I + F dt over an interval of several IMU samples with the mean
- * specific force, and P = Phi P Phi^T + Q computed through F's ~40 non-zero entries
+ * specific force, and P = Phi P Phi^T + Q computed through F's 48 non-zero entries
  * (ekf_predict). Updates are scalar and sequential (no matrix inverse), in the symmetric
  * expansion of the Joseph form, each gated by its normalised innovation (chi-square).
  */
@@ -288,9 +289,9 @@ void ekf_rows_zero_velocity(const sins_t *s, nav_real_t h[EKF_ZUPT_ROWS][EKF_N],
 
 /* Zero rate. In: the bias-compensated z gyro rate minus the Earth's rate on the body z
  * axis, residual_rate_z_rps (rad/s; the truth at a standstill is zero). Out: z_rps =
- * residual and the row z = bg_z: h = e_z on bg. Neglected: the attitude and latitude
- * errors of the Earth's rate removed, (C^T [w_ie x] psi)_z: below |w_ie| |psi|, 7e-8
- * rad/s for a 1 mrad attitude error. */
+ * residual and the row z = bg_z + gz: h = 1 on bg_z and on the in-run state. Neglected: the
+ * attitude and latitude errors of the Earth's rate removed, (C^T [w_ie x] psi)_z: below
+ * |w_ie| |psi|, 7e-8 rad/s for a 1 mrad attitude error. */
 void ekf_rows_zero_rate(nav_real_t residual_rate_z_rps, nav_real_t h[EKF_ZARU_ROWS][EKF_N],
                         nav_real_t z_rps[EKF_ZARU_ROWS]);
 
@@ -432,7 +433,8 @@ void ekf_rows_pseudorange(const ekf_t *k, const ekf_antenna_t *a, const ekf_sat_
  * navigator's velocity at the epoch v_then_mps (ENU) and body rate w_b_rps: the antenna
  * moves at v_a = v + C (w_b x l_b). Out z_mps = u . (v_sat - v_a) + clock_drift - rr and
  *   z = -u^T dv - (u x C (w_b x l_b))^T psi + ((C^T u) x l_b)^T bg + dcd
- * (the compensated rate w_b is the true one plus the residual gyro bias bg).
+ * (the compensated rate w_b is the true one plus the residual gyro bias bg; its z part also
+ * the in-run state and w_bz times the scale factor state, with bg_z's entry).
  * Neglected: the line of sight's change with the position error, |v_sat - v_a| / r per
  * metre (4e3 / 2e7: 2e-4 m/s per m). */
 void ekf_rows_range_rate(const ekf_t *k, const sins_t *s, const nav_real_t v_then_mps[3],

@@ -112,8 +112,10 @@ def test_presets_are_the_simulators_grades(table):
         want = {"gyro_arw_rad_rts": spec.gyro_arw_deg_per_rth * math.pi / 180 / 60,
                 "gyro_bias_rps": spec.gyro_bias_turnon_rps,
                 "accel_bias_mps2": spec.accel_bias_turnon_mps2,
-                # the filter takes the instability over 300 s as a random walk
+                # the instability's Allan floor, stored as B sqrt(2 / 300 s) (the x and y
+                # gyros' walk; the z gyro's Gauss-Markov state takes B / 0.61736 from it)
                 "gyro_bias_rw_rps_rts": spec.gyro_bias_instability_rps * math.sqrt(2 / 300),
+                "gyro_bias_corr_time_s": spec.gyro_bias_corr_time_s,
                 "accel_bias_rw_mps2_rts": spec.accel_bias_instability_mps2 * math.sqrt(2 / 300)}
         for k, w in want.items():
             assert si[k] == pytest.approx(w, rel=1e-5), (name, k)
