@@ -83,15 +83,14 @@ def outage_floor(scen_name: str, limits_pct=(), outage: tuple | None = None) -> 
     imu_name, _ = scenario.preset_names(scen, None, None)
     imu = sensors.PRESETS[imu_name]
     truth = trajectory.generate(scen, RATE_HZ)
-    outs = [(a, b) for (a, b, *_label) in truth.outages]
     if outage is not None:
-        outs = [tuple(outage)]
-    if not outs:
-        return None
-    dist = np.interp(np.array(outs), truth.t_s, truth.dist_m)
-    k = int(np.argmax(dist[:, 1] - dist[:, 0]))
-    a, b = outs[k]
-    d_m = float(dist[k, 1] - dist[k, 0])
+        a, b = (float(x) for x in outage)
+        d_m = float(np.diff(np.interp([a, b], truth.t_s, truth.dist_m))[0])
+    else:
+        longest = truth.longest_outage()
+        if longest is None:
+            return None
+        a, b, d_m = longest
     t = np.arange(0.0, b - a + 1e-9, STEP_S)
     v = np.column_stack([np.interp(a + t, truth.t_s, truth.v_enu_mps[:, i]) for i in (0, 1)])
     c_psi = heading_cov(t, imu.gyro_arw_rad_per_rts, imu.gyro_gm_sigma_rps,

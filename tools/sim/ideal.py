@@ -110,12 +110,9 @@ def receiver_limited(scen_name: str, seed: int, start_s: float | None = None) ->
     t0 = first if start_s is None else max(first, float(start_s))
     grid = np.arange(t0, float(truth.t_s[-1]) + 1e-9, EVAL_STEP_S)
     out = {"rms_m": float(math.sqrt(np.mean(at(grid) ** 2))), "outage_end_m": None}
-    outs = [(a, b) for (a, b, *_label) in truth.outages]
-    if outs:
-        dist = np.interp(np.array(outs), truth.t_s, truth.dist_m)
-        a, b = outs[int(np.argmax(dist[:, 1] - dist[:, 0]))]
-        if b >= first:
-            out["outage_end_m"] = float(at(b))
+    longest = truth.longest_outage()
+    if longest is not None and longest[1] >= first:
+        out["outage_end_m"] = float(at(longest[1]))
     return out
 
 

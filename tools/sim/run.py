@@ -205,9 +205,10 @@ def firmware_args(imu: "sensors.ImuSpec", gnss: "sensors.GnssSpec",
                   odo: "sensors.OdoSpec | None" = None) -> list:
     """navecu options describing this drive's sensors, as an ECU is configured for the IMU
     and receiver it is installed with (docs/kalman.md): the IMU's noise, turn-on bias and
-    in-run instability with its correlation time, the receiver's latency, error correlation time and white part. Mounting, odometer
-    scale and the errors' realisation stay unknown to the firmware. With odo, the wheel
-    speeds' latency (an ABS module's data sheet figure)."""
+    in-run instability with its correlation time, the receiver's latency, error correlation
+    time and white part. Mounting, odometer scale and the errors' realisation stay unknown
+    to the firmware. With odo, the wheel speeds' latency (an ABS module's data sheet
+    figure)."""
     rad_dph = math.pi / 180.0 / 3600.0
     g = sensors.G0_MPS2
     args = ["--gyro-arw-dpsh", f"{max(imu.gyro_arw_deg_per_rth, 1e-4):.6g}",

@@ -420,6 +420,16 @@ class Truth:
     duration_s: float = 0.0           # scenario length (t_s[-1] may exceed it by < 1 sample)
     vehicle: dict = field(default_factory=dict)
 
+    def longest_outage(self) -> tuple | None:
+        """(start_s, end_s, distance_m) of the GNSS outage driven furthest, None without one
+        (the one tools.sim.seeds reports and the references measure)."""
+        outs = [(a, b) for (a, b, *_label) in self.outages]
+        if not outs:
+            return None
+        dist = np.interp(np.array(outs, dtype=float), self.t_s, self.dist_m)
+        k = int(np.argmax(dist[:, 1] - dist[:, 0]))
+        return float(outs[k][0]), float(outs[k][1]), float(dist[k, 1] - dist[k, 0])
+
     def to_csv(self, path):
         """truth.csv: t, lat/lon (deg), h, vE/vN/vU, roll/pitch/heading (deg), dist, speed."""
         cols = np.column_stack([
