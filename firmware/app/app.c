@@ -14,7 +14,7 @@ __attribute__((weak)) void app_trace(uint32_t point, uint32_t end)
     (void)end;
 }
 
-static app_diag_t diag_of(app_t *a)
+app_diag_t app_diag_of(app_t *a)
 {
     const app_diag_t d = {&a->keep.health, &a->run.events, a->keep.n_samples, app_time_us(a)};
     return d;
@@ -23,7 +23,7 @@ static app_diag_t diag_of(app_t *a)
 /* count a refused input and flag REJECTED */
 static void reject(app_t *a, uint32_t *counter)
 {
-    const app_diag_t d = diag_of(a);
+    const app_diag_t d = app_diag_of(a);
     app_diag_reject(&d, counter);
 }
 
@@ -342,7 +342,7 @@ static void process_sample(app_t *a, hal_t *hal, const int32_t w_raw[3], const i
                                             : NAV_C(1.0) / (nav_real_t)a->cfg.imu_rate_hz;
         app_rx_imu_increment(w_raw, v_raw, dt_s, &inc);
         mounting_apply(&a->keep.mount, &inc);
-        const app_diag_t d = diag_of(a);
+        const app_diag_t d = app_diag_of(a);
         calib_trip_odo(&a->run.cal, a->keep.odo.valid, a->keep.odo.speed_mps, dt_s);
         if (a->run.fusion.on) {
             const fusion_ctx_t c = fusion_ctx(a, &d);
@@ -552,7 +552,7 @@ static void on_gnss_status(app_t *a, hal_t *hal, const rx_input_t *in)
         return; /* the filter starts at the next epoch */
     }
     if (a->run.mode == APP_MODE_NAVIGATING) {
-        const app_diag_t d = diag_of(a);
+        const app_diag_t d = app_diag_of(a);
         const fusion_ctx_t c = fusion_ctx(a, &d);
         const fusion_prior_t prior = {
             a->keep.zbias.bias_rps, a->keep.cal.mu,
@@ -613,7 +613,7 @@ static void on_gnss_raw(app_t *a, hal_t *hal, const rx_input_t *in)
     app_count(&a->keep.raw_epochs);
     app_count_n(&a->keep.raw_sats, c.n_sats);
     if (a->run.mode == APP_MODE_NAVIGATING && !imu_rate_mismatch(&a->keep.rate)) {
-        const app_diag_t d = diag_of(a);
+        const app_diag_t d = app_diag_of(a);
         const fusion_ctx_t fc = fusion_ctx(a, &d);
         int adopt = 0;
         app_trace(APP_TRACE_GNSS_UPDATE, 0u);

@@ -238,6 +238,9 @@ static inline uint64_t app_time_us(const app_t *app)
                : app->keep.n_samples * 1000000u / app->cfg.imu_rate_hz;
 }
 static inline const app_health_t *app_health(const app_t *app) { return &app->keep.health; }
+/* The application's counters, events, sample count and time, for a module to count and
+ * stamp its rejections with (app_health.h). */
+app_diag_t app_diag_of(app_t *a);
 static inline const calib_t *app_calibration(const app_t *app) { return &app->keep.cal; }
 
 /* The configured gyro figures the standstill bias estimate and its accuracy use. */

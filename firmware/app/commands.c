@@ -4,15 +4,9 @@
 #include "app_tuning.h"
 #include "navecu_can.h"
 
-static app_diag_t diag_of(app_t *a)
-{
-    const app_diag_t d = {&a->keep.health, &a->run.events, a->keep.n_samples, app_time_us(a)};
-    return d;
-}
-
 static void refuse(app_t *a, cmd_refusal_t why)
 {
-    const app_diag_t d = diag_of(a);
+    const app_diag_t d = app_diag_of(a);
     a->keep.cmd_refusal = (uint8_t)why;
     app_diag_reject(&d, &a->keep.health.cmd_rejected);
 }
@@ -61,7 +55,7 @@ void commands_start_navigation(app_t *a, nav_real_t roll_rad, nav_real_t pitch_r
     }
     if (align_start(&a->run.align, roll_rad, pitch_rad, &a->run.nav, &a->run.dr,
                     &a->keep.cal) != NAV_OK) {
-        const app_diag_t d = diag_of(a);
+        const app_diag_t d = app_diag_of(a);
         app_diag_reject(&d, &a->keep.health.bad_value);
         a->run.mode = APP_MODE_FAULT;
         return;
