@@ -63,3 +63,44 @@ def test_outage5_automotive_floor_is_a_share_of_its_distance():
     assert r["distance_m"] == pytest.approx(4924.0, rel=0.01)
     assert 0.0 < r["median_m"] < r["rms_m"] * 1.5
     assert 0.0 < r["p_above"][1.5] < 1.0
+
+
+def test_scale_factor_gain_matches_a_dead_reckoning_with_the_scale():
+    # a car turning at a steady 0.02 rad/s (a slow circle) for 300 s at 15 m/s: its track
+    # dead-reckoned with the heading a gyro of scale factor s makes (the heading turned
+    # since the start, times 1 + s) ends s g away from the true one, to first order in s
+    # (s = 1e-4, 6 rad turned: the second order, V T (s 6)^2 / 2 ~ 1e-4 m, is 3e-4 of the
+    # error's size; the bound 0.1 % of it, on each component)
+    t = np.arange(0.0, 300.0 + 1e-9, gyro_floor.STEP_S)
+    heading = 0.3 + 0.02 * t
+    speed, s = 15.0, 1e-4
+
+    def track_end(h):
+        v = np.column_stack([speed * np.sin(h), speed * np.cos(h)])
+        wgt = np.full(t.size, gyro_floor.STEP_S)
+        wgt[0] = wgt[-1] = 0.5 * gyro_floor.STEP_S
+        return (v * wgt[:, None]).sum(axis=0)
+
+    v_true = np.column_stack([speed * np.sin(heading), speed * np.cos(heading)])
+    g = gyro_floor.scale_gain(t, v_true, np.mod(heading, 2.0 * math.pi))  # unwrapped inside
+    err = track_end(heading + s * (heading - heading[0])) - track_end(heading)
+    assert np.abs(err - s * g).max() < 1e-3 * np.hypot(*(s * g))
+    assert np.hypot(*g) > 1e3  # 6 rad turned over 4.5 km: 4.7 km per unit, not 0
+
+
+def test_heading_at_the_start_turns_the_whole_outage():
+    # a heading error psi0 at the outage's start leaves psi0 times the outage's straight-line
+    # displacement across it (to first order): outage5's 800-1100 s, displacement from the
+    # truth's own positions
+    from tools.sim import scenario, trajectory
+    sigma_deg = 0.03
+    r0 = gyro_floor.outage_floor("outage5")
+    r = gyro_floor.outage_floor("outage5", heading_sigma_deg=sigma_deg)
+    truth = trajectory.generate(scenario.load("outage5"), gyro_floor.RATE_HZ)
+    i0, i1 = np.searchsorted(truth.t_s, [800.0, 1100.0])
+    re = 6378137.0
+    de = (truth.lon_rad[i1] - truth.lon_rad[i0]) * re * math.cos(truth.lat_rad[i0])
+    dn = (truth.lat_rad[i1] - truth.lat_rad[i0]) * re
+    want = math.radians(sigma_deg) * math.hypot(de, dn)
+    assert r["heading_rms_m"] == pytest.approx(want, rel=0.01)
+    assert r["rms_m"] ** 2 == pytest.approx(r0["rms_m"] ** 2 + want ** 2, rel=0.02)

@@ -17,12 +17,25 @@ simulator's gyro (tools/sim/sensors.py) are such:
   predict b0 exp(-t/T); the rest has the covariance
   sigma_gm^2 (exp(-|t1 - t2| / T) - exp(-(t1 + t2) / T)).
 
+A third part is added on request (--scale-ppm): the residual of the z gyro's scale factor
+left at the outage's start, a constant s of the given sigma. The rate it reads is (1 + s)
+times the true one, so its heading error is s times the heading turned since the start
+(the unwrapped heading change, signed: a left and a right turn cancel, a roundabout's
+full circle does not), and its position error at the end s g, g the integral of that
+heading change times w below: a rank-one term sigma_s^2 g g^T of the covariance,
+independent of the other two. A navigator knows it only as well as the turns before the
+outage showed it. Likewise on request (--heading-sigma-deg) the heading error at the
+outage's start, a constant psi0 of the given sigma: psi0 g0, g0 the integral of w (the
+outage's displacement turned by 90 degrees), another rank-one term. With both, the figure
+is no longer the gyro's alone but what any navigator that starts the outage with that
+knowledge is left with.
+
 With psi(t) the heading error they make (their integral from the outage's start), the
 position error at its end is the integral of psi(s) (v_N(s), -v_E(s)) ds along the
 scenario's own trajectory (a heading error turns the velocity: dv = psi x v), so its
 covariance is the double integral of w(s1) w(s2)^T C_psi(s1, s2) with w = (v_N, -v_E).
-Everything else (the turn-on bias, the scale factor, the odometer, the bias at the start)
-is taken as known exactly, so this is a floor under the expected squared error of any
+Everything else (the turn-on bias, the odometer, the bias at the start; the scale factor
+and the heading at the start unless asked for) is taken as known exactly, so this is a floor under the expected squared error of any
 navigator with this IMU, not a typical figure; per seed it is a distribution: the error at
 the outage's end is at least this Gaussian's draw on average, and its median and the chance
 of exceeding a limit are printed. The firmware's own error adds everything the floor takes
@@ -63,22 +76,40 @@ def heading_cov(t_s: np.ndarray, arw_rad_rts: float, sigma_gm_rps: float,
     return c
 
 
-def position_cov(t_s: np.ndarray, v_en_mps: np.ndarray, c_psi: np.ndarray) -> np.ndarray:
-    """2x2 covariance (m^2, E and N) of the position error at the last time from the heading
-    error covariance c_psi over t_s and the velocities v_en_mps (N x 2, E and N)."""
+def _weights(t_s: np.ndarray, v_en_mps: np.ndarray) -> np.ndarray:
+    """w (N x 2): the position error at the last time is the sum of psi_i w_i (a heading
+    error turns the velocity; trapezoid rule over the uniform t_s)."""
     t = np.asarray(t_s, dtype=float)
     dt = t[1] - t[0]
     wgt = np.full(t.size, dt)
     wgt[0] = wgt[-1] = 0.5 * dt
-    w = np.column_stack([v_en_mps[:, 1], -v_en_mps[:, 0]]) * wgt[:, None]
+    return np.column_stack([v_en_mps[:, 1], -v_en_mps[:, 0]]) * wgt[:, None]
+
+
+def position_cov(t_s: np.ndarray, v_en_mps: np.ndarray, c_psi: np.ndarray) -> np.ndarray:
+    """2x2 covariance (m^2, E and N) of the position error at the last time from the heading
+    error covariance c_psi over t_s and the velocities v_en_mps (N x 2, E and N)."""
+    w = _weights(t_s, v_en_mps)
     return w.T @ c_psi @ w
 
 
-def outage_floor(scen_name: str, limits_pct=(), outage: tuple | None = None) -> dict | None:
+def scale_gain(t_s: np.ndarray, v_en_mps: np.ndarray, heading_rad: np.ndarray) -> np.ndarray:
+    """g (m per unit of scale factor, E and N): the position error at the last time that a
+    z gyro scale factor residual s makes, s g, from the heading over t_s (rad, clockwise
+    from north, any wrapping) and the velocities v_en_mps (N x 2): the heading error is s
+    times the heading turned since t_s[0], weighted as position_cov weights psi."""
+    turned = np.unwrap(np.asarray(heading_rad, dtype=float))
+    return _weights(t_s, v_en_mps).T @ (turned - turned[0])
+
+
+def outage_floor(scen_name: str, limits_pct=(), outage: tuple | None = None,
+                 scale_ppm: float = 0.0, heading_sigma_deg: float = 0.0) -> dict | None:
     """The floor at the end of a scenario's longest outage (by distance; or outage = (a, b)
     s): rms_m, rms_pct of its distance, median_m / median_pct of the 2-D error's size and,
-    for each limit in limits_pct, the chance p_above[limit] that it exceeds it. None for a
-    scenario without an outage."""
+    for each limit in limits_pct, the chance p_above[limit] that it exceeds it; with
+    scale_ppm > 0 the z gyro's scale factor residual of that sigma included (scale_rms_m:
+    its part alone); with heading_sigma_deg > 0 the heading error at the start of that sigma
+    (heading_rms_m: its part alone). None for a scenario without an outage."""
     scen = scenario.load(scen_name)
     imu_name, _ = scenario.preset_names(scen, None, None)
     imu = sensors.PRESETS[imu_name]
@@ -96,13 +127,28 @@ def outage_floor(scen_name: str, limits_pct=(), outage: tuple | None = None) -> 
     c_psi = heading_cov(t, imu.gyro_arw_rad_per_rts, imu.gyro_gm_sigma_rps,
                         imu.gyro_bias_corr_time_s)
     cov = position_cov(t, v, c_psi)
+    scale_rms = 0.0
+    if scale_ppm > 0.0:
+        # the truth's heading sampled at t: unwrapped first, so that the interpolation
+        # does not cross the 0 / 2 pi seam
+        h = np.interp(a + t, truth.t_s, np.unwrap(truth.heading_rad))
+        g = scale_gain(t, v, h) * scale_ppm * 1e-6
+        cov = cov + np.outer(g, g)
+        scale_rms = float(np.hypot(g[0], g[1]))
+    heading_rms = 0.0
+    if heading_sigma_deg > 0.0:
+        g0 = _weights(t, v).sum(axis=0) * math.radians(heading_sigma_deg)
+        cov = cov + np.outer(g0, g0)
+        heading_rms = float(np.hypot(g0[0], g0[1]))
     draws = np.random.default_rng(0).multivariate_normal([0.0, 0.0], cov, size=DRAWS)
     size = np.hypot(draws[:, 0], draws[:, 1])
     rms = math.sqrt(float(np.trace(cov)))
     med = float(np.median(size))
     return {"imu": imu_name, "outage_s": (float(a), float(b)), "distance_m": d_m,
             "rms_m": rms, "rms_pct": 100.0 * rms / d_m, "median_m": med,
-            "median_pct": 100.0 * med / d_m,
+            "median_pct": 100.0 * med / d_m, "scale_ppm": float(scale_ppm),
+            "scale_rms_m": scale_rms, "heading_sigma_deg": float(heading_sigma_deg),
+            "heading_rms_m": heading_rms,
             "p_above": {float(lim): float(np.mean(size > lim / 100.0 * d_m))
                         for lim in limits_pct}}
 
@@ -115,14 +161,26 @@ def main(argv=None) -> int:
     ap.add_argument("--seeds", type=int, default=None,
                     help="with --limit-pct: the chance that at least one of this many seeds "
                          "exceeds each limit")
+    ap.add_argument("--scale-ppm", type=float, default=0.0,
+                    help="include the z gyro's scale factor residual at the outage's start, "
+                         "1-sigma in ppm (the IMU preset's figure if nothing was learnt)")
+    ap.add_argument("--heading-sigma-deg", type=float, default=0.0,
+                    help="include the heading error at the outage's start, 1-sigma in degrees "
+                         "(the filter's own, NAV_Accuracy's HeadingAccuracy there)")
     a = ap.parse_args(argv)
-    r = outage_floor(a.scenario, a.limit_pct)
+    r = outage_floor(a.scenario, a.limit_pct, scale_ppm=a.scale_ppm,
+                     heading_sigma_deg=a.heading_sigma_deg)
     if r is None:
         print(f"{a.scenario}: no outage")
         return 1
     s0, s1 = r["outage_s"]
     print(f"{a.scenario} ({r['imu']} IMU), outage {s0:g}-{s1:g} s, {r['distance_m']:.0f} m: "
-          f"the z gyro's noise and bias wander alone leave {r['rms_m']:.1f} m RMS "
+          f"the z gyro's noise and bias wander"
+          + (f" and a {r['scale_ppm']:g} ppm scale factor ({r['scale_rms_m']:.1f} m of it alone)"
+             if r["scale_ppm"] > 0.0 else " alone")
+          + (f", with a heading {r['heading_sigma_deg']:g} deg off at the start "
+             f"({r['heading_rms_m']:.1f} m of it alone)," if r["heading_sigma_deg"] > 0.0 else "")
+          + f" leave {r['rms_m']:.1f} m RMS "
           f"({r['rms_pct']:.3f} %), median {r['median_m']:.1f} m ({r['median_pct']:.3f} %)")
     for lim, p in r["p_above"].items():
         line = f"  above {lim:g} %: {100.0 * p:.1f} % of seeds"
