@@ -127,19 +127,21 @@ def outage_floor(scen_name: str, limits_pct=(), outage: tuple | None = None,
     c_psi = heading_cov(t, imu.gyro_arw_rad_per_rts, imu.gyro_gm_sigma_rps,
                         imu.gyro_bias_corr_time_s)
     cov = position_cov(t, v, c_psi)
-    scale_rms = 0.0
+    # the constant errors asked for, each sigma times its gain g (position error per unit of
+    # the error): a rank-one term g g^T, independent of the rest
+    gains = {"scale_rms_m": None, "heading_rms_m": None}
     if scale_ppm > 0.0:
         # the truth's heading sampled at t: unwrapped first, so that the interpolation
         # does not cross the 0 / 2 pi seam
         h = np.interp(a + t, truth.t_s, np.unwrap(truth.heading_rad))
-        g = scale_gain(t, v, h) * scale_ppm * 1e-6
-        cov = cov + np.outer(g, g)
-        scale_rms = float(np.hypot(g[0], g[1]))
-    heading_rms = 0.0
+        gains["scale_rms_m"] = scale_gain(t, v, h) * scale_ppm * 1e-6
     if heading_sigma_deg > 0.0:
-        g0 = _weights(t, v).sum(axis=0) * math.radians(heading_sigma_deg)
-        cov = cov + np.outer(g0, g0)
-        heading_rms = float(np.hypot(g0[0], g0[1]))
+        gains["heading_rms_m"] = _weights(t, v).sum(axis=0) * math.radians(heading_sigma_deg)
+    parts = {}
+    for key, g in gains.items():
+        parts[key] = 0.0 if g is None else float(np.hypot(g[0], g[1]))
+        if g is not None:
+            cov = cov + np.outer(g, g)
     draws = np.random.default_rng(0).multivariate_normal([0.0, 0.0], cov, size=DRAWS)
     size = np.hypot(draws[:, 0], draws[:, 1])
     rms = math.sqrt(float(np.trace(cov)))
@@ -147,8 +149,7 @@ def outage_floor(scen_name: str, limits_pct=(), outage: tuple | None = None,
     return {"imu": imu_name, "outage_s": (float(a), float(b)), "distance_m": d_m,
             "rms_m": rms, "rms_pct": 100.0 * rms / d_m, "median_m": med,
             "median_pct": 100.0 * med / d_m, "scale_ppm": float(scale_ppm),
-            "scale_rms_m": scale_rms, "heading_sigma_deg": float(heading_sigma_deg),
-            "heading_rms_m": heading_rms,
+            "heading_sigma_deg": float(heading_sigma_deg), **parts,
             "p_above": {float(lim): float(np.mean(size > lim / 100.0 * d_m))
                         for lim in limits_pct}}
 
