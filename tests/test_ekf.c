@@ -23,6 +23,7 @@
 #include <string.h>
 #include <cmocka.h>
 
+#include "app_tuning.h"
 #include "dr.h"
 #include "ekf.h"
 #include "motions.h"
@@ -585,6 +586,16 @@ static void test_gyro_in_run_bias_is_gauss_markov(void **state)
     assert_near((double)f.P[EKF_PSI + 2][EKF_GZ], want_c, 0.02 * fabs(want_c));
 }
 
+/* The application's factor from the stored bias instability to the in-run state's sigma
+ * (app_tuning.h, a literal so that its float32 value stays the one the outputs were made
+ * with) is sqrt(150 s) / EKF_GM_ADEV_PEAK, to its six digits (relative 1e-5). */
+static void test_app_gm_factor_is_the_filters(void **state)
+{
+    (void)state;
+    const double want = sqrt(150.0) / (double)EKF_GM_ADEV_PEAK;
+    assert_near((double)APP_GYRO_GM_SIGMA_PER_RW, want, 1e-5 * want);
+}
+
 /* The heading held (ekf_t.hold_heading: a zero-velocity update at standstill, a GNSS fix
  * below 10 speed sigmas): GIVEN the north velocity error correlated with the heading
  * (correlation 0.5, as a drive-off's acceleration makes it) WHEN a zero-velocity update
@@ -657,6 +668,7 @@ int main(void)
         cmocka_unit_test(test_odometer_lever_arm_in_a_turn),
         cmocka_unit_test(test_standstill_updates),
         cmocka_unit_test(test_gyro_in_run_bias_is_gauss_markov),
+        cmocka_unit_test(test_app_gm_factor_is_the_filters),
         cmocka_unit_test(test_hold_heading),
         cmocka_unit_test(test_covariance_health),
     };

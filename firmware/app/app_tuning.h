@@ -97,11 +97,10 @@
 #define APP_GNSS_HACC_PER_AXIS NAV_C(0.7071)
 
 /* The gyro's in-run bias instability (params.toml gyro_bias_rw_rps_rts) is the floor B of
- * its Allan deviation, stored as B sqrt(2 / 300 s). A first-order Gauss-Markov process of
- * sigma s peaks in Allan deviation at 0.61736 s (at 1.89 correlation times; IEEE Std
- * 952-1997 annex C, the factor tools/sim/sensors.py computes as GM_ADEV_PEAK_FACTOR): the z
- * gyro's in-run state (ekf.h, state 24) takes s = B / 0.61736 = the field x sqrt(150 s) /
- * 0.61736 */
+ * its Allan deviation, stored as B sqrt(2 / 300 s): the z gyro's in-run state (ekf.h,
+ * state 24) takes s = B / EKF_GM_ADEV_PEAK = the field x sqrt(150 s) / EKF_GM_ADEV_PEAK,
+ * this factor (a literal: computed from EKF_GM_ADEV_PEAK in float32 it rounds differently
+ * and changes the outputs; test_ekf checks the two agree) */
 #define APP_GYRO_GM_SIGMA_PER_RW NAV_C(19.8383)
 /* the speed sigma a fix's horizontal accuracy implies (1/s): range-rate noise over range
  * noise, both multiplied by the same DOP (0.05 m/s Doppler, 1.5 m code: 0.03) */

@@ -55,7 +55,7 @@ ekf_config_t ekf_default_config(void)
     c.gyro_scale_rw_rts = NAV_C(8.3e-6);
     /* the in-run wander of a 0.005 deg/h Allan floor over 300 s (navigation grade; the
      * application sets its IMU's: fusion.c) */
-    c.gz_sigma_rps = NAV_C(0.005) / NAV_C(0.61736) * DEG_RAD / NAV_C(3600.0);
+    c.gz_sigma_rps = NAV_C(0.005) / EKF_GM_ADEV_PEAK * DEG_RAD / NAV_C(3600.0);
     c.gz_tau_s = NAV_C(300.0);
     /* a TCXO (Brown & Hwang, 4th ed., table 9.2: h0 = 2e-19 s, h-2 = 2e-20 1/s):
      * c^2 h0 / 2 = 9.0e-3 m^2/s, 2 pi^2 c^2 h-2 = 3.5e-2 m^2/s^3 */

@@ -77,6 +77,11 @@
 #include "sins.h"
 
 #define EKF_N 25
+/* The Allan deviation of a first-order Gauss-Markov process of sigma s peaks at
+ * EKF_GM_ADEV_PEAK s (at 1.89 correlation times; IEEE Std 952-1997 annex C; computed by
+ * tools/sim/sensors.py as GM_ADEV_PEAK_FACTOR): a data sheet's bias instability B, the
+ * floor of that deviation, is the process of sigma B / EKF_GM_ADEV_PEAK (state 24). */
+#define EKF_GM_ADEV_PEAK NAV_C(0.61736)
 enum {
     EKF_DR = 0,
     EKF_DV = 3,
