@@ -305,10 +305,43 @@ def test_residuals_against_the_reference_show_one_satellites_error():
     ref = np.array([(99.0, 44.23, -76.5, 40.0), (102.0, 44.23, -76.5, 40.0)],
                    dtype=[(n, float) for n in ("time_s", "lat_deg", "lon_deg", "height_m")])
     med = kraw.residuals(raw, ref, 90.0, 0.0, 20.0)
-    assert [t for t, _ in med] == [10.0, 11.0]
+    assert [t for t, _, _ in med] == [10.0, 11.0]
     for prn, _, v in med[0][1]:
         assert v == pytest.approx(5.0 if prn == 5 else 0.0, abs=1e-3)
     rel = kraw.residuals(raw, ref, 90.0, 0.0, 20.0, relative_to=5)
     assert len(rel) == 1
     for prn, _, v in rel[0][1]:
         assert v == pytest.approx(0.0 if prn == 5 else -5.0, abs=1e-3)
+
+
+def test_rate_residuals_against_the_reference_show_the_drift_and_one_satellite():
+    """tools.kingston.raw --residuals --rates: Dopplers made from the reference's velocity
+    (12 m/s east, 5 m/s north, 0.5 m/s up, through its ENU axes), the satellites' own and a
+    receiver clock drift of 85.25 m/s, one satellite's rate 0.5 m/s fast: less the median
+    the others are 0 and it is +0.5 m/s, the median is the drift (1e-6 m/s: float64)."""
+    lat, lon = math.radians(44.23), math.radians(-76.5)
+    p = gr.ecef_from_geodetic(lat, lon, 40.0)
+    v_enu = np.array([12.0, 5.0, 0.5])
+    v_rx = gr.enu_axes(lat, lon).T @ v_enu
+    sats = [np.array(s) for s in ([2.0e7, 0.5e7, 1.2e7], [0.3e7, -2.1e7, 1.5e7],
+                                  [1.1e7, -1.0e7, 2.1e7], [2.2e7, -0.4e7, 1.0e7],
+                                  [0.9e7, -1.6e7, 1.9e7])]
+    vels = [np.array(v) for v in ([100.0, -2000.0, 3000.0], [-1500.0, 200.0, 2500.0],
+                                  [2500.0, 800.0, -1200.0], [-300.0, 3100.0, 100.0],
+                                  [1800.0, -1800.0, 900.0])]
+    names = ["time_s", "prn", "sat_x_m", "sat_y_m", "sat_z_m", "sat_vx_mps", "sat_vy_mps",
+             "sat_vz_mps", "doppler", "elevation"]
+    rows = []
+    for i, (s, v) in enumerate(zip(sats, vels)):
+        u = (s - p) / np.linalg.norm(s - p)
+        rate = float(u @ (v - v_rx)) + 85.25 + (0.5 if i == 2 else 0.0)
+        rows.append((100.0, i + 1, *s, *v, -rate / gr.GPS_L1_WAVELENGTH_M, 0.5))
+    raw = np.array(rows, dtype=[(n, float) for n in names])
+    cols = ("time_s", "lat_deg", "lon_deg", "height_m", "ve_mps", "vn_mps", "vu_mps")
+    ref = np.array([(99.0, 44.23, -76.5, 40.0, *v_enu), (102.0, 44.23, -76.5, 40.0, *v_enu)],
+                   dtype=[(n, float) for n in cols])
+    (t, per, med), = kraw.residuals(raw, ref, 90.0, 0.0, 20.0, rates=True)
+    assert t == 10.0
+    assert med == pytest.approx(85.25, abs=1e-6)
+    for prn, _, v in per:
+        assert v == pytest.approx(0.5 if prn == 3 else 0.0, abs=1e-6)

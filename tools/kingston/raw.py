@@ -18,7 +18,7 @@ Doppler sigma or C/N0 (sent as 0: unknown, the ECU's parameters apply).
 
 Each satellite's corrected range against the SPAN reference, per epoch:
 
-    python -m tools.kingston.raw --residuals T0 T1 [--relative-to PRN] [--data DIR]
+    python -m tools.kingston.raw --residuals T0 T1 [--relative-to PRN] [--rates] [--data DIR]
 
 prints, for every raw epoch from T0 to T1 s of the drive (the log's time base, as
 tools.kingston.run and compare), the satellites (PRN at elevation, degrees) and each one's
@@ -27,7 +27,9 @@ to the epoch; ellipsoidal height, as reference.csv), less the epoch's median: wh
 firmware's bias learning (firmware/app/raw_bias.h) averages, with the reference in place
 of the filter's position. With --relative-to, less that satellite's instead (epochs
 without it are skipped: the median moves with the satellites in view, a difference does
-not), and then each satellite's mean over the window.
+not), and then each satellite's mean over the window. With --rates, the pseudorange rates
+instead (m/s): each one less the satellite's velocity and the reference's along the line of
+sight, less the median, which is printed too (in brackets: the receiver's clock drift).
 """
 from __future__ import annotations
 
@@ -88,12 +90,15 @@ def corrected_pseudorange_m(r) -> float:
 
 
 def residuals(raw: np.ndarray, ref: np.ndarray, t0_gps_s: float, t0_s: float,
-              t1_s: float, relative_to: int = 0) -> list:
-    """[(t s of the drive, [(prn, elevation deg, residual m less the epoch's median)])] for
-    the raw epochs from t0_s to t1_s; ref: reference.csv rows (GPS time, lat, lon,
-    ellipsoidal height). The satellites are in the receive time's axes (module docstring),
-    so the geometric range is |sat - receiver|. relative_to: a PRN whose residual replaces
-    the median (epochs without it left out)."""
+              t1_s: float, relative_to: int = 0, rates: bool = False) -> list:
+    """[(t s of the drive, [(prn, elevation deg, residual less the epoch's median)], that
+    median)] for the raw epochs from t0_s to t1_s; ref: reference.csv rows (GPS time, lat,
+    lon, ellipsoidal height, and with rates its velocity ve/vn/vu_mps). The satellites are
+    in the receive time's axes (module docstring), so the geometric range is |sat -
+    receiver|. relative_to: a PRN whose residual replaces the median (epochs without it
+    left out). rates: the pseudorange rates (-Doppler x the L1 wavelength) less the
+    satellite's velocity less the reference's along the line of sight, m/s; the median is
+    then the receiver's clock drift (and what the satellites' rates share)."""
     out = []
     for t in np.unique(raw["time_s"]):
         t_s = float(t) - t0_gps_s
@@ -101,14 +106,25 @@ def residuals(raw: np.ndarray, ref: np.ndarray, t0_gps_s: float, t0_s: float,
             continue
         if t < ref["time_s"][0] or t > ref["time_s"][-1]:
             continue
-        rx = gr.ecef_from_geodetic(
-            np.radians(np.interp(t, ref["time_s"], ref["lat_deg"])),
-            np.radians(np.interp(t, ref["time_s"], ref["lon_deg"])),
-            float(np.interp(t, ref["time_s"], ref["height_m"])))
+        lat = np.radians(np.interp(t, ref["time_s"], ref["lat_deg"]))
+        lon = np.radians(np.interp(t, ref["time_s"], ref["lon_deg"]))
+        rx = gr.ecef_from_geodetic(lat, lon, float(np.interp(t, ref["time_s"],
+                                                             ref["height_m"])))
         rows = raw[raw["time_s"] == t]
         rows = rows[np.argsort(rows["prn"])]
-        res = np.array([corrected_pseudorange_m(r) - float(np.linalg.norm(
-            np.array([r["sat_x_m"], r["sat_y_m"], r["sat_z_m"]]) - rx)) for r in rows])
+        if rates:
+            v_rx = gr.enu_axes(lat, lon).T @ np.array(
+                [np.interp(t, ref["time_s"], ref[k]) for k in ("ve_mps", "vn_mps", "vu_mps")])
+        res = []
+        for r in rows:
+            los = np.array([r["sat_x_m"], r["sat_y_m"], r["sat_z_m"]]) - rx
+            if rates:
+                u = los / np.linalg.norm(los)
+                v_sat = np.array([r["sat_vx_mps"], r["sat_vy_mps"], r["sat_vz_mps"]])
+                res.append(float(-r["doppler"] * gr.GPS_L1_WAVELENGTH_M - u @ (v_sat - v_rx)))
+            else:
+                res.append(corrected_pseudorange_m(r) - float(np.linalg.norm(los)))
+        res = np.array(res)
         if relative_to:
             own = res[rows["prn"] == relative_to]
             if own.size == 0:
@@ -117,7 +133,7 @@ def residuals(raw: np.ndarray, ref: np.ndarray, t0_gps_s: float, t0_s: float,
         else:
             med = float(np.median(res))
         out.append((t_s, [(int(r["prn"]), float(np.degrees(r["elevation"])), float(v - med))
-                          for r, v in zip(rows, res)]))
+                          for r, v in zip(rows, res)], med))
     return out
 
 
@@ -128,25 +144,34 @@ def main(argv=None) -> int:
                     help="window, s of the drive")
     ap.add_argument("--relative-to", type=int, default=0, metavar="PRN",
                     help="less this satellite's residual instead of the epoch's median")
+    ap.add_argument("--rates", action="store_true",
+                    help="the pseudorange rates (m/s) instead of the pseudoranges, and each "
+                         "epoch's median (the receiver's clock drift)")
     ap.add_argument("--data", default=None, help=f"data folder (default {convert.DATA_DIR})")
     a = ap.parse_args(argv)
     drive = convert.load(a.data)
     raw = read(Path(a.data) if a.data else convert.DATA_DIR)
     rows = residuals(raw, drive.ref, drive.t0_gps, a.residuals[0], a.residuals[1],
-                     a.relative_to)
+                     a.relative_to, a.rates)
     less = f"PRN {a.relative_to}'s" if a.relative_to else "the epoch's median"
-    print(f"corrected pseudorange less the range from the reference, less {less} (m): "
-          "PRN@elevation residual")
-    for t_s, sats in rows:
+    what = ("pseudorange rate less the satellite's and the reference's velocity along the "
+            "line of sight" if a.rates else
+            "corrected pseudorange less the range from the reference")
+    unit, fmt = ("m/s", "+6.2f") if a.rates else ("m", "+5.1f")
+    print(f"{what}, less {less} ({unit}): PRN@elevation residual"
+          + (f"; [{less} itself]" if a.rates else ""))
+    for t_s, sats, med in rows:
         print(f"{t_s:8.1f} s  {len(sats)}: " +
-              "  ".join(f"{p:2d}@{el:2.0f} {v:+5.1f}" for p, el, v in sats))
+              "  ".join(f"{p:2d}@{el:2.0f} {v:{fmt}}" for p, el, v in sats) +
+              (f"  [{med:+.2f}]" if a.rates else ""))
     if a.relative_to:
         per = {}
-        for _, sats in rows:
+        for _, sats, _ in rows:
             for p, _, v in sats:
                 per.setdefault(p, []).append(v)
         print(f"mean over {len(rows)} epochs with PRN {a.relative_to}: " +
-              "  ".join(f"{p}: {np.mean(v):+.2f} m ({len(v)})" for p, v in sorted(per.items())))
+              "  ".join(f"{p}: {np.mean(v):+.2f} {unit} ({len(v)})"
+                        for p, v in sorted(per.items())))
     return 0
 
 
