@@ -104,3 +104,27 @@ def test_heading_at_the_start_turns_the_whole_outage():
     want = math.radians(sigma_deg) * math.hypot(de, dn)
     assert r["heading_rms_m"] == pytest.approx(want, rel=0.01)
     assert r["rms_m"] ** 2 == pytest.approx(r0["rms_m"] ** 2 + want ** 2, rel=0.02)
+
+
+def test_an_unknown_start_bias_makes_the_stationary_process():
+    # the known-start wander plus an unknown start bias of the process's own sigma, decaying
+    # as the navigator predicts it (bias_gain), is the stationary Gauss-Markov process: its
+    # position covariance along a drive that turns (a slow circle) is the one integrated
+    # from sigma^2 exp(-|t1 - t2| / T) directly (the same trapezoid rule: to rounding)
+    sigma, tau = 1e-4, 100.0
+    t = np.arange(0.0, 300.0 + 1e-9, gyro_floor.STEP_S)
+    h = 0.3 + 0.02 * t
+    vel = np.column_stack([15.0 * np.sin(h), 15.0 * np.cos(h)])
+    known = gyro_floor.position_cov(t, vel, gyro_floor.heading_cov(t, 0.0, sigma, tau))
+    g = gyro_floor.bias_gain(t, vel, tau) * sigma
+    t1, t2 = np.meshgrid(t, t, indexing="ij")
+    a = gyro_floor._integrator(t)
+    stationary = gyro_floor.position_cov(
+        t, vel, a @ (sigma ** 2 * np.exp(-np.abs(t1 - t2) / tau)) @ a.T)
+    assert known + np.outer(g, g) == pytest.approx(stationary, rel=1e-9, abs=1e-12)
+    # and the start bias is a real part of it: its gain is the closed form's to 1 %
+    # (b0 T (1 - exp(-t/T)) integrated across the track of a straight drive north)
+    ts, vs = straight(300.0, 15.0)
+    want = 15.0 * (tau * 300.0 - tau ** 2 * (1.0 - math.exp(-300.0 / tau)))
+    assert gyro_floor.bias_gain(ts, vs, tau)[0] == pytest.approx(want, rel=0.01)
+    assert np.hypot(*g) > 0.1 * math.sqrt(np.trace(known))

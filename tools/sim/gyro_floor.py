@@ -3,7 +3,8 @@ outage's end that no navigator can remove (issue #18, a reference for outage5 an
 outage5-automotive).
 
     python -m tools.sim.gyro_floor [--scenario outage5-automotive] [--limit-pct 1.0 1.5]
-                                   [--seeds 24]
+                                   [--seeds 24] [--heading-sigma-deg D] [--scale-ppm P]
+                                   [--bias-sigma-dph B]
 
 Through an outage nothing observes the heading: the odometer and the car's constraints
 measure speed, not direction, and gravity says nothing of yaw. Whatever the z gyro's error
@@ -26,16 +27,21 @@ heading change times w below: a rank-one term sigma_s^2 g g^T of the covariance,
 independent of the other two. A navigator knows it only as well as the turns before the
 outage showed it. Likewise on request (--heading-sigma-deg) the heading error at the
 outage's start, a constant psi0 of the given sigma: psi0 g0, g0 the integral of w (the
-outage's displacement turned by 90 degrees), another rank-one term. With both, the figure
-is no longer the gyro's alone but what any navigator that starts the outage with that
-knowledge is left with.
+outage's displacement turned by 90 degrees), another rank-one term. And (--bias-sigma-dph)
+the error b0 of the navigator's estimate of the in-run bias at the outage's start: the
+navigator predicts the bias's mean b exp(-t/T), so that error decays the same way and turns
+the heading by b0 T (1 - exp(-t/T)) (bias_gain), a third rank-one term; with the process's
+own sigma (nothing learnt) it makes the known-start wander the stationary process. With
+any of them, the figure is no longer the gyro's alone but what any navigator that starts
+the outage with that knowledge is left with.
 
 With psi(t) the heading error they make (their integral from the outage's start), the
 position error at its end is the integral of psi(s) (v_N(s), -v_E(s)) ds along the
 scenario's own trajectory (a heading error turns the velocity: dv = psi x v), so its
 covariance is the double integral of w(s1) w(s2)^T C_psi(s1, s2) with w = (v_N, -v_E).
-Everything else (the turn-on bias, the odometer, the bias at the start; the scale factor
-and the heading at the start unless asked for) is taken as known exactly, so this is a floor under the expected squared error of any
+Everything else (the turn-on bias, the odometer; the scale factor, the heading and the
+in-run bias at the start unless asked for, each independent of the others) is taken as
+known exactly, so this is a floor under the expected squared error of any
 navigator with this IMU, not a typical figure; per seed it is a distribution: the error at
 the outage's end is at least this Gaussian's draw on average, and its median and the chance
 of exceeding a limit are printed. The firmware's own error adds everything the floor takes
@@ -64,16 +70,35 @@ def heading_cov(t_s: np.ndarray, arw_rad_rts: float, sigma_gm_rps: float,
     t1, t2 = np.meshgrid(t, t, indexing="ij")
     c = arw_rad_rts ** 2 * np.minimum(t1, t2)
     if sigma_gm_rps > 0.0 and corr_time_s > 0.0:
-        dt = t[1] - t[0] if t.size > 1 else 0.0
         ce = sigma_gm_rps ** 2 * (np.exp(-np.abs(t1 - t2) / corr_time_s)
                                   - np.exp(-(t1 + t2) / corr_time_s))
-        # psi_i = sum over the intervals before t_i of the rate (trapezoid rule)
-        a = np.tril(np.ones((t.size, t.size)), 0) * dt
-        a[:, 0] *= 0.5
-        a[np.arange(t.size), np.arange(t.size)] *= 0.5
-        a[0, :] = 0.0
+        a = _integrator(t)
         c = c + a @ ce @ a.T
     return c
+
+
+def _integrator(t_s: np.ndarray) -> np.ndarray:
+    """A (N x N): psi = A rate, psi_i the integral of a rate sampled at the uniform t_s from
+    t_s[0] to t_s[i] (trapezoid rule)."""
+    t = np.asarray(t_s, dtype=float)
+    dt = t[1] - t[0] if t.size > 1 else 0.0
+    a = np.tril(np.ones((t.size, t.size)), 0) * dt
+    a[:, 0] *= 0.5
+    a[np.arange(t.size), np.arange(t.size)] *= 0.5
+    a[0, :] = 0.0
+    return a
+
+
+def bias_gain(t_s: np.ndarray, v_en_mps: np.ndarray, corr_time_s: float) -> np.ndarray:
+    """g (m per rad/s, E and N): the position error at the last time that an error b0 in
+    the navigator's estimate of the in-run bias at t_s[0] makes, b0 g. The navigator
+    predicts the bias's mean, b exp(-t/T), so that error decays the same way: the heading
+    error is b0 T (1 - exp(-t/T)), here the integral of b0 exp(-t/T) by the rule
+    heading_cov uses (the known-start covariance plus sigma^2 g g^T is then the stationary
+    process's, exactly)."""
+    t = np.asarray(t_s, dtype=float)
+    psi = _integrator(t) @ np.exp(-(t - t[0]) / corr_time_s)
+    return _weights(t, v_en_mps).T @ psi
 
 
 def _weights(t_s: np.ndarray, v_en_mps: np.ndarray) -> np.ndarray:
@@ -103,13 +128,16 @@ def scale_gain(t_s: np.ndarray, v_en_mps: np.ndarray, heading_rad: np.ndarray) -
 
 
 def outage_floor(scen_name: str, limits_pct=(), outage: tuple | None = None,
-                 scale_ppm: float = 0.0, heading_sigma_deg: float = 0.0) -> dict | None:
+                 scale_ppm: float = 0.0, heading_sigma_deg: float = 0.0,
+                 bias_sigma_dph: float = 0.0) -> dict | None:
     """The floor at the end of a scenario's longest outage (by distance; or outage = (a, b)
     s): rms_m, rms_pct of its distance, median_m / median_pct of the 2-D error's size and,
     for each limit in limits_pct, the chance p_above[limit] that it exceeds it; with
     scale_ppm > 0 the z gyro's scale factor residual of that sigma included (scale_rms_m:
     its part alone); with heading_sigma_deg > 0 the heading error at the start of that sigma
-    (heading_rms_m: its part alone). None for a scenario without an outage."""
+    (heading_rms_m: its part alone); with bias_sigma_dph > 0 the in-run bias estimate's
+    error at the start of that sigma (bias_rms_m: its part alone, bias_gain). None for a
+    scenario without an outage."""
     scen = scenario.load(scen_name)
     imu_name, _ = scenario.preset_names(scen, None, None)
     imu = sensors.PRESETS[imu_name]
@@ -129,7 +157,7 @@ def outage_floor(scen_name: str, limits_pct=(), outage: tuple | None = None,
     cov = position_cov(t, v, c_psi)
     # the constant errors asked for, each sigma times its gain g (position error per unit of
     # the error): a rank-one term g g^T, independent of the rest
-    gains = {"scale_rms_m": None, "heading_rms_m": None}
+    gains = {"scale_rms_m": None, "heading_rms_m": None, "bias_rms_m": None}
     if scale_ppm > 0.0:
         # the truth's heading sampled at t: unwrapped first, so that the interpolation
         # does not cross the 0 / 2 pi seam
@@ -137,6 +165,9 @@ def outage_floor(scen_name: str, limits_pct=(), outage: tuple | None = None,
         gains["scale_rms_m"] = scale_gain(t, v, h) * scale_ppm * 1e-6
     if heading_sigma_deg > 0.0:
         gains["heading_rms_m"] = _weights(t, v).sum(axis=0) * math.radians(heading_sigma_deg)
+    if bias_sigma_dph > 0.0:
+        gains["bias_rms_m"] = (bias_gain(t, v, imu.gyro_bias_corr_time_s)
+                               * math.radians(bias_sigma_dph) / 3600.0)
     parts = {}
     for key, g in gains.items():
         parts[key] = 0.0 if g is None else float(np.hypot(g[0], g[1]))
@@ -149,7 +180,8 @@ def outage_floor(scen_name: str, limits_pct=(), outage: tuple | None = None,
     return {"imu": imu_name, "outage_s": (float(a), float(b)), "distance_m": d_m,
             "rms_m": rms, "rms_pct": 100.0 * rms / d_m, "median_m": med,
             "median_pct": 100.0 * med / d_m, "scale_ppm": float(scale_ppm),
-            "heading_sigma_deg": float(heading_sigma_deg), **parts,
+            "heading_sigma_deg": float(heading_sigma_deg),
+            "bias_sigma_dph": float(bias_sigma_dph), **parts,
             "p_above": {float(lim): float(np.mean(size > lim / 100.0 * d_m))
                         for lim in limits_pct}}
 
@@ -168,9 +200,13 @@ def main(argv=None) -> int:
     ap.add_argument("--heading-sigma-deg", type=float, default=0.0,
                     help="include the heading error at the outage's start, 1-sigma in degrees "
                          "(the filter's own, NAV_Accuracy's HeadingAccuracy there)")
+    ap.add_argument("--bias-sigma-dph", type=float, default=0.0,
+                    help="include the error of the z gyro's in-run bias estimate at the "
+                         "outage's start, 1-sigma in deg/h (the filter's own; the process's "
+                         "sigma, the IMU's bias instability / 0.617, if nothing was learnt)")
     a = ap.parse_args(argv)
     r = outage_floor(a.scenario, a.limit_pct, scale_ppm=a.scale_ppm,
-                     heading_sigma_deg=a.heading_sigma_deg)
+                     heading_sigma_deg=a.heading_sigma_deg, bias_sigma_dph=a.bias_sigma_dph)
     if r is None:
         print(f"{a.scenario}: no outage")
         return 1
@@ -181,6 +217,8 @@ def main(argv=None) -> int:
              if r["scale_ppm"] > 0.0 else " alone")
           + (f", with a heading {r['heading_sigma_deg']:g} deg off at the start "
              f"({r['heading_rms_m']:.1f} m of it alone)," if r["heading_sigma_deg"] > 0.0 else "")
+          + (f" with the in-run bias {r['bias_sigma_dph']:g} deg/h off at the start "
+             f"({r['bias_rms_m']:.1f} m of it alone)," if r["bias_sigma_dph"] > 0.0 else "")
           + f" leave {r['rms_m']:.1f} m RMS "
           f"({r['rms_pct']:.3f} %), median {r['median_m']:.1f} m ({r['median_pct']:.3f} %)")
     for lim, p in r["p_above"].items():
