@@ -128,3 +128,17 @@ def test_an_unknown_start_bias_makes_the_stationary_process():
     want = 15.0 * (tau * 300.0 - tau ** 2 * (1.0 - math.exp(-300.0 / tau)))
     assert gyro_floor.bias_gain(ts, vs, tau)[0] == pytest.approx(want, rel=0.01)
     assert np.hypot(*g) > 0.1 * math.sqrt(np.trace(known))
+
+
+def test_heading_and_bias_correlation_enters_once_each_way():
+    # the cross term rho sigma_h sigma_b (g_h g_b^T + g_b g_h^T) is linear in rho: the mean
+    # square of rho = +1 and -1 is that of 0; outage5's two gains point alike (both integrate
+    # the across-track weight forward), so a negative correlation lowers the floor; a rho
+    # outside -1..1 is refused
+    kw = dict(heading_sigma_deg=0.02, bias_sigma_dph=0.8)
+    ms = {rho: gyro_floor.outage_floor("outage5", heading_bias_rho=rho, **kw)["rms_m"] ** 2
+          for rho in (-1.0, -0.5, 0.0, 1.0)}
+    assert ms[1.0] + ms[-1.0] == pytest.approx(2.0 * ms[0.0], rel=1e-9)
+    assert ms[-0.5] < ms[0.0] < ms[1.0]
+    with pytest.raises(ValueError, match="correlation"):
+        gyro_floor.outage_floor("outage5", heading_bias_rho=1.5, **kw)

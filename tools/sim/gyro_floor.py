@@ -40,8 +40,8 @@ position error at its end is the integral of psi(s) (v_N(s), -v_E(s)) ds along t
 scenario's own trajectory (a heading error turns the velocity: dv = psi x v), so its
 covariance is the double integral of w(s1) w(s2)^T C_psi(s1, s2) with w = (v_N, -v_E).
 Everything else (the turn-on bias, the odometer; the scale factor, the heading and the
-in-run bias at the start unless asked for, each independent of the others) is taken as
-known exactly, so this is a floor under the expected squared error of any
+in-run bias at the start unless asked for, each independent of the others but the
+heading and the bias when their correlation is given) is taken as known exactly, so this is a floor under the expected squared error of any
 navigator with this IMU, not a typical figure; per seed it is a distribution: the error at
 the outage's end is at least this Gaussian's draw on average, and its median and the chance
 of exceeding a limit are printed. The firmware's own error adds everything the floor takes
@@ -129,15 +129,18 @@ def scale_gain(t_s: np.ndarray, v_en_mps: np.ndarray, heading_rad: np.ndarray) -
 
 def outage_floor(scen_name: str, limits_pct=(), outage: tuple | None = None,
                  scale_ppm: float = 0.0, heading_sigma_deg: float = 0.0,
-                 bias_sigma_dph: float = 0.0) -> dict | None:
+                 bias_sigma_dph: float = 0.0, heading_bias_rho: float = 0.0) -> dict | None:
     """The floor at the end of a scenario's longest outage (by distance; or outage = (a, b)
     s): rms_m, rms_pct of its distance, median_m / median_pct of the 2-D error's size and,
     for each limit in limits_pct, the chance p_above[limit] that it exceeds it; with
     scale_ppm > 0 the z gyro's scale factor residual of that sigma included (scale_rms_m:
     its part alone); with heading_sigma_deg > 0 the heading error at the start of that sigma
     (heading_rms_m: its part alone); with bias_sigma_dph > 0 the in-run bias estimate's
-    error at the start of that sigma (bias_rms_m: its part alone, bias_gain). None for a
+    error at the start of that sigma (bias_rms_m: its part alone, bias_gain), correlated with
+    the heading's by heading_bias_rho (the filter's covariance there; -1..1). None for a
     scenario without an outage."""
+    if not -1.0 <= heading_bias_rho <= 1.0:
+        raise ValueError(f"heading_bias_rho {heading_bias_rho} is not a correlation (-1..1)")
     scen = scenario.load(scen_name)
     imu_name, _ = scenario.preset_names(scen, None, None)
     imu = sensors.PRESETS[imu_name]
@@ -173,6 +176,9 @@ def outage_floor(scen_name: str, limits_pct=(), outage: tuple | None = None,
         parts[key] = 0.0 if g is None else float(np.hypot(g[0], g[1]))
         if g is not None:
             cov = cov + np.outer(g, g)
+    gh, gb = gains["heading_rms_m"], gains["bias_rms_m"]
+    if gh is not None and gb is not None:
+        cov = cov + heading_bias_rho * (np.outer(gh, gb) + np.outer(gb, gh))
     draws = np.random.default_rng(0).multivariate_normal([0.0, 0.0], cov, size=DRAWS)
     size = np.hypot(draws[:, 0], draws[:, 1])
     rms = math.sqrt(float(np.trace(cov)))
@@ -181,7 +187,8 @@ def outage_floor(scen_name: str, limits_pct=(), outage: tuple | None = None,
             "rms_m": rms, "rms_pct": 100.0 * rms / d_m, "median_m": med,
             "median_pct": 100.0 * med / d_m, "scale_ppm": float(scale_ppm),
             "heading_sigma_deg": float(heading_sigma_deg),
-            "bias_sigma_dph": float(bias_sigma_dph), **parts,
+            "bias_sigma_dph": float(bias_sigma_dph), "heading_bias_rho": float(heading_bias_rho),
+            **parts,
             "p_above": {float(lim): float(np.mean(size > lim / 100.0 * d_m))
                         for lim in limits_pct}}
 
@@ -204,9 +211,13 @@ def main(argv=None) -> int:
                     help="include the error of the z gyro's in-run bias estimate at the "
                          "outage's start, 1-sigma in deg/h (the filter's own; the process's "
                          "sigma, the IMU's bias instability / 0.617, if nothing was learnt)")
+    ap.add_argument("--heading-bias-rho", type=float, default=0.0,
+                    help="with both of the above: their correlation at the outage's start "
+                         "(the filter's covariance there), -1..1")
     a = ap.parse_args(argv)
     r = outage_floor(a.scenario, a.limit_pct, scale_ppm=a.scale_ppm,
-                     heading_sigma_deg=a.heading_sigma_deg, bias_sigma_dph=a.bias_sigma_dph)
+                     heading_sigma_deg=a.heading_sigma_deg, bias_sigma_dph=a.bias_sigma_dph,
+                     heading_bias_rho=a.heading_bias_rho)
     if r is None:
         print(f"{a.scenario}: no outage")
         return 1
@@ -219,6 +230,9 @@ def main(argv=None) -> int:
              f"({r['heading_rms_m']:.1f} m of it alone)," if r["heading_sigma_deg"] > 0.0 else "")
           + (f" with the in-run bias {r['bias_sigma_dph']:g} deg/h off at the start "
              f"({r['bias_rms_m']:.1f} m of it alone)," if r["bias_sigma_dph"] > 0.0 else "")
+          + (f" the two correlated {r['heading_bias_rho']:+g},"
+             if r["heading_bias_rho"] and r["bias_sigma_dph"] > 0.0
+             and r["heading_sigma_deg"] > 0.0 else "")
           + f" leave {r['rms_m']:.1f} m RMS "
           f"({r['rms_pct']:.3f} %), median {r['median_m']:.1f} m ({r['median_pct']:.3f} %)")
     for lim, p in r["p_above"].items():
