@@ -142,3 +142,30 @@ def test_heading_and_bias_correlation_enters_once_each_way():
     assert ms[-0.5] < ms[0.0] < ms[1.0]
     with pytest.raises(ValueError, match="correlation"):
         gyro_floor.outage_floor("outage5", heading_bias_rho=1.5, **kw)
+
+
+def test_rounding_is_a_constant_error_at_a_constant_speed_unless_dithered():
+    # a rear axle at a steady 18 m/s read 1.012 times (18.216 m/s) rounds to 18.22 m/s: a
+    # navigator that knows mu finds 18.22 / 1.012 = 18.00395 m/s, 3.95 mm/s fast, for the
+    # whole 300 s: 1.186 m ahead along the track (north), the same on every seed; white
+    # noise of one step before the rounding dithers it away (rounded_mean's bound: 3e-9 step)
+    t, v = straight(300.0, 18.0)
+    rear = np.full((t.size, 2), 18.0)
+    e = gyro_floor.rounding_error(t, v, rear, 0.012, 0.02, 0.0)
+    assert e[1] == pytest.approx((18.22 / 1.012 - 18.0) * 300.0, rel=1e-9)
+    assert e[0] == pytest.approx(0.0, abs=1e-12)
+    assert np.hypot(*gyro_floor.rounding_error(t, v, rear, 0.012, 0.02, 0.02)) < 0.02 * 1e-3 * 300
+    x = np.linspace(10.0, 10.04, 41)
+    assert np.array_equal(gyro_floor.rounded_mean(x, 0.02, 0.0), np.round(x / 0.02) * 0.02)
+    # half a step of noise: the mean error's first Fourier term, (q / pi) exp(-pi^2 / 2)
+    bound = 0.02 / math.pi * math.exp(-math.pi ** 2 / 2.0)
+    assert 0.95 * bound < np.abs(gyro_floor.rounded_mean(x, 0.02, 0.01) - x).max() < 1.01 * bound
+
+
+def test_outage5_rounding_is_the_simulators_own():
+    # outage5's odometer (mu 0.012, 0.02 m/s steps, no noise) at its 18 and 11 m/s
+    # stretches: about a metre that every seed carries (rounding_m), raising the floor
+    r0 = gyro_floor.outage_floor("outage5")
+    r = gyro_floor.outage_floor("outage5", odometer_rounding=True)
+    assert 0.5 < r["rounding_m"] < 2.0
+    assert r["rms_m"] ** 2 == pytest.approx(r0["rms_m"] ** 2 + r["rounding_m"] ** 2, rel=1e-9)

@@ -127,9 +127,49 @@ def scale_gain(t_s: np.ndarray, v_en_mps: np.ndarray, heading_rad: np.ndarray) -
     return _weights(t_s, v_en_mps).T @ (turned - turned[0])
 
 
+def rounded_mean(x, q: float, sigma: float) -> np.ndarray:
+    """E[round((x + n) / q) q] for n ~ N(0, sigma^2): a reading rounded to the step q after
+    white noise of sigma (exactly the rounding when sigma is 0). Noise dithers the rounding:
+    its mean error is at most (q / pi) exp(-2 pi^2 sigma^2 / q^2), its Fourier series's
+    first term: 0.23 % of a step at half a step of noise, 3e-9 of it at one step."""
+    x = np.asarray(x, dtype=float)
+    if sigma <= 0.0:
+        return np.round(x / q) * q
+    erf = np.vectorize(math.erf)
+    half = 6.0 * sigma + q
+    j0 = np.floor((x - half) / q)
+    out = np.zeros_like(x)
+    for i in range(int(2.0 * half / q) + 2):
+        j = j0 + i
+        hi = erf(((j + 0.5) * q - x) / (sigma * math.sqrt(2.0)))
+        lo = erf(((j - 0.5) * q - x) / (sigma * math.sqrt(2.0)))
+        out += j * q * 0.5 * (hi - lo)
+    return out
+
+
+def rounding_error(t_s: np.ndarray, v_en_mps: np.ndarray, rear_mps: np.ndarray,
+                   mu: float, q: float, noise_mps: float) -> np.ndarray:
+    """(E, N) m: the position error at the last time that the wheel speeds' rounding leaves
+    a navigator that knows their scale error mu exactly: each rear wheel (rear_mps, N x 2,
+    the truth's) read (1 + mu) times, rounded to q after noise_mps of white noise (its mean,
+    rounded_mean), the axle's mean compensated by 1 + mu, less the truth's speed, carried
+    along the track (v_en_mps's direction) over the uniform t_s. While the speed is constant
+    the rounding's error is too: no filter can tell it from the speed."""
+    read = rounded_mean((1.0 + mu) * np.asarray(rear_mps, dtype=float), q, noise_mps)
+    err = read.mean(axis=1) / (1.0 + mu) - np.asarray(rear_mps, dtype=float).mean(axis=1)
+    speed = np.hypot(v_en_mps[:, 0], v_en_mps[:, 1])
+    u = np.where(speed[:, None] > 0.0, v_en_mps / np.maximum(speed, 1e-9)[:, None], 0.0)
+    t = np.asarray(t_s, dtype=float)
+    dt = t[1] - t[0]
+    wgt = np.full(t.size, dt)
+    wgt[0] = wgt[-1] = 0.5 * dt
+    return (u * (err * wgt)[:, None]).sum(axis=0)
+
+
 def outage_floor(scen_name: str, limits_pct=(), outage: tuple | None = None,
                  scale_ppm: float = 0.0, heading_sigma_deg: float = 0.0,
-                 bias_sigma_dph: float = 0.0, heading_bias_rho: float = 0.0) -> dict | None:
+                 bias_sigma_dph: float = 0.0, heading_bias_rho: float = 0.0,
+                 odometer_rounding: bool = False) -> dict | None:
     """The floor at the end of a scenario's longest outage (by distance; or outage = (a, b)
     s): rms_m, rms_pct of its distance, median_m / median_pct of the 2-D error's size and,
     for each limit in limits_pct, the chance p_above[limit] that it exceeds it; with
@@ -137,13 +177,16 @@ def outage_floor(scen_name: str, limits_pct=(), outage: tuple | None = None,
     its part alone); with heading_sigma_deg > 0 the heading error at the start of that sigma
     (heading_rms_m: its part alone); with bias_sigma_dph > 0 the in-run bias estimate's
     error at the start of that sigma (bias_rms_m: its part alone, bias_gain), correlated with
-    the heading's by heading_bias_rho (the filter's covariance there; -1..1). None for a
-    scenario without an outage."""
+    the heading's by heading_bias_rho (the filter's covariance there; -1..1); with
+    odometer_rounding the wheel speeds' rounding at the scenario's odometer (rounding_error,
+    rounding_m: its size, the same on every seed: the draws' mean). None for a scenario
+    without an outage."""
     if not -1.0 <= heading_bias_rho <= 1.0:
         raise ValueError(f"heading_bias_rho {heading_bias_rho} is not a correlation (-1..1)")
     scen = scenario.load(scen_name)
     imu_name, _ = scenario.preset_names(scen, None, None)
     imu = sensors.PRESETS[imu_name]
+    _, odo = scenario.sensor_specs(scen, imu_name, scen["vehicle"])
     truth = trajectory.generate(scen, RATE_HZ)
     if outage is not None:
         a, b = (float(x) for x in outage)
@@ -179,15 +222,24 @@ def outage_floor(scen_name: str, limits_pct=(), outage: tuple | None = None,
     gh, gb = gains["heading_rms_m"], gains["bias_rms_m"]
     if gh is not None and gb is not None:
         cov = cov + heading_bias_rho * (np.outer(gh, gb) + np.outer(gb, gh))
-    draws = np.random.default_rng(0).multivariate_normal([0.0, 0.0], cov, size=DRAWS)
+    mean = np.zeros(2)
+    if odometer_rounding:
+        # the rear axle's wheels (the firmware's default odo_axle) as the simulator makes them
+        # (sensors._ideal_wheels), at the floor's times
+        s_t = np.interp(a + t, truth.t_s, truth.speed_mps)
+        r_t = np.interp(a + t, truth.t_s, truth.yaw_rate_rps)
+        rear = sensors._ideal_wheels(s_t, r_t, odo.track_m, odo.wheelbase_m)[:, 2:]
+        mean = rounding_error(t, v, rear, odo.mu, odo.quant_mps, odo.noise_mps)
+    draws = np.random.default_rng(0).multivariate_normal(mean, cov, size=DRAWS)
     size = np.hypot(draws[:, 0], draws[:, 1])
-    rms = math.sqrt(float(np.trace(cov)))
+    rms = math.sqrt(float(np.trace(cov)) + float(mean @ mean))
     med = float(np.median(size))
     return {"imu": imu_name, "outage_s": (float(a), float(b)), "distance_m": d_m,
             "rms_m": rms, "rms_pct": 100.0 * rms / d_m, "median_m": med,
             "median_pct": 100.0 * med / d_m, "scale_ppm": float(scale_ppm),
             "heading_sigma_deg": float(heading_sigma_deg),
             "bias_sigma_dph": float(bias_sigma_dph), "heading_bias_rho": float(heading_bias_rho),
+            "rounding_m": float(np.hypot(mean[0], mean[1])) if odometer_rounding else None,
             **parts,
             "p_above": {float(lim): float(np.mean(size > lim / 100.0 * d_m))
                         for lim in limits_pct}}
@@ -214,10 +266,13 @@ def main(argv=None) -> int:
     ap.add_argument("--heading-bias-rho", type=float, default=0.0,
                     help="with both of the above: their correlation at the outage's start "
                          "(the filter's covariance there), -1..1")
+    ap.add_argument("--odometer-rounding", action="store_true",
+                    help="include the wheel speeds' rounding to their step at the scenario's "
+                         "speeds (its odometer's mu, step and noise): the same on every seed")
     a = ap.parse_args(argv)
     r = outage_floor(a.scenario, a.limit_pct, scale_ppm=a.scale_ppm,
                      heading_sigma_deg=a.heading_sigma_deg, bias_sigma_dph=a.bias_sigma_dph,
-                     heading_bias_rho=a.heading_bias_rho)
+                     heading_bias_rho=a.heading_bias_rho, odometer_rounding=a.odometer_rounding)
     if r is None:
         print(f"{a.scenario}: no outage")
         return 1
@@ -233,6 +288,8 @@ def main(argv=None) -> int:
           + (f" the two correlated {r['heading_bias_rho']:+g},"
              if r["heading_bias_rho"] and r["bias_sigma_dph"] > 0.0
              and r["heading_sigma_deg"] > 0.0 else "")
+          + (f" with the wheel speeds' rounding ({r['rounding_m']:.2f} m, on every seed),"
+             if r["rounding_m"] is not None else "")
           + f" leave {r['rms_m']:.1f} m RMS "
           f"({r['rms_pct']:.3f} %), median {r['median_m']:.1f} m ({r['median_pct']:.3f} %)")
     for lim, p in r["p_above"].items():
