@@ -903,76 +903,6 @@ static void test_learning_needs_a_fix_taken(void **state)
     assert_near(learnt[12], learnt[11], 0.0);
 }
 
-/* The range rates of an epoch made by learn_epoch: each satellite's (standing still) the
- * rate the filter computes for it now plus off_mps[i] (its residual, computed minus
- * measured, -off_mps[i]); the receiver's velocity v_then (the history's), no rotation. */
-static void set_rates(gnss_raw_asm_t *g, int n, const nav_real_t v_then[3], const double *off_mps)
-{
-    ekf_antenna_t a;
-    assert_int_equal(ekf_antenna(&nav, &nav.pos, cfg.gnss_lever_b_m, &a), NAV_OK);
-    const nav_real_t w0[3] = {0.0f, 0.0f, 0.0f};
-    for (int i = 0; i < n; i++) {
-        gnss_raw_sat_t *m = &g->sat[i];
-        ekf_sat_t sat;
-        assert_int_equal(ekf_sat_geometry(&a, m->pos_lsb, m->vel_lsb, &sat), NAV_OK);
-        nav_real_t h[EKF_N], z;
-        ekf_rows_range_rate(&fu.ekf, &nav, v_then, w0, cfg.gnss_lever_b_m, &sat, 0.0f, h, &z);
-        m->rr_lsb = (int32_t)llround(((double)z + off_mps[i]) / 0.01);
-        m->rr_valid = 1u;
-    }
-}
-
-/* The range rates' errors are correlated from epoch to epoch as the receiver's velocity
- * (made of them) is, over gnss_vel_corr_s (fusion.c raw_fuse, step 4). GIVEN gnss_input =
- * raw, driving north at 10 m/s, 1-s epochs of five satellites whose ranges and rates fit
- * the navigator, six of them fused WHEN the seventh's lowest satellite (fused last, the
- * clock's drift already pinned by the other four) reads 0.9 m/s too fast THEN with
- * gnss_vel_corr_s 0 its variance is its sigma's, 0.2 m/s: 0.9 m/s is beyond the gate's
- * 3 sigmas (3 x 0.2 = 0.6 m/s and the filter's own small share), gated and counted; with 3
- * s the variance is 3 times that (3 s over the 1-s interval): 3 sigmas are at least 1.04
- * m/s and it is fused. Neither is excluded (5 sigmas: at least 1.0 m/s). */
-static void test_range_rate_variance_spans_vel_corr(void **state)
-{
-    (void)state;
-    const nav_real_t v[3] = {0.0f, 10.0f, 0.0f};
-    static const double no_bias[LEARN_SATS] = {0.0, 0.0, 0.0, 0.0, 0.0};
-    static const double fast_last[LEARN_SATS] = {0.0, 0.0, 0.0, 0.0, 0.9};
-    for (int corr = 0; corr < 2; corr++) {
-        start_at(0.0, v);
-        cfg.gnss_input = GNSS_INPUT_RAW;
-        cfg.gnss_latency_s = 0.0f;
-        cfg.gnss_vel_corr_s = corr ? NAV_C(3.0) : NAV_C(0.0);
-        static gnss_raw_asm_t g;
-        gnss_raw_close_t cl;
-        uint32_t tow = LEARN_TOW0_MS;
-        diag.t_us = 0u;
-        int adopt;
-        gnss_fix_t f = fix_at(450000000, 100000000, v);
-        f.tow_ms = tow;
-        assert_int_equal(fusion_gnss(&fu, &ctx, &PRIOR, &f, &adopt), FUSION_GO_ON);
-        assert_int_equal(fu.on, 1);
-        uint32_t gated = 0u, rr_used = 0u;
-        for (int k = 1; k <= 7; k++) {
-            tow += 1000u;
-            for (int j = 0; j < 100; j++) { /* 1 s at 100 Hz */
-                diag.n_samples++;
-                gnss_time_record(&gtime, diag.n_samples, cfg.imu_rate_hz, v);
-            }
-            diag.t_us += 1000000u;
-            learn_epoch(&g, &cl, LEARN_SATS, no_bias);
-            set_rates(&g, LEARN_SATS, v, k == 7 ? fast_last : no_bias);
-            gated = ctx.raw->gated;
-            rr_used = ctx.raw->rr_used;
-            assert_int_equal(fusion_raw(&fu, &ctx, &g, &cl, tow, 0, &adopt), FUSION_GO_ON);
-        }
-        assert_int_equal(ctx.raw->epochs_used, 7u);
-        assert_int_equal(ctx.raw->excluded, 0u);
-        assert_int_equal(ctx.raw->gated, gated + (corr ? 0u : 1u));
-        assert_int_equal(ctx.raw->rr_used, rr_used + (corr ? 5u : 4u));
-    }
-    cfg.gnss_vel_corr_s = NAV_C(0.0);
-}
-
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -999,7 +929,6 @@ int main(void)
         cmocka_unit_test(test_reported_accuracy_keeps_the_correlated_error),
         cmocka_unit_test(test_biases_learnt_only_moving_with_good_fixes),
         cmocka_unit_test(test_learning_needs_a_fix_taken),
-        cmocka_unit_test(test_range_rate_variance_spans_vel_corr),
     };
     return cmocka_run_group_tests_name("fusion", tests, NULL, NULL);
 }

@@ -606,9 +606,7 @@ fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_pr
  *    right, and both are excluded);
  * 4. the updates, highest satellite first, each gated by the filter (APP_GNSS_GATE_SIGMA);
  *    the pseudoranges' variances multiplied by gnss_corr_s over the epoch interval, as
- *    the fixes' height (errors correlated from epoch to epoch), the range rates' by
- *    gnss_vel_corr_s, as the fixes' velocity (the receiver's velocity is made of these
- *    Dopplers: its tracking loops' smoothing correlates both alike). */
+ *    the fixes' height (errors correlated from epoch to epoch), the range rates' not. */
 
 #define RAW_MAX ((int)GNSS_RAW_MAX_SATS)
 
@@ -781,8 +779,7 @@ static int raw_exclude(const raw_epoch_t *e, const nav_real_t *z, uint8_t *ok, i
     return n_out;
 }
 
-/* the scalar updates of the usable measurements (rate = 0 pseudoranges, 1 range rates),
- * their variances multiplied by r_scale (the range's white part's not, with the state db);
+/* the scalar updates of the usable measurements (rate = 0 pseudoranges, 1 range rates);
  * returns the number applied, *gated the number the gate refused */
 static int raw_updates(fusion_t *fu, const raw_epoch_t *e, const uint8_t *ok, int rate,
                        nav_real_t r_scale, int *gated, int *corrected)
@@ -801,7 +798,7 @@ static int raw_updates(fusion_t *fu, const raw_epoch_t *e, const uint8_t *ok, in
         nav_real_t r;
         if (rate != 0) {
             const nav_real_t s = rr_sigma_mps(m);
-            r = s * s * r_scale;
+            r = s * s;
         } else {
             /* with the state db the white part (gnss_white_ratio), else all of it,
              * its variance inflated by r_scale */
@@ -973,8 +970,7 @@ static fusion_action_t raw_fuse(fusion_t *fu, const raw_epoch_t *e, nav_real_t d
     }
     /* 4. the updates: the pseudoranges' errors correlated over gnss_corr_s, as the state
      * db (its stationary sigma the correlated part of the epoch's median range sigma) or
-     * by inflating their variance; the range rates' over gnss_vel_corr_s, by inflating
-     * theirs */
+     * by inflating their variance */
     const nav_real_t ep_s = dt_s > APP_GNSS_EPOCH_MIN_S ? dt_s : APP_GNSS_EPOCH_MIN_S;
     nav_real_t r_scale = corr_spans(cfg->gnss_corr_s, ep_s);
     if (e->use_bias != 0) {
@@ -992,8 +988,7 @@ static fusion_action_t raw_fuse(fusion_t *fu, const raw_epoch_t *e, nav_real_t d
     int gated = 0;
     int corrected = 0;
     const int pr_used = raw_updates(fu, e, r.ok[0], 0, r_scale, &gated, &corrected);
-    const int rr_used = raw_updates(fu, e, r.ok[1], 1, corr_spans(cfg->gnss_vel_corr_s, ep_s),
-                                    &gated, &corrected);
+    const int rr_used = raw_updates(fu, e, r.ok[1], 1, NAV_C(1.0), &gated, &corrected);
     fu->ekf.hold_heading = 0u;
     app_count_n(&c->raw->pr_used, (uint32_t)pr_used);
     app_count_n(&c->raw->rr_used, (uint32_t)rr_used);

@@ -345,3 +345,21 @@ def test_rate_residuals_against_the_reference_show_the_drift_and_one_satellite()
     assert med == pytest.approx(85.25, abs=1e-6)
     for prn, _, v in per:
         assert v == pytest.approx(0.5 if prn == 3 else 0.0, abs=1e-6)
+
+
+def test_epoch_to_epoch_correlation_of_the_residuals():
+    """tools.kingston.raw --rates: an AR(1) residual of coefficient 0.8 from one 1-s epoch to
+    the next shows about 0.8 (4000 pairs over two satellites: the estimate's standard error
+    is about 0.006, the bound 0.05); white residuals about 0; a residual beyond 1 m/s is
+    left out and counted (both pairs it is in)."""
+    rng = np.random.default_rng(3)
+    for phi in (0.8, 0.0):
+        x = np.zeros((2, 2001))
+        for i in range(1, 2001):
+            x[:, i] = phi * x[:, i - 1] + 0.05 * rng.standard_normal(2)
+        x[1, 1000] = 5.0
+        rows = [(float(i), [(7, 40.0, float(x[0, i])), (9, 60.0, float(x[1, i]))], 0.0)
+                for i in range(2001)]
+        r, n, out = kraw.epoch_to_epoch_correlation(rows)
+        assert r == pytest.approx(phi, abs=0.05)
+        assert (n, out) == (3998, 2)

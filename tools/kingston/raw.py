@@ -29,7 +29,8 @@ of the filter's position. With --relative-to, less that satellite's instead (epo
 without it are skipped: the median moves with the satellites in view, a difference does
 not), and then each satellite's mean over the window. With --rates, the pseudorange rates
 instead (m/s): each one less the satellite's velocity and the reference's along the line of
-sight, less the median, which is printed too (in brackets: the receiver's clock drift).
+sight, less the median, which is printed too (in brackets: the receiver's clock drift),
+and then how much one epoch's residual tells of the next's (their correlation 1 s apart).
 """
 from __future__ import annotations
 
@@ -137,6 +138,32 @@ def residuals(raw: np.ndarray, ref: np.ndarray, t0_gps_s: float, t0_s: float,
     return out
 
 
+def epoch_to_epoch_correlation(rows: list, gap_s: float = 1.0, beyond: float = 1.0) -> tuple:
+    """(correlation, pairs, left out): each satellite's residual (residuals' rows, less the
+    median) against its own gap_s later, over the satellites and epochs; residuals beyond
+    `beyond` (faults, in the rows' unit) are left out. How much one epoch's error tells
+    of the next's: 0 for white errors."""
+    per = {}
+    for t_s, sats, _ in rows:
+        for p, _, v in sats:
+            per.setdefault(p, {})[int(round(t_s * 10.0))] = v
+    a, b, out = [], [], 0
+    step = int(round(gap_s * 10.0))
+    for series in per.values():
+        for k, v in series.items():
+            w = series.get(k + step)
+            if w is None:
+                continue
+            if abs(v) > beyond or abs(w) > beyond:
+                out += 1
+                continue
+            a.append(v)
+            b.append(w)
+    if len(a) < 3:
+        return float("nan"), len(a), out
+    return float(np.corrcoef(a, b)[0, 1]), len(a), out
+
+
 def main(argv=None) -> int:
     from tools.kingston import convert  # the drive's time base; not needed by epochs()
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -164,6 +191,10 @@ def main(argv=None) -> int:
         print(f"{t_s:8.1f} s  {len(sats)}: " +
               "  ".join(f"{p:2d}@{el:2.0f} {v:{fmt}}" for p, el, v in sats) +
               (f"  [{med:+.2f}]" if a.rates else ""))
+    if a.rates:
+        r, n, out = epoch_to_epoch_correlation(rows)
+        print(f"each satellite's residual against its own 1 s later: correlation {r:.3f} over "
+              f"{n} pairs ({out} with a residual beyond 1 m/s left out)")
     if a.relative_to:
         per = {}
         for _, sats, _ in rows:
