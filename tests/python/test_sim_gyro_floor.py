@@ -130,31 +130,45 @@ def test_an_unknown_start_bias_makes_the_stationary_process():
     assert np.hypot(*g) > 0.1 * math.sqrt(np.trace(known))
 
 
-def test_heading_and_bias_correlation_enters_once_each_way():
-    # the cross term rho sigma_h sigma_b (g_h g_b^T + g_b g_h^T) is linear in rho: the mean
-    # square of rho = +1 and -1 is that of 0; outage5's two gains point alike (both integrate
-    # the across-track weight forward), so a negative correlation lowers the floor; a rho
-    # outside -1..1 is refused
-    kw = dict(heading_sigma_deg=0.02, bias_sigma_dph=0.8)
-    ms = {rho: gyro_floor.outage_floor("outage5", heading_bias_rho=rho, **kw)["rms_m"] ** 2
-          for rho in (-1.0, -0.5, 0.0, 1.0)}
-    assert ms[1.0] + ms[-1.0] == pytest.approx(2.0 * ms[0.0], rel=1e-9)
-    assert ms[-0.5] < ms[0.0] < ms[1.0]
+def test_start_correlations_enter_once_each_way():
+    # the start errors' cross terms are linear in each correlation: the mean square of
+    # rho = +0.9 and -0.9 (heading with the in-run bias) is that of 0; outage5's gains point
+    # alike (all integrate the across-track weight forward), so a positive correlation
+    # raises the floor; a matrix that is not a correlation matrix's is refused
+    kw = dict(heading_sigma_deg=0.02, turnon_sigma_dph=0.4, bias_sigma_dph=0.8)
+    ms = {rho: gyro_floor.outage_floor("outage5", start_rho=(0.0, rho, 0.0), **kw)["rms_m"] ** 2
+          for rho in (-0.9, 0.0, 0.9)}
+    assert ms[0.9] + ms[-0.9] == pytest.approx(2.0 * ms[0.0], rel=1e-9)
+    assert ms[-0.9] < ms[0.0] < ms[0.9]
     with pytest.raises(ValueError, match="correlation"):
-        gyro_floor.outage_floor("outage5", heading_bias_rho=1.5, **kw)
+        gyro_floor.outage_floor("outage5", start_rho=(0.9, 0.9, -0.9), **kw)
+
+
+def test_turnon_bias_is_the_in_run_one_that_never_decays():
+    # a constant bias error b0 turns the heading by b0 t: across the track of a straight
+    # drive north v T^2 / 2 per unit (the trapezoid rule on t is exact to rounding); and the
+    # in-run gain tends to it as the correlation time grows (T = 1e9 s: to 1e-6)
+    t, v = straight(300.0, 15.0)
+    g = gyro_floor.turnon_gain(t, v)
+    assert g[0] == pytest.approx(15.0 * 300.0 ** 2 / 2.0, rel=1e-6)
+    assert g[1] == pytest.approx(0.0, abs=1e-9)
+    assert gyro_floor.bias_gain(t, v, 1e9) == pytest.approx(g, rel=1e-6)
 
 
 def test_rounding_is_a_constant_error_at_a_constant_speed_unless_dithered():
     # a rear axle at a steady 18 m/s read 1.012 times (18.216 m/s) rounds to 18.22 m/s: a
     # navigator that knows mu finds 18.22 / 1.012 = 18.00395 m/s, 3.95 mm/s fast, for the
     # whole 300 s: 1.186 m ahead along the track (north), the same on every seed; white
-    # noise of one step before the rounding dithers it away (rounded_mean's bound: 3e-9 step)
+    # noise of one step before the rounding dithers it away (rounded_mean's bound: 8.5e-10
+    # of a step)
     t, v = straight(300.0, 18.0)
     rear = np.full((t.size, 2), 18.0)
     e = gyro_floor.rounding_error(t, v, rear, 0.012, 0.02, 0.0)
     assert e[1] == pytest.approx((18.22 / 1.012 - 18.0) * 300.0, rel=1e-9)
     assert e[0] == pytest.approx(0.0, abs=1e-12)
-    assert np.hypot(*gyro_floor.rounding_error(t, v, rear, 0.012, 0.02, 0.02)) < 0.02 * 1e-3 * 300
+    # one step of noise: the mean error's bound (q / pi) exp(-2 pi^2), 8.5e-10 q, over 300 s
+    bound1 = 0.02 / math.pi * math.exp(-2.0 * math.pi ** 2) * 300.0
+    assert np.hypot(*gyro_floor.rounding_error(t, v, rear, 0.012, 0.02, 0.02)) < 1.01 * bound1
     x = np.linspace(10.0, 10.04, 41)
     assert np.array_equal(gyro_floor.rounded_mean(x, 0.02, 0.0), np.round(x / 0.02) * 0.02)
     # half a step of noise: the mean error's first Fourier term, (q / pi) exp(-pi^2 / 2)
@@ -164,8 +178,24 @@ def test_rounding_is_a_constant_error_at_a_constant_speed_unless_dithered():
 
 def test_outage5_rounding_is_the_simulators_own():
     # outage5's odometer (mu 0.012, 0.02 m/s steps, no noise) at its 18 and 11 m/s
-    # stretches: about a metre that every seed carries (rounding_m), raising the floor
+    # stretches: the floor's rounding term against the simulator's own wheels
+    # (sensors.wheel_speeds at 50 Hz, rounded less unrounded, the rear axle's mean over
+    # 1 + mu, carried along the track): to 2 % (the floor samples every 0.5 s, the
+    # simulator's wheels are 20 ms late); every seed carries it, and it adds to the floor
+    import dataclasses
+    from tools.sim import scenario, sensors, trajectory
     r0 = gyro_floor.outage_floor("outage5")
     r = gyro_floor.outage_floor("outage5", odometer_rounding=True)
-    assert 0.5 < r["rounding_m"] < 2.0
+    scen = scenario.load("outage5")
+    _, odo = scenario.sensor_specs(scen, "tactical", scen["vehicle"])
+    truth = trajectory.generate(scen, gyro_floor.RATE_HZ)
+    tw, rounded = sensors.wheel_speeds(truth, odo, seed=1)
+    _, exact = sensors.wheel_speeds(truth, dataclasses.replace(odo, quant_mps=1e-9), seed=1)
+    k = (tw >= 800.0) & (tw <= 1100.0)
+    err = (rounded[k, 2:].mean(axis=1) - exact[k, 2:].mean(axis=1)) / (1.0 + odo.mu)
+    v = np.column_stack([np.interp(tw[k], truth.t_s, truth.v_enu_mps[:, i]) for i in (0, 1)])
+    u = v / np.hypot(v[:, 0], v[:, 1])[:, None]
+    sim = (u * err[:, None]).sum(axis=0) / odo.rate_hz
+    assert r["rounding_m"] == pytest.approx(float(np.hypot(*sim)), rel=0.02)
+    assert r["rounding_m"] > 0.5
     assert r["rms_m"] ** 2 == pytest.approx(r0["rms_m"] ** 2 + r["rounding_m"] ** 2, rel=1e-9)

@@ -76,7 +76,7 @@ def epochs(raw: np.ndarray, fixes: np.ndarray, height_offset_m: float = 0.0) -> 
                 sv_id=int(r["prn"]), sat_pos_m=gr.rotate_z(s_rx, a),
                 sat_vel_mps=gr.rotate_z(v_rx, a),
                 pseudorange_m=corrected_pseudorange_m(r),
-                range_rate_mps=float(-r["doppler"] * gr.GPS_L1_WAVELENGTH_M),
+                range_rate_mps=range_rate_mps(r),
                 pr_sigma_m=float(r["pseudorange_std_m"]),
                 elevation_deg=float(np.degrees(r["elevation"]))))
         out.append((float(t), ep))
@@ -88,6 +88,11 @@ def corrected_pseudorange_m(r) -> float:
     tropo, m."""
     return float(r["pseudorange_m"] + r["sat_clock_corr_m"] - r["iono_corr_m"]
                  - r["tropo_corr_m"])
+
+
+def range_rate_mps(r) -> float:
+    """The pseudorange rate of the module docstring: -Doppler x the L1 wavelength, m/s."""
+    return float(-r["doppler"] * gr.GPS_L1_WAVELENGTH_M)
 
 
 def residuals(raw: np.ndarray, ref: np.ndarray, t0_gps_s: float, t0_s: float,
@@ -122,7 +127,7 @@ def residuals(raw: np.ndarray, ref: np.ndarray, t0_gps_s: float, t0_s: float,
             if rates:
                 u = los / np.linalg.norm(los)
                 v_sat = np.array([r["sat_vx_mps"], r["sat_vy_mps"], r["sat_vz_mps"]])
-                res.append(float(-r["doppler"] * gr.GPS_L1_WAVELENGTH_M - u @ (v_sat - v_rx)))
+                res.append(range_rate_mps(r) - float(u @ (v_sat - v_rx)))
             else:
                 res.append(corrected_pseudorange_m(r) - float(np.linalg.norm(los)))
         res = np.array(res)

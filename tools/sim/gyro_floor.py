@@ -4,7 +4,8 @@ outage5-automotive).
 
     python -m tools.sim.gyro_floor [--scenario outage5-automotive] [--limit-pct 1.0 1.5]
                                    [--seeds 24] [--heading-sigma-deg D] [--scale-ppm P]
-                                   [--bias-sigma-dph B]
+                                   [--turnon-sigma-dph T] [--bias-sigma-dph B]
+                                   [--start-rho HT HI TI] [--odometer-rounding]
 
 Through an outage nothing observes the heading: the odometer and the car's constraints
 measure speed, not direction, and gravity says nothing of yaw. Whatever the z gyro's error
@@ -30,19 +31,21 @@ outage's start, a constant psi0 of the given sigma: psi0 g0, g0 the integral of 
 outage's displacement turned by 90 degrees), another rank-one term. And (--bias-sigma-dph)
 the error b0 of the navigator's estimate of the in-run bias at the outage's start: the
 navigator predicts the bias's mean b exp(-t/T), so that error decays the same way and turns
-the heading by b0 T (1 - exp(-t/T)) (bias_gain), a third rank-one term; with the process's
-own sigma (nothing learnt) it makes the known-start wander the stationary process. With
-any of them, the figure is no longer the gyro's alone but what any navigator that starts
-the outage with that knowledge is left with.
+the heading by b0 T (1 - exp(-t/T)) (bias_gain); with the process's own sigma (nothing
+learnt) it makes the known-start wander the stationary process. And (--turnon-sigma-dph)
+the error of its estimate of the turn-on bias, constant: b0 t (turnon_gain). The heading
+and the two biases at the start may be correlated (--start-rho, the navigator's own
+covariance there; outage_floor says in which sense). With any of them, the figure is no
+longer the gyro's alone but what any navigator that starts the outage with that knowledge
+is left with.
 
 With psi(t) the heading error they make (their integral from the outage's start), the
 position error at its end is the integral of psi(s) (v_N(s), -v_E(s)) ds along the
 scenario's own trajectory (a heading error turns the velocity: dv = psi x v), so its
 covariance is the double integral of w(s1) w(s2)^T C_psi(s1, s2) with w = (v_N, -v_E).
-Everything else (the turn-on bias, the odometer; the scale factor, the heading and the
-in-run bias at the start unless asked for, each independent of the others but the
-heading and the bias when their correlation is given) is taken as known exactly, so this is a floor under the expected squared error of any
-navigator with this IMU, not a typical figure; per seed it is a distribution: the error at
+Everything else (the odometer; the scale factor, the heading and the biases at the start
+unless asked for) is taken as known exactly, so this is a floor under the expected squared
+error of any navigator with this IMU, not a typical figure; per seed it is a distribution: the error at
 the outage's end is at least this Gaussian's draw on average, and its median and the chance
 of exceeding a limit are printed. The firmware's own error adds everything the floor takes
 as known. No seed enters: the covariance is that of the model.
@@ -77,6 +80,16 @@ def heading_cov(t_s: np.ndarray, arw_rad_rts: float, sigma_gm_rps: float,
     return c
 
 
+def _trapezoid(t_s: np.ndarray) -> np.ndarray:
+    """The trapezoid rule's weights over the uniform t_s: the integral is their dot
+    product with the samples."""
+    t = np.asarray(t_s, dtype=float)
+    dt = t[1] - t[0] if t.size > 1 else 0.0
+    wgt = np.full(t.size, dt)
+    wgt[0] = wgt[-1] = 0.5 * dt
+    return wgt
+
+
 def _integrator(t_s: np.ndarray) -> np.ndarray:
     """A (N x N): psi = A rate, psi_i the integral of a rate sampled at the uniform t_s from
     t_s[0] to t_s[i] (trapezoid rule)."""
@@ -101,14 +114,17 @@ def bias_gain(t_s: np.ndarray, v_en_mps: np.ndarray, corr_time_s: float) -> np.n
     return _weights(t, v_en_mps).T @ psi
 
 
+def turnon_gain(t_s: np.ndarray, v_en_mps: np.ndarray) -> np.ndarray:
+    """g (m per rad/s, E and N): the position error at the last time that a constant error
+    b0 of the navigator's turn-on bias estimate makes, b0 g: the heading error b0 t."""
+    t = np.asarray(t_s, dtype=float)
+    return _weights(t, v_en_mps).T @ (t - t[0])
+
+
 def _weights(t_s: np.ndarray, v_en_mps: np.ndarray) -> np.ndarray:
     """w (N x 2): the position error at the last time is the sum of psi_i w_i (a heading
     error turns the velocity; trapezoid rule over the uniform t_s)."""
-    t = np.asarray(t_s, dtype=float)
-    dt = t[1] - t[0]
-    wgt = np.full(t.size, dt)
-    wgt[0] = wgt[-1] = 0.5 * dt
-    return np.column_stack([v_en_mps[:, 1], -v_en_mps[:, 0]]) * wgt[:, None]
+    return np.column_stack([v_en_mps[:, 1], -v_en_mps[:, 0]]) * _trapezoid(t_s)[:, None]
 
 
 def position_cov(t_s: np.ndarray, v_en_mps: np.ndarray, c_psi: np.ndarray) -> np.ndarray:
@@ -131,12 +147,12 @@ def rounded_mean(x, q: float, sigma: float) -> np.ndarray:
     """E[round((x + n) / q) q] for n ~ N(0, sigma^2): a reading rounded to the step q after
     white noise of sigma (exactly the rounding when sigma is 0). Noise dithers the rounding:
     its mean error is at most (q / pi) exp(-2 pi^2 sigma^2 / q^2), its Fourier series's
-    first term: 0.23 % of a step at half a step of noise, 3e-9 of it at one step."""
+    first term: 0.23 % of a step at half a step of noise, 8.5e-10 of it at one step."""
     x = np.asarray(x, dtype=float)
     if sigma <= 0.0:
         return np.round(x / q) * q
     erf = np.vectorize(math.erf)
-    half = 6.0 * sigma + q
+    half = 8.0 * sigma + q  # the Gaussian beyond 8 sigma: 1e-15
     j0 = np.floor((x - half) / q)
     out = np.zeros_like(x)
     for i in range(int(2.0 * half / q) + 2):
@@ -159,30 +175,32 @@ def rounding_error(t_s: np.ndarray, v_en_mps: np.ndarray, rear_mps: np.ndarray,
     err = read.mean(axis=1) / (1.0 + mu) - np.asarray(rear_mps, dtype=float).mean(axis=1)
     speed = np.hypot(v_en_mps[:, 0], v_en_mps[:, 1])
     u = np.where(speed[:, None] > 0.0, v_en_mps / np.maximum(speed, 1e-9)[:, None], 0.0)
-    t = np.asarray(t_s, dtype=float)
-    dt = t[1] - t[0]
-    wgt = np.full(t.size, dt)
-    wgt[0] = wgt[-1] = 0.5 * dt
-    return (u * (err * wgt)[:, None]).sum(axis=0)
+    return (u * (err * _trapezoid(t_s))[:, None]).sum(axis=0)
 
 
 def outage_floor(scen_name: str, limits_pct=(), outage: tuple | None = None,
                  scale_ppm: float = 0.0, heading_sigma_deg: float = 0.0,
-                 bias_sigma_dph: float = 0.0, heading_bias_rho: float = 0.0,
-                 odometer_rounding: bool = False) -> dict | None:
+                 bias_sigma_dph: float = 0.0, turnon_sigma_dph: float = 0.0,
+                 start_rho=(0.0, 0.0, 0.0), odometer_rounding: bool = False) -> dict | None:
     """The floor at the end of a scenario's longest outage (by distance; or outage = (a, b)
     s): rms_m, rms_pct of its distance, median_m / median_pct of the 2-D error's size and,
     for each limit in limits_pct, the chance p_above[limit] that it exceeds it; with
     scale_ppm > 0 the z gyro's scale factor residual of that sigma included (scale_rms_m:
     its part alone); with heading_sigma_deg > 0 the heading error at the start of that sigma
     (heading_rms_m: its part alone); with bias_sigma_dph > 0 the in-run bias estimate's
-    error at the start of that sigma (bias_rms_m: its part alone, bias_gain), correlated with
-    the heading's by heading_bias_rho (the filter's covariance there; -1..1); with
-    odometer_rounding the wheel speeds' rounding at the scenario's odometer (rounding_error,
-    rounding_m: its size, the same on every seed: the draws' mean). None for a scenario
-    without an outage."""
-    if not -1.0 <= heading_bias_rho <= 1.0:
-        raise ValueError(f"heading_bias_rho {heading_bias_rho} is not a correlation (-1..1)")
+    error at the start of that sigma (bias_rms_m, bias_gain); with turnon_sigma_dph > 0 the
+    turn-on bias estimate's (turnon_rms_m, turnon_gain); start_rho: the correlations of
+    those three at the start, (heading, turn-on), (heading, in-run), (turn-on, in-run), in
+    the floor's sense: the heading error clockwise and each bias the rate that turns it
+    (psi' = +b). A filter whose attitude error integrates minus the z gyro's bias (this
+    firmware's psi_U, docs/kalman.md) has the heading's correlations with the biases of the
+    other sign, the biases' with each other the same. With odometer_rounding the wheel
+    speeds' rounding at the scenario's odometer (rounding_error, rounding_m: its size, the
+    same on every seed: the draws' mean). None for a scenario without an outage."""
+    rht, rhi, rti = (float(x) for x in start_rho)
+    corr = np.array([[1.0, rht, rhi], [rht, 1.0, rti], [rhi, rti, 1.0]])
+    if not np.all(np.abs(corr) <= 1.0) or np.linalg.eigvalsh(corr).min() < -1e-12:
+        raise ValueError(f"start_rho {tuple(start_rho)} is not a correlation matrix's")
     scen = scenario.load(scen_name)
     imu_name, _ = scenario.preset_names(scen, None, None)
     imu = sensors.PRESETS[imu_name]
@@ -201,27 +219,21 @@ def outage_floor(scen_name: str, limits_pct=(), outage: tuple | None = None,
     c_psi = heading_cov(t, imu.gyro_arw_rad_per_rts, imu.gyro_gm_sigma_rps,
                         imu.gyro_bias_corr_time_s)
     cov = position_cov(t, v, c_psi)
-    # the constant errors asked for, each sigma times its gain g (position error per unit of
-    # the error): a rank-one term g g^T, independent of the rest
-    gains = {"scale_rms_m": None, "heading_rms_m": None, "bias_rms_m": None}
-    if scale_ppm > 0.0:
-        # the truth's heading sampled at t: unwrapped first, so that the interpolation
-        # does not cross the 0 / 2 pi seam
-        h = np.interp(a + t, truth.t_s, np.unwrap(truth.heading_rad))
-        gains["scale_rms_m"] = scale_gain(t, v, h) * scale_ppm * 1e-6
-    if heading_sigma_deg > 0.0:
-        gains["heading_rms_m"] = _weights(t, v).sum(axis=0) * math.radians(heading_sigma_deg)
-    if bias_sigma_dph > 0.0:
-        gains["bias_rms_m"] = (bias_gain(t, v, imu.gyro_bias_corr_time_s)
-                               * math.radians(bias_sigma_dph) / 3600.0)
-    parts = {}
-    for key, g in gains.items():
-        parts[key] = 0.0 if g is None else float(np.hypot(g[0], g[1]))
-        if g is not None:
-            cov = cov + np.outer(g, g)
-    gh, gb = gains["heading_rms_m"], gains["bias_rms_m"]
-    if gh is not None and gb is not None:
-        cov = cov + heading_bias_rho * (np.outer(gh, gb) + np.outer(gb, gh))
+    # the errors at the start asked for, each sigma times its gain g (position error per
+    # unit of the error): the scale factor's a rank-one term g g^T independent of the rest;
+    # the heading's and the two biases' G S R S G^T with their correlations R
+    h = np.interp(a + t, truth.t_s, np.unwrap(truth.heading_rad))  # unwrapped: no seam
+    g_scale = scale_gain(t, v, h) * scale_ppm * 1e-6
+    cov = cov + np.outer(g_scale, g_scale)
+    dph = math.radians(1.0) / 3600.0
+    g_start = np.column_stack([
+        _weights(t, v).sum(axis=0) * math.radians(heading_sigma_deg),
+        turnon_gain(t, v) * turnon_sigma_dph * dph,
+        bias_gain(t, v, imu.gyro_bias_corr_time_s) * bias_sigma_dph * dph])
+    cov = cov + g_start @ corr @ g_start.T
+    parts = {key: float(np.hypot(*g)) for key, g in (
+        ("scale_rms_m", g_scale), ("heading_rms_m", g_start[:, 0]),
+        ("turnon_rms_m", g_start[:, 1]), ("bias_rms_m", g_start[:, 2]))}
     mean = np.zeros(2)
     if odometer_rounding:
         # the rear axle's wheels (the firmware's default odo_axle) as the simulator makes them
@@ -238,7 +250,8 @@ def outage_floor(scen_name: str, limits_pct=(), outage: tuple | None = None,
             "rms_m": rms, "rms_pct": 100.0 * rms / d_m, "median_m": med,
             "median_pct": 100.0 * med / d_m, "scale_ppm": float(scale_ppm),
             "heading_sigma_deg": float(heading_sigma_deg),
-            "bias_sigma_dph": float(bias_sigma_dph), "heading_bias_rho": float(heading_bias_rho),
+            "bias_sigma_dph": float(bias_sigma_dph), "turnon_sigma_dph": float(turnon_sigma_dph),
+            "start_rho": (rht, rhi, rti),
             "rounding_m": float(np.hypot(mean[0], mean[1])) if odometer_rounding else None,
             **parts,
             "p_above": {float(lim): float(np.mean(size > lim / 100.0 * d_m))
@@ -263,16 +276,24 @@ def main(argv=None) -> int:
                     help="include the error of the z gyro's in-run bias estimate at the "
                          "outage's start, 1-sigma in deg/h (the filter's own; the process's "
                          "sigma, the IMU's bias instability / 0.617, if nothing was learnt)")
-    ap.add_argument("--heading-bias-rho", type=float, default=0.0,
-                    help="with both of the above: their correlation at the outage's start "
-                         "(the filter's covariance there), -1..1")
+    ap.add_argument("--turnon-sigma-dph", type=float, default=0.0,
+                    help="include the error of the z gyro's turn-on (constant) bias estimate "
+                         "at the outage's start, 1-sigma in deg/h (the filter's own)")
+    ap.add_argument("--start-rho", type=float, nargs=3, default=(0.0, 0.0, 0.0),
+                    metavar=("HT", "HI", "TI"),
+                    help="the correlations at the outage's start of the heading with the "
+                         "turn-on bias, of the heading with the in-run bias and of the two "
+                         "biases, in the floor's sense (outage_floor: a filter whose attitude "
+                         "error integrates minus the bias gives the first two of the other "
+                         "sign)")
     ap.add_argument("--odometer-rounding", action="store_true",
                     help="include the wheel speeds' rounding to their step at the scenario's "
                          "speeds (its odometer's mu, step and noise): the same on every seed")
     a = ap.parse_args(argv)
     r = outage_floor(a.scenario, a.limit_pct, scale_ppm=a.scale_ppm,
                      heading_sigma_deg=a.heading_sigma_deg, bias_sigma_dph=a.bias_sigma_dph,
-                     heading_bias_rho=a.heading_bias_rho, odometer_rounding=a.odometer_rounding)
+                     turnon_sigma_dph=a.turnon_sigma_dph, start_rho=a.start_rho,
+                     odometer_rounding=a.odometer_rounding)
     if r is None:
         print(f"{a.scenario}: no outage")
         return 1
@@ -283,11 +304,12 @@ def main(argv=None) -> int:
              if r["scale_ppm"] > 0.0 else " alone")
           + (f", with a heading {r['heading_sigma_deg']:g} deg off at the start "
              f"({r['heading_rms_m']:.1f} m of it alone)," if r["heading_sigma_deg"] > 0.0 else "")
+          + (f" with the turn-on bias {r['turnon_sigma_dph']:g} deg/h off at the start "
+             f"({r['turnon_rms_m']:.1f} m of it alone)," if r["turnon_sigma_dph"] > 0.0 else "")
           + (f" with the in-run bias {r['bias_sigma_dph']:g} deg/h off at the start "
              f"({r['bias_rms_m']:.1f} m of it alone)," if r["bias_sigma_dph"] > 0.0 else "")
-          + (f" the two correlated {r['heading_bias_rho']:+g},"
-             if r["heading_bias_rho"] and r["bias_sigma_dph"] > 0.0
-             and r["heading_sigma_deg"] > 0.0 else "")
+          + (" correlated {:+g} {:+g} {:+g},".format(*r["start_rho"])
+             if any(r["start_rho"]) else "")
           + (f" with the wheel speeds' rounding ({r['rounding_m']:.2f} m, on every seed),"
              if r["rounding_m"] is not None else "")
           + f" leave {r['rms_m']:.1f} m RMS "
