@@ -142,6 +142,12 @@ def test_start_correlations_enter_once_each_way():
     assert ms[-0.9] < ms[0.0] < ms[0.9]
     with pytest.raises(ValueError, match="correlation"):
         gyro_floor.outage_floor("outage5", start_rho=(0.9, 0.9, -0.9), **kw)
+    # each correlation in its own slot: without the turn-on bias, its two correlations
+    # change nothing and the heading's with the in-run bias does
+    kw0 = dict(heading_sigma_deg=0.02, bias_sigma_dph=0.8)
+    base = gyro_floor.outage_floor("outage5", **kw0)["rms_m"]
+    assert gyro_floor.outage_floor("outage5", start_rho=(0.5, 0.0, 0.5), **kw0)["rms_m"] == base
+    assert gyro_floor.outage_floor("outage5", start_rho=(0.0, 0.5, 0.0), **kw0)["rms_m"] > base
 
 
 def test_turnon_bias_is_the_in_run_one_that_never_decays():
@@ -180,8 +186,9 @@ def test_outage5_rounding_is_the_simulators_own():
     # outage5's odometer (mu 0.012, 0.02 m/s steps, no noise) at its 18 and 11 m/s
     # stretches: the floor's rounding term against the simulator's own wheels
     # (sensors.wheel_speeds at 50 Hz, rounded less unrounded, the rear axle's mean over
-    # 1 + mu, carried along the track): to 2 % (the floor samples every 0.5 s, the
-    # simulator's wheels are 20 ms late); every seed carries it, and it adds to the floor
+    # 1 + mu, carried along the track): to 3 % (measured 1.8 %: the floor rounds the
+    # truth's speed every 0.5 s, the simulator its 20-ms-late speed at 50 Hz, which differ
+    # where the speed changes); every seed carries it, and it adds to the floor
     import dataclasses
     from tools.sim import scenario, sensors, trajectory
     r0 = gyro_floor.outage_floor("outage5")
@@ -191,11 +198,11 @@ def test_outage5_rounding_is_the_simulators_own():
     truth = trajectory.generate(scen, gyro_floor.RATE_HZ)
     tw, rounded = sensors.wheel_speeds(truth, odo, seed=1)
     _, exact = sensors.wheel_speeds(truth, dataclasses.replace(odo, quant_mps=1e-9), seed=1)
-    k = (tw >= 800.0) & (tw <= 1100.0)
+    k = (tw >= r["outage_s"][0]) & (tw <= r["outage_s"][1])
     err = (rounded[k, 2:].mean(axis=1) - exact[k, 2:].mean(axis=1)) / (1.0 + odo.mu)
     v = np.column_stack([np.interp(tw[k], truth.t_s, truth.v_enu_mps[:, i]) for i in (0, 1)])
     u = v / np.hypot(v[:, 0], v[:, 1])[:, None]
     sim = (u * err[:, None]).sum(axis=0) / odo.rate_hz
-    assert r["rounding_m"] == pytest.approx(float(np.hypot(*sim)), rel=0.02)
+    assert r["rounding_m"] == pytest.approx(float(np.hypot(*sim)), rel=0.03)
     assert r["rounding_m"] > 0.5
     assert r["rms_m"] ** 2 == pytest.approx(r0["rms_m"] ** 2 + r["rounding_m"] ** 2, rel=1e-9)
