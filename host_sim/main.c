@@ -68,7 +68,9 @@ int main(int argc, char **argv)
     const int live = o.live_if != NULL;
     unsigned long frames_in = 0;
     uint64_t t_first = UINT64_MAX; /* the first frame's time (--test-stall-poll-s) */
-    int expired = 0, read_error = 0;
+    int expired = 0, read_error = 0, filter_reported = 0;
+    /* --report-filter-at-s: at an IMU sample count, not a time of arrival */
+    const uint64_t report_at = o.report_filter_ms * app.cfg.imu_rate_hz / 1000u;
     while (!host_stop_requested() && !expired && !(live && host_wait(&hal, &o) != 0)) {
         const app_pass_cfg_t pass = {live ? 64u : 1u, (uint8_t)host_poll_allowed(&hal, &o, t_first)};
         const app_pass_t p = app_pass(&app, &hal, &pass);
@@ -79,6 +81,10 @@ int main(int argc, char **argv)
             break; /* the end of the log, or a read error */
         }
         expired = !p.kicked && hal_linux_watchdog_expired(&hal);
+        if (o.report_filter && !filter_reported && app_samples(&app) >= report_at) {
+            host_filter_report(stderr, &app);
+            filter_reported = 1;
+        }
     }
     if (expired) {
         fprintf(stderr, "navecu: WATCHDOG EXPIRED at %.3f s: no kick for more than %u ms, a "
@@ -87,6 +93,11 @@ int main(int argc, char **argv)
     }
     if (read_error) {
         fprintf(stderr, "navecu: read error on '%s'\n", o.in_path);
+    }
+    if (o.report_filter && !filter_reported) {
+        fprintf(stderr, "navecu: filter at %.2f s: not reached (%.2f s of IMU samples)\n",
+                (double)o.report_filter_ms * 1e-3,
+                (double)app_samples(&app) / (double)app.cfg.imu_rate_hz);
     }
     host_summary(stderr, &app, &hal, frames_in, expired, live);
     hal_linux_close(&hal);

@@ -176,6 +176,11 @@ int host_options_parse_over(int argc, char **argv, const app_config_t *base, hos
             bad = parse_double(v, &x) != 0 || x < 0.0 || x > 1e6;
             o->stall_poll_us = bad ? 0u : (uint64_t)(x * 1e6); /* no conversion out of range */
             o->stall_poll = 1;
+        } else if (strcmp(a, "--report-filter-at-s") == 0) {
+            double x = 0.0;
+            bad = parse_double(v, &x) != 0 || x < 0.0 || x > 1e6;
+            o->report_filter_ms = bad ? 0u : (uint64_t)(x * 1e3); /* no conversion out of range */
+            o->report_filter = 1;
         } else if (param_option(a) != NULL) {
             bad = parse_param(param_option(a), v, &o->cfg) != 0;
             o->nav_rate_given |= strcmp(a, "--nav-rate-hz") == 0;

@@ -20,6 +20,8 @@ typedef struct {
     int dyn_rate_given;    /* --dyn-rate-hz was given */
     int stall_poll;        /* --test-stall-poll-s given: stop calling app_poll ... */
     uint64_t stall_poll_us; /* ... this long after the first frame */
+    int report_filter;     /* --report-filter-at-s given: print the filter's figures ... */
+    uint64_t report_filter_ms; /* ... once this much IMU time has passed (host_filter_report) */
     int help;              /* --help or -h: nothing else was parsed */
     app_config_t cfg;      /* the defaults (or the base) with the options applied */
 } host_options_t;

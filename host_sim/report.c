@@ -5,6 +5,7 @@
 #include "hal_socketcan.h"
 #include "vehicle.h"
 
+#include <math.h>
 #include <string.h>
 
 #include "params_cli.h"
@@ -31,6 +32,9 @@ void host_usage(FILE *out)
             "                       memory only); the parameters stored there are loaded,\n"
             "                       the options given here go over them\n"
             "  --iface NAME         interface name written in OUT.log (default can0)\n"
+            "  --report-filter-at-s S  print what the filter knows of the heading and the z\n"
+            "                       gyro once S seconds of IMU samples have been processed\n"
+            "                       (the figures of tools/sim/gyro_floor.py)\n"
             "  --test-stall-poll-s S  test only: stop calling app_poll S seconds of bus time\n"
             "                       after the first frame (a stuck task: the watchdog expires,\n"
             "                       exit status 3)\n"
@@ -77,6 +81,33 @@ void host_usage(FILE *out)
     for (int k = 0; k < (int)APP_PRESET_N; k++) {
         fprintf(out, "  %-12s %s\n", app_preset_names[k], params_cli_preset_about[k]);
     }
+}
+
+void host_filter_report(FILE *out, const app_t *app)
+{
+    const double t_s = (double)app_samples(app) / (double)app->cfg.imu_rate_hz;
+    const ekf_t *k = app_filter(app);
+    if (k == NULL) {
+        fprintf(out, "navecu: filter at %.2f s: not running\n", t_s);
+        return;
+    }
+    /* the car's heading: the IMU's psi_U less the mounting's yaw (output.c) */
+    const int h = EKF_PSI + 2, m = EKF_MY, bt = EKF_BG + 2, bi = EKF_GZ;
+    const double hh = (double)ekf_state_cov(k, h, h) + (double)ekf_state_cov(k, m, m) -
+                      2.0 * (double)ekf_state_cov(k, h, m);
+    const double tt = (double)ekf_state_cov(k, bt, bt), ii = (double)ekf_state_cov(k, bi, bi);
+    const double ht = (double)ekf_state_cov(k, h, bt) - (double)ekf_state_cov(k, m, bt);
+    const double hi = (double)ekf_state_cov(k, h, bi) - (double)ekf_state_cov(k, m, bi);
+    const double ti = (double)ekf_state_cov(k, bt, bi);
+    const double deg = 57.29577951308232, dph = deg * 3600.0;
+    fprintf(out,
+            "navecu: filter at %.2f s: car heading sigma %.4f deg; z gyro turn-on bias sigma "
+            "%.3f deg/h, in-run %.3f deg/h; correlations heading/turn-on %+.3f, heading/in-run "
+            "%+.3f, turn-on/in-run %+.3f (the filter's: its attitude error integrates minus "
+            "the bias); z gyro scale factor sigma %.0f ppm\n",
+            t_s, sqrt(hh) * deg, sqrt(tt) * dph, sqrt(ii) * dph, ht / sqrt(hh * tt),
+            hi / sqrt(hh * ii), ti / sqrt(tt * ii),
+            sqrt((double)ekf_state_cov(k, EKF_SG, EKF_SG)) * 1e6);
 }
 
 void host_summary(FILE *out, const app_t *app, const hal_t *hal, unsigned long frames_in,

@@ -194,3 +194,36 @@ def test_watchdog_expiry_exits_nonzero(stationary, tmp_path):
     # watchdog timeout, within a frame period or two
     t_first = float(log.read_text().split(")", 1)[0].lstrip("("))
     assert float(m.group(1)) - t_first == pytest.approx(60.5, abs=0.03)
+
+
+def test_report_filter_at_prints_the_floors_figures_and_changes_no_output(tmp_path):
+    """--report-filter-at-s S prints, once S s of IMU samples are processed, what the
+    filter knows of the heading and the z gyro (tools/sim/gyro_floor.py's figures): on the
+    regression's sim-clean drive at 200 s every sigma is positive and finite and every
+    correlation within -1..1; at 0 s the filter has not started and it says so; beyond the
+    drive's end (277 s) it says that the time was not reached; the output frames are the
+    same every way (a report on stderr, nothing sent)."""
+    import json
+    import lzma
+    case = next(c for c in json.loads((ROOT / "tests/regression/cases.json").read_text())["cases"]
+                if c["name"] == "sim-clean")
+    log = tmp_path / "in.log"
+    log.write_bytes(lzma.decompress((ROOT / "tests/regression" / case["input"]).read_bytes()))
+    outs = {}
+    for at in ("200", "0", "1000"):
+        r = subprocess.run([str(NAVECU), "--can-log", str(log), "--out", str(tmp_path / f"{at}.log"),
+                            *case["args"].split(), "--report-filter-at-s", at],
+                           capture_output=True, text=True)
+        assert r.returncode == 0, r.stderr
+        outs[at] = (r.stderr, (tmp_path / f"{at}.log").read_bytes())
+    m = re.search(r"filter at 200\.00 s: car heading sigma ([0-9.]+) deg; z gyro turn-on bias "
+                  r"sigma ([0-9.]+) deg/h, in-run ([0-9.]+) deg/h; correlations heading/turn-on "
+                  r"([-+][0-9.]+), heading/in-run ([-+][0-9.]+), turn-on/in-run ([-+][0-9.]+) .*"
+                  r"scale factor sigma ([0-9]+) ppm", outs["200"][0])
+    assert m, outs["200"][0]
+    sig = [float(m.group(i)) for i in (1, 2, 3, 7)]
+    rho = [float(m.group(i)) for i in (4, 5, 6)]
+    assert all(0.0 < s < 1e6 for s in sig) and all(-1.0 <= r <= 1.0 for r in rho)
+    assert "filter at 0.00 s: not running" in outs["0"][0]
+    assert re.search(r"filter at 1000\.00 s: not reached \(27[0-9.]+ s", outs["1000"][0])
+    assert outs["200"][1] == outs["0"][1] == outs["1000"][1]
