@@ -99,7 +99,7 @@ void host_filter_report(FILE *out, const app_t *app)
     const double ht = (double)ekf_state_cov(k, h, bt) - (double)ekf_state_cov(k, m, bt);
     const double hi = (double)ekf_state_cov(k, h, bi) - (double)ekf_state_cov(k, m, bi);
     const double ti = (double)ekf_state_cov(k, bt, bi);
-    const double deg = 57.29577951308232, dph = deg * 3600.0;
+    const double deg = 1.0 / RAD_PER_DEG, dph = deg * 3600.0;
     fprintf(out,
             "navecu: filter at %.2f s: car heading sigma %.4f deg; z gyro turn-on bias sigma "
             "%.3f deg/h, in-run %.3f deg/h; correlations heading/turn-on %+.3f, heading/in-run "
