@@ -1049,6 +1049,38 @@ static void test_standstill_holds_and_estimates_bias(void **state)
                 0.02 * bias_dph);
 }
 
+/*
+ * GIVEN a noisy gyro configured as such (ARW 2 deg/sqrt(h) at 100 Hz: one sample scatters
+ *       by 0.33 deg/s) and the car parked, its yaw rate samples alternating +-1 deg/s
+ * WHEN  60 s pass with the wheels at zero
+ * THEN  it is a standstill from 0.5 s on (every sample but the first 0.5 s taught the z
+ *       bias, and the heading is held): the test is 4 of the sample's sigmas (1.33 deg/s),
+ *       not the 0.5 deg/s that every one of these samples exceeds (before, not one was
+ *       taken); a body turning at 2 deg/s with zero wheels is still no standstill.
+ */
+static void test_standstill_with_a_noisy_gyro(void **state)
+{
+    (void)state;
+    app_config_t cfg = app_default_config();
+    cfg.gyro_arw_rad_rts = (nav_real_t)(2.0 * DEG / 60.0);
+    assert_int_equal(app_init(&app, &cfg), NAV_OK);
+    assert_near((double)app.keep.odo.cfg.still_rate_rps,
+                4.0 * 2.0 * DEG / 60.0 * sqrt((double)RATE_HZ), 1e-6);
+    start_perfect();
+    const int32_t one_dps_lsb = (int32_t)lround(DEG / RATE_HZ / ldexp(1.0, -21)); /* 366 */
+    for (int k = 0; k < 60 * RATE_HZ; k++) {
+        run_wheels(1, 0.0, (k % 2 == 0) ? one_dps_lsb : -one_dps_lsb);
+    }
+    const double nst = (double)app.keep.zbias.n;
+    assert_true(nst > 59.0 * RATE_HZ - 60 && nst <= 60.0 * RATE_HZ);
+    struct navecu_can_nav_attitude_t att;
+    navecu_can_nav_attitude_unpack(&att, last_tx(NAVECU_CAN_NAV_ATTITUDE_FRAME_ID)->data, 8u);
+    assert_near(att.heading * 0.01, 30.0, 0.01);
+    const uint32_t n_before = app.keep.zbias.n;
+    run_wheels(10 * RATE_HZ, 0.0, 2 * one_dps_lsb);
+    assert_int_equal(app.keep.zbias.n, n_before); /* turning: nothing learnt */
+}
+
 /* a point at bearing (from the start) of the last output + dbearing, at distance / scale */
 static void known_point(double dbearing_deg, double scale, int32_t *lat_e7, int32_t *lon_e7)
 {
@@ -1741,6 +1773,7 @@ int main(void)
         cmocka_unit_test_setup(test_dead_reckoning_output, setup),
         cmocka_unit_test_setup(test_odo_direction_from_navigator, setup),
         cmocka_unit_test_setup(test_standstill_holds_and_estimates_bias, setup),
+        cmocka_unit_test_setup(test_standstill_with_a_noisy_gyro, setup),
         cmocka_unit_test_setup(test_one_point_calibration_and_nvm, setup),
         cmocka_unit_test_setup(test_corrupt_nvm_at_boot, setup),
         cmocka_unit_test_setup(test_diverged_filter_is_reset, setup),

@@ -36,6 +36,12 @@ int app_init(app_t *app, const app_config_t *cfg)
     ocfg.axle = cfg->odo_axle;
     ocfg.track_m = cfg->odo_track_m;
     ocfg.wheelbase_m = cfg->odo_wheelbase_m;
+    /* the still test reads one IMU sample's yaw rate: not below its own noise */
+    const nav_real_t rate_noise_rps = APP_STILL_RATE_SIGMAS * cfg->gyro_arw_rad_rts *
+                                      nav_sqrt((nav_real_t)cfg->imu_rate_hz);
+    if (rate_noise_rps > ocfg.still_rate_rps) {
+        ocfg.still_rate_rps = rate_noise_rps;
+    }
     memset(app, 0, sizeof *app);
     if (odo_init(&app->keep.odo, &ocfg) != NAV_OK) {
         return NAV_EINVAL;

@@ -163,6 +163,13 @@
 #define APP_ODO_SLOW_CORR_S NAV_C(3.0)
 /* the horizontal specific force beyond which zero wheels are not a standstill (fusion.c) */
 #define APP_STILL_ACC_MPS2 NAV_C(0.3)
+/* Zero wheels are a standstill only while the yaw rate stays below 0.5 deg/s
+ * (odo_default_config), one IMU sample at a time; a sample's own noise is ARW x
+ * sqrt(imu_rate), 0.33 deg/s for the simulator's automotive MEMS (2 deg/sqrt(h)) at
+ * 100 Hz, so that test would end every standstill within 0.5 s. The threshold is at
+ * least this many of those sigmas (app_init): a standing car leaves it once in 16 000
+ * samples (Gaussian, 4 sigma), a turn beyond it is still seen in one sample. */
+#define APP_STILL_RATE_SIGMAS NAV_C(4.0)
 #define APP_NHC_SIGMA_MPS NAV_C(0.1)     /* side slip in turns, suspension motion */
 #define APP_ODO_MIN_SPEED_MPS NAV_C(0.5) /* below this the speed rows are not used */
 /* odo_direction = navigator: reversing once the navigator moves backward faster than this
