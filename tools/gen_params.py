@@ -212,6 +212,8 @@ def gen_h(params, pre) -> str:
          "    nav_real_t min_si, max_si; /* range, SI units (enum: 0..values - 1) */",
          "    nav_real_t default_si;  /* default, SI; a vec3's x, y and z alike (vehicle_default:",
          "                               unused) */",
+         "    uint16_t offset;        /* its field in app_config_t: offsetof */",
+         "    uint8_t size;           /* and sizeof (an enum's is the target's: 1 or 4 bytes) */",
          "} app_param_t;", "",
          "/* the parameters, in the table's order */", "typedef enum {"]
     L += [f"    {_const(p)} = {k}," for k, p in enumerate(params)]
@@ -257,7 +259,8 @@ def gen_c(params, pre) -> str:
                  f"{int(p['min_exclusive'])}u, {int(p['vehicle_default'])}u, "
                  f"{int(p['at_reset'])}u, {int(p['uds_read_only'])}u, "
                  f"{_c_real(_si(p, p['min']))}, {_c_real(_si(p, p['max']))}, "
-                 f"{_c_real(d)}}},")
+                 f"{_c_real(d)}, offsetof(app_config_t, {p['name']}), "
+                 f"sizeof(((app_config_t *)0)->{p['name']})}},")
     names, lst, _ = pre
     by_name = {p["name"]: p for p in params}
     L += ["};", "", "#ifndef APP_PARAM_NO_NAMES", "const char *const app_param_names[APP_PARAM_N] = {"]
@@ -270,43 +273,20 @@ def gen_c(params, pre) -> str:
         L.append(f"    [APP_PRESET_{n.upper()}] = {{{{{v}}}}},")
     L += ["};", "", "#ifndef APP_PARAM_NO_NAMES", "const char *const app_preset_names[APP_PRESET_N] = {"]
     L += [f"    [APP_PRESET_{n.upper()}] = \"{n}\"," for n, _, _, _ in lst]
-    L += ["};", "#endif", "", "void app_param_get(const app_config_t *cfg, app_param_id_t id, nav_real_t v[3])",
-          "{", "    v[0] = NAV_C(0.0);", "    v[1] = NAV_C(0.0);", "    v[2] = NAV_C(0.0);",
-          "    switch (id) {"]
+    L += ["};", "#endif", "",
+          "/* app_param_get and app_param_set (app_config.c) read and write a field through its",
+          " * offset and size: an enum's index is its C constant's value */"]
+    size = {"u16": "sizeof(uint16_t)", "real": "sizeof(nav_real_t)",
+            "vec3": "3u * sizeof(nav_real_t)"}
     for p in params:
-        n = p["name"]
-        L.append(f"    case {_const(p)}:")
-        if p["type"] == "vec3":
-            L += [f"        v[{i}] = cfg->{n}[{i}];" for i in range(3)]
-        elif p["type"] == "real":
-            L.append(f"        v[0] = cfg->{n};")
-        elif p["type"] == "u16":
-            L.append(f"        v[0] = (nav_real_t)cfg->{n};")
-        else:
+        f = f"sizeof(((app_config_t *)0)->{p['name']})"
+        if p["type"] == "enum":
+            L.append(f"_Static_assert({f} == 1u || {f} == 4u, \"{p['name']}: 1 or 4 bytes\");")
             for i, cv in enumerate(p["c_values"]):
-                L += [f"        if (cfg->{n} == {cv}) {{", f"            v[0] = NAV_C({i}.0);",
-                      "        }"]
-        L.append("        break;")
-    L += ["    default:", "        break;", "    }", "}", "",
-          "int app_param_set(app_config_t *cfg, app_param_id_t id, const nav_real_t v[3])",
-          "{", "    if (!app_param_in_range(id, v)) {", "        return -1;", "    }",
-          "    switch (id) {"]
-    for p in params:
-        n = p["name"]
-        L.append(f"    case {_const(p)}:")
-        if p["type"] == "vec3":
-            L += [f"        cfg->{n}[{i}] = v[{i}];" for i in range(3)]
-        elif p["type"] == "real":
-            L.append(f"        cfg->{n} = v[0];")
-        elif p["type"] == "u16":
-            L.append(f"        cfg->{n} = (uint16_t)v[0];")
+                L.append(f"_Static_assert({cv} == {i}, \"{p['name']}: value {i} is {cv}\");")
         else:
-            L.append(f"        cfg->{n} = {p['c_values'][0]};")
-            for i, cv in enumerate(p["c_values"][1:], 1):
-                L += [f"        if (v[0] > NAV_C({i - 0.5})) {{", f"            cfg->{n} = {cv};",
-                      "        }"]
-        L.append("        break;")
-    L += ["    default:", "        return -1;", "    }", "    return 0;", "}", ""]
+            L.append(f"_Static_assert({f} == {size[p['type']]}, \"{p['name']}: its type's size\");")
+    L.append("")
     return "\n".join(L)
 
 

@@ -2,6 +2,8 @@
  * table (firmware/app/params.toml, generated app_params.c); see app_config.h. */
 #include "app_config.h"
 
+#include <string.h>
+
 #include "vehicle.h"
 
 app_config_t app_default_config(void)
@@ -43,6 +45,60 @@ int app_config_preset(app_config_t *cfg, app_preset_id_t id)
         if (app_param_set(cfg, app_preset_params[k], v) != 0) {
             return -1; /* cannot happen: the generator checks the presets' ranges */
         }
+    }
+    return 0;
+}
+
+/* A parameter's field is read and written through its offset and size in app_config_t
+ * (the generated table, which checks at compile time that a u16 is 2 bytes, a real and a
+ * vec3 one and three nav_real_t, an enum 1 or 4 bytes with its index as its value): one
+ * loop for every parameter, where a switch of a case per parameter took 1 kB of the
+ * ECU's flash. Bytes are copied, so no field is read through another type. */
+void app_param_get(const app_config_t *cfg, app_param_id_t id, nav_real_t v[3])
+{
+    v[0] = NAV_C(0.0);
+    v[1] = NAV_C(0.0);
+    v[2] = NAV_C(0.0);
+    if ((unsigned)id >= (unsigned)APP_PARAM_N) {
+        return;
+    }
+    const app_param_t *p = &app_params[id];
+    const uint8_t *f = (const uint8_t *)cfg + p->offset;
+    if (p->type == APP_PARAM_REAL || p->type == APP_PARAM_VEC3) {
+        memcpy(v, f, p->size);
+    } else if (p->size == 2u) {
+        uint16_t u;
+        memcpy(&u, f, sizeof u);
+        v[0] = (nav_real_t)u;
+    } else if (p->size == 1u) {
+        v[0] = (nav_real_t)f[0];
+    } else {
+        uint32_t u;
+        memcpy(&u, f, sizeof u);
+        v[0] = (nav_real_t)u;
+    }
+}
+
+int app_param_set(app_config_t *cfg, app_param_id_t id, const nav_real_t v[3])
+{
+    if (!app_param_in_range(id, v)) {
+        return -1;
+    }
+    const app_param_t *p = &app_params[id];
+    uint8_t *f = (uint8_t *)cfg + p->offset;
+    if (p->type == APP_PARAM_REAL || p->type == APP_PARAM_VEC3) {
+        memcpy(f, v, p->size);
+        return 0;
+    }
+    /* a whole number within the range (app_param_in_range) */
+    const uint32_t u = (uint32_t)v[0];
+    if (p->size == 2u) {
+        const uint16_t u16 = (uint16_t)u;
+        memcpy(f, &u16, sizeof u16);
+    } else if (p->size == 1u) {
+        f[0] = (uint8_t)u;
+    } else {
+        memcpy(f, &u, sizeof u);
     }
     return 0;
 }

@@ -141,11 +141,11 @@ app_config_rule_t app_config_check(const app_config_t *cfg);
 int app_config_valid(const app_config_t *cfg);
 
 /* Parameter id's value(s), SI units (one value in v[0]; APP_PARAM_VEC3 three; an enum its
- * index), generated from the table. */
+ * index), through the table's offset and size of its field. */
 void app_param_get(const app_config_t *cfg, app_param_id_t id, nav_real_t v[3]);
 
 /* Set parameter id from v (as app_param_get gives it): 0, or -1 (cfg unchanged) when v is
- * outside the parameter's range. Generated. */
+ * outside the parameter's range. */
 int app_param_set(app_config_t *cfg, app_param_id_t id, const nav_real_t v[3]);
 
 /* 1 if v is a value of parameter id (its range; a whole number for APP_PARAM_U16 and

@@ -6,47 +6,47 @@
 #include "app_config.h"
 
 const app_param_t app_params[APP_PARAM_N] = {
-    [APP_PARAM_IMU_RATE_HZ] = {0x0200u, APP_PARAM_U16, 0u, 0u, 1u, 0u, NAV_C(10.0), NAV_C(400.0), NAV_C(100.0)},
-    [APP_PARAM_NAV_RATE_HZ] = {0x0201u, APP_PARAM_U16, 0u, 0u, 0u, 0u, NAV_C(1.0), NAV_C(400.0), NAV_C(50.0)},
-    [APP_PARAM_STATUS_RATE_HZ] = {0x0202u, APP_PARAM_U16, 0u, 0u, 0u, 0u, NAV_C(1.0), NAV_C(400.0), NAV_C(10.0)},
-    [APP_PARAM_DYN_RATE_HZ] = {0x0203u, APP_PARAM_U16, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(400.0), NAV_C(50.0)},
-    [APP_PARAM_LEVEL_S] = {0x0204u, APP_PARAM_U16, 0u, 0u, 0u, 0u, NAV_C(1.0), NAV_C(600.0), NAV_C(30.0)},
-    [APP_PARAM_ODO_AXLE] = {0x0210u, APP_PARAM_ENUM, 0u, 0u, 1u, 0u, NAV_C(0.0), NAV_C(1.0), NAV_C(0.0)},
-    [APP_PARAM_ODO_TRACK_M] = {0x0211u, APP_PARAM_REAL, 1u, 1u, 1u, 0u, NAV_C(0.5), NAV_C(3.0), NAV_C(0.0)},
-    [APP_PARAM_ODO_WHEELBASE_M] = {0x0212u, APP_PARAM_REAL, 1u, 1u, 1u, 0u, NAV_C(1.0), NAV_C(6.0), NAV_C(0.0)},
-    [APP_PARAM_ODO_LEVER_B_M] = {0x0213u, APP_PARAM_VEC3, 0u, 0u, 0u, 0u, NAV_C(-10.0), NAV_C(10.0), NAV_C(0.0)},
-    [APP_PARAM_ODO_LEVER_SIGMA_M] = {0x0214u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(5.0), NAV_C(1.0)},
-    [APP_PARAM_ODO_STEP_MPS] = {0x0216u, APP_PARAM_REAL, 0u, 1u, 0u, 0u, NAV_C(0.001), NAV_C(1.0), NAV_C(0.0)},
-    [APP_PARAM_ODO_DIRECTION] = {0x0215u, APP_PARAM_ENUM, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(1.0), NAV_C(0.0)},
-    [APP_PARAM_ODO_LATENCY_S] = {0x0217u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(0.5), NAV_C(0.0)},
-    [APP_PARAM_CAL_MIN_BASE_M] = {0x0220u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(100000.0), NAV_C(2000.0)},
-    [APP_PARAM_IMU_MOUNT_RAD] = {0x0205u, APP_PARAM_VEC3, 0u, 0u, 1u, 0u, NAV_C(-3.141592653589793), NAV_C(3.141592653589793), NAV_C(0.0)},
-    [APP_PARAM_IMU_MOUNT_SOURCE] = {0x0206u, APP_PARAM_ENUM, 0u, 0u, 1u, 0u, NAV_C(0.0), NAV_C(1.0), NAV_C(0.0)},
-    [APP_PARAM_MOUNT_EST_SIGMA_RAD] = {0x0207u, APP_PARAM_REAL, 0u, 0u, 1u, 0u, NAV_C(0.00017453292519943296), NAV_C(0.17453292519943295), NAV_C(0.017453292519943295)},
-    [APP_PARAM_MOUNT_EST_EXCITE_M2PS3] = {0x0208u, APP_PARAM_REAL, 0u, 0u, 1u, 0u, NAV_C(0.0), NAV_C(100000.0), NAV_C(50.0)},
-    [APP_PARAM_GYRO_ARW_RAD_RTS] = {0x0230u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(2.908882086657216e-10), NAV_C(0.02908882086657216), NAV_C(0.0005817764173314432)},
-    [APP_PARAM_GYRO_BIAS_RPS] = {0x0231u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(4.84813681109536e-12), NAV_C(0.0484813681109536), NAV_C(0.0009999999697132222)},
-    [APP_PARAM_ACCEL_BIAS_MPS2] = {0x0232u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(9.80665e-07), NAV_C(9.80665), NAV_C(0.199999762095)},
-    [APP_PARAM_GYRO_BIAS_RW_RPS_RTS] = {0x0233u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(3.9584871301292103e-13), NAV_C(0.0039584871301292105), NAV_C(7.916974260258421e-06)},
-    [APP_PARAM_GYRO_BIAS_CORR_TIME_S] = {0x0238u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(10.0), NAV_C(100000.0), NAV_C(100.0)},
-    [APP_PARAM_ACCEL_BIAS_RW_MPS2_RTS] = {0x0234u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(8.007096195354886e-09), NAV_C(0.8007096195354885), NAV_C(0.0016329912193692611)},
-    [APP_PARAM_GYRO_RANGE_RPS] = {0x0235u, APP_PARAM_REAL, 0u, 0u, 1u, 0u, NAV_C(0.017453292519943295), NAV_C(87.26646259971648), NAV_C(5.235987755982989)},
-    [APP_PARAM_ACCEL_RANGE_MPS2] = {0x0236u, APP_PARAM_REAL, 0u, 0u, 1u, 0u, NAV_C(1.0), NAV_C(2000.0), NAV_C(78.4532)},
-    [APP_PARAM_GYRO_SCALE] = {0x0237u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(1e-07), NAV_C(0.09999999999999999), NAV_C(0.01)},
-    [APP_PARAM_GNSS_LATENCY_S] = {0x0240u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(0.5), NAV_C(0.1)},
-    [APP_PARAM_GNSS_CORR_S] = {0x0241u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(600.0), NAV_C(20.0)},
-    [APP_PARAM_GNSS_VEL_CORR_S] = {0x024Au, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(60.0), NAV_C(0.0)},
-    [APP_PARAM_GNSS_WHITE_RATIO] = {0x0248u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.05), NAV_C(1.0), NAV_C(0.33)},
-    [APP_PARAM_GNSS_ACCURACY] = {0x0243u, APP_PARAM_ENUM, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(1.0), NAV_C(0.0)},
-    [APP_PARAM_GNSS_HACC_M] = {0x0244u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.1), NAV_C(102.3), NAV_C(3.0)},
-    [APP_PARAM_GNSS_VACC_M] = {0x0245u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.1), NAV_C(102.3), NAV_C(5.0)},
-    [APP_PARAM_GNSS_SACC_MPS] = {0x0246u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.01), NAV_C(1.5), NAV_C(0.2)},
-    [APP_PARAM_GNSS_VEL_UP] = {0x0247u, APP_PARAM_ENUM, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(1.0), NAV_C(0.0)},
-    [APP_PARAM_GNSS_INPUT] = {0x0249u, APP_PARAM_ENUM, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(2.0), NAV_C(2.0)},
-    [APP_PARAM_GNSS_LEVER_B_M] = {0x0242u, APP_PARAM_VEC3, 0u, 0u, 0u, 0u, NAV_C(-10.0), NAV_C(10.0), NAV_C(0.0)},
-    [APP_PARAM_UDS_REQUEST_ID] = {0x0250u, APP_PARAM_U16, 0u, 0u, 1u, 1u, NAV_C(1.0), NAV_C(2047.0), NAV_C(1952.0)},
-    [APP_PARAM_UDS_RESPONSE_ID] = {0x0251u, APP_PARAM_U16, 0u, 0u, 1u, 1u, NAV_C(1.0), NAV_C(2047.0), NAV_C(1960.0)},
-    [APP_PARAM_IMU_TIME] = {0x0209u, APP_PARAM_ENUM, 0u, 0u, 1u, 0u, NAV_C(0.0), NAV_C(1.0), NAV_C(0.0)},
+    [APP_PARAM_IMU_RATE_HZ] = {0x0200u, APP_PARAM_U16, 0u, 0u, 1u, 0u, NAV_C(10.0), NAV_C(400.0), NAV_C(100.0), offsetof(app_config_t, imu_rate_hz), sizeof(((app_config_t *)0)->imu_rate_hz)},
+    [APP_PARAM_NAV_RATE_HZ] = {0x0201u, APP_PARAM_U16, 0u, 0u, 0u, 0u, NAV_C(1.0), NAV_C(400.0), NAV_C(50.0), offsetof(app_config_t, nav_rate_hz), sizeof(((app_config_t *)0)->nav_rate_hz)},
+    [APP_PARAM_STATUS_RATE_HZ] = {0x0202u, APP_PARAM_U16, 0u, 0u, 0u, 0u, NAV_C(1.0), NAV_C(400.0), NAV_C(10.0), offsetof(app_config_t, status_rate_hz), sizeof(((app_config_t *)0)->status_rate_hz)},
+    [APP_PARAM_DYN_RATE_HZ] = {0x0203u, APP_PARAM_U16, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(400.0), NAV_C(50.0), offsetof(app_config_t, dyn_rate_hz), sizeof(((app_config_t *)0)->dyn_rate_hz)},
+    [APP_PARAM_LEVEL_S] = {0x0204u, APP_PARAM_U16, 0u, 0u, 0u, 0u, NAV_C(1.0), NAV_C(600.0), NAV_C(30.0), offsetof(app_config_t, level_s), sizeof(((app_config_t *)0)->level_s)},
+    [APP_PARAM_ODO_AXLE] = {0x0210u, APP_PARAM_ENUM, 0u, 0u, 1u, 0u, NAV_C(0.0), NAV_C(1.0), NAV_C(0.0), offsetof(app_config_t, odo_axle), sizeof(((app_config_t *)0)->odo_axle)},
+    [APP_PARAM_ODO_TRACK_M] = {0x0211u, APP_PARAM_REAL, 1u, 1u, 1u, 0u, NAV_C(0.5), NAV_C(3.0), NAV_C(0.0), offsetof(app_config_t, odo_track_m), sizeof(((app_config_t *)0)->odo_track_m)},
+    [APP_PARAM_ODO_WHEELBASE_M] = {0x0212u, APP_PARAM_REAL, 1u, 1u, 1u, 0u, NAV_C(1.0), NAV_C(6.0), NAV_C(0.0), offsetof(app_config_t, odo_wheelbase_m), sizeof(((app_config_t *)0)->odo_wheelbase_m)},
+    [APP_PARAM_ODO_LEVER_B_M] = {0x0213u, APP_PARAM_VEC3, 0u, 0u, 0u, 0u, NAV_C(-10.0), NAV_C(10.0), NAV_C(0.0), offsetof(app_config_t, odo_lever_b_m), sizeof(((app_config_t *)0)->odo_lever_b_m)},
+    [APP_PARAM_ODO_LEVER_SIGMA_M] = {0x0214u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(5.0), NAV_C(1.0), offsetof(app_config_t, odo_lever_sigma_m), sizeof(((app_config_t *)0)->odo_lever_sigma_m)},
+    [APP_PARAM_ODO_STEP_MPS] = {0x0216u, APP_PARAM_REAL, 0u, 1u, 0u, 0u, NAV_C(0.001), NAV_C(1.0), NAV_C(0.0), offsetof(app_config_t, odo_step_mps), sizeof(((app_config_t *)0)->odo_step_mps)},
+    [APP_PARAM_ODO_DIRECTION] = {0x0215u, APP_PARAM_ENUM, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(1.0), NAV_C(0.0), offsetof(app_config_t, odo_direction), sizeof(((app_config_t *)0)->odo_direction)},
+    [APP_PARAM_ODO_LATENCY_S] = {0x0217u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(0.5), NAV_C(0.0), offsetof(app_config_t, odo_latency_s), sizeof(((app_config_t *)0)->odo_latency_s)},
+    [APP_PARAM_CAL_MIN_BASE_M] = {0x0220u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(100000.0), NAV_C(2000.0), offsetof(app_config_t, cal_min_base_m), sizeof(((app_config_t *)0)->cal_min_base_m)},
+    [APP_PARAM_IMU_MOUNT_RAD] = {0x0205u, APP_PARAM_VEC3, 0u, 0u, 1u, 0u, NAV_C(-3.141592653589793), NAV_C(3.141592653589793), NAV_C(0.0), offsetof(app_config_t, imu_mount_rad), sizeof(((app_config_t *)0)->imu_mount_rad)},
+    [APP_PARAM_IMU_MOUNT_SOURCE] = {0x0206u, APP_PARAM_ENUM, 0u, 0u, 1u, 0u, NAV_C(0.0), NAV_C(1.0), NAV_C(0.0), offsetof(app_config_t, imu_mount_source), sizeof(((app_config_t *)0)->imu_mount_source)},
+    [APP_PARAM_MOUNT_EST_SIGMA_RAD] = {0x0207u, APP_PARAM_REAL, 0u, 0u, 1u, 0u, NAV_C(0.00017453292519943296), NAV_C(0.17453292519943295), NAV_C(0.017453292519943295), offsetof(app_config_t, mount_est_sigma_rad), sizeof(((app_config_t *)0)->mount_est_sigma_rad)},
+    [APP_PARAM_MOUNT_EST_EXCITE_M2PS3] = {0x0208u, APP_PARAM_REAL, 0u, 0u, 1u, 0u, NAV_C(0.0), NAV_C(100000.0), NAV_C(50.0), offsetof(app_config_t, mount_est_excite_m2ps3), sizeof(((app_config_t *)0)->mount_est_excite_m2ps3)},
+    [APP_PARAM_GYRO_ARW_RAD_RTS] = {0x0230u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(2.908882086657216e-10), NAV_C(0.02908882086657216), NAV_C(0.0005817764173314432), offsetof(app_config_t, gyro_arw_rad_rts), sizeof(((app_config_t *)0)->gyro_arw_rad_rts)},
+    [APP_PARAM_GYRO_BIAS_RPS] = {0x0231u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(4.84813681109536e-12), NAV_C(0.0484813681109536), NAV_C(0.0009999999697132222), offsetof(app_config_t, gyro_bias_rps), sizeof(((app_config_t *)0)->gyro_bias_rps)},
+    [APP_PARAM_ACCEL_BIAS_MPS2] = {0x0232u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(9.80665e-07), NAV_C(9.80665), NAV_C(0.199999762095), offsetof(app_config_t, accel_bias_mps2), sizeof(((app_config_t *)0)->accel_bias_mps2)},
+    [APP_PARAM_GYRO_BIAS_RW_RPS_RTS] = {0x0233u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(3.9584871301292103e-13), NAV_C(0.0039584871301292105), NAV_C(7.916974260258421e-06), offsetof(app_config_t, gyro_bias_rw_rps_rts), sizeof(((app_config_t *)0)->gyro_bias_rw_rps_rts)},
+    [APP_PARAM_GYRO_BIAS_CORR_TIME_S] = {0x0238u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(10.0), NAV_C(100000.0), NAV_C(100.0), offsetof(app_config_t, gyro_bias_corr_time_s), sizeof(((app_config_t *)0)->gyro_bias_corr_time_s)},
+    [APP_PARAM_ACCEL_BIAS_RW_MPS2_RTS] = {0x0234u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(8.007096195354886e-09), NAV_C(0.8007096195354885), NAV_C(0.0016329912193692611), offsetof(app_config_t, accel_bias_rw_mps2_rts), sizeof(((app_config_t *)0)->accel_bias_rw_mps2_rts)},
+    [APP_PARAM_GYRO_RANGE_RPS] = {0x0235u, APP_PARAM_REAL, 0u, 0u, 1u, 0u, NAV_C(0.017453292519943295), NAV_C(87.26646259971648), NAV_C(5.235987755982989), offsetof(app_config_t, gyro_range_rps), sizeof(((app_config_t *)0)->gyro_range_rps)},
+    [APP_PARAM_ACCEL_RANGE_MPS2] = {0x0236u, APP_PARAM_REAL, 0u, 0u, 1u, 0u, NAV_C(1.0), NAV_C(2000.0), NAV_C(78.4532), offsetof(app_config_t, accel_range_mps2), sizeof(((app_config_t *)0)->accel_range_mps2)},
+    [APP_PARAM_GYRO_SCALE] = {0x0237u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(1e-07), NAV_C(0.09999999999999999), NAV_C(0.01), offsetof(app_config_t, gyro_scale), sizeof(((app_config_t *)0)->gyro_scale)},
+    [APP_PARAM_GNSS_LATENCY_S] = {0x0240u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(0.5), NAV_C(0.1), offsetof(app_config_t, gnss_latency_s), sizeof(((app_config_t *)0)->gnss_latency_s)},
+    [APP_PARAM_GNSS_CORR_S] = {0x0241u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(600.0), NAV_C(20.0), offsetof(app_config_t, gnss_corr_s), sizeof(((app_config_t *)0)->gnss_corr_s)},
+    [APP_PARAM_GNSS_VEL_CORR_S] = {0x024Au, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(60.0), NAV_C(0.0), offsetof(app_config_t, gnss_vel_corr_s), sizeof(((app_config_t *)0)->gnss_vel_corr_s)},
+    [APP_PARAM_GNSS_WHITE_RATIO] = {0x0248u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.05), NAV_C(1.0), NAV_C(0.33), offsetof(app_config_t, gnss_white_ratio), sizeof(((app_config_t *)0)->gnss_white_ratio)},
+    [APP_PARAM_GNSS_ACCURACY] = {0x0243u, APP_PARAM_ENUM, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(1.0), NAV_C(0.0), offsetof(app_config_t, gnss_accuracy), sizeof(((app_config_t *)0)->gnss_accuracy)},
+    [APP_PARAM_GNSS_HACC_M] = {0x0244u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.1), NAV_C(102.3), NAV_C(3.0), offsetof(app_config_t, gnss_hacc_m), sizeof(((app_config_t *)0)->gnss_hacc_m)},
+    [APP_PARAM_GNSS_VACC_M] = {0x0245u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.1), NAV_C(102.3), NAV_C(5.0), offsetof(app_config_t, gnss_vacc_m), sizeof(((app_config_t *)0)->gnss_vacc_m)},
+    [APP_PARAM_GNSS_SACC_MPS] = {0x0246u, APP_PARAM_REAL, 0u, 0u, 0u, 0u, NAV_C(0.01), NAV_C(1.5), NAV_C(0.2), offsetof(app_config_t, gnss_sacc_mps), sizeof(((app_config_t *)0)->gnss_sacc_mps)},
+    [APP_PARAM_GNSS_VEL_UP] = {0x0247u, APP_PARAM_ENUM, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(1.0), NAV_C(0.0), offsetof(app_config_t, gnss_vel_up), sizeof(((app_config_t *)0)->gnss_vel_up)},
+    [APP_PARAM_GNSS_INPUT] = {0x0249u, APP_PARAM_ENUM, 0u, 0u, 0u, 0u, NAV_C(0.0), NAV_C(2.0), NAV_C(2.0), offsetof(app_config_t, gnss_input), sizeof(((app_config_t *)0)->gnss_input)},
+    [APP_PARAM_GNSS_LEVER_B_M] = {0x0242u, APP_PARAM_VEC3, 0u, 0u, 0u, 0u, NAV_C(-10.0), NAV_C(10.0), NAV_C(0.0), offsetof(app_config_t, gnss_lever_b_m), sizeof(((app_config_t *)0)->gnss_lever_b_m)},
+    [APP_PARAM_UDS_REQUEST_ID] = {0x0250u, APP_PARAM_U16, 0u, 0u, 1u, 1u, NAV_C(1.0), NAV_C(2047.0), NAV_C(1952.0), offsetof(app_config_t, uds_request_id), sizeof(((app_config_t *)0)->uds_request_id)},
+    [APP_PARAM_UDS_RESPONSE_ID] = {0x0251u, APP_PARAM_U16, 0u, 0u, 1u, 1u, NAV_C(1.0), NAV_C(2047.0), NAV_C(1960.0), offsetof(app_config_t, uds_response_id), sizeof(((app_config_t *)0)->uds_response_id)},
+    [APP_PARAM_IMU_TIME] = {0x0209u, APP_PARAM_ENUM, 0u, 0u, 1u, 0u, NAV_C(0.0), NAV_C(1.0), NAV_C(0.0), offsetof(app_config_t, imu_time), sizeof(((app_config_t *)0)->imu_time)},
 };
 
 #ifndef APP_PARAM_NO_NAMES
@@ -123,345 +123,61 @@ const char *const app_preset_names[APP_PRESET_N] = {
 };
 #endif
 
-void app_param_get(const app_config_t *cfg, app_param_id_t id, nav_real_t v[3])
-{
-    v[0] = NAV_C(0.0);
-    v[1] = NAV_C(0.0);
-    v[2] = NAV_C(0.0);
-    switch (id) {
-    case APP_PARAM_IMU_RATE_HZ:
-        v[0] = (nav_real_t)cfg->imu_rate_hz;
-        break;
-    case APP_PARAM_NAV_RATE_HZ:
-        v[0] = (nav_real_t)cfg->nav_rate_hz;
-        break;
-    case APP_PARAM_STATUS_RATE_HZ:
-        v[0] = (nav_real_t)cfg->status_rate_hz;
-        break;
-    case APP_PARAM_DYN_RATE_HZ:
-        v[0] = (nav_real_t)cfg->dyn_rate_hz;
-        break;
-    case APP_PARAM_LEVEL_S:
-        v[0] = (nav_real_t)cfg->level_s;
-        break;
-    case APP_PARAM_ODO_AXLE:
-        if (cfg->odo_axle == ODO_AXLE_REAR) {
-            v[0] = NAV_C(0.0);
-        }
-        if (cfg->odo_axle == ODO_AXLE_FRONT) {
-            v[0] = NAV_C(1.0);
-        }
-        break;
-    case APP_PARAM_ODO_TRACK_M:
-        v[0] = cfg->odo_track_m;
-        break;
-    case APP_PARAM_ODO_WHEELBASE_M:
-        v[0] = cfg->odo_wheelbase_m;
-        break;
-    case APP_PARAM_ODO_LEVER_B_M:
-        v[0] = cfg->odo_lever_b_m[0];
-        v[1] = cfg->odo_lever_b_m[1];
-        v[2] = cfg->odo_lever_b_m[2];
-        break;
-    case APP_PARAM_ODO_LEVER_SIGMA_M:
-        v[0] = cfg->odo_lever_sigma_m;
-        break;
-    case APP_PARAM_ODO_STEP_MPS:
-        v[0] = cfg->odo_step_mps;
-        break;
-    case APP_PARAM_ODO_DIRECTION:
-        if (cfg->odo_direction == ODO_DIR_AS_READ) {
-            v[0] = NAV_C(0.0);
-        }
-        if (cfg->odo_direction == ODO_DIR_NAVIGATOR) {
-            v[0] = NAV_C(1.0);
-        }
-        break;
-    case APP_PARAM_ODO_LATENCY_S:
-        v[0] = cfg->odo_latency_s;
-        break;
-    case APP_PARAM_CAL_MIN_BASE_M:
-        v[0] = cfg->cal_min_base_m;
-        break;
-    case APP_PARAM_IMU_MOUNT_RAD:
-        v[0] = cfg->imu_mount_rad[0];
-        v[1] = cfg->imu_mount_rad[1];
-        v[2] = cfg->imu_mount_rad[2];
-        break;
-    case APP_PARAM_IMU_MOUNT_SOURCE:
-        if (cfg->imu_mount_source == MOUNT_SOURCE_FIXED) {
-            v[0] = NAV_C(0.0);
-        }
-        if (cfg->imu_mount_source == MOUNT_SOURCE_AUTOMATIC) {
-            v[0] = NAV_C(1.0);
-        }
-        break;
-    case APP_PARAM_MOUNT_EST_SIGMA_RAD:
-        v[0] = cfg->mount_est_sigma_rad;
-        break;
-    case APP_PARAM_MOUNT_EST_EXCITE_M2PS3:
-        v[0] = cfg->mount_est_excite_m2ps3;
-        break;
-    case APP_PARAM_GYRO_ARW_RAD_RTS:
-        v[0] = cfg->gyro_arw_rad_rts;
-        break;
-    case APP_PARAM_GYRO_BIAS_RPS:
-        v[0] = cfg->gyro_bias_rps;
-        break;
-    case APP_PARAM_ACCEL_BIAS_MPS2:
-        v[0] = cfg->accel_bias_mps2;
-        break;
-    case APP_PARAM_GYRO_BIAS_RW_RPS_RTS:
-        v[0] = cfg->gyro_bias_rw_rps_rts;
-        break;
-    case APP_PARAM_GYRO_BIAS_CORR_TIME_S:
-        v[0] = cfg->gyro_bias_corr_time_s;
-        break;
-    case APP_PARAM_ACCEL_BIAS_RW_MPS2_RTS:
-        v[0] = cfg->accel_bias_rw_mps2_rts;
-        break;
-    case APP_PARAM_GYRO_RANGE_RPS:
-        v[0] = cfg->gyro_range_rps;
-        break;
-    case APP_PARAM_ACCEL_RANGE_MPS2:
-        v[0] = cfg->accel_range_mps2;
-        break;
-    case APP_PARAM_GYRO_SCALE:
-        v[0] = cfg->gyro_scale;
-        break;
-    case APP_PARAM_GNSS_LATENCY_S:
-        v[0] = cfg->gnss_latency_s;
-        break;
-    case APP_PARAM_GNSS_CORR_S:
-        v[0] = cfg->gnss_corr_s;
-        break;
-    case APP_PARAM_GNSS_VEL_CORR_S:
-        v[0] = cfg->gnss_vel_corr_s;
-        break;
-    case APP_PARAM_GNSS_WHITE_RATIO:
-        v[0] = cfg->gnss_white_ratio;
-        break;
-    case APP_PARAM_GNSS_ACCURACY:
-        if (cfg->gnss_accuracy == GNSS_ACC_REPORTED) {
-            v[0] = NAV_C(0.0);
-        }
-        if (cfg->gnss_accuracy == GNSS_ACC_DECLARED) {
-            v[0] = NAV_C(1.0);
-        }
-        break;
-    case APP_PARAM_GNSS_HACC_M:
-        v[0] = cfg->gnss_hacc_m;
-        break;
-    case APP_PARAM_GNSS_VACC_M:
-        v[0] = cfg->gnss_vacc_m;
-        break;
-    case APP_PARAM_GNSS_SACC_MPS:
-        v[0] = cfg->gnss_sacc_mps;
-        break;
-    case APP_PARAM_GNSS_VEL_UP:
-        if (cfg->gnss_vel_up == GNSS_VUP_MEASURED) {
-            v[0] = NAV_C(0.0);
-        }
-        if (cfg->gnss_vel_up == GNSS_VUP_NONE) {
-            v[0] = NAV_C(1.0);
-        }
-        break;
-    case APP_PARAM_GNSS_INPUT:
-        if (cfg->gnss_input == GNSS_INPUT_FIX) {
-            v[0] = NAV_C(0.0);
-        }
-        if (cfg->gnss_input == GNSS_INPUT_RAW) {
-            v[0] = NAV_C(1.0);
-        }
-        if (cfg->gnss_input == GNSS_INPUT_BOTH) {
-            v[0] = NAV_C(2.0);
-        }
-        break;
-    case APP_PARAM_GNSS_LEVER_B_M:
-        v[0] = cfg->gnss_lever_b_m[0];
-        v[1] = cfg->gnss_lever_b_m[1];
-        v[2] = cfg->gnss_lever_b_m[2];
-        break;
-    case APP_PARAM_UDS_REQUEST_ID:
-        v[0] = (nav_real_t)cfg->uds_request_id;
-        break;
-    case APP_PARAM_UDS_RESPONSE_ID:
-        v[0] = (nav_real_t)cfg->uds_response_id;
-        break;
-    case APP_PARAM_IMU_TIME:
-        if (cfg->imu_time == IMU_TIME_GRID) {
-            v[0] = NAV_C(0.0);
-        }
-        if (cfg->imu_time == IMU_TIME_STAMPED) {
-            v[0] = NAV_C(1.0);
-        }
-        break;
-    default:
-        break;
-    }
-}
-
-int app_param_set(app_config_t *cfg, app_param_id_t id, const nav_real_t v[3])
-{
-    if (!app_param_in_range(id, v)) {
-        return -1;
-    }
-    switch (id) {
-    case APP_PARAM_IMU_RATE_HZ:
-        cfg->imu_rate_hz = (uint16_t)v[0];
-        break;
-    case APP_PARAM_NAV_RATE_HZ:
-        cfg->nav_rate_hz = (uint16_t)v[0];
-        break;
-    case APP_PARAM_STATUS_RATE_HZ:
-        cfg->status_rate_hz = (uint16_t)v[0];
-        break;
-    case APP_PARAM_DYN_RATE_HZ:
-        cfg->dyn_rate_hz = (uint16_t)v[0];
-        break;
-    case APP_PARAM_LEVEL_S:
-        cfg->level_s = (uint16_t)v[0];
-        break;
-    case APP_PARAM_ODO_AXLE:
-        cfg->odo_axle = ODO_AXLE_REAR;
-        if (v[0] > NAV_C(0.5)) {
-            cfg->odo_axle = ODO_AXLE_FRONT;
-        }
-        break;
-    case APP_PARAM_ODO_TRACK_M:
-        cfg->odo_track_m = v[0];
-        break;
-    case APP_PARAM_ODO_WHEELBASE_M:
-        cfg->odo_wheelbase_m = v[0];
-        break;
-    case APP_PARAM_ODO_LEVER_B_M:
-        cfg->odo_lever_b_m[0] = v[0];
-        cfg->odo_lever_b_m[1] = v[1];
-        cfg->odo_lever_b_m[2] = v[2];
-        break;
-    case APP_PARAM_ODO_LEVER_SIGMA_M:
-        cfg->odo_lever_sigma_m = v[0];
-        break;
-    case APP_PARAM_ODO_STEP_MPS:
-        cfg->odo_step_mps = v[0];
-        break;
-    case APP_PARAM_ODO_DIRECTION:
-        cfg->odo_direction = ODO_DIR_AS_READ;
-        if (v[0] > NAV_C(0.5)) {
-            cfg->odo_direction = ODO_DIR_NAVIGATOR;
-        }
-        break;
-    case APP_PARAM_ODO_LATENCY_S:
-        cfg->odo_latency_s = v[0];
-        break;
-    case APP_PARAM_CAL_MIN_BASE_M:
-        cfg->cal_min_base_m = v[0];
-        break;
-    case APP_PARAM_IMU_MOUNT_RAD:
-        cfg->imu_mount_rad[0] = v[0];
-        cfg->imu_mount_rad[1] = v[1];
-        cfg->imu_mount_rad[2] = v[2];
-        break;
-    case APP_PARAM_IMU_MOUNT_SOURCE:
-        cfg->imu_mount_source = MOUNT_SOURCE_FIXED;
-        if (v[0] > NAV_C(0.5)) {
-            cfg->imu_mount_source = MOUNT_SOURCE_AUTOMATIC;
-        }
-        break;
-    case APP_PARAM_MOUNT_EST_SIGMA_RAD:
-        cfg->mount_est_sigma_rad = v[0];
-        break;
-    case APP_PARAM_MOUNT_EST_EXCITE_M2PS3:
-        cfg->mount_est_excite_m2ps3 = v[0];
-        break;
-    case APP_PARAM_GYRO_ARW_RAD_RTS:
-        cfg->gyro_arw_rad_rts = v[0];
-        break;
-    case APP_PARAM_GYRO_BIAS_RPS:
-        cfg->gyro_bias_rps = v[0];
-        break;
-    case APP_PARAM_ACCEL_BIAS_MPS2:
-        cfg->accel_bias_mps2 = v[0];
-        break;
-    case APP_PARAM_GYRO_BIAS_RW_RPS_RTS:
-        cfg->gyro_bias_rw_rps_rts = v[0];
-        break;
-    case APP_PARAM_GYRO_BIAS_CORR_TIME_S:
-        cfg->gyro_bias_corr_time_s = v[0];
-        break;
-    case APP_PARAM_ACCEL_BIAS_RW_MPS2_RTS:
-        cfg->accel_bias_rw_mps2_rts = v[0];
-        break;
-    case APP_PARAM_GYRO_RANGE_RPS:
-        cfg->gyro_range_rps = v[0];
-        break;
-    case APP_PARAM_ACCEL_RANGE_MPS2:
-        cfg->accel_range_mps2 = v[0];
-        break;
-    case APP_PARAM_GYRO_SCALE:
-        cfg->gyro_scale = v[0];
-        break;
-    case APP_PARAM_GNSS_LATENCY_S:
-        cfg->gnss_latency_s = v[0];
-        break;
-    case APP_PARAM_GNSS_CORR_S:
-        cfg->gnss_corr_s = v[0];
-        break;
-    case APP_PARAM_GNSS_VEL_CORR_S:
-        cfg->gnss_vel_corr_s = v[0];
-        break;
-    case APP_PARAM_GNSS_WHITE_RATIO:
-        cfg->gnss_white_ratio = v[0];
-        break;
-    case APP_PARAM_GNSS_ACCURACY:
-        cfg->gnss_accuracy = GNSS_ACC_REPORTED;
-        if (v[0] > NAV_C(0.5)) {
-            cfg->gnss_accuracy = GNSS_ACC_DECLARED;
-        }
-        break;
-    case APP_PARAM_GNSS_HACC_M:
-        cfg->gnss_hacc_m = v[0];
-        break;
-    case APP_PARAM_GNSS_VACC_M:
-        cfg->gnss_vacc_m = v[0];
-        break;
-    case APP_PARAM_GNSS_SACC_MPS:
-        cfg->gnss_sacc_mps = v[0];
-        break;
-    case APP_PARAM_GNSS_VEL_UP:
-        cfg->gnss_vel_up = GNSS_VUP_MEASURED;
-        if (v[0] > NAV_C(0.5)) {
-            cfg->gnss_vel_up = GNSS_VUP_NONE;
-        }
-        break;
-    case APP_PARAM_GNSS_INPUT:
-        cfg->gnss_input = GNSS_INPUT_FIX;
-        if (v[0] > NAV_C(0.5)) {
-            cfg->gnss_input = GNSS_INPUT_RAW;
-        }
-        if (v[0] > NAV_C(1.5)) {
-            cfg->gnss_input = GNSS_INPUT_BOTH;
-        }
-        break;
-    case APP_PARAM_GNSS_LEVER_B_M:
-        cfg->gnss_lever_b_m[0] = v[0];
-        cfg->gnss_lever_b_m[1] = v[1];
-        cfg->gnss_lever_b_m[2] = v[2];
-        break;
-    case APP_PARAM_UDS_REQUEST_ID:
-        cfg->uds_request_id = (uint16_t)v[0];
-        break;
-    case APP_PARAM_UDS_RESPONSE_ID:
-        cfg->uds_response_id = (uint16_t)v[0];
-        break;
-    case APP_PARAM_IMU_TIME:
-        cfg->imu_time = IMU_TIME_GRID;
-        if (v[0] > NAV_C(0.5)) {
-            cfg->imu_time = IMU_TIME_STAMPED;
-        }
-        break;
-    default:
-        return -1;
-    }
-    return 0;
-}
+/* app_param_get and app_param_set (app_config.c) read and write a field through its
+ * offset and size: an enum's index is its C constant's value */
+_Static_assert(sizeof(((app_config_t *)0)->imu_rate_hz) == sizeof(uint16_t), "imu_rate_hz: its type's size");
+_Static_assert(sizeof(((app_config_t *)0)->nav_rate_hz) == sizeof(uint16_t), "nav_rate_hz: its type's size");
+_Static_assert(sizeof(((app_config_t *)0)->status_rate_hz) == sizeof(uint16_t), "status_rate_hz: its type's size");
+_Static_assert(sizeof(((app_config_t *)0)->dyn_rate_hz) == sizeof(uint16_t), "dyn_rate_hz: its type's size");
+_Static_assert(sizeof(((app_config_t *)0)->level_s) == sizeof(uint16_t), "level_s: its type's size");
+_Static_assert(sizeof(((app_config_t *)0)->odo_axle) == 1u || sizeof(((app_config_t *)0)->odo_axle) == 4u, "odo_axle: 1 or 4 bytes");
+_Static_assert(ODO_AXLE_REAR == 0, "odo_axle: value 0 is ODO_AXLE_REAR");
+_Static_assert(ODO_AXLE_FRONT == 1, "odo_axle: value 1 is ODO_AXLE_FRONT");
+_Static_assert(sizeof(((app_config_t *)0)->odo_track_m) == sizeof(nav_real_t), "odo_track_m: its type's size");
+_Static_assert(sizeof(((app_config_t *)0)->odo_wheelbase_m) == sizeof(nav_real_t), "odo_wheelbase_m: its type's size");
+_Static_assert(sizeof(((app_config_t *)0)->odo_lever_b_m) == 3u * sizeof(nav_real_t), "odo_lever_b_m: its type's size");
+_Static_assert(sizeof(((app_config_t *)0)->odo_lever_sigma_m) == sizeof(nav_real_t), "odo_lever_sigma_m: its type's size");
+_Static_assert(sizeof(((app_config_t *)0)->odo_step_mps) == sizeof(nav_real_t), "odo_step_mps: its type's size");
+_Static_assert(sizeof(((app_config_t *)0)->odo_direction) == 1u || sizeof(((app_config_t *)0)->odo_direction) == 4u, "odo_direction: 1 or 4 bytes");
+_Static_assert(ODO_DIR_AS_READ == 0, "odo_direction: value 0 is ODO_DIR_AS_READ");
+_Static_assert(ODO_DIR_NAVIGATOR == 1, "odo_direction: value 1 is ODO_DIR_NAVIGATOR");
+_Static_assert(sizeof(((app_config_t *)0)->odo_latency_s) == sizeof(nav_real_t), "odo_latency_s: its type's size");
+_Static_assert(sizeof(((app_config_t *)0)->cal_min_base_m) == sizeof(nav_real_t), "cal_min_base_m: its type's size");
+_Static_assert(sizeof(((app_config_t *)0)->imu_mount_rad) == 3u * sizeof(nav_real_t), "imu_mount_rad: its type's size");
+_Static_assert(sizeof(((app_config_t *)0)->imu_mount_source) == 1u || sizeof(((app_config_t *)0)->imu_mount_source) == 4u, "imu_mount_source: 1 or 4 bytes");
+_Static_assert(MOUNT_SOURCE_FIXED == 0, "imu_mount_source: value 0 is MOUNT_SOURCE_FIXED");
+_Static_assert(MOUNT_SOURCE_AUTOMATIC == 1, "imu_mount_source: value 1 is MOUNT_SOURCE_AUTOMATIC");
+_Static_assert(sizeof(((app_config_t *)0)->mount_est_sigma_rad) == sizeof(nav_real_t), "mount_est_sigma_rad: its type's size");
+_Static_assert(sizeof(((app_config_t *)0)->mount_est_excite_m2ps3) == sizeof(nav_real_t), "mount_est_excite_m2ps3: its type's size");
+_Static_assert(sizeof(((app_config_t *)0)->gyro_arw_rad_rts) == sizeof(nav_real_t), "gyro_arw_rad_rts: its type's size");
+_Static_assert(sizeof(((app_config_t *)0)->gyro_bias_rps) == sizeof(nav_real_t), "gyro_bias_rps: its type's size");
+_Static_assert(sizeof(((app_config_t *)0)->accel_bias_mps2) == sizeof(nav_real_t), "accel_bias_mps2: its type's size");
+_Static_assert(sizeof(((app_config_t *)0)->gyro_bias_rw_rps_rts) == sizeof(nav_real_t), "gyro_bias_rw_rps_rts: its type's size");
+_Static_assert(sizeof(((app_config_t *)0)->gyro_bias_corr_time_s) == sizeof(nav_real_t), "gyro_bias_corr_time_s: its type's size");
+_Static_assert(sizeof(((app_config_t *)0)->accel_bias_rw_mps2_rts) == sizeof(nav_real_t), "accel_bias_rw_mps2_rts: its type's size");
+_Static_assert(sizeof(((app_config_t *)0)->gyro_range_rps) == sizeof(nav_real_t), "gyro_range_rps: its type's size");
+_Static_assert(sizeof(((app_config_t *)0)->accel_range_mps2) == sizeof(nav_real_t), "accel_range_mps2: its type's size");
+_Static_assert(sizeof(((app_config_t *)0)->gyro_scale) == sizeof(nav_real_t), "gyro_scale: its type's size");
+_Static_assert(sizeof(((app_config_t *)0)->gnss_latency_s) == sizeof(nav_real_t), "gnss_latency_s: its type's size");
+_Static_assert(sizeof(((app_config_t *)0)->gnss_corr_s) == sizeof(nav_real_t), "gnss_corr_s: its type's size");
+_Static_assert(sizeof(((app_config_t *)0)->gnss_vel_corr_s) == sizeof(nav_real_t), "gnss_vel_corr_s: its type's size");
+_Static_assert(sizeof(((app_config_t *)0)->gnss_white_ratio) == sizeof(nav_real_t), "gnss_white_ratio: its type's size");
+_Static_assert(sizeof(((app_config_t *)0)->gnss_accuracy) == 1u || sizeof(((app_config_t *)0)->gnss_accuracy) == 4u, "gnss_accuracy: 1 or 4 bytes");
+_Static_assert(GNSS_ACC_REPORTED == 0, "gnss_accuracy: value 0 is GNSS_ACC_REPORTED");
+_Static_assert(GNSS_ACC_DECLARED == 1, "gnss_accuracy: value 1 is GNSS_ACC_DECLARED");
+_Static_assert(sizeof(((app_config_t *)0)->gnss_hacc_m) == sizeof(nav_real_t), "gnss_hacc_m: its type's size");
+_Static_assert(sizeof(((app_config_t *)0)->gnss_vacc_m) == sizeof(nav_real_t), "gnss_vacc_m: its type's size");
+_Static_assert(sizeof(((app_config_t *)0)->gnss_sacc_mps) == sizeof(nav_real_t), "gnss_sacc_mps: its type's size");
+_Static_assert(sizeof(((app_config_t *)0)->gnss_vel_up) == 1u || sizeof(((app_config_t *)0)->gnss_vel_up) == 4u, "gnss_vel_up: 1 or 4 bytes");
+_Static_assert(GNSS_VUP_MEASURED == 0, "gnss_vel_up: value 0 is GNSS_VUP_MEASURED");
+_Static_assert(GNSS_VUP_NONE == 1, "gnss_vel_up: value 1 is GNSS_VUP_NONE");
+_Static_assert(sizeof(((app_config_t *)0)->gnss_input) == 1u || sizeof(((app_config_t *)0)->gnss_input) == 4u, "gnss_input: 1 or 4 bytes");
+_Static_assert(GNSS_INPUT_FIX == 0, "gnss_input: value 0 is GNSS_INPUT_FIX");
+_Static_assert(GNSS_INPUT_RAW == 1, "gnss_input: value 1 is GNSS_INPUT_RAW");
+_Static_assert(GNSS_INPUT_BOTH == 2, "gnss_input: value 2 is GNSS_INPUT_BOTH");
+_Static_assert(sizeof(((app_config_t *)0)->gnss_lever_b_m) == 3u * sizeof(nav_real_t), "gnss_lever_b_m: its type's size");
+_Static_assert(sizeof(((app_config_t *)0)->uds_request_id) == sizeof(uint16_t), "uds_request_id: its type's size");
+_Static_assert(sizeof(((app_config_t *)0)->uds_response_id) == sizeof(uint16_t), "uds_response_id: its type's size");
+_Static_assert(sizeof(((app_config_t *)0)->imu_time) == 1u || sizeof(((app_config_t *)0)->imu_time) == 4u, "imu_time: 1 or 4 bytes");
+_Static_assert(IMU_TIME_GRID == 0, "imu_time: value 0 is IMU_TIME_GRID");
+_Static_assert(IMU_TIME_STAMPED == 1, "imu_time: value 1 is IMU_TIME_STAMPED");

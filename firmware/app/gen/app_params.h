@@ -29,6 +29,8 @@ typedef struct {
     nav_real_t min_si, max_si; /* range, SI units (enum: 0..values - 1) */
     nav_real_t default_si;  /* default, SI; a vec3's x, y and z alike (vehicle_default:
                                unused) */
+    uint16_t offset;        /* its field in app_config_t: offsetof */
+    uint8_t size;           /* and sizeof (an enum's is the target's: 1 or 4 bytes) */
 } app_param_t;
 
 /* the parameters, in the table's order */
