@@ -328,6 +328,42 @@ static void test_bad_entries_refused(void **state)
     assert_int_equal(got.uds_request_id, d.uds_request_id);
 }
 
+/* A set valid as a whole loads back whatever its entries' order (the IMU rate's entry,
+ * 20 Hz, comes before the output rates', 10 Hz, and breaks "an output rate at most the
+ * IMU rate" against their defaults halfway through: it was refused and the ECU ran at
+ * 100 Hz); a set that breaks the rule as a whole (the IMU rate alone) is applied entry by
+ * entry, and its IMU rate is refused and counted. */
+static void test_low_imu_rate_loads_back(void **state)
+{
+    (void)state;
+    calstore_t cs = {0u, -1};
+    app_config_t a = app_default_config();
+    a.nav_rate_hz = 10u;
+    a.status_rate_hz = 10u;
+    a.dyn_rate_hz = 10u;
+    a.imu_rate_hz = 20u;
+    assert_true(app_config_valid(&a));
+    assert_true(app_params[APP_PARAM_IMU_RATE_HZ].did < app_params[APP_PARAM_NAV_RATE_HZ].did);
+    assert_int_equal(nvstore_save(&hal, &cs, &a, &cal_x), 0);
+    app_config_t got;
+    nvstore_status_t st;
+    assert_int_equal(nvstore_layer(&hal, &got, &st), CALSTORE_OK);
+    assert_int_equal(st.refused, 0);
+    assert_true(same_params(&got, &a));
+
+    const app_config_t d = app_default_config();
+    const uint16_t did = app_params[APP_PARAM_IMU_RATE_HZ].did;
+    const uint8_t alone[] = {(uint8_t)(did >> 8), (uint8_t)did, 2u, 0u, 20u};
+    app_config_t c = d;
+    nvstore_status_t st2;
+    memset(&st2, 0, sizeof st2);
+    nvstore_params_decode(&c, alone, sizeof alone, &st2);
+    assert_int_equal(st2.refused, 1);
+    assert_int_equal(st2.loaded, 0);
+    assert_true(same_params(&c, &d));
+    assert_true(app_config_valid(&c));
+}
+
 /* a calibration save (calib's policy) and a calibration erase keep the parameters; the
  * erase leaves no calibration; DTC status bytes round trip and survive both */
 static void test_calibration_keeps_params_and_dtc(void **state)
@@ -417,6 +453,7 @@ int main(void)
         cmocka_unit_test_setup(test_bad_entries_refused, setup),
         cmocka_unit_test_setup(test_calibration_keeps_params_and_dtc, setup),
         cmocka_unit_test_setup(test_interrupted_first_save, setup),
+        cmocka_unit_test_setup(test_low_imu_rate_loads_back, setup),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

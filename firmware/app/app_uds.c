@@ -98,8 +98,8 @@ size_t app_uds_param_encode(const app_config_t *cfg, app_param_id_t id, uint8_t 
     return n;
 }
 
-uint8_t app_uds_param_decode(app_config_t *cfg, app_param_id_t id, const uint8_t *data,
-                             size_t len)
+uint8_t app_uds_param_value(app_config_t *cfg, app_param_id_t id, const uint8_t *data,
+                            size_t len)
 {
     const app_param_type_t t = app_params[id].type;
     if (len != value_len(t)) {
@@ -116,9 +116,19 @@ uint8_t app_uds_param_decode(app_config_t *cfg, app_param_id_t id, const uint8_t
             v[i] = get_f32(&data[4u * i]);
         }
     }
+    return app_param_set(cfg, id, v) != 0 ? UDS_NRC_REQUEST_OUT_OF_RANGE : UDS_NRC_OK;
+}
+
+uint8_t app_uds_param_decode(app_config_t *cfg, app_param_id_t id, const uint8_t *data,
+                             size_t len)
+{
     app_config_t next = *cfg;
-    if (app_param_set(&next, id, v) != 0 || !app_config_valid(&next)) {
-        return UDS_NRC_REQUEST_OUT_OF_RANGE; /* its range, or a rule between parameters */
+    const uint8_t nrc = app_uds_param_value(&next, id, data, len);
+    if (nrc != UDS_NRC_OK) {
+        return nrc;
+    }
+    if (!app_config_valid(&next)) {
+        return UDS_NRC_REQUEST_OUT_OF_RANGE; /* a rule between parameters */
     }
     *cfg = next;
     return UDS_NRC_OK;

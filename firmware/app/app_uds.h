@@ -92,6 +92,11 @@ size_t app_uds_param_encode(const app_config_t *cfg, app_param_id_t id, uint8_t 
  * between parameters, app_config_valid). *cfg is changed only on UDS_NRC_OK. */
 uint8_t app_uds_param_decode(app_config_t *cfg, app_param_id_t id, const uint8_t *data,
                              size_t len);
+/* The same without the rules between parameters (a value's own length and range only;
+ * *cfg is changed only on UDS_NRC_OK): a stored set's entries, whose rules are checked on
+ * the whole set (nvstore_params_decode). */
+uint8_t app_uds_param_value(app_config_t *cfg, app_param_id_t id, const uint8_t *data,
+                            size_t len);
 
 /* The diagnostic channel and server with their message buffers (a request is copied out
  * of the channel to be served; the response stays put while ISO-TP sends it). */

@@ -43,18 +43,19 @@ static void count_refused(nvstore_status_t *st)
 void nvstore_params_decode(app_config_t *cfg, const uint8_t *buf, size_t len,
                            nvstore_status_t *st)
 {
+    *cfg = app_default_config();
     size_t k = 0u;
     while (k < len) {
         if (len - k < NVSTORE_ENTRY_HEAD ||
             len - k - NVSTORE_ENTRY_HEAD < (size_t)buf[k + 2u]) {
             count_refused(st); /* a truncated last entry */
-            return;
+            break;
         }
         const uint16_t did = (uint16_t)(((uint16_t)buf[k] << 8) | buf[k + 1u]);
         const size_t n = buf[k + 2u];
         const app_param_id_t id = app_uds_param_of_did(did);
         if (id == APP_PARAM_N || app_params[id].uds_read_only ||
-            app_uds_param_decode(cfg, id, &buf[k + NVSTORE_ENTRY_HEAD], n) != UDS_NRC_OK) {
+            app_uds_param_value(cfg, id, &buf[k + NVSTORE_ENTRY_HEAD], n) != UDS_NRC_OK) {
             count_refused(st);
         } else if (st->loaded < UINT8_MAX) {
             st->loaded++;
@@ -62,6 +63,17 @@ void nvstore_params_decode(app_config_t *cfg, const uint8_t *buf, size_t len,
             /* loaded saturated */
         }
         k += NVSTORE_ENTRY_HEAD + n;
+    }
+    /* A set stored valid is valid as a whole, not after each of its entries (with the IMU
+     * at 20 Hz and the outputs at 10 Hz, the IMU rate's entry comes first and breaks "an
+     * output rate at most the IMU rate" against the default 50 Hz): the rules between
+     * parameters are checked once, on the whole. A set that breaks them (a record of a
+     * firmware with other rules) is refused whole: the defaults, its entries counted. */
+    if (!app_config_valid(cfg)) {
+        *cfg = app_default_config();
+        const unsigned refused = (unsigned)st->refused + st->loaded;
+        st->refused = (uint8_t)(refused < UINT8_MAX ? refused : UINT8_MAX);
+        st->loaded = 0u;
     }
 }
 
@@ -88,7 +100,7 @@ int nvstore_layer(hal_t *hal, app_config_t *cfg, nvstore_status_t *st)
     } else {
         st->version = (uint8_t)CALSTORE_EXT_VERSION;
         st->source = (uint8_t)NVSTORE_SRC_NVM;
-        nvstore_params_decode(cfg, ext.params, ext.params_len, st);
+        nvstore_params_decode(cfg, ext.params, ext.params_len, st); /* over the defaults */
     }
     return rc;
 }

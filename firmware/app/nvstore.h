@@ -5,12 +5,14 @@
  *
  * Entry: DID (2 bytes, big-endian), length n (1 byte), value (n bytes, the DID's UDS
  * encoding: app_uds_param_encode / app_uds_param_decode, so one codec serves UDS and NVM),
- * entries back to back in the table's order. On load each entry is applied over the
- * configuration in turn, as a WriteDataByIdentifier would be: an unknown DID, a DID that
- * is read-only, a wrong length, a value out of range or breaking a rule between
- * parameters is refused and counted (nvstore_status_t refused), and that parameter keeps
- * the value it had (the default, under a fresh boot); a truncated last entry is refused.
- * A parameter with no entry keeps its value too.
+ * entries back to back in the table's order. On load the entries are applied over the
+ * configuration: an unknown DID, a DID that is read-only, a wrong length or a value out
+ * of its range is refused and counted (nvstore_status_t refused), and that parameter
+ * keeps the value it had (the default, under a fresh boot); a truncated last entry is
+ * refused. The rules between parameters (app_config_valid) are checked once, on the
+ * whole result (a set stored valid need not be valid halfway through it); a set that
+ * breaks them is refused whole: the defaults, every entry counted refused. A parameter
+ * with no entry keeps its value.
  *
  * Layers (docs/configuration.md): the table's defaults, then this record, then the board's
  * own (the host's command-line options); nvstore_layer does the first two.
@@ -51,8 +53,8 @@ typedef struct {
  * or 0 if they do not fit. */
 size_t nvstore_params_encode(const app_config_t *cfg, uint8_t *buf, size_t cap);
 
-/* Apply the entries buf[0..len) over *cfg (the rules above); st->loaded and st->refused
- * counted. */
+/* *cfg = the defaults with the entries buf[0..len) applied (the rules above);
+ * st->loaded and st->refused counted on. */
 void nvstore_params_decode(app_config_t *cfg, const uint8_t *buf, size_t len,
                            nvstore_status_t *st);
 
