@@ -283,6 +283,29 @@ static void test_latency_forgotten_at_time_jump(void **state)
     assert_near(gnss_time_latency(&g, 0.1f), 0.1f, 0.0);
 }
 
+/* GIVEN epochs on time and a learnt latency WHEN the time of week passes the week's end
+ * (604 799.8 and .9 s, then 0.0 and 0.1 s, 0.1 s of IMU time apart) THEN no epoch is a
+ * jump, each is on time and the latency stays learnt; before, the offset stepped by a
+ * week at 0.0 s: counted as a receiver clock jump, the latency forgotten. */
+static void test_week_rollover_is_no_jump(void **state)
+{
+    (void)state;
+    record_constant(64u, 0.0f, 0.0f, 0.0f);
+    const uint64_t t0_us = 1000000000u;
+    const uint32_t tow0_ms = APP_WEEK_MS - 200u;
+    assert_int_equal(gnss_time_align(&g, t0_us, RATE_HZ, tow0_ms, 0.0f).jumped, 0);
+    g.lat_learnt = 1u; /* as if learnt: a jump would clear it */
+    for (uint32_t k = 1u; k <= 3u; k++) {
+        const uint32_t tow_ms = (tow0_ms + 100u * k) % APP_WEEK_MS;
+        const gnss_when_t w = gnss_time_align(&g, t0_us + 100000u * k, RATE_HZ, tow_ms, 0.0f);
+        assert_int_equal(w.jumped, 0);
+        assert_near(w.late_s, 0.0, 1e-4);
+    }
+    assert_int_equal(g.lat_learnt, 1);
+    const gnss_when_t p = gnss_time_peek(&g, t0_us + 400000u, RATE_HZ, 200u, 0.0f);
+    assert_near(p.late_s, 0.0, 1e-4);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -298,6 +321,7 @@ int main(void)
         cmocka_unit_test_setup(test_latency_learnt_from_acceleration, setup),
         cmocka_unit_test_setup(test_latency_not_learnt_without_dynamics, setup),
         cmocka_unit_test_setup(test_latency_forgotten_at_time_jump, setup),
+        cmocka_unit_test_setup(test_week_rollover_is_no_jump, setup),
     };
     return cmocka_run_group_tests_name("gnss_time", tests, NULL, NULL);
 }
