@@ -229,6 +229,27 @@ static void test_missing_frame(void **state)
     assert_int_equal(c.complete, 0x5u);
 }
 
+/* Satellite 1 sent in slots 1 and 3 (the same System and SvId), satellite 0 in slot 0 and
+ * 2 in slot 2: slots 1 and 3 are both dropped and counted (which is right cannot be told;
+ * fused twice it weighed double and outvoted the others in the fault exclusion: a review's
+ * finding), slots 0 and 2 used. */
+static void test_duplicate_satellite(void **state)
+{
+    (void)state;
+    feed_sat(0, 0u, 3u);
+    feed_sat(1, 1u, 3u);
+    feed_sat(2, 2u, 3u);
+    feed_sat(1, 3u, 3u);
+    const hal_can_frame_t e = epoch_frame(3u, 4u, 4000u);
+    const gnss_raw_close_t c = close_with(&e);
+    assert_int_equal(c.usable, 1u);
+    assert_int_equal(c.n_sats, 2u);
+    assert_int_equal(c.duplicate, 2u);
+    assert_int_equal(c.complete, 0x5u);
+    assert_sat(0u, 0);
+    assert_sat(2u, 2);
+}
+
 /* A second GNSS_RawRange of slot 0 in the same epoch is a repeat: dropped, the first
  * value stays. */
 static void test_repeated_frame(void **state)
@@ -323,7 +344,8 @@ static void test_frame_checks(void **state)
 }
 
 /* Through the application: a good epoch counted in raw_epochs/raw_sats; an incomplete
- * one in CntGnssRejected (once); a repeated frame in CntBadCounter; nothing else. */
+ * one in CntGnssRejected (once); a repeated frame in CntBadCounter; nothing else; an epoch
+ * with a satellite in two slots in CntGnssRejected (once), its other satellite used. */
 static void test_counted_by_the_application(void **state)
 {
     (void)state;
@@ -356,6 +378,22 @@ static void test_counted_by_the_application(void **state)
     assert_int_equal(app.keep.raw_epochs, 1u);
     assert_int_equal(app.keep.health.gnss_rejected, h0.gnss_rejected + 1u);
     assert_int_equal(app.keep.health.bad_counter, h0.bad_counter + 1u);
+
+    /* satellite 0 in slots 0 and 2, satellite 1 in slot 1: one satellite used, the epoch
+     * counted once in CntGnssRejected */
+    const int sat_of_slot[3] = {0, 1, 0};
+    for (int k = 0; k < 3; k++) {
+        const sat_t d = sat_k(sat_of_slot[k]);
+        for (int p = 0; p < 5; p++) {
+            const hal_can_frame_t f = sat_frame(&d, p, (uint8_t)k, 2u);
+            app_handle_frame(&app, &hal, &f);
+        }
+    }
+    e = epoch_frame(2u, 3u, 3000u);
+    app_handle_frame(&app, &hal, &e);
+    assert_int_equal(app.keep.raw_epochs, 2u);
+    assert_int_equal(app.keep.raw_sats, 3u);
+    assert_int_equal(app.keep.health.gnss_rejected, h0.gnss_rejected + 2u);
 }
 
 /* ---- each satellite's learnt range bias (raw_bias.h) ---- */
@@ -545,6 +583,7 @@ int main(void)
         cmocka_unit_test_setup(test_any_order, setup),
         cmocka_unit_test_setup(test_missing_frame, setup),
         cmocka_unit_test_setup(test_repeated_frame, setup),
+        cmocka_unit_test_setup(test_duplicate_satellite, setup),
         cmocka_unit_test_setup(test_unclosed_and_mismatched_epochs, setup),
         cmocka_unit_test_setup(test_repeat_extra_and_empty, setup),
         cmocka_unit_test_setup(test_frame_checks, setup),

@@ -608,7 +608,7 @@ static void on_gnss_raw(app_t *a, hal_t *hal, const rx_input_t *in)
     const gnss_raw_close_t c = gnss_raw_close(&a->keep.raw, in);
     if (c.repeat != 0u) {
         reject(a, &a->keep.health.bad_counter);
-    } else if (c.mismatch != 0u || c.incomplete != 0u || c.extra != 0u) {
+    } else if (c.mismatch != 0u || c.incomplete != 0u || c.extra != 0u || c.duplicate != 0u) {
         reject(a, &a->keep.health.gnss_rejected);
     } else {
         /* a well-formed epoch */

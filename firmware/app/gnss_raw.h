@@ -12,7 +12,8 @@
  * - a second frame of the same part and slot in one epoch: the repeat is dropped, the
  *   first stays (GNSS_RAW_REPEAT);
  * - at the close: slots with a frame missing, frames of slots at or beyond NumMeas, a close
- *   whose epoch number is not the assembly's (gnss_raw_close_t);
+ *   whose epoch number is not the assembly's, a satellite in two slots (both dropped:
+ *   gnss_raw_close_t);
  * - an epoch with the TimeOfWeek of the previous one (a repeat of the whole epoch).
  * The assembly is fixed size: GNSS_RAW_MAX_SATS slots.
  */
@@ -60,6 +61,8 @@ typedef struct {
     uint8_t repeat;     /* the previous epoch's TimeOfWeek again: all dropped */
     uint8_t incomplete; /* slots below NumMeas with a frame missing (dropped) */
     uint8_t extra;      /* slots at or beyond NumMeas that had frames (dropped) */
+    uint8_t duplicate;  /* complete slots of a satellite (System, SvId) another complete
+                           slot also has: every one of them dropped */
     uint8_t n_sats;     /* complete satellites */
     uint16_t complete;  /* their slots */
     uint8_t usable;     /* at least one complete satellite, not a repeat or mismatch */
