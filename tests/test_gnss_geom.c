@@ -143,8 +143,31 @@ static void test_satellite_range(void **state)
     assert_true(fabs((double)z - want) < 2e-4);
 }
 
-/* A satellite 100 m from the receiver, or at the Earth's centre's distance of 10^9 m: not
- * a GNSS satellite, refused. */
+/* A satellite on GPS's orbit (26,560 km from the centre) seen at elevation el_deg from
+ * rx (0.1 mm), towards the east: its position in 0.02 m */
+static void sat_at_elevation(const int64_t rx[3], double el_deg, int32_t sat[3])
+{
+    double r[3], up[3];
+    for (int i = 0; i < 3; i++) {
+        r[i] = (double)rx[i] * 1e-4;
+    }
+    const double rn = sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+    for (int i = 0; i < 3; i++) {
+        up[i] = r[i] / rn;
+    }
+    const double en = hypot(up[0], up[1]);
+    const double east[3] = {-up[1] / en, up[0] / en, 0.0};
+    const double e = el_deg * M_PI / 180.0, R = 26560e3;
+    const double rho = -rn * sin(e) + sqrt(rn * rn * sin(e) * sin(e) - rn * rn + R * R);
+    for (int i = 0; i < 3; i++) {
+        sat[i] = (int32_t)llround((r[i] + rho * (cos(e) * east[i] + sin(e) * up[i])) / 0.02);
+    }
+}
+
+/* Not a GNSS satellite, refused: 100 m from the receiver; at the Earth's centre (6,378 km
+ * from the receiver, inside the 1,000-100,000 km that let it through before: a review's
+ * finding); on GPS's orbit straight below the receiver (nadir) or 15 deg below its
+ * horizon. On the orbit 5 deg below (a mountain's horizon), 5 and 90 deg above: taken. */
 static void test_impossible_satellite(void **state)
 {
     (void)state;
@@ -156,6 +179,31 @@ static void test_impossible_satellite(void **state)
     const int16_t v[3] = {0, 0, 0};
     gnss_geom_t g;
     assert_int_equal(gnss_geom_sat(rx, near, v, &g), NAV_EINVAL);
+    const int32_t centre[3] = {0, 0, 0};
+    assert_int_equal(gnss_geom_sat(rx, centre, v, &g), NAV_EINVAL);
+    int32_t sat[3];
+    sat_at_elevation(rx, -90.0, sat);
+    assert_int_equal(gnss_geom_sat(rx, sat, v, &g), NAV_EINVAL);
+    sat_at_elevation(rx, -15.0, sat);
+    assert_int_equal(gnss_geom_sat(rx, sat, v, &g), NAV_EINVAL);
+    sat_at_elevation(rx, -5.0, sat);
+    assert_int_equal(gnss_geom_sat(rx, sat, v, &g), NAV_OK);
+    sat_at_elevation(rx, 5.0, sat);
+    assert_int_equal(gnss_geom_sat(rx, sat, v, &g), NAV_OK);
+    sat_at_elevation(rx, 90.0, sat);
+    assert_int_equal(gnss_geom_sat(rx, sat, v, &g), NAV_OK);
+    /* along (1, 1, 1), above this receiver's horizon: 45,000 km from the centre (QZSS's
+     * apogee, 45,330 km) is taken, 50,000 km (each axis 28,868 km, within the frame's
+     * range) is not a GNSS orbit */
+    int32_t far[3];
+    for (int i = 0; i < 3; i++) {
+        far[i] = (int32_t)llround(45000e3 / sqrt(3.0) / 0.02);
+    }
+    assert_int_equal(gnss_geom_sat(rx, far, v, &g), NAV_OK);
+    for (int i = 0; i < 3; i++) {
+        far[i] = (int32_t)llround(50000e3 / sqrt(3.0) / 0.02);
+    }
+    assert_int_equal(gnss_geom_sat(rx, far, v, &g), NAV_EINVAL);
 }
 
 int main(void)

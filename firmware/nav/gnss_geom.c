@@ -184,6 +184,22 @@ int gnss_geom_sat(const int64_t rx_dmm[3], const int32_t pos_lsb[3], const int16
           r0 <= NAV_C(1e8) * (nav_real_t)GNSS_GEOM_DMM_PER_M)) {
         return NAV_EINVAL;
     }
+    /* a GNSS satellite's orbit (the centre's distance) and above the receiver's horizon
+     * (the geocentric one, within 0.2 deg of the ellipsoid's normal): not a corrupt or
+     * made-up position that a range 1,000 to 100,000 km away would let through */
+    nav_real_t rs2 = NAV_C(0.0), rx2 = NAV_C(0.0), up = NAV_C(0.0);
+    for (int i = 0; i < 3; i++) {
+        const nav_real_t si = (nav_real_t)s[i], ri = (nav_real_t)rx_dmm[i];
+        rs2 += si * si;
+        rx2 += ri * ri;
+        up += df[i] * ri;
+    }
+    const nav_real_t lo = GNSS_GEOM_ORBIT_MIN_M * (nav_real_t)GNSS_GEOM_DMM_PER_M;
+    const nav_real_t hi = GNSS_GEOM_ORBIT_MAX_M * (nav_real_t)GNSS_GEOM_DMM_PER_M;
+    if (!(rs2 >= lo * lo && rs2 <= hi * hi) ||
+        !(up >= GNSS_GEOM_SIN_EL_MIN * r0 * nav_sqrt(rx2))) {
+        return NAV_EINVAL;
+    }
     const nav_real_t tau = r0 / ((nav_real_t)GNSS_GEOM_DMM_PER_M * NAV_C(299792458.0));
     const nav_real_t th = (nav_real_t)WGS84_OMEGA_IE_RPS * tau; /* < 1e-5 rad */
     /* R3(th) s - s = (th y - th^2/2 x, -th x - th^2/2 y, 0): below 400 m, float32 to 0.1 mm */

@@ -49,9 +49,20 @@ typedef struct {
 /* ECEF WGS-84 of a geodetic position, 0.1 mm units. */
 void geo_to_ecef_dmm(const geo_pos_t *pos, int64_t ecef_dmm[3]);
 
+/* A GNSS satellite's distance from the Earth's centre: GLONASS's 25,500 km orbit and the
+ * MEO constellations above it, up to QZSS's inclined geosynchronous orbit at its apogee
+ * (42,164 km x (1 + 0.075) = 45,330 km), with a margin; and its elevation above the
+ * receiver's horizon at least -10 deg (a receiver on a mountain sees the horizon dip by
+ * 2 deg at 4 km; refraction adds half a degree). */
+#define GNSS_GEOM_ORBIT_MIN_M NAV_C(2.0e7)
+#define GNSS_GEOM_ORBIT_MAX_M NAV_C(4.7e7)
+#define GNSS_GEOM_SIN_EL_MIN NAV_C(-0.17365) /* sin(-10 deg) */
+
 /* The geometry of a satellite at pos_lsb (0.02 m, transmit-time axes) with velocity
- * vel_lsb (0.125 m/s) seen from rx_dmm. NAV_EINVAL for a satellite closer than 1,000 km
- * or farther than 100,000 km (not a GNSS satellite: a corrupt position). */
+ * vel_lsb (0.125 m/s) seen from rx_dmm. NAV_EINVAL for a position that is not a GNSS
+ * satellite's (a corrupt or made-up one): closer than 1,000 km or farther than 100,000 km,
+ * off the orbits above (GNSS_GEOM_ORBIT_MIN_M..MAX_M from the Earth's centre), or more
+ * than 10 deg below the receiver's horizon. */
 int gnss_geom_sat(const int64_t rx_dmm[3], const int32_t pos_lsb[3], const int16_t vel_lsb[3],
                   gnss_geom_t *g);
 
