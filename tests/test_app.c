@@ -244,6 +244,27 @@ static void test_output_rates_and_e2e(void **state)
     }
 }
 
+/* Output rates that do not divide the IMU rate (100 Hz): 60 Hz is every 2nd sample, 50 Hz;
+ * 30 Hz every 3rd, 33.3 Hz; 7 Hz every 14th, 7.14 Hz (round(IMU rate / rate)). Before, the
+ * IMU rate over the rate was truncated: 60 Hz went out at 100 Hz (a review's finding). */
+static void test_output_rates_not_dividing(void **state)
+{
+    (void)state;
+    app_config_t cfg = app_default_config();
+    cfg.nav_rate_hz = 60u;
+    cfg.status_rate_hz = 30u;
+    cfg.dyn_rate_hz = 7u;
+    assert_int_equal(app_init(&app, &cfg), NAV_OK);
+    send_init_commands(30.0);
+    run_still(30); /* levelling */
+    hal.tx_n = 0u;
+    run_still(10);
+    assert_int_equal(hal.tx_dropped, 0);
+    assert_int_equal(tx_count(NAVECU_CAN_NAV_POSITION_FRAME_ID), 500);
+    assert_in_range(tx_count(NAVECU_CAN_NAV_STATUS_FRAME_ID), 666, 668); /* two a period */
+    assert_in_range(tx_count(NAVECU_CAN_NAV_RATES_FRAME_ID), 71, 72);
+}
+
 /* Same input twice, fresh application: byte-identical output frames. */
 static void test_deterministic(void **state)
 {
@@ -1757,6 +1778,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test_setup(test_stationary_navigation, setup),
         cmocka_unit_test_setup(test_output_rates_and_e2e, setup),
+        cmocka_unit_test_setup(test_output_rates_not_dividing, setup),
         cmocka_unit_test_setup(test_deterministic, setup),
         cmocka_unit_test_setup(test_bad_input_counted, setup),
         cmocka_unit_test_setup(test_init_needs_known_position, setup),

@@ -526,12 +526,21 @@ static void emit_mount(app_t *a, hal_t *hal)
     send_protected(&a->keep.tx, hal, a->cfg.can_ids[NAVECU_MSG_NAV_CALIBRATION], d);
 }
 
+/* an output at rate_hz goes every this many IMU samples: the IMU rate over it, rounded to
+ * the nearest (a rate that does not divide the IMU rate is the nearest that does: 60 Hz at
+ * 100 Hz every 2nd sample, 50 Hz; truncated, it was every sample, 100 Hz); at least 1 */
+static uint32_t every_samples(uint32_t imu_hz, uint32_t rate_hz)
+{
+    const uint32_t d = (imu_hz + rate_hz / 2u) / rate_hz;
+    return d > 0u ? d : 1u;
+}
+
 void output_due(app_t *a, hal_t *hal)
 {
     const uint64_t n = a->keep.n_samples;
     const uint32_t imu = a->cfg.imu_rate_hz;
-    const uint32_t nav_div = a->cfg.nav_rate_hz >= imu ? 1u : imu / a->cfg.nav_rate_hz;
-    const uint32_t st_div = a->cfg.status_rate_hz >= imu ? 1u : imu / a->cfg.status_rate_hz;
+    const uint32_t nav_div = every_samples(imu, a->cfg.nav_rate_hz);
+    const uint32_t st_div = every_samples(imu, a->cfg.status_rate_hz);
     const uint8_t mode_now = output_mode(a);
     const uint8_t mode_changed = (mode_now != a->keep.tx.last_mode) ? 1u : 0u;
     if (mode_changed != 0u) { /* the new Mode before the first (or after the last) set in it */
@@ -542,7 +551,7 @@ void output_due(app_t *a, hal_t *hal)
         emit_navigation(a, hal);
     }
     if (a->run.mode == APP_MODE_NAVIGATING && a->cfg.dyn_rate_hz != 0u &&
-        n % (a->cfg.dyn_rate_hz >= imu ? 1u : imu / a->cfg.dyn_rate_hz) == 0u) {
+        n % every_samples(imu, a->cfg.dyn_rate_hz) == 0u) {
         emit_dynamics(a, hal);
     }
     if (n % st_div == 0u && mode_changed == 0u) {
