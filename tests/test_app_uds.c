@@ -323,9 +323,13 @@ static void test_reset_parameter_needs_navigation_stopped(void **state)
     /* an "at once" parameter may change while navigating */
     app.run.mode = APP_MODE_NAVIGATING;
     assert_int_equal(REQUEST(0x2E, 0x02, 0x02, 0x00, 0x05), 3u); /* status_rate_hz 5 */
+    /* the gyro's ARW too: app_init copies it into the IMU link and the standstill's test
+     * (0.42 deg/sqrt(h) = 1.2217e-4 rad/sqrt(s), float32 0x39001B94) */
+    expect_nrc(REQUEST(0x2E, 0x02, 0x30, 0x39, 0x00, 0x1B, 0x94), 0x2E, 0x22);
     app.run.mode = APP_MODE_WAIT_INIT;
     assert_int_equal(REQUEST(0x2E, 0x02, 0x00, 0x00, 0xC8), 3u);
     assert_int_equal(app.cfg.imu_rate_hz, 200u);
+    assert_int_equal(REQUEST(0x2E, 0x02, 0x30, 0x39, 0x00, 0x1B, 0x94), 3u);
 }
 
 static void test_ecu_reset_restarts_with_the_configuration(void **state)
