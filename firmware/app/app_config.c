@@ -63,18 +63,18 @@ void app_param_get(const app_config_t *cfg, app_param_id_t id, nav_real_t v[3])
         return;
     }
     const app_param_t *p = &app_params[id];
-    const uint8_t *f = (const uint8_t *)cfg + p->offset;
+    const uint8_t *f = &((const uint8_t *)cfg)[p->offset];
     if (p->type == APP_PARAM_REAL || p->type == APP_PARAM_VEC3) {
-        memcpy(v, f, p->size);
+        (void)memcpy(v, f, p->size);
     } else if (p->size == 2u) {
         uint16_t u;
-        memcpy(&u, f, sizeof u);
+        (void)memcpy(&u, f, sizeof u);
         v[0] = (nav_real_t)u;
     } else if (p->size == 1u) {
         v[0] = (nav_real_t)f[0];
     } else {
         uint32_t u;
-        memcpy(&u, f, sizeof u);
+        (void)memcpy(&u, f, sizeof u);
         v[0] = (nav_real_t)u;
     }
 }
@@ -85,20 +85,20 @@ int app_param_set(app_config_t *cfg, app_param_id_t id, const nav_real_t v[3])
         return -1;
     }
     const app_param_t *p = &app_params[id];
-    uint8_t *f = (uint8_t *)cfg + p->offset;
+    uint8_t *f = &((uint8_t *)cfg)[p->offset];
     if (p->type == APP_PARAM_REAL || p->type == APP_PARAM_VEC3) {
-        memcpy(f, v, p->size);
+        (void)memcpy(f, v, p->size);
         return 0;
     }
     /* a whole number within the range (app_param_in_range) */
     const uint32_t u = (uint32_t)v[0];
     if (p->size == 2u) {
         const uint16_t u16 = (uint16_t)u;
-        memcpy(f, &u16, sizeof u16);
+        (void)memcpy(f, &u16, sizeof u16);
     } else if (p->size == 1u) {
         f[0] = (uint8_t)u;
     } else {
-        memcpy(f, &u, sizeof u);
+        (void)memcpy(f, &u, sizeof u);
     }
     return 0;
 }

@@ -119,8 +119,10 @@ uint8_t app_uds_param_value(app_config_t *cfg, app_param_id_t id, const uint8_t 
     return app_param_set(cfg, id, v) != 0 ? UDS_NRC_REQUEST_OUT_OF_RANGE : UDS_NRC_OK;
 }
 
-uint8_t app_uds_param_decode(app_config_t *cfg, app_param_id_t id, const uint8_t *data,
-                             size_t len)
+/* app_uds_param_value with the rules between parameters: a WriteDataByIdentifier's
+ * (UDS_NRC_REQUEST_OUT_OF_RANGE for a rule broken; *cfg changed only on UDS_NRC_OK) */
+static uint8_t param_write(app_config_t *cfg, app_param_id_t id, const uint8_t *data,
+                           size_t len)
 {
     app_config_t next = *cfg;
     const uint8_t nrc = app_uds_param_value(&next, id, data, len);
@@ -247,7 +249,7 @@ static uint8_t write_did(void *user, uint16_t did, const uint8_t *data, size_t l
         return UDS_NRC_CONDITIONS_NOT_CORRECT;
     }
     /* in RAM; RoutineControl StoreParameters (0x0200) saves it in NVM (docs/can.md) */
-    return app_uds_param_decode(&a->cfg, id, data, len);
+    return param_write(&a->cfg, id, data, len);
 }
 
 /* saving or erasing the NVM stalls the CPU (calstore.h): only with navigation not started

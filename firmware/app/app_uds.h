@@ -87,14 +87,11 @@ app_param_id_t app_uds_param_of_did(uint16_t did);
 size_t app_uds_param_encode(const app_config_t *cfg, app_param_id_t id, uint8_t *buf,
                             size_t cap);
 
-/* data[0..len) as parameter id's value into *cfg: UDS_NRC_OK; UDS_NRC_INCORRECT_LENGTH
- * (not its length); UDS_NRC_REQUEST_OUT_OF_RANGE (out of its range or breaking a rule
- * between parameters, app_config_valid). *cfg is changed only on UDS_NRC_OK. */
-uint8_t app_uds_param_decode(app_config_t *cfg, app_param_id_t id, const uint8_t *data,
-                             size_t len);
-/* The same without the rules between parameters (a value's own length and range only;
- * *cfg is changed only on UDS_NRC_OK): a stored set's entries, whose rules are checked on
- * the whole set (nvstore_params_decode). */
+/* data[0..len) as parameter id's value into *cfg, its own length and range checked (the
+ * rules between parameters are not: WriteDataByIdentifier checks them after this, the NVM
+ * load on the whole set, nvstore_params_decode): UDS_NRC_OK; UDS_NRC_INCORRECT_LENGTH
+ * (not its length); UDS_NRC_REQUEST_OUT_OF_RANGE (out of its range). *cfg is changed only
+ * on UDS_NRC_OK. */
 uint8_t app_uds_param_value(app_config_t *cfg, app_param_id_t id, const uint8_t *data,
                             size_t len);
 

@@ -103,14 +103,14 @@ gnss_raw_close_t gnss_raw_close(gnss_raw_asm_t *g, const rx_input_t *in)
     uint16_t dup = 0u;
     for (uint8_t i = 0u; i < (uint8_t)GNSS_RAW_MAX_SATS; i++) {
         for (uint8_t j = (uint8_t)(i + 1u); j < (uint8_t)GNSS_RAW_MAX_SATS; j++) {
-            const uint16_t both = (uint16_t)((1u << i) | (1u << j));
+            const uint16_t both = (uint16_t)((uint16_t)(1u << i) | (uint16_t)(1u << j));
             if ((c.complete & both) == both && g->sat[i].system == g->sat[j].system &&
                 g->sat[i].sv_id == g->sat[j].sv_id) {
                 dup = (uint16_t)(dup | both);
             }
         }
     }
-    c.complete = (uint16_t)(c.complete & ~dup);
+    c.complete = (uint16_t)(c.complete & (uint16_t)~dup);
     for (; dup != 0u; dup = (uint16_t)(dup & (dup - 1u))) {
         c.duplicate++;
         c.n_sats--;

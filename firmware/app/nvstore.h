@@ -4,7 +4,7 @@
  * per UDS-writable parameter of the table (params.toml), and 16 DTC status bytes.
  *
  * Entry: DID (2 bytes, big-endian), length n (1 byte), value (n bytes, the DID's UDS
- * encoding: app_uds_param_encode / app_uds_param_decode, so one codec serves UDS and NVM),
+ * encoding: app_uds_param_encode / app_uds_param_value, so one codec serves UDS and NVM),
  * entries back to back in the table's order. On load the entries are applied over the
  * configuration: an unknown DID, a DID that is read-only, a wrong length or a value out
  * of its range is refused and counted (nvstore_status_t refused), and that parameter
