@@ -206,3 +206,12 @@ def test_outage5_rounding_is_the_simulators_own():
     assert r["rounding_m"] == pytest.approx(float(np.hypot(*sim)), rel=0.03)
     assert r["rounding_m"] > 0.5
     assert r["rms_m"] ** 2 == pytest.approx(r0["rms_m"] ** 2 + r["rounding_m"] ** 2, rel=1e-9)
+
+
+def test_help_prints_and_exits_0(capsys):
+    # argparse formats every help text with %: a bare % in one (e.g. "% of the outage's
+    # distance") made --help raise instead of printing
+    with pytest.raises(SystemExit) as exc:
+        gyro_floor.main(["--help"])
+    assert exc.value.code == 0
+    assert "--limit-pct" in capsys.readouterr().out

@@ -262,7 +262,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--scenario", default="outage5-automotive")
     ap.add_argument("--limit-pct", type=float, nargs="*", default=[],
-                    help="limits (% of the outage's distance): the chance of exceeding each")
+                    help="limits (%% of the outage's distance): the chance of exceeding each")
     ap.add_argument("--seeds", type=int, default=None,
                     help="with --limit-pct: the chance that at least one of this many seeds "
                          "exceeds each limit")
