@@ -25,6 +25,16 @@ def drive(tmp_path_factory):
     return rc, rep
 
 
+def test_the_filters_odometer_scale_is_read_from_its_summary_line(drive):
+    # navecu's "filter:" line says "odometer scale X (sigma S)," (host_sim/report.c): the
+    # pattern looked for "odometer scale X," and the report said none since the sigma came
+    _, rep = drive
+    line = ("navecu: filter: 8128 updates, 2 gated, 0 covariance corrections; odometer scale "
+            "-0.01017 (sigma 0.00073), mounting yaw 0.6629 deg (sigma 0.1128), pitch -0.1 deg")
+    assert run.parse_summary(line)["filter_odometer_scale_error"] == -0.01017
+    assert rep["runs"]["bus"]["filter_odometer_scale_error"] is not None
+
+
 def test_every_car_message_of_the_profile_is_read(drive):
     _, rep = drive
     sent = rep["car_bus"]["profile_messages"]

@@ -119,7 +119,7 @@ def gnss_error(data: Path, truth: dict, t0: float) -> dict:
 _SUMMARY = {
     "car_read": re.compile(r"wheel speeds (\d+), gear (\d+), yaw rate (\d+)"),
     "foreign": re.compile(r"foreign frames \(not read, not refused\): (\d+)"),
-    "odo_scale": re.compile(r"odometer scale (\S+),"),
+    "odo_scale": re.compile(r"odometer scale (-?\d+\.\d+)"),  # navecu's "filter:" line
     "rejected": re.compile(r"rejected: (.*)$", re.M),
 }
 
