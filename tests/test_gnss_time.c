@@ -306,6 +306,28 @@ static void test_week_rollover_is_no_jump(void **state)
     assert_near(p.late_s, 0.0, 1e-4);
 }
 
+/* GIVEN week 2000 and an epoch 0.2 s before its end WHEN the next epochs are of week 2001
+ * (TimeOfWeek from 0) THEN NAV_Time's time is that week's: week 2001, 0.1 s after an epoch
+ * at 0.0 s; before the minimum followed the week, it said week 2002 (a review's finding). */
+static void test_week_rollover_keeps_the_weeks_time(void **state)
+{
+    (void)state;
+    record_constant(64u, 0.0f, 0.0f, 0.0f);
+    const uint64_t t0_us = 1000000000u;
+    gnss_time_week(&g, 2000u);
+    (void)gnss_time_align(&g, t0_us, RATE_HZ, APP_WEEK_MS - 200u, 0.0f);
+    uint64_t tow_us;
+    uint16_t week;
+    assert_int_equal(gnss_time_at(&g, t0_us + 100000u, 0.0f, &tow_us, &week), 0);
+    assert_int_equal(week, 2000u);
+    assert_int_equal(tow_us, (uint64_t)(APP_WEEK_MS - 100u) * 1000u);
+    gnss_time_week(&g, 2001u);
+    assert_int_equal(gnss_time_align(&g, t0_us + 200000u, RATE_HZ, 0u, 0.0f).jumped, 0);
+    assert_int_equal(gnss_time_at(&g, t0_us + 300000u, 0.0f, &tow_us, &week), 0);
+    assert_int_equal(week, 2001u);
+    assert_int_equal(tow_us, 100000u);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -322,6 +344,7 @@ int main(void)
         cmocka_unit_test_setup(test_latency_not_learnt_without_dynamics, setup),
         cmocka_unit_test_setup(test_latency_forgotten_at_time_jump, setup),
         cmocka_unit_test_setup(test_week_rollover_is_no_jump, setup),
+        cmocka_unit_test_setup(test_week_rollover_keeps_the_weeks_time, setup),
     };
     return cmocka_run_group_tests_name("gnss_time", tests, NULL, NULL);
 }

@@ -34,24 +34,25 @@ static void when_late(const gnss_time_t *g, gnss_when_t *w, int64_t late_us,
     gnss_time_reach(g, w, latency_s);
 }
 
-/* the epoch's offset: IMU time less the receiver's time of week, us, within half a week
- * of the offset in use: the time of week restarts at 0 every week, and an epoch across
- * the week's end is the same clock, not a jump (it was counted as one, and the learnt
- * latency forgotten) */
-static int64_t offset_us(const gnss_time_t *g, uint64_t imu_t_us, uint32_t tow_ms)
+/* the epoch's offset: IMU time less the receiver's time of week, us */
+static int64_t offset_us(uint64_t imu_t_us, uint32_t tow_ms)
+{
+    return (int64_t)imu_t_us - (int64_t)tow_ms * 1000;
+}
+
+/* The time of week restarts at 0 every week: an offset a week (more than half of one)
+ * away from the minimum is the same clock, not a jump (it was counted as one, and the
+ * learnt latency forgotten). The week that the minimum is of: +-1 week to reach off. */
+static int64_t week_step_us(const gnss_time_t *g, int64_t off)
 {
     const int64_t week_us = (int64_t)APP_WEEK_MS * 1000;
-    int64_t off = (int64_t)imu_t_us - (int64_t)tow_ms * 1000;
-    if (g->off_valid) {
-        if (off - g->off_min_us > week_us / 2) {
-            off -= week_us;
-        } else if (off - g->off_min_us < -week_us / 2) {
-            off += week_us;
-        } else {
-            /* the same week */
-        }
+    if (g->off_valid && off - g->off_min_us > week_us / 2) {
+        return week_us;
     }
-    return off;
+    if (g->off_valid && off - g->off_min_us < -week_us / 2) {
+        return -week_us;
+    }
+    return 0;
 }
 
 gnss_when_t gnss_time_align(gnss_time_t *g, uint64_t imu_t_us, uint32_t imu_rate_hz,
@@ -59,7 +60,10 @@ gnss_when_t gnss_time_align(gnss_time_t *g, uint64_t imu_t_us, uint32_t imu_rate
 {
     gnss_when_t w;
     const int64_t t_imu_us = (int64_t)imu_t_us;
-    const int64_t off = offset_us(g, imu_t_us, tow_ms);
+    const int64_t off = offset_us(imu_t_us, tow_ms);
+    /* a new week: the minimum moves to it, so that it stays the latest epoch's (NAV_Time
+     * takes the week from the fixes: gnss_time_at) */
+    g->off_min_us += week_step_us(g, off);
     /* A step earlier by more than 1 s, later by more than 10 s, or later by more than
      * 0.5 s three epochs in a row is a time jump; a late epoch moves the offset once. */
     const int64_t excess = off - g->off_min_us;
@@ -95,7 +99,8 @@ gnss_when_t gnss_time_peek(const gnss_time_t *g, uint64_t imu_t_us, uint32_t imu
                            uint32_t tow_ms, nav_real_t latency_s)
 {
     gnss_when_t w;
-    const int64_t late = offset_us(g, imu_t_us, tow_ms) - g->off_min_us;
+    const int64_t off = offset_us(imu_t_us, tow_ms);
+    const int64_t late = off - (g->off_min_us + week_step_us(g, off));
     w.jumped = 0u;
     when_late(g, &w, late, imu_rate_hz, latency_s);
     if (g->off_valid == 0u || late > APP_GNSS_LATE_US) {
