@@ -55,6 +55,50 @@ def test_angle_random_walk_matches_its_closed_form():
     assert np.max(np.abs(err[:, k].real)) < 1e-2 * math.sqrt(want)  # along: second order
 
 
+def test_the_bias_estimate_is_the_posterior_of_the_standing_seconds_before_it():
+    # 300 s standing, then moving: at row 300 the estimate has seen 300 s (the rows before
+    # it), its error's variance 1 / (1 / sb^2 + T / q^2); it does not see the row itself
+    # (changing that row's reading leaves it as it was); it stays the same while moving
+    q, sb = 1e-4, 5e-5
+    t, z, still = north(600.0, 10.0, still_s=300.0)
+    dt = np.diff(t, append=t[-1])
+    rng = np.random.default_rng(7)
+    draws = 8000
+    b = sb * rng.standard_normal((draws, 1))
+    w = q * rng.standard_normal((draws, t.size))
+    est = dr_floor.bias_estimates(b, w, still, dt, q, sb)
+    want = 1.0 / (1.0 / sb ** 2 + 300.0 / q ** 2)
+    assert np.var(est[:, 300] - b[:, 0]) == pytest.approx(want, rel=0.06)
+    w2 = w.copy()
+    w2[:, 299] += 1.0
+    est2 = dr_floor.bias_estimates(b, w2, still, dt, q, sb)
+    # (to rounding: the estimate before row k is the running sum less row k's term)
+    assert np.allclose(est2[:, 299], est[:, 299], rtol=0.0, atol=1e-15)  # not yet seen
+    assert np.min(np.abs(est2[:, 300] - est[:, 300])) > 1e-3             # seen at 300
+    assert np.allclose(est[:, 300], est[:, 599], rtol=0.0, atol=1e-15)   # moving
+
+
+def test_the_calibration_rotates_and_scales_as_seed_000_says():
+    # the dead reckoning after the point, drawn independently here: the displacement from
+    # the start to the point, true and dead-reckoned, gives (1 + mu) exp(-i a) = D / D_dr;
+    # after it the velocity is that times exp(i psi) z. A bias never seen makes psi a ramp.
+    t, z, still = north(600.0, 10.0)
+    z = z * np.exp(1j * 0.3 * np.sin(t / 60.0))          # a winding road, not a straight
+    k_cal = 300
+    err = dr_floor.draw_errors(t, z, still, k_cal, 0.0, 2e-4, draws=4, seed=3)
+    b = 2e-4 * np.random.default_rng(3).standard_normal((4, 1))
+    dt = np.diff(t, append=t[-1])
+    psi = np.concatenate([np.zeros((4, 1)), np.cumsum(b * np.ones_like(t) * dt, axis=1)[:, :-1]],
+                         axis=1)
+    d_true = np.sum((z * dt)[:k_cal])
+    d_dr = np.sum((np.exp(1j * psi) * z * dt)[:, :k_cal], axis=1)
+    ratio = d_true / d_dr
+    v_after = ratio[:, None] * np.exp(1j * psi[:, k_cal:]) * z[k_cal:]
+    want = np.cumsum((v_after - z[k_cal:]) * dt[k_cal:], axis=1)[:, :-1]
+    assert np.allclose(err[:, k_cal + 1:], want, atol=1e-6)
+    assert np.max(np.abs(want)) > 1.0                     # a test of something
+
+
 def test_the_calibration_removes_the_rotation_it_measures():
     # a heading ramp before the point (bias never seen) makes the dead-reckoned displacement
     # turn; the calibration rotates and scales it onto the true one, so the error at the

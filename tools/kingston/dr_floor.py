@@ -11,8 +11,8 @@ the posterior mean of a constant with a zero-mean prior (docs/odometry.md, "Stan
 prior sigma the turn-on bias, each standing second an observation of the bias with the
 angle random walk's noise). What that leaves is modelled here, per draw:
 
-* a constant bias b ~ N(0, bias^2) (the configured turn-on sigma, `--gyro-bias-dph`);
-* the gyro's white rate noise, ARW^2 / dt per second's mean (`--gyro-arw-dpsh`), the same
+* a constant bias b ~ N(0, bias^2) (the configured turn-on sigma, `--bias-dph`);
+* the gyro's white rate noise, ARW^2 / dt per second's mean (`--arw-dpsh`), the same
   sequence the standstills observe and the moving seconds integrate;
 * the bias estimate at each second: every standing second before it, weighted as above;
 * the heading error psi: held at a standstill, grown by (b - estimate) + noise while moving;
@@ -62,6 +62,21 @@ def route(drive) -> dict:
     return {"t_s": t, "z": z, "dist_m": ref["dist_m"], "still": still}
 
 
+def bias_estimates(b, w, still, dt, arw_rad_rts: float, bias_rps: float) -> np.ndarray:
+    """The standstill estimate of the bias at each row (draws, n), rad/s: the posterior
+    mean of a constant with a zero-mean prior of sigma bias_rps from the standing steps
+    *before* the row, each step's reading b + w of variance ARW^2 / dt (docs/odometry.md)."""
+    n = np.asarray(dt).size
+    obs = np.asarray(still).astype(float) * dt         # seconds of bias seen at each step
+    info = np.cumsum(obs) - obs                        # before row k
+    s_info = np.cumsum((b + w) * obs, axis=1) - (b + w) * obs
+    prior_info = 1.0 / bias_rps ** 2 if bias_rps > 0.0 else math.inf
+    if arw_rad_rts > 0.0:
+        return (s_info / arw_rad_rts ** 2) / (prior_info + info / arw_rad_rts ** 2)
+    # a noiseless gyro: its first standing second gives the bias exactly
+    return np.where(info > 0.0, b, 0.0) * np.ones((1, n))
+
+
 def draw_errors(t_s, z, still, i_cal: int, arw_rad_rts: float, bias_rps: float,
                 draws: int, seed: int = SEED) -> np.ndarray:
     """Position errors (draws, n) as complex north + i east, m, of the model in the module
@@ -74,15 +89,7 @@ def draw_errors(t_s, z, still, i_cal: int, arw_rad_rts: float, bias_rps: float,
     rng = np.random.default_rng(seed)
     b = bias_rps * rng.standard_normal((draws, 1))
     w = arw_rad_rts / np.sqrt(dtc) * rng.standard_normal((draws, n))   # each step's mean noise
-    # the standstill estimate at row k: the posterior mean from the standing steps before k
-    obs = still.astype(float) * dt                     # seconds of bias seen at each step
-    info = np.cumsum(obs) - obs                        # before row k
-    s_info = np.cumsum((b + w) * obs, axis=1) - (b + w) * obs
-    prior_info = 1.0 / bias_rps ** 2 if bias_rps > 0.0 else math.inf
-    if arw_rad_rts > 0.0:
-        est = (s_info / arw_rad_rts ** 2) / (prior_info + info / arw_rad_rts ** 2)
-    else:  # a noiseless gyro: its first standing second gives the bias exactly
-        est = np.where(info > 0.0, b, 0.0) * np.ones((1, n))
+    est = bias_estimates(b, w, still, dt, arw_rad_rts, bias_rps)
     rate = np.where(still, 0.0, (b - est) + w)         # the heading is held at a standstill
     psi = np.concatenate([np.zeros((draws, 1)), np.cumsum(rate * dt, axis=1)[:, :-1]], axis=1)
     dz = (np.exp(1j * psi) - 1.0) * z                  # velocity error before the point
