@@ -331,8 +331,8 @@ static void test_bad_entries_refused(void **state)
 /* A set valid as a whole loads back whatever its entries' order (the IMU rate's entry,
  * 20 Hz, comes before the output rates', 10 Hz, and breaks "an output rate at most the
  * IMU rate" against their defaults halfway through: it was refused and the ECU ran at
- * 100 Hz); a set that breaks the rule as a whole (the IMU rate alone) is applied entry by
- * entry, and its IMU rate is refused and counted. */
+ * 100 Hz); a set that breaks the rule as a whole (the IMU rate alone) is refused whole:
+ * the defaults, its one entry counted refused. */
 static void test_low_imu_rate_loads_back(void **state)
 {
     (void)state;

@@ -8,8 +8,7 @@
  * entries back to back in the table's order. On load the entries are applied over the
  * configuration: an unknown DID, a DID that is read-only, a wrong length or a value out
  * of its range is refused and counted (nvstore_status_t refused), and that parameter
- * keeps the value it had (the default, under a fresh boot); a truncated last entry is
- * refused. The rules between parameters (app_config_valid) are checked once, on the
+ * keeps its default; a truncated last entry is refused. The rules between parameters (app_config_valid) are checked once, on the
  * whole result (a set stored valid need not be valid halfway through it); a set that
  * breaks them is refused whole: the defaults, every entry counted refused. A parameter
  * with no entry keeps its value.

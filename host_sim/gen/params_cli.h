@@ -22,7 +22,7 @@ typedef struct {
 
 static const params_cli_t params_cli[PARAMS_CLI_N] = {
     {"--imu-rate-hz", APP_PARAM_IMU_RATE_HZ, "Hz", 10.0, 400.0, 1.0, "", "IMU sample rate: one IMU_Rate + IMU_Accel pair per sample"},
-    {"--nav-rate-hz", APP_PARAM_NAV_RATE_HZ, "Hz", 1.0, 400.0, 1.0, "", "NAV_Position, NAV_Height, NAV_Velocity, NAV_Attitude and NAV_Time rate (at most the IMU rate; the host lowers the default to it); sent every round(IMU rate / rate) IMU samples, so a rate that does not divide the IMU rate is the nearest one that does (60 Hz at 100 Hz: 50 Hz)"},
+    {"--nav-rate-hz", APP_PARAM_NAV_RATE_HZ, "Hz", 1.0, 400.0, 1.0, "", "NAV_Position, NAV_Height, NAV_Velocity, NAV_Attitude and NAV_Time rate (at most the IMU rate; the host lowers the default to it); sent every round(IMU rate / rate) IMU samples: a rate that does not divide the IMU rate goes out at the IMU rate over that whole number (60 Hz at 100 Hz: every 2nd sample, 50 Hz; 67 Hz: every sample, 100 Hz)"},
     {"--status-rate-hz", APP_PARAM_STATUS_RATE_HZ, "Hz", 1.0, 400.0, 1.0, "", "NAV_Status page 0 (and NAV_Accuracy) rate, at most the IMU rate; sent every round(IMU rate / rate) IMU samples, as nav_rate_hz"},
     {"--dyn-rate-hz", APP_PARAM_DYN_RATE_HZ, "Hz", 0.0, 400.0, 1.0, "", "NAV_Rates, NAV_AttitudeRates, NAV_Accel, NAV_AccelEnu rate (at most the IMU rate; 0: not sent); sent every round(IMU rate / rate) IMU samples, as nav_rate_hz"},
     {"--level-s", APP_PARAM_LEVEL_S, "s", 1.0, 600.0, 1.0, "", "accelerometer levelling time at rest before navigation starts"},
