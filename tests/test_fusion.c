@@ -903,6 +903,50 @@ static void test_learning_needs_a_fix_taken(void **state)
     assert_near(learnt[12], learnt[11], 0.0);
 }
 
+/* One raw epoch fused (gnss_input = raw) after the fix that started the filter, with the
+ * fifth satellite (20 deg up) declared at elevation decl_deg: the bad values counted. */
+static uint32_t bad_values_with_declared_elevation(uint8_t decl_deg)
+{
+    const nav_real_t v[3] = {0.0f, 10.0f, 0.0f};
+    start_at(0.0, v);
+    cfg.gnss_input = GNSS_INPUT_RAW;
+    cfg.gnss_latency_s = 0.0f;
+    diag.t_us = 0u;
+    uint32_t tow = LEARN_TOW0_MS;
+    gnss_fix_t f = fix_at(450000000, 100000000, v);
+    f.tow_ms = tow;
+    int adopt;
+    assert_int_equal(fusion_gnss(&fu, &ctx, &PRIOR, &f, &adopt), FUSION_GO_ON);
+    assert_int_equal(fu.on, 1);
+    for (int j = 0; j < 100; j++) { /* 1 s at 100 Hz */
+        diag.n_samples++;
+        gnss_time_record(&gtime, diag.n_samples, cfg.imu_rate_hz, v);
+    }
+    diag.t_us += 1000000u;
+    tow += 1000u;
+    static const double no_bias[LEARN_SATS] = {0.0, 0.0, 0.0, 0.0, 0.0};
+    static gnss_raw_asm_t g;
+    gnss_raw_close_t cl;
+    learn_epoch(&g, &cl, LEARN_SATS, no_bias);
+    g.sat[4].elevation_deg = decl_deg;
+    assert_int_equal(fusion_raw(&fu, &ctx, &g, &cl, tow, 0, &adopt), FUSION_GO_ON);
+    assert_int_equal(ctx.raw->epochs_used, 1u);
+    return health.bad_value;
+}
+
+/* A satellite's declared elevation must be its geometry's (a review's finding: a low
+ * satellite declared at 90 deg took the zenith's sigma floor): the fifth satellite, 20 deg
+ * up, declared at 20 or 24 deg is used (nothing counted), at 90 or 5 deg refused and
+ * counted in bad_value, the epoch's other four still fused. */
+static void test_raw_declared_elevation_must_be_the_geometrys(void **state)
+{
+    (void)state;
+    assert_int_equal(bad_values_with_declared_elevation(20u), 0u);
+    assert_int_equal(bad_values_with_declared_elevation(24u), 0u);
+    assert_int_equal(bad_values_with_declared_elevation(90u), 1u);
+    assert_int_equal(bad_values_with_declared_elevation(5u), 1u);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -929,6 +973,7 @@ int main(void)
         cmocka_unit_test(test_reported_accuracy_keeps_the_correlated_error),
         cmocka_unit_test(test_biases_learnt_only_moving_with_good_fixes),
         cmocka_unit_test(test_learning_needs_a_fix_taken),
+        cmocka_unit_test(test_raw_declared_elevation_must_be_the_geometrys),
     };
     return cmocka_run_group_tests_name("fusion", tests, NULL, NULL);
 }

@@ -224,6 +224,11 @@
 /* a pseudorange farther than this from its satellite's range is no measurement (a
  * receiver's clock stays within 1 ms of GPS time: 3e5 m; 3 ms allowed) */
 #define APP_RAW_PR_PLAUSIBLE_M NAV_C(1.0e6)
+/* a satellite's declared elevation (GNSS_RawRange, whole degrees) against its geometry's
+ * from the antenna: their sines more than this apart (6 deg at the horizon, 26 deg at
+ * 60 deg; the rounding is 0.009 at most) is not this satellite's elevation, refused with
+ * CntBadValue: it sets the satellite's sigma floor and its place in the fusion order */
+#define APP_RAW_EL_SIN_MISMATCH NAV_C(0.1)
 /* fault exclusion: a residual this many sigmas from the epoch's median */
 #define APP_RAW_FDE_SIGMAS NAV_C(5.0)
 /* each satellite's range bias learnt while fixes come (raw_bias.h, gnss_input = both):

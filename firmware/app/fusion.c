@@ -683,7 +683,8 @@ static int raw_row(const fusion_t *fu, const raw_epoch_t *e, int i, int rate,
 }
 
 /* every satellite's geometry from the epoch's antenna, once; a satellite whose position
- * is not a GNSS satellite's (gnss_geom_sat), or whose pseudorange is not its range within
+ * is not a GNSS satellite's (gnss_geom_sat), whose declared elevation is not its geometry's
+ * (APP_RAW_EL_SIN_MISMATCH), or whose pseudorange is not its range within
  * APP_RAW_PR_PLAUSIBLE_M (a receiver clock within 3 ms of GPS time; a range of 0 or a
  * corrupt one) is refused, and counted in bad_value when count is set (an epoch fused) */
 static void raw_geometry(fusion_t *fu, const raw_epoch_t *e, int count)
@@ -691,7 +692,10 @@ static void raw_geometry(fusion_t *fu, const raw_epoch_t *e, int count)
     for (int i = 0; i < e->n; i++) {
         const gnss_raw_sat_t *m = &e->g->sat[e->slot[i]];
         const int geo_ok =
-            ekf_sat_geometry(&e->ant, m->pos_lsb, m->vel_lsb, &fu->raw_geo[i]) == NAV_OK;
+            ekf_sat_geometry(&e->ant, m->pos_lsb, m->vel_lsb, &fu->raw_geo[i]) == NAV_OK &&
+            nav_fabs(fu->raw_geo[i].los_enu[2] -
+                     nav_sin((nav_real_t)m->elevation_deg * NAV_C(0.017453292519943295))) <=
+                APP_RAW_EL_SIN_MISMATCH;
         const int pr_ok = geo_ok && (m->pr_valid == 0u ||
                                      nav_fabs(gnss_geom_pr_residual_m(m->pr_lsb, &fu->raw_geo[i].g,
                                                                       0)) <=
