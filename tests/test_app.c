@@ -207,6 +207,17 @@ static uint8_t nav_counter_of(const hal_can_frame_t *f)
     }
 }
 
+/* the start commands, 30 s of levelling at rest, then 10 s of outputs: hal.tx holds those
+ * 10 s, none dropped */
+static void run_levelled_10_s(void)
+{
+    send_init_commands(30.0);
+    run_still(30); /* levelling */
+    hal.tx_n = 0u;
+    run_still(10);
+    assert_int_equal(hal.tx_dropped, 0);
+}
+
 /*
  * GIVEN navigation running at the default rates (IMU 100 Hz)
  * WHEN 10 s pass
@@ -217,11 +228,7 @@ static uint8_t nav_counter_of(const hal_can_frame_t *f)
 static void test_output_rates_and_e2e(void **state)
 {
     (void)state;
-    send_init_commands(30.0);
-    run_still(30); /* levelling */
-    hal.tx_n = 0u;
-    run_still(10);
-    assert_int_equal(hal.tx_dropped, 0);
+    run_levelled_10_s();
     assert_int_equal(tx_count(NAVECU_CAN_NAV_POSITION_FRAME_ID), 500);
     assert_int_equal(tx_count(NAVECU_CAN_NAV_HEIGHT_FRAME_ID), 500);
     assert_int_equal(tx_count(NAVECU_CAN_NAV_VELOCITY_FRAME_ID), 500);
@@ -255,11 +262,7 @@ static void test_output_rates_not_dividing(void **state)
     cfg.status_rate_hz = 30u;
     cfg.dyn_rate_hz = 7u;
     assert_int_equal(app_init(&app, &cfg), NAV_OK);
-    send_init_commands(30.0);
-    run_still(30); /* levelling */
-    hal.tx_n = 0u;
-    run_still(10);
-    assert_int_equal(hal.tx_dropped, 0);
+    run_levelled_10_s();
     assert_int_equal(tx_count(NAVECU_CAN_NAV_POSITION_FRAME_ID), 500);
     assert_in_range(tx_count(NAVECU_CAN_NAV_STATUS_FRAME_ID), 666, 668); /* two a period */
     assert_in_range(tx_count(NAVECU_CAN_NAV_RATES_FRAME_ID), 71, 72);

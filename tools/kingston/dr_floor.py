@@ -120,8 +120,9 @@ def floor(drive=None, arw_dpsh: float = 0.3, bias_dph: float = 5.0, draws: int =
                           bias_dph * DPH, min(CHUNK, draws - k), seed=SEED + c)
         pct.append(100.0 * np.max(np.abs(err[:, i_cal:]), axis=1) / d_after)
     pct = np.concatenate(pct)
-    still_before = float(np.sum(np.diff(r["t_s"], append=r["t_s"][-1])[:i_cal][r["still"][:i_cal]]))
-    still_all = float(np.sum(np.diff(r["t_s"], append=r["t_s"][-1])[r["still"]]))
+    standing = np.diff(r["t_s"], append=r["t_s"][-1]) * r["still"]  # s standing per row
+    still_before = float(np.sum(standing[:i_cal]))
+    still_all = float(np.sum(standing))
     return {"arw_dpsh": arw_dpsh, "bias_dph": bias_dph, "draws": draws,
             "calibrate_at_s": float(r["t_s"][i_cal]), "distance_after_m": d_after,
             "standing_before_s": still_before, "standing_s": still_all,
