@@ -759,6 +759,93 @@ static void test_board_layer_over_nvm(void **state)
     layer_on = 0;
 }
 
+
+/* ---- found by a review (each failed before its fix) ---- */
+static void dump_rsp_frames(const char *tag, uint32_t from)
+{
+    print_message("%s:", tag);
+    for (uint32_t i = from; i < hal.tx_n; i++) {
+        if (hal.tx[i].id == RSP) {
+            print_message(" [");
+            for (int k = 0; k < 8; k++) {
+                print_message("%02X", hal.tx[i].data[k]);
+            }
+            print_message("]");
+        }
+    }
+    print_message("\n");
+}
+
+/* a 7F 31 78 refused by the CAN driver (its queue full) is given up, not left in the
+ * channel (which would keep a pointer to a stack array and refuse the final response):
+ * the final response goes out once the queue drains */
+static void test_pending_refused_by_a_full_can_queue(void **state)
+{
+    (void)state;
+    unlock();
+    const uint32_t mark = hal.tx_n;
+    hal.tx_n = FAKE_TX_MAX; /* the CAN driver's queue is full */
+    const uint8_t sf[8] = {0x04, 0x31, 0x01, 0x02, 0x00};
+    hal_can_frame_t f;
+    memset(&f, 0, sizeof f);
+    f.id = REQ; f.dlc = 8u; memset(f.data, 0xCC, 8u); memcpy(f.data, sf, 5u);
+    f.t_us = hal.t_us;
+    app_handle_frame(&app, &hal, &f);
+    /* the queue drains */
+    hal.tx_n = mark;
+    for (int i = 0; i < 5; i++) {
+        hal.t_us += 10000u;
+        app_poll(&app, &hal);
+    }
+    dump_rsp_frames("frames on 0x7A8 after the queue drained", mark);
+    int saw_final = 0, saw_pending = 0;
+    for (uint32_t i = mark; i < hal.tx_n; i++) {
+        if (hal.tx[i].id != RSP) continue;
+        if (memcmp(hal.tx[i].data, "\x04\x71\x01\x02\x00", 5) == 0) saw_final = 1;
+        if (memcmp(hal.tx[i].data, "\x03\x7F\x31\x78", 4) == 0) saw_pending = 1;
+    }
+    print_message("pending seen %d, final 71 01 02 00 seen %d\n", saw_pending, saw_final);
+    assert_false(saw_pending);
+    assert_true(saw_final);
+}
+
+/* suppressPosRspMsgIndicationBit after a 7F 31 78: ISO 14229-1 wants the final positive
+ * response anyway */
+static void test_suppressed_response_after_a_pending(void **state)
+{
+    (void)state;
+    unlock();
+    const uint32_t mark = hal.tx_n;
+    pendings = 0;
+    const size_t n = REQUEST(0x31, 0x81, 0x02, 0x00);
+    dump_rsp_frames("31 81 02 00", mark);
+    print_message("pendings=%d final len=%zu\n", pendings, n);
+    assert_int_equal(pendings, 1);
+    assert_int_equal(n, 4u);
+}
+
+/* a DTC confirmed while driving (its NVM write held until a standstill), then ECUReset
+ * (allowed while moving): the reset writes it first, and it is still confirmed after */
+static void test_ecu_reset_while_moving_keeps_dtcs(void **state)
+{
+    (void)state;
+    app.run.mode = APP_MODE_NAVIGATING;
+    app.keep.odo.standing = 0u;
+    app_dtc_cycle(&app, &hal, NAVECU_HEALTH_IMU_FAULT);
+    hal.t_us += 1100000u;
+    app_dtc_cycle(&app, &hal, NAVECU_HEALTH_IMU_FAULT);
+    const uint8_t before = dtc_status(&app.keep.dtc, DTC_IMU_FAULT);
+    print_message("IMU_FAULT status before ECUReset 0x%02X, dirty 0x%X\n", before,
+                  (unsigned)app.keep.dtc_dirty);
+    assert_true((before & DTC_CDTC) != 0u);
+    unlock();
+    assert_int_equal(REQUEST(0x11, 0x01), 2u);
+    app_poll(&app, &hal);
+    const uint8_t after = dtc_status(&app.keep.dtc, DTC_IMU_FAULT);
+    print_message("IMU_FAULT status after ECUReset 0x%02X\n", after);
+    assert_true((after & DTC_CDTC) != 0u);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -775,6 +862,9 @@ int main(void)
         cmocka_unit_test_setup(test_three_wrong_keys_then_delay_on_the_hal_clock, setup),
         cmocka_unit_test_setup(test_identifier_rules_and_receive_list, setup),
         cmocka_unit_test_setup(test_dtc_of_a_silent_imu_read_and_cleared, setup),
+        cmocka_unit_test_setup(test_pending_refused_by_a_full_can_queue, setup_started),
+        cmocka_unit_test_setup(test_suppressed_response_after_a_pending, setup_started),
+        cmocka_unit_test_setup(test_ecu_reset_while_moving_keeps_dtcs, setup_started),
         cmocka_unit_test_setup(test_routine_checks, setup_started),
         cmocka_unit_test_setup(test_store_parameters_and_reset, setup_started),
         cmocka_unit_test_setup(test_routine_conditions_and_nvm_failure, setup_started),

@@ -100,9 +100,18 @@ static const boot_flash_t fl = {&sim, sim_read, sim_write, sim_erase};
 static hal_can_frame_t hb[8];
 static int n_hb;
 
+static int refuse_tx; /* 1: the CAN driver's queue is full (refuses all but heartbeats) */
+static hal_can_frame_t sent_log[64];
+static int n_sent_log;
 static int tx(void *user, const hal_can_frame_t *f)
 {
     (void)user;
+    if (refuse_tx && f->id != NAVECU_CAN_NAV_HEARTBEAT_FRAME_ID) {
+        return HAL_ENOSPC;
+    }
+    if (f->id != NAVECU_CAN_NAV_HEARTBEAT_FRAME_ID && n_sent_log < 64) {
+        sent_log[n_sent_log++] = *f;
+    }
     if (f->id == NAVECU_CAN_NAV_HEARTBEAT_FRAME_ID) {
         if (n_hb < 8) {
             hb[n_hb] = *f;
@@ -550,16 +559,23 @@ static void test_heartbeat_says_bootloader(void **state)
  * request) the session falls back to the default and, the application untouched and
  * valid, boot_poll says reset (the board starts it again) instead of leaving the ECU in its
  * bootloader; with the application erased it stays. */
-static void test_abandoned_programming_returns_to_the_application(void **state)
+/* a whole application flashed, then the bootloader started by the application's
+ * programming request at t */
+static void programming_requested_over_a_valid_application(uint64_t t)
 {
-    (void)state;
     make_image(3000u, 5u);
     unlock();
     assert_int_equal(flash_image(3000u, 500u), 0u);
     assert_int_equal(boot_image_check(&fl), BOOT_IMAGE_OK);
     reboot();
-    const uint64_t t = 20000000u;
     boot_programming_requested(&boot, t);
+}
+
+static void test_abandoned_programming_returns_to_the_application(void **state)
+{
+    (void)state;
+    const uint64_t t = 20000000u;
+    programming_requested_over_a_valid_application(t);
     assert_int_equal(boot_poll(&boot, t + 1000000u), 0);
     assert_int_equal(boot_poll(&boot, t + 4900000u), 0);
     assert_int_equal(boot_poll(&boot, t + 5100000u), 1);
@@ -635,9 +651,81 @@ static void test_marker_and_crc_checked_at_boot(void **state)
     assert_int_equal(boot_image_check(&fl), BOOT_IMAGE_NO_MARKER);
 }
 
+
+/* ---- found by a review (each failed before its fix) ---- */
+static void frame_in(const uint8_t *d, uint8_t n, uint64_t t)
+{
+    hal_can_frame_t f;
+    memset(&f, 0, sizeof f);
+    f.id = 0x7A0u; f.dlc = 8u; memset(f.data, 0xCC, 8u); memcpy(f.data, d, n);
+    boot_frame(&boot, &f, t);
+}
+static void dump_sent(const char *tag, int from)
+{
+    print_message("%s:", tag);
+    for (int i = from; i < n_sent_log; i++) {
+        print_message(" [");
+        for (int k = 0; k < 8; k++) print_message("%02X", sent_log[i].data[k]);
+        print_message("]");
+    }
+    print_message("\n");
+}
+
+/* 10 01 received as the boards receive it (boot_frame, then boot_poll) with the
+ * application whole: the bootloader resets into it */
+static void test_default_session_request_returns_to_the_application(void **state)
+{
+    (void)state;
+    const uint64_t t = 20000000u;
+    programming_requested_over_a_valid_application(t);
+    assert_int_equal(boot_poll(&boot, t + 1000u), 0);
+    frame_in((const uint8_t[]){0x02, 0x10, 0x01}, 3u, t + 2000u); /* 10 01: 50 01 sent */
+    assert_int_equal(boot.srv.session, UDS_SESSION_DEFAULT);
+    assert_int_equal(boot_poll(&boot, t + 3000u), 1); /* the next poll resets */
+    assert_int_equal(boot.cnt.returns, 1u);
+}
+
+/* eraseMemory's 7F 31 78 refused by the CAN driver: given up, not left in the channel
+ * (a pointer to a stack array; the final response refused); the final response goes out */
+static void test_pending_refused_by_a_full_can_queue(void **state)
+{
+    (void)state;
+    unlock();
+    const uint64_t t = now_us + 1000u;
+    n_sent_log = 0;
+    /* 31 01 FF 00 44 08 00 C0 00 00 00 10 00: FF + 1 CF */
+    frame_in((const uint8_t[]){0x10, 0x0D, 0x31, 0x01, 0xFF, 0x00, 0x44, 0x08}, 8u, t);
+    (void)boot_poll(&boot, t);
+    refuse_tx = 1;
+    frame_in((const uint8_t[]){0x21, 0x00, 0xC0, 0x00, 0x00, 0x00, 0x10, 0x00}, 8u, t + 1000u);
+    refuse_tx = 0;
+    for (int i = 0; i < 5; i++) (void)boot_poll(&boot, t + 2000u + 1000u * (uint64_t)i);
+    dump_sent("frames sent (FC, then after the queue drained)", 0);
+    int final = 0;
+    for (int i = 0; i < n_sent_log; i++)
+        if (memcmp(sent_log[i].data, "\x04\x71\x01\xFF\x00", 5) == 0) final = 1;
+    assert_int_equal(final, 1);
+}
+
+/* eraseMemory with the suppress bit: after its 7F 31 78 the final response goes out */
+static void test_suppressed_erase_after_its_pending(void **state)
+{
+    (void)state;
+    unlock();
+    n_sent_log = 0;
+    const size_t n = req(B(0x31, 0x81, 0xFF, 0x00, 0x44, 0x08, 0x00, 0xC0, 0x00, 0x00, 0x00,
+                           0x10, 0x00));
+    dump_sent("frames sent during 31 81 FF00", 0);
+    print_message("final response length %zu\n", n);
+    assert_int_equal(n, 4u);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test_setup_teardown(test_default_session_request_returns_to_the_application, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_pending_refused_by_a_full_can_queue, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_suppressed_erase_after_its_pending, setup, teardown),
         cmocka_unit_test_setup_teardown(test_empty_flash_stays, setup, teardown),
         cmocka_unit_test_setup_teardown(test_heartbeat_says_bootloader, setup, teardown),
         cmocka_unit_test_setup_teardown(test_abandoned_programming_returns_to_the_application,

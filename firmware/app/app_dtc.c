@@ -16,10 +16,10 @@ _Static_assert(DTC_MAX == CALSTORE_DTC_N, "the NVM record holds a status byte pe
  * write failed (counted in dtc_persist_failed; NAV_Status NVM_ERROR; the bytes are not
  * retried until the next change, so a failing flash is not hammered).
  */
-static int persist_changed(app_t *a, hal_t *hal, uint32_t changed)
+static int persist_changed(app_t *a, hal_t *hal, uint32_t changed, int now_anyway)
 {
     a->keep.dtc_dirty |= changed;
-    if (a->keep.dtc_dirty == 0u || hal == NULL || !app_nvm_write_allowed(a)) {
+    if (a->keep.dtc_dirty == 0u || hal == NULL || (!now_anyway && !app_nvm_write_allowed(a))) {
         return 0;
     }
     uint8_t b[CALSTORE_DTC_N];
@@ -44,7 +44,12 @@ void app_dtc_load(app_t *a, const uint8_t *status, size_t n)
 void app_dtc_cycle(app_t *a, hal_t *hal, uint32_t health_flags)
 {
     const uint32_t changed = dtc_update(&a->keep.dtc, health_flags, hal_time_us(hal));
-    (void)persist_changed(a, hal, changed); /* a failure is counted in persist_failed */
+    (void)persist_changed(a, hal, changed, 0); /* a failure is counted in persist_failed */
+}
+
+void app_dtc_flush(app_t *a, hal_t *hal)
+{
+    (void)persist_changed(a, hal, 0u, 1); /* a failure is counted in persist_failed */
 }
 
 uint8_t app_dtc_clear(app_t *a, hal_t *hal)
@@ -53,6 +58,6 @@ uint8_t app_dtc_clear(app_t *a, hal_t *hal)
         return UDS_NRC_CONDITIONS_NOT_CORRECT; /* the NVM write would stall navigation */
     }
     const uint32_t changed = dtc_clear_all(&a->keep.dtc);
-    return persist_changed(a, hal, changed) == 0 ? UDS_NRC_OK
+    return persist_changed(a, hal, changed, 0) == 0 ? UDS_NRC_OK
                                                  : UDS_NRC_GENERAL_PROGRAMMING_FAILURE;
 }

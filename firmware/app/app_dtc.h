@@ -28,6 +28,10 @@ void app_dtc_load(struct app *a, const uint8_t *status, size_t n);
  * time now; the stored bytes that changed go to NVM (above). */
 void app_dtc_cycle(struct app *a, hal_t *hal, uint32_t health_flags);
 
+/* Before an ECUReset: the stored bytes still waiting for a standstill go to NVM now (the
+ * reset stops navigation anyway; without this a DTC confirmed while moving would be lost). */
+void app_dtc_flush(struct app *a, hal_t *hal);
+
 /* ClearDiagnosticInformation (UDS 0x14, all DTCs): UDS_NRC_OK, 0x22 when NVM may not be
  * written now (moving while navigating; nothing cleared), or 0x72
  * generalProgrammingFailure when a stored byte could not be written (the RAM status is

@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "app.h"
+#include "app_dtc.h"
 #include "vehicle.h"
 
 static int tx_frame(void *user, const hal_can_frame_t *f)
@@ -15,7 +16,9 @@ static int tx_frame(void *user, const hal_can_frame_t *f)
 /* ISO 14229-1 responsePending (7F SID 78), sent at once before an NVM erase and write: one
  * may take longer than the P2 the ECU announces (UDS_P2_MS, 50 ms; a 16 KiB sector erase
  * of the STM32F405 takes up to about 0.5 s and stalls the CPU); the final response then
- * follows within P2* (UDS_P2_STAR_MS). A single frame: it leaves before the work starts. */
+ * follows within P2* (UDS_P2_STAR_MS), suppressed or not. A single frame: it leaves before
+ * the work starts, or, refused by the CAN driver (its queue full), is given up (the
+ * channel keeps no pointer to p), and the final response follows the work alone. */
 static void send_pending(app_t *a, uint8_t sid)
 {
     hal_t *hal = a->uds.hal;
@@ -26,7 +29,12 @@ static void send_pending(app_t *a, uint8_t sid)
     const uint64_t now = hal_time_us(hal);
     if (isotp_send(&a->uds.tp, p, sizeof p, now) == 0) {
         (void)isotp_poll(&a->uds.tp, now, tx_frame, hal);
+        if (isotp_tx_busy(&a->uds.tp)) {
+            isotp_tx_abort(&a->uds.tp);
+            return;
+        }
         app_count(&a->uds.pending_sent);
+        uds_pending_sent(&a->uds.srv);
     }
 }
 
@@ -322,15 +330,18 @@ static uint8_t uds_dtc_availability(void *user)
     return (uint8_t)DTC_AVAILABILITY_MASK;
 }
 
+static int has_routine(void *user, uint16_t rid)
+{
+    (void)user;
+    return rid >= APP_UDS_RID_STORE_PARAMS && rid <= APP_UDS_RID_ADOPT_MOUNTING;
+}
+
 static uint8_t start_routine(void *user, uint16_t rid, const uint8_t *data, size_t len)
 {
     app_t *a = (app_t *)user;
     hal_t *hal = a->uds.hal;
     calib_t *c = &a->keep.cal;
-    (void)data;
-    if (rid < APP_UDS_RID_STORE_PARAMS || rid > APP_UDS_RID_ADOPT_MOUNTING) {
-        return UDS_NRC_REQUEST_OUT_OF_RANGE;
-    }
+    (void)data; /* rid is one of has_routine's */
     if (len != 0u) {
         return UDS_NRC_INCORRECT_LENGTH; /* no option record */
     }
@@ -404,6 +415,7 @@ int app_uds_init(app_t *a)
         .dtc_clear = uds_dtc_clear,
         .dtc_availability = uds_dtc_availability,
         .start_routine = start_routine,
+        .has_routine = has_routine,
         .session_change = session_change,
     };
     a->uds.on = 0u;
@@ -418,6 +430,7 @@ int app_uds_init(app_t *a)
  * layers again); one started by app_init alone keeps its configuration in RAM */
 static void ecu_restart(app_t *a, hal_t *hal)
 {
+    app_dtc_flush(a, hal);
     const app_config_t cfg = a->cfg;
     const uint8_t started = a->started;
     if (started && app_start(a, hal) == NAV_OK) {

@@ -126,6 +126,9 @@ boot_image_t boot_image_check(const boot_flash_t *fl)
 
 /* ---- the transport's part: 7F SID 78 before a long operation ---- */
 
+/* a single frame that leaves at once or, refused by the CAN driver (its queue full), is
+ * given up (the channel keeps no pointer to p; the final response follows the work
+ * alone); sent, it makes the final response due even when suppressed */
 static void boot_send_pending(boot_t *b, uint8_t sid)
 {
     const uint8_t p[3] = {UDS_NEGATIVE, sid, UDS_NRC_RESPONSE_PENDING};
@@ -133,9 +136,13 @@ static void boot_send_pending(boot_t *b, uint8_t sid)
         return;
     }
     if (isotp_send(&b->tp, p, sizeof p, b->now_us) == 0) {
-        /* a single frame: it leaves in this poll, so p may go out of scope */
         (void)isotp_poll(&b->tp, b->now_us, b->tx, b->tx_user);
+        if (isotp_tx_busy(&b->tp)) {
+            isotp_tx_abort(&b->tp);
+            return;
+        }
         boot_count(&b->cnt.pending_sent);
+        uds_pending_sent(&b->srv);
     }
 }
 
@@ -210,6 +217,12 @@ static uint8_t check_memory(boot_t *b, const uint8_t *data, size_t len)
     return UDS_NRC_OK;
 }
 
+static int boot_has_routine(void *user, uint16_t rid)
+{
+    (void)user;
+    return rid == BOOT_RID_ERASE || rid == BOOT_RID_CHECK;
+}
+
 static uint8_t boot_start_routine(void *user, uint16_t rid, const uint8_t *data, size_t len)
 {
     boot_t *b = (boot_t *)user;
@@ -219,10 +232,7 @@ static uint8_t boot_start_routine(void *user, uint16_t rid, const uint8_t *data,
     if (rid == BOOT_RID_ERASE) {
         return erase_memory(b, data, len);
     }
-    if (rid == BOOT_RID_CHECK) {
-        return check_memory(b, data, len);
-    }
-    return UDS_NRC_REQUEST_OUT_OF_RANGE;
+    return check_memory(b, data, len); /* the other of boot_has_routine's */
 }
 
 /* ---- 0x34, 0x36, 0x37 ---- */
@@ -425,12 +435,14 @@ int boot_init(boot_t *b, const boot_flash_t *fl, uint32_t rx_id, uint32_t tx_id,
     b->tx = tx;
     b->tx_user = tx_user;
     b->erased_end = BOOT_APP_START;
+    b->session_seen = UDS_SESSION_DEFAULT;
     const uds_if_t itf = {
         .user = b,
         .read_did = boot_read_did,
         .write_did = boot_write_did,
         .is_writable = boot_is_writable,
         .start_routine = boot_start_routine,
+        .has_routine = boot_has_routine,
         .session_change = boot_session_change,
         .service = boot_service,
     };
@@ -526,7 +538,6 @@ static void heartbeat(boot_t *b, uint64_t now_us)
 int boot_poll(boot_t *b, uint64_t now_us)
 {
     heartbeat(b, now_us);
-    const uint8_t session_before = b->srv.session;
     boot_serve(b, now_us);
     uds_poll(&b->srv, now_us);
     if (b->srv.session != UDS_SESSION_PROGRAMMING) {
@@ -536,13 +547,22 @@ int boot_poll(boot_t *b, uint64_t now_us)
         b->reset_due = 0u;
         return 1;
     }
-    /* back in the default session (the tester gone: S3, or its 10 01) with the application
-     * still whole (nothing erased yet): reset, and the application starts again, rather
-     * than an ECU left in its bootloader until the next power cycle */
-    if (session_before != UDS_SESSION_DEFAULT && b->srv.session == UDS_SESSION_DEFAULT &&
-        !isotp_tx_busy(&b->tp) && boot_image_check(&b->fl) == BOOT_IMAGE_OK) {
-        boot_count(&b->cnt.returns);
-        return 1;
+    /* back in the default session (the tester gone: S3, or its 10 01, served here or by
+     * boot_frame since the last poll) with the application still whole (nothing erased
+     * yet): reset once the 50 01 left, and the application starts again, rather than an
+     * ECU left in its bootloader until the next power cycle */
+    const uint8_t session = b->srv.session;
+    if (session == UDS_SESSION_DEFAULT && b->session_seen != UDS_SESSION_DEFAULT) {
+        if (isotp_tx_busy(&b->tp)) {
+            return 0;
+        }
+        b->session_seen = session;
+        if (boot_image_check(&b->fl) == BOOT_IMAGE_OK) {
+            boot_count(&b->cnt.returns);
+            return 1;
+        }
+        return 0;
     }
+    b->session_seen = session;
     return 0;
 }

@@ -116,6 +116,7 @@ typedef struct {
     uint8_t dl_state;        /* 0 none, 1 transferring, 2 exited (FF01 may run) */
     uint8_t bsc;             /* the next block sequence counter expected */
     uint8_t reset_due;       /* ECUReset accepted: the board resets once it went out */
+    uint8_t session_seen;    /* the session at the end of the last boot_poll */
     uint8_t hb_sent;         /* NAV_Heartbeat (Mode Bootloader) sent since the start */
     uint8_t hb_counter;      /* its E2E alive counter, the next one */
     uint32_t hb_uptime_s;    /* the uptime of the last one */

@@ -229,6 +229,13 @@ __attribute__((noinline)) static void tx_end(isotp_t *c, isotp_result_t result)
     c->tx_result = result;
 }
 
+void isotp_tx_abort(isotp_t *c)
+{
+    if (c->tx_state != ISOTP_TX_IDLE) {
+        tx_end(c, ISOTP_N_TIMEOUT_A);
+    }
+}
+
 static void on_fc(isotp_t *c, const hal_can_frame_t *f, uint64_t now_us)
 {
     if (f->dlc < 3u) {

@@ -231,6 +231,11 @@ int isotp_receive(isotp_t *c, uint8_t *buf, size_t cap, size_t *len);
 /* 1 while a transmission is in progress (its data still in use), else 0. */
 int isotp_tx_busy(const isotp_t *c);
 
+/* Give up the message being sent (its result ISOTP_N_TIMEOUT_A, as a driver that kept
+ * refusing it): e.g. a 7F SID 78 the CAN driver refused, stale once the work it announced
+ * is done. Nothing when idle. */
+void isotp_tx_abort(isotp_t *c);
+
 /* 1 while a segmented reception is in progress, else 0. */
 int isotp_rx_busy(const isotp_t *c);
 

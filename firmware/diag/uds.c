@@ -361,10 +361,13 @@ static result_t routine_control(uds_t *s, const uint8_t *req, size_t len, uint8_
     if (len < 4u) {
         return nrc(UDS_NRC_INCORRECT_LENGTH);
     }
+    const uint16_t rid = (uint16_t)(((uint32_t)req[2] << 8) | req[3]);
+    if (s->itf.has_routine == NULL || s->itf.has_routine(s->itf.user, rid) == 0) {
+        return nrc(UDS_NRC_REQUEST_OUT_OF_RANGE);
+    }
     if (!s->unlocked) {
         return nrc(UDS_NRC_SECURITY_ACCESS_DENIED);
     }
-    const uint16_t rid = (uint16_t)(((uint32_t)req[2] << 8) | req[3]);
     const uint8_t code = s->itf.start_routine(s->itf.user, rid, &req[4], len - 4u);
     if (code != UDS_NRC_OK) {
         return nrc(code);
@@ -417,6 +420,11 @@ static result_t other_service(uds_t *s, const uint8_t *req, size_t len, uint8_t 
     return positive(n, 0u);
 }
 
+void uds_pending_sent(uds_t *s)
+{
+    s->pending_sent = 1u;
+}
+
 size_t uds_handle(uds_t *s, const uint8_t *req, size_t len, uint64_t now_us, uint8_t *rsp,
                   size_t cap)
 {
@@ -424,6 +432,7 @@ size_t uds_handle(uds_t *s, const uint8_t *req, size_t len, uint64_t now_us, uin
         return 0u;
     }
     uds_poll(s, now_us); /* an S3 or a delay that ended before this request */
+    s->pending_sent = 0u;
     count(&s->cnt.requests);
     s->last_request_us = now_us; /* S3 restarts with every request */
     const uint8_t sid = req[0];
@@ -483,7 +492,7 @@ size_t uds_handle(uds_t *s, const uint8_t *req, size_t len, uint64_t now_us, uin
         rsp[2] = r.nrc;
         return 3u;
     }
-    if (r.suppress) {
+    if (r.suppress && s->pending_sent == 0u) {
         return 0u;
     }
     rsp[0] = (uint8_t)(sid + 0x40u);

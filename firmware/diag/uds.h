@@ -114,6 +114,9 @@
  *              its option record data[0..len): UDS_NRC_OK once it is done, or the NRC
  *              (0x31 an unknown routine, 0x22 not now, 0x72 an NVM failure). Called only
  *              in the extended session, unlocked.
+ *   has_routine  (needed by start_routine; NULL: no routine is known) 1 if rid is one of its routines, else 0: an unknown
+ *              routine is 0x31 before 0x33, whatever the security state (ISO 14229-1's
+ *              order for 0x31, as is_writable's for 0x2E).
  * Pluggable parts, optional (NULL: not there), used by the bootloader (firmware/boot):
  *   session_change  a 0x10 request for session (its sub-function, suppress bit off) is
  *              about to be accepted: UDS_NRC_OK lets it (the session changes, relocked), any
@@ -139,6 +142,7 @@ typedef struct {
     uint8_t (*session_change)(void *user, uint8_t session);
     uint8_t (*service)(void *user, uint8_t session, uint8_t unlocked, const uint8_t *req,
                        size_t len, uint8_t *rsp, size_t cap, size_t *rsp_len);
+    int (*has_routine)(void *user, uint16_t rid);
 } uds_if_t;
 
 /* Counted, each saturating (never decreasing). */
@@ -160,11 +164,18 @@ typedef struct {
     uint8_t delay_on;         /* the delay after UDS_MAX_ATTEMPTS runs */
     uint8_t reset_pending;    /* an ECUReset was accepted: the caller resets after the
                                  response went out (uds_take_reset) */
+    uint8_t pending_sent;     /* a 7F SID 78 went out for the request being served: its
+                                 final response is sent even when suppressed */
     uint32_t seed;            /* the seed sent */
     uint32_t prng;            /* seed generator state (xorshift32), never 0 */
     uint64_t delay_start_us;
     uint64_t last_request_us; /* S3 start */
 } uds_t;
+
+/* A 7F SID 78 responsePending went out for the request being served (called from within
+ * uds_handle's callbacks): ISO 14229-1 then wants the final response whatever the request's
+ * suppressPosRspMsgIndicationBit says (the tester waits for it for P2*). */
+void uds_pending_sent(uds_t *s);
 
 /* Start in the default session, locked, no delay, counters 0. entropy mixes into the seed
  * generator (any value; the application passes its time). Returns 0, -1 for NULLs or an
