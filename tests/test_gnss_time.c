@@ -328,6 +328,29 @@ static void test_week_rollover_keeps_the_weeks_time(void **state)
     assert_int_equal(tow_us, 100000u);
 }
 
+/* GIVEN epochs on time WHEN one arrives while 3 IMU samples are lost (the last sample
+ * before it 30 ms old: it looks 30 ms early and lowers the minimum) and the next sample
+ * reveals the gap THEN the minimum is the one before it: the next on-time epoch is on time
+ * (back 10), not 30 ms late (back 13); WHEN an early epoch is followed by a sample without
+ * a gap THEN its minimum stays (a receiver that was early). */
+static void test_epoch_in_an_imu_gap_sets_no_minimum(void **state)
+{
+    (void)state;
+    record_constant(64u, 0.0f, 0.0f, 0.0f);
+    (void)epoch(1000u, 0);
+    gnss_time_imu_next(&g, 0);
+    (void)epoch(1097u, -30); /* received after sample 1100; the last processed is 1097 */
+    gnss_time_imu_next(&g, 1); /* sample 1101 reveals 1098..1100 lost */
+    gnss_when_t w = epoch(1200u, 0);
+    gnss_time_imu_next(&g, 0);
+    assert_near(w.back, 10.0, 1e-2);
+    (void)epoch(1300u, -30); /* a receiver 30 ms early, no gap */
+    gnss_time_imu_next(&g, 0);
+    gnss_time_imu_next(&g, 1); /* a later gap does not undo it */
+    w = epoch(1400u, -30);
+    assert_near(w.back, 10.0, 1e-2);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -345,6 +368,7 @@ int main(void)
         cmocka_unit_test_setup(test_latency_forgotten_at_time_jump, setup),
         cmocka_unit_test_setup(test_week_rollover_is_no_jump, setup),
         cmocka_unit_test_setup(test_week_rollover_keeps_the_weeks_time, setup),
+        cmocka_unit_test_setup(test_epoch_in_an_imu_gap_sets_no_minimum, setup),
     };
     return cmocka_run_group_tests_name("gnss_time", tests, NULL, NULL);
 }

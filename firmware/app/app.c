@@ -396,6 +396,7 @@ static void on_imu_accel(app_t *a, hal_t *hal, const rx_input_t *in, uint64_t t_
         reject(a, &a->keep.health.imu_pair_broken); /* an IMU_Rate that got no IMU_Accel */
     }
     imu_rate_sample(&a->keep.rate, s.lost - s.lost_by_time, s.time_gap);
+    gnss_time_imu_next(&a->keep.gnss_time, s.lost > 0u || s.time_reset || s.time_gap);
     if (a->cfg.imu_time == IMU_TIME_STAMPED) {
         imu_rate_stamp(&a->keep.rate, s.time_reset ? 0u : s.dt_us);
     }

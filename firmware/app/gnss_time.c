@@ -77,7 +77,10 @@ gnss_when_t gnss_time_align(gnss_time_t *g, uint64_t imu_t_us, uint32_t imu_rate
     if (jumped) {
         g->late_run = 0u;
     }
-    if (!g->off_valid || off < g->off_min_us || jumped) {
+    g->off_min_was_us = g->off_min_us;
+    g->off_valid_was = g->off_valid;
+    g->lowered = (!g->off_valid || off < g->off_min_us || jumped) ? 1u : 0u;
+    if (g->lowered != 0u) {
         g->off_min_us = off; /* first epoch, an earlier one, or a time jump */
         g->off_valid = 1u;
     } else {
@@ -93,6 +96,15 @@ gnss_when_t gnss_time_align(gnss_time_t *g, uint64_t imu_t_us, uint32_t imu_rate
     }
     when_late(g, &w, off - g->off_min_us, imu_rate_hz, latency_s); /* off >= off_min_us */
     return w;
+}
+
+void gnss_time_imu_next(gnss_time_t *g, int gap)
+{
+    if (g->lowered != 0u && gap != 0) {
+        g->off_min_us = g->off_min_was_us;
+        g->off_valid = g->off_valid_was;
+    }
+    g->lowered = 0u;
 }
 
 gnss_when_t gnss_time_peek(const gnss_time_t *g, uint64_t imu_t_us, uint32_t imu_rate_hz,
