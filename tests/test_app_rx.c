@@ -408,7 +408,8 @@ static hal_can_frame_t status(uint8_t fix_type, uint8_t sats, uint8_t epoch)
     return cf_gnss_status(&s, 0u);
 }
 
-/* GNSS_Status: its values, "defined" for fix types 0..6 and epochs 0..14, 3D from type 3. */
+/* GNSS_Status: its values, "defined" for fix types 0..6, epochs 0..14 and a TimeOfWeek within
+ * the week, 3D from type 3. */
 static void test_gnss_status_decoded(void **state)
 {
     (void)state;
@@ -433,6 +434,16 @@ static void test_gnss_status_decoded(void **state)
     assert_int_equal(decode(&f), RX_OK);
     assert_int_equal(in.u.status.defined, 0);
     f = status(3u, 9u, 15u);
+    assert_int_equal(decode(&f), RX_OK);
+    assert_int_equal(in.u.status.defined, 0);
+    /* a TimeOfWeek beyond the week's last millisecond (604,799,999) is no time of week */
+    struct navecu_can_gnss_status_t s;
+    memset(&s, 0, sizeof s);
+    s.fix_type = 3u;
+    s.num_satellites = 9u;
+    s.gnss_epoch = 4u;
+    s.time_of_week = 604800000u;
+    f = cf_gnss_status(&s, 0u);
     assert_int_equal(decode(&f), RX_OK);
     assert_int_equal(in.u.status.defined, 0);
 }

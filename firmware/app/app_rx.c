@@ -166,7 +166,8 @@ static rx_verdict_t decode_gnss(rx_state_t *rx, int msg, const uint8_t d[8], rx_
     in->kind = RX_GNSS_STATUS;
     in->u.status.epoch = m.gnss_epoch;
     in->u.status.defined = m.gnss_epoch <= E2E_COUNTER_MAX &&
-                           m.fix_type <= NAVECU_CAN_GNSS_STATUS_FIX_TYPE_RTK_FIXED_CHOICE;
+                           m.fix_type <= NAVECU_CAN_GNSS_STATUS_FIX_TYPE_RTK_FIXED_CHOICE &&
+                           navecu_can_gnss_status_time_of_week_is_in_range(m.time_of_week);
     in->u.status.fix_3d = m.fix_type >= NAVECU_CAN_GNSS_STATUS_FIX_TYPE_FIX3_D_CHOICE;
     in->u.status.n_sats = m.num_satellites;
     in->u.status.hacc_m = navecu_can_gnss_status_horiz_accuracy_decode(m.horiz_accuracy);
