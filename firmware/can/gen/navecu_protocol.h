@@ -6,11 +6,11 @@
 /* NAV_Status HealthFlags bits (value table HealthFlagBits) */
 #define NAVECU_HEALTH_IMU_STALE 0x0001u /* IMU data stale (none for 0.5 s of bus time) */
 #define NAVECU_HEALTH_IMU_FAULT 0x0002u /* the IMU reports a fault */
-#define NAVECU_HEALTH_NO_GNSS 0x0004u /* no usable GNSS epoch for 2 s */
+#define NAVECU_HEALTH_NO_GNSS 0x0004u /* no usable GNSS epoch for 2 s, or none since power-on */
 #define NAVECU_HEALTH_REJECTED 0x0008u /* input was rejected in the last second */
 #define NAVECU_HEALTH_NVM_ERROR 0x0010u /* the last NVM operation failed */
 #define NAVECU_HEALTH_NO_HEADING 0x0020u /* waiting for a heading (command or GNSS course) */
-#define NAVECU_HEALTH_IMU_GAP 0x0040u /* IMU samples were lost and bridged in the last second */
+#define NAVECU_HEALTH_IMU_GAP 0x0040u /* IMU samples were lost in the last second (bridged, or a gap too long to bridge: then REACQUIRE too) */
 #define NAVECU_HEALTH_FILTER_RESET 0x0080u /* the Kalman filter diverged and was reset in the last 10 s */
 #define NAVECU_HEALTH_IMU_SUSPECT 0x0100u /* an IMU axis was found stuck in the last 10 s */
 #define NAVECU_HEALTH_IMU_SATURATED 0x0200u /* an IMU axis was at its configured range (saturated) in the last second */
