@@ -201,19 +201,22 @@ def gen_h(params, pre) -> str:
          " * index of its value name; APP_PARAM_REAL) or three (APP_PARAM_VEC3) */",
          "typedef enum {", "    APP_PARAM_U16 = 0,", "    APP_PARAM_REAL = 1,",
          "    APP_PARAM_VEC3 = 2,", "    APP_PARAM_ENUM = 3,", "} app_param_type_t;", "",
+         "/* 20 bytes a row on the ECU (24 with a byte per flag): the flags and the small",
+         " * numbers in one word of bit-fields */",
          "typedef struct {",
-         "    uint16_t did;           /* UDS data identifier */",
-         "    app_param_type_t type;",
-         "    uint8_t min_exclusive;  /* the range excludes min */",
-         "    uint8_t vehicle_default; /* the default is the vehicle profile's */",
-         "    uint8_t at_reset;       /* apply = \"reset\": copied at app_init, so a UDS write",
-         "                               needs navigation stopped and is in force after ECUReset */",
-         "    uint8_t uds_read_only;  /* uds_write = false: ReadDataByIdentifier only */",
          "    nav_real_t min_si, max_si; /* range, SI units (enum: 0..values - 1) */",
          "    nav_real_t default_si;  /* default, SI; a vec3's x, y and z alike (vehicle_default:",
          "                               unused) */",
+         "    uint16_t did;           /* UDS data identifier */",
          "    uint16_t offset;        /* its field in app_config_t: offsetof */",
-         "    uint8_t size;           /* and sizeof (an enum's is the target's: 1 or 4 bytes) */",
+         "    unsigned int type : 2;  /* an app_param_type_t */",
+         "    unsigned int min_exclusive : 1;   /* the range excludes min */",
+         "    unsigned int vehicle_default : 1; /* the default is the vehicle profile's */",
+         "    unsigned int at_reset : 1;  /* apply = \"reset\": copied at app_init, so a UDS write",
+         "                                   needs navigation stopped and is in force after",
+         "                                   ECUReset */",
+         "    unsigned int uds_read_only : 1; /* uds_write = false: ReadDataByIdentifier only */",
+         "    unsigned int size : 8;  /* and sizeof (an enum's is the target's: 1 or 4 bytes) */",
          "} app_param_t;", "",
          "/* the parameters, in the table's order */", "typedef enum {"]
     L += [f"    {_const(p)} = {k}," for k, p in enumerate(params)]
@@ -255,11 +258,11 @@ def gen_c(params, pre) -> str:
             d = _si(p, p["default"])
         typ = {"u16": "APP_PARAM_U16", "real": "APP_PARAM_REAL", "vec3": "APP_PARAM_VEC3",
                "enum": "APP_PARAM_ENUM"}[p["type"]]
-        L.append(f"    [{_const(p)}] = {{0x{int(p['did']):04X}u, {typ}, "
+        L.append(f"    [{_const(p)}] = {{{_c_real(_si(p, p['min']))}, "
+                 f"{_c_real(_si(p, p['max']))}, {_c_real(d)}, 0x{int(p['did']):04X}u, "
+                 f"offsetof(app_config_t, {p['name']}), {typ}, "
                  f"{int(p['min_exclusive'])}u, {int(p['vehicle_default'])}u, "
                  f"{int(p['at_reset'])}u, {int(p['uds_read_only'])}u, "
-                 f"{_c_real(_si(p, p['min']))}, {_c_real(_si(p, p['max']))}, "
-                 f"{_c_real(d)}, offsetof(app_config_t, {p['name']}), "
                  f"sizeof(((app_config_t *)0)->{p['name']})}},")
     names, lst, _ = pre
     by_name = {p["name"]: p for p in params}

@@ -18,19 +18,22 @@ typedef enum {
     APP_PARAM_ENUM = 3,
 } app_param_type_t;
 
+/* 20 bytes a row on the ECU (24 with a byte per flag): the flags and the small
+ * numbers in one word of bit-fields */
 typedef struct {
-    uint16_t did;           /* UDS data identifier */
-    app_param_type_t type;
-    uint8_t min_exclusive;  /* the range excludes min */
-    uint8_t vehicle_default; /* the default is the vehicle profile's */
-    uint8_t at_reset;       /* apply = "reset": copied at app_init, so a UDS write
-                               needs navigation stopped and is in force after ECUReset */
-    uint8_t uds_read_only;  /* uds_write = false: ReadDataByIdentifier only */
     nav_real_t min_si, max_si; /* range, SI units (enum: 0..values - 1) */
     nav_real_t default_si;  /* default, SI; a vec3's x, y and z alike (vehicle_default:
                                unused) */
+    uint16_t did;           /* UDS data identifier */
     uint16_t offset;        /* its field in app_config_t: offsetof */
-    uint8_t size;           /* and sizeof (an enum's is the target's: 1 or 4 bytes) */
+    unsigned int type : 2;  /* an app_param_type_t */
+    unsigned int min_exclusive : 1;   /* the range excludes min */
+    unsigned int vehicle_default : 1; /* the default is the vehicle profile's */
+    unsigned int at_reset : 1;  /* apply = "reset": copied at app_init, so a UDS write
+                                   needs navigation stopped and is in force after
+                                   ECUReset */
+    unsigned int uds_read_only : 1; /* uds_write = false: ReadDataByIdentifier only */
+    unsigned int size : 8;  /* and sizeof (an enum's is the target's: 1 or 4 bytes) */
 } app_param_t;
 
 /* the parameters, in the table's order */
