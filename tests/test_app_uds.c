@@ -461,6 +461,27 @@ static void silent_imu(uint64_t for_us)
     }
 }
 
+/* An IMU that never sends after power-on (found by a UDS client written from docs/can.md:
+ * with no sample there was no NAV_Status, so no DTC test, and U1101-87 stayed 0x50): from
+ * 0.5 s after power-on the DTCs are tested at the status rate on the HAL clock, the IMU's
+ * failing and then confirmed after its 2 s, and still no NAV_Status is sent (the
+ * data-driven outputs wait for data: a live replay's outputs do not depend on how long the
+ * ECU waited for it) */
+static void test_dtc_of_an_imu_absent_from_power_on(void **state)
+{
+    (void)state;
+    app_poll(&app, &hal); /* power-on: the first heartbeat, uptime 0 */
+    const uint32_t tx_before = hal.tx_n;
+    silent_imu(400000u); /* 0.4 s: not stale yet */
+    assert_int_equal(dtc_status(&app.keep.dtc, DTC_IMU_STALE), 0x50u);
+    silent_imu(3000000u);
+    for (uint32_t i = tx_before; i < hal.tx_n; i++) {
+        assert_int_not_equal(hal.tx[i].id, NAVECU_CAN_NAV_STATUS_FRAME_ID);
+    }
+    const uint8_t status = dtc_status(&app.keep.dtc, DTC_IMU_STALE);
+    assert_true((status & DTC_CDTC) != 0u);
+}
+
 static void test_dtc_of_a_silent_imu_read_and_cleared(void **state)
 {
     (void)state;
@@ -862,6 +883,7 @@ int main(void)
         cmocka_unit_test_setup(test_three_wrong_keys_then_delay_on_the_hal_clock, setup),
         cmocka_unit_test_setup(test_identifier_rules_and_receive_list, setup),
         cmocka_unit_test_setup(test_dtc_of_a_silent_imu_read_and_cleared, setup),
+        cmocka_unit_test_setup(test_dtc_of_an_imu_absent_from_power_on, setup),
         cmocka_unit_test_setup(test_pending_refused_by_a_full_can_queue, setup_started),
         cmocka_unit_test_setup(test_suppressed_response_after_a_pending, setup_started),
         cmocka_unit_test_setup(test_ecu_reset_while_moving_keeps_dtcs, setup_started),

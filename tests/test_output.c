@@ -145,8 +145,12 @@ static void test_flag_imu_stale(void **state)
     assert_int_equal(flags_now() & NAVECU_HEALTH_IMU_STALE, 0u);
     hal.t_us = 501001u;
     assert_int_equal(flags_now() & NAVECU_HEALTH_IMU_STALE, NAVECU_HEALTH_IMU_STALE);
-    app.keep.imu.have_sample = 0u; /* no sample ever: not stale, just absent */
+    /* no sample ever: stale from 0.5 s after power-on (the first heartbeat's time) */
+    app.keep.imu.have_sample = 0u;
+    app.keep.tx.boot_us = 2000u;
     assert_int_equal(flags_now() & NAVECU_HEALTH_IMU_STALE, 0u);
+    hal.t_us = 502001u;
+    assert_int_equal(flags_now() & NAVECU_HEALTH_IMU_STALE, NAVECU_HEALTH_IMU_STALE);
 }
 
 /* The flags of a state: IMU_FAULT, NVM_ERROR, NO_HEADING (a position without heading,

@@ -758,11 +758,16 @@ void app_poll(app_t *a, hal_t *hal)
     a->keep.last_poll_us = now;
     a->keep.have_poll = 1u;
     output_heartbeat(a, hal); /* time-driven, from boot; no other output depends on it */
-    const uint64_t stale_since = a->keep.imu.last_t_us + APP_IMU_STALE_US;
+    /* the IMU silent: NAV_Status on the HAL clock; none since power-on: the DTCs tested */
+    const uint64_t stale_since = app_imu_since(a) + APP_IMU_STALE_US;
     const uint64_t period_us = 1000000u / a->cfg.status_rate_hz;
     const uint64_t last = a->keep.tx.last_status_t_us;
-    if (a->keep.imu.have_sample && now > stale_since && now > last && now - last >= period_us) {
-        output_status(a, hal);
+    if (now > stale_since && now > last && now - last >= period_us) {
+        if (a->keep.imu.have_sample) {
+            output_status(a, hal);
+        } else {
+            output_dtc_tests(a, hal);
+        }
     }
 }
 

@@ -238,6 +238,12 @@ static inline uint64_t app_time_us(const app_t *app)
                : app->keep.n_samples * 1000000u / app->cfg.imu_rate_hz;
 }
 static inline const app_health_t *app_health(const app_t *app) { return &app->keep.health; }
+/* The HAL time IMU_STALE counts from: the last IMU sample's, or before the first the
+ * power-on's (the first NAV_Heartbeat's; app_poll sends that first) */
+static inline uint64_t app_imu_since(const app_t *app)
+{
+    return app->keep.imu.have_sample ? app->keep.imu.last_t_us : app->keep.tx.boot_us;
+}
 /* The application's counters, events, sample count and time, for a module to count and
  * stamp its rejections with (app_health.h). */
 app_diag_t app_diag_of(app_t *a);

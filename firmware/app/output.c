@@ -259,12 +259,13 @@ static uint8_t sat8(uint32_t x)
     return x > UINT8_MAX ? (uint8_t)UINT8_MAX : (uint8_t)x;
 }
 
-/* IMU_STALE: an IMU sample was taken, none for APP_IMU_STALE_US of the HAL clock */
+/* IMU_STALE: no IMU sample for APP_IMU_STALE_US of the HAL clock, since the last one or,
+ * before the first, since power-on (the first NAV_Heartbeat; app_poll's app_imu_since) */
 static int imu_stale(const app_t *a, const hal_t *hal)
 {
     const uint64_t now = hal_time_us(hal);
-    const imu_link_t *l = &a->keep.imu;
-    return l->have_sample && now > l->last_t_us && now - l->last_t_us > APP_IMU_STALE_US;
+    const uint64_t since = app_imu_since(a);
+    return now > since && now - since > APP_IMU_STALE_US;
 }
 
 /* NO_GNSS: no usable GNSS epoch for APP_NO_GNSS_S of IMU time (or none since power-on) */
@@ -387,6 +388,12 @@ static void fill_counter_page(struct navecu_can_nav_status_t *st, const app_heal
     }
 }
 
+void output_dtc_tests(app_t *a, hal_t *hal)
+{
+    a->keep.tx.last_status_t_us = hal_time_us(hal);
+    app_dtc_cycle(a, hal, health_flags(a, hal));
+}
+
 void output_status(app_t *a, hal_t *hal)
 {
     tx_state_t *tx = &a->keep.tx;
@@ -401,6 +408,7 @@ void output_status(app_t *a, hal_t *hal)
     tx->last_mode = st.mode;
     st.health_flags = health_flags(a, hal);
     app_dtc_cycle(a, hal, st.health_flags); /* the DTCs' tests (app_dtc.h) */
+
     /* the filter's; without it the dead reckoning's while it is the output and its error
      * model holds (dr_acc.h); else "unknown" */
     st.horiz_accuracy = NAVECU_NAV_STATUS_HORIZ_ACCURACY_RAW_MAX;

@@ -37,6 +37,12 @@ void output_due(app_t *a, hal_t *hal);
 /* NAV_Status now (app_poll: the heartbeat while no IMU data arrives). */
 void output_status(app_t *a, hal_t *hal);
 
+/* Before the first IMU sample, from app_poll at the status rate once the IMU is overdue
+ * (APP_IMU_STALE_US after power-on): the DTCs tested with the health flags (IMU_STALE
+ * among them), and nothing sent (the data-driven outputs wait for data, so a live run's
+ * frames do not depend on how long the ECU waited for its input). */
+void output_dtc_tests(app_t *a, hal_t *hal);
+
 /* NAV_Heartbeat when due (app_poll, every main-loop pass): the first at the first call
  * (uptime 0, the boot), then one at each whole second of uptime on the HAL clock, whatever
  * the input. Mode as NAV_Status page 0; the inputs missing now (IMU_STALE or no IMU
