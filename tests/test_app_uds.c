@@ -248,15 +248,19 @@ static void test_mount_estimate_did(void **state)
 static void test_all_dids_in_one_request(void **state)
 {
     (void)state;
-    uint8_t req[1 + 2 * (APP_PARAM_N + 4)];
+    uint8_t req[1 + 2 * (APP_PARAM_N + 7)];
     size_t m = 0u;
     req[m++] = 0x22;
     for (int k = 0; k < (int)APP_PARAM_N; k++) {
         req[m++] = (uint8_t)(app_params[k].did >> 8);
         req[m++] = (uint8_t)app_params[k].did;
     }
-    const uint16_t ident[4] = {0xF18Cu, 0xF195u, 0xF1A0u, 0xF1A2u};
-    for (int i = 0; i < 4; i++) {
+    /* the identification DIDs, then the records: every DID the application reads */
+    const uint16_t ident[7] = {APP_UDS_DID_SERIAL,     APP_UDS_DID_SW_VERSION,
+                               APP_UDS_DID_VEHICLE,    APP_UDS_DID_BUILD,
+                               APP_UDS_DID_NVM_STATUS, APP_UDS_DID_CMD_STATUS,
+                               APP_UDS_DID_MOUNT_EST};
+    for (int i = 0; i < 7; i++) {
         req[m++] = (uint8_t)(ident[i] >> 8);
         req[m++] = (uint8_t)ident[i];
     }
@@ -270,6 +274,7 @@ static void test_all_dids_in_one_request(void **state)
     }
     pos += 2u + strlen(NAVECU_ECU_SERIAL) + 2u + strlen(NAVECU_SW_VERSION) + 2u +
            strlen(vehicle_profile.name) + 2u + strlen(NAVECU_BUILD);
+    pos += 2u + 8u + 2u + 5u + 2u + APP_UDS_MOUNT_EST_LEN; /* F1A1, F1A3, 0260 (can.md) */
     assert_int_equal(n, pos);
     /* docs/can.md: every DID at once fits the ECU's ISO-TP buffer (ISOTP_MAX_LEN 512 in
      * the Makefile's M4_DEFS; the host keeps 4,095) */
