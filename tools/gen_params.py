@@ -16,6 +16,7 @@ import argparse
 import ast
 import math
 import operator
+import struct
 import sys
 import tomllib
 from pathlib import Path
@@ -323,6 +324,18 @@ def gen_cli(params, pre) -> str:
     return "\n".join(L)
 
 
+def _f32(x: float) -> str:
+    """The shortest decimal (at least 6 digits) that is the same float32 as x: the bound a
+    client sends as float32 is then the ECU's bound exactly (6 digits of 2.908882e-10
+    rounded below the ECU's minimum, and a write of the printed minimum was refused)."""
+    want = struct.unpack("<f", struct.pack("<f", x))[0]
+    for d in range(6, 10):
+        t = f"{x:.{d}g}"
+        if struct.unpack("<f", struct.pack("<f", float(t)))[0] == want:
+            return t
+    return f"{x:.9g}"
+
+
 def _fmt(x) -> str:
     if isinstance(x, list):
         return ",".join(_fmt(v) for v in x)
@@ -383,7 +396,7 @@ def gen_uds_table(params) -> str:
             rng = ", ".join(f"{k} {v}" for k, v in enumerate(p["values"]))
         else:
             lo = "(" if p["min_exclusive"] else "["
-            rng = f"{lo}{p['min'] * p['factor']:.6g}, {p['max'] * p['factor']:.6g}]"
+            rng = f"{lo}{_f32(p['min'] * p['factor'])}, {_f32(p['max'] * p['factor'])}]"
             if p["vehicle_default"]:
                 rng += ", default the vehicle profile's"
         when = "navigation stopped; after ECUReset" if p["at_reset"] else "at once"

@@ -119,3 +119,28 @@ def test_presets_are_the_simulators_grades(table):
                 "accel_bias_rw_mps2_rts": spec.accel_bias_instability_mps2 * math.sqrt(2 / 300)}
         for k, w in want.items():
             assert si[k] == pytest.approx(w, rel=1e-5), (name, k)
+
+
+def _f32(x):
+    import struct
+    return struct.unpack("<f", struct.pack("<f", float(x)))[0]
+
+
+def test_uds_table_bounds_are_the_ecus_float32(table):
+    """docs/can.md's parameter DIDs print each real bound so that the float32 a client sends
+    for it is the ECU's bound itself (6 digits of 2.908882e-10 were below the ECU's minimum,
+    and a write of the printed minimum was refused)."""
+    import re
+    doc = (ROOT / "docs/can.md").read_text()
+    params, _ = table
+    checked = 0
+    for p in params:
+        if p["type"] not in ("real", "vec3"):
+            continue
+        m = re.search(r"\| `0x%04X` \| `%s` \|[^\n]*?\| [\[(]([^,\]]+), ([^\],]+)\]" % (int(p["did"]), p["name"]), doc)
+        assert m, p["name"]
+        lo, hi = float(m.group(1)), float(m.group(2))
+        assert _f32(lo) == _f32(p["min"] * p["factor"]), p["name"]
+        assert _f32(hi) == _f32(p["max"] * p["factor"]), p["name"]
+        checked += 1
+    assert checked >= 20
