@@ -414,6 +414,8 @@ static void test_s3_on_the_hal_clock(void **state)
     assert_int_equal(app.uds.srv.unlocked, 0);
 }
 
+/* three wrong keys: 0x35, 0x35, 0x36, then the 10 s delay on the HAL clock (0x37), which
+ * the programming session does not bypass (0x22) */
 static void test_three_wrong_keys_then_delay_on_the_hal_clock(void **state)
 {
     (void)state;
@@ -427,6 +429,11 @@ static void test_three_wrong_keys_then_delay_on_the_hal_clock(void **state)
         expect_nrc(request(key, sizeof key), 0x27, codes[i]);
     }
     expect_nrc(REQUEST(0x27, 0x01), 0x27, 0x37);
+    /* nor through the bootloader, which would start with a fresh count (a review's) */
+    hal.has_bootloader = 1;
+    expect_nrc(REQUEST(0x10, 0x02), 0x10, 0x22);
+    assert_int_equal(hal.bootloader_entered, 0u);
+    assert_int_equal(REQUEST(0x10, 0x03), 6u);
     for (int s = 0; s < 10; s++) {
         hal.t_us += 1000000u;
         assert_int_equal(REQUEST(0x3E, 0x00), 2u);

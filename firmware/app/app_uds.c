@@ -393,7 +393,9 @@ static uint8_t session_change(void *user, uint8_t session)
         return UDS_NRC_OK;
     }
     hal_t *hal = a->uds.hal;
-    if (hal == NULL || hal_bootloader(hal, 0) != 0) {
+    /* not during the security delay: the bootloader starts with a fresh count, and would
+     * give three more keys at once */
+    if (hal == NULL || a->uds.srv.delay_on || hal_bootloader(hal, 0) != 0) {
         return UDS_NRC_CONDITIONS_NOT_CORRECT;
     }
     send_pending(a, UDS_SID_SESSION);
