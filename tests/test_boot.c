@@ -388,6 +388,7 @@ static void test_sequence_errors(void **state)
     make_image(3000u, 2u);
     unlock();
     expect_nrc(B(0x36, 0x01, 0xAA), 0x24);          /* no download */
+    expect_nrc(B(0x36, 0x01), 0x13);                /* no data: the length first (ISO) */
     expect_nrc(B(0x37), 0x24);
     check(crc32_of(img, 3000u), 0x24);              /* nothing downloaded */
     request_download(BOOT_APP_START, 3000u, 0x70);  /* not erased */

@@ -290,11 +290,11 @@ static int flash_equals(const boot_flash_t *fl, uint32_t addr, const uint8_t *da
 static uint8_t transfer_data(boot_t *b, const uint8_t *req, size_t len, uint8_t *rsp,
                              size_t *rsp_len)
 {
+    if (len < 3u || len > BOOT_MAX_BLOCK) {
+        return UDS_NRC_INCORRECT_LENGTH; /* ISO 14229-1: the length before the sequence */
+    }
     if (b->dl_state != DL_TRANSFER) {
         return UDS_NRC_REQUEST_SEQUENCE_ERROR;
-    }
-    if (len < 3u || len > BOOT_MAX_BLOCK) {
-        return UDS_NRC_INCORRECT_LENGTH;
     }
     const uint8_t bsc = req[1];
     const uint32_t n = (uint32_t)len - 2u;
