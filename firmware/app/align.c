@@ -58,22 +58,31 @@ geo_pos_t align_pos_of(int32_t lat_e7, int32_t lon_e7, int32_t h_cm)
     return p;
 }
 
+/* The navigator started at pos (height reference h_cm) with velocity v_enu_mps and that
+ * attitude, the dead reckoning at pos with the calibration: NAV_OK or the first error
+ * (every start: commanded, in motion, re-acquired) */
+static int nav_start(const geo_pos_t *pos, int32_t h_cm, const nav_real_t v_enu_mps[3],
+                     nav_real_t roll_rad, nav_real_t pitch_rad, nav_real_t heading_rad,
+                     sins_t *nav, dr_t *dr, const calib_t *cal)
+{
+    nav_real_t q[4];
+    quat_from_euler(roll_rad, pitch_rad, heading_rad, q);
+    const sins_config_t scfg = sins_default_config();
+    int rc = sins_init(nav, &scfg, pos, v_enu_mps, q);
+    if (rc == NAV_OK) {
+        rc = calib_start_dr(cal, dr, pos);
+    }
+    sins_set_height_ref(nav, (nav_real_t)h_cm * NAV_C(0.01));
+    return rc;
+}
+
 int align_start(const align_t *al, nav_real_t roll_rad, nav_real_t pitch_rad, sins_t *nav,
                 dr_t *dr, const calib_t *cal)
 {
-    nav_real_t q[4];
-    quat_from_euler(roll_rad, pitch_rad, al->heading_rad, q);
-    const geo_pos_t pos = al->pos;
-    const nav_real_t v0[3] = {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)};
-    const sins_config_t scfg = sins_default_config();
-    int rc = sins_init(nav, &scfg, &pos, v0, q);
-    if (rc != NAV_OK) {
-        return rc;
-    }
-    sins_set_height_ref(nav, (nav_real_t)al->h_cm * NAV_C(0.01));
-    rc = calib_start_dr(cal, dr, &pos);
-    return rc;
+    static const nav_real_t v0[3] = {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)};
+    return nav_start(&al->pos, al->h_cm, v0, roll_rad, pitch_rad, al->heading_rad, nav, dr, cal);
 }
+
 
 int align_gnss(align_t *al, const gnss_fix_t *fix)
 {
@@ -113,14 +122,10 @@ int align_reacquire(align_t *al, const gnss_fix_t *fix, sins_t *nav, dr_t *dr,
     const nav_real_t heading = fix->speed_mps >= APP_GNSS_COURSE_MIN_MPS
                                    ? fix->course_rad + al->reacq_mount_rad
                                    : al->reacq_heading_rad;
-    nav_real_t q[4];
-    quat_from_euler(al->reacq_roll_rad, al->reacq_pitch_rad, heading, q);
-    const sins_config_t scfg = sins_default_config();
-    if (sins_init(nav, &scfg, &fix->pos, fix->v_enu_mps, q) != NAV_OK ||
-        calib_start_dr(cal, dr, &fix->pos) != NAV_OK) {
+    if (nav_start(&fix->pos, fix->h_cm, fix->v_enu_mps, al->reacq_roll_rad, al->reacq_pitch_rad,
+                  heading, nav, dr, cal) != NAV_OK) {
         return NAV_EINVAL;
     }
-    sins_set_height_ref(nav, (nav_real_t)fix->h_cm * NAV_C(0.01));
     al->reacquire = 0u;
     return NAV_OK;
 }
@@ -215,13 +220,8 @@ int align_motion_epoch(align_t *al, const gnss_fix_t *fix, const align_odo_t *od
 int align_motion_start(const gnss_fix_t *fix, nav_real_t roll_rad, nav_real_t pitch_rad,
                        nav_real_t heading_rad, sins_t *nav, dr_t *dr, const calib_t *cal)
 {
-    nav_real_t q[4];
-    quat_from_euler(roll_rad, pitch_rad, heading_rad, q);
-    const sins_config_t scfg = sins_default_config();
-    if (sins_init(nav, &scfg, &fix->pos, fix->v_enu_mps, q) != NAV_OK ||
-        calib_start_dr(cal, dr, &fix->pos) != NAV_OK) {
-        return NAV_EINVAL;
-    }
-    sins_set_height_ref(nav, (nav_real_t)fix->h_cm * NAV_C(0.01));
-    return NAV_OK;
+    return nav_start(&fix->pos, fix->h_cm, fix->v_enu_mps, roll_rad, pitch_rad, heading_rad, nav,
+                     dr, cal) != NAV_OK
+               ? NAV_EINVAL
+               : NAV_OK;
 }
