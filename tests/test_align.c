@@ -224,26 +224,37 @@ static void test_gnss_init_needs_course_and_stop(void **state)
 
 /* ---- re-acquisition ---- */
 
+/* driving (the course a heading) or standing, with velocity and height; standing only
+ * when the car has not moved since the re-acquisition began (a review: a car that braked
+ * and turned 90 deg in a gap re-acquired at its stop with the heading before, 90 deg off,
+ * claiming 5 deg) */
 static void test_reacquire_ready(void **state)
 {
     (void)state;
+    align_reacquire_begin(&al, &nav, 0.0f, 0);
     gnss_fix_t f = fix_at(10.0f, 0.0f, 1);
-    assert_int_equal(align_reacquire_ready(&f), 1);
+    assert_int_equal(align_reacquire_ready(&al, &f), 1);
     f = fix_at(0.3f, 0.0f, 1);
-    assert_int_equal(align_reacquire_ready(&f), 1);
+    assert_int_equal(align_reacquire_ready(&al, &f), 1);
     f = fix_at(2.0f, 0.0f, 1);
-    assert_int_equal(align_reacquire_ready(&f), 0); /* a course that is not a heading */
+    assert_int_equal(align_reacquire_ready(&al, &f), 0); /* a course that is not a heading */
     f = fix_at(10.0f, 0.0f, 0);
-    assert_int_equal(align_reacquire_ready(&f), 0); /* no height */
+    assert_int_equal(align_reacquire_ready(&al, &f), 0); /* no height */
     f = fix_at(10.0f, 0.0f, 1);
     f.has_vel = 0u;
-    assert_int_equal(align_reacquire_ready(&f), 0);
+    assert_int_equal(align_reacquire_ready(&al, &f), 0);
+    align_reacquire_begin(&al, &nav, 0.0f, 1); /* moving when the gap came */
+    f = fix_at(0.3f, 0.0f, 1);
+    assert_int_equal(align_reacquire_ready(&al, &f), 0);
+    f = fix_at(10.0f, 0.0f, 1);
+    assert_int_equal(align_reacquire_ready(&al, &f), 1);
 }
 
 /* GIVEN a navigator at roll 2, pitch -1, heading 60 deg and a mounting yaw of 0.05 rad
  * WHEN re-acquiring from a fix driving at 10 m/s on course 2.0 rad THEN roll and pitch are
  * kept, the heading is the course plus the mounting (2.05 rad), position, velocity and
- * height reference are the fix's; WHEN instead standing THEN the heading before is kept. */
+ * height reference are the fix's; WHEN instead standing THEN the heading before is kept;
+ * WHEN reversing THEN the heading is the course's opposite. */
 static void test_reacquire(void **state)
 {
     (void)state;
@@ -252,10 +263,10 @@ static void test_reacquire(void **state)
     assert_int_equal(align_start(&al, (nav_real_t)(2.0 * DEG), (nav_real_t)(-1.0 * DEG), &nav,
                                  &dr, &cal),
                      NAV_OK);
-    align_reacquire_begin(&al, &nav, 0.05f);
+    align_reacquire_begin(&al, &nav, 0.05f, 1);
     assert_int_equal(al.reacquire, 1);
     gnss_fix_t f = fix_at(10.0f, 2.0f, 1);
-    assert_int_equal(align_reacquire(&al, &f, &nav, &dr, &cal), NAV_OK);
+    assert_int_equal(align_reacquire(&al, &f, &nav, &dr, &cal, 0), NAV_OK);
     assert_int_equal(al.reacquire, 0);
     nav_real_t roll, pitch, heading;
     sins_euler(&nav, &roll, &pitch, &heading);
@@ -268,11 +279,19 @@ static void test_reacquire(void **state)
     assert_true(dr.pos.lat == f.pos.lat && dr.pos.lon == f.pos.lon);
     assert_near(nav.h_ref_m, 250.0, 1e-4);
 
-    align_reacquire_begin(&al, &nav, 0.05f);
+    align_reacquire_begin(&al, &nav, 0.05f, 0);
     f = fix_at(0.1f, 5.0f, 1);
-    assert_int_equal(align_reacquire(&al, &f, &nav, &dr, &cal), NAV_OK);
+    assert_int_equal(align_reacquire(&al, &f, &nav, &dr, &cal, 0), NAV_OK);
     sins_euler(&nav, &roll, &pitch, &heading);
     assert_near(heading, 2.05, 1e-6); /* the heading before, not the standing course */
+
+    /* reversing (the wheels say so) at 6 m/s on course 2.0 rad: the car points the other
+     * way, 2.0 + pi + 0.05 (a review: it took the course, 180 deg off, claiming 2-3 deg) */
+    align_reacquire_begin(&al, &nav, 0.05f, 1);
+    f = fix_at(6.0f, 2.0f, 1);
+    assert_int_equal(align_reacquire(&al, &f, &nav, &dr, &cal, 1), NAV_OK);
+    sins_euler(&nav, &roll, &pitch, &heading);
+    assert_near(remainder((double)heading - (2.05 + M_PI), 2.0 * M_PI), 0.0, 1e-5);
 }
 
 int main(void)

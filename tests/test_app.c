@@ -834,13 +834,15 @@ static void test_imu_gap_restarts_levelling(void **state)
 }
 
 /*
- * GIVEN navigation interrupted by an IMU gap of 2 s (beyond bridging): mode Fault,
- *       HealthFlags REACQUIRE
- * WHEN a GNSS epoch at 2 m/s arrives (its course is no heading yet)
- * THEN it still waits;
- * WHEN a GNSS epoch of the car standing arrives
+ * GIVEN navigation of a standing car interrupted by an IMU gap of 2 s (beyond bridging):
+ *       mode Fault, HealthFlags REACQUIRE
+ * WHEN a GNSS epoch of the car still standing arrives
  * THEN navigation resumes there with the attitude from before the gap (heading 30 deg)
- *      and nothing is refused afterwards.
+ *      and nothing is refused afterwards;
+ * GIVEN another such gap WHEN an epoch at 2 m/s arrives (its course is no heading yet)
+ * THEN it waits, and WHEN the car then stands THEN it still waits (it may have turned:
+ *      a review found a car re-acquired 90 deg off, claiming 5 deg), until a course at
+ *      10 m/s gives the heading.
  */
 static void test_reacquire_after_long_gap(void **state)
 {
@@ -851,9 +853,7 @@ static void test_reacquire_after_long_gap(void **state)
     run_still(1);
     assert_int_equal(app.run.mode, APP_MODE_FAULT);
     assert_true(app.run.align.reacquire);
-    send_gnss_epoch(0u, 0u, 2.0);
-    assert_int_equal(app.run.mode, APP_MODE_FAULT);
-    send_gnss_epoch(1u, 1u, 0.0);
+    send_gnss_epoch(0u, 0u, 0.0); /* still standing: the heading before is kept */
     assert_int_equal(app.run.mode, APP_MODE_NAVIGATING);
     assert_false(app.run.align.reacquire);
     run_still(1);
@@ -862,6 +862,20 @@ static void test_reacquire_after_long_gap(void **state)
     assert_true(fabs((double)heading / DEG - 30.0) < 0.05);
     assert_int_equal(app.keep.health.nav_rejected, 0u);
     assert_false(health_flags_now() & NAVECU_HEALTH_REACQUIRE);
+
+    /* again, and the car moves before it stops (2 m/s: no course to take): the heading
+     * before may be gone, so the stop does not re-acquire; the course at 10 m/s does */
+    skip_samples(200);
+    run_still(1);
+    assert_int_equal(app.run.mode, APP_MODE_FAULT);
+    send_gnss_epoch(1u, 1u, 2.0);
+    assert_int_equal(app.run.mode, APP_MODE_FAULT);
+    send_gnss_epoch(2u, 2u, 0.0);
+    assert_int_equal(app.run.mode, APP_MODE_FAULT);
+    send_gnss_epoch(3u, 3u, 10.0); /* north */
+    assert_int_equal(app.run.mode, APP_MODE_NAVIGATING);
+    sins_euler(&app.run.nav, &roll, &pitch, &heading);
+    assert_true(fabs(remainder((double)heading, 2.0 * M_PI)) < 0.05);
 }
 
 static void send_initial_attitude(double roll_rad, double pitch_rad)

@@ -83,7 +83,6 @@ int align_start(const align_t *al, nav_real_t roll_rad, nav_real_t pitch_rad, si
     return nav_start(&al->pos, al->h_cm, v0, roll_rad, pitch_rad, al->heading_rad, nav, dr, cal);
 }
 
-
 int align_gnss(align_t *al, const gnss_fix_t *fix)
 {
     if (fix->speed_mps >= APP_GNSS_COURSE_MIN_MPS) {
@@ -98,8 +97,10 @@ int align_gnss(align_t *al, const gnss_fix_t *fix)
     return 0;
 }
 
-void align_reacquire_begin(align_t *al, const sins_t *nav, nav_real_t mount_yaw_rad)
+void align_reacquire_begin(align_t *al, const sins_t *nav, nav_real_t mount_yaw_rad,
+                           int moving)
 {
+    al->reacq_moved = moving != 0 ? 1u : 0u;
     nav_real_t roll, pitch, heading;
     sins_euler(nav, &roll, &pitch, &heading);
     al->reacq_roll_rad = roll;
@@ -109,19 +110,21 @@ void align_reacquire_begin(align_t *al, const sins_t *nav, nav_real_t mount_yaw_
     al->reacquire = 1u;
 }
 
-int align_reacquire_ready(const gnss_fix_t *fix)
+int align_reacquire_ready(const align_t *al, const gnss_fix_t *fix)
 {
     return fix->has_vel && fix->has_h &&
            (fix->speed_mps >= APP_GNSS_COURSE_MIN_MPS ||
-            (fix->speed_mps >= NAV_C(0.0) && fix->speed_mps <= APP_GNSS_STILL_MPS));
+            (al->reacq_moved == 0u && fix->speed_mps >= NAV_C(0.0) &&
+             fix->speed_mps <= APP_GNSS_STILL_MPS));
 }
 
 int align_reacquire(align_t *al, const gnss_fix_t *fix, sins_t *nav, dr_t *dr,
-                    const calib_t *cal)
+                    const calib_t *cal, int reversing)
 {
-    const nav_real_t heading = fix->speed_mps >= APP_GNSS_COURSE_MIN_MPS
-                                   ? fix->course_rad + al->reacq_mount_rad
-                                   : al->reacq_heading_rad;
+    const nav_real_t heading =
+        fix->speed_mps >= APP_GNSS_COURSE_MIN_MPS
+            ? fix->course_rad + al->reacq_mount_rad + (reversing != 0 ? NAV_PI : NAV_C(0.0))
+            : al->reacq_heading_rad;
     if (nav_start(&fix->pos, fix->h_cm, fix->v_enu_mps, al->reacq_roll_rad, al->reacq_pitch_rad,
                   heading, nav, dr, cal) != NAV_OK) {
         return NAV_EINVAL;

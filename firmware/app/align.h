@@ -41,6 +41,7 @@ typedef struct {
     nav_real_t course_rad;
     /* re-acquisition: the attitude before the gap, the mounting yaw in use */
     uint8_t reacquire;
+    uint8_t reacq_moved; /* the car moved since: the heading before is no longer known */
     nav_real_t reacq_roll_rad, reacq_pitch_rad, reacq_heading_rad, reacq_mount_rad;
     /* in-motion alignment: the window since a GNSS epoch (align_motion_*) */
     uint8_t mot_open;                 /* a window runs */
@@ -95,16 +96,21 @@ int align_start(const align_t *al, nav_real_t roll_rad, nav_real_t pitch_rad, si
 int align_gnss(align_t *al, const gnss_fix_t *fix);
 
 /* An IMU gap too long to bridge or a filter reset: keep roll, pitch and heading and the
- * mounting yaw (rad) in use; position, velocity and heading come from GNSS. */
-void align_reacquire_begin(align_t *al, const sins_t *nav, nav_real_t mount_yaw_rad);
+ * mounting yaw (rad) in use; position, velocity and heading come from GNSS. moving: the
+ * car was moving then (the heading kept is then not the one after the gap). */
+void align_reacquire_begin(align_t *al, const sins_t *nav, nav_real_t mount_yaw_rad,
+                           int moving);
 
 /* 1 if the epoch can re-acquire: velocity and height, and either driving (the course is a
- * heading) or standing (the heading before is kept). */
-int align_reacquire_ready(const gnss_fix_t *fix);
+ * heading) or standing still since the re-acquisition began (the heading before is kept;
+ * a car that moved meanwhile, in the gap or waiting, may have turned: it waits for the
+ * course). */
+int align_reacquire_ready(const align_t *al, const gnss_fix_t *fix);
 
-/* Resume at this epoch. NAV_OK, or the core's error (the epoch is refused). */
+/* Resume at this epoch, reversing (the wheels say so): the heading is the course's
+ * opposite. NAV_OK, or the core's error (the epoch is refused). */
 int align_reacquire(align_t *al, const gnss_fix_t *fix, sins_t *nav, dr_t *dr,
-                    const calib_t *cal);
+                    const calib_t *cal, int reversing);
 
 /* In-motion alignment (docs/kalman.md, Initialisation), while waiting for an initial
  * state with no heading: a car that powers on or is reset while driving. Between two GNSS

@@ -128,10 +128,18 @@ static fusion_ctx_t fusion_ctx(app_t *a, const app_diag_t *d)
 
 /* An IMU gap too long to bridge, or a filter reset: position, velocity and (when driving)
  * heading come from the next GNSS epoch; the attitude before is kept. */
+/* the car moves: a speed above a standstill's, or turning wheels */
+static int car_moving(const app_t *a, nav_real_t speed_mps)
+{
+    return speed_mps > APP_GNSS_STILL_MPS || (a->keep.odo.valid && !a->keep.odo.standing);
+}
+
 static void begin_reacquire(app_t *a)
 {
     const nav_real_t mount = a->run.fusion.on ? a->run.fusion.ekf.mount_yaw_rad : a->run.dr.dh_rad;
-    align_reacquire_begin(&a->run.align, &a->run.nav, mount);
+    const nav_real_t *v = a->run.nav.v_n_mps;
+    align_reacquire_begin(&a->run.align, &a->run.nav, mount,
+                          car_moving(a, nav_sqrt(v[0] * v[0] + v[1] * v[1])));
     fusion_stop(&a->run.fusion);
     a->run.mode = APP_MODE_FAULT;
 }
@@ -539,9 +547,14 @@ static void on_gnss_status(app_t *a, hal_t *hal, const rx_input_t *in)
         if (a->run.mount_start && fix.speed_mps < APP_GNSS_COURSE_MIN_MPS) {
             course_ok = 0;
         }
-        if (!imu_rate_mismatch(&a->keep.rate) && course_ok && align_reacquire_ready(&fix)) {
+        if (car_moving(a, fix.speed_mps)) {
+            a->run.align.reacq_moved = 1u; /* the heading before may be gone */
+        }
+        if (!imu_rate_mismatch(&a->keep.rate) && course_ok &&
+            align_reacquire_ready(&a->run.align, &fix)) {
             const gnss_fix_t now = fix_now(a, &fix);
-            if (align_reacquire(&a->run.align, &now, &a->run.nav, &a->run.dr, &a->keep.cal) !=
+            if (align_reacquire(&a->run.align, &now, &a->run.nav, &a->run.dr, &a->keep.cal,
+                                a->keep.odo.valid && a->keep.odo.speed_mps < NAV_C(0.0)) !=
                 NAV_OK) {
                 reject(a, &a->keep.health.gnss_rejected);
                 return;
