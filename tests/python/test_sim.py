@@ -332,3 +332,31 @@ def test_mount_curve_pages_and_errors(tmp_path):
                                               "yaw_deg": 90.0})
     np.testing.assert_allclose(err["roll"], [0.1, 0.1, 0.1], atol=1e-9)
     np.testing.assert_allclose(err["yaw"], [0.0, 1.0, 2.0], atol=1e-9)
+
+
+def test_nav_log_time_across_a_gap_longer_than_the_wrap(tmp_path):
+    """NAV_Height's TimeOfValidity wraps every 65.536 s. A run whose navigation stops for
+    longer (a re-acquisition that waits for the GNSS course through a stop) lost a wrap when
+    wraps were counted from TimeOfValidity going back: the report then compared the outputs
+    with the truth 65.5 s away (a review's 787 m for 2.8 m). With the log's timestamps as
+    the IMU time (wraps_from_log, a --can-log run) every set's time is resolved."""
+    db = nc.load_db()
+    pos, hgt = db.get_message_by_name("NAV_Position"), db.get_message_by_name("NAV_Height")
+    lines = []
+    for t in (10.0, 10.02, 100.0, 170.0):  # a gap of 89.98 s, then one of 70 s
+        ms = int(round(t * 1000)) % 65536
+        p = pos.encode({"Latitude": 45.0, "Longitude": 10.0})
+        h = hgt.encode({"Height": 100.0, "VertAccuracy": 1.0, "TimeOfValidity": ms,
+                        "NavCounter": 0, "NavCrc": 0})
+        lines.append(f"({t:.6f}) can0 {pos.frame_id:03X}#{p.hex().upper()}")
+        lines.append(f"({t:.6f}) can0 {hgt.frame_id:03X}#{h.hex().upper()}")
+    log = tmp_path / "nav.log"
+    log.write_text("\n".join(lines) + "\n")
+    t = report.read_nav_log(log, db, wraps_from_log=True)["NAV_Position"]["t_s"]
+    assert list(np.round(t, 3)) == [10.0, 10.02, 100.0, 170.0]
+    # a power-on later than the log's start: the log's time less it is the IMU time
+    lines = [ln.replace(f"({t0:.6f})", f"({t0 + 30.0:.6f})") for ln in lines
+             for t0 in (float(ln[1:ln.index(")")]),)]
+    log.write_text("\n".join(lines) + "\n")
+    t = report.read_nav_log(log, db, wraps_from_log=True, log_t0_s=30.0)["NAV_Position"]["t_s"]
+    assert list(np.round(t, 3)) == [10.0, 10.02, 100.0, 170.0]

@@ -26,7 +26,7 @@ from tools import navecu_can as nc
 from tools.geodesy import horizontal_error_m, radii_m
 from tools.sim import scenario, sensors
 
-def read_nav_log(path, db=None, wraps_from_log: bool = False) -> dict:
+def read_nav_log(path, db=None, wraps_from_log: bool = False, log_t0_s: float = 0.0) -> dict:
     """Decode the NAV_* frames of a candump log (every message navecu sends) into arrays
     keyed by message; each has 't_s' and the signal columns.
 
@@ -37,9 +37,12 @@ def read_nav_log(path, db=None, wraps_from_log: bool = False) -> dict:
     its NAV_Height's time; the others take the time of the last set (NaN before one): at
     the default rates every output of a sample follows its set (docs/can.md). db: the
     protocol to decode with (default nc.load_db(), the selected vehicle's).
-    wraps_from_log: the log's timestamps are the IMU time (a --can-log run of the
-    simulator's log): the first NAV_Height's modulus is resolved with them, for a start
-    held beyond 65.536 s (the automatic mounting estimate); later wraps as above.
+    wraps_from_log: the log's timestamps are the IMU time plus log_t0_s (a --can-log run
+    of the simulator's log; log_t0_s its power-on time): every NAV_Height's modulus is
+    resolved with them, so that neither a start held beyond 65.536 s (the automatic
+    mounting estimate) nor a longer time without navigation (a re-acquisition waiting for
+    the GNSS course) loses a wrap; without it a wrap is counted when TimeOfValidity goes
+    back, which misses a gap of more than 65.536 s.
     Each row also has 'seq', the frame's index in the log: what a receiver had seen before
     it (transition_check)."""
     db = db if db is not None else nc.load_db()
@@ -57,9 +60,10 @@ def read_nav_log(path, db=None, wraps_from_log: bool = False) -> dict:
                 cycle_rows = []
             if name == "NAV_Height":
                 ms = int(sig["TimeOfValidity"])
-                if last_ms is None and wraps_from_log:
-                    wraps = max(0, round((float(msg.timestamp) - ms / 1000.0) / 65.536))
-                if last_ms is not None and ms < last_ms:
+                if wraps_from_log:
+                    wraps = max(0, round((float(msg.timestamp) - log_t0_s - ms / 1000.0)
+                                         / 65.536))
+                elif last_ms is not None and ms < last_ms:
                     wraps += 1
                 last_ms = ms
                 t_cycle = (wraps * 65536 + ms) / 1000.0

@@ -386,7 +386,8 @@ def main(argv=None) -> int:
 
     st.start("report")
     # the firmware's times count from its power-on: the log's timestamps are the drive's
-    nav = report.read_nav_log(nav_log, wraps_from_log=not a.bus and a.power_on_s is None)
+    nav = report.read_nav_log(nav_log, wraps_from_log=not a.bus,
+                              log_t0_s=a.power_on_s if a.power_on_s is not None else 0.0)
     if a.power_on_s is not None:
         for cols in nav.values():
             cols["t_s"] = cols["t_s"] + a.power_on_s
