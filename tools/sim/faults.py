@@ -701,7 +701,7 @@ def evaluate(drive: Drive, msgs: list, out_dir: Path, cmd_tail: list, navecu: st
                   "cal": None, "decoded_finite": True})
         return r
     t = time.monotonic()
-    nav = report.read_nav_log(nav_log)
+    nav = report.read_nav_log(nav_log, wraps_from_log=True)  # the log's time is the IMU time
     tr = drive.truth
     truth_r = {"t_s": tr.t_s, "lat_rad": tr.lat_rad, "lon_rad": tr.lon_rad,
                "heading_rad": tr.heading_rad, "dist_m": tr.dist_m}
