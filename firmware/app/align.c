@@ -83,13 +83,17 @@ int align_start(const align_t *al, nav_real_t roll_rad, nav_real_t pitch_rad, si
     return nav_start(&al->pos, al->h_cm, v0, roll_rad, pitch_rad, al->heading_rad, nav, dr, cal);
 }
 
-int align_gnss(align_t *al, const gnss_fix_t *fix)
+int align_gnss(align_t *al, const gnss_fix_t *fix, int wheels_turn)
 {
     if (fix->speed_mps >= APP_GNSS_COURSE_MIN_MPS) {
         al->course_rad = fix->course_rad;
         al->course_valid = 1u;
+        al->course_dyaw_rad = NAV_C(0.0);
     }
-    if (al->course_valid && fix->has_h && fix->speed_mps >= NAV_C(0.0) &&
+    /* the course is the heading while the z gyro says the car has not turned since (its
+     * uncompensated bias turns that too: an old course runs out) */
+    if (al->course_valid && nav_fabs(al->course_dyaw_rad) <= APP_GNSS_COURSE_TURN_RAD &&
+        fix->has_h && wheels_turn == 0 && fix->speed_mps >= NAV_C(0.0) &&
         fix->speed_mps <= APP_GNSS_STILL_MPS) {
         align_set_initial(al, &fix->pos, fix->h_cm, 1, al->course_rad);
         return 1;
@@ -135,6 +139,7 @@ int align_reacquire(align_t *al, const gnss_fix_t *fix, sins_t *nav, dr_t *dr,
 
 void align_motion_sample(align_t *al, const imu_inc_t *inc)
 {
+    al->course_dyaw_rad += inc->dtheta_b_rad[2];
     if (!al->mot_open) {
         return;
     }

@@ -39,6 +39,7 @@ typedef struct {
     /* GNSS-only initialisation: a course seen while moving */
     uint8_t course_valid;
     nav_real_t course_rad;
+    nav_real_t course_dyaw_rad; /* the z gyro's turn since it */
     /* re-acquisition: the attitude before the gap, the mounting yaw in use */
     uint8_t reacquire;
     uint8_t reacq_moved; /* the car moved since: the heading before is no longer known */
@@ -91,9 +92,13 @@ int align_start(const align_t *al, nav_real_t roll_rad, nav_real_t pitch_rad, si
                 dr_t *dr, const calib_t *cal);
 
 /* GNSS-only initialisation, while waiting for an initial state without one: the heading
- * is the GNSS course while driving; the position, height and levelling come at the next
- * stop. Returns 1 when the epoch set the initial state. */
-int align_gnss(align_t *al, const gnss_fix_t *fix);
+ * is the GNSS course while driving (5 m/s or more), while the z gyro says the car has not
+ * turned since by more than APP_GNSS_COURSE_TURN_RAD (align_motion_sample: a car that
+ * turns below 5 m/s before it stops; a review found it started 90 deg off); the position,
+ * height and levelling come at the next stop, once the wheels stand too (wheels_turn 0: the receiver's speed falls below a
+ * standstill's while a braking car still rolls, and the wheels would stop the levelling,
+ * the course forgotten). Returns 1 when the epoch set the initial state. */
+int align_gnss(align_t *al, const gnss_fix_t *fix, int wheels_turn);
 
 /* An IMU gap too long to bridge or a filter reset: keep roll, pitch and heading and the
  * mounting yaw (rad) in use; position, velocity and heading come from GNSS. moving: the

@@ -596,7 +596,8 @@ static void on_gnss_status(app_t *a, hal_t *hal, const rx_input_t *in)
         align_level_restart(&a->run.align);
     }
     if (a->run.mode == APP_MODE_WAIT_INIT && !a->run.align.pos_valid &&
-        align_gnss(&a->run.align, &fix) && align_ready(&a->run.align)) {
+        align_gnss(&a->run.align, &fix, a->keep.odo.valid && !a->keep.odo.zero) &&
+        align_ready(&a->run.align)) {
         a->run.mode = APP_MODE_LEVELLING;
         align_level_restart(&a->run.align);
     }

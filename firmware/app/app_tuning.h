@@ -78,6 +78,12 @@
 #define APP_GNSS_HEADING_SPEED_SIGMAS NAV_C(10.0)
 /* below this GNSS speed the vehicle may be still (levelling, GNSS-only initialisation) */
 #define APP_GNSS_STILL_MPS NAV_C(0.3)
+/* the GNSS-only initialisation's course is the heading at the stop while the z gyro's
+ * turn since it (its uncompensated bias included) stays within this: 2 deg, so that with
+ * the course's own error the start stays within the filter's default 5 deg heading sigma
+ * (the default automotive preset's turn-on bias, 0.001 rad/s, spends it in 35 s of driving
+ * below 5 m/s: an older course is no heading) */
+#define APP_GNSS_COURSE_TURN_RAD NAV_C(0.0349)
 /* in-motion alignment (align.h): a window of at least this long between two driving
  * epochs (the along-track acceleration's error is ~ sqrt(2) sigma_v / window), restarted
  * beyond the longest; driving means a speed of this many sigmas (course sigma ~ 0.1 rad at
