@@ -351,6 +351,56 @@ static void test_epoch_in_an_imu_gap_sets_no_minimum(void **state)
     assert_near(w.back, 10.0, 1e-2);
 }
 
+/* Two epochs (a 10 Hz receiver) in one IMU gap: both looked early (the second by more);
+ * the next epoch after the gap sets the minimum (a review: the first version restored only
+ * the last epoch's, the first's lowered one, and left every later epoch 30 ms late). */
+static void test_two_epochs_in_one_imu_gap(void **state)
+{
+    (void)state;
+    record_constant(64u, 0.0f, 0.0f, 0.0f);
+    (void)epoch(1000u, 0);
+    gnss_time_imu_next(&g, 0);
+    (void)epoch(1097u, -30);  /* arrived after sample 1100, the last processed 1097 */
+    (void)epoch(1097u, -130); /* arrived after sample 1110 */
+    gnss_time_imu_next(&g, 1); /* sample 1116 reveals the loss */
+    gnss_when_t w = epoch(1200u, 0);
+    gnss_time_imu_next(&g, 0);
+    assert_near(w.back, 10.0, 1e-2);
+    w = epoch(1300u, 0);
+    assert_near(w.back, 10.0, 1e-2);
+}
+
+/* A clock jump (1.5 s earlier) whose epoch came in an IMU gap: counted once, the next
+ * epochs on the new clock on time; a first epoch in a gap keeps NAV_Time (a review: the
+ * first version counted the jump twice and lost NAV_Time until the next epoch). */
+static void test_jump_or_first_epoch_in_an_imu_gap(void **state)
+{
+    (void)state;
+    record_constant(64u, 0.0f, 0.0f, 0.0f);
+    (void)epoch(1000u, 0);
+    gnss_time_imu_next(&g, 0);
+    gnss_when_t w = epoch(1100u, -1500);
+    int jumps = w.jumped;
+    gnss_time_imu_next(&g, 1);
+    w = epoch(1110u, -1500);
+    jumps += w.jumped;
+    gnss_time_imu_next(&g, 0);
+    w = epoch(1120u, -1500);
+    jumps += w.jumped;
+    assert_int_equal(jumps, 1);
+    assert_near(w.back, 10.0, 1e-2);
+
+    memset(&g, 0, sizeof g);
+    record_constant(64u, 0.0f, 0.0f, 0.0f);
+    (void)epoch(1097u, -30);
+    gnss_time_imu_next(&g, 1);
+    uint64_t tow_us;
+    uint16_t week;
+    assert_int_equal(gnss_time_at(&g, 1101u * 10000u, 0.1f, &tow_us, &week), 0);
+    w = epoch(1200u, 0);
+    assert_near(w.back, 10.0, 1e-2);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -369,6 +419,8 @@ int main(void)
         cmocka_unit_test_setup(test_week_rollover_is_no_jump, setup),
         cmocka_unit_test_setup(test_week_rollover_keeps_the_weeks_time, setup),
         cmocka_unit_test_setup(test_epoch_in_an_imu_gap_sets_no_minimum, setup),
+        cmocka_unit_test_setup(test_two_epochs_in_one_imu_gap, setup),
+        cmocka_unit_test_setup(test_jump_or_first_epoch_in_an_imu_gap, setup),
     };
     return cmocka_run_group_tests_name("gnss_time", tests, NULL, NULL);
 }

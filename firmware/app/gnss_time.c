@@ -64,6 +64,11 @@ gnss_when_t gnss_time_align(gnss_time_t *g, uint64_t imu_t_us, uint32_t imu_rate
     /* a new week: the minimum moves to it, so that it stays the latest epoch's (NAV_Time
      * takes the week from the fixes: gnss_time_at) */
     g->off_min_us += week_step_us(g, off);
+    if (g->min_suspect != 0u) {
+        g->min_suspect = 0u; /* the one set in an IMU gap: this epoch's instead */
+        g->off_min_us = off;
+        g->lowered = 1u;
+    }
     /* A step earlier by more than 1 s, later by more than 10 s, or later by more than
      * 0.5 s three epochs in a row is a time jump; a late epoch moves the offset once. */
     const int64_t excess = off - g->off_min_us;
@@ -77,10 +82,8 @@ gnss_when_t gnss_time_align(gnss_time_t *g, uint64_t imu_t_us, uint32_t imu_rate
     if (jumped) {
         g->late_run = 0u;
     }
-    g->off_min_was_us = g->off_min_us;
-    g->off_valid_was = g->off_valid;
-    g->lowered = (!g->off_valid || off < g->off_min_us || jumped) ? 1u : 0u;
-    if (g->lowered != 0u) {
+    if (!g->off_valid || off < g->off_min_us || jumped) {
+        g->lowered = 1u;
         g->off_min_us = off; /* first epoch, an earlier one, or a time jump */
         g->off_valid = 1u;
     } else {
@@ -101,8 +104,7 @@ gnss_when_t gnss_time_align(gnss_time_t *g, uint64_t imu_t_us, uint32_t imu_rate
 void gnss_time_imu_next(gnss_time_t *g, int gap)
 {
     if (g->lowered != 0u && gap != 0) {
-        g->off_min_us = g->off_min_was_us;
-        g->off_valid = g->off_valid_was;
+        g->min_suspect = 1u;
     }
     g->lowered = 0u;
 }

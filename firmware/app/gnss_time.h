@@ -28,10 +28,10 @@ typedef struct {
     uint8_t off_valid;
     uint8_t late_run;               /* consecutive epochs more than 0.5 s late */
     int64_t prev_t_us;              /* IMU time of the previous epoch (drift allowance) */
-    int64_t off_min_was_us;         /* off_min_us before the latest epoch lowered it */
-    uint8_t off_valid_was;          /* off_valid before it */
-    uint8_t lowered;                /* the latest epoch lowered the minimum, and no IMU
-                                       sample has followed it yet (gnss_time_imu_next) */
+    uint8_t lowered;                /* an epoch set the minimum since the last IMU sample
+                                       (gnss_time_imu_next) */
+    uint8_t min_suspect;            /* it arrived in an IMU gap: the next epoch's offset
+                                       is the minimum instead */
     uint16_t gps_week;              /* GPS week of the latest epoch that had one */
     uint8_t have_week;
     nav_real_t lat_cost[APP_GNSS_LAT_BINS]; /* faded misfit per latency candidate */
@@ -53,9 +53,10 @@ typedef struct {
 
 /* The IMU sample after an epoch arrived: gap 1 when samples were lost before it (or the
  * IMU's clock jumped). An epoch's arrival is the IMU time of the last sample before it, so
- * one that arrived in a gap looked early by up to the gap: the minimum it set is undone
- * (lost samples before an epoch otherwise shifted NAV_Time and the time of validity of
- * every later epoch by the gap, until the 50 ppm creep undid it: minutes). */
+ * one that arrived in a gap looked early by up to the gap: the minimum it set (as an
+ * earlier epoch, the first, or a clock jump; one or several in the gap) is replaced by the
+ * next epoch's offset (lost samples before an epoch otherwise shifted NAV_Time and the
+ * time of validity of every later epoch by the gap, until the 50 ppm creep undid it). */
 void gnss_time_imu_next(gnss_time_t *g, int gap);
 
 /* Record the navigator's velocity after IMU sample n (every entry_s). */
