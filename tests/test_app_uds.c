@@ -494,6 +494,40 @@ static void test_dtc_of_an_imu_absent_from_power_on(void **state)
     assert_true((status & DTC_CDTC) != 0u);
 }
 
+/* Before the first IMU sample only IMU_STALE's and NVM_ERROR's DTCs are tested: the other
+ * flags hold for a number of IMU samples, and with none one refused frame stayed REJECTED
+ * and confirmed U1103 for good (a review's) */
+static void test_one_rejection_without_imu_confirms_nothing(void **state)
+{
+    (void)state;
+    app_poll(&app, &hal);
+    silent_imu(1000000u);
+    const app_diag_t d = app_diag_of(&app);
+    app_diag_reject(&d, &app.keep.health.bad_crc);
+    silent_imu(30000000u);
+    assert_int_equal(dtc_status(&app.keep.dtc, DTC_REJECTED), 0x50u); /* not tested */
+    assert_true((dtc_status(&app.keep.dtc, DTC_IMU_STALE) & DTC_CDTC) != 0u);
+}
+
+/* A DTC confirmed while driving, then 10 02: the bytes held for a standstill are written
+ * before the reset into the bootloader, as before an ECUReset (a review's) */
+static void test_programming_session_while_moving_keeps_dtcs(void **state)
+{
+    (void)state;
+    app.run.mode = APP_MODE_NAVIGATING;
+    app.keep.odo.standing = 0u;
+    app_dtc_cycle(&app, &hal, NAVECU_HEALTH_IMU_FAULT);
+    hal.t_us += 1100000u;
+    app_dtc_cycle(&app, &hal, NAVECU_HEALTH_IMU_FAULT);
+    assert_true((dtc_status(&app.keep.dtc, DTC_IMU_FAULT) & DTC_CDTC) != 0u);
+    assert_true(app.keep.dtc_dirty != 0u);
+    hal.has_bootloader = 1;
+    assert_int_equal(REQUEST(0x10, 0x03), 6u);
+    expect_nrc(REQUEST(0x10, 0x02), 0x10, 0x22); /* the fake HAL returns from the reset */
+    assert_int_equal(hal.bootloader_entered, 1u);
+    assert_int_equal(app.keep.dtc_dirty, 0u);
+}
+
 static void test_dtc_of_a_silent_imu_read_and_cleared(void **state)
 {
     (void)state;
@@ -896,6 +930,8 @@ int main(void)
         cmocka_unit_test_setup(test_identifier_rules_and_receive_list, setup),
         cmocka_unit_test_setup(test_dtc_of_a_silent_imu_read_and_cleared, setup),
         cmocka_unit_test_setup(test_dtc_of_an_imu_absent_from_power_on, setup),
+        cmocka_unit_test_setup(test_one_rejection_without_imu_confirms_nothing, setup),
+        cmocka_unit_test_setup(test_programming_session_while_moving_keeps_dtcs, setup),
         cmocka_unit_test_setup(test_pending_refused_by_a_full_can_queue, setup_started),
         cmocka_unit_test_setup(test_suppressed_response_after_a_pending, setup_started),
         cmocka_unit_test_setup(test_ecu_reset_while_moving_keeps_dtcs, setup_started),

@@ -43,7 +43,13 @@ void app_dtc_load(app_t *a, const uint8_t *status, size_t n)
 
 void app_dtc_cycle(app_t *a, hal_t *hal, uint32_t health_flags)
 {
-    const uint32_t changed = dtc_update(&a->keep.dtc, health_flags, hal_time_us(hal));
+    app_dtc_cycle_tested(a, hal, health_flags, UINT32_MAX);
+}
+
+void app_dtc_cycle_tested(app_t *a, hal_t *hal, uint32_t health_flags, uint32_t tested)
+{
+    const uint32_t changed =
+        dtc_update_tested(&a->keep.dtc, health_flags, tested, hal_time_us(hal));
     (void)persist_changed(a, hal, changed, 0); /* a failure is counted in persist_failed */
 }
 

@@ -28,6 +28,9 @@ void app_dtc_load(struct app *a, const uint8_t *status, size_t n);
  * time now; the stored bytes that changed go to NVM (above). */
 void app_dtc_cycle(struct app *a, hal_t *hal, uint32_t health_flags);
 
+/* app_dtc_cycle of the DTCs whose HealthFlags bits are in tested only (dtc_update_tested) */
+void app_dtc_cycle_tested(struct app *a, hal_t *hal, uint32_t health_flags, uint32_t tested);
+
 /* Before an ECUReset: the stored bytes still waiting for a standstill go to NVM now (the
  * reset stops navigation anyway; without this a DTC confirmed while moving would be lost). */
 void app_dtc_flush(struct app *a, hal_t *hal);

@@ -399,6 +399,7 @@ static uint8_t session_change(void *user, uint8_t session)
         return UDS_NRC_CONDITIONS_NOT_CORRECT;
     }
     send_pending(a, UDS_SID_SESSION);
+    app_dtc_flush(a, hal); /* the bytes held for a standstill, before the reset */
     (void)hal_bootloader(hal, 1);
     return UDS_NRC_CONDITIONS_NOT_CORRECT; /* it returned: the board could not reset */
 }

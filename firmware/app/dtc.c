@@ -75,9 +75,17 @@ size_t dtc_load(dtc_t *d, const uint8_t *stored, size_t n)
 
 uint32_t dtc_update(dtc_t *d, uint32_t health_flags, uint64_t now_us)
 {
+    return dtc_update_tested(d, health_flags, UINT32_MAX, now_us);
+}
+
+uint32_t dtc_update_tested(dtc_t *d, uint32_t health_flags, uint32_t tested, uint64_t now_us)
+{
     uint32_t changed = 0u;
     for (size_t i = 0u; i < (size_t)DTC_N; i++) {
         const dtc_def_t *def = &dtc_table[i];
+        if ((tested & def->health_mask) == 0u) {
+            continue;
+        }
         uint8_t st = d->status[i];
         if ((health_flags & def->health_mask) != 0u) {
             if ((st & DTC_TF) == 0u) {

@@ -79,6 +79,10 @@ size_t dtc_load(dtc_t *d, const uint8_t *stored, size_t n);
  * i for DTC i), to be written to NVM. */
 uint32_t dtc_update(dtc_t *d, uint32_t health_flags, uint64_t now_us);
 
+/* dtc_update for the DTCs whose HealthFlags bits are in tested only; the others keep their
+ * status (not tested this time). */
+uint32_t dtc_update_tested(dtc_t *d, uint32_t health_flags, uint32_t tested, uint64_t now_us);
+
 /* ClearDiagnosticInformation of every DTC. Returns the DTCs whose stored byte changed. */
 uint32_t dtc_clear_all(dtc_t *d);
 

@@ -391,7 +391,12 @@ static void fill_counter_page(struct navecu_can_nav_status_t *st, const app_heal
 void output_dtc_tests(app_t *a, hal_t *hal)
 {
     a->keep.tx.last_status_t_us = hal_time_us(hal);
-    app_dtc_cycle(a, hal, health_flags(a, hal));
+    /* only the flags that mean something before any IMU sample (the others hold for a
+     * number of IMU samples: with none, one refused frame would stay REJECTED for good,
+     * a review found) */
+    const uint32_t nvm = a->keep.cal.nvm_error ? NAVECU_HEALTH_NVM_ERROR : 0u;
+    app_dtc_cycle_tested(a, hal, NAVECU_HEALTH_IMU_STALE | nvm,
+                         NAVECU_HEALTH_IMU_STALE | NAVECU_HEALTH_NVM_ERROR);
 }
 
 void output_status(app_t *a, hal_t *hal)

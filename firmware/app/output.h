@@ -38,8 +38,8 @@ void output_due(app_t *a, hal_t *hal);
 void output_status(app_t *a, hal_t *hal);
 
 /* Before the first IMU sample, from app_poll at the status rate once the IMU is overdue
- * (APP_IMU_STALE_US after power-on): the DTCs tested with the health flags (IMU_STALE
- * among them), and nothing sent (the data-driven outputs wait for data, so a live run's
+ * (APP_IMU_STALE_US after power-on): the DTCs of IMU_STALE (failing) and NVM_ERROR tested,
+ * the others not (their flags count IMU samples), and nothing sent (the data-driven outputs wait for data, so a live run's
  * frames do not depend on how long the ECU waited for its input). */
 void output_dtc_tests(app_t *a, hal_t *hal);
 
