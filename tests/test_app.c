@@ -784,6 +784,22 @@ static void send_gnss_epoch(uint8_t vel_epoch, uint8_t status_epoch, double spee
     send_gnss(&g);
 }
 
+/* A course seen while waiting, then an IMU gap too long to bridge: the gap's turn is not
+ * in the gyro's sum, so the course is no longer the heading for a stop (a review found a
+ * GNSS-only start 90 deg off after a turn inside such a gap) */
+static void test_gap_while_waiting_forgets_the_course(void **state)
+{
+    (void)state;
+    run_still(1);
+    send_gnss_epoch(0u, 0u, 10.0);
+    assert_int_equal(app.run.align.course_valid, 1);
+    skip_samples(200);
+    run_still(1);
+    assert_int_equal(app.run.align.course_valid, 0);
+    send_gnss_epoch(1u, 1u, 0.0); /* the stop: no GNSS-only start */
+    assert_int_equal(app.run.mode, APP_MODE_WAIT_INIT);
+}
+
 /*
  * GNSS initialization: a course while driving north at 10 m/s, then a stop gives position,
  * height and heading, and levelling starts. An epoch whose velocity and height carry
@@ -1806,6 +1822,7 @@ int main(void)
         cmocka_unit_test_setup(test_corrupt_imu_counter_is_not_a_gap, setup),
         cmocka_unit_test_setup(test_imu_stuck_and_saturated, setup),
         cmocka_unit_test_setup(test_reacquire_after_long_gap, setup),
+        cmocka_unit_test_setup(test_gap_while_waiting_forgets_the_course, setup),
         cmocka_unit_test_setup(test_stale_imu_status, setup),
         cmocka_unit_test_setup(test_gnss_init_and_epochs, setup),
         cmocka_unit_test_setup(test_initial_attitude_skips_levelling, setup),

@@ -128,10 +128,12 @@ static fusion_ctx_t fusion_ctx(app_t *a, const app_diag_t *d)
 
 /* An IMU gap too long to bridge, or a filter reset: position, velocity and (when driving)
  * heading come from the next GNSS epoch; the attitude before is kept. */
-/* the car moves: a speed above a standstill's, or turning wheels */
+/* the car moves: its wheels read a speed, or without wheel speeds a speed above a
+ * standstill's (the wheels first: a diverged navigator's velocity is no evidence, a review
+ * found; odo.zero, not odo.standing, which only the navigator updates) */
 static int car_moving(const app_t *a, nav_real_t speed_mps)
 {
-    return speed_mps > APP_GNSS_STILL_MPS || (a->keep.odo.valid && !a->keep.odo.standing);
+    return a->keep.odo.valid ? !a->keep.odo.zero : speed_mps > APP_GNSS_STILL_MPS;
 }
 
 static void begin_reacquire(app_t *a)
@@ -191,8 +193,10 @@ static void gap_unbridged(app_t *a)
         align_level_restart(&a->run.align);
     } else {
         /* waiting: an in-motion alignment window sums the samples since its epoch, which
-         * the gap's are missing from: it starts again at the next epoch (review) */
+         * the gap's are missing from: it starts again at the next epoch (review); the
+         * GNSS-only start's course misses the gap's turn: no longer a heading (review) */
         a->run.align.mot_open = 0u;
+        a->run.align.course_valid = 0u;
     }
 }
 
