@@ -133,7 +133,10 @@ static fusion_ctx_t fusion_ctx(app_t *a, const app_diag_t *d)
  * found; odo.zero, not odo.standing, which only the navigator updates) */
 static int car_moving(const app_t *a, nav_real_t speed_mps)
 {
-    return a->keep.odo.valid ? !a->keep.odo.zero : speed_mps > APP_GNSS_STILL_MPS;
+    if (a->keep.odo.valid != 0u) {
+        return (a->keep.odo.zero == 0u) ? 1 : 0;
+    }
+    return (speed_mps > APP_GNSS_STILL_MPS) ? 1 : 0;
 }
 
 static void begin_reacquire(app_t *a)

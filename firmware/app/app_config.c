@@ -64,7 +64,7 @@ void app_param_get(const app_config_t *cfg, app_param_id_t id, nav_real_t v[3])
     }
     const app_param_t *p = &app_params[id];
     const uint8_t *f = &((const uint8_t *)cfg)[p->offset];
-    if (p->type == APP_PARAM_REAL || p->type == APP_PARAM_VEC3) {
+    if (p->type == (unsigned)APP_PARAM_REAL || p->type == (unsigned)APP_PARAM_VEC3) {
         (void)memcpy(v, f, p->size);
     } else if (p->size == 2u) {
         uint16_t u;
@@ -86,7 +86,7 @@ int app_param_set(app_config_t *cfg, app_param_id_t id, const nav_real_t v[3])
     }
     const app_param_t *p = &app_params[id];
     uint8_t *f = &((uint8_t *)cfg)[p->offset];
-    if (p->type == APP_PARAM_REAL || p->type == APP_PARAM_VEC3) {
+    if (p->type == (unsigned)APP_PARAM_REAL || p->type == (unsigned)APP_PARAM_VEC3) {
         (void)memcpy(f, v, p->size);
         return 0;
     }
@@ -119,7 +119,7 @@ int app_param_in_range(app_param_id_t id, const nav_real_t v[3])
         return 1; /* the defaults' placeholder, replaced by the vehicle profile's */
     }
     int n = 1;
-    if (p->type == APP_PARAM_VEC3) {
+    if (p->type == (unsigned)APP_PARAM_VEC3) {
         n = 3;
     }
     for (int i = 0; i < n; i++) {
@@ -127,7 +127,7 @@ int app_param_in_range(app_param_id_t id, const nav_real_t v[3])
             return 0;
         }
     }
-    if (p->type == APP_PARAM_U16 || p->type == APP_PARAM_ENUM) {
+    if (p->type == (unsigned)APP_PARAM_U16 || p->type == (unsigned)APP_PARAM_ENUM) {
         return same(v[0], (nav_real_t)(int32_t)v[0]); /* a whole number */
     }
     return 1;
