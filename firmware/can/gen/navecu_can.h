@@ -1508,7 +1508,7 @@ struct navecu_can_nav_accel_t {
 /**
  * Signals in message NAV_AccelEnu.
  *
- * The derivative of the ENU velocity of NAV_Velocity: the same acceleration in the local-level frame (its Coriolis and transport-rate terms neglected, as NAV_Accel's: at 10 m/s up to 1 mm/s2). Sent at the dynamics rate while navigating.
+ * The derivative of the ENU velocity of NAV_Velocity: the same acceleration in the local-level frame (its Coriolis and transport-rate terms neglected, as NAV_Accel's: at 10 m/s up to about 1.5 mm/s2). Sent at the dynamics rate while navigating.
  *
  * All signal values are as on the CAN bus.
  */
