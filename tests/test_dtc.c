@@ -48,8 +48,8 @@ static void test_table_from_dtc_toml(void **state)
     assert_true(DTC_N <= DTC_MAX);
     assert_int_equal(dtc_table[DTC_IMU_STALE].number, 0xD10187u); /* U1101-87 */
     assert_int_equal(dtc_table[DTC_IMU_STALE].health_mask, NAVECU_HEALTH_IMU_STALE);
-    assert_int_equal(dtc_table[DTC_IMU_STALE].confirm_ms, 2000u);
-    assert_int_equal(dtc_table[DTC_NVM_ERROR].confirm_ms, 0u);
+    assert_int_equal(dtc_table[DTC_IMU_STALE].confirm_ds, 20u); /* 2 s */
+    assert_int_equal(dtc_table[DTC_NVM_ERROR].confirm_ds, 0u);
     uint32_t all = 0u;
     for (size_t i = 0u; i < (size_t)DTC_N; i++) {
         assert_int_equal(all & dtc_table[i].health_mask, 0u); /* one DTC per flag */

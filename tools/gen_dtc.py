@@ -94,6 +94,8 @@ def load(path: Path = TABLE, flags: dict | None = None) -> list:
         confirm = float(d["confirm_s"])
         if not 0.0 <= confirm <= CONFIRM_MAX_S:
             raise TableError(f"{where}: confirm_s outside [0, {CONFIRM_MAX_S:g}]")
+        if abs(confirm * 10.0 - round(confirm * 10.0)) > 1e-9:
+            raise TableError(f"{where}: confirm_s not a whole number of 0.1 s (the table's unit)")
         try:
             number = dtc_number(d["code"], int(d["ftb"]))
         except TableError as e:
@@ -107,7 +109,7 @@ def load(path: Path = TABLE, flags: dict | None = None) -> list:
         used.add(d["flag"])
         q = dict(d)
         q.update(index=i, number=number, bit=flags[d["flag"]][0],
-                 confirm_ms=int(round(confirm * 1000.0)))
+                 confirm_ms=int(round(confirm * 1000.0)), confirm_ds=int(round(confirm * 10.0)))
         out.append(q)
     missing = sorted(set(flags) - used, key=lambda n: flags[n][0])
     if missing:
@@ -127,7 +129,8 @@ def gen_h(dtcs) -> str:
           "typedef struct {",
           "    uint32_t number;      /* the 3-byte DTC: J2012 code (high, middle), FTB (low) */",
           "    uint16_t health_mask; /* the NAV_Status HealthFlags bit it mirrors */",
-          "    uint32_t confirm_ms;  /* the condition persisting this long: confirmedDTC */",
+          "    uint16_t confirm_ds;  /* the condition persisting this long, 0.1 s: confirmedDTC",
+          "                             (8 bytes a row; 12 with milliseconds in 32 bits) */",
           "} dtc_def_t;", "",
           "extern const dtc_def_t dtc_table[DTC_N];", "",
           "#endif /* NAVECU_DTC_TABLE_H */", ""]
@@ -139,7 +142,7 @@ def gen_c(dtcs) -> str:
          "const dtc_def_t dtc_table[DTC_N] = {"]
     for d in dtcs:
         L.append(f"    [DTC_{d['name'].upper()}] = {{0x{d['number']:06X}u, "
-                 f"NAVECU_HEALTH_{d['flag']}, {d['confirm_ms']}u}},")
+                 f"NAVECU_HEALTH_{d['flag']}, {d['confirm_ds']}u}},")
     L += ["};", ""]
     return "\n".join(L)
 

@@ -95,7 +95,7 @@ uint32_t dtc_update_tested(dtc_t *d, uint32_t health_flags, uint32_t tested, uin
             st = (uint8_t)(st & (uint8_t)~(DTC_TNCTOC | DTC_TNCSLC));
             const uint64_t lasted_us =
                 now_us > d->fail_start_us[i] ? now_us - d->fail_start_us[i] : 0u;
-            if (lasted_us >= (uint64_t)def->confirm_ms * 1000u || d->pending_at_start[i]) {
+            if (lasted_us >= (uint64_t)def->confirm_ds * 100000u || d->pending_at_start[i]) {
                 st = (uint8_t)(st | DTC_CDTC);
             }
         } else {

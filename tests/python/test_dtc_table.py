@@ -46,10 +46,10 @@ def test_one_dtc_per_health_flag_in_the_generated_c():
     c = (ROOT / gen_dtc.OUT_C).read_text()
     rows = re.findall(r"\[DTC_(\w+)\] = \{0x([0-9A-F]{6})u, NAVECU_HEALTH_(\w+), (\d+)u\}", c)
     assert len(rows) == len(dtcs)
-    for d, (name, num, flag, ms) in zip(dtcs, rows):
+    for d, (name, num, flag, ds) in zip(dtcs, rows):
         assert name == d["name"].upper() and flag == d["flag"]
         assert int(num, 16) == gen_dtc.dtc_number(d["code"], int(d["ftb"]))
-        assert int(ms) == round(float(d["confirm_s"]) * 1000)
+        assert int(ds) == round(float(d["confirm_s"]) * 10)  # 0.1 s units
     doc = (ROOT / gen_dtc.DOC).read_text()
     for d in dtcs:
         assert f"| {d['index']} | {gen_dtc.dtc_text(d['number'])} |" in doc
@@ -72,6 +72,7 @@ description = "x"
     (lambda t: t + t.replace('name = "a"', 'name = "b"'), "has a DTC already"),
     (lambda t: t + t, "name used twice"),
     (lambda t: t.replace("confirm_s = 2.0", "confirm_s = -1.0"), "confirm_s outside"),
+    (lambda t: t.replace("confirm_s = 2.0", "confirm_s = 2.05"), "whole number of 0.1 s"),
     (lambda t: t.replace("confirm_s = 2.0\n", ""), "needs confirm_s"),
     (lambda t: t.replace('code = "U1101"', 'code = "Q1101"'), "a letter P/C/B/U"),
     (lambda t: t, "HealthFlagBits without a DTC: IMU_FAULT"),

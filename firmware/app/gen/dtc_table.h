@@ -27,7 +27,8 @@
 typedef struct {
     uint32_t number;      /* the 3-byte DTC: J2012 code (high, middle), FTB (low) */
     uint16_t health_mask; /* the NAV_Status HealthFlags bit it mirrors */
-    uint32_t confirm_ms;  /* the condition persisting this long: confirmedDTC */
+    uint16_t confirm_ds;  /* the condition persisting this long, 0.1 s: confirmedDTC
+                             (8 bytes a row; 12 with milliseconds in 32 bits) */
 } dtc_def_t;
 
 extern const dtc_def_t dtc_table[DTC_N];
