@@ -34,7 +34,8 @@ typedef struct {
     nav_real_t wheelbase_m;      /* for the front axle's steering correction */
     nav_real_t wheel_step_mps;   /* the wheel speed signal's resolution, its DBC scale, m/s
                                     (the parameter odo_step_mps's default) */
-    uint32_t can_ids[NAVECU_MSG_N]; /* navecu's identifiers on this car (navecu_msg_t) */
+    uint16_t can_ids[NAVECU_MSG_N]; /* navecu's identifiers on this car (navecu_msg_t): 11-bit
+                                       (tools/vehicle.py checks it), 2 bytes each */
 } vehicle_profile_t;
 
 /* the build's profile (generated) */
