@@ -677,6 +677,34 @@ static void test_odometer_reading_moved_through_a_stop_not_used(void **state)
 }
 
 
+/* the filter started on a car heading north at v_n_mps, braking at brake_mps2, its wheels
+ * reading zero every 10 ms (a 100 Hz source) for 2 s: the odometer's refusals */
+static uint32_t zero_wheels_braking(double v_n_mps, double brake_mps2)
+{
+    static const fusion_prior_t still = {0.0f, 0.0f, 1u, 0.0f, {0.0f, 0.0f}};
+    const nav_real_t v[3] = {0.0f, (nav_real_t)v_n_mps, 0.0f};
+    start_at(0.0, v);
+    const gnss_fix_t f = fix_at(450000000, 100000000, v);
+    int adopt = 0;
+    assert_int_equal(fusion_gnss(&fu, &ctx, &still, &f, &adopt), FUSION_GO_ON);
+    const nav_real_t w[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+    for (int k = 0; k < 200; k++) {
+        assert_int_equal(odo_wheels(&odo, w, 0.0f), NAV_OK);
+        (void)braking_sample(v_n_mps - brake_mps2 * 0.01 * k > 0.0 ? brake_mps2 : 0.0);
+    }
+    return health.odo_rejected;
+}
+
+/* Wheels reading zero while the IMU sees the car brake: at 10 m/s they are locked
+ * (refused and counted; the fault drive's lock had gone unreported); a car braking at
+ * 2 m/s^2 from 0.05 m/s, within a 100 Hz source's reach of its stop, is not refused. */
+static void test_locked_wheels_under_braking_refused(void **state)
+{
+    (void)state;
+    assert_true(zero_wheels_braking(10.0, 2.0) > 0u);
+    assert_int_equal(zero_wheels_braking(0.05, 2.0), 0u);
+}
+
 /* ---- gnss_input = both: the satellites' biases learnt while the fixes come (raw_bias.h) */
 
 #define LEARN_SATS 5
@@ -970,6 +998,7 @@ int main(void)
         cmocka_unit_test_setup(test_correlated_error_model_by_fix_rate, setup),
         cmocka_unit_test_setup(test_odometer_reading_moved_on_by_its_latency, setup),
         cmocka_unit_test_setup(test_odometer_reading_moved_through_a_stop_not_used, setup),
+        cmocka_unit_test_setup(test_locked_wheels_under_braking_refused, setup),
         cmocka_unit_test(test_reported_accuracy_keeps_the_correlated_error),
         cmocka_unit_test(test_biases_learnt_only_moving_with_good_fixes),
         cmocka_unit_test(test_learning_needs_a_fix_taken),

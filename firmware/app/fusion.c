@@ -151,8 +151,23 @@ static void standstill_updates(fusion_t *fu, const fusion_ctx_t *c, nav_real_t T
 {
     const nav_real_t a_h_mps2 =
         nav_sqrt(f_mean_n[0] * f_mean_n[0] + f_mean_n[1] * f_mean_n[1]);
+    const nav_real_t sz = APP_ZUPT_SIGMA_MPS + APP_ZUPT_SIGMA_PER_PERIOD_MPS * per;
     if (a_h_mps2 > APP_STILL_ACC_MPS2) {
-        return; /* moving while the wheels still read zero: no update of either kind */
+        /* moving while the wheels still read zero: no update of either kind. The reading
+         * is a stop when the car is within reach of one: the source's step plus what the
+         * acceleration changes in one of its periods, within the standstill update's gate
+         * (its sigma, and the filter's velocity sigma; a car's wheel-speed latency of tens
+         * of ms is within them). Faster, the wheels are locked (or their sensor stuck):
+         * refused and counted, as the gate would (the fault drive's lock under braking had
+         * gone unreported, docs/reliability.md) */
+        const nav_real_t *v = c->nav->v_n_mps;
+        const nav_real_t reach = c->cfg->odo_step_mps + a_h_mps2 * per + APP_ODO_GATE_SIGMA * sz;
+        const nav_real_t var_v = fu->ekf.P[EKF_DV][EKF_DV] + fu->ekf.P[EKF_DV + 1][EKF_DV + 1];
+        if (v[0] * v[0] + v[1] * v[1] >
+            reach * reach + APP_ODO_GATE_SIGMA * APP_ODO_GATE_SIGMA * var_v) {
+            odo_refused(c);
+        }
+        return;
     }
     /* Standing wheels say |v| < half a step, not which way the car would go: no heading
      * information (the heading's 5 deg sigma would otherwise take the first centimetres
@@ -163,10 +178,7 @@ static void standstill_updates(fusion_t *fu, const fusion_ctx_t *c, nav_real_t T
      * the same in every prediction interval until the next frame, so the frame's sigma is
      * shared by the per / T updates it serves (each sqrt(per / T) times it) */
     const nav_real_t n_upd = corr_spans(per, T);
-    const int zv = ekf_zero_velocity(&fu->ekf, c->nav,
-                                     (APP_ZUPT_SIGMA_MPS + APP_ZUPT_SIGMA_PER_PERIOD_MPS * per) *
-                                         nav_sqrt(n_upd),
-                                     APP_ODO_GATE_SIGMA);
+    const int zv = ekf_zero_velocity(&fu->ekf, c->nav, sz * nav_sqrt(n_upd), APP_ODO_GATE_SIGMA);
     fu->ekf.hold_heading = 0u;
     if (zv == 0) {
         odo_refused(c); /* "standing" wheels while the car moves: a locked wheel */
