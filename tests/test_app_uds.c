@@ -494,6 +494,17 @@ static void test_dtc_of_an_imu_absent_from_power_on(void **state)
     assert_true((status & DTC_CDTC) != 0u);
 }
 
+/* navigating and moving, the IMU's fault tested failing for 1.1 s: C1101 confirmed, its
+ * stored byte held for a standstill (dtc_dirty) */
+static void imu_fault_confirmed_while_driving(void)
+{
+    app.run.mode = APP_MODE_NAVIGATING;
+    app.keep.odo.standing = 0u;
+    app_dtc_cycle(&app, &hal, NAVECU_HEALTH_IMU_FAULT);
+    hal.t_us += 1100000u;
+    app_dtc_cycle(&app, &hal, NAVECU_HEALTH_IMU_FAULT);
+}
+
 /* Before the first IMU sample only IMU_STALE's and NVM_ERROR's DTCs are tested: the other
  * flags hold for a number of IMU samples, and with none one refused frame stayed REJECTED
  * and confirmed U1103 for good (a review's) */
@@ -514,11 +525,7 @@ static void test_one_rejection_without_imu_confirms_nothing(void **state)
 static void test_programming_session_while_moving_keeps_dtcs(void **state)
 {
     (void)state;
-    app.run.mode = APP_MODE_NAVIGATING;
-    app.keep.odo.standing = 0u;
-    app_dtc_cycle(&app, &hal, NAVECU_HEALTH_IMU_FAULT);
-    hal.t_us += 1100000u;
-    app_dtc_cycle(&app, &hal, NAVECU_HEALTH_IMU_FAULT);
+    imu_fault_confirmed_while_driving();
     assert_true((dtc_status(&app.keep.dtc, DTC_IMU_FAULT) & DTC_CDTC) != 0u);
     assert_true(app.keep.dtc_dirty != 0u);
     hal.has_bootloader = 1;
@@ -896,11 +903,7 @@ static void test_suppressed_response_after_a_pending(void **state)
 static void test_ecu_reset_while_moving_keeps_dtcs(void **state)
 {
     (void)state;
-    app.run.mode = APP_MODE_NAVIGATING;
-    app.keep.odo.standing = 0u;
-    app_dtc_cycle(&app, &hal, NAVECU_HEALTH_IMU_FAULT);
-    hal.t_us += 1100000u;
-    app_dtc_cycle(&app, &hal, NAVECU_HEALTH_IMU_FAULT);
+    imu_fault_confirmed_while_driving();
     const uint8_t before = dtc_status(&app.keep.dtc, DTC_IMU_FAULT);
     print_message("IMU_FAULT status before ECUReset 0x%02X, dirty 0x%X\n", before,
                   (unsigned)app.keep.dtc_dirty);

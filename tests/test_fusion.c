@@ -623,11 +623,9 @@ static void test_reported_accuracy_keeps_the_correlated_error(void **state)
     }
 }
 
-/* the filter started at P0 on a car heading north with north velocity v_n_mps, 10
- * samples of braking at brake_mps2 (along the heading), wheel speeds reading_mps arriving
- * after the 5th; returns the north velocity after the 10th (the interval's prediction and
- * updates) */
-static double moved_on(double v_n_mps, double brake_mps2, float reading_mps, float latency_s)
+/* the filter started by a fix at P0 on a car heading north at v_n_mps, odo_latency_s
+ * latency_s */
+static void start_driving_north(double v_n_mps, float latency_s)
 {
     static const fusion_prior_t still = {0.0f, 0.0f, 1u, 0.0f, {0.0f, 0.0f}};
     const nav_real_t v[3] = {0.0f, (nav_real_t)v_n_mps, 0.0f};
@@ -637,6 +635,15 @@ static double moved_on(double v_n_mps, double brake_mps2, float reading_mps, flo
     int adopt = 0;
     assert_int_equal(fusion_gnss(&fu, &ctx, &still, &f, &adopt), FUSION_GO_ON);
     assert_int_equal(fu.on, 1);
+}
+
+/* the filter started at P0 on a car heading north with north velocity v_n_mps, 10
+ * samples of braking at brake_mps2 (along the heading), wheel speeds reading_mps arriving
+ * after the 5th; returns the north velocity after the 10th (the interval's prediction and
+ * updates) */
+static double moved_on(double v_n_mps, double brake_mps2, float reading_mps, float latency_s)
+{
+    start_driving_north(v_n_mps, latency_s);
     for (int k = 0; k < 10; k++) {
         if (k == 5) {
             const nav_real_t w[4] = {reading_mps, reading_mps, reading_mps, reading_mps};
@@ -681,12 +688,7 @@ static void test_odometer_reading_moved_through_a_stop_not_used(void **state)
  * reading zero every 10 ms (a 100 Hz source) for 2 s: the odometer's refusals */
 static uint32_t zero_wheels_braking(double v_n_mps, double brake_mps2)
 {
-    static const fusion_prior_t still = {0.0f, 0.0f, 1u, 0.0f, {0.0f, 0.0f}};
-    const nav_real_t v[3] = {0.0f, (nav_real_t)v_n_mps, 0.0f};
-    start_at(0.0, v);
-    const gnss_fix_t f = fix_at(450000000, 100000000, v);
-    int adopt = 0;
-    assert_int_equal(fusion_gnss(&fu, &ctx, &still, &f, &adopt), FUSION_GO_ON);
+    start_driving_north(v_n_mps, 0.0f);
     const nav_real_t w[4] = {0.0f, 0.0f, 0.0f, 0.0f};
     for (int k = 0; k < 200; k++) {
         assert_int_equal(odo_wheels(&odo, w, 0.0f), NAV_OK);
