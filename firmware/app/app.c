@@ -126,8 +126,6 @@ static fusion_ctx_t fusion_ctx(app_t *a, const app_diag_t *d)
     return c;
 }
 
-/* An IMU gap too long to bridge, or a filter reset: position, velocity and (when driving)
- * heading come from the next GNSS epoch; the attitude before is kept. */
 /* the car moves: its wheels read a speed, or without wheel speeds a speed above a
  * standstill's (the wheels first: a diverged navigator's velocity is no evidence, a review
  * found; odo.zero, not odo.standing, which only the navigator updates) */
@@ -139,6 +137,8 @@ static int car_moving(const app_t *a, nav_real_t speed_mps)
     return (speed_mps > APP_GNSS_STILL_MPS) ? 1 : 0;
 }
 
+/* An IMU gap too long to bridge, or a filter reset: position, velocity and (when driving)
+ * heading come from the next GNSS epoch; the attitude before is kept. */
 static void begin_reacquire(app_t *a)
 {
     const nav_real_t mount = a->run.fusion.on ? a->run.fusion.ekf.mount_yaw_rad : a->run.dr.dh_rad;
