@@ -786,6 +786,33 @@ static void test_timeout_n_as(void **state)
     ASSERT_FRAME(2, 8, 0x03, 1, 2, 3, 0xCC);
 }
 
+/* a single frame that must leave now or not at all (a 7F SID 78 before a long operation) */
+static void test_send_now(void **state)
+{
+    (void)state;
+    setup_default();
+    const uint8_t pending[3] = {0x7Fu, 0x2Eu, 0x78u};
+    assert_int_equal(isotp_send_now(&ecu, pending, 3u, 5u, sink_tx, &sink), 0);
+    ASSERT_FRAME(0, 8, 0x03, 0x7F, 0x2E, 0x78, 0xCC);
+    assert_int_equal(isotp_tx_busy(&ecu), 0);
+    assert_int_equal(ecu.tx_result, ISOTP_N_OK);
+    /* refused by the driver: given up at once, not offered again */
+    sink.refuse = 1;
+    assert_int_equal(isotp_send_now(&ecu, pending, 3u, 6u, sink_tx, &sink), HAL_EAGAIN);
+    assert_int_equal(isotp_tx_busy(&ecu), 0);
+    assert_int_equal(ecu.tx_result, ISOTP_N_TIMEOUT_A);
+    sink.refuse = 0;
+    assert_int_equal(poll_at(7u), 0);
+    assert_int_equal(sink.n, 1u);
+    /* not while another message is being sent, and never more than a single frame */
+    pattern(msg, 30u, 2u);
+    assert_int_equal(isotp_send(&ecu, msg, 30u, 8u), 0);
+    assert_int_equal(isotp_send_now(&ecu, pending, 3u, 8u, sink_tx, &sink), HAL_EAGAIN);
+    assert_int_equal(sink.n, 1u);
+    assert_int_equal(isotp_send_now(&ecu, msg, 8u, 8u, sink_tx, &sink), HAL_EINVAL);
+    assert_int_equal(isotp_send_now(&ecu, pending, 3u, 8u, NULL, &sink), HAL_EINVAL);
+}
+
 static void test_timeout_n_ar(void **state)
 {
     (void)state;
@@ -1040,6 +1067,7 @@ int main(void)
         cmocka_unit_test(test_timeout_n_cr),
         cmocka_unit_test(test_timeout_n_bs),
         cmocka_unit_test(test_timeout_n_as),
+        cmocka_unit_test(test_send_now),
         cmocka_unit_test(test_timeout_n_ar),
         cmocka_unit_test(test_time_backwards),
         cmocka_unit_test(test_wrong_sequence_number),

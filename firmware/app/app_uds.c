@@ -26,13 +26,7 @@ static void send_pending(app_t *a, uint8_t sid)
         return;
     }
     const uint8_t p[3] = {UDS_NEGATIVE, sid, UDS_NRC_RESPONSE_PENDING};
-    const uint64_t now = hal_time_us(hal);
-    if (isotp_send(&a->uds.tp, p, sizeof p, now) == 0) {
-        (void)isotp_poll(&a->uds.tp, now, tx_frame, hal);
-        if (isotp_tx_busy(&a->uds.tp)) {
-            isotp_tx_abort(&a->uds.tp);
-            return;
-        }
+    if (isotp_send_now(&a->uds.tp, p, sizeof p, hal_time_us(hal), tx_frame, hal) == 0) {
         app_count(&a->uds.pending_sent);
         uds_pending_sent(&a->uds.srv);
     }

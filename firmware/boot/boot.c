@@ -132,15 +132,7 @@ boot_image_t boot_image_check(const boot_flash_t *fl)
 static void boot_send_pending(boot_t *b, uint8_t sid)
 {
     const uint8_t p[3] = {UDS_NEGATIVE, sid, UDS_NRC_RESPONSE_PENDING};
-    if (b->tx == NULL || isotp_tx_busy(&b->tp)) {
-        return;
-    }
-    if (isotp_send(&b->tp, p, sizeof p, b->now_us) == 0) {
-        (void)isotp_poll(&b->tp, b->now_us, b->tx, b->tx_user);
-        if (isotp_tx_busy(&b->tp)) {
-            isotp_tx_abort(&b->tp);
-            return;
-        }
+    if (isotp_send_now(&b->tp, p, sizeof p, b->now_us, b->tx, b->tx_user) == 0) {
         boot_count(&b->cnt.pending_sent);
         uds_pending_sent(&b->srv);
     }

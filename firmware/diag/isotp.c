@@ -229,13 +229,6 @@ __attribute__((noinline)) static void tx_end(isotp_t *c, isotp_result_t result)
     c->tx_result = result;
 }
 
-void isotp_tx_abort(isotp_t *c)
-{
-    if (c->tx_state != ISOTP_TX_IDLE) {
-        tx_end(c, ISOTP_N_TIMEOUT_A);
-    }
-}
-
 static void on_fc(isotp_t *c, const hal_can_frame_t *f, uint64_t now_us)
 {
     if (f->dlc < 3u) {
@@ -523,4 +516,22 @@ int isotp_tx_busy(const isotp_t *c)
 int isotp_rx_busy(const isotp_t *c)
 {
     return ((c != NULL) && (c->rx_state != ISOTP_RX_IDLE)) ? 1 : 0;
+}
+
+int isotp_send_now(isotp_t *c, const uint8_t *data, size_t len, uint64_t now_us,
+                   isotp_tx_fn tx, void *user)
+{
+    if ((tx == NULL) || (len > SF_MAX)) {
+        return HAL_EINVAL;
+    }
+    const int r = isotp_send(c, data, len, now_us);
+    if (r != 0) {
+        return r;
+    }
+    (void)isotp_poll(c, now_us, tx, user);
+    if (c->tx_state != ISOTP_TX_IDLE) {
+        tx_end(c, ISOTP_N_TIMEOUT_A); /* refused: given up */
+        return HAL_EAGAIN;
+    }
+    return 0;
 }

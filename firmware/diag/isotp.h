@@ -231,10 +231,15 @@ int isotp_receive(isotp_t *c, uint8_t *buf, size_t cap, size_t *len);
 /* 1 while a transmission is in progress (its data still in use), else 0. */
 int isotp_tx_busy(const isotp_t *c);
 
-/* Give up the message being sent (its result ISOTP_N_TIMEOUT_A, as a driver that kept
- * refusing it): e.g. a 7F SID 78 the CAN driver refused, stale once the work it announced
- * is done. Nothing when idle. */
-void isotp_tx_abort(isotp_t *c);
+/*
+ * Send a single-frame message (len 1..7) at once, e.g. a 7F SID 78 before a long operation:
+ * it leaves in this call or, refused by tx (a full driver queue; it would be stale once the
+ * work it announces is done), is given up with the result ISOTP_N_TIMEOUT_A. data need not
+ * stay valid after the call. Returns 0 when tx took the frame; HAL_EAGAIN while a
+ * transmission is in progress or when tx refused it; HAL_EINVAL for NULLs or another len.
+ */
+int isotp_send_now(isotp_t *c, const uint8_t *data, size_t len, uint64_t now_us,
+                   isotp_tx_fn tx, void *user);
 
 /* 1 while a segmented reception is in progress, else 0. */
 int isotp_rx_busy(const isotp_t *c);
