@@ -124,3 +124,29 @@ def test_alias_groups_from_the_symbol_table(tmp_path, monkeypatch):
         stdout = nm
     monkeypatch.setattr(budget.subprocess, "run", lambda *a, **k: R())
     assert budget.alias_groups(Path("x.elf")) == [["app_count", "count"], ["enc_x", "enc_y"]]
+
+
+def test_bench_finds_the_imu_where_the_profile_moved_it(tmp_path):
+    """A profile that moves navecu's identifiers (vw_mqb: all of them from 0x6C0) moves the
+    IMU frames the bench times: the same trace with the profile's identifiers gives the same
+    step counts (make VEHICLE=vw_mqb target-check failed with an IndexError on the stock
+    0x100/0x101), and the car's own wheel-speed message (ESP_19) is the wheel frame."""
+    stock = tmp_path / "stock.txt"
+    write_trace(stock, 100)
+    fids = qemu_run.frame_ids("vw_mqb")
+    assert fids["imu_rate"] == 0x6C0 and fids["imu_accel"] == 0x6C1
+    move = {0x100: fids["imu_rate"], 0x101: fids["imu_accel"], 0x120: min(fids["gnss"]),
+            0x121: min(fids["gnss"]) + 1}
+    lines = stock.read_text().splitlines()
+    moved = [lines[0]] + [f"{move[int(ln.split()[0], 16)]:x} {ln.split(' ', 1)[1]}"
+                          if not ln.startswith("point") else ln for ln in lines[1:]]
+    moved.append("b2 7 0")                                        # ESP_19, 0x0B2
+    trace = tmp_path / "vw.txt"
+    trace.write_text("\n".join(moved) + "\n")
+    r = qemu_run.bench(trace, duration_s=1.0, imu_rate_hz=100.0, fids=fids)
+    ref = qemu_run.bench(stock, duration_s=1.0, imu_rate_hz=100.0)
+    for k in ("n_imu_steps", "insn_per_imu_step_mean", "insn_per_bare_imu_step",
+              "insn_per_gnss_frame_max"):
+        assert r[k] == ref[k], k
+    assert r["insn_per_wheel_frame_mean"] == 6 * 7
+    assert qemu_run.frame_ids("toyota_rav4_2017")["gnss"] == {0x120, 0x121, 0x122, 0x124}

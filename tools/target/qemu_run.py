@@ -38,9 +38,26 @@ ROOT = Path(__file__).resolve().parents[2]
 TARGET_DIR = ROOT / "build" / "target"   # make VEHICLE=NAME: build/target-NAME
 NAVECU = ROOT / "build" / "host" / "navecu"
 
-IMU_RATE, IMU_ACCEL = 0x100, 0x101
-WHEELS = 0x110
-GNSS_IDS = {0x120, 0x121, 0x122, 0x123}
+GNSS_MESSAGES = ("GNSS_Position", "GNSS_Velocity", "GNSS_Status", "GNSS_Height")
+
+
+def frame_ids(vehicle: str | None = None) -> dict:
+    """The identifiers the bench times, as the build of vehicle profile `vehicle` (None:
+    native) receives them: navecu's IMU_Rate, IMU_Accel and GNSS fix messages at the
+    profile's identifiers (a profile may move them all: vw_mqb's base 0x6C0), and the wheel
+    speeds: navecu's WheelSpeeds, or the car's own wheel-speed message."""
+    ids = {m.name: m.frame_id for m in navecu_can.load_db(navecu_can.DBC_PATH).messages}
+    wheels = ids["WheelSpeeds"]
+    if vehicle not in (None, "native"):
+        from tools import vehicle as veh
+        profile = veh.load(vehicle)
+        ids = profile.can_ids
+        reads = {r.role: r for r in profile.reads}
+        if "wheels" in reads:
+            wheels = reads["wheels"].message.frame_id
+    return {"imu_rate": ids["IMU_Rate"], "imu_accel": ids["IMU_Accel"], "wheels": wheels,
+            "gnss": {ids[n] for n in GNSS_MESSAGES}}
+
 
 # Cycles per instruction assumed for the STM32F405 at 168 MHz (docs/target.md): the M4's
 # integer and single-precision FPU instructions issue in 1 cycle, loads/stores take 2 (1
@@ -152,18 +169,24 @@ def stats(x: np.ndarray) -> dict:
             "p99": float(np.percentile(x, 99)) if x.size else 0.0}
 
 
-def bench(trace: Path, duration_s: float, imu_rate_hz: float) -> dict:
+def bench(trace: Path, duration_s: float, imu_rate_hz: float, fids: dict | None = None) -> dict:
+    """The instruction counts of the trace; fids: frame_ids() of the build's profile
+    (default: native's)."""
+    fids = frame_ids() if fids is None else fids
     ipt, ids, ticks, upd, points = read_trace(trace)
     insn = ticks * ipt
     # IMU step: the IMU_Rate frame and the IMU_Accel frame that completes the sample (the
     # strapdown step; on every 10th the filter's prediction, odometer or standstill update
     # and feedback; the NAV outputs). The updates come from the profiling points of app.h
     # (app_trace), timed inside the image.
-    acc = np.flatnonzero(ids == IMU_ACCEL)
-    acc = acc[(acc > 0) & (ids[np.maximum(acc - 1, 0)] == IMU_RATE)]
+    acc = np.flatnonzero(ids == fids["imu_accel"])
+    acc = acc[(acc > 0) & (ids[np.maximum(acc - 1, 0)] == fids["imu_rate"])]
+    if acc.size == 0:
+        raise SystemExit(f"{trace}: no IMU step (IMU_Rate 0x{fids['imu_rate']:03X} then "
+                         f"IMU_Accel 0x{fids['imu_accel']:03X}): not the trace of this profile?")
     imu_step = insn[acc] + insn[acc - 1]
-    wheel = insn[ids == WHEELS]
-    gnss_frames = insn[np.isin(ids, list(GNSS_IDS))]
+    wheel = insn[ids == fids["wheels"]]
+    gnss_frames = insn[np.isin(ids, list(fids["gnss"]))]
     insn_per_s = float(insn.sum()) / duration_s
     step = stats(imu_step)
 
@@ -295,7 +318,7 @@ def main(argv=None) -> int:
                   + first_difference(host_log, qemu_log), file=sys.stderr)
             status = 1
     if a.bench:
-        res = bench(trace, duration_s, round(n_samples / duration_s))
+        res = bench(trace, duration_s, round(n_samples / duration_s), frame_ids(vehicle))
         res.update({"scenario": a.scenario, "qemu_machine": "netduinoplus2",
                     "qemu_version": run(["qemu-system-arm", "--version"]).stdout.split("\n")[0],
                     "method": "QEMU -icount shift=0 (1 instruction = 1 ns of virtual time); "
