@@ -64,7 +64,7 @@ SUPPORT_SRC_BOTH := tests/support/nav_run.c
 # tests built once per numeric variant (f32 firmware, f64 reference)
 TESTS_VARIANT := test_nav_math test_earth test_sins test_dr test_ekf test_ekf_rows test_gnss_geom
 # tests of the float32 firmware only (application, codec, HAL)
-TESTS_F32 := test_e2e test_codec test_trig test_isotp test_uds test_dtc test_boot
+TESTS_F32 := test_e2e test_codec test_trig test_isotp test_uds test_dtc test_boot test_vehicle_checksum
 # tests that link both variants themselves
 TESTS_BOTH := test_drive
 # tests of application modules against the in-memory HAL (tests/support/fake_hal.c)

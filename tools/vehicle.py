@@ -37,7 +37,23 @@ CODEC_DB = "veh_can"
 SPEED_UNITS = {"m/s": 1.0, "km/h": 1.0 / 3.6, "kph": 1.0 / 3.6, "mph": 0.44704}
 #: rad/s per unit of a yaw-rate signal
 RATE_UNITS = {"rad/s": 1.0, "deg/s": 3.141592653589793 / 180.0}
-CHECKSUMS = ("none", "toyota")
+
+
+def _toyota_checksum(frame_id: int, data: bytearray) -> None:
+    """Toyota: the last byte is ID bytes + DLC + the other bytes, modulo 256."""
+    data[-1] = ((frame_id >> 8) + (frame_id & 0xFF) + len(data) + sum(data[:-1])) & 0xFF
+
+
+def _subaru_checksum(frame_id: int, data: bytearray) -> None:
+    """Subaru (global platform): the first byte is ID bytes + the other bytes, modulo 256."""
+    data[0] = ((frame_id >> 8) + (frame_id & 0xFF) + sum(data[1:])) & 0xFF
+
+
+#: the car makers' checksums a profile may name: the test encoder's (CarEncoder) fill of
+#: the checksum byte; the firmware checks each with vehicle_checksum_NAME
+#: (firmware/vehicle/vehicle_checksum.c)
+CAR_CHECKSUMS = {"toyota": _toyota_checksum, "subaru": _subaru_checksum}
+CHECKSUMS = ("none",) + tuple(CAR_CHECKSUMS)
 DIRECTIONS = {"signed": "VEHICLE_DIR_SIGNED", "gear": "VEHICLE_DIR_GEAR",
               "none": "VEHICLE_DIR_NONE"}
 WHEELS = ("fl", "fr", "rl", "rr")
@@ -391,9 +407,8 @@ class CarEncoder:
                 for s in msg.signals}
         full.update(values)
         data = bytearray(msg.encode(full, scaling=True, strict=False))
-        if r.checksum == "toyota":
-            data[-1] = ((msg.frame_id >> 8) + (msg.frame_id & 0xFF) + len(data)
-                        + sum(data[:-1])) & 0xFF
+        if r.checksum != "none":
+            CAR_CHECKSUMS[r.checksum](msg.frame_id, data)
         return can.Message(timestamp=t, arbitration_id=msg.frame_id, is_extended_id=False,
                            dlc=msg.length, data=bytes(data))
 
@@ -492,8 +507,8 @@ def _decode_case(p: Profile, r: CarSignalSet) -> list:
             "yaw_rate": "VEHICLE_MSG_YAW_RATE"}[r.role]
     L = [f"    case {up}_FRAME_ID: {{", f"        m->kind = {kind};",
          f"        if (f->dlc != {up}_LENGTH) {{", "            return VEHICLE_BAD_DLC;", "        }"]
-    if r.checksum == "toyota":
-        L += ["        if (!vehicle_checksum_toyota(f->id, f->data, f->dlc)) {",
+    if r.checksum != "none":
+        L += [f"        if (!vehicle_checksum_{r.checksum}(f->id, f->data, f->dlc)) {{",
               "            return VEHICLE_BAD_CHECKSUM;", "        }"]
     L += [f"        struct {fn}_t s;",
           f"        if ({fn}_unpack(&s, f->data, f->dlc) != 0) {{",

@@ -12,3 +12,15 @@ int vehicle_checksum_toyota(uint32_t id, const uint8_t *data, uint8_t dlc)
     }
     return (uint8_t)(sum & 0xFFu) == data[dlc - 1u];
 }
+
+int vehicle_checksum_subaru(uint32_t id, const uint8_t *data, uint8_t dlc)
+{
+    if (dlc == 0u || dlc > 8u) {
+        return 0;
+    }
+    uint32_t sum = (id >> 8) + (id & 0xFFu);
+    for (uint8_t i = 1u; i < dlc; i++) {
+        sum += data[i];
+    }
+    return (uint8_t)(sum & 0xFFu) == data[0];
+}

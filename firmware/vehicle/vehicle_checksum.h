@@ -13,4 +13,10 @@
  * recorded bus: every frame of the 87 identifiers that carry it passes (data/comma2k19-rav4). */
 int vehicle_checksum_toyota(uint32_t id, const uint8_t *data, uint8_t dlc);
 
+/* Subaru (global platform, opendbc's subaru_global_* DBCs, signal CHECKSUM): the first byte
+ * is (ID >> 8) + (ID & 0xFF) + the sum of the other bytes, modulo 256 (no DLC, unlike
+ * Toyota's). 1 if data[0..dlc) carries it (dlc 1..8), else 0. Not checked on a recording
+ * (the project has none of a Subaru): from opendbc's definition of the checksum. */
+int vehicle_checksum_subaru(uint32_t id, const uint8_t *data, uint8_t dlc);
+
 #endif /* NAVECU_VEHICLE_CHECKSUM_H */

@@ -1,0 +1,69 @@
+/* test_vehicle_checksum.c - the car makers' frame checksums (firmware/vehicle/vehicle_checksum.c)
+ * on known frames: a real one of the RAV4's bus for Toyota's, frames summed by hand from the
+ * definition for Subaru's (no recording of a Subaru in the project). */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include "vehicle_checksum.h"
+
+typedef int (*checksum_fn)(uint32_t id, const uint8_t *data, uint8_t dlc);
+
+/* every single-bit error of the frame is caught (a byte sum changes by +-2^b) */
+static void assert_single_bit_errors_caught(checksum_fn fn, uint32_t id, uint8_t *d, uint8_t dlc)
+{
+    for (uint8_t byte = 0u; byte < dlc; byte++) {
+        for (unsigned bit = 0u; bit < 8u; bit++) {
+            d[byte] ^= (uint8_t)(1u << bit);
+            assert_false(fn(id, d, dlc));
+            d[byte] ^= (uint8_t)(1u << bit);
+        }
+    }
+    assert_true(fn(id, d, dlc));
+}
+
+/* data/comma2k19-rav4/car_bus.log, its first KINEMATICS frame: 024#01FE01D541F980BB
+ * (0x00 + 0x24 + 8 + 0x01 + 0xFE + 0x01 + 0xD5 + 0x41 + 0xF9 + 0x80 = 0x3BB) */
+static void test_toyota_recorded_frame(void **state)
+{
+    (void)state;
+    uint8_t d[8] = {0x01, 0xFE, 0x01, 0xD5, 0x41, 0xF9, 0x80, 0xBB};
+    assert_true(vehicle_checksum_toyota(0x024u, d, 8u));
+    assert_false(vehicle_checksum_toyota(0x025u, d, 8u)); /* the identifier is summed */
+    assert_false(vehicle_checksum_toyota(0x024u, d, 7u)); /* so is the DLC */
+    assert_single_bit_errors_caught(vehicle_checksum_toyota, 0x024u, d, 8u);
+    assert_false(vehicle_checksum_toyota(0x024u, d, 0u));
+    assert_false(vehicle_checksum_toyota(0x024u, d, 9u));
+}
+
+/* Subaru: the first byte, over the identifier's bytes and bytes 1..dlc-1, no DLC:
+ * 0x13A (Wheel_Speeds): 0x01 + 0x3A + (1 + 2 + ... + 7) = 0x57;
+ * 0x048 (Transmission): 0x00 + 0x48 + 0x0A + 0x79 = 0xCB */
+static void test_subaru_frames(void **state)
+{
+    (void)state;
+    uint8_t w[8] = {0x57, 0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07};
+    assert_true(vehicle_checksum_subaru(0x13Au, w, 8u));
+    assert_false(vehicle_checksum_subaru(0x13Bu, w, 8u));  /* the identifier is summed */
+    assert_false(vehicle_checksum_toyota(0x13Au, w, 8u));  /* not Toyota's: other byte, no DLC */
+    assert_single_bit_errors_caught(vehicle_checksum_subaru, 0x13Au, w, 8u);
+    uint8_t g[8] = {0xCB, 0x0A, 0x00, 0x79, 0x00, 0x00, 0x00, 0x00};
+    assert_true(vehicle_checksum_subaru(0x048u, g, 8u));
+    assert_single_bit_errors_caught(vehicle_checksum_subaru, 0x048u, g, 8u);
+    /* a shorter frame sums only its own bytes: 0x00 + 0x48 + 0x0A = 0x52 */
+    uint8_t s[2] = {0x52, 0x0A};
+    assert_true(vehicle_checksum_subaru(0x048u, s, 2u));
+    assert_false(vehicle_checksum_subaru(0x048u, w, 0u));
+    assert_false(vehicle_checksum_subaru(0x048u, w, 9u));
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_toyota_recorded_frame),
+        cmocka_unit_test(test_subaru_frames),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
