@@ -167,6 +167,72 @@ def _ids(spec: dict) -> dict:
     return ids
 
 
+#: what a profile's tables may hold: key -> (required, type(s)); a key not listed is refused
+#: (a misspelt `checksum` would otherwise leave the checksum unchecked without a word)
+_NUM = (int, float)
+SCHEMA = {
+    "": {"name": (True, str), "description": (False, str), "ecu_bus": (False, str),
+         "buses": (False, dict), "wheels": (True, dict), "gear": (False, dict),
+         "yaw_rate": (False, dict), "geometry": (True, dict), "can_ids": (False, dict),
+         "recordings": (False, list)},
+    "wheels": {"native": (False, bool), "direction": (False, str), "message": (False, str),
+               "signals": (False, dict), "unit": (False, str), "scale": (False, _NUM),
+               "checksum": (False, str), "range": (False, list)},
+    "gear": {"message": (True, str), "signal": (True, str), "forward": (False, list),
+             "reverse": (True, list), "stopped": (False, list), "checksum": (False, str)},
+    "yaw_rate": {"message": (True, str), "signal": (True, str), "unit": (False, str),
+                 "left_positive": (False, bool), "checksum": (False, str),
+                 "range": (False, list)},
+    "geometry": {"track_m": (True, _NUM), "wheelbase_m": (True, _NUM)},
+    "recordings": {"file": (True, str), "channels": (True, dict)},
+}
+_TYPE_NAMES = {str: "a string", dict: "a table", list: "a list", bool: "true or false",
+               _NUM: "a number", int: "an integer"}
+
+
+def _check_table(tab, schema: dict, where: str) -> None:
+    if not isinstance(tab, dict):
+        raise ProfileError(f"{where} must be a table")
+    for key, value in tab.items():
+        if key not in schema:
+            raise ProfileError(f"{where}: unknown key {key!r} (known: {', '.join(schema)})")
+        typ = schema[key][1]
+        if not isinstance(value, typ) or (typ is not bool and isinstance(value, bool)):
+            raise ProfileError(f"{where}: {key} must be {_TYPE_NAMES[typ]}, not {value!r}")
+    for key, (required, _) in schema.items():
+        if required and key not in tab:
+            raise ProfileError(f"{where} needs {key}")
+
+
+def _check_shape(t: dict, fname: str) -> None:
+    """Every table's keys and value types (SCHEMA), before anything is read from them."""
+    _check_table(t, SCHEMA[""], fname)
+    for sect in ("wheels", "gear", "yaw_rate", "geometry"):
+        if sect in t:
+            _check_table(t[sect], SCHEMA[sect], f"{fname} [{sect}]")
+    w = t["wheels"]
+    if not w.get("native", False):
+        for key in ("message", "signals"):
+            if key not in w:
+                raise ProfileError(f"{fname} [wheels] needs {key} (or native = true)")
+        if sorted(w["signals"]) != sorted(WHEELS) or not all(
+                isinstance(v, str) for v in w["signals"].values()):
+            raise ProfileError(f"{fname} [wheels]: signals must name the four wheels' signals, "
+                               f"{{{', '.join(k + ' = ...' for k in WHEELS)}}}")
+    for key in ("forward", "reverse", "stopped"):
+        if not all(isinstance(v, str) for v in t.get("gear", {}).get(key, [])):
+            raise ProfileError(f"{fname} [gear]: {key} must be a list of the DBC's value names")
+    for i, rec in enumerate(t.get("recordings", [])):
+        _check_table(rec, SCHEMA["recordings"], f"{fname} [[recordings]] {i + 1}")
+    for key, value in t.get("buses", {}).items():
+        if not isinstance(value, str):
+            raise ProfileError(f"{fname} [buses]: {key} must be a DBC (a string)")
+    for key, value in t.get("can_ids", {}).items():
+        if not isinstance(value, int) or isinstance(value, bool):
+            raise ProfileError(f"{fname} [can_ids]: {key} must be an integer (0x6C0, not a "
+                               f"string), not {value!r}")
+
+
 def load(name: str) -> Profile:
     path = VEHICLES / f"{name}.toml"
     if not path.is_file():
@@ -178,6 +244,7 @@ def load(name: str) -> Profile:
         raise ProfileError(f"{path.name}: {e}") from e
     if t.get("name") != name:
         raise ProfileError(f"{path.name}: name must be {name!r}")
+    _check_shape(t, path.name)
     wheels = t.get("wheels", {})
     geo = t.get("geometry", {})
     try:
