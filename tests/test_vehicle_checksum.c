@@ -1,6 +1,6 @@
 /* test_vehicle_checksum.c - the car makers' frame checksums (firmware/vehicle/vehicle_checksum.c)
  * on known frames: a real one of the RAV4's bus for Toyota's, frames summed by hand from the
- * definition for Subaru's (no recording of a Subaru in the project). */
+ * definitions for Subaru's and Honda's (no recording of either car in the project). */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -59,11 +59,34 @@ static void test_subaru_frames(void **state)
     assert_false(vehicle_checksum_subaru(0x048u, w, 9u));
 }
 
+/* Honda: the last byte's low nibble is 8 - (the identifier's nibbles + every other data
+ * nibble), modulo 16:
+ * 0x1D0 (WHEEL_SPEEDS), data 0: 8 - (1 + 0xD) = -6 = 0xA;
+ * 0x1D0, 12 34 56 78 9A BC DE F_: 8 - (14 + (1 + 2 + ... + 14) + 15) = -126 = 0x2;
+ * 0x191 (GEARBOX_CVT), 7 bytes of 0: 8 - (1 + 9 + 1) = -3 = 0xD */
+static void test_honda_frames(void **state)
+{
+    (void)state;
+    uint8_t z[8] = {0, 0, 0, 0, 0, 0, 0, 0x0A};
+    assert_true(vehicle_checksum_honda(0x1D0u, z, 8u));
+    assert_false(vehicle_checksum_honda(0x1D1u, z, 8u)); /* the identifier is summed */
+    uint8_t w[8] = {0x12, 0x34, 0x56, 0x78, 0x9A, 0xBC, 0xDE, 0xF2};
+    assert_true(vehicle_checksum_honda(0x1D0u, w, 8u));
+    uint8_t g[7] = {0, 0, 0, 0, 0, 0, 0x0D};
+    assert_true(vehicle_checksum_honda(0x191u, g, 7u));
+    /* a nibble sum: a bit flipped anywhere changes it by +-2^b, b < 4, never 0 mod 16 */
+    assert_single_bit_errors_caught(vehicle_checksum_honda, 0x1D0u, w, 8u);
+    assert_false(vehicle_checksum_honda(0x1D0u, w, 0u));
+    assert_false(vehicle_checksum_honda(0x1D0u, w, 9u));
+    assert_false(vehicle_checksum_honda(0x800u, z, 8u)); /* not a standard identifier */
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_toyota_recorded_frame),
         cmocka_unit_test(test_subaru_frames),
+        cmocka_unit_test(test_honda_frames),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -49,10 +49,28 @@ def _subaru_checksum(frame_id: int, data: bytearray) -> None:
     data[0] = ((frame_id >> 8) + (frame_id & 0xFF) + sum(data[1:])) & 0xFF
 
 
-#: the car makers' checksums a profile may name: the test encoder's (CarEncoder) fill of
-#: the checksum byte; the firmware checks each with vehicle_checksum_NAME
-#: (firmware/vehicle/vehicle_checksum.c)
-CAR_CHECKSUMS = {"toyota": _toyota_checksum, "subaru": _subaru_checksum}
+def _honda_checksum(frame_id: int, data: bytearray) -> None:
+    """Honda: the last byte's low nibble is 8 - the sum of every other nibble (the 11-bit
+    identifier's and the data's), modulo 16."""
+    nibbles = sum((b >> 4) + (b & 0xF) for b in data[:-1]) + (data[-1] >> 4)
+    nibbles += (frame_id >> 8) + ((frame_id >> 4) & 0xF) + (frame_id & 0xF)
+    data[-1] = (data[-1] & 0xF0) | ((8 - nibbles) & 0xF)
+
+
+@dataclass(frozen=True)
+class CarChecksum:
+    """A car maker's frame checksum: fill(frame_id, data) writes it (the test encoder,
+    CarEncoder), in data[byte] under mask; the firmware checks it with
+    vehicle_checksum_NAME (firmware/vehicle/vehicle_checksum.c)."""
+    fill: object
+    byte: int      # the checksum's byte (-1: the last)
+    mask: int      # its bits in that byte
+
+
+#: the car makers' checksums a profile may name
+CAR_CHECKSUMS = {"toyota": CarChecksum(_toyota_checksum, -1, 0xFF),
+                 "subaru": CarChecksum(_subaru_checksum, 0, 0xFF),
+                 "honda": CarChecksum(_honda_checksum, -1, 0x0F)}
 CHECKSUMS = ("none",) + tuple(CAR_CHECKSUMS)
 DIRECTIONS = {"signed": "VEHICLE_DIR_SIGNED", "gear": "VEHICLE_DIR_GEAR",
               "none": "VEHICLE_DIR_NONE"}
@@ -113,8 +131,15 @@ def opendbc_text(ref: str) -> str:
     return path.read_text(encoding="utf-8")
 
 
+#: a comment that names a signal's message but not the signal (`CM_ SG_ 304 "...";`) or
+#: names no object (`CM_ 145 "...";`): not DBC syntax, so cantools refuses the whole file;
+#: opendbc's Honda generator files (_honda_common.dbc) and hyundai_kia_generic.dbc have them
+MALFORMED_COMMENT = re.compile(r'^CM_ (?:SG_ )?\d+ "(?:[^"\\]|\\.)*";[ \t]*\r?\n', re.M)
+
+
 def load_dbc(ref: str):
-    """'opendbc:PATH' (the opendbc package) or a path in the repository."""
+    """'opendbc:PATH' (the opendbc package) or a path in the repository. Malformed comments
+    (MALFORMED_COMMENT) are dropped: a comment does not change a frame's decoding."""
     if ref.startswith("opendbc:"):
         text = opendbc_text(ref.split(":", 1)[1])
     else:
@@ -122,6 +147,7 @@ def load_dbc(ref: str):
         if not path.is_file():
             raise ProfileError(f"DBC {ref} not found")
         text = path.read_text(encoding="utf-8")
+    text = MALFORMED_COMMENT.sub("", text)
     try:
         return cantools.database.load_string(text, database_format="dbc", strict=False)
     except Exception as e:  # cantools raises several kinds for a malformed DBC
@@ -475,7 +501,7 @@ class CarEncoder:
         full.update(values)
         data = bytearray(msg.encode(full, scaling=True, strict=False))
         if r.checksum != "none":
-            CAR_CHECKSUMS[r.checksum](msg.frame_id, data)
+            CAR_CHECKSUMS[r.checksum].fill(msg.frame_id, data)
         return can.Message(timestamp=t, arbitration_id=msg.frame_id, is_extended_id=False,
                            dlc=msg.length, data=bytes(data))
 

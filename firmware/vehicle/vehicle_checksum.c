@@ -24,3 +24,16 @@ int vehicle_checksum_subaru(uint32_t id, const uint8_t *data, uint8_t dlc)
     }
     return (uint8_t)(sum & 0xFFu) == data[0];
 }
+
+int vehicle_checksum_honda(uint32_t id, const uint8_t *data, uint8_t dlc)
+{
+    if (dlc == 0u || dlc > 8u || id > 0x7FFu) {
+        return 0;
+    }
+    uint32_t sum = (id >> 8) + ((id >> 4) & 0xFu) + (id & 0xFu);
+    for (uint8_t i = 0u; i + 1u < dlc; i++) {
+        sum += (uint32_t)(data[i] >> 4) + (data[i] & 0xFu);
+    }
+    sum += (uint32_t)(data[dlc - 1u] >> 4); /* the last byte's high nibble; the low one is it */
+    return ((8u - sum) & 0xFu) == (data[dlc - 1u] & 0xFu);
+}

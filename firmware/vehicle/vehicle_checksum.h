@@ -19,4 +19,10 @@ int vehicle_checksum_toyota(uint32_t id, const uint8_t *data, uint8_t dlc);
  * (the project has none of a Subaru): from opendbc's definition of the checksum. */
 int vehicle_checksum_subaru(uint32_t id, const uint8_t *data, uint8_t dlc);
 
+/* Honda: the low 4 bits of the last byte are 8 minus the sum of every other 4-bit nibble
+ * of the frame (the identifier's three nibbles, the data's but that one), modulo 16.
+ * 1 if data[0..dlc) carries it (dlc 1..8, a standard identifier), else 0. From opendbc's
+ * definition of the checksum; no Honda recording in the project. */
+int vehicle_checksum_honda(uint32_t id, const uint8_t *data, uint8_t dlc);
+
 #endif /* NAVECU_VEHICLE_CHECKSUM_H */

@@ -78,3 +78,14 @@ def test_check_says_it_without_a_traceback(tmp_path):
         path.unlink()
     assert r.returncode == 2
     assert "Traceback" not in r.stderr and r.stderr.startswith("vehicle: "), r.stderr
+
+
+def test_a_dbc_with_malformed_comments_loads():
+    """Every Honda generator file of opendbc has `CM_ SG_ 304 "...";` (a signal comment
+    without its signal), which made cantools refuse the whole DBC ("Invalid syntax at line
+    211"): the comment is dropped, the messages load; a well-formed comment is kept."""
+    db = vehicle.load_dbc("opendbc:generator/honda/honda_civic_touring_2016_can.dbc")
+    assert db.get_message_by_name("WHEEL_SPEEDS").frame_id == 0x1D0
+    assert vehicle.load_dbc("opendbc:hyundai_kia_generic.dbc").get_message_by_name("WHL_SPD11")
+    text = 'CM_ SG_ 304 "no signal";\nCM_ 145 "no object";\nCM_ SG_ 304 GAS "kept";\n'
+    assert vehicle.MALFORMED_COMMENT.sub("", text) == 'CM_ SG_ 304 GAS "kept";\n'

@@ -210,17 +210,21 @@ def test_wrong_dlc(name, role, tmp_path):
 
 @pytest.mark.parametrize("name,role", CHECKSUMMED)
 def test_bad_car_checksum(name, role, tmp_path):
-    """A frame whose checksum byte, or another byte, no longer matches: BAD_CHECKSUM."""
+    """A frame whose checksum field is off, or with any one bit flipped: BAD_CHECKSUM. (A
+    byte changed by more than a bit may pass a nibble sum: Honda's checksum does not see
+    0x0F added to its last byte, a nibble moved from its checksum to the data.)"""
     r = read(name, role)
+    cs = vehicle.CAR_CHECKSUMS[r.checksum]
     car = vehicle.CarEncoder(profile(name))
     msgs = []
     for i, v in enumerate(random_values(r.message, np.random.default_rng(7), 255)):
         m = car.message(role, v)
         data = bytearray(m.data)
-        if i % 2:   # the checksum byte off by 1..255
-            data[-1] = (data[-1] + 1 + (i // 2) % 255) & 0xFF
-        else:       # one bit of another byte flipped: the sum changes by +-2^b
-            data[(i // 2) % (len(data) - 1)] ^= 1 << (i % 8)
+        if i % 2:   # the checksum field off by 1..its largest value
+            k = 1 + (i // 2) % cs.mask
+            data[cs.byte] = (data[cs.byte] & ~cs.mask & 0xFF) | ((data[cs.byte] + k) & cs.mask)
+        else:       # one bit flipped anywhere: a byte or nibble sum changes by +-2^b
+            data[(i // 2) % len(data)] ^= 1 << (i % 8)
         msgs.append(can.Message(arbitration_id=m.arbitration_id, is_extended_id=False,
                                 dlc=m.dlc, data=bytes(data)))
     for m, d in zip(msgs, decode(name, msgs, tmp_path)):
