@@ -314,7 +314,11 @@ def _car_reads(p: Profile, t: dict, fname: str) -> None:
     _range_override(w, sigs, f"{fname} [wheels]")
     unit = w.get("unit", "m/s")
     if unit not in SPEED_UNITS:
-        raise ProfileError(f"{fname}: wheel unit must be one of {', '.join(SPEED_UNITS)}")
+        hint = (" (an angular speed: unit = \"m/s\" and scale = the tyre's rolling radius "
+                "in m)" if str(unit).lower() in DBC_ANGULAR_UNITS else "")
+        raise ProfileError(f"{fname}: wheel unit must be one of {', '.join(SPEED_UNITS)}"
+                           + hint)
+    _check_dbc_unit(sigs, unit, "scale" in w, f"{fname} [wheels]")
     p.speed_factor = SPEED_UNITS[unit] * float(w.get("scale", 1.0))
     p.wheel_step_mps = abs(float(sigs[0].scale)) * p.speed_factor
     p.reads.append(CarSignalSet("wheels", msg, sigs, _checksum(w, fname)))
@@ -352,6 +356,30 @@ def _car_reads(p: Profile, t: dict, fname: str) -> None:
     ids = [r.message.frame_id for r in p.reads]
     if len(set(ids)) != len(ids):
         raise ProfileError(f"{fname}: wheels, gear and yaw rate must be different messages")
+
+
+#: the wheel-speed units DBCs write (lower case), as the profile's `unit` names them; an
+#: angular speed needs the tyre's rolling radius as `scale`
+DBC_SPEED_UNITS = {"m/s": "m/s", "km/h": "km/h", "kph": "km/h", "kmh": "km/h",
+                   "unit_kilometerperhour": "km/h", "mph": "mph", "unit_milesperhour": "mph"}
+DBC_ANGULAR_UNITS = ("rad/s", "rpm", "1/min", "unit_radianpersecond")
+
+
+def _check_dbc_unit(sigs: list, unit: str, scaled: bool, where: str) -> None:
+    """The profile's wheel unit against the unit the DBC gives the signals, where the DBC
+    gives one this knows: `unit = "m/s"` on a km/h signal would make every speed 3.6 times
+    too large without a word. A DBC whose unit is wrong needs a corrected copy."""
+    for sig in sigs:
+        dbc = (sig.unit or "").strip().lower()
+        if dbc in DBC_ANGULAR_UNITS and not scaled:
+            raise ProfileError(f"{where}: {sig.name} is an angular speed ({sig.unit}): give "
+                               f"unit = \"m/s\" and scale = the tyre's rolling radius in m"
+                               + (" / 9.549 (rpm to rad/s)" if dbc != "rad/s"
+                                  and "radian" not in dbc else ""))
+        known = DBC_SPEED_UNITS.get(dbc)
+        if known is not None and SPEED_UNITS[known] != SPEED_UNITS[unit]:
+            raise ProfileError(f"{where}: unit = {unit!r}, but the DBC gives {sig.name} in "
+                               f"{sig.unit}")
 
 
 def _raw_span(sig) -> tuple:

@@ -43,6 +43,7 @@ CASES = [
     ("a gear list given as a string", lambda s: s.replace('forward = ["D"]', 'forward = "D"'), "forward"),
     ("a misspelt checksum", lambda s: s.replace('direction = "gear"', 'direction = "gear"\nchksum = "toyota"'), "chksum"),
     ("a key the format does not have", lambda s: s.replace('direction = "gear"', 'direction = "gear"\ncounter = "COUNTER"'), "counter"),
+    ("a unit the DBC contradicts", lambda s: s.replace('unit = "km/h"', 'unit = "m/s"'), "Unit_KiloMeterPerHour"),
     ("a recording without its channels", lambda s: s + '[[recordings]]\nfile = "data/comma2k19-rav4/car_bus.log"\n', "channels"),
 ]
 
@@ -89,3 +90,29 @@ def test_a_dbc_with_malformed_comments_loads():
     assert vehicle.load_dbc("opendbc:hyundai_kia_generic.dbc").get_message_by_name("WHL_SPD11")
     text = 'CM_ SG_ 304 "no signal";\nCM_ 145 "no object";\nCM_ SG_ 304 GAS "kept";\n'
     assert vehicle.MALFORMED_COMMENT.sub("", text) == 'CM_ SG_ 304 GAS "kept";\n'
+
+
+FORD = """name = "{name}"
+ecu_bus = "pt"
+[buses]
+pt = "opendbc:ford_lincoln_base_pt.dbc"
+[wheels]
+message = "WheelSpeed"
+signals = {{fl = "WhlFl_W_Meas", fr = "WhlFr_W_Meas", rl = "WhlRl_W_Meas", rr = "WhlRr_W_Meas"}}
+{unit}
+direction = "none"
+[geometry]
+track_m = 1.58
+wheelbase_m = 2.71
+"""
+
+
+@pytest.mark.parametrize("unit", ['unit = "rad/s"', 'unit = "m/s"', 'unit = "km/h"'])
+def test_an_angular_wheel_speed_asks_for_the_tyre_radius(profiles, unit):
+    """Ford's WheelSpeed gives each wheel's angular speed (rad/s): without the tyre's
+    rolling radius as `scale` the profile is refused with what to write."""
+    (profiles / "ford.toml").write_text(FORD.format(name="ford", unit=unit))
+    with pytest.raises(vehicle.ProfileError, match="rolling radius"):
+        vehicle.load("ford")
+    (profiles / "ford.toml").write_text(FORD.format(name="ford", unit='unit = "m/s"\nscale = 0.355'))
+    assert vehicle.load("ford").speed_factor == 0.355
