@@ -120,24 +120,50 @@ def mark(image: bytes) -> bytes:
 
 
 def _read_hex(path: Path) -> bytes:
-    """An Intel HEX file's bytes in the application region (0xFF in gaps)."""
+    """An Intel HEX file's bytes in the application region (0xFF in gaps). Every line but
+    blank ones must be a whole record with its checksum, and the file must end with the
+    end-of-file record: a HEX file cut short otherwise loads as a shorter image whose own
+    CRC-32 the bootloader would accept."""
     mem: dict[int, int] = {}
     base = 0
-    for ln in path.read_text().splitlines():
+    try:
+        lines = path.read_text(encoding="ascii").splitlines()
+    except UnicodeDecodeError as e:
+        raise PackageError(f"{path}: not an Intel HEX file (byte 0x{e.object[e.start]:02X} "
+                           f"at offset {e.start} is not ASCII)") from None
+    ended = False
+    for lineno, ln in enumerate(lines, 1):
         ln = ln.strip()
-        if not ln.startswith(":"):
+        if not ln:
             continue
-        rec = bytes.fromhex(ln[1:])
+        where = f"{path}:{lineno}"
+        if ended:
+            raise PackageError(f"{where}: a record after the end-of-file record")
+        if not ln.startswith(":"):
+            raise PackageError(f"{where}: not an Intel HEX record (no ':')")
+        try:
+            rec = bytes.fromhex(ln[1:])
+        except ValueError:
+            raise PackageError(f"{where}: not an Intel HEX record (not whole hexadecimal bytes)") from None
+        if len(rec) < 5 or len(rec) != rec[0] + 5:
+            raise PackageError(f"{where}: record of {len(rec)} bytes, its length field says "
+                               f"{rec[0] + 5 if rec else '?'} (truncated?)")
         n, addr, kind = rec[0], (rec[1] << 8) | rec[2], rec[3]
         if sum(rec) & 0xFF:
-            raise PackageError(f"{path}: checksum error in {ln[:20]}")
+            raise PackageError(f"{where}: checksum error in {ln[:20]}")
         if kind == 0:
             for i, b in enumerate(rec[4:4 + n]):
                 mem[base + addr + i] = b
+        elif kind == 1:
+            ended = True
         elif kind == 4:
             base = ((rec[4] << 8) | rec[5]) << 16
         elif kind == 2:
             base = ((rec[4] << 8) | rec[5]) << 4
+        elif kind not in (3, 5):
+            raise PackageError(f"{where}: unknown record type {kind:02X}")
+    if not ended:
+        raise PackageError(f"{path}: no end-of-file record (:00000001FF): truncated")
     addrs = [a for a in mem if a >= BOOT_APP_START]
     if [a for a in mem if a < BOOT_APP_START]:
         raise PackageError(f"{path}: bytes below 0x{BOOT_APP_START:08X} (the bootloader or "

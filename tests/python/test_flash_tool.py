@@ -86,6 +86,53 @@ def test_package_round_trip_and_refusals(tmp_path):
     assert navecu_pkg.load(hexfile).image == image
 
 
+def _hex_records(image: bytes, address: int = navecu_pkg.BOOT_APP_START) -> list:
+    """Intel HEX lines of image at address (16-byte data records, one extended linear
+    address record, the end-of-file record last): what objcopy -O ihex writes."""
+    def rec(kind: int, addr: int, data: bytes) -> str:
+        body = bytes([len(data), addr >> 8, addr & 0xFF, kind]) + data
+        return ":" + (body + bytes([-sum(body) & 0xFF])).hex().upper()
+    lines = [rec(4, 0, (address >> 16).to_bytes(2, "big"))]
+    lines += [rec(0, (address + i) & 0xFFFF, image[i:i + 16]) for i in range(0, len(image), 16)]
+    return lines + [rec(1, 0, b"")]
+
+
+def test_hex_file_cut_short_or_corrupt_is_refused_with_its_line(tmp_path):
+    # a small image the bootloader's rules accept: SP in SRAM, reset vector after the slot
+    image = bytearray(b"\x00" * 2048)
+    struct.pack_into("<II", image, 0, 0x20020000, navecu_pkg.BOOT_MARKER_ADDR + 64 + 1)
+    image[navecu_pkg.MARKER_OFFSET:navecu_pkg.MARKER_OFFSET + 16] = b"\xff" * 16
+    lines = _hex_records(bytes(image))
+    good = tmp_path / "good.hex"
+    good.write_text("\n".join(lines) + "\n")
+    assert navecu_pkg.load(good).image == bytes(image)
+    cases = {
+        # cut at a record boundary before its end: once loaded as a shorter image whose
+        # own CRC-32 the bootloader would have accepted
+        "end-of-file record": lines[:-20],
+        "good.hex:31: record of": lines[:30] + [lines[30][:21]],     # cut mid-record
+        "good.hex:11: not an Intel HEX record": lines[:10] + [":10ZZ"] + lines[10:],
+        "good.hex:6: record of": lines[:5] + [":01"] + lines[5:],
+        "good.hex:3: not an Intel HEX record": lines[:2] + ["garbage"] + lines[2:],
+        "after the end-of-file record": lines + lines[1:2],
+    }
+    for what, body in cases.items():
+        bad = tmp_path / "good.hex"
+        bad.write_text("\n".join(body) + "\n")
+        with pytest.raises(navecu_pkg.PackageError, match=re.escape(what)):
+            navecu_pkg.load(bad)
+    good.write_bytes(("\n".join(lines[:5]) + "\n").encode() + b"\xff\xfe\n")
+    with pytest.raises(navecu_pkg.PackageError, match="not an Intel HEX file"):
+        navecu_pkg.load(good)
+    # the command line says it and fails, no traceback
+    good.write_text("\n".join(lines[:-20]) + "\n")
+    assert navecu_pkg.main(["info", str(good)]) == 1
+    out = io.StringIO()
+    assert navecu_flash.main(["--pipe", "true", "flash", str(good)], out=out) == \
+        navecu_uds.EXIT_INPUT
+    assert "truncated" in out.getvalue()
+
+
 def flash_tool(flash: Path, image: Path, *boot_args, timeout=1.0, retries=3) -> tuple:
     """navecu_flash.py against navecu-boot on `flash`: (exit status, its report)."""
     pipe = f"{BOOT_HOST} --flash {flash} " + " ".join(boot_args)
