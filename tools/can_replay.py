@@ -135,7 +135,7 @@ def replay(log, channel, speed=None, max_rate=None, interface="socketcan", skip=
         return replay_fastest(log, channel, interface, ack_every, window, timeout_s, follower)
     sent = retries = 0
     t0 = time.monotonic()
-    with can.Bus(channel=channel, interface=interface) as bus, can.LogReader(log) as reader:
+    with nc.LogFile(log) as reader, can.Bus(channel=channel, interface=interface) as bus:
         if max_rate:
             source = reader
             period = 1.0 / max_rate
@@ -160,14 +160,19 @@ def replay(log, channel, speed=None, max_rate=None, interface="socketcan", skip=
                     retries += 1
                     time.sleep(0.001)
             sent += 1
-    return {"sent": sent, "retries": retries, "seconds": time.monotonic() - t0}
+    return {"sent": sent, "retries": retries, "seconds": time.monotonic() - t0,
+            **_skipped(reader)}
 
 
-def load_frames(log) -> list:
+def load_frames(log, skipped=None) -> list:
     """The log's frames as (is IMU_Accel, struct can_frame bytes), ready to write to a raw
-    CAN socket. Loaded before the replay starts: parsing is no part of the paced loop."""
+    CAN socket. Loaded before the replay starts: parsing is no part of the paced loop.
+    A candump log's malformed lines are skipped (nc.LogFile); skipped: a list that gets
+    the LogFile, for its count."""
     out = []
-    with can.LogReader(log) as reader:
+    with nc.LogFile(log) as reader:
+        if skipped is not None:
+            skipped.append(reader)
         for m in reader:
             if m.is_extended_id:
                 can_id = m.arbitration_id | CAN_EFF_FLAG
@@ -201,8 +206,9 @@ def replay_fastest(log, channel, interface="socketcan", ack_every=ACK_EVERY, win
         raise ValueError(f"window ({window}) must be at least ack_every ({ack_every}): "
                          "with less the replay would wait for an acknowledgement that needs "
                          "samples it has not sent")
+    skipped = []
     if frames is None:
-        frames = load_frames(log)
+        frames = load_frames(log, skipped)
     sent = retries = samples = waits = keepalives = 0
     wait_s = max_wait = 0.0
     keepalive = (keepalive_s, hard_window) if keepalive_s else None
@@ -251,7 +257,12 @@ def replay_fastest(log, channel, interface="socketcan", ack_every=ACK_EVERY, win
             "keepalives": keepalives,
             "wait_s": round(wait_s, 3), "max_wait_ms": round(max_wait * 1e3, 1),
             "max_ack_gap_ms": round(acks.max_gap_s * 1e3, 1), "ack_every": ack_every,
-            "window": window}
+            "window": window, **(_skipped(skipped[0]) if skipped else {})}
+
+
+def _skipped(log) -> dict:
+    """A result's count of the log's malformed lines (nc.LogFile), and the line saying so."""
+    return {"malformed": log.malformed, "malformed_note": log.note()}
 
 
 def _limit(acks, follower, ack_every, window) -> int:
@@ -306,6 +317,8 @@ def _scaled(reader, factor):
 def summary_line(r) -> str:
     s = (f"can_replay: {r['sent']} frames in {r['seconds']:.1f} s "
          f"({r['sent'] / max(r['seconds'], 1e-9):.0f} /s), {r['retries']} retries")
+    if "malformed" in r:
+        s += f"; {r['malformed_note']}"
     if "acked" in r:
         s += (f"; --fastest: {r['samples']} IMU samples, {r['acked']} acknowledged status "
               f"periods (every {r['ack_every']}, window {r['window']}), {r['waits']} waits "
@@ -343,7 +356,7 @@ def main(argv=None) -> int:
     try:
         r = replay(a.log, a.channel, a.speed, a.max_rate, a.interface, fastest=a.fastest,
                    ack_every=a.ack_every, window=a.window, timeout_s=a.timeout_s)
-    except (AckTimeout, ValueError) as e:
+    except (AckTimeout, ValueError, OSError) as e:
         print(f"can_replay: {e}", file=sys.stderr)
         return 1
     print(summary_line(r), file=sys.stderr)

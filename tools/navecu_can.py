@@ -28,6 +28,8 @@ bus and log-file operation goes through python-can.
 from __future__ import annotations
 
 import math
+import re
+import sys
 from pathlib import Path
 from typing import Iterable, Mapping, Optional
 
@@ -433,9 +435,111 @@ def write_candump(path, messages: Iterable[can.Message]) -> int:
     return n
 
 
-def read_log(path) -> list:
-    """All frames of a log file python-can can read (candump .log, .asc, .blf, ...)."""
-    return list(can.LogReader(str(path)))
+#: A candump -L line as the firmware's log reader takes it (hal/common/candump.h, the
+#: rule): "(" seconds "." 1..9 digits ")", an interface of 1..15 printable characters, a
+#: classic frame ID#DATA (3 hex digits, or 8 for an extended ID, 0..8 data bytes as hex
+#: pairs) and an optional direction R or T, blanks around. Everything else is malformed:
+#: python-can would raise on some of it and change other lines silently (a 4-digit ID
+#: becomes an extended one, 11 data bytes a frame of 11). A standard ID is at most 0x7FF,
+#: an extended one below 2^29 (at or above it the CAN_ERR_FLAG: an error frame).
+CANDUMP_LINE = re.compile(r"[ \t]*\(\d+\.\d{1,9}\)[ \t]+[!-~]{1,15}[ \t]+"
+                          r"(?:[0-7][0-9A-Fa-f]{2}|[01][0-9A-Fa-f]{7})#(?:[0-9A-Fa-f]{2}){0,8}"
+                          r"(?:[ \t]+[RT])?[ \t\r]*")
+
+
+class LogFile:
+    """The frames of a CAN log file, through python-can's LogReader (candump .log, .asc,
+    .blf, ...), as a context manager and an iterable of can.Message.
+
+    A candump text log (.log) is read as the firmware reads one (navecu --can-log): blank
+    lines are skipped, and a line that is not a classic CAN frame by CANDUMP_LINE's rule
+    (garbage, bad or odd hex, more than 8 bytes, a remote, FD or error frame, bytes that
+    are not UTF-8, a line cut short) is skipped and counted, never raised on nor changed:
+    `malformed` is their number, `first_malformed` the first few as (line number, text),
+    `note()` the line a tool prints. Other formats are python-can's business. A file that
+    cannot be opened raises OSError."""
+
+    KEEP = 5
+    _line_ok = staticmethod(CANDUMP_LINE.fullmatch)
+
+    def __init__(self, path):
+        self.path = str(path)
+        self.malformed = self.rejected = 0
+        self.first_malformed: list = []
+        self.first_rejected: list = []
+        if self.path.endswith(".log"):
+            self._fh = open(self.path, encoding="utf-8", errors="replace")
+            self._reader = can.CanutilsLogReader(self._lines())
+        else:
+            self._fh = None
+            self._reader = can.LogReader(self.path)
+
+    def _lines(self):
+        for lineno, line in enumerate(self._fh, 1):
+            text = line.rstrip("\n")
+            if not text.strip(" \t\r"):
+                continue
+            if self._line_ok(text):
+                yield text
+                continue
+            self.malformed += 1
+            if len(self.first_malformed) < self.KEEP:
+                self.first_malformed.append((lineno, text[:60]))
+
+    def __iter__(self):
+        return iter(self._reader)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+        return False
+
+    def close(self) -> None:
+        if self._fh is not None:
+            self._fh.close()
+        else:
+            self._reader.stop()
+
+    def reject(self, msg: can.Message, why: str) -> None:
+        """Count a frame of the log that the tool reading it cannot take (e.g. a known
+        identifier with another length): `rejected`, the first few in `first_rejected`."""
+        self.rejected += 1
+        if len(self.first_rejected) < self.KEEP:
+            self.first_rejected.append((msg.timestamp, msg.arbitration_id, why))
+
+    def note(self) -> str:
+        """'N malformed lines of FILE skipped (first: line L, 'text')', and the rejected
+        frames if any, for a summary."""
+        s = (f"{self.malformed} malformed line{'s' if self.malformed != 1 else ''} of "
+             f"{self.path} skipped")
+        if self.first_malformed:
+            lineno, text = self.first_malformed[0]
+            s += f" (first: line {lineno}, {text!r})"
+        if self.rejected:
+            t, ident, why = self.first_rejected[0]
+            s += (f", {self.rejected} frame{'s' if self.rejected != 1 else ''} rejected "
+                  f"(first: 0x{ident:03X} at {t:.6f} s, {why})")
+        return s
+
+    @property
+    def skipped(self) -> int:
+        """Malformed lines and rejected frames."""
+        return self.malformed + self.rejected
+
+
+def read_log(path, skipped: Optional[list] = None) -> list:
+    """All frames of a log file python-can can read (candump .log, .asc, .blf, ...), a
+    candump log's malformed lines skipped (LogFile); skipped: a list that gets the
+    LogFile, for its count; without one a count above 0 is said on stderr."""
+    with LogFile(path) as log:
+        frames = list(log)
+    if skipped is not None:
+        skipped.append(log)
+    elif log.skipped:
+        print(f"read_log: {log.note()}", file=sys.stderr)
+    return frames
 
 
 # ---------------------------------------------------------------- the time-driven output

@@ -568,3 +568,74 @@ def test_can_doc_is_current():
     res = subprocess.run([sys.executable, "-m", "tools.gen_can_doc", "--check"],
                          capture_output=True, text=True, cwd=ROOT)
     assert res.returncode == 0, res.stderr
+
+
+# ------------------------------------------------------------------ reading a CAN log ----
+
+# (line, a frame?) by hal/common/candump.h's rule, which navecu --can-log applies
+CANDUMP_CASES = [
+    ("(0000000001.000000) can0 101#0011223344556677", True),
+    ("  (1.5)\tvcan0 7FF#   ", True),
+    ("(1.123456789) can0 123#0011 R\r", True),
+    ("(1.0) can0 1FFFFFFF#00", True),
+    ("(1.0) can0 123#", True),
+    ("this is not a candump line", False),             # regression_inputs' three
+    ("(12.5) can0 1234#00", False),                     # python-can: extended 0x1234
+    ("(100.000000) can0 100#0011223344556677889900", False),  # python-can: 11 bytes
+    ("(1.0) can0 GARBAGE", False),                      # python-can: ValueError
+    ("(1.0) can0 101#ZZ", False),                       # python-can: ValueError
+    ("(1.0) can0 101#001", False),                      # odd digits: cut short
+    ("(1.0) can0 800#00", False),
+    ("(1.0) can0 20000000#00", False),                  # CAN_ERR_FLAG: an error frame
+    ("(1.0) can0 123#R", False),
+    ("(1.0) can0 123##100", False),
+    ("(1.0 can0 123#00", False),
+    ("(1.0) can0 123#00 X", False),
+]
+
+
+def test_log_file_skips_and_counts_malformed_lines_as_navecu_does(tmp_path):
+    """nc.LogFile (every tool's candump reader) takes the lines the firmware takes and skips
+    and counts the others, where python-can's reader raised (a traceback half way through
+    a replay) or changed the frame; navecu --can-log on the same file counts as many."""
+    good = "(0000000002.000000) can0 310#0000000000000000"
+    lines = [good]
+    for text, _ in CANDUMP_CASES:
+        lines += [text, good]
+    log = tmp_path / "mixed.log"
+    data = ("\n".join(lines) + "\n\n").encode() + b"(3.0) can0 101#00\xff\xfe\n" + \
+        (good + "\n").encode()
+    log.write_bytes(data)
+    n_bad = sum(not ok for _, ok in CANDUMP_CASES) + 1   # + the line that is not UTF-8
+    n_frames = len(CANDUMP_CASES) + 2 + sum(ok for _, ok in CANDUMP_CASES)
+    with nc.LogFile(log) as f:
+        frames = list(f)
+    assert (len(frames), f.malformed) == (n_frames, n_bad)
+    assert f.first_malformed[0] == (12, "this is not a candump line")
+    assert all(len(m.data) <= 8 and m.arbitration_id < 1 << 29 for m in frames)
+    assert f"{n_bad} malformed lines of {log} skipped (first: line 12," in f.note()
+    skipped = []
+    assert len(nc.read_log(log, skipped)) == n_frames and skipped[0].malformed == n_bad
+    navecu = ROOT / "build" / "host" / "navecu"
+    if navecu.exists():
+        r = subprocess.run([str(navecu), "--can-log", str(log), "--out", str(tmp_path / "o.log")],
+                           capture_output=True, text=True, timeout=30)
+        assert f"{n_frames} frames in, {n_bad} malformed lines skipped" in r.stderr
+
+
+def test_can_replay_counts_malformed_lines_and_names_a_missing_log(tmp_path, capsys):
+    """The log replayer on python-can's virtual bus: a malformed line once ended the
+    replay half way with "not enough values to unpack"; now it is skipped and counted in
+    the summary, as navecu --can-log skips it. A missing log: one line, exit status 1."""
+    from tools import can_replay
+    log = tmp_path / "in.log"
+    good = [f"({k * 0.01:.6f}) can0 100#{k:016X}" for k in range(20)]
+    log.write_text("\n".join(good[:10] + ["(0.1) can0 GARBAGE"] + good[10:]) + "\n")
+    assert can_replay.main([str(log), "--interface", "virtual", "--channel", "t",
+                            "--max-rate", "100000"]) == 0
+    err = capsys.readouterr().err
+    assert "can_replay: 20 frames" in err and "1 malformed line of" in err
+    assert "(first: line 11, '(0.1) can0 GARBAGE')" in err
+    assert can_replay.main([str(tmp_path / "none.log"), "--interface", "virtual",
+                            "--channel", "t"]) == 1
+    assert "No such file or directory" in capsys.readouterr().err

@@ -5,6 +5,7 @@ GNSS_Position by the given metres, a frozen fix repeats, a latency spike shifts 
 time but not TimeOfWeek), and the report's sigma_consistency, filter_calibration and
 gnss_faults on synthetic logs. No accuracy assertion on the firmware."""
 import math
+import re
 
 import numpy as np
 import pytest
@@ -413,3 +414,55 @@ def test_gnss_fault_report(tmp_path):
                                                "latency_spike": [{"t_s": 9.0, "extra_s": 0.5}]})
     assert [(f["kind"], f["t_start_s"], f["t_end_s"]) for f in nominal] == \
         [("jump", 5.0, 6.0), ("latency_spike", 9.0, 9.5)]
+
+
+def test_report_rejects_bad_inputs_with_one_line(tmp_path, capsys):
+    """tools.sim.report on corrupt inputs: a malformed line or a NAV_* frame of another
+    length in nav.log is skipped and counted on stderr (a traceback before); a log without
+    any NAV_* frame (empty, or the input log given as --nav) is no report, where it said
+    'navecu never started navigating'; a truth.npz that is missing, of another kind, with
+    a NaN or with time going back is refused naming the file."""
+    n = 100
+    report_dir = tmp_path / "rep"
+    nav_log(tmp_path, n, np.full(n, 1.0))
+    nav = tmp_path / "nav.log"
+    lines = nav.read_text().splitlines()
+    lines[50:50] = ["(1005.0) can0 GARBAGE", "(1005.0) can0 300#0102", "(1005.0) can0 301#ZZ"]
+    nav.write_text("\n".join(lines) + "\n")
+    rm, _ = geodesy.radii_m(math.radians(45.0))
+    t = np.linspace(0.0, 50.0, 501)
+    truth = {"t_s": t, "lat_rad": np.full(t.size, math.radians(45.0) - 2.0 / rm),
+             "lon_rad": np.full(t.size, math.radians(10.0)), "heading_rad": np.zeros(t.size),
+             "dist_m": 10.0 * t}
+    good = tmp_path / "truth.npz"
+    np.savez(good, **truth)
+    args = ["--truth", str(good), "--out", str(report_dir)]
+    report.main(args + ["--nav", str(nav)])
+    cap = capsys.readouterr()
+    assert "horizontal error: rms 2.00 m" in cap.out
+    assert (f"read_nav_log: 2 malformed lines of {nav} skipped (first: line 51, "
+            "'(1005.0) can0 GARBAGE'), 1 frame rejected (first: 0x300 at 1005.000000 s, "
+            "NAV_Position with 2 bytes)") in cap.err
+    for bad_nav, what in ((tmp_path / "empty.log", "no NAV_* frame in it"),
+                          (tmp_path / "none.log", "No such file or directory"),
+                          (good, "not a CAN log it can read")):
+        if bad_nav.name == "empty.log":
+            bad_nav.write_text("")
+        with pytest.raises(SystemExit, match=re.escape(f"report: {bad_nav}: ") + ".*"
+                           + re.escape(what)):
+            report.main(args[2:] + ["--truth", str(good), "--nav", str(bad_nav)])
+    nan_truth = dict(truth, lat_rad=truth["lat_rad"].copy())
+    nan_truth["lat_rad"][7] = np.nan
+    back_truth = dict(truth, t_s=truth["t_s"].copy())
+    back_truth["t_s"][9] = 0.0
+    for name, data, what in (("nan", nan_truth, "lat_rad is not finite at 1 samples "
+                              "(first at index 7)"),
+                             ("back", back_truth, "t_s does not increase"),
+                             ("short", {k: v for k, v in truth.items() if k != "dist_m"},
+                              "no dist_m")):
+        p = tmp_path / f"{name}.npz"
+        np.savez(p, **data)
+        with pytest.raises(SystemExit, match=re.escape(f"report: {p}: {what}")):
+            report.main(["--truth", str(p), "--nav", str(nav), "--out", str(report_dir)])
+    with pytest.raises(SystemExit, match="not a truth.npz"):
+        report.main(["--truth", str(nav), "--nav", str(nav), "--out", str(report_dir)])

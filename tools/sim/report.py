@@ -16,7 +16,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import re
+import sys
 from pathlib import Path
 
 import can
@@ -26,7 +26,8 @@ from tools import navecu_can as nc
 from tools.geodesy import horizontal_error_m, radii_m
 from tools.sim import scenario, sensors
 
-def read_nav_log(path, db=None, wraps_from_log: bool = False, log_t0_s: float = 0.0) -> dict:
+def read_nav_log(path, db=None, wraps_from_log: bool = False, log_t0_s: float = 0.0,
+                 skipped: list | None = None) -> dict:
     """Decode the NAV_* frames of a candump log (every message navecu sends) into arrays
     keyed by message; each has 't_s' and the signal columns.
 
@@ -44,15 +45,24 @@ def read_nav_log(path, db=None, wraps_from_log: bool = False, log_t0_s: float = 
     the GNSS course) loses a wrap; without it a wrap is counted when TimeOfValidity goes
     back, which misses a gap of more than 65.536 s.
     Each row also has 'seq', the frame's index in the log: what a receiver had seen before
-    it (transition_check)."""
+    it (transition_check). A candump log's malformed lines are skipped and counted
+    (nc.LogFile): skipped, a list, gets the LogFile; without one a count above 0 is said
+    on stderr; so are frames of a NAV_* identifier that are not that message (an extended
+    ID, another length): rejected, not decoded."""
     db = db if db is not None else nc.load_db()
     want = {m.frame_id: m.name for m in db.messages if "NAVECU" in m.senders}
     rows = {n: [] for n in want.values()}
     cycle_rows, t_cycle, last_ms, wraps = [], math.nan, None, 0
-    with can.LogReader(str(path)) as reader:
+    length = {m.frame_id: m.length for m in db.messages}
+    with nc.LogFile(path) as reader:
         for seq, msg in enumerate(reader):
             name = want.get(msg.arbitration_id)
             if name is None:
+                continue
+            if msg.is_extended_id or msg.is_remote_frame or len(msg.data) != length[
+                    msg.arbitration_id]:
+                reader.reject(msg, f"{name} with {len(msg.data)} bytes"
+                              + (", extended ID" if msg.is_extended_id else ""))
                 continue
             sig = db.decode_message(msg.arbitration_id, bytes(msg.data), decode_choices=False)
             sig["seq"] = seq
@@ -73,6 +83,10 @@ def read_nav_log(path, db=None, wraps_from_log: bool = False, log_t0_s: float = 
             if name != "NAV_Status":
                 cycle_rows.append(sig)
             rows[name].append(sig)
+    if skipped is not None:
+        skipped.append(reader)
+    elif reader.skipped:
+        print(f"read_nav_log: {reader.note()}", file=sys.stderr)
     out = {}
     for name, lst in rows.items():
         if lst:
@@ -81,14 +95,11 @@ def read_nav_log(path, db=None, wraps_from_log: bool = False, log_t0_s: float = 
     return out
 
 
-_CANDUMP_LINE = re.compile(
-    r"^\(\d+\.\d+\)\s+\S+\s+([0-9A-Fa-f]{3,8})#([0-9A-Fa-f]*)(?:\s+[RT])?\s*$")
-
-
 def _frames_with_ids(path, ids):
     """(frame_id, data) of the frames with these IDs, in log order. A candump -L text log
-    (.log) is scanned line by line for them (a million-frame log in about a second); any
-    other format goes through python-can's LogReader."""
+    (.log) is scanned line by line for them (a million-frame log in about a second), its
+    malformed lines (nc.CANDUMP_LINE) left out as read_nav_log leaves them out and counts
+    them; any other format goes through python-can's LogReader."""
     if str(path).endswith(".log"):
         keys = {f"{i:03X}#" for i in ids}
         with open(path) as fh:
@@ -96,9 +107,9 @@ def _frames_with_ids(path, ids):
                 sp = line.find(" ", line.find(" ") + 1)
                 if line[sp + 1:line.find("#", sp) + 1].upper() not in keys:
                     continue
-                m = _CANDUMP_LINE.match(line)
-                if m:
-                    yield int(m.group(1), 16), bytes.fromhex(m.group(2))
+                if nc.CANDUMP_LINE.fullmatch(line.rstrip("\n")):
+                    ident, data = line.split()[2].split("#")
+                    yield int(ident, 16), bytes.fromhex(data)
         return
     with can.LogReader(str(path)) as reader:
         for msg in reader:
@@ -802,6 +813,38 @@ def summary_table(rep: dict) -> str:
     return "\n".join(lines)
 
 
+TRUTH_KEYS = ("t_s", "lat_rad", "lon_rad", "heading_rad", "dist_m")
+
+
+def read_truth(path) -> dict:
+    """truth.npz as tools.sim.run writes it, or SystemExit naming the file and what is
+    wrong: unreadable, another kind of file, a column missing, of another length, not
+    finite, or time not increasing."""
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            data = dict(z)
+    except (OSError, ValueError, EOFError) as e:   # zipfile.BadZipFile is an OSError
+        raise SystemExit(f"report: {path}: not a truth.npz of tools.sim.run: {e}") from None
+    missing = [k for k in TRUTH_KEYS if k not in data]
+    if missing:
+        raise SystemExit(f"report: {path}: no {', '.join(missing)}: not a truth.npz of "
+                         "tools.sim.run")
+    t = np.asarray(data["t_s"], dtype=float)
+    for k in TRUTH_KEYS:
+        col = np.asarray(data[k], dtype=float)
+        if col.shape != t.shape or t.ndim != 1 or t.size < 2:
+            raise SystemExit(f"report: {path}: {k} has shape {col.shape}, t_s {t.shape}")
+        bad = np.nonzero(~np.isfinite(col))[0]
+        if bad.size:
+            raise SystemExit(f"report: {path}: {k} is not finite at {bad.size} samples "
+                             f"(first at index {bad[0]})")
+    back = np.nonzero(np.diff(t) <= 0)[0]
+    if back.size:
+        raise SystemExit(f"report: {path}: t_s does not increase at {back.size} samples "
+                         f"(first at index {back[0] + 1}, {t[back[0]]:g} -> {t[back[0] + 1]:g} s)")
+    return data
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--truth", required=True, help="truth.npz written by tools.sim.run")
@@ -810,9 +853,15 @@ def main(argv=None):
     ap.add_argument("--scenario", default=None,
                     help="the run's scenario (name or .toml): adds its truths and calibration")
     args = ap.parse_args(argv)
-    data = dict(np.load(args.truth, allow_pickle=False))
+    data = read_truth(args.truth)
     outages = [tuple(o) for o in data.pop("outages", np.zeros((0, 2))).tolist()]
-    nav = read_nav_log(args.nav)
+    try:
+        nav = read_nav_log(args.nav)
+    except (OSError, ValueError) as e:
+        raise SystemExit(f"report: {args.nav}: not a CAN log it can read: {e}") from None
+    if not nav:
+        raise SystemExit(f"report: {args.nav}: no NAV_* frame in it: not a navecu output log "
+                         "(or navecu sent nothing); no report")
     rep, series = compute(data, nav, outages)
     if args.scenario:
         scen = scenario.load(args.scenario)
