@@ -266,8 +266,8 @@ def load(name: str) -> Profile:
         raise ProfileError(f"no vehicle profile {name} (vehicles/: {known})")
     try:
         t = tomllib.loads(path.read_text(encoding="utf-8"))
-    except tomllib.TOMLDecodeError as e:
-        raise ProfileError(f"{path.name}: {e}") from e
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
+        raise ProfileError(f"{path.name}: not TOML: {e}") from e
     if t.get("name") != name:
         raise ProfileError(f"{path.name}: name must be {name!r}")
     _check_shape(t, path.name)
@@ -434,11 +434,20 @@ class Collision:
 
 
 def recorded_ids(path: Path, channels: dict) -> dict:
-    """{(bus, id): (frames, rate Hz, DLCs)} of a candump recording (python-can reads it)."""
+    """{(bus, id): (frames, rate Hz, DLCs)} of a candump recording (python-can reads it;
+    malformed lines skipped and their count said on stderr, navecu_can.LogFile); a file
+    python-can has no reader for, or whose reader fails, is a ProfileError."""
     per = {}
     t0 = t1 = None
-    import can
-    for msg in can.LogReader(str(path)):
+    try:
+        with navecu_can.LogFile(path) as log:
+            msgs = list(log)
+    except (OSError, ValueError) as e:
+        raise ProfileError(f"recording {path}: not a CAN log it can read: "
+                           f"{type(e).__name__}: {e}") from None
+    if log.skipped:
+        print(f"vehicle: {log.note()}", file=sys.stderr)
+    for msg in msgs:
         if msg.is_error_frame or msg.is_extended_id:
             continue
         bus = channels.get(str(msg.channel))
@@ -703,7 +712,11 @@ def main(argv=None) -> int:
         return 0
     ids = stock_ids() if getattr(a, "ids", "profile") == "stock" else p.can_ids
     label = "the DBC's stock identifiers" if ids is not p.can_ids else f"profile {p.name}"
-    found = collisions(p, {**ids, **uds_ids()})
+    try:
+        found = collisions(p, {**ids, **uds_ids()})
+    except ProfileError as e:
+        print(f"vehicle: {p.name}: {e}", file=sys.stderr)
+        return 2
     if found:
         print(f"vehicle: {len(found)} collision(s) of navecu's identifiers ({label}) with "
               f"the car's buses:", file=sys.stderr)

@@ -56,3 +56,39 @@ def test_a_colliding_profile_is_not_generated(tmp_path, monkeypatch):
     out = tmp_path / "gen"
     assert vehicle.main(["generate", "rav4_bad", str(out)]) == 1
     assert not out.exists()
+
+
+NATIVE = ('name = "bad"\n[wheels]\nnative = true\n[geometry]\ntrack_m = 1.6\n'
+          'wheelbase_m = 2.7\n')
+
+
+@pytest.mark.parametrize("text, what", [
+    # each raised a Python traceback (UnicodeDecodeError; python-can's ValueError)
+    (NATIVE.encode() + b"# \xff\n", "bad.toml: not TOML"),
+    (NATIVE + '[[recordings]]\nfile = "vehicles/native.toml"\nchannels = {can0 = "pt"}\n',
+     "native.toml: not a CAN log it can read"),
+    (NATIVE + '[[recordings]]\nfile = "tools/requirements.txt"\nchannels = {can0 = "pt"}\n',
+     "requirements.txt: not a CAN log it can read"),
+])
+def test_a_profile_that_cannot_be_read_is_refused_in_one_line(tmp_path, monkeypatch, capsys,
+                                                               text, what):
+    p = tmp_path / "bad.toml"
+    p.write_bytes(text if isinstance(text, bytes) else text.encode())
+    monkeypatch.setattr(vehicle, "VEHICLES", tmp_path)
+    assert vehicle.main(["check", "bad"]) == 2
+    err = capsys.readouterr().err
+    assert what in err and "Traceback" not in err
+
+
+def test_a_recordings_malformed_lines_are_counted(tmp_path, monkeypatch, capsys):
+    """A recording with a line python-can cannot read stopped the check with a traceback;
+    now the line is skipped and counted (the firmware's rule, navecu_can.LogFile)."""
+    rec = tmp_path / "rec.log"
+    rec.write_text("(1.0) can0 0AA#0011223344556677\n(1.1) can0 GARBAGE\n"
+                   "(1.2) can0 0AA#0011223344556677\n")
+    (tmp_path / "bad.toml").write_text(
+        NATIVE + f'[[recordings]]\nfile = "{rec}"\nchannels = {{can0 = "pt"}}\n')
+    monkeypatch.setattr(vehicle, "VEHICLES", tmp_path)
+    assert vehicle.main(["check", "bad"]) == 0
+    assert (f"vehicle: 1 malformed line of {rec} skipped (first: line 2, "
+            "'(1.1) can0 GARBAGE')") in capsys.readouterr().err
