@@ -22,7 +22,8 @@ message, the last value of every NAV_Status counter) with navecu's stderr summar
 
 check: every case's record against tests/regression/expected.json; on a difference it
 names the case and what differs and prints the summary diff. Exit status 0 if all agree,
-1 otherwise. The outputs stay in build/regression/<case>/ (out.log, nvm.bin, stderr.txt).
+1 otherwise, 2 if there is no firmware or cases.json, expected.json or an input cannot be
+read (named, with the line of a JSON error). The outputs stay in build/regression/<case>/ (out.log, nvm.bin, stderr.txt).
 
 update: runs every case twice, refuses to write if the two runs differ (a non-deterministic
 output cannot be a reference), and rewrites expected.json. A change that alters the
@@ -65,8 +66,38 @@ def data_sha256(out_log: Path) -> str:
     return hashlib.sha256("".join(nc.data_driven(lines)).encode()).hexdigest()
 
 
+class CaseFileError(ValueError):
+    """cases.json, expected.json or a case's input that cannot be read: exit status 2."""
+
+
+def read_json(path: Path) -> dict:
+    """A JSON file of the regression (cases.json, expected.json) as a dict, or
+    CaseFileError naming the file and, for a syntax error, its line and column."""
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except OSError as e:
+        raise CaseFileError(f"{path}: {e.strerror or e}") from None
+    except UnicodeDecodeError as e:
+        raise CaseFileError(f"{path}: not UTF-8 text: {e}") from None
+    except json.JSONDecodeError as e:
+        raise CaseFileError(f"{path}:{e.lineno}:{e.colno}: not JSON: {e.msg}") from None
+    if not isinstance(data, dict):
+        raise CaseFileError(f"{path}: not a JSON object")
+    return data
+
+
 def load_cases(cases_dir: Path) -> list:
-    return json.loads((cases_dir / "cases.json").read_text())["cases"]
+    """cases.json's cases, each with a name, an input and its options (CaseFileError
+    otherwise)."""
+    path = cases_dir / "cases.json"
+    cases = read_json(path).get("cases")
+    if not isinstance(cases, list):
+        raise CaseFileError(f"{path}: no list \"cases\"")
+    for i, c in enumerate(cases):
+        if not (isinstance(c, dict) and all(isinstance(c.get(k), str)
+                                            for k in ("name", "input", "args"))):
+            raise CaseFileError(f"{path}: case {i + 1} needs the strings name, input and args")
+    return cases
 
 
 def to_json(x, indent: int = 0, width: int = 96) -> str:
@@ -222,11 +253,17 @@ def input_log(case: dict, cases_dir: Path, work: Path) -> Path:
     name = src.name[:-3] if src.name.endswith(".xz") else src.name
     dst = work / "inputs" / name
     stamp = dst.with_name(dst.name + ".src-sha256")
+    if not src.is_file():
+        raise CaseFileError(f"{src}: case {case['name']}'s input is missing")
     src_sha = sha256(src)
     if not (dst.exists() and stamp.exists() and stamp.read_text() == src_sha):
         dst.parent.mkdir(parents=True, exist_ok=True)
         data = src.read_bytes()
-        dst.write_bytes(lzma.decompress(data) if src.name.endswith(".xz") else data)
+        try:
+            dst.write_bytes(lzma.decompress(data) if src.name.endswith(".xz") else data)
+        except lzma.LZMAError as e:
+            raise CaseFileError(f"{src}: case {case['name']}'s input does not decompress: "
+                                f"{e}") from None
         stamp.write_text(src_sha)
     return dst
 
@@ -373,6 +410,14 @@ def main(argv=None) -> int:
     if not navecu.exists():
         print(f"regression: no firmware at {navecu} (make build/host/navecu)", file=sys.stderr)
         return 2
+    try:
+        return _main(a, ap, navecu, cases_dir, work)
+    except CaseFileError as e:
+        print(f"regression: {e}", file=sys.stderr)
+        return 2
+
+
+def _main(a, ap, navecu: Path, cases_dir: Path, work: Path) -> int:
     cases = load_cases(cases_dir)
     if a.case:
         unknown = set(a.case) - {c["name"] for c in cases}
@@ -384,7 +429,7 @@ def main(argv=None) -> int:
             ap.error("update rewrites every case: no --case")
         return update(cases, navecu, cases_dir, work)
     path = cases_dir / "expected.json"
-    expected = json.loads(path.read_text()) if path.exists() else {}
+    expected = read_json(path) if path.exists() else {}
     return check(cases, expected, navecu, cases_dir, work, a.case)
 
 

@@ -156,3 +156,28 @@ def test_kingston_case_runs_the_kingston_runners_options():
     from tools.kingston import run as kingston_run
     case = next(c for c in regression.load_cases(CASES) if c["name"] == "kingston-900s")
     assert case["args"] == regression_inputs.args_text(kingston_run.RATES + kingston_run.SENSORS)
+
+
+def test_a_corrupt_case_file_or_input_is_named_not_a_traceback(one_case):
+    """cases.json or expected.json cut short, a case without its input, or an input that
+    does not decompress: one line naming the file (and the JSON error's line), exit 2;
+    each was a Python traceback."""
+    cases, work = one_case
+    good = {p: p.read_bytes() for p in (cases / "cases.json", cases / "expected.json")}
+    log = next((cases / "inputs").iterdir())
+    for path, bad, what in (
+            (cases / "cases.json", b'{"cases": [{"name": "x",\n "inp', "cases.json:2:2: not JSON"),
+            (cases / "expected.json", b"{\n  \"sim\n", "expected.json:2:7: not JSON"),
+            (cases / "cases.json", b'{"cases": [{"name": "x"}]}', "case 1 needs the strings"),
+            (log, log.read_bytes()[:5000], "input does not decompress"),
+            (log, None, "input is missing")):
+        keep = path.read_bytes()
+        if bad is None:
+            path.unlink()
+        else:
+            path.write_bytes(bad)
+        r = tool(cases, work, "check")
+        assert r.returncode == 2 and what in r.stderr and "Traceback" not in r.stderr, r.stderr
+        path.write_bytes(keep)
+    assert {p: p.read_bytes() for p in good} == good
+    assert tool(cases, work, "check").returncode == 0
