@@ -306,3 +306,80 @@ def test_compare_by_minute_shares_add_up_to_the_difference():
     assert share[0] == share[60] == 0.0
     rms = {m0: (ra, rb) for _, m0, ra, rb in rows}
     assert rms[120] == pytest.approx((3.0, 1.0))
+
+
+def _small_data(tmp_path, seconds=60.0):
+    """The first `seconds` of each of the drive's CSV files, rows as they are."""
+    d = tmp_path / "data"
+    d.mkdir()
+    t_end = convert.load().t0_gps + seconds
+    for name in convert.COLUMNS:
+        lines = (convert.DATA_DIR / name).read_text().splitlines(keepends=True)
+        (d / name).write_text(lines[0] + "".join(ln for ln in lines[1:]
+                                                 if float(ln.split(",")[0]) < t_end))
+    return d
+
+
+def _edit(path, line_no, fn):
+    lines = path.read_text().splitlines(keepends=True)
+    lines[line_no - 1] = fn(lines[line_no - 1])
+    path.write_text("".join(lines))
+
+
+def _cell(col, value):
+    def fn(line):
+        cells = line.rstrip("\n").split(",")
+        cells[col] = value
+        return ",".join(cells) + "\n"
+    return fn
+
+
+@pytest.mark.parametrize("name, edit, what", [
+    # numpy's genfromtxt read these as NaN: the converter then died in the quantiser or
+    # the encoder ("IMU increment is not finite", "signal Latitude: value nan ...")
+    ("imu.csv", (101, _cell(1, "nan")), "imu.csv: line 101: fx_mps2 = nan is not finite"),
+    ("imu.csv", (101, _cell(1, "abc")), "imu.csv: line 101: fx_mps2 = 'abc' is not a number"),
+    ("imu.csv", (101, _cell(1, "")), "imu.csv: line 101: fx_mps2 = '' is not a number"),
+    ("gnss.csv", (30, _cell(2, "inf")), "gnss.csv: line 30: lon_deg = inf is not finite"),
+    ("odometer.csv", (30, _cell(1, "nan")), "odometer.csv: line 30: speed_mps = nan is not"),
+    # NaN in gnss_raw's time was a satellite silently not counted
+    ("gnss_raw.csv", (20, _cell(0, "xx")), "gnss_raw.csv: line 20: time_s = 'xx' is not a"),
+    # these were numpy tracebacks
+    ("imu.csv", (101, lambda ln: ln[:30] + "\n"), "imu.csv: line 101: 3 fields, the header "
+                                                  "has 7 (a line cut short?)"),
+    ("imu.csv", (1, lambda ln: ln.replace("wz_radps", "wz")), "imu.csv: no column wz_radps"),
+    ("reference.csv", None, "reference.csv: No such file or directory"),
+    ("gnss.csv", "header", "gnss.csv: no data row"),
+    ("gnss.csv", b"\xff", "gnss.csv: not UTF-8 text (line 5: byte 0xFF)"),
+])
+def test_corrupt_data_file_refused_with_its_line(tmp_path, capsys, name, edit, what):
+    d = _small_data(tmp_path)
+    path = d / name
+    if edit is None:
+        path.unlink()
+    elif edit == "header":
+        path.write_text(path.read_text().splitlines(keepends=True)[0])
+    elif isinstance(edit, bytes):
+        lines = path.read_bytes().splitlines(keepends=True)
+        path.write_bytes(b"".join(lines[:4]) + edit + b"\n" + b"".join(lines[4:]))
+    else:
+        _edit(path, *edit)
+    out = tmp_path / "can_in.log"
+    assert convert.main(["--data", str(d), "--out", str(out), "--calibrate-at-km", "none"]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("kingston.convert: ") and what in err, err
+    assert not out.exists()
+
+
+def test_data_irregularities_are_one_line_not_a_traceback(tmp_path, capsys):
+    d = _small_data(tmp_path)
+    out = tmp_path / "can_in.log"
+    # the default calibration point is beyond a short drive
+    assert convert.main(["--data", str(d), "--out", str(out)]) == 1
+    assert "the reference never reaches 5.0 km" in capsys.readouterr().err
+    lines = (d / "imu.csv").read_text().splitlines(keepends=True)
+    lines[200], lines[201] = lines[201], lines[200]
+    (d / "imu.csv").write_text("".join(lines))
+    assert convert.main(["--data", str(d), "--out", str(out), "--calibrate-at-km", "none"]) == 1
+    assert "time goes backwards" in capsys.readouterr().err
+    assert not out.exists()

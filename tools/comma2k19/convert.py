@@ -52,6 +52,7 @@ import numpy as np
 
 from tools import navecu_can as nc
 from tools import vehicle
+from tools.data_csv import read_csv
 
 ROOT = Path(__file__).resolve().parents[2]
 DATA_DIR = Path(os.environ.get("NAVECU_COMMA2K19_DIR") or ROOT / "data" / "comma2k19-rav4")
@@ -70,7 +71,9 @@ O_GPOS, O_GVEL, O_GHGT, O_GTIME, O_GSTAT = 7, 8, 9, 10, 11
 
 
 def _csv(path: Path) -> np.ndarray:
-    return np.genfromtxt(path, delimiter=",", names=True, dtype=float)
+    """One of the segment's CSV files, every cell a finite number (data_csv.read_csv:
+    DataError, a ValueError, naming the file and line otherwise)."""
+    return read_csv(path)
 
 
 def _rot(axis: int, a: float) -> np.ndarray:
@@ -179,13 +182,18 @@ def parse_outage(spec):
 _CAR_FRAMES = {}
 
 
-def car_frames(path: Path) -> list:
-    """The frames of a car's candump log (python-can), read once per process."""
+def car_frames(path: Path, skipped: list | None = None) -> list:
+    """The frames of a car's candump log (python-can through nc.LogFile: a malformed line
+    skipped and counted, as navecu skips it), read once per process; skipped: a list that
+    gets the LogFile, for its count."""
     key = str(Path(path).resolve())
     if key not in _CAR_FRAMES:
-        with can.LogReader(str(path)) as reader:
-            _CAR_FRAMES[key] = list(reader)
-    return _CAR_FRAMES[key]
+        with nc.LogFile(path) as reader:
+            _CAR_FRAMES[key] = (list(reader), reader)
+    frames, reader = _CAR_FRAMES[key]
+    if skipped is not None:
+        skipped.append(reader)
+    return frames
 
 
 def build(data_dir=None, vehicle_name="toyota_rav4_2017", channels=None, car_bus=True,
@@ -310,8 +318,9 @@ def build(data_dir=None, vehicle_name="toyota_rav4_2017", channels=None, car_bus
     for r in prof.reads:
         read_ids[r.message.frame_id] = r.message.name
     per_ch, per_id, n_car = {}, {}, 0
+    skipped = []
     if car_bus:
-        for msg in car_frames(data / "car_bus.log"):
+        for msg in car_frames(data / "car_bus.log", skipped):
             ch = str(msg.channel)
             if ((channels is not None and ch not in channels) or
                     (car_ids is not None and msg.arbitration_id not in car_ids)):
@@ -329,7 +338,9 @@ def build(data_dir=None, vehicle_name="toyota_rav4_2017", channels=None, car_bus
             n_car += 1
     meta["car_bus"] = {"file": str(data / "car_bus.log"), "frames": n_car,
                        "per_channel": per_ch, "profile_messages": per_id,
-                       "frames_per_s": n_car / t_last if t_last > 0 else None}
+                       "frames_per_s": n_car / t_last if t_last > 0 else None,
+                       "malformed_lines": skipped[0].malformed if skipped else 0,
+                       "malformed_first": skipped[0].first_malformed if skipped else []}
     out.sort(key=lambda x: (x[0], x[1]))
     meta["frames"] = len(out)
     return out, meta
@@ -363,7 +374,8 @@ def main(argv=None) -> int:
         return 1
     write(a.out, frames, meta)
     print(f"comma2k19: {meta['frames']} frames, {meta['car_bus']['frames']} of the car's "
-          f"bus, {meta['gnss']['epochs_sent']} GNSS epochs -> {a.out}")
+          f"bus ({meta['car_bus']['malformed_lines']} malformed lines of it skipped), "
+          f"{meta['gnss']['epochs_sent']} GNSS epochs -> {a.out}")
     return 0
 
 

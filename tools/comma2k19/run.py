@@ -45,6 +45,7 @@ import numpy as np
 from tools import navecu_can as nc
 from tools import vehicle
 from tools.comma2k19 import convert
+from tools.data_csv import read_csv
 from tools.geodesy import horizontal_distance_m, horizontal_error_m
 from tools.sim import report
 from tools.sim.run import Stages
@@ -76,7 +77,7 @@ def rate_options(imu_time: str) -> list:
 def reference_truth(data: Path, t0: float) -> dict:
     """reference.csv on the run's time base in the simulator's truth layout (report.compute):
     t_s, lat/lon in rad, the car's heading (direction of travel), distance along it."""
-    r = np.genfromtxt(data / "reference.csv", delimiter=",", names=True, dtype=float)
+    r = read_csv(data / "reference.csv")
     ds = horizontal_distance_m(r["lat_deg"][:-1], r["lon_deg"][:-1], r["lat_deg"][1:],
                                r["lon_deg"][1:])
     return {"t_s": r["t_s"] - t0, "lat_rad": np.radians(r["lat_deg"]),
@@ -107,7 +108,7 @@ def wheel_distance_ratio(data: Path, prof, t0: float, t1: float, truth: dict) ->
 
 def gnss_error(data: Path, truth: dict, t0: float) -> dict:
     """The u-blox fixes against the reference at their own time of validity."""
-    g = np.genfromtxt(data / "gnss_ublox.csv", delimiter=",", names=True, dtype=float)
+    g = read_csv(data / "gnss_ublox.csv")
     t = g["t_fix_s"] - t0
     sel = (t >= truth["t_s"][0]) & (t <= truth["t_s"][-1])
     lat, lon, _ = report._interp_truth(truth, t[sel])

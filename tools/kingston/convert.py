@@ -75,6 +75,7 @@ from pathlib import Path
 import numpy as np
 
 from tools import navecu_can as nc
+from tools.data_csv import DataError, read_csv
 from tools.geodesy import horizontal_distance_m
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -125,19 +126,31 @@ class Drive:
                      data_dir=self.data_dir)
 
 
+#: the columns the converter reads from each file (data/kingston-2008/README.md)
+COLUMNS = {
+    "imu.csv": ("time_s", "fx_mps2", "fy_mps2", "fz_mps2", "wx_radps", "wy_radps", "wz_radps"),
+    "odometer.csv": ("time_s", "speed_mps"),
+    "gnss.csv": ("time_s", "lat_deg", "lon_deg", "height_m", "lat_std_m", "lon_std_m",
+                 "height_std_m", "ve_mps", "vn_mps", "vu_mps"),
+    "reference.csv": ("time_s", "lat_deg", "lon_deg", "height_m", "ve_mps", "vn_mps", "vu_mps",
+                      "roll_deg", "pitch_deg", "azimuth_deg"),
+    "gnss_raw.csv": ("time_s",),
+}
+
+
 def _read_csv(path: Path) -> np.ndarray:
-    return np.genfromtxt(path, delimiter=",", names=True, dtype=float)
+    """One of the drive's files, every cell a finite number (data_csv.read_csv: DataError
+    with the file and line otherwise)."""
+    return read_csv(path, COLUMNS[Path(path).name])
 
 
 def load(data_dir=None) -> Drive:
     d = Path(data_dir) if data_dir else DATA_DIR
     if not (d / "imu.csv").exists():
-        raise FileNotFoundError(f"no Kingston data in {d} (imu.csv missing)")
-    raw_t = np.genfromtxt(d / "gnss_raw.csv", delimiter=",", skip_header=1, usecols=(0,),
-                          dtype=float)
+        raise DataError(f"no Kingston data in {d} (imu.csv missing)")
     return Drive(imu=_read_csv(d / "imu.csv"), odo=_read_csv(d / "odometer.csv"),
                  gnss=_read_csv(d / "gnss.csv"), ref=_read_csv(d / "reference.csv"),
-                 raw_time_s=np.atleast_1d(raw_t), data_dir=d)
+                 raw_time_s=_read_csv(d / "gnss_raw.csv")["time_s"], data_dir=d)
 
 
 # ------------------------------------------------------------------ geometry ----
@@ -539,17 +552,25 @@ def main(argv=None) -> int:
                     help="with --gnss-raw: in the outages keep the N highest satellites' raw "
                          "measurements (a partial outage) instead of none")
     a = ap.parse_args(argv)
-    drive = load(a.data)
+    try:
+        drive = load(a.data)
+    except DataError as e:
+        print(f"kingston.convert: {e}", file=sys.stderr)
+        return 1
     t_end = float(drive.imu["time_s"][-1] - drive.t0_gps)
     try:
         outages = parse_outages(a.outages, t_end)
     except ValueError as e:
         ap.error(str(e))
-    meta = convert(a.out, a.data, gnss=not a.no_gnss, outages=outages,
-                   calibrate_at_km=a.calibrate_at_km, imu_rule=a.imu_rule,
-                   initial_attitude=not a.level, odometer=not a.no_odometer,
-                   gnss_velocity=not a.no_gnss_velocity, gnss_raw=a.gnss_raw,
-                   raw_keep_in_outages=a.raw_keep)
+    try:
+        meta = convert(a.out, a.data, gnss=not a.no_gnss, outages=outages,
+                       calibrate_at_km=a.calibrate_at_km, imu_rule=a.imu_rule,
+                       initial_attitude=not a.level, odometer=not a.no_odometer,
+                       gnss_velocity=not a.no_gnss_velocity, gnss_raw=a.gnss_raw,
+                       raw_keep_in_outages=a.raw_keep)
+    except ValueError as e:   # the data's own irregularities (time going back, a range)
+        print(f"kingston.convert: {e}; nothing written", file=sys.stderr)
+        return 1
     print(summary(meta))
     print(f"wrote {a.out} and {sidecar_path(a.out)}")
     return 0

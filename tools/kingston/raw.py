@@ -41,12 +41,12 @@ from pathlib import Path
 import numpy as np
 
 from tools import gnss_raw as gr
+from tools.data_csv import read_csv
 from tools.geodesy import WGS84_OMEGA_IE_RPS
 
 
 def read(data_dir: Path) -> np.ndarray:
-    return np.genfromtxt(Path(data_dir) / "gnss_raw.csv", delimiter=",", names=True,
-                         dtype=float)
+    return read_csv(Path(data_dir) / "gnss_raw.csv", ("time_s",))
 
 
 def epochs(raw: np.ndarray, fixes: np.ndarray, height_offset_m: float = 0.0) -> list:
