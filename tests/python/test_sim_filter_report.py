@@ -466,3 +466,28 @@ def test_report_rejects_bad_inputs_with_one_line(tmp_path, capsys):
             report.main(["--truth", str(p), "--nav", str(nav), "--out", str(report_dir)])
     with pytest.raises(SystemExit, match="not a truth.npz"):
         report.main(["--truth", str(nav), "--nav", str(nav), "--out", str(report_dir)])
+
+
+@pytest.mark.parametrize("edit, what", [
+    # taken without a word: a NaN heading, an infinite or negative duration, a misspelt key
+    (("heading_deg = 30.0", "heading_deg = nan"), "start.heading_deg = nan is not a finite"),
+    (("duration_s = 2", "duration_s = inf"), "segment[0].duration_s = inf is not a finite"),
+    (("duration_s = 2", "duration_s = -2"), "segment 0 (stop): duration_s must be a "
+                                            "non-negative number, not -2"),
+    (("lat_deg = 45.0", "lat_deg = 45.0\nlatt_deg = 1.0"), "unknown [start] keys ['latt_deg']"),
+    # tracebacks: a string for a number, a file cut short, bytes that are not UTF-8
+    (("lat_deg = 45.0", 'lat_deg = "north"'), "[start] lat_deg must be a number, not 'north'"),
+    (("[[segment]]\nkind = \"stop\"", "[[segment]\nkind = \"stop\""), "not TOML"),
+    (("description = \"the base\"", "description = \"the base \xff\""), "not TOML"),
+])
+def test_a_malformed_scenario_is_refused_naming_the_key(tmp_path, edit, what):
+    text = BASE.replace(*edit)
+    assert text != BASE
+    p = tmp_path / "bad.toml"
+    p.write_bytes(text.encode("latin-1") if "\xff" in text else text.encode())
+    with pytest.raises(ValueError, match=re.escape(what)):
+        scenario.load_scenario(p)
+    # the command-line tools (tools.sim.run, report, trajectory): one line, no traceback
+    with pytest.raises(SystemExit, match=re.escape(f"scenario: {p}: ")):
+        scenario.load(str(p))
+    scenario.load_scenario(write(tmp_path, "good", BASE))

@@ -151,6 +151,28 @@ _SEG_KEYS = {
 }
 
 
+# segment keys that are lengths of time or road (a negative one shortened the drive)
+_SEG_NOT_NEGATIVE = {"duration_s", "distance_m", "radius_m", "ramp_frac", "ramp_s"}
+START_KEYS = ("lat_deg", "lon_deg", "h_m", "heading_deg")
+
+
+def _is_number(v) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
+def _check_numbers(x, where: str, key: str = "") -> None:
+    """Every number in a scenario finite: TOML writes nan and inf, and a NaN heading or an
+    infinite duration went into the trajectory without a word."""
+    if isinstance(x, float) and not math.isfinite(x):
+        raise ValueError(f"{where}: {key} = {x} is not a finite number")
+    if isinstance(x, dict):
+        for k, v in x.items():
+            _check_numbers(v, where, f"{key}.{k}" if key else str(k))
+    elif isinstance(x, list):
+        for i, v in enumerate(x):
+            _check_numbers(v, where, f"{key}[{i}]")
+
+
 MOUNTING_DEFAULTS = {"roll_deg": 0.0, "pitch_deg": 0.0, "yaw_deg": 0.0, "configured": False,
                      "automatic": False}
 INITIALIZATION_DEFAULTS = {"heading_reference": "car", "heading_error_deg": 0.0}
@@ -235,8 +257,13 @@ def read_scenario_toml(path, _chain=()) -> dict:
     path = Path(path).resolve()
     if path in _chain:
         raise ValueError(f"{path}: base cycle: {' -> '.join(p.name for p in _chain + (path,))}")
-    with open(path, "rb") as fh:
-        own = tomllib.load(fh)
+    try:
+        with open(path, "rb") as fh:
+            own = tomllib.load(fh)
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
+        raise ValueError(f"{path}: not TOML: {e}") from None
+    except OSError as e:
+        raise ValueError(f"{path}: {e.strerror or e}") from None
     if "base" not in own:
         return own
     if not isinstance(own["base"], str) or not own["base"]:
@@ -260,11 +287,18 @@ def load_scenario(path) -> dict:
     `base` scenario resolved (read_scenario_toml)."""
     path = Path(path)
     sc = read_scenario_toml(path)
+    _check_numbers(sc, str(path))
     sc.setdefault("name", path.stem)
     sc.setdefault("description", "")
-    for key in ("lat_deg", "lon_deg", "h_m", "heading_deg"):
-        if key not in sc.get("start", {}):
+    start = sc.get("start", {})
+    for key in START_KEYS:
+        if key not in start:
             raise ValueError(f"{path}: [start] needs {key}")
+        if not _is_number(start[key]):
+            raise ValueError(f"{path}: [start] {key} must be a number, not {start[key]!r}")
+    unknown = set(start) - set(START_KEYS)
+    if unknown:
+        raise ValueError(f"{path}: unknown [start] keys {sorted(unknown)}")
     veh = dict(VEHICLE_DEFAULTS)
     unknown = set(sc.get("vehicle", {})) - set(VEHICLE_DEFAULTS)
     if unknown:
@@ -281,6 +315,12 @@ def load_scenario(path) -> dict:
         unknown = set(seg) - _SEG_KEYS[kind] - {"kind", "note"}
         if unknown:
             raise ValueError(f"{path}: segment {i} ({kind}): unknown keys {sorted(unknown)}")
+        for key in _SEG_KEYS[kind] & set(seg):
+            v = seg[key]
+            if not _is_number(v) or (key in _SEG_NOT_NEGATIVE and v < 0):
+                raise ValueError(f"{path}: segment {i} ({kind}): {key} must be a "
+                                 f"{'non-negative ' if key in _SEG_NOT_NEGATIVE else ''}"
+                                 f"number, not {v!r}")
     sc["segment"] = segs
     outs = []
     for o in sc.get("outage", []):
@@ -358,8 +398,13 @@ def scenario_path(name: str) -> Path:
 
 
 def load(name: str) -> dict:
-    """The scenario of this name or .toml path (scenario_path), loaded (load_scenario)."""
-    return load_scenario(scenario_path(name))
+    """The scenario of this name or .toml path (scenario_path), loaded (load_scenario);
+    for the command-line tools a scenario that does not load is SystemExit with the
+    reason, as an unknown name is."""
+    try:
+        return load_scenario(scenario_path(name))
+    except ValueError as e:
+        raise SystemExit(f"scenario: {e}") from None
 
 
 def preset_names(scen: dict, imu: str | None = None, gnss: str | None = None) -> tuple:

@@ -551,9 +551,9 @@ def timeline(scenario: dict):
 if __name__ == "__main__":  # print a scenario's timeline
     import sys
 
-    from tools.sim.scenario import load_scenario
+    from tools.sim.scenario import load
 
-    sc = load_scenario(sys.argv[1])
+    sc = load(sys.argv[1])
     tr = Trajectory(sc)
     for i, (a, b, kind) in enumerate(tr.segment_times):
         print(f"{i:3d} {a:8.1f} {b:8.1f} {kind}")
