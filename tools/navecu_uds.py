@@ -570,7 +570,10 @@ def run(a, tab: dict, out=sys.stdout, client=None) -> int:
         elif a.cmd == "dump":
             text = to_toml(t.dump(), tab)
             if a.toml:
-                Path(a.toml).write_text(text, encoding="utf-8")
+                try:
+                    Path(a.toml).write_text(text, encoding="utf-8")
+                except OSError as e:   # a bad file, not the transport: exit 3
+                    raise InputError(f"{a.toml}: {e.strerror or e}") from None
                 t.say(f"dumped {len(tab)} parameters to {a.toml}")
             else:
                 out.write(text)

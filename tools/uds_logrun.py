@@ -39,6 +39,8 @@ from typing import Optional, Sequence
 
 import can
 
+from tools import navecu_can as nc
+
 ROOT = Path(__file__).resolve().parent.parent
 NAVECU = ROOT / "build" / "host" / "navecu"
 IFACE = "can0"  # the interface name written into the log
@@ -49,9 +51,12 @@ class LogRunError(can.CanError):
 
 
 def _read_log(path: Path) -> list:
+    """The frames of a session or output log; a malformed line (a session log edited by
+    hand, or cut by a crash) skipped and its count said on stderr, as navecu skips it
+    (navecu_can.read_log), not a python-can traceback."""
     if not path.exists() or path.stat().st_size == 0:
         return []
-    return list(can.LogReader(str(path)))
+    return nc.read_log(path)
 
 
 def _write_log(path: Path, frames: Sequence[can.Message]) -> None:

@@ -363,3 +363,18 @@ def test_log_runner_dtc_of_the_silent_imu(tmp_path):
     assert failing & (TEST_FAILED | CONFIRMED) == TEST_FAILED, hex(failing)
     assert confirmed & (TEST_FAILED | CONFIRMED) == TEST_FAILED | CONFIRMED, hex(confirmed)
     assert cleared & CONFIRMED == 0, hex(cleared)
+
+
+def test_log_runner_session_with_a_malformed_line_and_dump_to_a_bad_path(lr, capfd):
+    """A session log with a line navecu skips (edited by hand, cut by a crash) was a
+    python-can traceback ('not enough values to unpack'); now the line is skipped and
+    counted, as navecu skips it. dump --toml into a folder that does not exist was
+    'transport: FileNotFoundError', exit 2: it is a bad file, exit 3."""
+    assert lr("info")[0] == 0
+    session = lr.tmp / "session.log"
+    session.write_text(session.read_text() + "(0.5) can0 GARBAGE\n")
+    rc, out, err = lr("info")
+    assert rc == 0 and "serial: NAVECU-00000000" in out, err
+    assert f"1 malformed line of {session} skipped" in capfd.readouterr().err
+    rc, _, err = lr("dump", "--toml", str(lr.tmp / "no" / "such" / "ecu.toml"))
+    assert rc == nu.EXIT_INPUT and "ecu.toml: No such file or directory" in err, err
