@@ -607,9 +607,9 @@ static void test_imu_gaps(void **state)
     hal.tx_n = 0u;
     skip_samples(200);
     run_still(1);
-    /* 200 lost, and the first sample after them: its counter step (201 mod 15 = 6) is a
-     * wrong sequence until the next sample confirms the gap */
-    assert_int_equal(app.keep.health.imu_lost, 216);
+    /* 200 lost, and the first two samples after them: the first's counter step (201 mod
+     * 15 = 6) is a wrong sequence until the two after it confirm the gap */
+    assert_int_equal(app.keep.health.imu_lost, 217);
     assert_int_equal(app.run.mode, APP_MODE_FAULT);
     assert_int_equal(tx_count(NAVECU_CAN_NAV_POSITION_FRAME_ID), 0);
     struct navecu_can_nav_status_t st;
@@ -625,8 +625,8 @@ static void test_imu_gaps(void **state)
  * A sample whose alive counter is wrong but whose CRC is right (a sender fault: E2E
  * "wrong sequence") must not be taken for a gap: a jump of 9 is held, the next sample
  * follows the last good one, so the held one is dropped (CntBadCounter) and one sample
- * bridged; time does not run ahead. A real gap of 9 samples is confirmed by the sample
- * after it and bridged whole.
+ * bridged; time does not run ahead. A real gap of 9 samples is confirmed by the two
+ * samples after it and bridged whole.
  */
 static void test_corrupt_imu_counter_is_not_a_gap(void **state)
 {
@@ -651,8 +651,8 @@ static void test_corrupt_imu_counter_is_not_a_gap(void **state)
     /* a real gap of 9 samples */
     skip_samples(9);
     run_still(1);
-    assert_int_equal(app.keep.health.bad_counter, bad0 + 2u); /* the first after it, held */
-    assert_int_equal(app.keep.health.imu_lost, 1u + 10u);
+    assert_int_equal(app.keep.health.bad_counter, bad0 + 3u); /* the two after it, held */
+    assert_int_equal(app.keep.health.imu_lost, 1u + 11u);
     assert_int_equal(app.keep.n_samples, n0 + 1u + 100u + 9u + 100u);
     assert_int_equal(app.run.mode, APP_MODE_NAVIGATING);
     /* a counter corrupted 2 ahead looks like one lost sample and is bridged; the real

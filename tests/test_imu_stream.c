@@ -1,6 +1,6 @@
 /*
- * test_imu_stream.c - imu_stream.h: the IMU pair, its counter (jumps held until a
- * successor confirms them, corrupt counters), gaps seen by counter and by receive time,
+ * test_imu_stream.c - imu_stream.h: the IMU pair, its counter (jumps held until
+ * successors confirm them, corrupt counters), gaps seen by counter and by receive time,
  * the interpolated bridge, saturation at the configured range, stuck axes. Frames are the
  * real encoding (tests/support/can_frames.h); the stream is fed their decoded raw values.
  *
@@ -218,18 +218,42 @@ static void test_counter_steps_1_and_2(void **state)
     assert_int_equal(out.lost, 3u);
 }
 
-/* GIVEN counter 0 WHEN counter 5 comes (a step beyond APP_IMU_MAX_DELTA) THEN it is held;
- * WHEN counter 6 follows it THEN the jump was real: taken, with 5 samples lost (1..4 and
- * the held 5 itself). */
+/* GIVEN counter 0 WHEN counter 5 comes (a step beyond APP_IMU_MAX_DELTA) THEN it is held,
+ * and 6 after it too (APP_IMU_JUMP_HELD = 2 samples following one another); WHEN 7
+ * follows them THEN the jump was real: taken, with 6 samples lost (1..4 and the held 5
+ * and 6). A successor may skip lost ones: 0, 5, 7 (6 lost), 9 is taken with 8 lost. */
 static void test_counter_step_5_held_until_confirmed(void **state)
 {
     (void)state;
     assert_int_equal(pair(0u, W0, V0, 0u), IMU_SAMPLE);
     assert_int_equal(pair(5u, W0, V0, 5u * PERIOD_US), IMU_REJ_COUNTER);
     assert_int_equal(l.counter.last, 0);
-    assert_int_equal(pair(6u, W0, V0, 6u * PERIOD_US), IMU_SAMPLE);
-    assert_int_equal(out.lost, 5u);
-    assert_int_equal(l.counter.last, 6);
+    assert_int_equal(pair(6u, W0, V0, 6u * PERIOD_US), IMU_REJ_COUNTER);
+    assert_int_equal(l.counter.last, 0);
+    assert_int_equal(pair(7u, W0, V0, 7u * PERIOD_US), IMU_SAMPLE);
+    assert_int_equal(out.lost, 6u);
+    assert_int_equal(l.counter.last, 7);
+    assert_int_equal(pair(14u, W0, V0, 14u * PERIOD_US), IMU_REJ_COUNTER);
+    assert_int_equal(pair(1u, W0, V0, 16u * PERIOD_US), IMU_REJ_COUNTER);
+    assert_int_equal(pair(3u, W0, V0, 18u * PERIOD_US), IMU_SAMPLE);
+    assert_int_equal(out.lost, 10u);
+}
+
+/* GIVEN counter 0 WHEN two wrong counters follow one another (9, 10: a sender's fault),
+ * then 3 (they were samples 1 and 2) THEN they were not a gap: both dropped, 3 taken with
+ * 2 lost. (With one held sample, 10 had confirmed 9: 9 samples of time added, then
+ * the good samples, 6 behind, a second jump: a whole counter cycle for good.) */
+static void test_two_wrong_counters_in_a_row(void **state)
+{
+    (void)state;
+    assert_int_equal(pair(0u, W0, V0, 0u), IMU_SAMPLE);
+    assert_int_equal(pair(9u, W0, V0, PERIOD_US), IMU_REJ_COUNTER);
+    assert_int_equal(pair(10u, W0, V0, 2u * PERIOD_US), IMU_REJ_COUNTER);
+    assert_int_equal(l.counter.last, 0);
+    assert_int_equal(pair(3u, W0, V0, 3u * PERIOD_US), IMU_SAMPLE);
+    assert_int_equal(out.lost, 2u);
+    assert_int_equal(pair(4u, W0, V0, 4u * PERIOD_US), IMU_SAMPLE);
+    assert_int_equal(out.lost, 0u);
 }
 
 /* GIVEN counter 0 WHEN a corrupt counter 9 comes, then 1 (the good one's successor)
@@ -537,6 +561,7 @@ int main(void)
         cmocka_unit_test_setup(test_fault_bit, setup),
         cmocka_unit_test_setup(test_counter_steps_1_and_2, setup),
         cmocka_unit_test_setup(test_counter_step_5_held_until_confirmed, setup),
+        cmocka_unit_test_setup(test_two_wrong_counters_in_a_row, setup),
         cmocka_unit_test_setup(test_corrupt_counter, setup),
         cmocka_unit_test_setup(test_gap_by_receive_time, setup),
         cmocka_unit_test_setup(test_bridge_interpolation, setup),

@@ -16,9 +16,14 @@
 /* ---- time base and input supervision (docs/can.md, docs/reliability.md) ---- */
 /* NAV_Status flags IMU_STALE when no IMU sample came for this long on the HAL clock */
 #define APP_IMU_STALE_US 500000u
-/* IMU counter steps above this are held until a successor confirms them (a corrupt
+/* IMU counter steps above this are held until successors confirm them (a corrupt
  * counter must not move time ahead): 4 = the lost frames the next sample may follow */
 #define APP_IMU_MAX_DELTA 4
+/* samples held for a counter jump, one following the other, before the next confirms the
+ * jump: 2, so two wrong counters that happen to follow each other (a sender's fault) are
+ * not a gap; with one, such a pair put a whole counter cycle (150 ms at 100 Hz) into the
+ * IMU time for good (docs/reliability.md, bad counters) */
+#define APP_IMU_JUMP_HELD 2u
 /* a command's alive counter may step by at most this (CMD_MAX_DELTA - 1 lost frames) */
 #define APP_CMD_MAX_DELTA 3
 /* IMU gaps up to this are bridged by interpolation; longer ones re-acquire (docs/can.md) */

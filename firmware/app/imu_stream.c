@@ -225,24 +225,25 @@ imu_verdict_t imu_stream_accel(imu_stream_t *s, imu_link_t *l, uint8_t counter, 
     if (step <= 0) {
         return IMU_REJ_COUNTER; /* repeated sample or invalid counter */
     }
-    /* a sample held for a counter jump is confirmed by one of its next few successors
-     * (1..APP_IMU_MAX_DELTA after it, as lost frames may take the very next): the gap was
-     * real */
+    /* a sample held for a counter jump is followed by one of its next few successors
+     * (1..APP_IMU_MAX_DELTA after it, as lost frames may take the very next) */
     const int after_held = ((int)counter - (int)s->resync_counter + 15) % 15;
-    const int confirmed = s->resync_valid && after_held >= 1 && after_held <= APP_IMU_MAX_DELTA;
-    if (!confirmed && step >= 15 - APP_IMU_MAX_DELTA) {
+    const int follows = s->resync_valid != 0u && after_held >= 1 &&
+                        after_held <= APP_IMU_MAX_DELTA;
+    if (!follows && step >= 15 - APP_IMU_MAX_DELTA) {
         /* 1..4 behind the counter held: old data (or the counter held was itself a
          * corrupt one ahead of time): dropped until the counter catches up, so a wrong
          * counter never moves time ahead for good. */
         return IMU_REJ_COUNTER;
     }
-    if (!confirmed && step > APP_IMU_MAX_DELTA) {
+    if (follows ? s->resync_valid < APP_IMU_JUMP_HELD : step > APP_IMU_MAX_DELTA) {
         /* E2E "wrong sequence": a corrupted counter, or a real gap of APP_IMU_MAX_DELTA
-         * samples or more. The next samples decide: if one follows this one closely, the
-         * gap was real and is bridged then (this sample counted among the lost); if they
-         * follow the last good one, this counter was wrong and only this sample is lost.
-         * Counter-only, so the same at any replay speed. */
-        s->resync_valid = 1u;
+         * samples or more. The next samples decide: if APP_IMU_JUMP_HELD samples follow
+         * one another from this one (held as well), the gap was real and is bridged at the
+         * next (the held ones counted among the lost); if one follows the last good one,
+         * these counters were wrong and only their samples are lost. Counter-only, so the
+         * same at any replay speed. */
+        s->resync_valid = (uint8_t)(follows ? s->resync_valid + 1u : 1u);
         s->resync_counter = counter;
         return IMU_REJ_COUNTER;
     }

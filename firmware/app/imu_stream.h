@@ -63,7 +63,8 @@ typedef struct {
 typedef struct {
     imu_half_t pending[IMU_PENDING_MAX]; /* oldest first */
     uint8_t n_pending;
-    uint8_t resync_valid;  /* a sample with a counter jump waits for confirmation */
+    uint8_t resync_valid;  /* samples held for a counter jump, each following the one
+                              before (up to APP_IMU_JUMP_HELD): they wait for confirmation */
     uint8_t resync_counter;
     uint8_t time_valid;    /* stamped: an IMU_Time waits for its sample */
     uint8_t time_counter;  /* its ImuCounter */
