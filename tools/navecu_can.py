@@ -442,7 +442,7 @@ def write_candump(path, messages: Iterable[can.Message]) -> int:
 #: python-can would raise on some of it and change other lines silently (a 4-digit ID
 #: becomes an extended one, 11 data bytes a frame of 11). A standard ID is at most 0x7FF,
 #: an extended one below 2^29 (at or above it the CAN_ERR_FLAG: an error frame).
-CANDUMP_LINE = re.compile(r"[ \t]*\(\d+\.\d{1,9}\)[ \t]+[!-~]{1,15}[ \t]+"
+CANDUMP_LINE = re.compile(r"[ \t]*\([0-9]+\.[0-9]{1,9}\)[ \t]+[!-~]{1,15}[ \t]+"
                           r"(?:[0-7][0-9A-Fa-f]{2}|[01][0-9A-Fa-f]{7})#(?:[0-9A-Fa-f]{2}){0,8}"
                           r"(?:[ \t]+[RT])?[ \t\r]*")
 
@@ -480,7 +480,7 @@ class LogFile:
             if not text.strip(" \t\r"):
                 continue
             if self._line_ok(text):
-                yield text
+                yield " ".join(text.split())  # python-can splits on single spaces only
                 continue
             self.malformed += 1
             if len(self.first_malformed) < self.KEEP:

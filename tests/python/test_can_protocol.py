@@ -591,6 +591,8 @@ CANDUMP_CASES = [
     ("(1.0) can0 123##100", False),
     ("(1.0 can0 123#00", False),
     ("(1.0) can0 123#00 X", False),
+    ("(0.2) can0 123#0011\tR", True),                   # python-can: split on " " only
+    ("(\u0661\u0660.5) can0 123#00", False),            # python's \d takes Arabic digits
 ]
 
 
