@@ -270,6 +270,12 @@ def test_read_calibration_log_and_report(tmp_path):
     assert len(cl["t_s"]) == 65 and cl["t_s"][0] == 0.0 and cl["t_s"][-1] == 64.0
     p1 = report.read_calibration_log(log, page=1)
     assert len(p1["t_s"]) == 65 and set(p1["MountYaw"]) == {90.0}
+    # tabs between the fields and a line that is not UTF-8, as navecu and read_nav_log read
+    # them (the scan had found no frame in the first and raised on the second)
+    tabbed = tmp_path / "tabs.log"
+    tabbed.write_bytes(b"(0.0) can0 30A#\xff\xfe\n" + log.read_bytes().replace(b" ", b"\t"))
+    for k, v in report.read_calibration_log(tabbed).items():
+        np.testing.assert_array_equal(v, cl[k])
     nc.write_candump(tmp_path / "nav.asc", msgs)             # another format: python-can
     for k, v in report.read_calibration_log(tmp_path / "nav.asc").items():
         np.testing.assert_array_equal(v, cl[k])

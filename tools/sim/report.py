@@ -101,15 +101,15 @@ def _frames_with_ids(path, ids):
     malformed lines (nc.CANDUMP_LINE) left out as read_nav_log leaves them out and counts
     them; any other format goes through python-can's LogReader."""
     if str(path).endswith(".log"):
-        keys = {f"{i:03X}#" for i in ids}
-        with open(path) as fh:
+        keys = {f"{i:03{c}}#" for i in ids for c in "Xx"}
+        with open(path, encoding="utf-8", errors="replace") as fh:
             for line in fh:
-                sp = line.find(" ", line.find(" ") + 1)
-                if line[sp + 1:line.find("#", sp) + 1].upper() not in keys:
+                if not any(k in line for k in keys):
                     continue
                 if nc.CANDUMP_LINE.fullmatch(line.rstrip("\n")):
                     ident, data = line.split()[2].split("#")
-                    yield int(ident, 16), bytes.fromhex(data)
+                    if int(ident, 16) in ids:
+                        yield int(ident, 16), bytes.fromhex(data)
         return
     with can.LogReader(str(path)) as reader:
         for msg in reader:
