@@ -151,6 +151,10 @@ def _read_hex(path: Path) -> bytes:
         n, addr, kind = rec[0], (rec[1] << 8) | rec[2], rec[3]
         if sum(rec) & 0xFF:
             raise PackageError(f"{where}: checksum error in {ln[:20]}")
+        want = {1: 0, 2: 2, 3: 4, 4: 2, 5: 4}.get(kind)
+        if want is not None and n != want:
+            raise PackageError(f"{where}: a type {kind:02X} record of {n} data bytes (the "
+                               f"format's {want})")
         if kind == 0:
             for i, b in enumerate(rec[4:4 + n]):
                 mem[base + addr + i] = b

@@ -115,6 +115,10 @@ def test_hex_file_cut_short_or_corrupt_is_refused_with_its_line(tmp_path):
         "good.hex:6: record of": lines[:5] + [":01"] + lines[5:],
         "good.hex:3: not an Intel HEX record": lines[:2] + ["garbage"] + lines[2:],
         "after the end-of-file record": lines + lines[1:2],
+        # an extended linear address of no bytes (an IndexError), of one (its checksum
+        # byte taken for the address)
+        "good.hex:2: a type 04 record of 0 data bytes": lines[:1] + [":00000004FC"] + lines[1:],
+        "good.hex:2: a type 04 record of 1 data bytes": lines[:1] + [":0100000408F3"] + lines[1:],
     }
     for what, body in cases.items():
         bad = tmp_path / "good.hex"
