@@ -20,9 +20,10 @@
  * counter must not move time ahead): 4 = the lost frames the next sample may follow */
 #define APP_IMU_MAX_DELTA 4
 /* samples held for a counter jump, one following the other, before the next confirms the
- * jump: 2, so two wrong counters that happen to follow each other (a sender's fault) are
- * not a gap; with one, such a pair put a whole counter cycle (150 ms at 100 Hz) into the
- * IMU time for good (docs/reliability.md, bad counters) */
+ * jump: 2, so two wrong counters above 4 that happen to follow each other (a sender's
+ * fault) are not a gap; with one, such a pair put a whole counter cycle (150 ms at 100 Hz)
+ * into the IMU time for good (docs/reliability.md, bad counters; two wrong steps of +4 in a
+ * row, taken at once, still can: docs/can.md) */
 #define APP_IMU_JUMP_HELD 2u
 /* a command's alive counter may step by at most this (CMD_MAX_DELTA - 1 lost frames) */
 #define APP_CMD_MAX_DELTA 3
