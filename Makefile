@@ -39,7 +39,7 @@ VEH_OUT := $(BUILD)/vehicle
 # executable on its own frames (tests/python/test_vehicle_profiles.py)
 VEHICLES_BUILT := $(sort $(basename $(notdir $(wildcard vehicles/*.toml))) $(VEHICLE))
 VEH_GEN_SRC = $(VEH_OUT)/$(1)/vehicle_profile.c $(VEH_OUT)/$(1)/veh_can.c
-VEH_SRC = $(call VEH_GEN_SRC,$(1)) firmware/vehicle/vehicle_checksum.c
+VEH_SRC = $(call VEH_GEN_SRC,$(1)) firmware/vehicle/vehicle_checksum.c firmware/vehicle/vehicle_counter.c
 CODEC_GEN := firmware/can/gen/navecu_can.c firmware/can/gen/navecu_can.h
 # the diagnostic transport (ISO-TP, docs/can.md): part of the application's library, linked
 # into the images, kept out of them by --gc-sections until the application calls it
@@ -64,7 +64,7 @@ SUPPORT_SRC_BOTH := tests/support/nav_run.c
 # tests built once per numeric variant (f32 firmware, f64 reference)
 TESTS_VARIANT := test_nav_math test_earth test_sins test_dr test_ekf test_ekf_rows test_gnss_geom
 # tests of the float32 firmware only (application, codec, HAL)
-TESTS_F32 := test_e2e test_codec test_trig test_isotp test_uds test_dtc test_boot test_vehicle_checksum
+TESTS_F32 := test_e2e test_codec test_trig test_isotp test_uds test_dtc test_boot test_vehicle_checksum test_vehicle_counter
 # tests that link both variants themselves
 TESTS_BOTH := test_drive
 # tests of application modules against the in-memory HAL (tests/support/fake_hal.c)
@@ -196,7 +196,8 @@ $(BUILD)/$(1)/veh-$(3)/%.o: $(VEH_OUT)/$(3)/%.c $(VEH_OUT)/$(3)/.stamp
 	@mkdir -p $$(@D)
 	$$(CC) $$(CFLAGS_BASE) -D_DEFAULT_SOURCE $(2) $$(HOST_INC) -I$(VEH_OUT)/$(3) -MMD -MP -c $$< -o $$@
 $(BUILD)/$(1)/libvehicle_$(3).a: $(BUILD)/$(1)/veh-$(3)/vehicle_profile.o $(BUILD)/$(1)/veh-$(3)/veh_can.o \
-		$(BUILD)/$(1)/f32/firmware/vehicle/vehicle_checksum.o
+		$(BUILD)/$(1)/f32/firmware/vehicle/vehicle_checksum.o \
+		$(BUILD)/$(1)/f32/firmware/vehicle/vehicle_counter.o
 	@mkdir -p $$(@D)
 	$$(AR) rcs $$@ $$^
 # the host executable of this profile: build/host/navecu (native), build/host/navecu-NAME

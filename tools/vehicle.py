@@ -88,6 +88,8 @@ class CarSignalSet:
     message: object         # cantools Message
     signals: list           # cantools Signals, in the firmware's order
     checksum: str = "none"
+    counter: object = None  # the rolling counter's cantools Signal, or None
+    counter_modulus: int = 0   # it runs 0..modulus-1 (2^length unless the profile says)
 
 
 @dataclass
@@ -203,11 +205,14 @@ SCHEMA = {
          "recordings": (False, list)},
     "wheels": {"native": (False, bool), "direction": (False, str), "message": (False, str),
                "signals": (False, dict), "unit": (False, str), "scale": (False, _NUM),
-               "checksum": (False, str), "range": (False, list)},
+               "checksum": (False, str), "counter": (False, str),
+               "counter_modulus": (False, int), "range": (False, list)},
     "gear": {"message": (True, str), "signal": (True, str), "forward": (False, list),
-             "reverse": (True, list), "stopped": (False, list), "checksum": (False, str)},
+             "reverse": (True, list), "stopped": (False, list), "checksum": (False, str),
+             "counter": (False, str), "counter_modulus": (False, int)},
     "yaw_rate": {"message": (True, str), "signal": (True, str), "unit": (False, str),
                  "left_positive": (False, bool), "checksum": (False, str),
+                 "counter": (False, str), "counter_modulus": (False, int),
                  "range": (False, list)},
     "geometry": {"track_m": (True, _NUM), "wheelbase_m": (True, _NUM)},
     "recordings": {"file": (True, str), "channels": (True, dict)},
@@ -237,7 +242,13 @@ def _check_shape(t: dict, fname: str) -> None:
         if sect in t:
             _check_table(t[sect], SCHEMA[sect], f"{fname} [{sect}]")
     w = t["wheels"]
-    if not w.get("native", False):
+    if w.get("native", False):
+        for key in ("checksum", "counter", "counter_modulus"):
+            if key in w:
+                raise ProfileError(f"{fname} [wheels]: {key} is for a car message; navecu's "
+                                   "WheelSpeeds (native = true) carry their own E2E CRC and "
+                                   "counter")
+    else:
         for key in ("message", "signals"):
             if key not in w:
                 raise ProfileError(f"{fname} [wheels] needs {key} (or native = true)")
@@ -321,7 +332,8 @@ def _car_reads(p: Profile, t: dict, fname: str) -> None:
     _check_dbc_unit(sigs, unit, "scale" in w, f"{fname} [wheels]")
     p.speed_factor = SPEED_UNITS[unit] * float(w.get("scale", 1.0))
     p.wheel_step_mps = abs(float(sigs[0].scale)) * p.speed_factor
-    p.reads.append(CarSignalSet("wheels", msg, sigs, _checksum(w, fname)))
+    p.reads.append(CarSignalSet("wheels", msg, sigs, _checksum(w, fname),
+                                *_counter(w, msg, sigs, f"{fname} [wheels]")))
     if p.direction == "gear":
         g = t.get("gear")
         if g is None:
@@ -342,7 +354,8 @@ def _car_reads(p: Profile, t: dict, fname: str) -> None:
                     p.gear_values[raw] = sign
         if -1 not in p.gear_values.values():
             raise ProfileError(f"{fname} [gear]: no reverse gear named")
-        p.reads.append(CarSignalSet("gear", gmsg, [gsig], _checksum(g, fname)))
+        p.reads.append(CarSignalSet("gear", gmsg, [gsig], _checksum(g, fname),
+                                    *_counter(g, gmsg, [gsig], f"{fname} [gear]")))
     y = t.get("yaw_rate")
     if y is not None:
         ymsg = _message(db, y["message"], f"{fname} [yaw_rate]")
@@ -352,7 +365,8 @@ def _car_reads(p: Profile, t: dict, fname: str) -> None:
         if unit not in RATE_UNITS:
             raise ProfileError(f"{fname}: yaw-rate unit must be one of {', '.join(RATE_UNITS)}")
         p.rate_factor = RATE_UNITS[unit] * (1.0 if y.get("left_positive", True) else -1.0)
-        p.reads.append(CarSignalSet("yaw_rate", ymsg, [ysig], _checksum(y, fname)))
+        p.reads.append(CarSignalSet("yaw_rate", ymsg, [ysig], _checksum(y, fname),
+                                    *_counter(y, ymsg, [ysig], f"{fname} [yaw_rate]")))
     ids = [r.message.frame_id for r in p.reads]
     if len(set(ids)) != len(ids):
         raise ProfileError(f"{fname}: wheels, gear and yaw rate must be different messages")
@@ -407,6 +421,39 @@ def _range_override(spec: dict, sigs: list, where: str) -> None:
             raise ProfileError(f"{where}: range {r} is beyond what {sig.name}'s "
                                f"{sig.length} bits hold ([{lo:g}, {hi:g}])")
         sig.minimum, sig.maximum = float(r[0]), float(r[1])
+
+
+#: the widest rolling counter (bits): its raw value is a uint8_t in the generated codec
+COUNTER_MAX_BITS = 8
+
+
+def _counter(spec: dict, msg, data_sigs: list, where: str) -> tuple:
+    """(signal, modulus) of the table's `counter`, the message's rolling counter, or
+    (None, 0). It is a DBC signal of the message, unsigned, unscaled, of at most
+    COUNTER_MAX_BITS bits and none of the values read; it runs 0..modulus-1, modulus =
+    2^its length (the DBC's) unless `counter_modulus` says otherwise (2..2^length: 15 for a
+    4-bit counter that never sends 15)."""
+    name = spec.get("counter")
+    if name is None:
+        if "counter_modulus" in spec:
+            raise ProfileError(f"{where}: counter_modulus without a counter")
+        return None, 0
+    sig = _signal(msg, name, where)
+    if any(sig is d for d in data_sigs):
+        raise ProfileError(f"{where}: counter {name} is a signal the profile reads as a value")
+    if not 1 <= sig.length <= COUNTER_MAX_BITS:
+        raise ProfileError(f"{where}: counter {name} has {sig.length} bits; at most "
+                           f"{COUNTER_MAX_BITS} are supported")
+    if sig.is_signed or sig.scale != 1 or sig.offset != 0 or sig.is_float:
+        raise ProfileError(f"{where}: counter {name} must be an unsigned integer signal "
+                           f"(scale 1, offset 0), not {'signed ' if sig.is_signed else ''}"
+                           f"({sig.scale:g}, {sig.offset:g})")
+    full = 1 << sig.length
+    modulus = spec.get("counter_modulus", full)
+    if not 2 <= modulus <= full:
+        raise ProfileError(f"{where}: counter_modulus {modulus} is not 2..{full} (what "
+                           f"{name}'s {sig.length} bits count through)")
+    return sig, int(modulus)
 
 
 def _checksum(spec: dict, fname: str) -> str:
@@ -507,12 +554,14 @@ def stock_ids() -> dict:
 class CarEncoder:
     """The car's own frames that a profile reads, encoded with the car's DBC as the car
     sends them: the wheel speeds (unsigned where the profile takes the direction from the
-    gear), the gear (on every change and every gear_period_s), the ESP yaw rate."""
+    gear), the gear (on every change and every gear_period_s), the ESP yaw rate; where the
+    profile names a message's rolling counter, +1 per frame of that message from 0."""
 
     def __init__(self, p: Profile, gear_period_s: float = 1.0):
         self.p = p
         self.by_role = {r.role: r for r in p.reads}
         self.gear_period_s = gear_period_s
+        self.counters = {r.role: 0 for r in p.reads if r.counter is not None}  # the next
         self._gear = None
         self._gear_t = -1e9
         gear = self.by_role.get("gear")
@@ -524,18 +573,25 @@ class CarEncoder:
             self.gear_raw = {1: fwd[0], -1: rev[0]}
             self.gear_names = names
 
-    def message(self, role: str, values: dict, t: float = 0.0) -> can.Message:
+    def message(self, role: str, values: dict, t: float = 0.0,
+                counter: int | None = None) -> can.Message:
         """The car's frame of role ("wheels", "gear", "yaw_rate") at t with these signal
         values (the DBC's physical units; the message's other signals at their initial
         value, else 0 or their minimum if that is above 0), encoded with the car's DBC
         without range checks (cantools rounds to the nearest raw value), with the car's
-        checksum where the profile names one."""
+        checksum where the profile names one. Where it names a rolling counter, the frame
+        carries `counter` if given (the next frame then counts on from it), else the next
+        value of the role's sequence (a counter in values is overridden)."""
         r = self.by_role[role]
         msg = r.message
         full = {s.name: (s.initial if s.initial is not None else
                          (s.minimum if s.minimum is not None and s.minimum > 0 else 0))
                 for s in msg.signals}
         full.update(values)
+        if r.counter is not None:
+            value = self.counters[role] if counter is None else int(counter)
+            full[r.counter.name] = value
+            self.counters[role] = (value + 1) % r.counter_modulus
         data = bytearray(msg.encode(full, scaling=True, strict=False))
         if r.checksum != "none":
             CAR_CHECKSUMS[r.checksum].fill(msg.frame_id, data)
@@ -600,8 +656,10 @@ def vehicle_profile_c(p: Profile) -> str:
     L = ["/* GENERATED FILE - DO NOT EDIT. Source: vehicles/" + p.name + ".toml and the car's DBC",
          " * (tools/vehicle.py; firmware/vehicle/vehicle.h). */",
          '#include "vehicle.h"', ""]
+    counted = any(r.counter is not None for r in p.reads)
     if p.reads:
-        L += [f'#include "{CODEC_DB}.h"', '#include "vehicle_checksum.h"', ""]
+        L += [f'#include "{CODEC_DB}.h"', '#include "vehicle_checksum.h"']
+        L += ['#include "vehicle_counter.h"', ""] if counted else [""]
     L += [f"const vehicle_profile_t vehicle_profile = {{\"{p.name}\", {DIRECTIONS[p.direction]}, "
           f"{1 if p.native_wheels else 0}u, {_c_float(p.track_m)}, {_c_float(p.wheelbase_m)}, "
           f"{_c_float(p.wheel_step_mps)},",
@@ -616,8 +674,11 @@ def vehicle_profile_c(p: Profile) -> str:
     else:
         L += ["    (void)ids;", "    (void)max;", "    return 0u;"]
     L += ["}", ""]
-    L += ["vehicle_verdict_t vehicle_decode(const hal_can_frame_t *f, vehicle_msg_t *m)", "{",
+    L += ["vehicle_verdict_t vehicle_decode(const hal_can_frame_t *f, vehicle_counters_t *c,",
+          "                                 vehicle_msg_t *m)", "{",
           "    m->kind = VEHICLE_MSG_NONE;"]
+    if not counted:
+        L += ["    (void)c; /* the profile names no rolling counter */"]
     if not p.reads:
         L += ["    (void)f;", "    return VEHICLE_OK; /* the wheels come in navecu's WheelSpeeds */",
               "}", ""]
@@ -643,6 +704,12 @@ def _decode_case(p: Profile, r: CarSignalSet) -> list:
     L += [f"        struct {fn}_t s;",
           f"        if ({fn}_unpack(&s, f->data, f->dlc) != 0) {{",
           "            return VEHICLE_BAD_DLC;", "        }"]
+    if r.counter is not None:
+        cx = camel_to_snake_case(r.counter.name)
+        L += [f"        /* {r.counter.name}: {r.counter.length} bits, modulo {r.counter_modulus}: a "
+              "repeat or a value it never takes is refused, lost frames are not */",
+              f"        if (vehicle_counter_step(c, {kind}, s.{cx}, {r.counter_modulus}u) <= 0) {{",
+              "            return VEHICLE_BAD_COUNTER;", "        }"]
     fields = [camel_to_snake_case(s.name) for s in r.signals]
     cond = " ||\n            ".join(f"!{fn}_{x}_is_in_range(s.{x})" for x in fields)
     L += [f"        if ({cond}) {{", "            return VEHICLE_BAD_VALUE;", "        }"]

@@ -53,8 +53,18 @@ typedef enum {
     VEHICLE_OK = 0,
     VEHICLE_BAD_DLC,       /* not the length the car's DBC gives the message */
     VEHICLE_BAD_CHECKSUM,  /* the car's own checksum (where the profile names one) */
+    VEHICLE_BAD_COUNTER,   /* the car's rolling counter (where the profile names one):
+                              repeated, or a value the sender does not count through */
     VEHICLE_BAD_VALUE,     /* outside the DBC's range, or a gear the profile does not know */
 } vehicle_verdict_t;
+
+/* The receive state of the car's rolling counters (vehicle_counter.h): kept by the caller
+ * (rx_state_t, through a navigation reset like navecu's own E2E counters), updated by
+ * vehicle_decode; all zero at init: no counter seen yet. 4 bytes whatever the profile. */
+typedef struct {
+    uint8_t last[VEHICLE_MSG_N - 1]; /* the last counter accepted, by vehicle_kind_t - 1 */
+    uint8_t seen;                    /* bit kind - 1: a counter of that kind was accepted */
+} vehicle_counters_t;
 
 typedef struct {
     vehicle_kind_t kind;
@@ -64,8 +74,12 @@ typedef struct {
 } vehicle_msg_t;
 
 /* Decode f if it is one of the car's messages the profile names (its kind is then not
- * VEHICLE_MSG_NONE); the verdict says whether it passed the car's checks. Generated. */
-vehicle_verdict_t vehicle_decode(const hal_can_frame_t *f, vehicle_msg_t *m);
+ * VEHICLE_MSG_NONE); the verdict says whether it passed the car's checks, in this order:
+ * the DLC, the car's checksum, the rolling counter (against c, which a counter that passes
+ * updates: a frame refused afterwards for its values has still counted), the ranges.
+ * Generated; c is untouched by a profile that names no counter. */
+vehicle_verdict_t vehicle_decode(const hal_can_frame_t *f, vehicle_counters_t *c,
+                                 vehicle_msg_t *m);
 
 /* The car's identifiers navecu receives: writes up to max to ids, returns how many there
  * are. Generated. */

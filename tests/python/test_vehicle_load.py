@@ -42,7 +42,14 @@ CASES = [
     ("a base given as a string", lambda s: s.replace("base = 0x6C0", 'base = "0x6C0"'), "base"),
     ("a gear list given as a string", lambda s: s.replace('forward = ["D"]', 'forward = "D"'), "forward"),
     ("a misspelt checksum", lambda s: s.replace('direction = "gear"', 'direction = "gear"\nchksum = "toyota"'), "chksum"),
-    ("a key the format does not have", lambda s: s.replace('direction = "gear"', 'direction = "gear"\ncounter = "COUNTER"'), "counter"),
+    ("a key the format does not have", lambda s: s.replace('direction = "gear"', 'direction = "gear"\ncrc = "autosar"'), "crc"),
+    ("a counter the message does not have", lambda s: s.replace('direction = "gear"', 'direction = "gear"\ncounter = "COUNTER"'), "COUNTER"),
+    ("a counter that is a value read", lambda s: s.replace('stopped = ["P", "N"]', 'stopped = ["P", "N"]\ncounter = "GE_Fahrstufe"'), "value"),
+    ("a counter wider than 8 bits", lambda s: s.replace('stopped = ["P", "N"]', 'stopped = ["P", "N"]\ncounter = "GE_MMom_Soll_02"'), "10 bits"),
+    ("a counter modulus beyond its bits", lambda s: s.replace('stopped = ["P", "N"]', 'stopped = ["P", "N"]\ncounter = "COUNTER_DISABLED"\ncounter_modulus = 17'), "2..16"),
+    ("a counter modulus of 1", lambda s: s.replace('stopped = ["P", "N"]', 'stopped = ["P", "N"]\ncounter = "COUNTER_DISABLED"\ncounter_modulus = 1'), "counter_modulus"),
+    ("a counter modulus without a counter", lambda s: s.replace('stopped = ["P", "N"]', 'stopped = ["P", "N"]\ncounter_modulus = 15'), "without a counter"),
+    ("a counter on navecu's own WheelSpeeds", lambda s: s.replace('message = "ESP_19"', 'native = true\ncounter = "WheelCounter"').replace('direction = "gear"', 'direction = "signed"'), "E2E"),
     ("a unit the DBC contradicts", lambda s: s.replace('unit = "km/h"', 'unit = "m/s"'), "Unit_KiloMeterPerHour"),
     ("a recording without its channels", lambda s: s + '[[recordings]]\nfile = "data/comma2k19-rav4/car_bus.log"\n', "channels"),
 ]
@@ -116,3 +123,48 @@ def test_an_angular_wheel_speed_asks_for_the_tyre_radius(profiles, unit):
         vehicle.load("ford")
     (profiles / "ford.toml").write_text(FORD.format(name="ford", unit='unit = "m/s"\nscale = 0.355'))
     assert vehicle.load("ford").speed_factor == 0.355
+
+
+def test_a_counter_is_the_dbc_signal_its_bits_and_the_generated_check(profiles):
+    """`counter` names the message's rolling counter: its width is the DBC signal's length,
+    its modulus 2^length unless `counter_modulus` says otherwise; the generated decoder
+    checks it (vehicle_counter_step on the generated codec's field) after the checksum and
+    before the ranges. A profile that names none has no counter code and includes no
+    vehicle_counter.h (its image does not link vehicle_counter.c)."""
+    gear = 'stopped = ["P", "N"]'
+    (profiles / "plain.toml").write_text(GOOD.format(name="plain"))
+    plain = vehicle.load("plain")
+    assert all(r.counter is None for r in plain.reads)
+    src = vehicle.vehicle_profile_c(plain)
+    assert "vehicle_counter.h" not in src and "vehicle_counter_step" not in src
+    assert "(void)c;" in src
+    (profiles / "ctr.toml").write_text(GOOD.format(name="ctr").replace(
+        gear, gear + '\ncounter = "COUNTER_DISABLED"'))
+    r = next(r for r in vehicle.load("ctr").reads if r.role == "gear")
+    assert (r.counter.name, r.counter.length, r.counter_modulus) == ("COUNTER_DISABLED", 4, 16)
+    src = vehicle.vehicle_profile_c(vehicle.load("ctr"))
+    assert '#include "vehicle_counter.h"' in src and "(void)c;" not in src
+    check = "vehicle_counter_step(c, VEHICLE_MSG_GEAR, s.counter_disabled, 16u) <= 0"
+    assert src.count(check) == 1
+    case = src[src.index("case VEH_CAN_GETRIEBE_11_FRAME_ID"):]
+    assert case.index("_unpack(") < case.index(check) < case.index("_is_in_range(")
+    (profiles / "ctr15.toml").write_text(GOOD.format(name="ctr15").replace(
+        gear, gear + '\ncounter = "COUNTER_DISABLED"\ncounter_modulus = 15'))
+    assert "s.counter_disabled, 15u)" in vehicle.vehicle_profile_c(vehicle.load("ctr15"))
+
+
+def test_the_car_encoder_counts_and_can_be_told_a_counter(profiles):
+    """CarEncoder (the tests' and the simulator's car) sends a named counter +1 per frame of
+    its message from 0, wrapping at the modulus; `counter=` sends a given value and counts
+    on from it; a counter in the values is overridden."""
+    (profiles / "ctr.toml").write_text(GOOD.format(name="ctr").replace(
+        'stopped = ["P", "N"]', 'stopped = ["P", "N"]\ncounter = "COUNTER_DISABLED"\n'
+        'counter_modulus = 15'))
+    p = vehicle.load("ctr")
+    car = vehicle.CarEncoder(p)
+    r = next(r for r in p.reads if r.role == "gear")
+    got = [r.message.decode(bytes(car.message("gear", {"COUNTER_DISABLED": 9}).data))
+           ["COUNTER_DISABLED"] for _ in range(17)]
+    assert got == list(range(15)) + [0, 1]
+    assert r.message.decode(bytes(car.message("gear", {}, counter=7).data))["COUNTER_DISABLED"] == 7
+    assert r.message.decode(bytes(car.message("gear", {}).data))["COUNTER_DISABLED"] == 8

@@ -6,11 +6,14 @@
  *     vehicle_decode < frames.log    one output line per input line (candump lines,
  *                                    hal/common/candump.h):
  *         VERDICT KIND FL FR RL RR GEAR YAW
- *       vehicle_decode()'s verdict (OK, BAD_DLC, BAD_CHECKSUM, BAD_VALUE) and the message
- *       kind (NONE, WHEELS, GEAR, YAW_RATE), their names in vehicle.h without the prefix;
+ *       vehicle_decode()'s verdict (OK, BAD_DLC, BAD_CHECKSUM, BAD_VALUE, BAD_COUNTER) and
+ *       the message kind (NONE, WHEELS, GEAR, YAW_RATE), their names in vehicle.h without
+ *       the prefix;
  *       the wheel speeds in m/s, the gear direction (-1, 0, +1) and the yaw rate in rad/s,
  *       0 where the message does not set them; every value as %.9g, which identifies a
  *       float exactly. A line candump_parse_line does not take as a frame: MALFORMED.
+ *       The frames go through one receive state, in order, as the firmware's (rx_state_t):
+ *       a rolling counter is checked against the previous frame of its message.
  *     vehicle_decode --profile       the profile's name and the car identifiers it reads
  *                                    (vehicle_rx_ids), hexadecimal, on one line
  * Exit status 0, or 2 on a usage error.
@@ -33,6 +36,8 @@ static const char *verdict_name(vehicle_verdict_t v)
         return "BAD_CHECKSUM";
     case VEHICLE_BAD_VALUE:
         return "BAD_VALUE";
+    case VEHICLE_BAD_COUNTER:
+        return "BAD_COUNTER";
     default:
         return "UNKNOWN_VERDICT";
     }
@@ -76,6 +81,8 @@ int main(int argc, char **argv)
         return 2;
     }
     char line[256];
+    vehicle_counters_t counters;
+    memset(&counters, 0, sizeof counters);
     while (fgets(line, sizeof line, stdin) != NULL) {
         const size_t n = strcspn(line, "\r\n");
         hal_can_frame_t f;
@@ -85,7 +92,7 @@ int main(int argc, char **argv)
         }
         vehicle_msg_t m;
         memset(&m, 0, sizeof m);
-        const vehicle_verdict_t v = vehicle_decode(&f, &m);
+        const vehicle_verdict_t v = vehicle_decode(&f, &counters, &m);
         printf("%s %s %.9g %.9g %.9g %.9g %d %.9g\n", verdict_name(v), kind_name(m.kind),
                (double)m.wheel_mps[0], (double)m.wheel_mps[1], (double)m.wheel_mps[2],
                (double)m.wheel_mps[3], (int)m.gear_direction, (double)m.yaw_rate_rps);
