@@ -492,3 +492,113 @@ def test_odo_step_default_is_the_wheel_signals_resolution(name):
     line = next(x for x in out.splitlines() if x.strip().startswith("--odo-step-mps"))
     got = float(line.rsplit(":", 1)[1].strip(" )"))
     assert got == pytest.approx(expect, rel=1e-5), line
+
+
+# ------------------------------------------------------------------ rolling counters
+#: the counters the profiles name: (profile, role) -> (bits, modulus)
+COUNTERS = {("subaru_global_2017", "wheels"): (4, 16),
+            ("subaru_global_2017", "gear"): (4, 16),
+            ("honda_civic_2016", "gear"): (2, 4)}
+COUNTED = sorted(COUNTERS)
+
+
+def test_every_counter_of_a_read_message_is_checked():
+    """A read message's DBC signal named COUNTER (Subaru's Wheel_Speeds and Transmission,
+    Honda's GEARBOX_CVT: 4, 4 and 2 bits) is the profile's `counter`, its modulus 2^length:
+    a sender repeating a stale frame is refused, not read. (Honda's WHEEL_SPEEDS has no
+    COUNTER in opendbc's DBC, so it has none to check; VW's Getriebe_11 calls its own
+    COUNTER_DISABLED.)"""
+    missing = [(n, r.message.name) for n in CAR_PROFILES for r in profile(n).reads
+               if any(s.name == "COUNTER" for s in r.message.signals)
+               and (r.counter is None or r.counter.name != "COUNTER")]
+    assert missing == []
+    widths = {(n, r.role): (r.counter.length, r.counter_modulus) for n in CAR_PROFILES
+              for r in profile(n).reads if r.counter is not None}
+    assert widths == COUNTERS
+
+
+def _valid_values(name, role, n, seed):
+    """n random values of the role's message that pass every check but the counter: a gear
+    the profile names, the four wheels at one speed of 10..30 m/s (the firmware's odometer
+    refuses a locked or spinning wheel, beyond the DBC's range checks)."""
+    r = read(name, role)
+    rng = np.random.default_rng(seed)
+    values = random_values(r.message, rng, n + 2)[2:]
+    if role == "wheels":
+        for v in values:
+            speed = float(rng.uniform(10.0, 30.0)) / profile(name).speed_factor
+            v.update({sig.name: speed for sig in r.signals})
+    if role == "gear":   # a gear the profile names
+        sig = r.signals[0]
+        raws = sorted(profile(name).gear_values)
+        for i, v in enumerate(values):
+            v[sig.name] = raws[i % len(raws)]
+    return values
+
+
+@pytest.mark.parametrize("name,role", COUNTED)
+def test_a_repeated_frame_is_a_bad_counter(name, role, tmp_path):
+    """The same frame sent three times (a stuck or replaying sender, its checksum valid):
+    the first read, the two repeats BAD_COUNTER; then the next counter is read (a repeat
+    leaves the state where it was), a step of 3 (2 frames lost) is read, and the counter
+    runs through its whole cycle and wraps (modulus + 2 frames, each OK)."""
+    mod = COUNTERS[(name, role)][1]
+    car = vehicle.CarEncoder(profile(name))
+    vals = _valid_values(name, role, mod + 8, 17)
+    first = car.message(role, vals[0], counter=mod - 1)
+    msgs = [first, first, first,
+            car.message(role, vals[1], counter=0),        # mod - 1 -> 0: the next one
+            car.message(role, vals[2], counter=3 % mod)]  # 0 -> 3: 2 lost (2-bit: 3)
+    msgs += [car.message(role, v) for v in vals[3:3 + mod + 2]]
+    got = [d.verdict for d in decode(name, msgs, tmp_path)]
+    assert got[:5] == ["OK", "BAD_COUNTER", "BAD_COUNTER", "OK", "OK"], got
+    assert got[5:] == ["OK"] * (mod + 2), got
+    assert {d.kind for d in decode(name, msgs, tmp_path)} == {KIND[role]}
+
+
+@pytest.mark.parametrize("name,role", COUNTED)
+def test_every_step_of_the_counter(name, role, tmp_path):
+    """From each counter value `last`, each next value: step 0 (a repeat) BAD_COUNTER,
+    every other step read (1 the next frame; more, frames lost: the values still good).
+    Each case: a frame at last - 1 (sets the state there, read or a repeat of it), one at
+    last (read, step 1), then the one tested."""
+    mod = COUNTERS[(name, role)][1]
+    car = vehicle.CarEncoder(profile(name))
+    vals = _valid_values(name, role, 3 * mod * mod, 19)
+    cases = [(last, nxt) for last in range(mod) for nxt in range(mod)]
+    msgs = []
+    for i, (last, nxt) in enumerate(cases):
+        msgs += [car.message(role, vals[3 * i], counter=(last - 1) % mod),
+                 car.message(role, vals[3 * i + 1], counter=last),
+                 car.message(role, vals[3 * i + 2], counter=nxt)]
+    got = [d.verdict for d in decode(name, msgs, tmp_path)]
+    for i, (last, nxt) in enumerate(cases):
+        expect = "BAD_COUNTER" if nxt == last else "OK"
+        assert (got[3 * i + 1], got[3 * i + 2]) == ("OK", expect), (last, nxt)
+
+
+@pytest.mark.parametrize("name,role", COUNTED)
+def test_a_repeated_frame_is_counted_by_the_firmware(name, role, tmp_path):
+    """navecu-NAME on a log of the car's frames with the last one sent twice more: those two
+    are refused and counted as bad counter (CntBadCounter), not read; a frame after a gap
+    in the counter (frames lost) is read."""
+    mod = COUNTERS[(name, role)][1]
+    exe = HOST / f"navecu-{name}"
+    if not exe.exists():
+        pytest.fail(f"{exe} not built: run 'make test-python'")
+    car = vehicle.CarEncoder(profile(name))
+    vals = _valid_values(name, role, 12, 23)
+    msgs = [car.message(role, v) for v in vals[:10]]
+    msgs += [msgs[-1], msgs[-1]]
+    msgs.append(car.message(role, vals[10], counter=(10 + 2) % mod))  # 2 lost
+    for i, m in enumerate(msgs):
+        m.timestamp = 0.01 * i
+    log = tmp_path / "car.log"
+    nc.write_candump(log, msgs)
+    res = subprocess.run([str(exe), "--can-log", str(log), "--out", str(tmp_path / "nav.log")],
+                         capture_output=True, text=True, check=True)
+    rejected = next(x for x in res.stderr.splitlines() if "rejected:" in x)
+    read_line = next(x for x in res.stderr.splitlines() if "car messages read" in x)
+    assert "bad counter 2," in rejected and "bad value 0," in rejected, rejected
+    label = {"wheels": "wheel speeds", "gear": "gear", "yaw_rate": "yaw rate"}[role]
+    assert f"{label} 11" in read_line, read_line
