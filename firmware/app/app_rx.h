@@ -153,19 +153,21 @@ typedef struct {
 
 /* The E2E receive state of the single-frame inputs: kept through a navigation reset, so
  * that a replayed old frame is never taken for a first one (and so the car's rolling
- * counters); and what the car's own messages said last (vehicle.h): the gear's direction and the ESP's yaw rate. */
+ * counters); and what the car's own messages said last (vehicle.h): the gear's direction
+ * and the ESP's yaw rate. (The byte fields together: the car's counters fit in what was
+ * padding, the size unchanged.) */
 typedef struct {
     e2e_counter_t wheel, cmd, att;
-    /* the TimeOfWeek of the last GNSS_Status reporting a fix (a repeat is decided from it:
-     * the 4-bit GnssEpoch comes round over an outage of 15 epochs) */
-    uint32_t gnss_tow_ms;
+    vehicle_counters_t car_counters; /* the car's rolling counters, where the profile names
+                                        them */
     uint8_t have_gnss_tow;
     int8_t gear_direction;  /* +1 forward, -1 reverse, 0 park/neutral (the car's gear) */
     uint8_t have_gear;
     uint8_t have_esp_yaw;
+    /* the TimeOfWeek of the last GNSS_Status reporting a fix (a repeat is decided from it:
+     * the 4-bit GnssEpoch comes round over an outage of 15 epochs) */
+    uint32_t gnss_tow_ms;
     nav_real_t esp_yaw_rate_rps; /* the car's ESP, left positive */
-    vehicle_counters_t car_counters; /* the car's rolling counters, where the profile names
-                                        them (in what was padding: the size is unchanged) */
     uint32_t car_read[VEHICLE_MSG_N]; /* the car's frames read and passed, by vehicle_kind_t
                                          (saturating; host summary) */
 } rx_state_t;

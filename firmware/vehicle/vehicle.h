@@ -60,10 +60,10 @@ typedef enum {
 
 /* The receive state of the car's rolling counters (vehicle_counter.h): kept by the caller
  * (rx_state_t, through a navigation reset like navecu's own E2E counters), updated by
- * vehicle_decode; all zero at init: no counter seen yet. 4 bytes whatever the profile. */
+ * vehicle_decode; all zero at init: no counter seen yet. 6 bytes whatever the profile. */
 typedef struct {
-    uint8_t last[VEHICLE_MSG_N - 1]; /* the last counter accepted, by vehicle_kind_t - 1 */
-    uint8_t seen;                    /* bit kind - 1: a counter of that kind was accepted */
+    uint16_t last[VEHICLE_MSG_N - 1]; /* by vehicle_kind_t - 1: 0 none accepted yet, else
+                                         the last counter accepted + 1 */
 } vehicle_counters_t;
 
 typedef struct {

@@ -4,21 +4,16 @@
 int vehicle_counter_step(vehicle_counters_t *c, vehicle_kind_t kind, uint8_t counter,
                          uint16_t modulus)
 {
-    if ((unsigned)kind == (unsigned)VEHICLE_MSG_NONE || (unsigned)kind >= (unsigned)VEHICLE_MSG_N ||
-        modulus < 2u || modulus > 256u || counter >= modulus) {
+    const unsigned k = (unsigned)kind - 1u; /* kind NONE wraps to a large k */
+    if (k >= (unsigned)VEHICLE_MSG_N - 1u || modulus < 2u || modulus > 256u ||
+        counter >= modulus) {
         return -1;
     }
-    const unsigned k = (unsigned)kind - 1u;
-    const uint8_t bit = (uint8_t)(1u << k);
-    if ((c->seen & bit) == 0u) {
-        c->seen = (uint8_t)(c->seen | bit);
-        c->last[k] = counter;
-        return 1;
+    const unsigned last1 = c->last[k]; /* the last counter + 1, 0 for none yet */
+    /* unsigned: modulo a power of two (the usual modulus) is a mask */
+    const unsigned step = last1 != 0u ? ((unsigned)counter + 1u + modulus - last1) % modulus : 1u;
+    if (step != 0u) {
+        c->last[k] = (uint16_t)(counter + 1u);
     }
-    const int step = ((int)counter - (int)c->last[k] + (int)modulus) % (int)modulus;
-    if (step == 0) {
-        return 0;
-    }
-    c->last[k] = counter;
-    return step;
+    return (int)step;
 }
