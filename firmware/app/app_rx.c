@@ -309,14 +309,6 @@ static rx_verdict_t decode_command(rx_state_t *rx, int msg, const uint8_t d[8],
     return RX_OK;
 }
 
-/* A refusal of the car's checks (vehicle_verdict_t) and its rx_verdict_t: the counter's and
- * the value's are the vehicle one's value + 1. (Written so: a chain of four tests, or + 1
- * for all four, took the RAV4's image 8 B over its flash.) */
-#define RX_OF_CAR(v, rx) ((int)(rx) == (int)(v) + 1)
-_Static_assert(RX_OF_CAR(VEHICLE_BAD_COUNTER, RX_BAD_COUNTER) &&
-                   RX_OF_CAR(VEHICLE_BAD_VALUE, RX_BAD_VALUE),
-               "vehicle_verdict_t and rx_verdict_t: the counter and the value in the same order");
-
 /* One of the car's messages (vehicle.h), or RX_FOREIGN for a frame the car's profile
  * does not name either. */
 static rx_verdict_t decode_car(rx_state_t *rx, const hal_can_frame_t *f, rx_input_t *in)
@@ -329,7 +321,8 @@ static rx_verdict_t decode_car(rx_state_t *rx, const hal_can_frame_t *f, rx_inpu
     if (v != VEHICLE_OK) {
         return v == VEHICLE_BAD_DLC        ? RX_BAD_DLC
                : v == VEHICLE_BAD_CHECKSUM ? RX_BAD_CRC
-                                           : (rx_verdict_t)((int)v + 1); /* RX_OF_CAR */
+               : v == VEHICLE_BAD_COUNTER  ? RX_BAD_COUNTER
+                                           : RX_BAD_VALUE;
     }
     if ((unsigned)m.kind < (unsigned)VEHICLE_MSG_N && rx->car_read[m.kind] < UINT32_MAX) {
         rx->car_read[m.kind]++;
