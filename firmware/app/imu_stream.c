@@ -236,7 +236,8 @@ imu_verdict_t imu_stream_accel(imu_stream_t *s, imu_link_t *l, uint8_t counter, 
          * counter never moves time ahead for good. */
         return IMU_REJ_COUNTER;
     }
-    if (follows ? s->resync_valid < APP_IMU_JUMP_HELD : step > APP_IMU_MAX_DELTA) {
+    if ((follows && s->resync_valid < APP_IMU_JUMP_HELD) ||
+        (!follows && step > APP_IMU_MAX_DELTA)) {
         /* E2E "wrong sequence": a corrupted counter, or a real gap of APP_IMU_MAX_DELTA
          * samples or more. The next samples decide: if APP_IMU_JUMP_HELD samples follow
          * one another from this one (held as well), the gap was real and is bridged at the

@@ -62,8 +62,8 @@ typedef enum {
  * (rx_state_t, through a navigation reset like navecu's own E2E counters), updated by
  * vehicle_decode; all zero at init: no counter seen yet. 6 bytes whatever the profile. */
 typedef struct {
-    uint16_t last[VEHICLE_MSG_N - 1]; /* by vehicle_kind_t - 1: 0 none accepted yet, else
-                                         the last counter accepted + 1 */
+    /* by vehicle_kind_t - 1: 0 none accepted yet, else the last counter accepted + 1 */
+    uint16_t last[(unsigned)VEHICLE_MSG_N - 1u];
 } vehicle_counters_t;
 
 typedef struct {

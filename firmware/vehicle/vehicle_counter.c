@@ -13,7 +13,8 @@ int vehicle_counter_step(vehicle_counters_t *c, vehicle_kind_t kind, uint8_t cou
     /* unsigned: modulo a power of two (the usual modulus) is a mask */
     const unsigned step = last1 != 0u ? ((unsigned)counter + 1u + modulus - last1) % modulus : 1u;
     if (step != 0u) {
-        c->last[k] = (uint16_t)(counter + 1u);
+        const unsigned next1 = (unsigned)counter + 1u;
+        c->last[k] = (uint16_t)next1;
     }
     return (int)step;
 }
