@@ -333,7 +333,8 @@ def _car_reads(p: Profile, t: dict, fname: str) -> None:
     p.speed_factor = SPEED_UNITS[unit] * float(w.get("scale", 1.0))
     p.wheel_step_mps = abs(float(sigs[0].scale)) * p.speed_factor
     p.reads.append(CarSignalSet("wheels", msg, sigs, _checksum(w, fname),
-                                *_counter(w, msg, sigs, f"{fname} [wheels]")))
+                                *_counter(w, msg, sigs, f"{fname} [wheels]",
+                                          _checksum(w, fname))))
     if p.direction == "gear":
         g = t.get("gear")
         if g is None:
@@ -355,7 +356,8 @@ def _car_reads(p: Profile, t: dict, fname: str) -> None:
         if -1 not in p.gear_values.values():
             raise ProfileError(f"{fname} [gear]: no reverse gear named")
         p.reads.append(CarSignalSet("gear", gmsg, [gsig], _checksum(g, fname),
-                                    *_counter(g, gmsg, [gsig], f"{fname} [gear]")))
+                                    *_counter(g, gmsg, [gsig], f"{fname} [gear]",
+                                              _checksum(g, fname))))
     y = t.get("yaw_rate")
     if y is not None:
         ymsg = _message(db, y["message"], f"{fname} [yaw_rate]")
@@ -366,7 +368,8 @@ def _car_reads(p: Profile, t: dict, fname: str) -> None:
             raise ProfileError(f"{fname}: yaw-rate unit must be one of {', '.join(RATE_UNITS)}")
         p.rate_factor = RATE_UNITS[unit] * (1.0 if y.get("left_positive", True) else -1.0)
         p.reads.append(CarSignalSet("yaw_rate", ymsg, [ysig], _checksum(y, fname),
-                                    *_counter(y, ymsg, [ysig], f"{fname} [yaw_rate]")))
+                                    *_counter(y, ymsg, [ysig], f"{fname} [yaw_rate]",
+                                              _checksum(y, fname))))
     ids = [r.message.frame_id for r in p.reads]
     if len(set(ids)) != len(ids):
         raise ProfileError(f"{fname}: wheels, gear and yaw rate must be different messages")
@@ -427,12 +430,13 @@ def _range_override(spec: dict, sigs: list, where: str) -> None:
 COUNTER_MAX_BITS = 8
 
 
-def _counter(spec: dict, msg, data_sigs: list, where: str) -> tuple:
+def _counter(spec: dict, msg, data_sigs: list, where: str, checksum: str = "none") -> tuple:
     """(signal, modulus) of the table's `counter`, the message's rolling counter, or
     (None, 0). It is a DBC signal of the message, unsigned, unscaled, of at most
-    COUNTER_MAX_BITS bits and none of the values read; it runs 0..modulus-1, modulus =
-    2^its length (the DBC's) unless `counter_modulus` says otherwise (2..2^length: 15 for a
-    4-bit counter that never sends 15)."""
+    COUNTER_MAX_BITS bits, none of the values read and none of the checksum's bits (a
+    checksum taken for a counter would refuse a good frame whenever it repeats); it runs
+    0..modulus-1, modulus = 2^its length (the DBC's) unless `counter_modulus` says
+    otherwise (2..2^length: 15 for a 4-bit counter that never sends 15)."""
     name = spec.get("counter")
     if name is None:
         if "counter_modulus" in spec:
@@ -448,6 +452,14 @@ def _counter(spec: dict, msg, data_sigs: list, where: str) -> tuple:
         raise ProfileError(f"{where}: counter {name} must be an unsigned integer signal "
                            f"(scale 1, offset 0), not {'signed ' if sig.is_signed else ''}"
                            f"({sig.scale:g}, {sig.offset:g})")
+    if checksum != "none":
+        cs = CAR_CHECKSUMS[checksum]
+        raw = {x.name: 0 for x in msg.signals}
+        raw[sig.name] = (1 << sig.length) - 1
+        bits = msg.encode(raw, scaling=False, strict=False, padding=False)
+        if bits[cs.byte] & cs.mask:
+            raise ProfileError(f"{where}: counter {name} overlaps the {checksum} checksum's "
+                               f"bits")
     full = 1 << sig.length
     modulus = spec.get("counter_modulus", full)
     if not 2 <= modulus <= full:

@@ -168,3 +168,17 @@ def test_the_car_encoder_counts_and_can_be_told_a_counter(profiles):
     assert got == list(range(15)) + [0, 1]
     assert r.message.decode(bytes(car.message("gear", {}, counter=7).data))["COUNTER_DISABLED"] == 7
     assert r.message.decode(bytes(car.message("gear", {}).data))["COUNTER_DISABLED"] == 8
+
+
+def test_a_counter_on_the_checksum_is_refused(profiles):
+    """A counter named on the checksum's bits (Subaru's CHECKSUM, byte 0) would refuse a
+    good frame whenever the checksum repeats (1 in 256): refused, naming the checksum; the
+    real COUNTER loads."""
+    text = (vehicle.ROOT / "vehicles" / "subaru_global_2017.toml").read_text()
+    (profiles / "sub.toml").write_text(text.replace('name = "subaru_global_2017"', 'name = "sub"'))
+    assert vehicle.load("sub").reads[0].counter.name == "COUNTER"
+    bad = text.replace('counter = "COUNTER"         # 4 bits', 'counter = "CHECKSUM"  # 4 bits', 1)
+    assert bad != text
+    (profiles / "sub.toml").write_text(bad.replace('name = "subaru_global_2017"', 'name = "sub"'))
+    with pytest.raises(vehicle.ProfileError, match="counter CHECKSUM overlaps the subaru"):
+        vehicle.load("sub")
