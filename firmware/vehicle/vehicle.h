@@ -60,7 +60,8 @@ typedef enum {
 
 /* The receive state of the car's rolling counters (vehicle_counter.h): kept by the caller
  * (rx_state_t, through a navigation reset like navecu's own E2E counters), updated by
- * vehicle_decode; all zero at init: no counter seen yet. 2 bytes a message kind whatever the profile. */
+ * vehicle_decode; all zero at init: no counter seen yet. 2 bytes a message kind, whatever
+ * the profile. */
 typedef struct {
     /* by vehicle_kind_t - 1: 0 none accepted yet, else the last counter accepted + 1 */
     uint16_t last[(unsigned)VEHICLE_MSG_N - 1u];
