@@ -332,9 +332,7 @@ def _car_reads(p: Profile, t: dict, fname: str) -> None:
     _check_dbc_unit(sigs, unit, "scale" in w, f"{fname} [wheels]")
     p.speed_factor = SPEED_UNITS[unit] * float(w.get("scale", 1.0))
     p.wheel_step_mps = abs(float(sigs[0].scale)) * p.speed_factor
-    p.reads.append(CarSignalSet("wheels", msg, sigs, _checksum(w, fname),
-                                *_counter(w, msg, sigs, f"{fname} [wheels]",
-                                          _checksum(w, fname))))
+    p.reads.append(_signal_set("wheels", w, msg, sigs, fname))
     if p.direction == "gear":
         g = t.get("gear")
         if g is None:
@@ -355,9 +353,7 @@ def _car_reads(p: Profile, t: dict, fname: str) -> None:
                     p.gear_values[raw] = sign
         if -1 not in p.gear_values.values():
             raise ProfileError(f"{fname} [gear]: no reverse gear named")
-        p.reads.append(CarSignalSet("gear", gmsg, [gsig], _checksum(g, fname),
-                                    *_counter(g, gmsg, [gsig], f"{fname} [gear]",
-                                              _checksum(g, fname))))
+        p.reads.append(_signal_set("gear", g, gmsg, [gsig], fname))
     y = t.get("yaw_rate")
     if y is not None:
         ymsg = _message(db, y["message"], f"{fname} [yaw_rate]")
@@ -367,9 +363,7 @@ def _car_reads(p: Profile, t: dict, fname: str) -> None:
         if unit not in RATE_UNITS:
             raise ProfileError(f"{fname}: yaw-rate unit must be one of {', '.join(RATE_UNITS)}")
         p.rate_factor = RATE_UNITS[unit] * (1.0 if y.get("left_positive", True) else -1.0)
-        p.reads.append(CarSignalSet("yaw_rate", ymsg, [ysig], _checksum(y, fname),
-                                    *_counter(y, ymsg, [ysig], f"{fname} [yaw_rate]",
-                                              _checksum(y, fname))))
+        p.reads.append(_signal_set("yaw_rate", y, ymsg, [ysig], fname))
     ids = [r.message.frame_id for r in p.reads]
     if len(set(ids)) != len(ids):
         raise ProfileError(f"{fname}: wheels, gear and yaw rate must be different messages")
@@ -430,7 +424,7 @@ def _range_override(spec: dict, sigs: list, where: str) -> None:
 COUNTER_MAX_BITS = 8
 
 
-def _counter(spec: dict, msg, data_sigs: list, where: str, checksum: str = "none") -> tuple:
+def _counter(spec: dict, msg, data_sigs: list, where: str, checksum: str) -> tuple:
     """(signal, modulus) of the table's `counter`, the message's rolling counter, or
     (None, 0). It is a DBC signal of the message, unsigned, unscaled, of at most
     COUNTER_MAX_BITS bits, none of the values read and none of the checksum's bits (a
@@ -473,6 +467,14 @@ def _checksum(spec: dict, fname: str) -> str:
     if c not in CHECKSUMS:
         raise ProfileError(f"{fname}: checksum must be one of {', '.join(CHECKSUMS)}")
     return c
+
+
+def _signal_set(role: str, spec: dict, msg, sigs: list, fname: str) -> CarSignalSet:
+    """The message of the profile's table `role` (spec) and the signals read from it, with
+    its checksum and rolling counter."""
+    checksum = _checksum(spec, fname)
+    return CarSignalSet(role, msg, sigs, checksum,
+                        *_counter(spec, msg, sigs, f"{fname} [{role}]", checksum))
 
 
 # ----------------------------------------------------------------------- collisions
