@@ -109,6 +109,7 @@ class Profile:
     rate_factor: float = 1.0           # rad/s per yaw-rate unit, sign included
     gear_values: dict = field(default_factory=dict)  # raw gear value -> +1, -1, 0
     recordings: list = field(default_factory=list)   # (path, {channel: bus})
+    dbc_notes: dict = field(default_factory=dict)    # bus -> what normalise_dbc changed
 
 
 # ------------------------------------------------------------------ loading a profile
@@ -134,14 +135,83 @@ def opendbc_text(ref: str) -> str:
 
 
 #: a comment that names a signal's message but not the signal (`CM_ SG_ 304 "...";`) or
-#: names no object (`CM_ 145 "...";`): not DBC syntax, so cantools refuses the whole file;
-#: opendbc's Honda generator files (_honda_common.dbc) and hyundai_kia_generic.dbc have them
-MALFORMED_COMMENT = re.compile(r'^CM_ (?:SG_ )?\d+ "(?:[^"\\]|\\.)*";[ \t]*\r?\n', re.M)
+#: names no object (`CM_ 145 "...";`), or a network comment without its `;`
+#: (`CM_ "Front target"`, toyota_radar_dsu_tssp.dbc): not DBC syntax, so cantools refuses
+#: the whole file; opendbc's Honda generator files (_honda_common.dbc) and
+#: hyundai_kia_generic.dbc have the first two
+MALFORMED_COMMENT = re.compile(r'^CM_ (?:(?:SG_ )?\d+ "(?:[^"\\]|\\.)*";|"(?:[^"\\]|\\.)*")'
+                               r'[ \t]*\r?\n', re.M)
+#: a keyword followed by a message's identifier, wherever a DBC names a message by it
+_DBC_ID_REF = re.compile(r'\b(BO_|VAL_|SG_|SIG_VALTYPE_|BO_TX_BU_|SG_MUL_VAL_)([ \t]+)(\d+)\b')
+_DBC_BO = re.compile(r'^BO_[ \t]+(\d+)[ \t]+(\w+)[ \t]*:', re.M)
+_DBC_SG = re.compile(r'^[ \t]+SG_[ \t]+(\w+)\b')
+_DBC_VAL = re.compile(r'^VAL_[ \t]+(\d+)[ \t]+(\w+)\b(?:[^;"]|"[^"]*")*;[ \t]*\r?\n', re.M)
+_DBC_VAL_OPEN = re.compile(r'^(VAL_[ \t]+\d+[ \t]+\w+(?:[ \t]+-?\d+[ \t]+"[^"]*")*)[ \t]*$', re.M)
+_DBC_LEADING_POINT = re.compile(r'(?<![\w.])(-?)\.(\d)')
+_DBC_DIGIT_NAME = re.compile(r'^(BO_[ \t]+\d+[ \t]+|[ \t]+SG_[ \t]+)(\d\w*)', re.M)
+_DBC_EXTENDED = 0x80000000
 
 
-def load_dbc(ref: str):
-    """'opendbc:PATH' (the opendbc package) or a path in the repository. Malformed comments
-    (MALFORMED_COMMENT) are dropped: a comment does not change a frame's decoding."""
+def normalise_dbc(text: str) -> tuple:
+    """(text, notes): what cantools refuses in opendbc's files and the DBC format does not
+    leave in doubt, made DBC, each kind said once in notes with how many (`python -m
+    tools.vehicle check` prints them). A frame's decoding is the file's own:
+    - malformed comments (MALFORMED_COMMENT) dropped;
+    - an identifier above 0x7FF written without the extended-frame flag (bit 31): it can only
+      be a 29-bit identifier, so the flag is set (opendbc's convention; navecu reads 11-bit
+      frames, so such a message is never one it reads, and cannot collide with its own);
+    - a `VAL_` table's missing closing `;` added, and `VAL_` tables of signals the
+      message does not have dropped (value names only);
+    - numbers written without their leading zero (`.25`) in signal definitions;
+    - message and signal names that begin with a digit (`2017_5`, not a DBC or C name)
+      prefixed with `_`: a profile names them so (`_2017_5`)."""
+    notes = []
+    n = len(MALFORMED_COMMENT.findall(text))
+    if n:
+        text = MALFORMED_COMMENT.sub("", text)
+        notes.append(f"{n} malformed comment(s) dropped")
+    ext = {int(i) for i, _ in _DBC_BO.findall(text) if 0x7FF < int(i) < (1 << 29)}
+    if ext:
+        text = _DBC_ID_REF.sub(lambda m: m[1] + m[2] + str(int(m[3]) | _DBC_EXTENDED)
+                               if int(m[3]) in ext else m[0], text)
+        notes.append(f"{len(ext)} identifier(s) above 0x7FF taken as extended (29-bit)")
+    n = len(_DBC_VAL_OPEN.findall(text))
+    if n:
+        text = _DBC_VAL_OPEN.sub(r"\1 ;", text)
+        notes.append(f"{n} value table(s) without their closing ; closed")
+    signals, msg_id = set(), None
+    for line in text.splitlines():
+        bo = _DBC_BO.match(line)
+        if bo:
+            msg_id = int(bo[1])
+        elif msg_id is not None and _DBC_SG.match(line):
+            signals.add((msg_id, _DBC_SG.match(line)[1]))
+        elif line.strip():
+            msg_id = None if not line.startswith((" ", "\t")) else msg_id
+    stale = [m for m in _DBC_VAL.finditer(text) if (int(m[1]), m[2]) not in signals]
+    if stale:
+        text = _DBC_VAL.sub(lambda m: "" if (int(m[1]), m[2]) not in signals else m[0], text)
+        notes.append(f"{len(stale)} value table(s) of signals that do not exist dropped "
+                     f"({', '.join(sorted({m[2] for m in stale}))})")
+    lines = text.split("\n")
+    fixed = 0
+    for i, line in enumerate(lines):
+        if _DBC_SG.match(line) and _DBC_LEADING_POINT.search(line):
+            lines[i] = _DBC_LEADING_POINT.sub(r"\g<1>0.\2", line)
+            fixed += 1
+    if fixed:
+        text = "\n".join(lines)
+        notes.append(f"{fixed} signal(s) with numbers like .25 read as 0.25")
+    names = sorted({m[2] for m in _DBC_DIGIT_NAME.finditer(text)})
+    if names:
+        text = re.sub(r'(?<![\w"])(' + "|".join(map(re.escape, names)) + r')\b', r"_\1", text)
+        notes.append(f"name(s) beginning with a digit prefixed with _: {', '.join(names)}")
+    return text, notes
+
+
+def load_dbc(ref: str, notes: list | None = None):
+    """'opendbc:PATH' (the opendbc package) or a path in the repository, normalised
+    (normalise_dbc; what it changed is appended to notes)."""
     if ref.startswith("opendbc:"):
         text = opendbc_text(ref.split(":", 1)[1])
     else:
@@ -149,7 +219,9 @@ def load_dbc(ref: str):
         if not path.is_file():
             raise ProfileError(f"DBC {ref} not found")
         text = path.read_text(encoding="utf-8")
-    text = MALFORMED_COMMENT.sub("", text)
+    text, changed = normalise_dbc(text)
+    if notes is not None:
+        notes.extend(changed)
     try:
         return cantools.database.load_string(text, database_format="dbc", strict=False)
     except Exception as e:  # cantools raises several kinds for a malformed DBC
@@ -157,10 +229,19 @@ def load_dbc(ref: str):
 
 
 def _message(db, name: str, where: str):
+    """A message navecu reads: an 11-bit identifier, at most 8 bytes. (A DBC may declare
+    a message of 8 bytes or fewer CAN FD, as Ford's does every message of its powertrain
+    bus, which its CAN cars send as classic frames: its layout is a classic frame's.)"""
     try:
-        return db.get_message_by_name(name)
+        msg = db.get_message_by_name(name)
     except KeyError as e:
         raise ProfileError(f"{where}: no message {name} in the car's DBC") from e
+    if msg.is_extended_frame or msg.length > 8:
+        raise ProfileError(f"{where}: {name} is "
+                           + ("an extended (29-bit) frame" if msg.is_extended_frame
+                              else f"a CAN FD frame of {msg.length} bytes")
+                           + "; navecu reads classic CAN frames with 11-bit identifiers")
+    return msg
 
 
 def _signal(msg, name: str, where: str):
@@ -298,7 +379,8 @@ def load(name: str) -> Profile:
         raise ProfileError(f"{path.name}: track {p.track_m} m or wheelbase {p.wheelbase_m} m "
                            "is not a car's")
     for bus, ref in t.get("buses", {}).items():
-        p.buses[bus] = load_dbc(ref)
+        p.dbc_notes[bus] = []
+        p.buses[bus] = load_dbc(ref, p.dbc_notes[bus])
     p.ecu_bus = t.get("ecu_bus")
     if p.native_wheels:
         if p.direction != "signed":
@@ -791,6 +873,9 @@ def main(argv=None) -> int:
     if a.cmd == "dbc":
         Path(a.out).write_text(profile_dbc_text(p))
         return 0
+    for bus, notes in p.dbc_notes.items():
+        for note in notes:
+            print(f"vehicle: {p.name}: {bus} DBC normalised: {note}")
     ids = stock_ids() if getattr(a, "ids", "profile") == "stock" else p.can_ids
     label = "the DBC's stock identifiers" if ids is not p.can_ids else f"profile {p.name}"
     try:

@@ -99,6 +99,82 @@ def test_a_dbc_with_malformed_comments_loads():
     assert vehicle.MALFORMED_COMMENT.sub("", text) == 'CM_ SG_ 304 GAS "kept";\n'
 
 
+# what opendbc's files have that cantools refuses (one of each; normalise_dbc)
+ODD_DBC = """VERSION ""
+
+BU_: XXX
+
+BO_ 1275 2017_5: 8 XXX
+ SG_ 0_COUNTER : 7|4@0+ (1,0) [0|15] "" XXX
+ SG_ TORQUE : 15|13@0+ (.25,-500) [-500|1547.75] "Nm" XXX
+
+BO_ 13274 LKAS_HUD_A: 5 XXX
+ SG_ BEEP : 7|2@0+ (1,0) [0|3] "" XXX
+
+CM_ "Front target"
+CM_ SG_ 13274 BEEP "kept";
+VAL_ 1275 0_COUNTER 0 "zero" 1 "one"
+VAL_ 1275 GONE 0 "no such signal" ;
+VAL_ 13274 BEEP 1 "once" 2 "twice" ;
+"""
+
+
+def test_opendbc_oddities_are_normalised_and_said():
+    """Each oddity is made DBC and said once; what a frame decodes to is the file's: the
+    scale .25 is 0.25, 0x33DA is a 29-bit identifier (opendbc's convention: above 0x7FF
+    without the flag), the value names stay with their signals, a name beginning with a
+    digit is prefixed with _."""
+    text, notes = vehicle.normalise_dbc(ODD_DBC)
+    assert len(notes) == 6, notes
+    for word in ("comment", "extended", "closing", "GONE", "0.25", "2017_5"):
+        assert any(word in n for n in notes), (word, notes)
+    import cantools
+    db = cantools.database.load_string(text, database_format="dbc", strict=False)
+    m = db.get_message_by_name("_2017_5")
+    assert m.frame_id == 1275 and not m.is_extended_frame
+    assert m.get_signal_by_name("_0_COUNTER").choices[1] == "one"
+    # TORQUE: raw 0x0BB8 = 3000 in its 13 big-endian bits -> 3000 * 0.25 - 500 = 250 Nm
+    raw = (3000 << 3).to_bytes(2, "big")
+    assert m.decode(bytes([0x10]) + raw + bytes(5))["TORQUE"] == 250.0
+    hud = db.get_message_by_name("LKAS_HUD_A")
+    assert hud.is_extended_frame and hud.frame_id == 0x33DA
+    assert hud.get_signal_by_name("BEEP").comment == "kept"
+    assert hud.get_signal_by_name("BEEP").choices[2] == "twice"
+
+
+def test_a_well_formed_dbc_is_left_as_it_is():
+    text = vehicle.opendbc_text("vw_mqb.dbc")
+    assert vehicle.normalise_dbc(text) == (text, [])
+
+
+def test_every_dbc_of_the_pinned_opendbc_loads_but_one():
+    """docs/vehicles.md: of the pinned opendbc's DBC files (generator files through its
+    generator) only toyota_2017_ref_pt.dbc does not load: an identifier with bit 30 set
+    (0x40140639), neither an 11-bit nor a 29-bit identifier."""
+    import opendbc
+    from pathlib import Path
+    root = Path(opendbc.DBC_PATH)
+    refs = [p.name for p in sorted(root.glob("*.dbc"))]
+    refs += [str(p.relative_to(root)) for p in sorted((root / "generator").rglob("*.dbc"))
+             if not p.name.startswith("_")]
+    failed = []
+    for ref in refs:
+        try:
+            vehicle.load_dbc("opendbc:" + ref)
+        except vehicle.ProfileError:
+            failed.append(ref)
+    assert len(refs) > 80 and failed == ["toyota_2017_ref_pt.dbc"], failed
+
+
+def test_an_extended_message_is_not_read(profiles):
+    """navecu reads classic frames with 11-bit identifiers: a profile naming a 29-bit
+    message is refused (it would be generated and never match a frame)."""
+    (profiles / "ext.toml").write_text(GOOD.format(name="ext").replace(
+        'message = "Getriebe_11"', 'message = "KN_Getriebe_01"').replace(
+        'signal = "GE_Fahrstufe"', 'signal = "KN_Getriebe_ECUKnockOutTimer"'))
+    with pytest.raises(vehicle.ProfileError, match="29-bit"):
+        vehicle.load("ext")
+
 FORD = """name = "{name}"
 ecu_bus = "pt"
 [buses]
