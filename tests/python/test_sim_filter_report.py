@@ -418,7 +418,9 @@ def test_gnss_fault_report(tmp_path):
 
 def test_report_rejects_bad_inputs_with_one_line(tmp_path, capsys):
     """tools.sim.report on corrupt inputs: a malformed line or a NAV_* frame of another
-    length in nav.log is skipped and counted on stderr (a traceback before); a log without
+    length in nav.log is skipped and counted on stderr (a traceback before), and so is a
+    NAV_* frame failing its E2E check (a NAV_Height with its time of validity changed and
+    its CRC not: taken, it would have moved the set's time by 20 s); a log without
     any NAV_* frame (empty, or the input log given as --nav) is no report, where it said
     'navecu never started navigating'; a truth.npz that is missing, of another kind, with
     a NaN or with time going back is refused naming the file."""
@@ -428,6 +430,12 @@ def test_report_rejects_bad_inputs_with_one_line(tmp_path, capsys):
     nav = tmp_path / "nav.log"
     lines = nav.read_text().splitlines()
     lines[50:50] = ["(1005.0) can0 GARBAGE", "(1005.0) can0 300#0102", "(1005.0) can0 301#ZZ"]
+    k = next(i for i in range(60, len(lines)) if " 301#" in lines[i])
+    head, rest = lines[k].split("#")
+    data, tail = rest.split(" ", 1)
+    tov = (int.from_bytes(bytes.fromhex(data), "little") >> 32 & 0xFFFF) + 20000
+    lines[k] = (head + "#" + data[:8] + (tov & 0xFFFF).to_bytes(2, "little").hex().upper()
+                + data[12:] + " " + tail)
     nav.write_text("\n".join(lines) + "\n")
     rm, _ = geodesy.radii_m(math.radians(45.0))
     t = np.linspace(0.0, 50.0, 501)
@@ -441,7 +449,7 @@ def test_report_rejects_bad_inputs_with_one_line(tmp_path, capsys):
     cap = capsys.readouterr()
     assert "horizontal error: rms 2.00 m" in cap.out
     assert (f"read_nav_log: 2 malformed lines of {nav} skipped (first: line 51, "
-            "'(1005.0) can0 GARBAGE'), 1 frame rejected (first: 0x300 at 1005.000000 s, "
+            "'(1005.0) can0 GARBAGE'), 2 frames rejected (first: 0x300 at 1005.000000 s, "
             "NAV_Position with 2 bytes)") in cap.err
     for bad_nav, what in ((tmp_path / "empty.log", "no NAV_* frame in it"),
                           (tmp_path / "none.log", "No such file or directory"),

@@ -48,7 +48,8 @@ def read_nav_log(path, db=None, wraps_from_log: bool = False, log_t0_s: float = 
     it (transition_check). A candump log's malformed lines are skipped and counted
     (nc.LogFile): skipped, a list, gets the LogFile; without one a count above 0 is said
     on stderr; so are frames of a NAV_* identifier that are not that message (an extended
-    ID, another length): rejected, not decoded."""
+    ID, another length) or that fail its E2E check (the CRC in byte 7, a counter of 15;
+    nc.check_e2e, docs/can.md): rejected, not decoded."""
     db = db if db is not None else nc.load_db()
     want = {m.frame_id: m.name for m in db.messages if "NAVECU" in m.senders}
     rows = {n: [] for n in want.values()}
@@ -63,6 +64,9 @@ def read_nav_log(path, db=None, wraps_from_log: bool = False, log_t0_s: float = 
                     msg.arbitration_id]:
                 reader.reject(msg, f"{name} with {len(msg.data)} bytes"
                               + (", extended ID" if msg.is_extended_id else ""))
+                continue
+            if not nc.check_e2e(msg, db):
+                reader.reject(msg, f"{name} failing its E2E check")
                 continue
             sig = db.decode_message(msg.arbitration_id, bytes(msg.data), decode_choices=False)
             sig["seq"] = seq
