@@ -50,6 +50,8 @@ static void test_table_from_dtc_toml(void **state)
     assert_int_equal(dtc_table[DTC_IMU_STALE].health_mask, NAVECU_HEALTH_IMU_STALE);
     assert_int_equal(dtc_table[DTC_IMU_STALE].confirm_ds, 20u); /* 2 s */
     assert_int_equal(dtc_table[DTC_NVM_ERROR].confirm_ds, 0u);
+    assert_int_equal(dtc_table[DTC_NO_GNSS].confirm_ds, 600u | DTC_DEBOUNCED); /* 60 s */
+    assert_int_equal(dtc_table[DTC_NO_HEADING].confirm_ds, 3000u | DTC_DEBOUNCED);
     uint32_t all = 0u;
     for (size_t i = 0u; i < (size_t)DTC_N; i++) {
         assert_int_equal(all & dtc_table[i].health_mask, 0u); /* one DTC per flag */
@@ -266,6 +268,40 @@ static void test_load_refuses_impossible_bytes(void **state)
     assert_bit7_clear();
 }
 
+/* NO_GNSS, debounced for 60 s: a start's wait for the first fix (59.9 s of the condition
+ * from 0.1 s) is no test result, in this operation cycle and the next (the docs-only client
+ * found U1102-87 confirmed on the second fault-free start, before debouncing); a pass
+ * between restarts the time; 60 s of it fails the test: 0x2F (TF TFTOC PDTC CDTC TFSLC)
+ * at once, stored 0x2C */
+static void test_debounced(void **state)
+{
+    (void)state;
+    const uint32_t no_gnss = NAVECU_HEALTH_NO_GNSS;
+    for (int cycle = 0; cycle < 2; cycle++) {
+        for (uint64_t t = 100u; t < 60000u; t += 100u) {
+            assert_int_equal(dtc_update(&d, no_gnss, t * MS) & BIT(DTC_NO_GNSS), 0u);
+            assert_int_equal(dtc_status(&d, DTC_NO_GNSS), cycle == 0 ? 0x50u : 0x40u);
+        }
+        assert_int_equal(dtc_update(&d, 0u, 60000u * MS) & BIT(DTC_NO_GNSS),
+                         cycle == 0 ? BIT(DTC_NO_GNSS) : 0u); /* passed: 0x00 */
+        assert_int_equal(dtc_status(&d, DTC_NO_GNSS), 0x00u);
+        const uint8_t stored = dtc_stored(&d, DTC_NO_GNSS);
+        assert_int_equal(stored, 0x00u);
+        (void)dtc_load(&d, (const uint8_t[DTC_N]){[DTC_NO_GNSS] = 0x00u}, (size_t)DTC_N);
+    }
+    (void)dtc_update(&d, no_gnss, 0u);
+    (void)dtc_update(&d, no_gnss, 40000u * MS);
+    (void)dtc_update(&d, 0u, 41000u * MS);                /* a fix: the time restarts */
+    (void)dtc_update(&d, no_gnss, 42000u * MS);
+    assert_int_equal(dtc_update(&d, no_gnss, 101999u * MS) & BIT(DTC_NO_GNSS), 0u);
+    assert_int_equal(dtc_status(&d, DTC_NO_GNSS), 0x00u); /* 59.999 s: nothing yet */
+    assert_int_equal(dtc_update(&d, no_gnss, 102000u * MS) & BIT(DTC_NO_GNSS),
+                     BIT(DTC_NO_GNSS));
+    assert_int_equal(dtc_status(&d, DTC_NO_GNSS), 0x2Fu);
+    assert_int_equal(dtc_stored(&d, DTC_NO_GNSS), 0x2Cu);
+    assert_bit7_clear();
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -279,6 +315,7 @@ int main(void)
         cmocka_unit_test_setup(test_pending_across_cycles, setup),
         cmocka_unit_test_setup(test_clear, setup),
         cmocka_unit_test_setup(test_load_refuses_impossible_bytes, setup),
+        cmocka_unit_test_setup(test_debounced, setup),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

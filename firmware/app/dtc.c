@@ -32,7 +32,7 @@ static void start_cleared(dtc_t *d, size_t i)
     d->status[i] = DTC_STATUS_CLEARED;
     d->stored[i] = stored_of(DTC_STATUS_CLEARED);
     d->pending_at_start[i] = 0u;
-    d->fail_start_us[i] = 0u;
+    d->fail_start_us[i] = DTC_NO_CONDITION;
 }
 
 void dtc_init(dtc_t *d)
@@ -68,7 +68,7 @@ size_t dtc_load(dtc_t *d, const uint8_t *stored, size_t n)
         d->status[i] = (uint8_t)(b | DTC_TNCTOC);
         d->stored[i] = b;
         d->pending_at_start[i] = (b & DTC_PDTC) != 0u ? 1u : 0u;
-        d->fail_start_us[i] = 0u;
+        d->fail_start_us[i] = DTC_NO_CONDITION;
     }
     return refused;
 }
@@ -88,17 +88,22 @@ uint32_t dtc_update_tested(dtc_t *d, uint32_t health_flags, uint32_t tested, uin
         }
         uint8_t st = d->status[i];
         if ((health_flags & def->health_mask) != 0u) {
-            if ((st & DTC_TF) == 0u) {
-                d->fail_start_us[i] = now_us; /* the failure starts */
+            if (d->fail_start_us[i] == DTC_NO_CONDITION) {
+                d->fail_start_us[i] = now_us; /* the condition starts */
+            }
+            const uint64_t confirm_us = (uint64_t)(def->confirm_ds & DTC_CONFIRM_DS_MASK) * 100000u;
+            /* time going backwards counts as no time */
+            const int lasted = now_us >= d->fail_start_us[i] + confirm_us;
+            if (!lasted && (def->confirm_ds & DTC_DEBOUNCED) != 0u) {
+                continue; /* debounced: not completed yet */
             }
             st = (uint8_t)(st | DTC_TF | DTC_TFTOC | DTC_PDTC | DTC_TFSLC);
             st = (uint8_t)(st & (uint8_t)~(DTC_TNCTOC | DTC_TNCSLC));
-            const uint64_t lasted_us =
-                now_us > d->fail_start_us[i] ? now_us - d->fail_start_us[i] : 0u;
-            if (lasted_us >= (uint64_t)def->confirm_ds * 100000u || d->pending_at_start[i]) {
+            if (lasted || d->pending_at_start[i]) {
                 st = (uint8_t)(st | DTC_CDTC);
             }
         } else {
+            d->fail_start_us[i] = DTC_NO_CONDITION;
             st = (uint8_t)(st & (uint8_t)~(DTC_TF | DTC_TNCTOC | DTC_TNCSLC));
         }
         d->status[i] = st;

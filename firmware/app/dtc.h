@@ -11,6 +11,12 @@
  *            between (the table's confirm time; 0 confirms at the first failure), or at
  *            once when the DTC was pending at the start of this operation cycle (it failed
  *            in the previous one: two operation cycles);
+ *   debounced (DTC_DEBOUNCED in the table's confirm_ds; dtc.toml: a condition that is also
+ *            a state of normal operation while short, such as the first GNSS fix after
+ *            power-on): the condition fails the test only once it has lasted the confirm
+ *            time (then pending and confirmed at once); shorter, the test is not completed
+ *            and the status byte unchanged, so a start's normal wait is no failure and no
+ *            second start confirms it;
  *   passed:  testFailed, testNotCompletedThisOperationCycle, testNotCompletedSinceLastClear
  *            clear;
  *   the start of an operation cycle (dtc_load): testFailed, testFailedThisOperationCycle
@@ -48,6 +54,7 @@
 #define DTC_AVAILABILITY_MASK 0x7Fu /* bits 0..6 supported */
 #define DTC_STORED_MASK 0x3Cu       /* bits kept in NVM: pending, confirmed, the two SLC */
 #define DTC_STATUS_CLEARED 0x50u    /* after a clear: TNCSLC | TNCTOC */
+#define DTC_NO_CONDITION UINT64_MAX /* fail_start_us: the condition is clear */
 #define DTC_STORED_NONE 0xFFu       /* a stored byte never written (erased flash; the NVM
                                        record's "none stored") */
 
@@ -55,7 +62,8 @@ typedef struct {
     uint8_t status[DTC_N];       /* the Annex D status bytes */
     uint8_t stored[DTC_N];       /* what NVM holds (DTC_STORED_MASK bits) */
     uint8_t pending_at_start[DTC_N]; /* pendingDTC when this operation cycle started */
-    uint64_t fail_start_us[DTC_N]; /* when the present failure started (testFailed set) */
+    uint64_t fail_start_us[DTC_N]; /* when the present condition started (its HealthFlags
+                                      bit set), DTC_NO_CONDITION while it is clear */
     uint32_t load_rejected;      /* stored bytes refused at dtc_load (bits outside
                                     DTC_STORED_MASK, an impossible combination): 0x50 */
     uint32_t clears;             /* ClearDiagnosticInformation done */

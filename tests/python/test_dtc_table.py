@@ -44,12 +44,18 @@ def test_one_dtc_per_health_flag_in_the_generated_c():
     assert sorted(d["bit"] for d in dtcs) == sorted(bits)
     assert len(dtcs) <= gen_dtc.DTC_MAX
     c = (ROOT / gen_dtc.OUT_C).read_text()
-    rows = re.findall(r"\[DTC_(\w+)\] = \{0x([0-9A-F]{6})u, NAVECU_HEALTH_(\w+), (\d+)u\}", c)
+    rows = re.findall(r"\[DTC_(\w+)\] = \{0x([0-9A-F]{6})u, NAVECU_HEALTH_(\w+), (\d+)u"
+                      r"( \| DTC_DEBOUNCED)?\}", c)
     assert len(rows) == len(dtcs)
-    for d, (name, num, flag, ds) in zip(dtcs, rows):
+    for d, (name, num, flag, ds, debounced) in zip(dtcs, rows):
         assert name == d["name"].upper() and flag == d["flag"]
         assert int(num, 16) == gen_dtc.dtc_number(d["code"], int(d["ftb"]))
         assert int(ds) == round(float(d["confirm_s"]) * 10)  # 0.1 s units
+        assert bool(debounced) == d.get("debounced", False)
+    # the conditions a fault-free start goes through are debounced (a client found U1102-87
+    # confirmed on the second start before)
+    assert {d["flag"] for d in dtcs if d.get("debounced")} == {"NO_GNSS", "NO_HEADING",
+                                                               "REACQUIRE"}
     doc = (ROOT / gen_dtc.DOC).read_text()
     for d in dtcs:
         assert f"| {d['index']} | {gen_dtc.dtc_text(d['number'])} |" in doc
@@ -74,6 +80,12 @@ description = "x"
     (lambda t: t.replace("confirm_s = 2.0", "confirm_s = -1.0"), "confirm_s outside"),
     (lambda t: t.replace("confirm_s = 2.0", "confirm_s = 2.05"), "whole number of 0.1 s"),
     (lambda t: t.replace("confirm_s = 2.0\n", ""), "needs confirm_s"),
+    (lambda t: t.replace("confirm_s = 2.0", "confirm_s = 4000.0"), "confirm_s outside"),
+    (lambda t: t.replace("confirm_s = 2.0", "confirm_s = 2.0\ndebounce = true"),
+     "unknown key debounce"),
+    (lambda t: t.replace("confirm_s = 2.0", "confirm_s = 2.0\ndebounced = 1"), "true or false"),
+    (lambda t: t.replace("confirm_s = 2.0", "confirm_s = 0.0\ndebounced = true"),
+     "debounced needs a confirm_s"),
     (lambda t: t.replace('code = "U1101"', 'code = "Q1101"'), "a letter P/C/B/U"),
     (lambda t: t, "HealthFlagBits without a DTC: IMU_FAULT"),
 ])

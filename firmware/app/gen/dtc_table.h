@@ -28,8 +28,12 @@ typedef struct {
     uint32_t number;      /* the 3-byte DTC: J2012 code (high, middle), FTB (low) */
     uint16_t health_mask; /* the NAV_Status HealthFlags bit it mirrors */
     uint16_t confirm_ds;  /* the condition persisting this long, 0.1 s: confirmedDTC
-                             (8 bytes a row; 12 with milliseconds in 32 bits) */
+                             (8 bytes a row; 12 with milliseconds in 32 bits); with
+                             DTC_DEBOUNCED the test fails only then (dtc.h) */
 } dtc_def_t;
+
+#define DTC_DEBOUNCED 0x8000u     /* in confirm_ds: a debounced DTC (dtc.toml) */
+#define DTC_CONFIRM_DS_MASK 0x7FFFu /* in confirm_ds: the confirm time */
 
 extern const dtc_def_t dtc_table[DTC_N];
 
