@@ -27,12 +27,22 @@ int host_open(hal_t *hal, const host_options_t *o)
                                             o->out_path, o->nvm_path)
                        : hal_linux_open(hal, o->in_path, o->out_path, o->nvm_path);
     if (rc != 0) {
-        if (o->live_if != NULL) {
-            fprintf(stderr, "navecu: cannot open CAN interface '%s': %s\n", o->live_if,
+        const hal_linux_file_t w = hal_linux_open_failed(hal);
+        if (w == HAL_LINUX_FILE_NVM_SIZE) {
+            fprintf(stderr, "navecu: NVM file '%s' is not an NVM image (%u bytes) or cannot be "
+                    "read; refused, left as it is\n", o->nvm_path, HAL_LINUX_NVM_SIZE);
+        } else if (w != HAL_LINUX_FILE_NONE) {
+            fprintf(stderr, "navecu: cannot %s '%s': %s\n",
+                    w == HAL_LINUX_FILE_RX   ? "open the input log"
+                    : w == HAL_LINUX_FILE_TX ? "create the output log"
+                                             : "open or create the NVM file",
+                    w == HAL_LINUX_FILE_RX   ? o->in_path
+                    : w == HAL_LINUX_FILE_TX ? o->out_path
+                                             : o->nvm_path,
                     strerror(errno));
         } else {
-            fprintf(stderr, "navecu: cannot open '%s' or '%s': %s\n", o->in_path, o->out_path,
-                    strerror(errno));
+            fprintf(stderr, "navecu: cannot open CAN interface '%s': %s\n",
+                    o->live_if != NULL ? o->live_if : "?", strerror(errno));
         }
         return 1;
     }

@@ -416,6 +416,7 @@ static void test_rx_end_of_file(void **state)
     char p[PATH_LEN];
     tmp_path(p, "does_not_exist.log");
     assert_int_equal(hal_linux_open(&hal, p, NULL, NULL), HAL_EIO);
+    assert_int_equal(hal_linux_open_failed(&hal), HAL_LINUX_FILE_RX); /* for the message */
     hal_linux_close(&hal); /* harmless after a failed open */
 
     /* after the last frame, and many calls after that */
@@ -650,14 +651,24 @@ static void test_nvm_persistence(void **state)
     char bad[PATH_LEN];
     write_file(bad, "nvm_short.bin", "short");
     assert_int_equal(hal_linux_open(&hal, NULL, NULL, bad), HAL_EIO);
+    assert_int_equal(hal_linux_open_failed(&hal), HAL_LINUX_FILE_NVM_SIZE);
     hal_linux_close(&hal);
     memset(image, 0, sizeof image);
     write_file_n(bad, "nvm_long.bin", image, HAL_LINUX_NVM_SIZE + 1);
     assert_int_equal(hal_linux_open(&hal, NULL, NULL, bad), HAL_EIO);
+    assert_int_equal(hal_linux_open_failed(&hal), HAL_LINUX_FILE_NVM_SIZE);
     hal_linux_close(&hal);
     /* a path in a missing directory cannot be created */
     tmp_path(bad, "no_such_dir/nvm.bin");
     assert_int_equal(hal_linux_open(&hal, NULL, NULL, bad), HAL_EIO);
+    assert_int_equal(hal_linux_open_failed(&hal), HAL_LINUX_FILE_NVM);
+    hal_linux_close(&hal);
+    /* an output log in a missing directory: the output log is named, not the NVM */
+    assert_int_equal(hal_linux_open(&hal, NULL, bad, nvm), HAL_EIO);
+    assert_int_equal(hal_linux_open_failed(&hal), HAL_LINUX_FILE_TX);
+    hal_linux_close(&hal);
+    assert_int_equal(hal_linux_open(&hal, NULL, NULL, nvm), 0);
+    assert_int_equal(hal_linux_open_failed(&hal), HAL_LINUX_FILE_NONE);
     hal_linux_close(&hal);
 }
 

@@ -215,6 +215,7 @@ static int nvm_open(hal_t *hal, const char *path)
     }
     if (fread(hal->nvm, 1u, sizeof hal->nvm, hal->nvm_file) != sizeof hal->nvm ||
         getc(hal->nvm_file) != EOF || ferror(hal->nvm_file)) {
+        hal->open_failed = HAL_LINUX_FILE_NVM_SIZE;
         return HAL_EIO; /* short, long, or unreadable: not an NVM image of ours */
     }
     return 0;
@@ -235,23 +236,34 @@ int hal_linux_open(hal_t *hal, const char *rx_log_path, const char *tx_log_path,
     if (rx_log_path != NULL) {
         hal->rx = fopen(rx_log_path, "rb");
         if (hal->rx == NULL) {
+            hal->open_failed = HAL_LINUX_FILE_RX;
             rc = HAL_EIO;
         }
     }
     if (rc == 0 && tx_log_path != NULL) {
         hal->tx = fopen(tx_log_path, "wb");
         if (hal->tx == NULL) {
+            hal->open_failed = HAL_LINUX_FILE_TX;
             rc = HAL_EIO;
         }
     }
     if (rc == 0 && nvm_path != NULL) {
+        hal->open_failed = HAL_LINUX_FILE_NVM; /* unless nvm_open says more */
         rc = nvm_open(hal, nvm_path);
+        if (rc == 0) {
+            hal->open_failed = HAL_LINUX_FILE_NONE;
+        }
     }
     if (rc != 0) {
         hal_linux_close(hal);
         memset(hal->nvm, 0xFF, sizeof hal->nvm);
     }
     return rc;
+}
+
+hal_linux_file_t hal_linux_open_failed(const hal_t *hal)
+{
+    return hal != NULL ? hal->open_failed : HAL_LINUX_FILE_NONE;
 }
 
 void hal_linux_close(hal_t *hal)

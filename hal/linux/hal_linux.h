@@ -27,6 +27,15 @@
 #define HAL_LINUX_LINE_MAX 128u  /* longest RX log line, characters before the newline */
 #define HAL_LINUX_IFACE_MAX CANDUMP_IFACE_MAX /* longest interface name (IFNAMSIZ - 1) */
 
+/* The file hal_linux_open could not use (hal_linux_open_failed). */
+typedef enum {
+    HAL_LINUX_FILE_NONE = 0,
+    HAL_LINUX_FILE_RX,   /* the input log: cannot be opened (errno) */
+    HAL_LINUX_FILE_TX,   /* the output log: cannot be created (errno) */
+    HAL_LINUX_FILE_NVM,  /* the NVM file: cannot be opened or created (errno 0 < 0) */
+    HAL_LINUX_FILE_NVM_SIZE, /* the NVM file: not HAL_LINUX_NVM_SIZE bytes, or unreadable */
+} hal_linux_file_t;
+
 /* One Linux host HAL. Fields are private to hal_linux.c; tests read them through the
  * accessor functions below. */
 struct hal {
@@ -44,6 +53,7 @@ struct hal {
     int can_fd;               /* live SocketCAN socket (hal_socketcan.c); -1: log replay */
     uint32_t can_error_frames; /* CAN error frames received on the socket */
     uint32_t can_io_errors;   /* failed socket reads/writes (interface down, queue full) */
+    hal_linux_file_t open_failed; /* the file a failed hal_linux_open could not use */
 };
 
 /*
@@ -58,10 +68,12 @@ struct hal {
  * The TX interface name is "can0" (hal_linux_set_iface changes it), the clock is 0.
  * Returns 0; HAL_EINVAL if hal is NULL; HAL_EIO if a file cannot be opened, created, or
  * read, or the NVM file has another size. On an error every file opened here is closed
- * again, and hal_linux_close(hal) is harmless.
+ * again, hal_linux_close(hal) is harmless and hal_linux_open_failed says which file (for
+ * the message: "cannot open" an input log is not "not an NVM image").
  */
 int hal_linux_open(hal_t *hal, const char *rx_log_path, const char *tx_log_path,
                    const char *nvm_path);
+hal_linux_file_t hal_linux_open_failed(const hal_t *hal);
 
 /*
  * Flush the TX log and close every file. The NVM file is already up to date (writes go
