@@ -107,6 +107,18 @@ static int config_check(const app_config_t *cfg, char *err, size_t err_len)
         return 0;
     }
     say(err, err_len, said[rule], "", "");
+    for (size_t i = 0u; rule == APP_CONFIG_UDS_ON_NAV && i < (size_t)NAVECU_MSG_N; i++) {
+        if (cfg->can_ids[i] == cfg->uds_request_id || cfg->can_ids[i] == cfg->uds_response_id) {
+            if (err != NULL && err_len > 0u) {
+                (void)snprintf(err, err_len,
+                               "a UDS ID is one of navecu's CAN IDs: 0x%03X is both; move the "
+                               "UDS IDs (--uds-request-id, --uds-response-id) or that message "
+                               "(the vehicle profile's can_ids)",
+                               (unsigned)cfg->can_ids[i]);
+            }
+            break;
+        }
+    }
     return 2;
 }
 

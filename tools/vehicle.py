@@ -273,6 +273,10 @@ def _ids(spec: dict) -> dict:
         if v in seen:
             raise ProfileError(f"can_ids: {n} and {seen[v]} share 0x{v:03X}")
         seen[v] = n
+    for label, v in uds_ids().items():
+        if v in seen:
+            raise ProfileError(f"can_ids: {seen[v]} = 0x{v:03X} is the {label}: navecu would "
+                               "refuse to start (move the message, or the UDS IDs)")
     return ids
 
 
@@ -373,11 +377,15 @@ def load(name: str) -> Profile:
                     can_ids=_ids(t.get("can_ids", {})))
     except KeyError as e:
         raise ProfileError(f"{path.name}: [geometry] needs {e}") from e
+    except ProfileError as e:
+        raise ProfileError(f"{path.name}: {e}") from e
     if p.direction not in DIRECTIONS:
         raise ProfileError(f"{path.name}: direction must be one of {', '.join(DIRECTIONS)}")
-    if not (0.5 < p.track_m < 3.0 and 1.0 < p.wheelbase_m < 6.0):
-        raise ProfileError(f"{path.name}: track {p.track_m} m or wheelbase {p.wheelbase_m} m "
-                           "is not a car's")
+    for what, value, lo, hi in (("track_m", p.track_m, 0.5, 3.0),
+                                ("wheelbase_m", p.wheelbase_m, 1.0, 6.0)):
+        if not lo < value < hi:
+            raise ProfileError(f"{path.name}: [geometry] {what} = {value:g} m is not a car's "
+                               f"(between {lo:g} and {hi:g} m)")
     for bus, ref in t.get("buses", {}).items():
         p.dbc_notes[bus] = []
         p.buses[bus] = load_dbc(ref, p.dbc_notes[bus])

@@ -51,6 +51,8 @@ CASES = [
     ("a counter modulus without a counter", lambda s: s.replace('stopped = ["P", "N"]', 'stopped = ["P", "N"]\ncounter_modulus = 15'), "without a counter"),
     ("a counter on navecu's own WheelSpeeds", lambda s: s.replace('message = "ESP_19"', 'native = true\ncounter = "WheelCounter"').replace('direction = "gear"', 'direction = "signed"'), "E2E"),
     ("a unit the DBC contradicts", lambda s: s.replace('unit = "km/h"', 'unit = "m/s"'), "Unit_KiloMeterPerHour"),
+    ("a track of 15.95 m", lambda s: s.replace("track_m = 1.51", "track_m = 15.95"), "track_m = 15.95 m is not a car's (between 0.5 and 3 m)"),
+    ("a message on the UDS request ID", lambda s: s.replace("base = 0x6C0", "base = 0x6C0\nCMD_Control = 0x7A0"), "CMD_Control = 0x7A0 is the UDS request"),
     ("a recording without its channels", lambda s: s + '[[recordings]]\nfile = "data/comma2k19-rav4/car_bus.log"\n', "channels"),
 ]
 
