@@ -302,6 +302,31 @@ static void test_debounced(void **state)
     assert_bit7_clear();
 }
 
+/* A debounced condition lasts only while it is tested: NO_GNSS untested for 100 s (the
+ * car stands, output.c) restarts its time, as does a new operation cycle (dtc_load) */
+static void test_debounce_time_while_tested(void **state)
+{
+    (void)state;
+    const uint32_t no_gnss = NAVECU_HEALTH_NO_GNSS;
+    const uint32_t not_it = ~no_gnss;
+    (void)dtc_update(&d, no_gnss, 0u);
+    (void)dtc_update_tested(&d, no_gnss, not_it, 50000u * MS);
+    (void)dtc_update(&d, no_gnss, 100000u * MS);
+    assert_int_equal(dtc_status(&d, DTC_NO_GNSS), 0x50u); /* 0 s of it since 100 s */
+    (void)dtc_update(&d, no_gnss, 159999u * MS);
+    assert_int_equal(dtc_status(&d, DTC_NO_GNSS), 0x50u);
+    (void)dtc_update(&d, no_gnss, 160000u * MS);
+    assert_int_equal(dtc_status(&d, DTC_NO_GNSS), 0x2Fu);
+    /* a new cycle with the condition running from before it: its time starts again */
+    setup(NULL);
+    (void)dtc_update(&d, no_gnss, 0u);
+    (void)dtc_load(&d, (const uint8_t[DTC_N]){0}, (size_t)DTC_N);
+    (void)dtc_update(&d, no_gnss, 61000u * MS);
+    assert_int_equal(dtc_status(&d, DTC_NO_GNSS), 0x40u); /* not completed this cycle */
+    (void)dtc_update(&d, no_gnss, 121000u * MS);
+    assert_int_equal(dtc_status(&d, DTC_NO_GNSS), 0x2Fu);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -316,6 +341,7 @@ int main(void)
         cmocka_unit_test_setup(test_clear, setup),
         cmocka_unit_test_setup(test_load_refuses_impossible_bytes, setup),
         cmocka_unit_test_setup(test_debounced, setup),
+        cmocka_unit_test_setup(test_debounce_time_while_tested, setup),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -145,6 +145,9 @@ def gen_h(dtcs) -> str:
           "                             DTC_DEBOUNCED the test fails only then (dtc.h) */",
           "} dtc_def_t;", "",
           "#define DTC_DEBOUNCED 0x8000u     /* in confirm_ds: a debounced DTC (dtc.toml) */",
+          f"#define DTC_DEBOUNCED_FLAGS 0x{sum(1 << d['bit'] for d in dtcs if d['debounced']):04X}u "
+          f"/* their HealthFlags: {' | '.join(d['flag'] for d in dtcs if d['debounced']) or 'none'}"
+          " */",
           "#define DTC_CONFIRM_DS_MASK 0x7FFFu /* in confirm_ds: the confirm time */", "",
           "extern const dtc_def_t dtc_table[DTC_N];", "",
           "#endif /* NAVECU_DTC_TABLE_H */", ""]

@@ -83,28 +83,29 @@ uint32_t dtc_update_tested(dtc_t *d, uint32_t health_flags, uint32_t tested, uin
     uint32_t changed = 0u;
     for (size_t i = 0u; i < (size_t)DTC_N; i++) {
         const dtc_def_t *def = &dtc_table[i];
-        if ((tested & def->health_mask) == 0u) {
-            continue;
-        }
         uint8_t st = d->status[i];
-        if ((health_flags & def->health_mask) != 0u) {
+        if ((health_flags & tested & def->health_mask) == 0u) {
+            /* passed, or not tested: a condition lasts while it is tested */
+            d->fail_start_us[i] = DTC_NO_CONDITION;
+            if ((tested & def->health_mask) == 0u) {
+                continue;
+            }
+            st = (uint8_t)(st & (uint8_t)~(DTC_TF | DTC_TNCTOC | DTC_TNCSLC));
+        } else {
             if (d->fail_start_us[i] == DTC_NO_CONDITION) {
                 d->fail_start_us[i] = now_us; /* the condition starts */
             }
             const uint64_t confirm_us = (uint64_t)(def->confirm_ds & DTC_CONFIRM_DS_MASK) * 100000u;
-            /* time going backwards counts as no time */
-            const int lasted = now_us >= d->fail_start_us[i] + confirm_us;
-            if (!lasted && (def->confirm_ds & DTC_DEBOUNCED) != 0u) {
+            /* time going backwards counts as no time; no overflow: now_us < 2^63 (dtc.h) */
+            const uint8_t lasted = now_us >= d->fail_start_us[i] + confirm_us ? 1u : 0u;
+            if (lasted == 0u && (def->confirm_ds & DTC_DEBOUNCED) != 0u) {
                 continue; /* debounced: not completed yet */
             }
             st = (uint8_t)(st | DTC_TF | DTC_TFTOC | DTC_PDTC | DTC_TFSLC);
             st = (uint8_t)(st & (uint8_t)~(DTC_TNCTOC | DTC_TNCSLC));
-            if (lasted || d->pending_at_start[i]) {
+            if (lasted != 0u || d->pending_at_start[i] != 0u) {
                 st = (uint8_t)(st | DTC_CDTC);
             }
-        } else {
-            d->fail_start_us[i] = DTC_NO_CONDITION;
-            st = (uint8_t)(st & (uint8_t)~(DTC_TF | DTC_TNCTOC | DTC_TNCSLC));
         }
         d->status[i] = st;
         const uint8_t keep = stored_of(st);

@@ -16,7 +16,9 @@
  *            power-on): the condition fails the test only once it has lasted the confirm
  *            time (then pending and confirmed at once); shorter, the test is not completed
  *            and the status byte unchanged, so a start's normal wait is no failure and no
- *            second start confirms it;
+ *            second start confirms it. A condition lasts while it is tested: a test not
+ *            run (dtc_update_tested; the application runs the debounced ones only while
+ *            the car moves), a passed test and a new operation cycle start its time again;
  *   passed:  testFailed, testNotCompletedThisOperationCycle, testNotCompletedSinceLastClear
  *            clear;
  *   the start of an operation cycle (dtc_load): testFailed, testFailedThisOperationCycle
@@ -82,7 +84,8 @@ void dtc_init(dtc_t *d);
  */
 size_t dtc_load(dtc_t *d, const uint8_t *stored, size_t n);
 
-/* One test of every DTC at now_us (any monotonic clock; backwards counts as no time):
+/* One test of every DTC at now_us (a clock in us below 2^63, e.g. since power-on; going
+ * backwards counts as no time; DTC_NO_CONDITION is not a time):
  * health_flags the NAV_Status HealthFlags. Returns the DTCs whose stored byte changed (bit
  * i for DTC i), to be written to NVM. */
 uint32_t dtc_update(dtc_t *d, uint32_t health_flags, uint64_t now_us);
