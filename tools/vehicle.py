@@ -142,24 +142,57 @@ def opendbc_text(ref: str) -> str:
 MALFORMED_COMMENT = re.compile(r'^CM_ (?:(?:SG_ )?\d+ "(?:[^"\\]|\\.)*";|"(?:[^"\\]|\\.)*")'
                                r'[ \t]*\r?\n', re.M)
 #: a keyword followed by a message's identifier, wherever a DBC names a message by it
-_DBC_ID_REF = re.compile(r'\b(BO_|VAL_|SG_|SIG_VALTYPE_|BO_TX_BU_|SG_MUL_VAL_)([ \t]+)(\d+)\b')
-_DBC_BO = re.compile(r'^BO_[ \t]+(\d+)[ \t]+(\w+)[ \t]*:', re.M)
-_DBC_SG = re.compile(r'^[ \t]+SG_[ \t]+(\w+)\b')
-_DBC_VAL = re.compile(r'^VAL_[ \t]+(\d+)[ \t]+(\w+)\b(?:[^;"]|"[^"]*")*;[ \t]*\r?\n', re.M)
-_DBC_VAL_OPEN = re.compile(r'^(VAL_[ \t]+\d+[ \t]+\w+(?:[ \t]+-?\d+[ \t]+"[^"]*")*)[ \t]*$', re.M)
+_DBC_ID_REF = re.compile(r'\b(BO_|VAL_|SG_|SIG_VALTYPE_|BO_TX_BU_|SG_MUL_VAL_|SIG_GROUP_|'
+                         r'BU_BO_REL_[ \t]+\w+)([ \t]+)(\d+)\b')
+_DBC_BO = re.compile(r'^[ \t]*BO_[ \t]+(\d+)[ \t]+(\w+)[ \t]*:', re.M)
+_DBC_SG = re.compile(r'^[ \t]*SG_[ \t]+(\w+)\b')
+_DBC_STRING = re.compile(r'("(?:[^"\\]|\\.)*")')
+_DBC_STATEMENT = re.compile(r'^[ \t]*[A-Z][A-Z0-9_]*_\b')  # a line that starts a statement
+_DBC_VAL_HEAD = re.compile(r'^VAL_[ \t]+(\d+)[ \t]+(\w+)\b')
 _DBC_LEADING_POINT = re.compile(r'(?<![\w.])(-?)\.(\d)')
-_DBC_DIGIT_NAME = re.compile(r'^(BO_[ \t]+\d+[ \t]+|[ \t]+SG_[ \t]+)(\d\w*)', re.M)
+_DBC_DIGIT_NAME = re.compile(r'^([ \t]*BO_[ \t]+\d+[ \t]+|[ \t]*SG_[ \t]+)(\d\w*)', re.M)
 _DBC_EXTENDED = 0x80000000
+
+
+def _outside_strings(text: str, fn) -> str:
+    """fn applied to the parts of text outside its quoted strings (comments, value names,
+    units): they stay as they are."""
+    parts = _DBC_STRING.split(text)
+    return "".join(fn(p) if k % 2 == 0 else p for k, p in enumerate(parts))
+
+
+def _val_statements(lines: list) -> list:
+    """(first, last, closed) line indices of every VAL_ statement: it runs until a line
+    with its ';' (outside strings) or up to the line before the next statement."""
+    out, i = [], 0
+    while i < len(lines):
+        if not _DBC_VAL_HEAD.match(lines[i]):
+            i += 1
+            continue
+        j = i
+        while True:
+            if ";" in _DBC_STRING.sub("", lines[j]):
+                out.append((i, j, True))
+                break
+            if (j + 1 >= len(lines) or not lines[j + 1].strip()
+                    or _DBC_STATEMENT.match(lines[j + 1])):
+                out.append((i, j, False))
+                break
+            j += 1
+        i = j + 1
+    return out
 
 
 def normalise_dbc(text: str) -> tuple:
     """(text, notes): what cantools refuses in opendbc's files and the DBC format does not
     leave in doubt, made DBC, each kind said once in notes with how many (`python -m
-    tools.vehicle check` prints them). A frame's decoding is the file's own:
+    tools.vehicle check` prints them). A frame's decoding is the file's own, and quoted
+    strings (comments, value names, units) are left as they are:
     - malformed comments (MALFORMED_COMMENT) dropped;
     - an identifier above 0x7FF written without the extended-frame flag (bit 31): it can only
-      be a 29-bit identifier, so the flag is set (opendbc's convention; navecu reads 11-bit
-      frames, so such a message is never one it reads, and cannot collide with its own);
+      be a 29-bit identifier, so the flag is set wherever the file names it (opendbc's
+      convention; navecu reads 11-bit frames, so such a message is never one it reads, and
+      cannot collide with its own); not where the file also has it with the flag (said);
     - a `VAL_` table's missing closing `;` added, and `VAL_` tables of signals the
       message does not have dropped (value names only);
     - numbers written without their leading zero (`.25`) in signal definitions;
@@ -170,41 +203,61 @@ def normalise_dbc(text: str) -> tuple:
     if n:
         text = MALFORMED_COMMENT.sub("", text)
         notes.append(f"{n} malformed comment(s) dropped")
-    ext = {int(i) for i, _ in _DBC_BO.findall(text) if 0x7FF < int(i) < (1 << 29)}
+    ids = {int(i) for i, _ in _DBC_BO.findall(text)}
+    ext = {i for i in ids if 0x7FF < i < (1 << 29) and (i | _DBC_EXTENDED) not in ids}
+    both = sorted(i for i in ids if 0x7FF < i < (1 << 29) and (i | _DBC_EXTENDED) in ids)
     if ext:
-        text = _DBC_ID_REF.sub(lambda m: m[1] + m[2] + str(int(m[3]) | _DBC_EXTENDED)
-                               if int(m[3]) in ext else m[0], text)
+        text = _outside_strings(text, lambda s: _DBC_ID_REF.sub(
+            lambda m: m[1] + m[2] + str(int(m[3]) | _DBC_EXTENDED) if int(m[3]) in ext
+            else m[0], s))
         notes.append(f"{len(ext)} identifier(s) above 0x7FF taken as extended (29-bit)")
-    n = len(_DBC_VAL_OPEN.findall(text))
-    if n:
-        text = _DBC_VAL_OPEN.sub(r"\1 ;", text)
-        notes.append(f"{n} value table(s) without their closing ; closed")
+    if both:
+        notes.append("identifier(s) above 0x7FF also present with the extended flag, left as "
+                     f"they are: {', '.join(f'0x{i:X}' for i in both)}")
+    lines = text.split("\n")
     signals, msg_id = set(), None
-    for line in text.splitlines():
-        bo = _DBC_BO.match(line)
+    for line in lines:
+        bo, sg = _DBC_BO.match(line), _DBC_SG.match(line)
         if bo:
             msg_id = int(bo[1])
-        elif msg_id is not None and _DBC_SG.match(line):
-            signals.add((msg_id, _DBC_SG.match(line)[1]))
-        elif line.strip():
-            msg_id = None if not line.startswith((" ", "\t")) else msg_id
-    stale = [m for m in _DBC_VAL.finditer(text) if (int(m[1]), m[2]) not in signals]
+        elif sg and msg_id is not None:
+            signals.add((msg_id, sg[1]))
+        elif line.strip() and not line.startswith((" ", "\t")):
+            msg_id = None
+    closed, stale, drop = 0, set(), set()
+    for first, last, ok in _val_statements(lines):
+        head = _DBC_VAL_HEAD.match(lines[first])
+        if (int(head[1]), head[2]) not in signals:
+            stale.add(head[2])
+            drop.update(range(first, last + 1))
+        elif not ok:
+            lines[last] = lines[last].rstrip("\r").rstrip() + " ;" + (
+                "\r" if lines[last].endswith("\r") else "")
+            closed += 1
+    if closed:
+        notes.append(f"{closed} value table(s) without their closing ; closed")
     if stale:
-        text = _DBC_VAL.sub(lambda m: "" if (int(m[1]), m[2]) not in signals else m[0], text)
-        notes.append(f"{len(stale)} value table(s) of signals that do not exist dropped "
-                     f"({', '.join(sorted({m[2] for m in stale}))})")
-    lines = text.split("\n")
+        notes.append(f"{len([1 for _ in stale])} value table(s) of signals that do not exist "
+                     f"dropped ({', '.join(sorted(stale))})")
+    lines = [s for k, s in enumerate(lines) if k not in drop]
     fixed = 0
     for i, line in enumerate(lines):
-        if _DBC_SG.match(line) and _DBC_LEADING_POINT.search(line):
-            lines[i] = _DBC_LEADING_POINT.sub(r"\g<1>0.\2", line)
-            fixed += 1
+        if _DBC_SG.match(line):
+            new = _outside_strings(line, lambda s: _DBC_LEADING_POINT.sub(r"\g<1>0.\2", s))
+            fixed += new != line
+            lines[i] = new
+    text = "\n".join(lines)
     if fixed:
-        text = "\n".join(lines)
         notes.append(f"{fixed} signal(s) with numbers like .25 read as 0.25")
     names = sorted({m[2] for m in _DBC_DIGIT_NAME.finditer(text)})
+    taken = sorted(n for n in names if re.search(r'(?<!\w)_' + re.escape(n) + r'\b', text))
+    if taken:
+        notes.append(f"name(s) beginning with a digit whose _ name is taken, left as they are "
+                     f"(cantools refuses them): {', '.join(taken)}")
+        names = [n for n in names if n not in taken]
     if names:
-        text = re.sub(r'(?<![\w"])(' + "|".join(map(re.escape, names)) + r')\b', r"_\1", text)
+        rename = re.compile(r'(?<!\w)(' + "|".join(map(re.escape, names)) + r')\b')
+        text = _outside_strings(text, lambda s: rename.sub(r"_\1", s))
         notes.append(f"name(s) beginning with a digit prefixed with _: {', '.join(names)}")
     return text, notes
 
