@@ -70,7 +70,7 @@ SUPPORT_SRC_BOTH := tests/support/nav_run.c
 # tests built once per numeric variant (f32 firmware, f64 reference)
 TESTS_VARIANT := test_nav_math test_earth test_sins test_dr test_ekf test_ekf_rows test_gnss_geom
 # tests of the float32 firmware only (application, codec, HAL)
-TESTS_F32 := test_e2e test_codec test_trig test_isotp test_uds test_dtc test_boot test_vehicle_checksum test_vehicle_counter
+TESTS_F32 := test_e2e test_codec test_trig test_isotp test_uds test_dtc test_boot test_vehicle_checksum test_vehicle_counter test_vehicle_pair
 # tests that link both variants themselves
 TESTS_BOTH := test_drive
 # tests of application modules against the in-memory HAL (tests/support/fake_hal.c)
@@ -192,7 +192,15 @@ $(BUILD)/$(1)/tests/test_bxcan_profile: $(BUILD)/$(1)/f32/tests/test_bxcan_profi
 	@mkdir -p $$(@D)
 	$$(CC) $(2) $$^ -lcmocka -lm -o $$@
 
-$(1)_TEST_BINS := $(BUILD)/$(1)/tests/test_bxcan_profile $(foreach t,$(TESTS_VARIANT),$(BUILD)/$(1)/tests/$(t)_f32 $(BUILD)/$(1)/tests/$(t)_f64) \
+# wheel speeds split over two messages through the receive path: the Nissan X-Trail's
+# generated vehicle layer under the application (tests/test_vehicle_split.c)
+$(BUILD)/$(1)/tests/test_vehicle_split: $(BUILD)/$(1)/f32/tests/test_vehicle_split.o \
+		$(FAKE_HAL_SUPPORT:%.c=$(BUILD)/$(1)/f32/%.o) $(BUILD)/$(1)/libnavapp.a $(BUILD)/$(1)/libvehicle_nissan_x_trail_2017.a \
+		$(BUILD)/$(1)/libnavcore_f32.a
+	@mkdir -p $$(@D)
+	$$(CC) $(2) $$^ -lcmocka -lm -o $$@
+
+$(1)_TEST_BINS := $(BUILD)/$(1)/tests/test_bxcan_profile $(BUILD)/$(1)/tests/test_vehicle_split $(foreach t,$(TESTS_VARIANT),$(BUILD)/$(1)/tests/$(t)_f32 $(BUILD)/$(1)/tests/$(t)_f64) \
                   $(foreach t,$(TESTS_F32) $(TESTS_BOTH) $(TESTS_FAKE_HAL) $(TESTS_M4_HAL) test_hal_linux,$(BUILD)/$(1)/tests/$(t))
 endef
 
