@@ -435,12 +435,16 @@ def _car_reads(p: Profile, t: dict, fname: str) -> None:
     # (role, message, its wheels): one message for the four, or one per axle, each axle's
     # signals in its own message
     if "messages" in w:
-        parts = [(role, _message(db, w["messages"][axle], f"{fname} [wheels] {axle}"), wheels)
-                 for axle, (role, wheels) in AXLES.items()]
+        if w["messages"]["front"] == w["messages"]["rear"]:
+            raise ProfileError(f"{fname} [wheels]: messages names {w['messages']['front']} for "
+                               "both axles: one message for the four wheels is `message`")
+        parts = [(role, _message(db, w["messages"][axle], f"{fname} [wheels] {axle} axle"),
+                  wheels, f"{fname} [wheels] {axle} axle") for axle, (role, wheels) in AXLES.items()]
     else:
-        parts = [("wheels", _message(db, w["message"], f"{fname} [wheels]"), WHEELS)]
-    part_sigs = [[_signal(msg, w["signals"][k], f"{fname} [wheels] {role}") for k in wheels]
-                 for role, msg, wheels in parts]
+        parts = [("wheels", _message(db, w["message"], f"{fname} [wheels]"), WHEELS,
+                  f"{fname} [wheels]")]
+    part_sigs = [[_signal(msg, w["signals"][k], where) for k in wheels]
+                 for _, msg, wheels, where in parts]
     sigs = [sig for ps in part_sigs for sig in ps]
     _range_override(w, sigs, f"{fname} [wheels]")
     unit = w.get("unit", "m/s")
@@ -452,7 +456,7 @@ def _car_reads(p: Profile, t: dict, fname: str) -> None:
     _check_dbc_unit(sigs, unit, "scale" in w, f"{fname} [wheels]")
     p.speed_factor = SPEED_UNITS[unit] * float(w.get("scale", 1.0))
     p.wheel_step_mps = abs(float(sigs[0].scale)) * p.speed_factor
-    for (role, msg, _), ps in zip(parts, part_sigs):
+    for (role, msg, _, _), ps in zip(parts, part_sigs):
         p.reads.append(_signal_set(role, w, msg, ps, fname))
     if p.direction == "gear":
         g = t.get("gear")
