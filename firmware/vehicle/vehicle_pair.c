@@ -12,7 +12,7 @@ int vehicle_pair_half(vehicle_pair_t *p, vehicle_axle_t axle, nav_real_t left_mp
         return 0;
     }
     /* the other axle's half is held: the two make one sample */
-    const unsigned here = (axle == VEHICLE_AXLE_FRONT) ? 0u : 2u; /* this half's left wheel */
+    const unsigned here = 2u * (unsigned)axle; /* this half's left wheel: FL 0, RL 2 */
     const unsigned there = 2u - here;
     wheel_mps[here] = left_mps;
     wheel_mps[here + 1u] = right_mps;

@@ -354,39 +354,47 @@ duration_s = 3
 """
 
 
-@pytest.fixture(scope="module")
-def vw_drive(tmp_path_factory):
-    """The drive as the VW's bus carries it (navecu's IMU frames at the profile's
-    identifiers, the car's ESP_19 wheel speeds and Getriebe_11 gear), and
-    build/host/navecu-vw_mqb run on it with and without the ESP_19 frames."""
+def car_drive(name: str, d: Path, variants: dict):
+    """VW_DRIVE as profile name's bus carries it (navecu's IMU frames at the profile's
+    identifiers, the car's wheel-speed and gear frames: tools.vehicle.CarEncoder), and
+    build/host/navecu-NAME run on each variant of its log, {label: keep(frame)}. Yields
+    (drive, {label: (frames, decoded outputs, the run's stderr)}, the drive's odometer,
+    the profile), with navecu_can.select_vehicle(name) meanwhile."""
     from tools.sim import faults, report, scenario
-    exe = HOST / f"navecu-{VW}"
+    exe = HOST / f"navecu-{name}"
     if not exe.exists():
         pytest.fail(f"{exe} not built: run 'make test-python'")
-    d = tmp_path_factory.mktemp("vw")
-    p = profile(VW)
-    toml = d / "vw.toml"
+    p = profile(name)
+    toml = d / f"{name}.toml"
     toml.write_text(VW_DRIVE.format(base=scenario.scenario_path("regress"), track=p.track_m,
                                     wheelbase=p.wheelbase_m))
-    nc.select_vehicle(VW)
+    nc.select_vehicle(name)
     try:
         drive = faults.build_drive(str(toml), imu_rate_hz=IMU_HZ, log=lambda *a: None,
                                    car=vehicle.CarEncoder(p))
-        wheels_id = read(VW, "wheels").message.frame_id
         runs = {}
-        for label, keep in (("wheels", lambda m: True),
-                            ("no-wheels", lambda m: m.arbitration_id != wheels_id)):
+        for label, keep in variants.items():
             log, out = d / f"{label}.log", d / f"{label}-nav.log"
             n = nc.write_candump(log, (m for m in drive.messages if keep(m)))
-            subprocess.run([str(exe), "--can-log", str(log), "--out", str(out),
-                            "--imu-rate-hz", str(IMU_HZ)] + drive.fw_args,
-                           check=True, capture_output=True, text=True)
-            runs[label] = (n, report.read_nav_log(out))
+            res = subprocess.run([str(exe), "--can-log", str(log), "--out", str(out),
+                                  "--imu-rate-hz", str(IMU_HZ)] + drive.fw_args,
+                                 check=True, capture_output=True, text=True)
+            runs[label] = (n, report.read_nav_log(out), res.stderr)
         _, odo = scenario.sensor_specs(scenario.load(str(toml)), drive.imu_name,
                                        drive.truth.vehicle)   # the drive's odometer
         yield drive, runs, odo, p
     finally:
         nc.select_vehicle(None)
+
+
+@pytest.fixture(scope="module")
+def vw_drive(tmp_path_factory):
+    """The drive on the VW's bus (its ESP_19 wheel speeds and Getriebe_11 gear), and
+    build/host/navecu-vw_mqb run on it with and without the ESP_19 frames."""
+    wheels_id = read(VW, "wheels").message.frame_id
+    yield from car_drive(VW, tmp_path_factory.mktemp("vw"),
+                         {"wheels": lambda m: True,
+                          "no-wheels": lambda m: m.arbitration_id != wheels_id})
 
 
 def odometer_model_error_m(truth, nav, mu):
@@ -442,7 +450,7 @@ def test_vw_frames_drive_the_dead_reckoning(vw_drive):
     long sees it, forward, through the turn and reversing, within the bound the odometer
     and the DBCs leave (odometer_bound_m)."""
     drive, runs, odo, p = vw_drive
-    _, nav = runs["wheels"]
+    _, nav, _ = runs["wheels"]
     mu = odo.mu
     err, disp = odometer_model_error_m(drive.truth, nav, mu)
     bound = odometer_bound_m(drive.truth, odo, p)
@@ -461,7 +469,7 @@ def test_without_the_vw_wheel_frames_no_dead_reckoning(vw_drive):
     """The same log without ESP_19: no dead reckoning (Mode never DeadReckoning) and the
     position does not follow the odometer's model: the VW's frames drove it."""
     drive, runs, odo, p = vw_drive
-    (n_with, _), (n_without, nav) = runs["wheels"], runs["no-wheels"]
+    (n_with, _, _), (n_without, nav, _) = runs["wheels"], runs["no-wheels"]
     err, _ = odometer_model_error_m(drive.truth, nav, odo.mu)
     bound = odometer_bound_m(drive.truth, odo, p)
     status = nav["NAV_Status"]
@@ -539,38 +547,14 @@ NISSAN_STOP_S = 60.0   # the rear axle's message stops, the car moving (VW_DRIVE
 
 @pytest.fixture(scope="module")
 def nissan_drive(tmp_path_factory):
-    """VW_DRIVE on the Nissan's bus (its WHEEL_SPEEDS_FRONT and _REAR, 0x29A then 0x285 at
+    """The drive on the Nissan's bus (its WHEEL_SPEEDS_FRONT and _REAR, 0x29A then 0x285 at
     each of the simulator's wheel times, and GEARBOX) and build/host/navecu-nissan_x_trail_2017
     run on it, with every frame and with the rear axle's stopping at NISSAN_STOP_S."""
-    from tools.sim import faults, report, scenario
-    exe = HOST / f"navecu-{NISSAN}"
-    if not exe.exists():
-        pytest.fail(f"{exe} not built: run 'make test-python'")
-    d = tmp_path_factory.mktemp("nissan")
-    p = profile(NISSAN)
-    toml = d / "nissan.toml"
-    toml.write_text(VW_DRIVE.format(base=scenario.scenario_path("regress"), track=p.track_m,
-                                    wheelbase=p.wheelbase_m))
-    nc.select_vehicle(NISSAN)
-    try:
-        drive = faults.build_drive(str(toml), imu_rate_hz=IMU_HZ, log=lambda *a: None,
-                                   car=vehicle.CarEncoder(p))
-        rear_id = read(NISSAN, "wheels_rear").message.frame_id
-        runs = {}
-        for label, keep in (("wheels", lambda m: True),
-                            ("rear-stops", lambda m: m.arbitration_id != rear_id
-                             or m.timestamp < NISSAN_STOP_S)):
-            log, out = d / f"{label}.log", d / f"{label}-nav.log"
-            n = nc.write_candump(log, (m for m in drive.messages if keep(m)))
-            res = subprocess.run([str(exe), "--can-log", str(log), "--out", str(out),
-                                  "--imu-rate-hz", str(IMU_HZ)] + drive.fw_args,
-                                 check=True, capture_output=True, text=True)
-            runs[label] = (n, report.read_nav_log(out), res.stderr)
-        _, odo = scenario.sensor_specs(scenario.load(str(toml)), drive.imu_name,
-                                       drive.truth.vehicle)
-        yield drive, runs, odo, p
-    finally:
-        nc.select_vehicle(None)
+    rear_id = read(NISSAN, "wheels_rear").message.frame_id
+    yield from car_drive(NISSAN, tmp_path_factory.mktemp("nissan"),
+                         {"wheels": lambda m: True,
+                          "rear-stops": lambda m: m.arbitration_id != rear_id
+                          or m.timestamp < NISSAN_STOP_S})
 
 
 def test_nissan_frames_drive_the_dead_reckoning(nissan_drive):
