@@ -39,7 +39,13 @@ VEH_OUT := $(BUILD)/vehicle
 # executable on its own frames (tests/python/test_vehicle_profiles.py)
 VEHICLES_BUILT := $(sort $(basename $(notdir $(wildcard vehicles/*.toml))) $(VEHICLE))
 VEH_GEN_SRC = $(VEH_OUT)/$(1)/vehicle_profile.c $(VEH_OUT)/$(1)/veh_can.c
-VEH_SRC = $(call VEH_GEN_SRC,$(1)) firmware/vehicle/vehicle_checksum.c firmware/vehicle/vehicle_counter.c
+VEH_SRC = $(call VEH_GEN_SRC,$(1)) firmware/vehicle/vehicle_checksum.c firmware/vehicle/vehicle_counter.c \
+          firmware/vehicle/vehicle_pair.c
+# 1 if the profile's wheel speeds come in two messages ([wheels] messages = {front, rear}):
+# only then do the ECU's images hold the application's code for the held half
+# (VEHICLE_SPLIT_WHEELS, firmware/vehicle/vehicle.h; the generated layer of a split profile
+# refuses to build with 0, so this cannot be wrong silently)
+VEH_SPLIT := $(shell grep -Eqs '^[[:space:]]*messages[[:space:]]*=' vehicles/$(VEHICLE).toml && echo 1 || echo 0)
 CODEC_GEN := firmware/can/gen/navecu_can.c firmware/can/gen/navecu_can.h
 # the diagnostic transport (ISO-TP, docs/can.md): part of the application's library, linked
 # into the images, kept out of them by --gc-sections until the application calls it
@@ -64,7 +70,7 @@ SUPPORT_SRC_BOTH := tests/support/nav_run.c
 # tests built once per numeric variant (f32 firmware, f64 reference)
 TESTS_VARIANT := test_nav_math test_earth test_sins test_dr test_ekf test_ekf_rows test_gnss_geom
 # tests of the float32 firmware only (application, codec, HAL)
-TESTS_F32 := test_e2e test_codec test_trig test_isotp test_uds test_dtc test_boot test_vehicle_checksum test_vehicle_counter
+TESTS_F32 := test_e2e test_codec test_trig test_isotp test_uds test_dtc test_boot test_vehicle_checksum test_vehicle_counter test_vehicle_pair
 # tests that link both variants themselves
 TESTS_BOTH := test_drive
 # tests of application modules against the in-memory HAL (tests/support/fake_hal.c)
@@ -186,7 +192,15 @@ $(BUILD)/$(1)/tests/test_bxcan_profile: $(BUILD)/$(1)/f32/tests/test_bxcan_profi
 	@mkdir -p $$(@D)
 	$$(CC) $(2) $$^ -lcmocka -lm -o $$@
 
-$(1)_TEST_BINS := $(BUILD)/$(1)/tests/test_bxcan_profile $(foreach t,$(TESTS_VARIANT),$(BUILD)/$(1)/tests/$(t)_f32 $(BUILD)/$(1)/tests/$(t)_f64) \
+# wheel speeds split over two messages through the receive path: the Nissan X-Trail's
+# generated vehicle layer under the application (tests/test_vehicle_split.c)
+$(BUILD)/$(1)/tests/test_vehicle_split: $(BUILD)/$(1)/f32/tests/test_vehicle_split.o \
+		$(FAKE_HAL_SUPPORT:%.c=$(BUILD)/$(1)/f32/%.o) $(BUILD)/$(1)/libnavapp.a $(BUILD)/$(1)/libvehicle_nissan_x_trail_2017.a \
+		$(BUILD)/$(1)/libnavcore_f32.a
+	@mkdir -p $$(@D)
+	$$(CC) $(2) $$^ -lcmocka -lm -o $$@
+
+$(1)_TEST_BINS := $(BUILD)/$(1)/tests/test_bxcan_profile $(BUILD)/$(1)/tests/test_vehicle_split $(foreach t,$(TESTS_VARIANT),$(BUILD)/$(1)/tests/$(t)_f32 $(BUILD)/$(1)/tests/$(t)_f64) \
                   $(foreach t,$(TESTS_F32) $(TESTS_BOTH) $(TESTS_FAKE_HAL) $(TESTS_M4_HAL) test_hal_linux,$(BUILD)/$(1)/tests/$(t))
 endef
 
@@ -197,7 +211,8 @@ $(BUILD)/$(1)/veh-$(3)/%.o: $(VEH_OUT)/$(3)/%.c $(VEH_OUT)/$(3)/.stamp
 	$$(CC) $$(CFLAGS_BASE) -D_DEFAULT_SOURCE $(2) $$(HOST_INC) -I$(VEH_OUT)/$(3) -MMD -MP -c $$< -o $$@
 $(BUILD)/$(1)/libvehicle_$(3).a: $(BUILD)/$(1)/veh-$(3)/vehicle_profile.o $(BUILD)/$(1)/veh-$(3)/veh_can.o \
 		$(BUILD)/$(1)/f32/firmware/vehicle/vehicle_checksum.o \
-		$(BUILD)/$(1)/f32/firmware/vehicle/vehicle_counter.o
+		$(BUILD)/$(1)/f32/firmware/vehicle/vehicle_counter.o \
+		$(BUILD)/$(1)/f32/firmware/vehicle/vehicle_pair.o
 	@mkdir -p $$(@D)
 	$$(AR) rcs $$@ $$^
 # the host executable of this profile: build/host/navecu (native), build/host/navecu-NAME
@@ -354,7 +369,7 @@ cross test-cross: $(BUILD)/m4/libnavecu.a
 TGT := $(BUILD)/target$(VEH_SUFFIX)
 M4_LD := boards/stm32f405/stm32f405.ld
 M4_TGT_CFLAGS := $(CFLAGS_BASE) $(M4_FLAGS) -ffunction-sections -fdata-sections \
-                 -fstack-usage -fcallgraph-info=su
+                 -fstack-usage -fcallgraph-info=su -DVEHICLE_SPLIT_WHEELS=$(VEH_SPLIT)
 M4_TGT_INC := $(FW_INC) -Ihal/common -Ihal/cortex_m4f -Iboards/qemu -I$(VEH_OUT)/$(VEHICLE)
 M4_LDFLAGS_COMMON := $(M4_FLAGS) -nostartfiles --specs=nano.specs -Lboards/stm32f405 -Wl,--gc-sections
 M4_LDFLAGS := $(M4_LDFLAGS_COMMON) -T $(M4_LD)

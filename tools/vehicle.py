@@ -75,6 +75,11 @@ CHECKSUMS = ("none",) + tuple(CAR_CHECKSUMS)
 DIRECTIONS = {"signed": "VEHICLE_DIR_SIGNED", "gear": "VEHICLE_DIR_GEAR",
               "none": "VEHICLE_DIR_NONE"}
 WHEELS = ("fl", "fr", "rl", "rr")
+#: the axles of wheel speeds split over two messages ([wheels] messages = {front, rear}):
+#: the role of each message's signal set, and its wheels (left, right), in WHEELS' order
+AXLES = {"front": ("wheels_front", ("fl", "fr")), "rear": ("wheels_rear", ("rl", "rr"))}
+#: the roles of the wheel speeds' message(s): one message, or one per axle
+WHEEL_ROLES = ("wheels",) + tuple(role for role, _ in AXLES.values())
 
 
 class ProfileError(ValueError):
@@ -84,7 +89,7 @@ class ProfileError(ValueError):
 @dataclass
 class CarSignalSet:
     """One car message navecu reads, and the signals it takes from it."""
-    role: str               # "wheels", "gear" or "yaw_rate"
+    role: str               # "wheels" (or "wheels_front", "wheels_rear"), "gear", "yaw_rate"
     message: object         # cantools Message
     signals: list           # cantools Signals, in the firmware's order
     checksum: str = "none"
@@ -110,6 +115,15 @@ class Profile:
     gear_values: dict = field(default_factory=dict)  # raw gear value -> +1, -1, 0
     recordings: list = field(default_factory=list)   # (path, {channel: bus})
     dbc_notes: dict = field(default_factory=dict)    # bus -> what normalise_dbc changed
+
+    @property
+    def split_wheels(self) -> bool:
+        """The wheel speeds come in two messages, one per axle (firmware/vehicle/vehicle_pair.h)."""
+        return any(r.role in ("wheels_front", "wheels_rear") for r in self.reads)
+
+    def wheel_reads(self) -> list:
+        """The wheel speeds' signal set(s): one, or the front's and the rear's."""
+        return [r for r in self.reads if r.role in WHEEL_ROLES]
 
 
 # ------------------------------------------------------------------ loading a profile
@@ -342,7 +356,7 @@ SCHEMA = {
          "yaw_rate": (False, dict), "geometry": (True, dict), "can_ids": (False, dict),
          "recordings": (False, list)},
     "wheels": {"native": (False, bool), "direction": (False, str), "message": (False, str),
-               "signals": (False, dict), "unit": (False, str), "scale": (False, _NUM),
+               "messages": (False, dict), "signals": (False, dict), "unit": (False, str), "scale": (False, _NUM),
                "checksum": (False, str), "counter": (False, str),
                "counter_modulus": (False, int), "range": (False, list)},
     "gear": {"message": (True, str), "signal": (True, str), "forward": (False, list),
@@ -381,15 +395,23 @@ def _check_shape(t: dict, fname: str) -> None:
             _check_table(t[sect], SCHEMA[sect], f"{fname} [{sect}]")
     w = t["wheels"]
     if w.get("native", False):
-        for key in ("checksum", "counter", "counter_modulus"):
+        for key in ("checksum", "counter", "counter_modulus", "message", "messages"):
             if key in w:
                 raise ProfileError(f"{fname} [wheels]: {key} is for a car message; navecu's "
                                    "WheelSpeeds (native = true) carry their own E2E CRC and "
                                    "counter")
     else:
-        for key in ("message", "signals"):
-            if key not in w:
-                raise ProfileError(f"{fname} [wheels] needs {key} (or native = true)")
+        if ("message" in w) == ("messages" in w):
+            raise ProfileError(f"{fname} [wheels] needs either message (one message for the "
+                               "four wheels) or messages = {front = ..., rear = ...} (one per "
+                               "axle), not " + ("both" if "message" in w else "neither")
+                               + " (or native = true)")
+        if "messages" in w and (sorted(w["messages"]) != sorted(AXLES) or not all(
+                isinstance(v, str) for v in w["messages"].values())):
+            raise ProfileError(f"{fname} [wheels]: messages must name the two axles' messages, "
+                               "{front = ..., rear = ...}, not " + repr(w["messages"]))
+        if "signals" not in w:
+            raise ProfileError(f"{fname} [wheels] needs signals (or native = true)")
         if sorted(w["signals"]) != sorted(WHEELS) or not all(
                 isinstance(v, str) for v in w["signals"].values()):
             raise ProfileError(f"{fname} [wheels]: signals must name the four wheels' signals, "
@@ -463,8 +485,20 @@ def _car_reads(p: Profile, t: dict, fname: str) -> None:
         raise ProfileError(f"{fname}: ecu_bus must name one of [buses]")
     db = p.buses[p.ecu_bus]
     w = t["wheels"]
-    msg = _message(db, w["message"], f"{fname} [wheels]")
-    sigs = [_signal(msg, w["signals"][k], f"{fname} [wheels]") for k in WHEELS]
+    # (role, message, its wheels): one message for the four, or one per axle, each axle's
+    # signals in its own message
+    if "messages" in w:
+        if w["messages"]["front"] == w["messages"]["rear"]:
+            raise ProfileError(f"{fname} [wheels]: messages names {w['messages']['front']} for "
+                               "both axles: one message for the four wheels is `message`")
+        parts = [(role, _message(db, w["messages"][axle], f"{fname} [wheels] {axle} axle"),
+                  wheels, f"{fname} [wheels] {axle} axle") for axle, (role, wheels) in AXLES.items()]
+    else:
+        parts = [("wheels", _message(db, w["message"], f"{fname} [wheels]"), WHEELS,
+                  f"{fname} [wheels]")]
+    part_sigs = [[_signal(msg, w["signals"][k], where) for k in wheels]
+                 for _, msg, wheels, where in parts]
+    sigs = [sig for ps in part_sigs for sig in ps]
     _range_override(w, sigs, f"{fname} [wheels]")
     unit = w.get("unit", "m/s")
     if unit not in SPEED_UNITS:
@@ -475,7 +509,8 @@ def _car_reads(p: Profile, t: dict, fname: str) -> None:
     _check_dbc_unit(sigs, unit, "scale" in w, f"{fname} [wheels]")
     p.speed_factor = SPEED_UNITS[unit] * float(w.get("scale", 1.0))
     p.wheel_step_mps = abs(float(sigs[0].scale)) * p.speed_factor
-    p.reads.append(_signal_set("wheels", w, msg, sigs, fname))
+    for (role, msg, _, _), ps in zip(parts, part_sigs):
+        p.reads.append(_signal_set(role, w, msg, ps, fname))
     if p.direction == "gear":
         g = t.get("gear")
         if g is None:
@@ -509,7 +544,8 @@ def _car_reads(p: Profile, t: dict, fname: str) -> None:
         p.reads.append(_signal_set("yaw_rate", y, ymsg, [ysig], fname))
     ids = [r.message.frame_id for r in p.reads]
     if len(set(ids)) != len(ids):
-        raise ProfileError(f"{fname}: wheels, gear and yaw rate must be different messages")
+        raise ProfileError(f"{fname}: wheels (each axle's), gear and yaw rate must be "
+                           "different messages")
 
 
 #: the wheel-speed units DBCs write (lower case), as the profile's `unit` names them; an
@@ -732,7 +768,8 @@ class CarEncoder:
 
     def message(self, role: str, values: dict, t: float = 0.0,
                 counter: int | None = None) -> can.Message:
-        """The car's frame of role ("wheels", "gear", "yaw_rate") at t with these signal
+        """The car's frame of role ("wheels" or an axle's "wheels_front", "wheels_rear";
+        "gear", "yaw_rate") at t with these signal
         values (the DBC's physical units; the message's other signals at their initial
         value, else 0 or their minimum if that is above 0), encoded with the car's DBC
         without range checks (cantools rounds to the nearest raw value), with the car's
@@ -756,22 +793,25 @@ class CarEncoder:
                            dlc=msg.length, data=bytes(data))
 
     def wheels(self, t: float, v_mps) -> list:
-        """The frames at t for wheel speeds v_mps (FL, FR, RL, RR, signed m/s)."""
+        """The frames at t for wheel speeds v_mps (FL, FR, RL, RR, signed m/s): the gear's
+        where due, then the wheel speeds' message, or the front axle's and the rear's."""
         out = []
-        r = self.by_role["wheels"]
         direction = 1 if sum(v_mps) >= 0 else -1
         if self.p.direction == "gear" and (direction != self._gear
                                             or t - self._gear_t >= self.gear_period_s):
             self._gear, self._gear_t = direction, t
             sig = self.by_role["gear"].signals[0]
             out.append(self.message("gear", {sig.name: self.gear_raw[direction]}, t))
-        vals = {}
-        for s, v in zip(r.signals, v_mps):
-            unit = abs(v) if self.p.direction != "signed" else v
-            lo = s.minimum if s.minimum is not None else -1e9
-            hi = s.maximum if s.maximum is not None else 1e9
-            vals[s.name] = min(max(unit / self.p.speed_factor, lo), hi)
-        out.append(self.message("wheels", vals, t))
+        first = 0   # the first wheel of v_mps that the message carries
+        for r in self.p.wheel_reads():
+            vals = {}
+            for s, v in zip(r.signals, v_mps[first:first + len(r.signals)]):
+                unit = abs(v) if self.p.direction != "signed" else v
+                lo = s.minimum if s.minimum is not None else -1e9
+                hi = s.maximum if s.maximum is not None else 1e9
+                vals[s.name] = min(max(unit / self.p.speed_factor, lo), hi)
+            out.append(self.message(r.role, vals, t))
+            first += len(r.signals)
         return out
 
     def yaw_rate(self, t: float, rate_rps: float) -> list:
@@ -816,7 +856,11 @@ def vehicle_profile_c(p: Profile) -> str:
     counted = any(r.counter is not None for r in p.reads)
     if p.reads:
         L += [f'#include "{CODEC_DB}.h"', '#include "vehicle_checksum.h"']
-        L += ['#include "vehicle_counter.h"', ""] if counted else [""]
+        L += ['#include "vehicle_counter.h"'] if counted else []
+        L += ['#include "vehicle_pair.h"'] if p.split_wheels else []
+        L += [""]
+    if p.split_wheels:
+        L += _split_state_c(p)
     L += [f"const vehicle_profile_t vehicle_profile = {{\"{p.name}\", {DIRECTIONS[p.direction]}, "
           f"{1 if p.native_wheels else 0}u, {_c_float(p.track_m)}, {_c_float(p.wheelbase_m)}, "
           f"{_c_float(p.wheel_step_mps)},",
@@ -847,12 +891,42 @@ def vehicle_profile_c(p: Profile) -> str:
     return "\n".join(L)
 
 
+#: the rear axle's rolling counter, where split wheel speeds name one: the generated file's
+#: own, the caller's vehicle_counters_t having a place for one wheel-speed message only
+REAR_COUNTERS = "rear_counters"
+
+
+def _split_state_c(p: Profile) -> list:
+    """What the generated layer of a profile with split wheel speeds keeps of its own (the
+    held half, the rear axle's counter) and its vehicle_reset (vehicle.h)."""
+    rear = next(r for r in p.reads if r.role == "wheels_rear")
+    L = ["#if !VEHICLE_SPLIT_WHEELS",
+         f'#error "profile {p.name} sends its wheel speeds in two messages: build the '
+         'application with VEHICLE_SPLIT_WHEELS 1 (vehicle.h)"',
+         "#endif", "",
+         "/* The half of the wheel speeds held until the other axle's (vehicle_pair.h)"
+         + (f", and the rear axle's rolling\n * counter {rear.counter.name}"
+            if rear.counter is not None else "") + ":",
+         " * this file's own state, not the caller's (rx_state_t is the same size for every",
+         " * profile: those whose wheel speeds come in one message pay nothing for it);",
+         " * forgotten by vehicle_reset, which the caller calls where it clears its receive",
+         " * state. */",
+         "static vehicle_pair_t wheel_pair;"]
+    if rear.counter is not None:
+        L += [f"static vehicle_counters_t {REAR_COUNTERS}; /* its slot VEHICLE_MSG_WHEELS only */"]
+    L += ["", "void vehicle_reset(void)", "{", "    wheel_pair.held = 0u;"]
+    if rear.counter is not None:
+        L += [f"    {REAR_COUNTERS}.last[(unsigned)VEHICLE_MSG_WHEELS - 1u] = 0u;"]
+    L += ["}", ""]
+    return L
+
+
 def _decode_case(p: Profile, r: CarSignalSet) -> list:
     mn = _c_name(r.message)
     up = f"{CODEC_DB.upper()}_{mn.upper()}"
     fn = f"{CODEC_DB}_{mn}"
-    kind = {"wheels": "VEHICLE_MSG_WHEELS", "gear": "VEHICLE_MSG_GEAR",
-            "yaw_rate": "VEHICLE_MSG_YAW_RATE"}[r.role]
+    kind = "VEHICLE_MSG_WHEELS" if r.role in WHEEL_ROLES else \
+        {"gear": "VEHICLE_MSG_GEAR", "yaw_rate": "VEHICLE_MSG_YAW_RATE"}[r.role]
     L = [f"    case {up}_FRAME_ID: {{", f"        m->kind = {kind};",
          f"        if (f->dlc != {up}_LENGTH) {{", "            return VEHICLE_BAD_DLC;", "        }"]
     if r.checksum != "none":
@@ -863,9 +937,10 @@ def _decode_case(p: Profile, r: CarSignalSet) -> list:
           "            return VEHICLE_BAD_DLC;", "        }"]
     if r.counter is not None:
         cx = camel_to_snake_case(r.counter.name)
+        counters = f"&{REAR_COUNTERS}" if r.role == "wheels_rear" else "c"
         L += [f"        /* {r.counter.name}: {r.counter.length} bits, modulo {r.counter_modulus}: a "
               "repeat or a value it never takes is refused, lost frames are not */",
-              f"        if (vehicle_counter_step(c, {kind}, s.{cx}, {r.counter_modulus}u) <= 0) {{",
+              f"        if (vehicle_counter_step({counters}, {kind}, s.{cx}, {r.counter_modulus}u) <= 0) {{",
               "            return VEHICLE_BAD_COUNTER;", "        }"]
     fields = [camel_to_snake_case(s.name) for s in r.signals]
     cond = " ||\n            ".join(f"!{fn}_{x}_is_in_range(s.{x})" for x in fields)
@@ -874,6 +949,16 @@ def _decode_case(p: Profile, r: CarSignalSet) -> list:
         for i, x in enumerate(fields):
             L.append(f"        m->wheel_mps[{i}] = {fn}_{x}_decode(s.{x}) * "
                      f"{_c_float(p.speed_factor)};")
+    elif r.role in WHEEL_ROLES:
+        axle = "FRONT" if r.role == "wheels_front" else "REAR"
+        other = "rear" if axle == "FRONT" else "front"
+        left, right = (f"{fn}_{x}_decode(s.{x}) * {_c_float(p.speed_factor)}" for x in fields)
+        L += [f"        /* the {axle.lower()} axle's half: held until the {other} axle's, or "
+              "with it one sample (vehicle_pair.h) */",
+              f"        if (vehicle_pair_half(&wheel_pair, VEHICLE_AXLE_{axle},",
+              f"                              {left},",
+              f"                              {right}, m->wheel_mps) == 0) {{",
+              "            return VEHICLE_WHEELS_HELD;", "        }"]
     elif r.role == "gear":
         x = fields[0]
         L.append(f"        switch (s.{x}) {{")

@@ -43,6 +43,9 @@ int app_init(app_t *app, const app_config_t *cfg)
         ocfg.still_rate_rps = rate_noise_rps;
     }
     memset(app, 0, sizeof *app);
+#if VEHICLE_SPLIT_WHEELS
+    vehicle_reset(); /* and what the vehicle layer holds of the receive state (vehicle.h) */
+#endif
     if (odo_init(&app->keep.odo, &ocfg) != NAV_OK) {
         return NAV_EINVAL;
     }
@@ -82,6 +85,12 @@ void app_boot(app_t *a, hal_t *hal)
 int app_nvm_write_allowed(const app_t *a)
 {
     return (a->run.mode == APP_MODE_WAIT_INIT || a->keep.odo.standing != 0u) ? 1 : 0;
+}
+
+/* the default vehicle layer's state: none (vehicle.h; a profile with split wheel speeds
+ * generates its own vehicle_reset) */
+__attribute__((weak)) void vehicle_reset(void)
+{
 }
 
 /* the default board layer: nothing over the NVM's (app.h; the host has its own) */

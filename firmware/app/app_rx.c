@@ -318,6 +318,16 @@ static rx_verdict_t decode_car(rx_state_t *rx, const hal_can_frame_t *f, rx_inpu
     if (m.kind == VEHICLE_MSG_NONE) {
         return RX_FOREIGN;
     }
+#if VEHICLE_SPLIT_WHEELS
+    if (v == VEHICLE_WHEELS_HELD) {
+        /* one axle's wheel speeds, read and held until the other axle's (vehicle_pair.h):
+         * counted as read, nothing to act on yet */
+        if (rx->car_read[VEHICLE_MSG_WHEELS] < UINT32_MAX) {
+            rx->car_read[VEHICLE_MSG_WHEELS]++;
+        }
+        return RX_OK;
+    }
+#endif
     if (v != VEHICLE_OK) {
         return v == VEHICLE_BAD_DLC        ? RX_BAD_DLC
                : v == VEHICLE_BAD_CHECKSUM ? RX_BAD_CRC

@@ -19,6 +19,16 @@
 #include "nav_types.h"
 #include "navecu_protocol.h"
 
+/* 1 where the build's profile may send its wheel speeds in two messages, one per axle
+ * (vehicle_pair.h): the application then handles VEHICLE_WHEELS_HELD and calls
+ * vehicle_reset. The ECU's images are compiled per profile, and the Makefile sets it to 0
+ * for a profile whose wheel speeds come in one message, so that their images hold no code
+ * for it (the generated layer of a split profile refuses to build with 0); the host's
+ * libraries serve every profile and keep the default, 1. */
+#ifndef VEHICLE_SPLIT_WHEELS
+#define VEHICLE_SPLIT_WHEELS 1
+#endif
+
 /* where the direction of travel comes from */
 typedef enum {
     VEHICLE_DIR_SIGNED = 0, /* the wheel speeds are signed (navecu's WheelSpeeds) */
@@ -56,6 +66,9 @@ typedef enum {
     VEHICLE_BAD_COUNTER,   /* the car's rolling counter (where the profile names one):
                               repeated, or a value the sender does not count through */
     VEHICLE_BAD_VALUE,     /* outside the DBC's range, or a gear the profile does not know */
+    VEHICLE_WHEELS_HELD,   /* passed: one axle's wheel speeds, of a car that sends the axles
+                              in two messages, held until the other axle's (vehicle_pair.h);
+                              nothing to act on yet (kind VEHICLE_MSG_WHEELS, no values) */
 } vehicle_verdict_t;
 
 /* The receive state of the car's rolling counters (vehicle_counter.h): kept by the caller
@@ -78,9 +91,19 @@ typedef struct {
  * VEHICLE_MSG_NONE); the verdict says whether it passed the car's checks, in this order:
  * the DLC, the car's checksum, the rolling counter (against c, which a counter that passes
  * updates: a frame refused afterwards for its values has still counted), the ranges.
- * Generated; c is untouched by a profile that names no counter. */
+ * Generated; c is untouched by a profile that names no counter. Where the profile's wheel
+ * speeds come in two messages (front and rear axle), a half that passes is held and gives
+ * VEHICLE_WHEELS_HELD, and the half that completes the pair gives VEHICLE_OK with the four
+ * wheels (vehicle_pair.h). */
 vehicle_verdict_t vehicle_decode(const hal_can_frame_t *f, vehicle_counters_t *c,
                                  vehicle_msg_t *m);
+
+/* Forget what vehicle_decode holds of its own: the held half of split wheel speeds and the
+ * rolling counters the caller's vehicle_counters_t has no room for (the rear axle's).
+ * Called where the caller clears the state it keeps (app_init: power-on, ECUReset). Generated
+ * for profiles with split wheel speeds only; every other profile's vehicle layer holds
+ * nothing, and app.c's default (weak, empty) is taken. */
+void vehicle_reset(void);
 
 /* The car's identifiers navecu receives: writes up to max to ids, returns how many there
  * are. Generated. */

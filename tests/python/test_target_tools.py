@@ -150,3 +150,5 @@ def test_bench_finds_the_imu_where_the_profile_moved_it(tmp_path):
         assert r[k] == ref[k], k
     assert r["insn_per_wheel_frame_mean"] == 6 * 7
     assert qemu_run.frame_ids("toyota_rav4_2017")["gnss"] == {0x120, 0x121, 0x122, 0x124}
+    # wheel speeds in two messages: both are wheel frames (the front axle's, the rear's)
+    assert qemu_run.frame_ids("nissan_x_trail_2017")["wheels"] == {0x29A, 0x285}

@@ -286,3 +286,100 @@ def test_a_counter_on_the_checksum_is_refused(profiles):
     (profiles / "sub.toml").write_text(bad.replace('name = "subaru_global_2017"', 'name = "sub"'))
     with pytest.raises(vehicle.ProfileError, match="counter CHECKSUM overlaps the subaru"):
         vehicle.load("sub")
+
+
+# ------------------------------------------- wheel speeds in two messages, one per axle
+def _split_text(name: str) -> str:
+    text = (vehicle.ROOT / "vehicles" / "nissan_x_trail_2017.toml").read_text()
+    return text.replace('name = "nissan_x_trail_2017"', f'name = "{name}"')
+
+
+MESSAGES = 'messages = {front = "WHEEL_SPEEDS_FRONT", rear = "WHEEL_SPEEDS_REAR"}'
+# (what is wrong, the change to the Nissan profile, a word the message must hold)
+SPLIT_CASES = [
+    ("message and messages both", lambda s: s.replace(MESSAGES, MESSAGES + '\nmessage = "WHEEL_SPEEDS_FRONT"'), "not both"),
+    ("neither message nor messages", lambda s: s.replace(MESSAGES + "\n", ""), "neither"),
+    ("messages not a table", lambda s: s.replace(MESSAGES, 'messages = "WHEEL_SPEEDS_FRONT"'), "messages must be a table"),
+    ("no rear axle", lambda s: s.replace(', rear = "WHEEL_SPEEDS_REAR"', ""), "front = ..., rear = ..."),
+    ("an axle the format does not have", lambda s: s.replace("rear =", "middle = "), "front = ..., rear = ..."),
+    ("an axle's message not a string", lambda s: s.replace('rear = "WHEEL_SPEEDS_REAR"', "rear = 645"), "front = ..., rear = ..."),
+    ("an axle's message not in the DBC", lambda s: s.replace('"WHEEL_SPEEDS_REAR"}', '"WHEEL_SPEEDS_BACK"}'), "no message WHEEL_SPEEDS_BACK"),
+    ("a front wheel's signal in the rear message", lambda s: s.replace('fl = "WHEEL_SPEED_FL"', 'fl = "WHEEL_SPEED_RL"'), "WHEEL_SPEEDS_FRONT has no signal WHEEL_SPEED_RL"),
+    ("a rear wheel's signal in the front message", lambda s: s.replace('rr = "WHEEL_SPEED_RR"', 'rr = "WHEEL_SPEED_FR"'), "WHEEL_SPEEDS_REAR has no signal WHEEL_SPEED_FR"),
+    ("one message for both axles", lambda s: s.replace('rear = "WHEEL_SPEEDS_REAR"', 'rear = "WHEEL_SPEEDS_FRONT"'), "both axles"),
+    ("a counter neither message has", lambda s: s.replace('direction = "gear"', 'direction = "gear"\ncounter = "COUNTER"'), "no signal COUNTER"),
+    ("navecu's own WheelSpeeds with messages", lambda s: s.replace('direction = "gear"', 'native = true').replace('unit = "kph"\n', ""), "messages"),
+]
+
+
+@pytest.mark.parametrize("what,change,word", SPLIT_CASES, ids=[c[0] for c in SPLIT_CASES])
+def test_a_split_mistake_is_named(profiles, what, change, word):
+    """`[wheels] messages = {front, rear}` instead of `message`: exactly one of the two, the
+    two axles and no other, each a string naming a message of the DBC, each axle's signals
+    in its own message, two different messages; each refusal names what is wrong."""
+    text = change(_split_text("bad"))
+    assert text != _split_text("bad"), what
+    (profiles / "bad.toml").write_text(text)
+    with pytest.raises(vehicle.ProfileError) as e:
+        vehicle.load("bad")
+    assert word in str(e.value), str(e.value)
+
+
+def test_one_message_per_axle_loads_as_two_signal_sets(profiles):
+    """The Nissan profile: two signal sets, the front axle's (FL, FR of WHEEL_SPEEDS_FRONT)
+    and the rear's (RL, RR of WHEEL_SPEEDS_REAR), in that order, then the gear; the
+    generated layer includes vehicle_pair.h, refuses to build without VEHICLE_SPLIT_WHEELS,
+    defines vehicle_reset and hands each half to vehicle_pair_half after its checks."""
+    (profiles / "nis.toml").write_text(_split_text("nis"))
+    p = vehicle.load("nis")
+    assert p.split_wheels
+    assert [(r.role, r.message.name, [s.name for s in r.signals]) for r in p.wheel_reads()] == [
+        ("wheels_front", "WHEEL_SPEEDS_FRONT", ["WHEEL_SPEED_FL", "WHEEL_SPEED_FR"]),
+        ("wheels_rear", "WHEEL_SPEEDS_REAR", ["WHEEL_SPEED_RL", "WHEEL_SPEED_RR"])]
+    assert [r.role for r in p.reads] == ["wheels_front", "wheels_rear", "gear"]
+    assert p.wheel_step_mps == pytest.approx(0.005 / 3.6)
+    src = vehicle.vehicle_profile_c(p)
+    assert '#include "vehicle_pair.h"' in src and "#if !VEHICLE_SPLIT_WHEELS" in src
+    assert "void vehicle_reset(void)" in src and "vehicle_counter.h" not in src
+    for frame, axle in (("WHEEL_SPEEDS_FRONT", "FRONT"), ("WHEEL_SPEEDS_REAR", "REAR")):
+        case = src[src.index(f"case VEH_CAN_{frame}_FRAME_ID"):]
+        case = case[:case.index("    case ", 10)]
+        assert case.index("_LENGTH") < case.index("_is_in_range(") < \
+            case.index(f"vehicle_pair_half(&wheel_pair, VEHICLE_AXLE_{axle},")
+        assert "return VEHICLE_WHEELS_HELD;" in case
+    # a profile of one wheel message has none of it
+    (profiles / "one.toml").write_text(GOOD.format(name="one"))
+    one = vehicle.load("one")
+    src = vehicle.vehicle_profile_c(one)
+    assert not one.split_wheels and "vehicle_pair" not in src and "vehicle_reset" not in src
+
+
+def test_each_axles_message_has_its_checksum_and_counter(profiles):
+    """checksum and counter name each axle's message's own: both checked, each with its own
+    sequence (the front's in the caller's vehicle_counters_t, the rear's in the generated
+    layer's own state, cleared by vehicle_reset), in the order DLC, checksum, counter,
+    ranges, and only then the half is paired. (A synthetic profile on Subaru's DBC: its
+    Wheel_Speeds as the front axle, Brake_Pressure_L_R as the rear, both with CHECKSUM and
+    COUNTER.)"""
+    text = (vehicle.ROOT / "vehicles" / "subaru_global_2017.toml").read_text()
+    text = text.replace('name = "subaru_global_2017"', 'name = "sub2"').replace(
+        'message = "Wheel_Speeds"',
+        'messages = {front = "Wheel_Speeds", rear = "Brake_Pressure_L_R"}').replace(
+        'rl = "RL", rr = "RR"', 'rl = "Brake_1", rr = "Brake_2"')
+    (profiles / "sub2.toml").write_text(text)
+    p = vehicle.load("sub2")
+    assert [(r.role, r.checksum, r.counter.name, r.counter_modulus) for r in p.wheel_reads()] == [
+        ("wheels_front", "subaru", "COUNTER", 16), ("wheels_rear", "subaru", "COUNTER", 16)]
+    src = vehicle.vehicle_profile_c(p)
+    assert "static vehicle_counters_t rear_counters;" in src
+    reset = src[src.index("void vehicle_reset(void)"):]
+    assert "rear_counters.last[(unsigned)VEHICLE_MSG_WHEELS - 1u] = 0u;" in reset[:reset.index("}")]
+    for frame, counters, axle in (("WHEEL_SPEEDS", "c", "FRONT"),
+                                  ("BRAKE_PRESSURE_L_R", "&rear_counters", "REAR")):
+        case = src[src.index(f"case VEH_CAN_{frame}_FRAME_ID"):]
+        case = case[:case.index("    case ", 10)]
+        steps = ["_LENGTH", "vehicle_checksum_subaru(",
+                 f"vehicle_counter_step({counters}, VEHICLE_MSG_WHEELS, s.counter, 16u)",
+                 "_is_in_range(", f"vehicle_pair_half(&wheel_pair, VEHICLE_AXLE_{axle},"]
+        at = [case.index(x) for x in steps]
+        assert at == sorted(at), (frame, at)

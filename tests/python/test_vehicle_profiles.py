@@ -49,7 +49,13 @@ CHECKSUMMED = [(n, r.role) for n in CAR_PROFILES for r in profile(n).reads
                if r.checksum != "none"]
 
 Decoded = namedtuple("Decoded", "verdict kind wheels gear yaw")
-KIND = {"wheels": "WHEELS", "gear": "GEAR", "yaw_rate": "YAW_RATE"}
+KIND = {"wheels": "WHEELS", "wheels_front": "WHEELS", "wheels_rear": "WHEELS", "gear": "GEAR",
+        "yaw_rate": "YAW_RATE"}
+WHEEL_ROLES = vehicle.WHEEL_ROLES
+#: split wheel speeds: each axle's half is decoded paired with the other axle's, and its
+#: wheels' place in the four (FL, FR, RL, RR)
+OTHER_AXLE = {"wheels_front": "wheels_rear", "wheels_rear": "wheels_front"}
+FIRST_WHEEL = {"wheels": 0, "wheels_front": 0, "wheels_rear": 2}
 
 
 def decoder(name: str) -> Path:
@@ -134,7 +140,21 @@ def read(name: str, role: str):
 
 
 def value_of(d: Decoded, role: str, i: int) -> float:
-    return d.wheels[i] if role == "wheels" else d.yaw
+    return d.wheels[FIRST_WHEEL[role] + i] if role in WHEEL_ROLES else d.yaw
+
+
+def decode_paired(name: str, role: str, msgs: list, car, tmp_path: Path) -> list:
+    """decode() of msgs of one role; where the role is an axle's half of split wheel speeds,
+    each is sent after a frame of the other axle (read and held: HELD), so that it completes
+    a sample (OK) with its values in their places. One Decoded per frame of msgs."""
+    other = OTHER_AXLE.get(role)
+    if other is None:
+        return decode(name, msgs, tmp_path)
+    r = read(name, other)
+    fill = car.message(other, random_values(r.message, np.random.default_rng(21), 3)[2])
+    got = decode(name, [x for m in msgs for x in (fill, m)], tmp_path)
+    assert {(d.verdict, d.kind) for d in got[0::2]} == {("HELD", "WHEELS")}
+    return got[1::2]
 
 
 def test_every_profile_built_and_its_decoder_says_so():
@@ -151,16 +171,18 @@ def test_every_profile_built_and_its_decoder_says_so():
 @pytest.mark.parametrize("name,role", [x for x in READS if x[1] != "gear"])
 def test_signals_round_trip_against_cantools(name, role, tmp_path):
     """Random physical values over each read signal's DBC range, encoded by cantools with
-    the car's checksum: vehicle_decode accepts every frame and gives cantools' decode times
+    the car's checksum (an axle's half of split wheel speeds after a frame of the other
+    axle, so that it completes a sample): vehicle_decode accepts every frame and gives
+    cantools' decode times
     the profile's unit factor within float32 rounding, and the value encoded within half an
     LSB more."""
     p, r = profile(name), read(name, role)
-    k = p.speed_factor if role == "wheels" else p.rate_factor
+    k = p.speed_factor if role in WHEEL_ROLES else p.rate_factor
     car = vehicle.CarEncoder(p)
     values = random_values(r.message, np.random.default_rng(15), N_RANDOM)
     msgs = [car.message(role, v) for v in values]
     worst = 0.0
-    for v, m, d in zip(values, msgs, decode(name, msgs, tmp_path)):
+    for v, m, d in zip(values, msgs, decode_paired(name, role, msgs, car, tmp_path)):
         assert (d.verdict, d.kind) == ("OK", KIND[role]), (m, d)
         ref = r.message.decode(bytes(m.data), decode_choices=False)
         raw = raw_of(r.message, m)
@@ -332,39 +354,47 @@ duration_s = 3
 """
 
 
-@pytest.fixture(scope="module")
-def vw_drive(tmp_path_factory):
-    """The drive as the VW's bus carries it (navecu's IMU frames at the profile's
-    identifiers, the car's ESP_19 wheel speeds and Getriebe_11 gear), and
-    build/host/navecu-vw_mqb run on it with and without the ESP_19 frames."""
+def car_drive(name: str, d: Path, variants: dict):
+    """VW_DRIVE as profile name's bus carries it (navecu's IMU frames at the profile's
+    identifiers, the car's wheel-speed and gear frames: tools.vehicle.CarEncoder), and
+    build/host/navecu-NAME run on each variant of its log, {label: keep(frame)}. Yields
+    (drive, {label: (frames, decoded outputs, the run's stderr)}, the drive's odometer,
+    the profile), with navecu_can.select_vehicle(name) meanwhile."""
     from tools.sim import faults, report, scenario
-    exe = HOST / f"navecu-{VW}"
+    exe = HOST / f"navecu-{name}"
     if not exe.exists():
         pytest.fail(f"{exe} not built: run 'make test-python'")
-    d = tmp_path_factory.mktemp("vw")
-    p = profile(VW)
-    toml = d / "vw.toml"
+    p = profile(name)
+    toml = d / f"{name}.toml"
     toml.write_text(VW_DRIVE.format(base=scenario.scenario_path("regress"), track=p.track_m,
                                     wheelbase=p.wheelbase_m))
-    nc.select_vehicle(VW)
+    nc.select_vehicle(name)
     try:
         drive = faults.build_drive(str(toml), imu_rate_hz=IMU_HZ, log=lambda *a: None,
                                    car=vehicle.CarEncoder(p))
-        wheels_id = read(VW, "wheels").message.frame_id
         runs = {}
-        for label, keep in (("wheels", lambda m: True),
-                            ("no-wheels", lambda m: m.arbitration_id != wheels_id)):
+        for label, keep in variants.items():
             log, out = d / f"{label}.log", d / f"{label}-nav.log"
             n = nc.write_candump(log, (m for m in drive.messages if keep(m)))
-            subprocess.run([str(exe), "--can-log", str(log), "--out", str(out),
-                            "--imu-rate-hz", str(IMU_HZ)] + drive.fw_args,
-                           check=True, capture_output=True, text=True)
-            runs[label] = (n, report.read_nav_log(out))
+            res = subprocess.run([str(exe), "--can-log", str(log), "--out", str(out),
+                                  "--imu-rate-hz", str(IMU_HZ)] + drive.fw_args,
+                                 check=True, capture_output=True, text=True)
+            runs[label] = (n, report.read_nav_log(out), res.stderr)
         _, odo = scenario.sensor_specs(scenario.load(str(toml)), drive.imu_name,
                                        drive.truth.vehicle)   # the drive's odometer
         yield drive, runs, odo, p
     finally:
         nc.select_vehicle(None)
+
+
+@pytest.fixture(scope="module")
+def vw_drive(tmp_path_factory):
+    """The drive on the VW's bus (its ESP_19 wheel speeds and Getriebe_11 gear), and
+    build/host/navecu-vw_mqb run on it with and without the ESP_19 frames."""
+    wheels_id = read(VW, "wheels").message.frame_id
+    yield from car_drive(VW, tmp_path_factory.mktemp("vw"),
+                         {"wheels": lambda m: True,
+                          "no-wheels": lambda m: m.arbitration_id != wheels_id})
 
 
 def odometer_model_error_m(truth, nav, mu):
@@ -385,7 +415,7 @@ def odometer_model_error_m(truth, nav, mu):
     return np.linalg.norm(est - (1.0 + mu) * tru, axis=1), np.linalg.norm(tru, axis=1)
 
 
-def odometer_bound_m(truth, odo, p) -> float:
+def odometer_bound_m(truth, odo, p, name: str = VW) -> float:
     """What the odometer model cannot promise closer than (odometer_model_error_m), summed
     from the scenario's odometer and the DBCs:
     - the wheel speeds' latency and the 50 Hz frames' hold, L = latency + 1/rate: a speed
@@ -398,8 +428,8 @@ def odometer_bound_m(truth, odo, p) -> float:
     from tools.geodesy import radii_m
     db = nc.load_db()
     mu = odo.mu
-    r = read(VW, "wheels")
-    q_car = max(s.conversion.scale for s in r.signals) * p.speed_factor
+    q_car = max(s.conversion.scale for r in profile(name).wheel_reads()
+                for s in r.signals) * p.speed_factor
     dt = np.diff(truth.t_s)
     speed = np.asarray(truth.speed_mps)
     moving_s = float(np.sum(dt[(speed[1:] != 0) | (speed[:-1] != 0)]))
@@ -420,7 +450,7 @@ def test_vw_frames_drive_the_dead_reckoning(vw_drive):
     long sees it, forward, through the turn and reversing, within the bound the odometer
     and the DBCs leave (odometer_bound_m)."""
     drive, runs, odo, p = vw_drive
-    _, nav = runs["wheels"]
+    _, nav, _ = runs["wheels"]
     mu = odo.mu
     err, disp = odometer_model_error_m(drive.truth, nav, mu)
     bound = odometer_bound_m(drive.truth, odo, p)
@@ -439,7 +469,7 @@ def test_without_the_vw_wheel_frames_no_dead_reckoning(vw_drive):
     """The same log without ESP_19: no dead reckoning (Mode never DeadReckoning) and the
     position does not follow the odometer's model: the VW's frames drove it."""
     drive, runs, odo, p = vw_drive
-    (n_with, _), (n_without, nav) = runs["wheels"], runs["no-wheels"]
+    (n_with, _, _), (n_without, nav, _) = runs["wheels"], runs["no-wheels"]
     err, _ = odometer_model_error_m(drive.truth, nav, odo.mu)
     bound = odometer_bound_m(drive.truth, odo, p)
     status = nav["NAV_Status"]
@@ -449,6 +479,124 @@ def test_without_the_vw_wheel_frames_no_dead_reckoning(vw_drive):
     assert n_with - n_without > 1000
     assert 4 not in modes
     assert err.max() > bound
+
+
+# ------------------------------------------- wheel speeds in two messages (the Nissan)
+NISSAN = "nissan_x_trail_2017"
+SPLIT_PROFILES = [n for n in CAR_PROFILES if profile(n).split_wheels]
+
+
+def test_the_nissan_sends_its_axles_apart():
+    """The profile the split format was made for is one: WHEEL_SPEEDS_FRONT 0x29A carries
+    FL and FR, WHEEL_SPEEDS_REAR 0x285 RL and RR (opendbc's DBC, cantools)."""
+    assert NISSAN in SPLIT_PROFILES
+    got = [(r.message.frame_id, [s.name for s in r.signals]) for r in profile(NISSAN).wheel_reads()]
+    assert got == [(0x29A, ["WHEEL_SPEED_FL", "WHEEL_SPEED_FR"]),
+                   (0x285, ["WHEEL_SPEED_RL", "WHEEL_SPEED_RR"])]
+
+
+@pytest.mark.parametrize("name", SPLIT_PROFILES)
+def test_pairing_against_cantools(name, tmp_path):
+    """A random sequence of the two axles' frames (each axle drawn at random, so that halves
+    repeat before the other's, and runs of one axle alone), one in eight cut short (a wrong
+    DLC): vehicle_decode against a model of the rule decoded by cantools. Each good half is
+    HELD unless the other axle's is held; then it gives OK and the four wheels, FL, FR, RL,
+    RR: the newest good half of each axle (a repeated half replaces the held one), each
+    cantools' decode times the unit factor within float32 rounding. A refused half is not
+    held: it neither completes a pair nor replaces the held half."""
+    p = profile(name)
+    car = vehicle.CarEncoder(p)
+    rng = np.random.default_rng(29)
+    k = p.speed_factor
+    front, rear = p.wheel_reads()
+    msgs, axles = [], []
+    for i in range(N_RANDOM):
+        r = front if rng.random() < 0.5 else rear
+        m = car.message(r.role, random_values(r.message, rng, 3)[2])
+        if rng.random() < 0.125:
+            m = can.Message(arbitration_id=m.arbitration_id, is_extended_id=False,
+                            dlc=m.dlc - 1, data=bytes(m.data[:-1]))
+        msgs.append(m)
+        axles.append(r)
+    held = None     # (the axle's signal set, its frame)
+    pairs = 0
+    for m, r, d in zip(msgs, axles, decode(name, msgs, tmp_path)):
+        if m.dlc != r.message.length:
+            assert (d.verdict, d.kind) == ("BAD_DLC", "WHEELS"), (m, d)
+            continue
+        if held is None or held[0] is r:
+            held = (r, m)
+            assert (d.verdict, d.kind) == ("HELD", "WHEELS"), (m, d)
+            continue
+        assert (d.verdict, d.kind) == ("OK", "WHEELS"), (m, d)
+        for half, frame in ((r, m), held):
+            ref = half.message.decode(bytes(frame.data), decode_choices=False)
+            raw = raw_of(half.message, frame)
+            for i, sig in enumerate(half.signals):
+                got = d.wheels[FIRST_WHEEL[half.role] + i]
+                assert abs(got - ref[sig.name] * k) <= f32_bound(sig, raw[sig.name], k), \
+                    (sig.name, got, ref[sig.name] * k)
+        held = None
+        pairs += 1
+    print(f"{name}: {len(msgs)} frames, {pairs} samples")
+    assert 100 < pairs < N_RANDOM / 2
+
+
+NISSAN_STOP_S = 60.0   # the rear axle's message stops, the car moving (VW_DRIVE's timeline)
+
+
+@pytest.fixture(scope="module")
+def nissan_drive(tmp_path_factory):
+    """The drive on the Nissan's bus (its WHEEL_SPEEDS_FRONT and _REAR, 0x29A then 0x285 at
+    each of the simulator's wheel times, and GEARBOX) and build/host/navecu-nissan_x_trail_2017
+    run on it, with every frame and with the rear axle's stopping at NISSAN_STOP_S."""
+    rear_id = read(NISSAN, "wheels_rear").message.frame_id
+    yield from car_drive(NISSAN, tmp_path_factory.mktemp("nissan"),
+                         {"wheels": lambda m: True,
+                          "rear-stops": lambda m: m.arbitration_id != rear_id
+                          or m.timestamp < NISSAN_STOP_S})
+
+
+def test_nissan_frames_drive_the_dead_reckoning(nissan_drive):
+    """navecu-nissan_x_trail_2017 dead-reckons the drive on the pairs of the Nissan's two
+    wheel-speed messages and its gear: its position is the odometer's model of the truth
+    within the bound the odometer and the DBCs leave, forward, through the turn and
+    reversing (the pairs' wheels in their places: a swapped axle or side would turn the
+    car the wrong way); every half frame is counted as read."""
+    drive, runs, odo, p = nissan_drive
+    n, nav, stderr = runs["wheels"]
+    err, disp = odometer_model_error_m(drive.truth, nav, odo.mu)
+    bound = odometer_bound_m(drive.truth, odo, p, NISSAN)
+    status = nav["NAV_Status"]
+    modes = {int(x) for x in status["Mode"][status["StatusPage"] == 0]}
+    halves = sum(1 for m in drive.messages if m.arbitration_id in (0x29A, 0x285))
+    read_line = next(x for x in stderr.splitlines() if "car messages read" in x)
+    print(f"Nissan: {len(err)} positions, largest distance from the odometer's model "
+          f"{err.max():.3f} m (bound {bound:.3f} m); {halves} half frames; {read_line}")
+    assert 4 in modes and 5 not in modes
+    assert err.max() <= bound
+    assert f"wheel speeds {halves}," in read_line
+
+
+def test_a_stopped_axle_flags_the_wheels_missing(nissan_drive):
+    """The rear axle's message stops while the front's goes on: no wheel sample is made (a
+    half is no sample), so the odometer's timeout (1.5 s) flags it: NAV_Heartbeat
+    WheelsMissing is 0 before, 1 from 1.5 s after (the heartbeat's second) to the end;
+    with every frame it stays 0 once the car's frames have come."""
+    drive, runs, odo, p = nissan_drive
+    for label, stop in (("wheels", None), ("rear-stops", NISSAN_STOP_S)):
+        _, nav, _ = runs[label]
+        hb = nav["NAV_Heartbeat"]
+        t, missing = np.asarray(hb["t_s"]), np.asarray(hb["WheelsMissing"])
+        ok = np.isfinite(t)
+        t, missing = t[ok], missing[ok]
+        assert t.size > 60, label
+        if stop is None:
+            assert not missing.any(), label
+            continue
+        assert not missing[t < stop].any()
+        after = t > stop + 1.5 + 1.0
+        assert after.sum() > 10 and missing[after].all(), (t[after][~missing[after].astype(bool)])
 
 
 # ------------------------------------------------ failing: a bug reported, not yet decided
@@ -483,7 +631,7 @@ def test_odo_step_default_is_the_wheel_signals_resolution(name):
         sig = nc.DEFAULT_DB.get_message_by_name("WheelSpeeds").get_signal_by_name("WheelSpeedFL")
         expect = abs(sig.scale)
     else:
-        wheels = next(r for r in p.reads if r.role == "wheels")
+        wheels = p.wheel_reads()[0]
         expect = abs(wheels.signals[0].scale) * p.speed_factor
     exe = HOST / ("navecu" if name == "native" else f"navecu-{name}")
     if not exe.exists():
@@ -524,7 +672,7 @@ def _valid_values(name, role, n, seed):
     r = read(name, role)
     rng = np.random.default_rng(seed)
     values = random_values(r.message, rng, n + 2)[2:]
-    if role == "wheels":
+    if role in WHEEL_ROLES:
         for v in values:
             speed = float(rng.uniform(10.0, 30.0)) / profile(name).speed_factor
             v.update({sig.name: speed for sig in r.signals})

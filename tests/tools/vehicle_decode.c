@@ -6,7 +6,8 @@
  *     vehicle_decode < frames.log    one output line per input line (candump lines,
  *                                    hal/common/candump.h):
  *         VERDICT KIND FL FR RL RR GEAR YAW
- *       vehicle_decode()'s verdict (OK, BAD_DLC, BAD_CHECKSUM, BAD_VALUE, BAD_COUNTER) and
+ *       vehicle_decode()'s verdict (OK, BAD_DLC, BAD_CHECKSUM, BAD_VALUE, BAD_COUNTER; HELD
+ *       for one axle's half of split wheel speeds, VEHICLE_WHEELS_HELD) and
  *       the message kind (NONE, WHEELS, GEAR, YAW_RATE), their names in vehicle.h without
  *       the prefix;
  *       the wheel speeds in m/s, the gear direction (-1, 0, +1) and the yaw rate in rad/s,
@@ -38,6 +39,8 @@ static const char *verdict_name(vehicle_verdict_t v)
         return "BAD_VALUE";
     case VEHICLE_BAD_COUNTER:
         return "BAD_COUNTER";
+    case VEHICLE_WHEELS_HELD:
+        return "HELD";
     default:
         return "UNKNOWN_VERDICT";
     }

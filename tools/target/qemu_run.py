@@ -45,16 +45,16 @@ def frame_ids(vehicle: str | None = None) -> dict:
     """The identifiers the bench times, as the build of vehicle profile `vehicle` (None:
     native) receives them: navecu's IMU_Rate, IMU_Accel and GNSS fix messages at the
     profile's identifiers (a profile may move them all: vw_mqb's base 0x6C0), and the wheel
-    speeds: navecu's WheelSpeeds, or the car's own wheel-speed message."""
+    speeds: navecu's WheelSpeeds, or the car's own wheel-speed message(s) (one, or the front
+    axle's and the rear's)."""
     ids = {m.name: m.frame_id for m in navecu_can.load_db(navecu_can.DBC_PATH).messages}
-    wheels = ids["WheelSpeeds"]
+    wheels = {ids["WheelSpeeds"]}
     if vehicle not in (None, "native"):
         from tools import vehicle as veh
         profile = veh.load(vehicle)
         ids = profile.can_ids
-        reads = {r.role: r for r in profile.reads}
-        if "wheels" in reads:
-            wheels = reads["wheels"].message.frame_id
+        if profile.wheel_reads():
+            wheels = {r.message.frame_id for r in profile.wheel_reads()}
     return {"imu_rate": ids["IMU_Rate"], "imu_accel": ids["IMU_Accel"], "wheels": wheels,
             "gnss": {ids[n] for n in GNSS_MESSAGES}}
 
@@ -185,7 +185,7 @@ def bench(trace: Path, duration_s: float, imu_rate_hz: float, fids: dict | None 
         raise SystemExit(f"{trace}: no IMU step (IMU_Rate 0x{fids['imu_rate']:03X} then "
                          f"IMU_Accel 0x{fids['imu_accel']:03X}): not the trace of this profile?")
     imu_step = insn[acc] + insn[acc - 1]
-    wheel = insn[ids == fids["wheels"]]
+    wheel = insn[np.isin(ids, list(fids["wheels"]))]
     gnss_frames = insn[np.isin(ids, list(fids["gnss"]))]
     insn_per_s = float(insn.sum()) / duration_s
     step = stats(imu_step)
