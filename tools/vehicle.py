@@ -113,6 +113,7 @@ class Profile:
     wheel_step_mps: float = 0.0        # the wheel speed signal's resolution (DBC scale), m/s
     rate_factor: float = 1.0           # rad/s per yaw-rate unit, sign included
     gear_values: dict = field(default_factory=dict)  # raw gear value -> +1, -1, 0
+    gear_hold: set = field(default_factory=set)      # raw gear values that keep the direction
     recordings: list = field(default_factory=list)   # (path, {channel: bus})
     dbc_notes: dict = field(default_factory=dict)    # bus -> what normalise_dbc changed
 
@@ -360,8 +361,9 @@ SCHEMA = {
                "checksum": (False, str), "counter": (False, str),
                "counter_modulus": (False, int), "range": (False, list)},
     "gear": {"message": (True, str), "signal": (True, str), "forward": (False, list),
-             "reverse": (True, list), "stopped": (False, list), "checksum": (False, str),
-             "counter": (False, str), "counter_modulus": (False, int)},
+             "reverse": (True, list), "stopped": (False, list), "hold": (False, list),
+             "checksum": (False, str), "counter": (False, str),
+             "counter_modulus": (False, int)},
     "yaw_rate": {"message": (True, str), "signal": (True, str), "unit": (False, str),
                  "left_positive": (False, bool), "checksum": (False, str),
                  "counter": (False, str), "counter_modulus": (False, int),
@@ -419,6 +421,10 @@ def _check_shape(t: dict, fname: str) -> None:
     for key in ("forward", "reverse", "stopped"):
         if not all(isinstance(v, str) for v in t.get("gear", {}).get(key, [])):
             raise ProfileError(f"{fname} [gear]: {key} must be a list of the DBC's value names")
+    if not all(isinstance(v, (str, int)) and not isinstance(v, bool)
+               for v in t.get("gear", {}).get("hold", [])):
+        raise ProfileError(f"{fname} [gear]: hold must be a list of the DBC's value names or "
+                           "raw values")
     for i, rec in enumerate(t.get("recordings", [])):
         _check_table(rec, SCHEMA["recordings"], f"{fname} [[recordings]] {i + 1}")
     for key, value in t.get("buses", {}).items():
@@ -509,6 +515,7 @@ def _car_reads(p: Profile, t: dict, fname: str) -> None:
     _check_dbc_unit(sigs, unit, "scale" in w, f"{fname} [wheels]")
     p.speed_factor = SPEED_UNITS[unit] * float(w.get("scale", 1.0))
     p.wheel_step_mps = abs(float(sigs[0].scale)) * p.speed_factor
+    _check_wheel_range(sigs, p.speed_factor, f"{fname} [wheels]")
     for (role, msg, _, _), ps in zip(parts, part_sigs):
         p.reads.append(_signal_set(role, w, msg, ps, fname))
     if p.direction == "gear":
@@ -531,6 +538,18 @@ def _car_reads(p: Profile, t: dict, fname: str) -> None:
                     p.gear_values[raw] = sign
         if -1 not in p.gear_values.values():
             raise ProfileError(f"{fname} [gear]: no reverse gear named")
+        # values during which the direction is kept (a shift in progress): the DBC's names,
+        # or raw values where it names none (mazda_2017's 0, "shifting" in a comment only)
+        lo = gsig.minimum if gsig.minimum is not None else _raw_span(gsig)[0]
+        hi = gsig.maximum if gsig.maximum is not None else _raw_span(gsig)[1]
+        for n in g.get("hold", []):
+            raws = names.get(n) if isinstance(n, str) else [n]
+            if raws is None or not all(lo <= gsig.offset + gsig.scale * r <= hi and
+                                       r not in p.gear_values for r in raws):
+                raise ProfileError(f"{fname} [gear]: hold {n!r} is not a value of {gsig.name} "
+                                   "that no other list names (the DBC's names, or a raw "
+                                   f"value within its range [{lo:g}, {hi:g}])")
+            p.gear_hold.update(raws)
         p.reads.append(_signal_set("gear", g, gmsg, [gsig], fname))
     y = t.get("yaw_rate")
     if y is not None:
@@ -597,6 +616,28 @@ def _range_override(spec: dict, sigs: list, where: str) -> None:
             raise ProfileError(f"{where}: range {r} is beyond what {sig.name}'s "
                                f"{sig.length} bits hold ([{lo:g}, {hi:g}])")
         sig.minimum, sig.maximum = float(r[0]), float(r[1])
+
+
+#: a wheel speed's range that ends below this (m/s; 150 km/h) while its bits hold more is
+#: taken for a DBC placeholder (opendbc's mazda_2017 gives RL [0|15] km/h): it would refuse
+#: that wheel's frames above it
+WHEEL_RANGE_MIN_MPS = 150.0 / 3.6
+
+
+def _check_wheel_range(sigs: list, factor: float, where: str) -> None:
+    """Every wheel signal's range (the DBC's, or `range`) must take a standing car (0)
+    and a car's speeds (up to WHEEL_RANGE_MIN_MPS at least) where its bits can hold them:
+    else the profile must say `range` (a placeholder range would refuse good frames)."""
+    for sig in sigs:
+        lo, hi = _raw_span(sig)
+        top = hi if sig.maximum is None else float(sig.maximum)
+        bottom = lo if sig.minimum is None else float(sig.minimum)
+        short = top * factor < WHEEL_RANGE_MIN_MPS and hi > top
+        if short or (bottom > 0.0 and lo <= 0.0):
+            raise ProfileError(
+                f"{where}: {sig.name}'s range [{bottom:g}, {top:g}] {sig.unit or ''} refuses "
+                + (f"speeds above {top * factor * 3.6:.0f} km/h" if short else "a standing car")
+                + f" (a DBC placeholder?); give range = [lo, hi] (its bits hold [{lo:g}, {hi:g}])")
 
 
 #: the widest rolling counter (bits): its raw value is a uint8_t in the generated codec
@@ -965,6 +1006,9 @@ def _decode_case(p: Profile, r: CarSignalSet) -> list:
         for raw, sign in sorted(p.gear_values.items()):
             L += [f"        case {raw}:", f"            m->gear_direction = {sign};",
                   "            break;"]
+        for raw in sorted(p.gear_hold):
+            L += [f"        case {raw}: /* held: the direction kept, the frame not read */",
+                  "            m->kind = VEHICLE_MSG_NONE;", "            return VEHICLE_OK;"]
         L += ["        default:", "            return VEHICLE_BAD_VALUE; /* a gear the profile "
               "does not name */", "        }"]
     else:

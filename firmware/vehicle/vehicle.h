@@ -52,7 +52,8 @@ typedef struct {
 extern const vehicle_profile_t vehicle_profile;
 
 typedef enum {
-    VEHICLE_MSG_NONE = 0,  /* not one of the car's messages navecu reads */
+    VEHICLE_MSG_NONE = 0,  /* not one of the car's messages navecu reads (or a gear frame of
+                              a value the profile holds: passed over, the direction kept) */
     VEHICLE_MSG_WHEELS,    /* wheel_mps */
     VEHICLE_MSG_GEAR,      /* gear_direction */
     VEHICLE_MSG_YAW_RATE,  /* yaw_rate_rps */

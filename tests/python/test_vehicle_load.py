@@ -53,6 +53,11 @@ CASES = [
     ("a unit the DBC contradicts", lambda s: s.replace('unit = "km/h"', 'unit = "m/s"'), "Unit_KiloMeterPerHour"),
     ("a track of 15.95 m", lambda s: s.replace("track_m = 1.51", "track_m = 15.95"), "track_m = 15.95 m is not a car's (between 0.5 and 3 m)"),
     ("a message on the UDS request ID", lambda s: s.replace("base = 0x6C0", "base = 0x6C0\nCMD_Control = 0x7A0"), "CMD_Control = 0x7A0 is the UDS request"),
+    ("a hold value another list names", lambda s: s.replace('stopped = ["P", "N"]', 'stopped = ["P", "N"]\nhold = ["D"]'), "hold 'D'"),
+    ("a hold value beyond the signal", lambda s: s.replace('stopped = ["P", "N"]', 'stopped = ["P", "N"]\nhold = [99]'), "hold 99"),
+    ("a hold that is not a value", lambda s: s.replace('stopped = ["P", "N"]', 'stopped = ["P", "N"]\nhold = [true]'), "hold must be a list"),
+    ("a placeholder wheel range", lambda s: s.replace('unit = "km/h"', 'unit = "km/h"\nrange = [0.0, 15.0]'), "refuses speeds above 15 km/h"),
+    ("a wheel range without 0", lambda s: s.replace('unit = "km/h"', 'unit = "km/h"\nrange = [1.0, 300.0]'), "refuses a standing car"),
     ("a recording without its channels", lambda s: s + '[[recordings]]\nfile = "data/comma2k19-rav4/car_bus.log"\n', "channels"),
 ]
 

@@ -202,7 +202,8 @@ def test_signals_round_trip_against_cantools(name, role, tmp_path):
                                   {r.role for r in profile(n).reads}])
 def test_every_gear_value(name, tmp_path):
     """Every raw value of the gear signal: the gears the profile maps give their direction
-    (+1 forward, -1 reverse, 0 stopped), every other value is BAD_VALUE."""
+    (+1 forward, -1 reverse, 0 stopped), the values it holds (`hold`: a shift in progress)
+    are passed over (not read, the direction kept), every other value is BAD_VALUE."""
     p, r = profile(name), read(name, "gear")
     sig = r.signals[0]
     car = vehicle.CarEncoder(p)
@@ -212,6 +213,8 @@ def test_every_gear_value(name, tmp_path):
     for raw, d in zip(range(lo, hi + 1), decode(name, msgs, tmp_path)):
         if raw in p.gear_values:
             assert (d.verdict, d.kind, d.gear) == ("OK", "GEAR", p.gear_values[raw]), (raw, d)
+        elif raw in p.gear_hold:
+            assert (d.verdict, d.kind) == ("OK", "NONE"), (raw, d)
         else:
             assert (d.verdict, d.kind) == ("BAD_VALUE", "GEAR"), (raw, d)
     assert {-1, 1} <= set(p.gear_values.values())
