@@ -43,9 +43,12 @@ VEH_SRC = $(call VEH_GEN_SRC,$(1)) firmware/vehicle/vehicle_checksum.c firmware/
           firmware/vehicle/vehicle_pair.c
 # 1 if the profile's wheel speeds come in two messages ([wheels] messages = {front, rear}):
 # only then do the ECU's images hold the application's code for the held half
-# (VEHICLE_SPLIT_WHEELS, firmware/vehicle/vehicle.h; the generated layer of a split profile
-# refuses to build with 0, so this cannot be wrong silently)
-VEH_SPLIT := $(shell grep -Eqs '^[[:space:]]*messages[[:space:]]*=' vehicles/$(VEHICLE).toml && echo 1 || echo 0)
+# (VEHICLE_SPLIT_WHEELS, firmware/vehicle/vehicle.h). Read with TOML's own parser (any
+# spelling of the key); a profile it cannot read gives 0, and the generated layer of a split
+# profile refuses to build with 0. The objects depend on its value ($(TGT)/split_wheels
+# below), so a profile that changes between one message and two rebuilds them all.
+VEH_SPLIT := $(shell python3 -c "import sys, tomllib; t = tomllib.load(open(sys.argv[1], 'rb')); \
+  print(1 if 'messages' in t.get('wheels', {}) else 0)" vehicles/$(VEHICLE).toml 2>/dev/null || echo 0)
 CODEC_GEN := firmware/can/gen/navecu_can.c firmware/can/gen/navecu_can.h
 # the diagnostic transport (ISO-TP, docs/can.md): part of the application's library, linked
 # into the images, kept out of them by --gc-sections until the application calls it
@@ -390,8 +393,15 @@ QEMU_SRC := $(CORE_SRC) $(APP_SRC) $(call VEH_SRC,$(VEHICLE)) $(M4_BOARD_SRC) ha
             hal/cortex_m4f/hal_semihost.c \
             boards/qemu/main.c boards/qemu/bench_trace.c
 # every object depends on this Makefile too: a changed flag (-Os, -fno-reorder-blocks, ...)
-# rebuilds what it applies to, so a budget or a benchmark never measures a mix of flags
-$(TGT)/obj/%.o: %.c Makefile
+# rebuilds what it applies to, so a budget or a benchmark never measures a mix of flags;
+# and on the profile's VEH_SPLIT, a flag the Makefile does not spell out (the file is
+# rewritten only when the value changes)
+$(TGT)/split_wheels: FORCE
+	@mkdir -p $(@D)
+	@echo $(VEH_SPLIT) | cmp -s - $@ || echo $(VEH_SPLIT) > $@
+.PHONY: FORCE
+FORCE:
+$(TGT)/obj/%.o: %.c Makefile $(TGT)/split_wheels
 	@mkdir -p $(@D)
 	$(ARM_CC) $(M4_TGT_CFLAGS) $(M4_LTO) $(M4_TGT_INC) -MMD -MP -c $< -o $@
 # On the ECU everything but f2l.c and u64div.c is built for size (at first the

@@ -515,7 +515,7 @@ def _car_reads(p: Profile, t: dict, fname: str) -> None:
     _check_dbc_unit(sigs, unit, "scale" in w, f"{fname} [wheels]")
     p.speed_factor = SPEED_UNITS[unit] * float(w.get("scale", 1.0))
     p.wheel_step_mps = abs(float(sigs[0].scale)) * p.speed_factor
-    _check_wheel_range(sigs, p.speed_factor, f"{fname} [wheels]")
+    _check_wheel_range(sigs, p.speed_factor, p.direction == "signed", f"{fname} [wheels]")
     for (role, msg, _, _), ps in zip(parts, part_sigs):
         p.reads.append(_signal_set(role, w, msg, ps, fname))
     if p.direction == "gear":
@@ -542,13 +542,17 @@ def _car_reads(p: Profile, t: dict, fname: str) -> None:
         # or raw values where it names none (mazda_2017's 0, "shifting" in a comment only)
         lo = gsig.minimum if gsig.minimum is not None else _raw_span(gsig)[0]
         hi = gsig.maximum if gsig.maximum is not None else _raw_span(gsig)[1]
+        rlo = -(1 << (gsig.length - 1)) if gsig.is_signed else 0
+        rhi = (1 << (gsig.length - (1 if gsig.is_signed else 0))) - 1
         for n in g.get("hold", []):
             raws = names.get(n) if isinstance(n, str) else [n]
-            if raws is None or not all(lo <= gsig.offset + gsig.scale * r <= hi and
+            if raws is None or not all(rlo <= r <= rhi and
+                                       lo <= gsig.offset + gsig.scale * r <= hi and
                                        r not in p.gear_values for r in raws):
                 raise ProfileError(f"{fname} [gear]: hold {n!r} is not a value of {gsig.name} "
                                    "that no other list names (the DBC's names, or a raw "
-                                   f"value within its range [{lo:g}, {hi:g}])")
+                                   f"value its {gsig.length} bits and its range [{lo:g}, {hi:g}] "
+                                   "hold)")
             p.gear_hold.update(raws)
         p.reads.append(_signal_set("gear", g, gmsg, [gsig], fname))
     y = t.get("yaw_rate")
@@ -622,22 +626,33 @@ def _range_override(spec: dict, sigs: list, where: str) -> None:
 #: taken for a DBC placeholder (opendbc's mazda_2017 gives RL [0|15] km/h): it would refuse
 #: that wheel's frames above it
 WHEEL_RANGE_MIN_MPS = 150.0 / 3.6
+#: signed wheel speeds (direction = "signed") must take reversing down to this (m/s)
+WHEEL_RANGE_REVERSE_MPS = -5.0
 
 
-def _check_wheel_range(sigs: list, factor: float, where: str) -> None:
-    """Every wheel signal's range (the DBC's, or `range`) must take a standing car (0)
-    and a car's speeds (up to WHEEL_RANGE_MIN_MPS at least) where its bits can hold them:
-    else the profile must say `range` (a placeholder range would refuse good frames)."""
+def _check_wheel_range(sigs: list, factor: float, signed: bool, where: str) -> None:
+    """Every wheel signal's range (the DBC's, or `range`) must take a standing car (0),
+    a car's speeds (up to WHEEL_RANGE_MIN_MPS at least) and, for signed speeds, reversing
+    (down to WHEEL_RANGE_REVERSE_MPS), wherever its bits can hold them: else the profile
+    must say `range` (a placeholder range would refuse good frames)."""
     for sig in sigs:
         lo, hi = _raw_span(sig)
+        eps = 1e-9 * max(1.0, abs(lo), abs(hi))
         top = hi if sig.maximum is None else float(sig.maximum)
         bottom = lo if sig.minimum is None else float(sig.minimum)
-        short = top * factor < WHEEL_RANGE_MIN_MPS and hi > top
-        if short or (bottom > 0.0 and lo <= 0.0):
+        k = abs(factor)
+        why = None
+        if top * k < min(WHEEL_RANGE_MIN_MPS, hi * k) - eps * k:
+            why = f"speeds above {top * k * 3.6:.0f} km/h"
+        elif bottom > eps and lo <= 0.0:
+            why = "a standing car"
+        elif signed and bottom * k > max(WHEEL_RANGE_REVERSE_MPS, lo * k) + eps * k:
+            why = f"reversing faster than {-bottom * k * 3.6:.0f} km/h"
+        if why is not None:
             raise ProfileError(
                 f"{where}: {sig.name}'s range [{bottom:g}, {top:g}] {sig.unit or ''} refuses "
-                + (f"speeds above {top * factor * 3.6:.0f} km/h" if short else "a standing car")
-                + f" (a DBC placeholder?); give range = [lo, hi] (its bits hold [{lo:g}, {hi:g}])")
+                f"{why} (a DBC placeholder?); give range = [lo, hi] (its bits hold "
+                f"[{lo:g}, {hi:g}])")
 
 
 #: the widest rolling counter (bits): its raw value is a uint8_t in the generated codec

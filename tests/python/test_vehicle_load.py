@@ -388,3 +388,29 @@ def test_each_axles_message_has_its_checksum_and_counter(profiles):
                  "_is_in_range(", f"vehicle_pair_half(&wheel_pair, VEHICLE_AXLE_{axle},"]
         at = [case.index(x) for x in steps]
         assert at == sorted(at), (frame, at)
+
+
+def _wheel_sig(length, scale, lo, hi, signed=False, offset=0.0):
+    from types import SimpleNamespace
+    return SimpleNamespace(name="FL", length=length, scale=scale, offset=offset,
+                           is_signed=signed, minimum=lo, maximum=hi, unit="km/h")
+
+
+@pytest.mark.parametrize("sig,signed,refused", [
+    (_wheel_sig(16, 0.01, 0.0, 655.35), False, None),             # the span its bits hold
+    (_wheel_sig(12, 0.035, 0.0, 143.325), False, None),            # the span, rounded in float
+    (_wheel_sig(16, 0.01, 0.0, 15.0), False, "above 15 km/h"),     # mazda_2017's RL
+    (_wheel_sig(16, 0.01, 1.0, 655.35), False, "a standing car"),
+    (_wheel_sig(16, 0.01, 0.0, 300.0, signed=True), True, "reversing"),   # signed, no negatives
+    (_wheel_sig(16, 0.01, -50.0, 300.0, signed=True), True, None),
+    (_wheel_sig(8, 0.5, 0.0, 100.0), False, "above 100 km/h"),    # its bits hold 127.5
+    (_wheel_sig(8, 0.5, 0.0, 127.5), False, None),                 # all its bits hold
+])
+def test_a_wheel_range_that_refuses_a_car_is_named(sig, signed, refused):
+    """_check_wheel_range: a wheel speed's range must take 0, 150 km/h and (signed speeds)
+    reversing at 18 km/h wherever its bits can hold them; the full span always passes."""
+    if refused is None:
+        vehicle._check_wheel_range([sig], 1 / 3.6, signed, "w")
+    else:
+        with pytest.raises(vehicle.ProfileError, match=refused):
+            vehicle._check_wheel_range([sig], 1 / 3.6, signed, "w")
