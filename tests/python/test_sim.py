@@ -347,15 +347,14 @@ def test_nav_log_time_across_a_gap_longer_than_the_wrap(tmp_path):
     with the truth 65.5 s away (a review's 787 m for 2.8 m). With the log's timestamps as
     the IMU time (wraps_from_log, a --can-log run) every set's time is resolved."""
     db = nc.load_db()
-    pos, hgt = db.get_message_by_name("NAV_Position"), db.get_message_by_name("NAV_Height")
+    tx = nc.E2ESender(db)  # the firmware's E2E: read_nav_log rejects a frame failing it
     lines = []
     for t in (10.0, 10.02, 100.0, 170.0):  # a gap of 89.98 s, then one of 70 s
         ms = int(round(t * 1000)) % 65536
-        p = pos.encode({"Latitude": 45.0, "Longitude": 10.0})
-        h = hgt.encode({"Height": 100.0, "VertAccuracy": 1.0, "TimeOfValidity": ms,
-                        "NavCounter": 0, "NavCrc": 0})
-        lines.append(f"({t:.6f}) can0 {pos.frame_id:03X}#{p.hex().upper()}")
-        lines.append(f"({t:.6f}) can0 {hgt.frame_id:03X}#{h.hex().upper()}")
+        for m in (tx.encode("NAV_Position", {"Latitude": 45.0, "Longitude": 10.0}),
+                  tx.encode("NAV_Height", {"Height": 100.0, "VertAccuracy": 1.0,
+                                           "TimeOfValidity": ms})):
+            lines.append(f"({t:.6f}) can0 {m.arbitration_id:03X}#{bytes(m.data).hex().upper()}")
     log = tmp_path / "nav.log"
     log.write_text("\n".join(lines) + "\n")
     t = report.read_nav_log(log, db, wraps_from_log=True)["NAV_Position"]["t_s"]
