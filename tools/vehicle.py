@@ -542,8 +542,7 @@ def _car_reads(p: Profile, t: dict, fname: str) -> None:
         # or raw values where it names none (mazda_2017's 0, "shifting" in a comment only)
         lo = gsig.minimum if gsig.minimum is not None else _raw_span(gsig)[0]
         hi = gsig.maximum if gsig.maximum is not None else _raw_span(gsig)[1]
-        rlo = -(1 << (gsig.length - 1)) if gsig.is_signed else 0
-        rhi = (1 << (gsig.length - (1 if gsig.is_signed else 0))) - 1
+        rlo, rhi = _raw_bits(gsig)
         for n in g.get("hold", []):
             raws = names.get(n) if isinstance(n, str) else [n]
             if raws is None or not all(rlo <= r <= rhi and
@@ -595,10 +594,16 @@ def _check_dbc_unit(sigs: list, unit: str, scaled: bool, where: str) -> None:
                                f"{sig.unit}")
 
 
+def _raw_bits(sig) -> tuple:
+    """The raw values a signal's bits can hold."""
+    if sig.is_signed:
+        return -(1 << (sig.length - 1)), (1 << (sig.length - 1)) - 1
+    return 0, (1 << sig.length) - 1
+
+
 def _raw_span(sig) -> tuple:
     """The physical values a signal's bits can hold (DBC units)."""
-    lo = -(1 << (sig.length - 1)) if sig.is_signed else 0
-    hi = (1 << (sig.length - 1)) - 1 if sig.is_signed else (1 << sig.length) - 1
+    lo, hi = _raw_bits(sig)
     a, b = sig.offset + sig.scale * lo, sig.offset + sig.scale * hi
     return (min(a, b), max(a, b))
 
