@@ -327,6 +327,45 @@ static void test_debounce_time_while_tested(void **state)
     assert_int_equal(dtc_status(&d, DTC_NO_GNSS), 0x2Fu);
 }
 
+/* Refusals are debounced and tested at a standstill too (dtc.toml; the mask of output.c):
+ * a refused frame or a gated GNSS fix flags REJECTED for a second, in two drives in a row
+ * (the review found that confirming U1103-81 on fault-free drives: the simulator's clean
+ * drive gates 2 fixes); a wheel locking for 2 s under braking, in two drives, confirms no
+ * C1107-64 either. A sender whose every frame fails for 10 s confirms U1103-81, the car
+ * standing or not; NO_GNSS meanwhile, the car standing, is not tested (while_moving). */
+static void test_refusals_now_and_then_are_no_fault(void **state)
+{
+    (void)state;
+    const uint32_t standing = ~((uint32_t)DTC_WHILE_MOVING_FLAGS * 1u);
+    const uint32_t moving = ~((uint32_t)DTC_WHILE_MOVING_FLAGS * 0u);
+    for (int cycle = 0; cycle < 2; cycle++) {
+        for (uint64_t t = 0u; t < 120000u; t += 100u) {
+            /* a refusal flagged for 1 s of every 20 (REJECTED), a wheel lock for 2 s of
+             * every 60 (ODO_REJECTED): each condition short, then passed */
+            const uint32_t f = (t % 20000u < 1000u ? NAVECU_HEALTH_REJECTED : 0u) |
+                               (t % 60000u < 2000u ? NAVECU_HEALTH_ODO_REJECTED : 0u);
+            (void)dtc_update_tested(&d, f, t < 60000u ? moving : standing, t * MS);
+        }
+        assert_int_equal(dtc_status(&d, DTC_REJECTED), 0x00u); /* tested, passed */
+        assert_int_equal(dtc_status(&d, DTC_ODO_REJECTED), 0x00u);
+        (void)dtc_load(&d, (const uint8_t[DTC_N]){0}, (size_t)DTC_N); /* the next drive */
+    }
+    const uint32_t bad = NAVECU_HEALTH_REJECTED | NAVECU_HEALTH_NO_GNSS;
+    (void)dtc_update_tested(&d, bad, standing, 0u);
+    assert_int_equal(dtc_update_tested(&d, bad, standing, 9900u * MS) & BIT(DTC_REJECTED), 0u);
+    assert_int_equal(dtc_update_tested(&d, bad, standing, 10000u * MS) & BIT(DTC_REJECTED),
+                     BIT(DTC_REJECTED));
+    assert_int_equal(dtc_status(&d, DTC_REJECTED), 0x2Fu); /* pending and confirmed at once */
+    assert_int_equal(dtc_status(&d, DTC_NO_GNSS), 0x40u);  /* not tested while standing */
+    /* and the wheel speeds refused for 30 s of driving */
+    (void)dtc_update_tested(&d, NAVECU_HEALTH_ODO_REJECTED, moving, 20000u * MS);
+    (void)dtc_update_tested(&d, NAVECU_HEALTH_ODO_REJECTED, moving, 49900u * MS);
+    assert_int_equal(dtc_status(&d, DTC_ODO_REJECTED), 0x00u);
+    (void)dtc_update_tested(&d, NAVECU_HEALTH_ODO_REJECTED, moving, 50000u * MS);
+    assert_int_equal(dtc_status(&d, DTC_ODO_REJECTED), 0x2Fu);
+    assert_bit7_clear();
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -342,6 +381,7 @@ int main(void)
         cmocka_unit_test_setup(test_load_refuses_impossible_bytes, setup),
         cmocka_unit_test_setup(test_debounced, setup),
         cmocka_unit_test_setup(test_debounce_time_while_tested, setup),
+        cmocka_unit_test_setup(test_refusals_now_and_then_are_no_fault, setup),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -31,7 +31,7 @@ DOC_END = "<!-- end of dtc table -->"
 DTC_MAX = 16  # the NVM record's DTC status bytes (the nvm branch's nvstore)
 CONFIRM_MAX_S = 3276.7  # 0x7FFF x 0.1 s: confirm_ds's top bit is DTC_DEBOUNCED
 KEYS = ("name", "flag", "code", "ftb", "ftb_name", "confirm_s", "description")
-OPTIONAL_KEYS = {"debounced": bool}
+OPTIONAL_KEYS = {"debounced": bool, "while_moving": bool}
 LETTERS = {"P": 0, "C": 1, "B": 2, "U": 3}
 HEADER = ("/* GENERATED FILE - DO NOT EDIT. Source: firmware/app/dtc.toml.\n"
           " * Regenerate with 'make dtc' (tools/gen_dtc.py); 'make test' fails if stale. */\n")
@@ -93,6 +93,7 @@ def load(path: Path = TABLE, flags: dict | None = None) -> list:
         debounced = bool(d.get("debounced", False))
         if debounced and float(d["confirm_s"]) <= 0.0:
             raise TableError(f"{where}: debounced needs a confirm_s above 0")
+        while_moving = bool(d.get("while_moving", False))
         if not re.fullmatch(r"[a-z][a-z0-9_]*", d["name"]):
             raise TableError(f"{where}: name must be lower-case C identifier")
         if d["name"] in names:
@@ -120,7 +121,7 @@ def load(path: Path = TABLE, flags: dict | None = None) -> list:
         q = dict(d)
         q.update(index=i, number=number, bit=flags[d["flag"]][0],
                  confirm_ms=int(round(confirm * 1000.0)), confirm_ds=int(round(confirm * 10.0)),
-                 debounced=debounced)
+                 debounced=debounced, while_moving=while_moving)
         out.append(q)
     missing = sorted(set(flags) - used, key=lambda n: flags[n][0])
     if missing:
@@ -145,9 +146,9 @@ def gen_h(dtcs) -> str:
           "                             DTC_DEBOUNCED the test fails only then (dtc.h) */",
           "} dtc_def_t;", "",
           "#define DTC_DEBOUNCED 0x8000u     /* in confirm_ds: a debounced DTC (dtc.toml) */",
-          f"#define DTC_DEBOUNCED_FLAGS 0x{sum(1 << d['bit'] for d in dtcs if d['debounced']):04X}u "
-          f"/* their HealthFlags: {' | '.join(d['flag'] for d in dtcs if d['debounced']) or 'none'}"
-          " */",
+          f"#define DTC_WHILE_MOVING_FLAGS 0x{sum(1 << d['bit'] for d in dtcs if d['while_moving']):04X}u "
+          f"/* tested only while the car moves: "
+          f"{' | '.join(d['flag'] for d in dtcs if d['while_moving']) or 'none'} */",
           "#define DTC_CONFIRM_DS_MASK 0x7FFFu /* in confirm_ds: the confirm time */", "",
           "extern const dtc_def_t dtc_table[DTC_N];", "",
           "#endif /* NAVECU_DTC_TABLE_H */", ""]
@@ -173,6 +174,8 @@ def gen_doc_table(dtcs) -> str:
         conf = "the first failure" if d["confirm_ms"] == 0 else f"{d['confirm_s']:g} s"
         if d["debounced"]:
             conf += " (debounced: fails only then)"
+        if d["while_moving"]:
+            conf += ", tested while the car moves"
         L.append(f"| {d['index']} | {dtc_text(d['number'])} | `{d['number']:06X}` | "
                  f"{d['bit']} `{d['flag']}` | `{int(d['ftb']):02X}` {d['ftb_name']} | {conf} "
                  f"| {d['description']} |")

@@ -13,12 +13,12 @@
  *            in the previous one: two operation cycles);
  *   debounced (DTC_DEBOUNCED in the table's confirm_ds; dtc.toml: a condition that is also
  *            a state of normal operation while short, such as the first GNSS fix after
- *            power-on): the condition fails the test only once it has lasted the confirm
+ *            power-on or a refused frame now and then): the condition fails the test only once it has lasted the confirm
  *            time (then pending and confirmed at once); shorter, the test is not completed
  *            and the status byte unchanged, so a start's normal wait is no failure and no
  *            second start confirms it. A condition lasts while it is tested: a test not
- *            run (dtc_update_tested; the application runs the debounced ones only while
- *            the car moves), a passed test and a new operation cycle start its time again;
+ *            run (dtc_update_tested; the application runs the while_moving ones of
+ *            dtc.toml only while the car moves), a passed test and a new operation cycle start its time again;
  *   passed:  testFailed, testNotCompletedThisOperationCycle, testNotCompletedSinceLastClear
  *            clear;
  *   the start of an operation cycle (dtc_load): testFailed, testFailedThisOperationCycle

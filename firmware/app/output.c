@@ -412,11 +412,11 @@ void output_status(app_t *a, hal_t *hal)
     st.mode = output_mode(a);
     tx->last_mode = st.mode;
     st.health_flags = health_flags(a, hal);
-    /* the DTCs' tests (app_dtc.h); the debounced ones, waits of normal operation, only
-     * while the car moves (a car standing after power-on may wait for a fix or a heading
-     * for as long as it stands) */
+    /* the DTCs' tests (app_dtc.h); those of waits of normal operation (dtc.toml
+     * while_moving) only while the car moves (a car standing after power-on may wait for a
+     * fix or a heading for as long as it stands) */
     app_dtc_cycle_tested(a, hal, st.health_flags, /* standing is 0 or 1 */
-                         ~((uint32_t)DTC_DEBOUNCED_FLAGS * a->keep.odo.standing));
+                         ~((uint32_t)DTC_WHILE_MOVING_FLAGS * a->keep.odo.standing));
 
     /* the filter's; without it the dead reckoning's while it is the output and its error
      * model holds (dr_acc.h); else "unknown" */

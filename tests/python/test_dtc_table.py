@@ -52,10 +52,17 @@ def test_one_dtc_per_health_flag_in_the_generated_c():
         assert int(num, 16) == gen_dtc.dtc_number(d["code"], int(d["ftb"]))
         assert int(ds) == round(float(d["confirm_s"]) * 10)  # 0.1 s units
         assert bool(debounced) == d.get("debounced", False)
-    # the conditions a fault-free start goes through are debounced (a client found U1102-87
-    # confirmed on the second start before)
-    assert {d["flag"] for d in dtcs if d.get("debounced")} == {"NO_GNSS", "NO_HEADING",
-                                                               "REACQUIRE"}
+    # the conditions a fault-free drive goes through are debounced: a start's waits (a
+    # client found U1102-87 confirmed on the second start before), and a refusal now and
+    # then (a review found one gated GNSS fix a drive confirming U1103-81 on the second)
+    assert {d["flag"] for d in dtcs if d.get("debounced")} == {
+        "NO_GNSS", "NO_HEADING", "REACQUIRE", "REJECTED", "ODO_REJECTED"}
+    # the start's waits are tested only while the car moves, and the generated mask says so
+    moving = {d["flag"] for d in dtcs if d.get("while_moving")}
+    assert moving == {"NO_GNSS", "NO_HEADING", "REACQUIRE"}
+    h = (ROOT / gen_dtc.OUT_H).read_text()
+    mask = int(re.search(r"#define DTC_WHILE_MOVING_FLAGS 0x([0-9A-F]{4})u", h).group(1), 16)
+    assert mask == sum(1 << d["bit"] for d in dtcs if d["flag"] in moving)
     doc = (ROOT / gen_dtc.DOC).read_text()
     for d in dtcs:
         assert f"| {d['index']} | {gen_dtc.dtc_text(d['number'])} |" in doc
@@ -84,6 +91,8 @@ description = "x"
     (lambda t: t.replace("confirm_s = 2.0", "confirm_s = 2.0\ndebounce = true"),
      "unknown key debounce"),
     (lambda t: t.replace("confirm_s = 2.0", "confirm_s = 2.0\ndebounced = 1"), "true or false"),
+    (lambda t: t.replace("confirm_s = 2.0", "confirm_s = 2.0\nwhile_moving = \"yes\""),
+     "while_moving must be true or false"),
     (lambda t: t.replace("confirm_s = 2.0", "confirm_s = 0.0\ndebounced = true"),
      "debounced needs a confirm_s"),
     (lambda t: t.replace('code = "U1101"', 'code = "Q1101"'), "a letter P/C/B/U"),

@@ -33,7 +33,7 @@ typedef struct {
 } dtc_def_t;
 
 #define DTC_DEBOUNCED 0x8000u     /* in confirm_ds: a debounced DTC (dtc.toml) */
-#define DTC_DEBOUNCED_FLAGS 0x0824u /* their HealthFlags: NO_GNSS | NO_HEADING | REACQUIRE */
+#define DTC_WHILE_MOVING_FLAGS 0x0824u /* tested only while the car moves: NO_GNSS | NO_HEADING | REACQUIRE */
 #define DTC_CONFIRM_DS_MASK 0x7FFFu /* in confirm_ds: the confirm time */
 
 extern const dtc_def_t dtc_table[DTC_N];
