@@ -147,7 +147,6 @@ static void gnss_time_unlearn(gnss_time_t *g)
     }
     g->lat_learnt = 0u;
     g->lat_bin = 0u;
-    g->lat_epochs = 0u;
 }
 
 /* the candidate nearest a latency (the parameter's), within the range */
@@ -189,7 +188,6 @@ int gnss_time_learn(gnss_time_t *g, gnss_when_t *w, const nav_real_t v_enu_mps[3
             best = k;
         }
     }
-    g->lat_epochs++;
     const uint32_t used = g->lat_learnt ? (uint32_t)g->lat_bin : bin_of(latency_cfg_s);
     if (best == used || !(g->lat_cost[used] - g->lat_cost[best] > APP_GNSS_LAT_EVIDENCE)) {
         return 0;

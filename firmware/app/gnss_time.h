@@ -37,7 +37,6 @@ typedef struct {
     nav_real_t lat_cost[APP_GNSS_LAT_BINS]; /* faded misfit per latency candidate */
     uint8_t lat_learnt;             /* the data decided: lat_bin is in use */
     uint8_t lat_bin;                /* the latency in use, APP_GNSS_LAT_STEP_S units */
-    uint32_t lat_epochs;            /* epochs learnt from */
 } gnss_time_t;
 
 /* How far back a fix's time of validity lies. */

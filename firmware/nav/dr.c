@@ -23,8 +23,6 @@ int dr_init(dr_t *d, const geo_pos_t *pos, nav_real_t dh_rad, nav_real_t mu)
     d->base = *pos;
     d->dh_rad = dh_rad;
     d->mu = mu;
-    d->dist_m = NAV_C(0.0);
-    d->dist_total_m = NAV_C(0.0);
     d->step_e_m = NAV_C(0.0);
     d->step_n_m = NAV_C(0.0);
     return NAV_OK;
@@ -51,8 +49,6 @@ int dr_step(dr_t *d, nav_real_t ds_m, nav_real_t heading_rad, nav_real_t pitch_r
     if (rc != NAV_OK) {
         return rc;
     }
-    d->dist_m += nav_fabs(ds_c);
-    d->dist_total_m += nav_fabs(ds_c);
     d->step_e_m = de;
     d->step_n_m = dn;
     return NAV_OK;
@@ -155,6 +151,5 @@ int dr_calibrate(dr_t *d, const geo_pos_t *true_pos, nav_real_t min_base_m, dr_c
     d->pos.lat = true_pos->lat;
     d->pos.lon = true_pos->lon;
     d->base = d->pos;
-    d->dist_m = NAV_C(0.0);
     return NAV_OK;
 }

@@ -39,8 +39,6 @@ typedef struct {
     geo_pos_t base;         /* start, or the last calibration point (eqs 7-8) */
     nav_real_t dh_rad;      /* heading correction in use, dH (eqs 9, 11-12) */
     nav_real_t mu;          /* odometer scale error in use, mu (eqs 10, 11-12) */
-    nav_real_t dist_m;      /* path length since the base (compensated odometer) */
-    nav_real_t dist_total_m;/* path length since dr_init */
     nav_real_t step_e_m;    /* the last step's compensated horizontal move, east */
     nav_real_t step_n_m;    /* and north (eqs 3-4; dr_acc.h's dE, dN) */
 } dr_t;

@@ -46,7 +46,6 @@ int odo_init(odo_t *o, const odo_config_t *cfg)
     o->standing = 0u;
     o->zero = 0u;
     o->n_frames = 0u;
-    o->n_refused = 0u;
     return NAV_OK;
 }
 
@@ -70,7 +69,6 @@ int odo_wheels(odo_t *o, const nav_real_t wheel_mps[4], nav_real_t yaw_rate_rps)
     int all_zero = 1;
     for (int i = 0; i < 4; i++) {
         if (!nav_isfinite(wheel_mps[i]) || nav_fabs(wheel_mps[i]) > o->cfg.max_speed_mps) {
-            o->n_refused++;
             return NAV_EINVAL;
         }
         if (nav_fabs(wheel_mps[i]) >= o->cfg.still_speed_mps) {
@@ -78,19 +76,16 @@ int odo_wheels(odo_t *o, const nav_real_t wheel_mps[4], nav_real_t yaw_rate_rps)
         }
     }
     if (!nav_isfinite(yaw_rate_rps)) {
-        o->n_refused++;
         return NAV_EINVAL;
     }
     nav_real_t v;
     if (o->cfg.axle == ODO_AXLE_REAR) {
         if (axle_mean(&o->cfg, wheel_mps[2], wheel_mps[3], yaw_rate_rps, &v) != NAV_OK) {
-            o->n_refused++;
             return NAV_EINVAL;
         }
     } else {
         nav_real_t vf;
         if (axle_mean(&o->cfg, wheel_mps[0], wheel_mps[1], yaw_rate_rps, &vf) != NAV_OK) {
-            o->n_refused++;
             return NAV_EINVAL;
         }
         /* the steered wheels run on a circle of larger radius: remove the lateral part */

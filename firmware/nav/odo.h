@@ -50,7 +50,6 @@ typedef struct {
     uint8_t standing;          /* standstill */
     uint8_t zero;              /* the last accepted frame had every wheel at zero */
     uint32_t n_frames;         /* accepted frames */
-    uint32_t n_refused;        /* refused frames (implausible values) */
 } odo_t;
 
 #define odo_default_config NAV_SYM(odo_default_config)
@@ -70,7 +69,7 @@ int odo_init(odo_t *o, const odo_config_t *cfg);
  * One WheelSpeeds frame: front-left, front-right, rear-left, rear-right (m/s, signed,
  * reverse negative), and the body yaw rate (rad/s, about the car's up axis) at that time.
  * Returns NAV_OK; NAV_EINVAL for a non-finite or implausible value (the frame is refused,
- * counted in n_refused, and the previous speed ages on).
+ * which the caller counts (the application: CntBadValue), and the previous speed ages on).
  */
 int odo_wheels(odo_t *o, const nav_real_t wheel_mps[4], nav_real_t yaw_rate_rps);
 
