@@ -308,6 +308,24 @@ def test_figure8_returns_to_start():
     assert len(np.unique(np.round(t.speed_mps[np.abs(t.yaw_rate_rps) > 0.1], 6))) >= 4
 
 
+def test_motorway_scenario():
+    """The unseen route (issue #18's "other routes"): south and west of the equator and
+    Greenwich all the way, 130 km/h through the whole 3-min tunnel, and the car standing
+    at the service area for its 2 minutes inside the second outage, moving at both of its
+    ends (GNSS lost before the stop, back after the car has left)."""
+    t = tr.generate(load_scenario(SCEN / "motorway.toml"), 50.0)
+    assert np.all(t.lat_rad < 0.0) and np.all(t.lon_rad < 0.0)
+    assert t.speed_mps.max() == pytest.approx(36.0, abs=1e-9)
+    (a1, b1, _), (a2, b2, _) = t.outages
+    tunnel = (t.t_s >= a1) & (t.t_s <= b1)
+    assert b1 - a1 == 180.0 and np.all(t.speed_mps[tunnel] == pytest.approx(36.0, abs=1e-9))
+    inside = (t.t_s >= a2) & (t.t_s <= b2)
+    assert np.count_nonzero(t.speed_mps[inside] == 0.0) / 50.0 >= 119.0
+    assert t.speed_mps[t.t_s == a2][0] > 5.0 and t.speed_mps[t.t_s == b2][0] > 5.0
+    climb = np.abs(np.diff(t.h_m)).sum()
+    assert climb > 0.06 * 2500.0 / 2  # the 7 % hill: up and down, over half its length
+
+
 def test_seed000_scenario():
     """Seed 000's drive: long enough for 20 minutes after the calibration at 3431 s,
     moving there, standing still for the levelling and at stops along the way."""
