@@ -784,6 +784,35 @@ static void test_refused_entries_reported(void **state)
     assert_memory_equal(&rsp[3], want, 8u);
 }
 
+/* GIVEN a stored record whose DTC bytes are one confirmed DTC (IMU_STALE 0x2C) and one
+ * impossible byte (IMU_FAULT 0x01: testFailed is never stored) WHEN started THEN the good
+ * one comes back, the impossible one starts as after a clear and is counted, and
+ * NAV_Status's NVM_ERROR is raised (a review found the refusal counted where nothing read
+ * it: a confirmed DTC could be lost without a word) */
+static void test_refused_dtc_byte_reported(void **state)
+{
+    (void)state;
+    static calstore_ext_t ext;
+    memset(&ext, 0, sizeof ext);
+    memset(ext.dtc, 0xFF, sizeof ext.dtc);
+    ext.dtc[DTC_IMU_STALE] = 0x2Cu;
+    ext.dtc[DTC_IMU_FAULT] = 0x01u;
+    calstore_t cs = {0u, -1};
+    const cal_record_t none = {0.0f, 0.0f, 0.0f, CAL_SRC_NONE};
+    assert_int_equal(calstore_save_ext(&hal, &cs, &none, &ext), 0);
+    assert_int_equal(app_start(&app, &hal), NAV_OK);
+    assert_int_equal(dtc_stored(&app.keep.dtc, DTC_IMU_STALE), 0x2Cu);
+    assert_int_equal(dtc_status(&app.keep.dtc, DTC_IMU_FAULT), 0x50u);
+    assert_int_equal(app.keep.dtc.load_rejected, 1u);
+    assert_int_equal(app.keep.cal.nvm_error, 1u);
+    /* and a record whose bytes are all good raises nothing */
+    ext.dtc[DTC_IMU_FAULT] = 0x24u;
+    assert_int_equal(calstore_save_ext(&hal, &cs, &none, &ext), 0);
+    assert_int_equal(app_start(&app, &hal), NAV_OK);
+    assert_int_equal(app.keep.dtc.load_rejected, 0u);
+    assert_int_equal(app.keep.cal.nvm_error, 0u);
+}
+
 /* 0xF1A3, the commands' status: the last refusal's reason and the count (commands.h):
  * SetInitialPosition without a CMD_KnownPosition is refused with reason 1 */
 static void test_command_status_did(void **state)
@@ -943,6 +972,7 @@ int main(void)
         cmocka_unit_test_setup(test_routine_conditions_and_nvm_failure, setup_started),
         cmocka_unit_test_setup(test_calibration_routines, setup_started),
         cmocka_unit_test_setup(test_board_layer_over_nvm, setup_started),
+        cmocka_unit_test_setup(test_refused_dtc_byte_reported, setup),
         cmocka_unit_test_setup(test_refused_entries_reported, setup_started),
         cmocka_unit_test_setup(test_programming_session_enters_the_bootloader, setup),
     };

@@ -38,7 +38,11 @@ static int persist_changed(app_t *a, hal_t *hal, uint32_t changed, int now_anywa
 
 void app_dtc_load(app_t *a, const uint8_t *status, size_t n)
 {
-    (void)dtc_load(&a->keep.dtc, status, n);
+    if (dtc_load(&a->keep.dtc, status, n) != 0u) {
+        /* an impossible stored byte (that DTC starts as after a clear, a confirmed one may
+         * be lost): NAV_Status NVM_ERROR and its DTC, as a refused parameter entry */
+        a->keep.cal.nvm_error = 1u;
+    }
 }
 
 void app_dtc_cycle(app_t *a, hal_t *hal, uint32_t health_flags)

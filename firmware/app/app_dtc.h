@@ -21,7 +21,7 @@ struct app; /* app.h */
 
 /* Boot (the start of an operation cycle): the stored status bytes read from NVM, n of
  * them (NULL or n 0: none stored, every DTC as after a clear). Refused bytes are counted
- * (dtc_t load_rejected; dtc.h says which). */
+ * (dtc_t load_rejected; dtc.h says which) and raise NVM_ERROR (calib_t nvm_error). */
 void app_dtc_load(struct app *a, const uint8_t *status, size_t n);
 
 /* With each NAV_Status (output.c): the DTCs tested against its HealthFlags at the HAL
