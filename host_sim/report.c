@@ -206,6 +206,11 @@ void host_summary(FILE *out, const app_t *app, const hal_t *hal, unsigned long f
                  "odometer updates refused; non-finite outputs %lu\n",
             (unsigned long)h->imu_saturated, (unsigned long)h->imu_stuck,
             (unsigned long)h->odo_rejected, (unsigned long)h->nonfinite_out);
+    fprintf(out, "navecu: of the bad values, IMU_Time stamps %lu; DTC bytes: %lu NVM writes, "
+                 "%lu failed, %lu refused at start; UDS responsePending sent %lu\n",
+            (unsigned long)h->imu_timing, (unsigned long)app->keep.dtc_persist_writes,
+            (unsigned long)app->keep.dtc_persist_failed,
+            (unsigned long)app->keep.dtc.load_rejected, (unsigned long)app->uds.pending_sent);
     if (live) {
         fprintf(out, "navecu: CAN error frames %lu, socket errors %lu, send errors %lu\n",
                 (unsigned long)hal_socketcan_error_frames(hal),
