@@ -7,7 +7,7 @@
  *   imu_stream   IMU pairing, counter, gap bridging, plausibility -> raw samples
  *   imu_rate     the configured IMU rate against the samples counted between GNSS epochs
  *   gnss_epoch   GNSS frames -> one epoch (gnss_fix_t) with its time of validity
- *   gnss_raw     raw GNSS frames -> one raw epoch of satellites (issue #20: not fused yet)
+ *   gnss_raw     raw GNSS frames -> one raw epoch of satellites (issue #20; fusion_raw fuses it)
  *   align        initial state, levelling, start, re-acquisition
  *   landnav      standstill and dead reckoning without the filter
  *   fusion       the Kalman filter's schedule, updates and supervision (gnss_time: when

@@ -7,8 +7,9 @@
  * Off the navigation path: a frame on the request ID goes to ISO-TP and nowhere else (it
  * is never counted foreign or rejected); requests are served in app_poll and right after
  * their last frame; nothing here reads or changes the navigation state except an accepted
- * WriteDataByIdentifier (the configuration in RAM), a RoutineControl (0x0200..0x0203: the
- * NVM record, the calibration, the defaults in RAM; docs/can.md "Routines") and ECUReset
+ * WriteDataByIdentifier (the configuration in RAM), a RoutineControl (0x0200..0x0204: the
+ * NVM record, the calibration, the defaults in RAM, the mounting estimate adopted in RAM;
+ * docs/can.md "Routines") and ECUReset
  * (the application restarted through app_start's layers). With no diagnostic traffic it sends nothing, so the output frames are those
  * of a build without it. docs/can.md, "Diagnostics (UDS)", is the tester's description.
  */
