@@ -45,6 +45,9 @@ SESSION_PROGRAMMING = 0x02
 RID_ERASE = 0xFF00
 RID_CHECK = 0xFF01
 ALFID = 0x44
+DID_BOOT_COUNTERS = 0xF1B0  # the bootloader's counts since it started (docs/can.md)
+BOOT_COUNTERS = ("blocks programmed", "repeated", "sectors erased", "checks refused",
+                 "flash errors", "responsePendings", "returns to the application")
 
 
 class PipeBus(can.BusABC):
@@ -117,6 +120,8 @@ class Flasher:
         self.retries = retries
         self.max_block = max_block  # 0: what the bootloader announces
         self.repeats = 0
+        client.config.setdefault("data_identifiers", {})[DID_BOOT_COUNTERS] = \
+            navecu_uds.Raw(4 * len(BOOT_COUNTERS))
 
     def say(self, text: str) -> None:
         print(text, file=self.out, flush=True)
@@ -162,12 +167,17 @@ class Flasher:
         self.c.start_routine(RID_CHECK, data=struct.pack(">I", pkg.crc))
         self.say(f"flash: the bootloader checked CRC-32 0x{pkg.crc:08X} and marked the image "
                  "valid")
+        raw = self.c.read_data_by_identifier(DID_BOOT_COUNTERS).service_data.values[
+            DID_BOOT_COUNTERS]
+        counts = dict(zip(BOOT_COUNTERS, struct.unpack(f">{len(BOOT_COUNTERS)}I", raw)))
+        self.say("flash: the bootloader counted " + ", ".join(
+            f"{n} {k}" for k, n in list(counts.items())[:5]))
         self.c.ecu_reset(1)
         dt = time.monotonic() - t0
         self.say(f"flash: done, {len(image)} bytes in {dt:.1f} s ({len(image) / dt / 1024:.1f} "
                  f"KiB/s), {self.repeats} blocks sent again; ECUReset: the application starts")
         return {"bytes": len(image), "blocks": n_blocks, "seconds": dt,
-                "repeats": self.repeats}
+                "repeats": self.repeats, "boot_counters": counts}
 
 
 def parser() -> argparse.ArgumentParser:

@@ -36,6 +36,7 @@
 #define BOOT_RID_CHECK 0xFF01u   /* checkProgrammingDependencies: the image's CRC-32 */
 #define BOOT_DID_VERSION 0xF180u /* bootSoftwareIdentification */
 #define BOOT_DID_SESSION 0xF186u /* activeDiagnosticSession */
+#define BOOT_DID_COUNTERS 0xF1B0u /* boot_counters_t, 7 x uint32 big-endian (manufacturer range) */
 #define BOOT_ALFID 0x44u         /* addressAndLengthFormatIdentifier: 4 + 4 bytes */
 #define BOOT_VERSION_STRING "navecu-boot 1"
 
