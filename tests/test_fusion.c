@@ -977,6 +977,41 @@ static void test_raw_declared_elevation_must_be_the_geometrys(void **state)
     assert_int_equal(bad_values_with_declared_elevation(5u), 1u);
 }
 
+/* With gnss_input = both while the fixes come, a raw epoch is only learnt from; a
+ * satellite in it whose declared elevation is not its geometry's is refused and counted in
+ * bad_value all the same (a client written from the docs found those refusals uncounted) */
+static void test_raw_refusal_counted_in_a_learnt_epoch(void **state)
+{
+    (void)state;
+    const nav_real_t v[3] = {0.0f, 10.0f, 0.0f};
+    start_at(0.0, v);
+    cfg.gnss_input = GNSS_INPUT_BOTH;
+    cfg.gnss_latency_s = 0.0f;
+    static const double no_bias[LEARN_SATS] = {0.0, 0.0, 0.0, 0.0, 0.0};
+    static gnss_raw_asm_t g;
+    gnss_raw_close_t cl;
+    uint32_t tow = LEARN_TOW0_MS;
+    diag.t_us = 0u;
+    for (int k = 0; k < 3; k++, tow += 1000u) {
+        if (k > 0) {
+            for (int j = 0; j < 100; j++) { /* 1 s at 100 Hz */
+                diag.n_samples++;
+                gnss_time_record(&gtime, diag.n_samples, cfg.imu_rate_hz, v);
+            }
+            diag.t_us += 1000000u;
+        }
+        gnss_fix_t f = fix_at(450000000, 100000000, v);
+        f.tow_ms = tow;
+        int adopt;
+        assert_int_equal(fusion_gnss(&fu, &ctx, &PRIOR, &f, &adopt), FUSION_GO_ON);
+        learn_epoch(&g, &cl, LEARN_SATS, no_bias);
+        g.sat[4].elevation_deg = 90u; /* 20 deg up */
+        assert_int_equal(fusion_raw(&fu, &ctx, &g, &cl, tow, 0, &adopt), FUSION_GO_ON);
+    }
+    assert_int_equal(ctx.raw->epochs_used, 0u); /* learnt from, not fused */
+    assert_int_equal(health.bad_value, 3u); /* once an epoch */
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1005,6 +1040,7 @@ int main(void)
         cmocka_unit_test(test_biases_learnt_only_moving_with_good_fixes),
         cmocka_unit_test(test_learning_needs_a_fix_taken),
         cmocka_unit_test(test_raw_declared_elevation_must_be_the_geometrys),
+        cmocka_unit_test(test_raw_refusal_counted_in_a_learnt_epoch),
     };
     return cmocka_run_group_tests_name("fusion", tests, NULL, NULL);
 }

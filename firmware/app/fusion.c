@@ -698,8 +698,9 @@ static int raw_row(const fusion_t *fu, const raw_epoch_t *e, int i, int rate,
  * is not a GNSS satellite's (gnss_geom_sat), whose declared elevation is not its geometry's
  * (APP_RAW_EL_SIN_MISMATCH), or whose pseudorange is not its range within
  * APP_RAW_PR_PLAUSIBLE_M (a receiver clock within 3 ms of GPS time; a range of 0 or a
- * corrupt one) is refused, and counted in bad_value when count is set (an epoch fused) */
-static void raw_geometry(fusion_t *fu, const raw_epoch_t *e, int count)
+ * corrupt one) is refused and counted in bad_value, in an epoch fused or only learnt from
+ * (a client found the learnt-from epochs' refusals uncounted) */
+static void raw_geometry(fusion_t *fu, const raw_epoch_t *e)
 {
     for (int i = 0; i < e->n; i++) {
         const gnss_raw_sat_t *m = &e->g->sat[e->slot[i]];
@@ -713,7 +714,7 @@ static void raw_geometry(fusion_t *fu, const raw_epoch_t *e, int count)
                                                                       0)) <=
                                          APP_RAW_PR_PLAUSIBLE_M);
         fu->raw_geo_ok[i] = (uint8_t)(pr_ok ? 1u : 0u);
-        if (!pr_ok && count != 0) {
+        if (!pr_ok) {
             app_diag_reject(e->c->diag, &e->c->diag->health->bad_value);
         }
     }
@@ -1086,7 +1087,7 @@ fusion_action_t fusion_raw(fusion_t *fu, const fusion_ctx_t *c, const gnss_raw_a
         return FUSION_GO_ON;
     }
     raw_order(&e, closed);
-    raw_geometry(fu, &e, fuse);
+    raw_geometry(fu, &e);
     /* each satellite's learnt bias, removed from its range when fused (none learnt from) */
     for (int i = 0; i < e.n; i++) {
         const gnss_raw_sat_t *m = &g->sat[e.slot[i]];
