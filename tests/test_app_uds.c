@@ -805,6 +805,16 @@ static void test_refused_dtc_byte_reported(void **state)
     assert_int_equal(dtc_status(&app.keep.dtc, DTC_IMU_FAULT), 0x50u);
     assert_int_equal(app.keep.dtc.load_rejected, 1u);
     assert_int_equal(app.keep.cal.nvm_error, 1u);
+    /* the bytes are written again at the first test (navigation not started): the next
+     * start refuses nothing (a review found the corrupt byte refused at every start) */
+    app_dtc_cycle(&app, &hal, 0u);
+    uint8_t stored[CALSTORE_DTC_N];
+    assert_int_equal(nvstore_dtc_status(&hal, stored), 0);
+    assert_int_equal(stored[DTC_IMU_FAULT], 0x00u); /* started as after a clear, passed */
+    assert_int_equal(stored[DTC_IMU_STALE], dtc_stored(&app.keep.dtc, DTC_IMU_STALE));
+    assert_true((stored[DTC_IMU_STALE] & DTC_CDTC) != 0u); /* still confirmed */
+    assert_int_equal(app_start(&app, &hal), NAV_OK);
+    assert_int_equal(app.keep.dtc.load_rejected, 0u);
     /* and a record whose bytes are all good raises nothing */
     ext.dtc[DTC_IMU_FAULT] = 0x24u;
     assert_int_equal(calstore_save_ext(&hal, &cs, &none, &ext), 0);

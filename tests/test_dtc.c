@@ -124,6 +124,15 @@ static void test_confirm_time_restarts_after_a_pass(void **state)
     (void)dtc_update(&d, STALE, 5000u * MS);
     (void)dtc_update(&d, STALE, 1000u * MS);
     assert_int_equal(dtc_status(&d, DTC_IMU_STALE), 0x27u);
+    /* a condition's time is taken on the clock's low 32 bits (dtc.h): 2 s across their
+     * wrap (71.6 min after power-on) confirms as anywhere else, 1.9 s does not */
+    dtc_init(&d);
+    const uint64_t wrap = UINT64_C(1) << 32;
+    (void)dtc_update(&d, STALE, wrap - 1000u * MS);
+    (void)dtc_update(&d, STALE, wrap + 900u * MS);
+    assert_int_equal(dtc_status(&d, DTC_IMU_STALE) & DTC_CDTC, 0u);
+    (void)dtc_update(&d, STALE, wrap + 1000u * MS);
+    assert_int_equal(dtc_status(&d, DTC_IMU_STALE) & DTC_CDTC, DTC_CDTC);
 }
 
 /* confirm time 0: confirmed at the first failure (NVM_ERROR) */
@@ -366,6 +375,35 @@ static void test_refusals_now_and_then_are_no_fault(void **state)
     assert_bit7_clear();
 }
 
+/* A 1 Hz sender whose every frame is refused: REJECTED held 1 s after each refusal, seen
+ * at the 10 Hz NAV_Status ticks with the refusals' jitter leaving one or two ticks clear
+ * between them (a review's finding: such a fault never confirmed when any pass ended the
+ * condition). One condition: confirmed 10 s after the first refusal. Refusals 3.5 s apart
+ * (passes of 2.5 s, over DTC_PASS_HOLD_US): no condition, in two drives. */
+static void test_slow_refusals_are_one_condition(void **state)
+{
+    (void)state;
+    for (uint64_t t = 0u; t <= 10000u; t += 100u) {
+        const uint64_t in_s = t % 1000u; /* the flag clear for the last tick or two */
+        const uint32_t f = in_s < ((t / 1000u) % 2u == 0u ? 900u : 800u) ? NAVECU_HEALTH_REJECTED
+                                                                       : 0u;
+        (void)dtc_update(&d, f, t * MS);
+        if (t < 10000u) {
+            assert_int_equal(dtc_status(&d, DTC_REJECTED) & DTC_PDTC, 0u);
+        }
+    }
+    assert_int_equal(dtc_status(&d, DTC_REJECTED), 0x2Fu); /* at 10 s */
+    setup(NULL);
+    for (int cycle = 0; cycle < 2; cycle++) {
+        for (uint64_t t = 0u; t < 60000u; t += 100u) {
+            const uint32_t f = t % 3500u < 1000u ? NAVECU_HEALTH_REJECTED : 0u;
+            (void)dtc_update(&d, f, t * MS);
+        }
+        assert_int_equal(dtc_status(&d, DTC_REJECTED), 0x00u);
+        (void)dtc_load(&d, (const uint8_t[DTC_N]){0}, (size_t)DTC_N);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -382,6 +420,7 @@ int main(void)
         cmocka_unit_test_setup(test_debounced, setup),
         cmocka_unit_test_setup(test_debounce_time_while_tested, setup),
         cmocka_unit_test_setup(test_refusals_now_and_then_are_no_fault, setup),
+        cmocka_unit_test_setup(test_slow_refusals_are_one_condition, setup),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -40,8 +40,11 @@ void app_dtc_load(app_t *a, const uint8_t *status, size_t n)
 {
     if (dtc_load(&a->keep.dtc, status, n) != 0u) {
         /* an impossible stored byte (that DTC starts as after a clear, a confirmed one may
-         * be lost): NAV_Status NVM_ERROR and its DTC, as a refused parameter entry */
+         * be lost): NAV_Status NVM_ERROR and its DTC, as a refused parameter entry; and the
+         * bytes written again at the next chance (persist_changed), so a corrupt byte is
+         * not refused anew at every start */
         a->keep.cal.nvm_error = 1u;
+        a->keep.dtc_dirty = ((uint32_t)1u << DTC_N) - 1u;
     }
 }
 

@@ -85,19 +85,30 @@ uint32_t dtc_update_tested(dtc_t *d, uint32_t health_flags, uint32_t tested, uin
         const dtc_def_t *def = &dtc_table[i];
         uint8_t st = d->status[i];
         if ((health_flags & tested & def->health_mask) == 0u) {
-            /* passed, or not tested: a condition lasts while it is tested */
+            /* passed, or not tested: a condition lasts while it is tested, and an events
+             * one through a pass shorter than DTC_PASS_HOLD_US (on the clock's low 32 bits:
+             * time going backwards ends it) */
+            if ((def->confirm_ds & DTC_EVENTS) != 0u && d->fail_start_us[i] != DTC_NO_CONDITION &&
+                (tested & def->health_mask) != 0u &&
+                (uint32_t)now_us - d->last_fail_us[i] < DTC_PASS_HOLD_US) {
+                continue;
+            }
             d->fail_start_us[i] = DTC_NO_CONDITION;
             if ((tested & def->health_mask) == 0u) {
                 continue;
             }
             st = (uint8_t)(st & (uint8_t)~(DTC_TF | DTC_TNCTOC | DTC_TNCSLC));
         } else {
+            const uint32_t t_us = (uint32_t)now_us;
             if (d->fail_start_us[i] == DTC_NO_CONDITION) {
-                d->fail_start_us[i] = now_us; /* the condition starts */
+                d->fail_start_us[i] = t_us; /* the condition starts */
             }
-            const uint64_t confirm_us = (uint64_t)(def->confirm_ds & DTC_CONFIRM_DS_MASK) * 100000u;
-            /* time going backwards counts as no time; no overflow: now_us < 2^63 (dtc.h) */
-            const uint8_t lasted = now_us >= d->fail_start_us[i] + confirm_us ? 1u : 0u;
+            d->last_fail_us[i] = t_us;
+            /* at most 0x3FFF x 0.1 s = 1.64e9 us, below 2^31: time going backwards (a
+             * difference of 2^31 or more) counts as no time (dtc.h) */
+            const uint32_t confirm_us = (uint32_t)(def->confirm_ds & DTC_CONFIRM_DS_MASK) * 100000u;
+            const uint32_t since_us = t_us - d->fail_start_us[i];
+            const uint8_t lasted = since_us < 0x80000000u && since_us >= confirm_us ? 1u : 0u;
             if (lasted == 0u && (def->confirm_ds & DTC_DEBOUNCED) != 0u) {
                 continue; /* debounced: not completed yet */
             }

@@ -45,18 +45,22 @@ def test_one_dtc_per_health_flag_in_the_generated_c():
     assert len(dtcs) <= gen_dtc.DTC_MAX
     c = (ROOT / gen_dtc.OUT_C).read_text()
     rows = re.findall(r"\[DTC_(\w+)\] = \{0x([0-9A-F]{6})u, NAVECU_HEALTH_(\w+), (\d+)u"
-                      r"( \| DTC_DEBOUNCED)?\}", c)
+                      r"( \| DTC_DEBOUNCED)?( \| DTC_EVENTS)?\}", c)
     assert len(rows) == len(dtcs)
-    for d, (name, num, flag, ds, debounced) in zip(dtcs, rows):
+    for d, (name, num, flag, ds, debounced, events) in zip(dtcs, rows):
         assert name == d["name"].upper() and flag == d["flag"]
         assert int(num, 16) == gen_dtc.dtc_number(d["code"], int(d["ftb"]))
         assert int(ds) == round(float(d["confirm_s"]) * 10)  # 0.1 s units
         assert bool(debounced) == d.get("debounced", False)
+        assert bool(events) == d.get("events", False)
     # the conditions a fault-free drive goes through are debounced: a start's waits (a
     # client found U1102-87 confirmed on the second start before), and a refusal now and
     # then (a review found one gated GNSS fix a drive confirming U1103-81 on the second)
     assert {d["flag"] for d in dtcs if d.get("debounced")} == {
         "NO_GNSS", "NO_HEADING", "REACQUIRE", "REJECTED", "ODO_REJECTED"}
+    # the refusals' flags mark events held for a second: their conditions go on through
+    # short passes (a review found a 1 Hz sender's refusals never confirming without it)
+    assert {d["flag"] for d in dtcs if d.get("events")} == {"REJECTED", "ODO_REJECTED"}
     # the start's waits are tested only while the car moves, and the generated mask says so
     moving = {d["flag"] for d in dtcs if d.get("while_moving")}
     assert moving == {"NO_GNSS", "NO_HEADING", "REACQUIRE"}
@@ -93,6 +97,8 @@ description = "x"
     (lambda t: t.replace("confirm_s = 2.0", "confirm_s = 2.0\ndebounced = 1"), "true or false"),
     (lambda t: t.replace("confirm_s = 2.0", "confirm_s = 2.0\nwhile_moving = \"yes\""),
      "while_moving must be true or false"),
+    (lambda t: t.replace("confirm_s = 2.0", "confirm_s = 2.0\nevents = true"),
+     "events needs debounced"),
     (lambda t: t.replace("confirm_s = 2.0", "confirm_s = 0.0\ndebounced = true"),
      "debounced needs a confirm_s"),
     (lambda t: t.replace('code = "U1101"', 'code = "Q1101"'), "a letter P/C/B/U"),

@@ -33,8 +33,11 @@ typedef struct {
 } dtc_def_t;
 
 #define DTC_DEBOUNCED 0x8000u     /* in confirm_ds: a debounced DTC (dtc.toml) */
+#define DTC_EVENTS 0x4000u        /* in confirm_ds: its flag marks events, held for a
+                                     second (dtc.toml events; DTC_PASS_HOLD_US) */
+#define DTC_PASS_HOLD_US 2000000u /* an events DTC's condition goes on through shorter passes (dtc.h) */
 #define DTC_WHILE_MOVING_FLAGS 0x0824u /* tested only while the car moves: NO_GNSS | NO_HEADING | REACQUIRE */
-#define DTC_CONFIRM_DS_MASK 0x7FFFu /* in confirm_ds: the confirm time */
+#define DTC_CONFIRM_DS_MASK 0x3FFFu /* in confirm_ds: the confirm time */
 
 extern const dtc_def_t dtc_table[DTC_N];
 
