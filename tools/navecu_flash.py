@@ -45,9 +45,9 @@ SESSION_PROGRAMMING = 0x02
 RID_ERASE = 0xFF00
 RID_CHECK = 0xFF01
 ALFID = 0x44
-DID_BOOT_COUNTERS = 0xF1B0  # the bootloader's counts since it started (docs/can.md)
+DID_BOOT_COUNTERS = 0xFD00  # the bootloader's counts since it started (docs/can.md)
 BOOT_COUNTERS = ("blocks programmed", "repeated", "sectors erased", "checks refused",
-                 "flash errors", "responsePendings", "returns to the application")
+                 "flash errors", "responsePendings")
 
 
 class PipeBus(can.BusABC):
@@ -139,6 +139,19 @@ class Flasher:
                 self.say(f"flash: block {seq:#04x} unanswered, sent again "
                          f"({attempt + 1}/{self.retries})")
 
+    def boot_counters(self) -> Optional[dict]:
+        """The bootloader's counts (DID 0xFD00), or None from a bootloader without them
+        (navecu-boot 1 answers 7F 22 31) or with no answer: the image is flashed and
+        checked by then, so this never fails the flash."""
+        from udsoncan.exceptions import NegativeResponseException, TimeoutException
+        try:
+            raw = self.c.read_data_by_identifier(DID_BOOT_COUNTERS).service_data.values[
+                DID_BOOT_COUNTERS]
+        except (NegativeResponseException, TimeoutException) as e:
+            self.say(f"flash: the bootloader's counts not read ({e}): an older bootloader")
+            return None
+        return dict(zip(BOOT_COUNTERS, struct.unpack(f">{len(BOOT_COUNTERS)}I", raw)))
+
     def flash(self, pkg: navecu_pkg.Package) -> dict:
         from udsoncan import MemoryLocation
         image, addr = pkg.image, pkg.address
@@ -167,11 +180,10 @@ class Flasher:
         self.c.start_routine(RID_CHECK, data=struct.pack(">I", pkg.crc))
         self.say(f"flash: the bootloader checked CRC-32 0x{pkg.crc:08X} and marked the image "
                  "valid")
-        raw = self.c.read_data_by_identifier(DID_BOOT_COUNTERS).service_data.values[
-            DID_BOOT_COUNTERS]
-        counts = dict(zip(BOOT_COUNTERS, struct.unpack(f">{len(BOOT_COUNTERS)}I", raw)))
-        self.say("flash: the bootloader counted " + ", ".join(
-            f"{n} {k}" for k, n in list(counts.items())[:5]))
+        counts = self.boot_counters()
+        if counts is not None:
+            self.say("flash: the bootloader counted " + ", ".join(
+                f"{n} {k}" for k, n in list(counts.items())[:5]))
         self.c.ecu_reset(1)
         dt = time.monotonic() - t0
         self.say(f"flash: done, {len(image)} bytes in {dt:.1f} s ({len(image) / dt / 1024:.1f} "

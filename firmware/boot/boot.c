@@ -398,12 +398,12 @@ static size_t boot_read_did(void *user, uint16_t did, uint8_t *buf, size_t cap)
         return 1u;
     }
     if (did == BOOT_DID_COUNTERS) {
-        /* the counts in boot_counters_t's order, each big-endian, since the bootloader started */
-        const uint32_t c[7] = {b->cnt.blocks_written, b->cnt.blocks_repeated, b->cnt.erases,
-                               b->cnt.checks_failed,  b->cnt.flash_errors,    b->cnt.pending_sent,
-                               b->cnt.returns};
+        /* the counts in boot_counters_t's order, each big-endian, since the bootloader
+         * started; not `returns`, counted on the way into a reset that clears it */
+        const uint32_t c[6] = {b->cnt.blocks_written, b->cnt.blocks_repeated, b->cnt.erases,
+                               b->cnt.checks_failed,  b->cnt.flash_errors,    b->cnt.pending_sent};
         if (cap >= sizeof c) {
-            for (size_t i = 0u; i < 7u; i++) {
+            for (size_t i = 0u; i < 6u; i++) {
                 buf[4u * i] = (uint8_t)(c[i] >> 24);
                 buf[4u * i + 1u] = (uint8_t)(c[i] >> 16);
                 buf[4u * i + 2u] = (uint8_t)(c[i] >> 8);

@@ -36,9 +36,10 @@
 #define BOOT_RID_CHECK 0xFF01u   /* checkProgrammingDependencies: the image's CRC-32 */
 #define BOOT_DID_VERSION 0xF180u /* bootSoftwareIdentification */
 #define BOOT_DID_SESSION 0xF186u /* activeDiagnosticSession */
-#define BOOT_DID_COUNTERS 0xF1B0u /* boot_counters_t, 7 x uint32 big-endian (manufacturer range) */
+#define BOOT_DID_COUNTERS 0xFD00u /* its counts, 6 x uint32 big-endian (ISO 14229-1
+                                   0xFD00-0xFEFF: system supplier specific) */
 #define BOOT_ALFID 0x44u         /* addressAndLengthFormatIdentifier: 4 + 4 bytes */
-#define BOOT_VERSION_STRING "navecu-boot 1"
+#define BOOT_VERSION_STRING "navecu-boot 2" /* 2: DID 0xFD00 */
 
 #define UDS_SID_REQUEST_DOWNLOAD 0x34u
 #define UDS_SID_TRANSFER_DATA 0x36u

@@ -402,3 +402,37 @@ def test_qemu_power_cut_in_the_middle_of_an_erase(tmp_path):
         assert flash.read_bytes() == host_flash.read_bytes()
     print("QEMU bootloader: power cut half way through each of the two sector erases: no "
           "valid application after it, the complete re-flash starts")
+
+
+def test_counts_of_an_older_bootloader_do_not_fail_the_flash():
+    """The bootloader's counts are read after the image is checked and marked valid: a
+    bootloader without DID 0xFD00 (navecu-boot 1 answers 7F 22 31) or no answer must not
+    turn that flash into a failure (a review's finding), and a newer one's 24 bytes are the
+    six counts in order."""
+    import udsoncan
+    from udsoncan.exceptions import NegativeResponseException, TimeoutException
+    from udsoncan.services import ReadDataByIdentifier
+
+    class Client:
+        def __init__(self, answer):
+            self.config = {"data_identifiers": {}}
+            self.answer = answer
+
+        def read_data_by_identifier(self, did):
+            assert did == navecu_flash.DID_BOOT_COUNTERS
+            assert did in self.config["data_identifiers"]
+            if isinstance(self.answer, Exception):
+                raise self.answer
+            r = udsoncan.Response(ReadDataByIdentifier, code=0)
+            r.service_data = type("D", (), {"values": {did: self.answer}})()
+            return r
+
+    nrc = udsoncan.Response(ReadDataByIdentifier, code=0x31)
+    for answer in (NegativeResponseException(nrc), TimeoutException("no answer")):
+        out = io.StringIO()
+        assert navecu_flash.Flasher(Client(answer), out=out).boot_counters() is None
+        assert "not read" in out.getvalue() and "older bootloader" in out.getvalue()
+    counts = navecu_flash.Flasher(Client(struct.pack(">6I", 128, 1, 2, 0, 0, 3)),
+                                  out=io.StringIO()).boot_counters()
+    assert list(counts.values()) == [128, 1, 2, 0, 0, 3]
+    assert list(counts) == list(navecu_flash.BOOT_COUNTERS)
