@@ -886,7 +886,9 @@ static int raw_interval(fusion_t *fu, const fusion_ctx_t *c, uint32_t tow_ms, na
 /* gnss_input = both while the receiver gives fixes: the epoch's satellites' residuals
  * against the filter's position, which follows the fixes (with the correlated error state
  * db along each line of sight when it is one, as the fused ranges are), learnt as their
- * biases (raw_bias.h); nothing is fused, refused or counted (the epoch's fix is). Learnt
+ * biases (raw_bias.h); nothing is fused, and only a satellite that is not one
+ * (raw_geometry: its position, elevation or range implausible) is refused and counted; the
+ * fault exclusion's and the gate's verdicts are not (the epoch's fix is fused). Learnt
  * only while the filter takes the fixes (one within gap_samples: APP_RAW_BOTH_GAP_EPOCHS of
  * their interval) with its horizontal sigma below APP_RAW_BIAS_POS_SIGMA_M and the car at
  * APP_RAW_BIAS_SPEED_MPS or more, from the satellites the fault exclusion keeps, when at
