@@ -41,6 +41,17 @@ static fusion_ctx_t ctx;
 static const geo_pos_t P0 = {450000000LL * GEO_LSB_PER_DEG_E7, 100000000LL * GEO_LSB_PER_DEG_E7,
                              100000LL * GEO_LSB_PER_MM};
 
+/* one second of IMU samples at 100 Hz with the velocity v (ENU) in the history, and of the
+ * HAL clock */
+static void one_second(const nav_real_t v[3])
+{
+    for (int j = 0; j < 100; j++) {
+        diag.n_samples++;
+        gnss_time_record(&gtime, diag.n_samples, cfg.imu_rate_hz, v);
+    }
+    diag.t_us += 1000000u;
+}
+
 /* the navigator at P0 with heading (deg) and velocity v (ENU), the velocity history full
  * of v, sample count N0 */
 static void start_at(double heading_deg, const nav_real_t v[3])
@@ -72,6 +83,15 @@ static void start_at(double heading_deg, const nav_real_t v[3])
     for (uint64_t n = N0 - 50u; n < N0; n++) {
         gnss_time_record(&gtime, n, cfg.imu_rate_hz, v);
     }
+}
+
+/* start_at heading north at v, gnss_input both, no latency, the HAL clock at 0 */
+static void start_learning(const nav_real_t v[3])
+{
+    start_at(0.0, v);
+    cfg.gnss_input = GNSS_INPUT_BOTH;
+    cfg.gnss_latency_s = 0.0f;
+    diag.t_us = 0u;
 }
 
 static int setup(void **state)
@@ -899,22 +919,15 @@ static void test_learning_needs_a_fix_taken(void **state)
 {
     (void)state;
     const nav_real_t v[3] = {0.0f, 10.0f, 0.0f};
-    start_at(0.0, v);
-    cfg.gnss_input = GNSS_INPUT_BOTH;
-    cfg.gnss_latency_s = 0.0f;
+    start_learning(v);
     static const double no_bias[LEARN_SATS] = {0.0, 0.0, 0.0, 0.0, 0.0};
     static gnss_raw_asm_t g;
     gnss_raw_close_t cl;
     uint32_t tow = LEARN_TOW0_MS;
-    diag.t_us = 0u;
     nav_real_t learnt[13];
     for (int k = 0; k < 13; k++, tow += 1000u) {
         if (k > 0) {
-            for (int j = 0; j < 100; j++) { /* 1 s at 100 Hz */
-                diag.n_samples++;
-                gnss_time_record(&gtime, diag.n_samples, cfg.imu_rate_hz, v);
-            }
-            diag.t_us += 1000000u;
+            one_second(v);
         }
         gnss_fix_t f = fix_at(k >= 11 ? 450045000 : 450000000, 100000000, v);
         f.tow_ms = tow;
@@ -948,11 +961,7 @@ static uint32_t bad_values_with_declared_elevation(uint8_t decl_deg)
     int adopt;
     assert_int_equal(fusion_gnss(&fu, &ctx, &PRIOR, &f, &adopt), FUSION_GO_ON);
     assert_int_equal(fu.on, 1);
-    for (int j = 0; j < 100; j++) { /* 1 s at 100 Hz */
-        diag.n_samples++;
-        gnss_time_record(&gtime, diag.n_samples, cfg.imu_rate_hz, v);
-    }
-    diag.t_us += 1000000u;
+    one_second(v);
     tow += 1000u;
     static const double no_bias[LEARN_SATS] = {0.0, 0.0, 0.0, 0.0, 0.0};
     static gnss_raw_asm_t g;
@@ -984,21 +993,14 @@ static void test_raw_refusal_counted_in_a_learnt_epoch(void **state)
 {
     (void)state;
     const nav_real_t v[3] = {0.0f, 10.0f, 0.0f};
-    start_at(0.0, v);
-    cfg.gnss_input = GNSS_INPUT_BOTH;
-    cfg.gnss_latency_s = 0.0f;
+    start_learning(v);
     static const double no_bias[LEARN_SATS] = {0.0, 0.0, 0.0, 0.0, 0.0};
     static gnss_raw_asm_t g;
     gnss_raw_close_t cl;
     uint32_t tow = LEARN_TOW0_MS;
-    diag.t_us = 0u;
     for (int k = 0; k < 3; k++, tow += 1000u) {
         if (k > 0) {
-            for (int j = 0; j < 100; j++) { /* 1 s at 100 Hz */
-                diag.n_samples++;
-                gnss_time_record(&gtime, diag.n_samples, cfg.imu_rate_hz, v);
-            }
-            diag.t_us += 1000000u;
+            one_second(v);
         }
         gnss_fix_t f = fix_at(450000000, 100000000, v);
         f.tow_ms = tow;
