@@ -61,10 +61,7 @@ static void put_f32(uint8_t *p, nav_real_t x)
     const float f = (float)x;
     uint32_t u;
     memcpy(&u, &f, sizeof u);
-    p[0] = (uint8_t)(u >> 24);
-    p[1] = (uint8_t)(u >> 16);
-    p[2] = (uint8_t)(u >> 8);
-    p[3] = (uint8_t)u;
+    uds_put_u32(p, u);
 }
 
 static nav_real_t get_f32(const uint8_t *p)
@@ -202,22 +199,15 @@ static size_t read_did(void *user, uint16_t did, uint8_t *buf, size_t cap)
         buf[1] = a->nvm.source;
         buf[2] = a->nvm.loaded;
         buf[3] = a->nvm.refused;
-        buf[4] = (uint8_t)(a->nvm.seq >> 24);
-        buf[5] = (uint8_t)(a->nvm.seq >> 16);
-        buf[6] = (uint8_t)(a->nvm.seq >> 8);
-        buf[7] = (uint8_t)a->nvm.seq;
+        uds_put_u32(&buf[4], a->nvm.seq);
         return 8u;
     }
     if (did == APP_UDS_DID_CMD_STATUS) {
         if (cap < 5u) {
             return 5u;
         }
-        const uint32_t n = a->keep.health.cmd_rejected;
         buf[0] = a->keep.cmd_refusal;
-        buf[1] = (uint8_t)(n >> 24);
-        buf[2] = (uint8_t)(n >> 16);
-        buf[3] = (uint8_t)(n >> 8);
-        buf[4] = (uint8_t)n;
+        uds_put_u32(&buf[1], a->keep.health.cmd_rejected);
         return 5u;
     }
     const app_param_id_t id = app_uds_param_of_did(did);

@@ -404,10 +404,7 @@ static size_t boot_read_did(void *user, uint16_t did, uint8_t *buf, size_t cap)
                                b->cnt.checks_failed,  b->cnt.flash_errors,    b->cnt.pending_sent};
         if (cap >= sizeof c) {
             for (size_t i = 0u; i < 6u; i++) {
-                buf[4u * i] = (uint8_t)(c[i] >> 24);
-                buf[4u * i + 1u] = (uint8_t)(c[i] >> 16);
-                buf[4u * i + 2u] = (uint8_t)(c[i] >> 8);
-                buf[4u * i + 3u] = (uint8_t)c[i];
+                uds_put_u32(&buf[4u * i], c[i]);
             }
         }
         return sizeof c;

@@ -88,7 +88,7 @@ static void put_u16(uint8_t *p, uint32_t v)
     p[1] = (uint8_t)v;
 }
 
-static void put_u32(uint8_t *p, uint32_t v)
+void uds_put_u32(uint8_t *p, uint32_t v)
 {
     put_u16(p, v >> 16);
     put_u16(&p[2], v & 0xFFFFu);
@@ -186,7 +186,7 @@ static result_t security_access(uds_t *s, const uint8_t *req, size_t len, uint8_
     rsp[1] = sub;
     if (sub == 0x01u) {
         if (s->unlocked) {
-            put_u32(&rsp[2], 0u); /* already unlocked: the seed is 0 */
+            uds_put_u32(&rsp[2], 0u); /* already unlocked: the seed is 0 */
             return positive(2u + UDS_SEED_LEN, suppress);
         }
         uint32_t x = s->prng ^ (uint32_t)now_us;
@@ -199,7 +199,7 @@ static result_t security_access(uds_t *s, const uint8_t *req, size_t len, uint8_
         s->prng = x;
         s->seed = x; /* never 0: xorshift keeps a nonzero state nonzero */
         s->seed_pending = 1u;
-        put_u32(&rsp[2], s->seed);
+        uds_put_u32(&rsp[2], s->seed);
         return positive(2u + UDS_SEED_LEN, suppress);
     }
     if (!s->seed_pending) {

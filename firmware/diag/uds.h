@@ -207,4 +207,7 @@ size_t uds_session_response(uint8_t session, uint8_t *rsp);
 /* The demonstration key of a seed (UDS_KEY_XOR, UDS_KEY_ADD above). */
 uint32_t uds_key_of_seed(uint32_t seed);
 
+/* v at p[0..3], big-endian: UDS's byte order (a DID's values, a seed) */
+void uds_put_u32(uint8_t *p, uint32_t v);
+
 #endif /* NAVECU_UDS_H */
