@@ -907,6 +907,29 @@ static void test_biases_learnt_only_moving_with_good_fixes(void **state)
 }
 
 
+/* Second k of a learning drive (start_learning, v): a fix at lat_e7 (deg 1e-7) and the
+ * raw epoch of LEARN_SATS unbiased satellites, the fifth declared at el_deg (0: its own
+ * elevation), both offered to the filter at TimeOfWeek LEARN_TOW0_MS + k s */
+static void fix_and_raw_epoch(int k, int32_t lat_e7, const nav_real_t v[3], uint8_t el_deg)
+{
+    static const double no_bias[LEARN_SATS] = {0.0, 0.0, 0.0, 0.0, 0.0};
+    static gnss_raw_asm_t g;
+    gnss_raw_close_t cl;
+    const uint32_t tow = LEARN_TOW0_MS + 1000u * (uint32_t)k;
+    if (k > 0) {
+        one_second(v);
+    }
+    gnss_fix_t f = fix_at(lat_e7, 100000000, v);
+    f.tow_ms = tow;
+    int adopt;
+    assert_int_equal(fusion_gnss(&fu, &ctx, &PRIOR, &f, &adopt), FUSION_GO_ON);
+    learn_epoch(&g, &cl, LEARN_SATS, no_bias);
+    if (el_deg != 0u) {
+        g.sat[4].elevation_deg = el_deg;
+    }
+    assert_int_equal(fusion_raw(&fu, &ctx, &g, &cl, tow, 0, &adopt), FUSION_GO_ON);
+}
+
 /* The learning needs a fix taken within 1.5 of the receiver's usual intervals, not only
  * one offered (fusion.c raw_learn): GIVEN 1-s fixes and raw epochs of five satellites at
  * 10 m/s (ten taken: the usual interval down to about 1 s), then fixes 500 m off (offered,
@@ -920,21 +943,9 @@ static void test_learning_needs_a_fix_taken(void **state)
     (void)state;
     const nav_real_t v[3] = {0.0f, 10.0f, 0.0f};
     start_learning(v);
-    static const double no_bias[LEARN_SATS] = {0.0, 0.0, 0.0, 0.0, 0.0};
-    static gnss_raw_asm_t g;
-    gnss_raw_close_t cl;
-    uint32_t tow = LEARN_TOW0_MS;
     nav_real_t learnt[13];
-    for (int k = 0; k < 13; k++, tow += 1000u) {
-        if (k > 0) {
-            one_second(v);
-        }
-        gnss_fix_t f = fix_at(k >= 11 ? 450045000 : 450000000, 100000000, v);
-        f.tow_ms = tow;
-        int adopt;
-        assert_int_equal(fusion_gnss(&fu, &ctx, &PRIOR, &f, &adopt), FUSION_GO_ON);
-        learn_epoch(&g, &cl, LEARN_SATS, no_bias);
-        assert_int_equal(fusion_raw(&fu, &ctx, &g, &cl, tow, 0, &adopt), FUSION_GO_ON);
+    for (int k = 0; k < 13; k++) {
+        fix_and_raw_epoch(k, k >= 11 ? 450045000 : 450000000, v, 0u);
         learnt[k] = fu.raw_bias.sat[0].learnt_s;
     }
     assert_int_equal(health.time_jumps, 0u);
@@ -994,21 +1005,8 @@ static void test_raw_refusal_counted_in_a_learnt_epoch(void **state)
     (void)state;
     const nav_real_t v[3] = {0.0f, 10.0f, 0.0f};
     start_learning(v);
-    static const double no_bias[LEARN_SATS] = {0.0, 0.0, 0.0, 0.0, 0.0};
-    static gnss_raw_asm_t g;
-    gnss_raw_close_t cl;
-    uint32_t tow = LEARN_TOW0_MS;
-    for (int k = 0; k < 3; k++, tow += 1000u) {
-        if (k > 0) {
-            one_second(v);
-        }
-        gnss_fix_t f = fix_at(450000000, 100000000, v);
-        f.tow_ms = tow;
-        int adopt;
-        assert_int_equal(fusion_gnss(&fu, &ctx, &PRIOR, &f, &adopt), FUSION_GO_ON);
-        learn_epoch(&g, &cl, LEARN_SATS, no_bias);
-        g.sat[4].elevation_deg = 90u; /* 20 deg up */
-        assert_int_equal(fusion_raw(&fu, &ctx, &g, &cl, tow, 0, &adopt), FUSION_GO_ON);
+    for (int k = 0; k < 3; k++) {
+        fix_and_raw_epoch(k, 450000000, v, 90u); /* the fifth satellite 20 deg up */
     }
     assert_int_equal(ctx.raw->epochs_used, 0u); /* learnt from, not fused */
     assert_int_equal(health.bad_value, 3u); /* once an epoch */
