@@ -32,15 +32,34 @@ typedef struct hal hal_t; /* defined by the implementation */
 /*
  * Receive one frame into *f. Returns 0; HAL_EAGAIN if none is waiting; HAL_ENODATA when
  * a finite source (a log replay) is exhausted; HAL_EIO on a device error. A malformed
- * frame from the source is not returned: it is counted (hal_can_rx_malformed) and skipped.
+ * frame from the source is not returned: it is counted (hal_can_rx_lost) and skipped.
  */
 int hal_can_receive(hal_t *hal, hal_can_frame_t *f);
 
 /* Queue one frame for transmission. Returns 0, HAL_EINVAL (dlc > 8), HAL_ENOSPC, HAL_EIO. */
 int hal_can_send(hal_t *hal, const hal_can_frame_t *f);
 
-/* Number of malformed source frames skipped so far (garbage or truncated log lines). */
-uint32_t hal_can_rx_malformed(const hal_t *hal);
+/* Received frames the board lost before hal_can_receive could return them, since it
+ * started: on a log replay the malformed lines skipped (garbage, truncated); on a CAN
+ * controller the frames lost to a receive overrun (its hardware FIFO or the driver's ring
+ * full: the main loop did not read them in time). Saturating or wrapping at 2^32, as the
+ * implementation says; NAV_Status CntRxLost reports it (saturating at 255). */
+uint32_t hal_can_rx_lost(const hal_t *hal);
+
+/* The board's own faults (hal_faults), each a fault of the ECU the bus must hear of:
+ *   HAL_FAULT_WATCHDOG  the watchdog is not supervising the ECU (it did not start): a hung
+ *                       application is not reset; holds until the next power-on
+ *   HAL_FAULT_BUS_OFF   the CAN controller went bus-off since the previous call (too many
+ *                       errors of its own transmissions; it has recovered by itself once
+ *                       the application can send again, ISO 11898-1's 128 x 11 recessive
+ *                       bits) */
+#define HAL_FAULT_WATCHDOG 0x1u
+#define HAL_FAULT_BUS_OFF 0x2u
+
+/* The HAL_FAULT_* bits that hold now; reading clears the events (HAL_FAULT_BUS_OFF).
+ * A board without a fault source returns 0 for its bit (the host: no watchdog, and a
+ * SocketCAN or log bus reports no bus-off). */
+uint32_t hal_faults(hal_t *hal);
 
 /* Time in microseconds since an arbitrary origin, monotonic on real hardware. On a log
  * replay: the timestamp of the last frame received, so replay runs as fast as it can; a

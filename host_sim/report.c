@@ -125,7 +125,7 @@ void host_summary(FILE *out, const app_t *app, const hal_t *hal, unsigned long f
     fprintf(out,
             "navecu: %lu frames in, %lu malformed lines skipped, %lu frames out, %llu IMU "
             "samples (%.1f s), mode: %s\n",
-            frames_in, (unsigned long)hal_can_rx_malformed(hal),
+            frames_in, (unsigned long)hal_linux_rx_malformed(hal),
             (unsigned long)app->keep.tx.frames_sent, (unsigned long long)app_samples(app),
             (double)app_samples(app) / rate,
             (unsigned)app_mode(app) < 4u ? mode_names[app_mode(app)] : "?");
@@ -212,8 +212,10 @@ void host_summary(FILE *out, const app_t *app, const hal_t *hal, unsigned long f
             (unsigned long)app->keep.dtc_persist_failed,
             (unsigned long)app->keep.dtc.load_rejected, (unsigned long)app->uds.pending_sent);
     if (live) {
-        fprintf(out, "navecu: CAN error frames %lu, socket errors %lu, send errors %lu\n",
+        fprintf(out, "navecu: CAN error frames %lu, frames the socket dropped %lu, socket "
+                     "errors %lu, send errors %lu\n",
                 (unsigned long)hal_socketcan_error_frames(hal),
+                (unsigned long)hal_socketcan_rx_dropped(hal),
                 (unsigned long)hal_socketcan_io_errors(hal),
                 (unsigned long)app->keep.tx.send_errors);
     }

@@ -58,7 +58,10 @@ static void test_table_from_dtc_toml(void **state)
         all |= dtc_table[i].health_mask;
         assert_true(dtc_table[i].number <= 0xFFFFFFu);
     }
-    assert_int_equal(all, 0x1FFFu); /* every HealthFlags bit of the DBC has one */
+    assert_int_equal(all, 0x7FFFu); /* every HealthFlags bit of the DBC has one */
+    assert_int_equal(dtc_table[DTC_WATCHDOG_OFF].number, 0x510847u); /* C1108-47 */
+    assert_int_equal(dtc_table[DTC_BUS_OFF].number, 0xC00188u);      /* U0001-88 */
+    assert_int_equal(dtc_table[DTC_BUS_OFF].confirm_ds, 0u);
 }
 
 /* a fresh ECU: never tested since the clear (nothing in NVM) */

@@ -154,8 +154,9 @@ static void test_rx_valid_forms(void **state)
     expect_frame(&hal, 0x123, 0, 4, dead, UINT64_C(1436509052249721));
     expect_frame(&hal, 0x00000000, 1, 8, eight, UINT64_C(1500000));
     expect_end(&hal);
-    assert_int_equal(hal_can_rx_malformed(&hal), 0);
+    assert_int_equal(hal_can_rx_lost(&hal), 0);
     assert_int_equal(hal_linux_rx_frames(&hal), 10);
+    assert_int_equal(hal_faults(&hal), 0u); /* a log: no watchdog to fail, no bus-off */
     hal_linux_close(&hal);
 }
 
@@ -170,7 +171,7 @@ static void test_rx_iface_length(void **state)
                  "(3.000000) x 124#\n");
     expect_frame(&hal, 0x123, 0, 0, NULL, 1000000);
     expect_frame(&hal, 0x124, 0, 0, NULL, 3000000);
-    assert_int_equal(hal_can_rx_malformed(&hal), 1);
+    assert_int_equal(hal_can_rx_lost(&hal), 1);
     expect_end(&hal);
     hal_linux_close(&hal);
 }
@@ -206,7 +207,7 @@ static void test_rx_timestamps_exact(void **state)
         expect_frame(&hal, 0x001, 0, 0, NULL, want[k]);
     }
     expect_end(&hal);
-    assert_int_equal(hal_can_rx_malformed(&hal), 0);
+    assert_int_equal(hal_can_rx_lost(&hal), 0);
     /* the clock keeps the last frame's time after the end */
     assert_true(hal_time_us(&hal) == UINT64_MAX);
     hal_linux_close(&hal);
@@ -294,21 +295,21 @@ static void test_rx_malformed_each(void **state)
         hal_can_frame_t f;
         memset(&f, 0, sizeof f);
         const int rc = hal_can_receive(&hal, &f);
-        if (rc != 0 || f.id != 0x321 || hal_can_rx_malformed(&hal) != 1) {
+        if (rc != 0 || f.id != 0x321 || hal_can_rx_lost(&hal) != 1) {
             fail_msg("case %zu \"%s\": rc %d id 0x%X malformed %u", k, malformed[k], rc,
-                     (unsigned)f.id, (unsigned)hal_can_rx_malformed(&hal));
+                     (unsigned)f.id, (unsigned)hal_can_rx_lost(&hal));
         }
         assert_int_equal(f.dlc, 1);
         assert_memory_equal(f.data, good_data, 1);
         assert_true(f.t_us == 5000000u);
         expect_end(&hal);
-        assert_int_equal(hal_can_rx_malformed(&hal), 1);
+        assert_int_equal(hal_can_rx_lost(&hal), 1);
         hal_linux_close(&hal);
 
         /* the same as the last line, without newline: counted once, then the end */
         open_rx_text(&hal, "bad_last.log", malformed[k]);
         expect_end(&hal);
-        assert_int_equal(hal_can_rx_malformed(&hal), 1);
+        assert_int_equal(hal_can_rx_lost(&hal), 1);
         hal_linux_close(&hal);
     }
 }
@@ -328,7 +329,7 @@ static void test_rx_malformed_binary(void **state)
     assert_int_equal(hal_linux_open(&hal, p, NULL, NULL), 0);
     static const uint8_t d[] = {0x42};
     expect_frame(&hal, 0x321, 0, 1, d, 2000000);
-    assert_int_equal(hal_can_rx_malformed(&hal), 4);
+    assert_int_equal(hal_can_rx_lost(&hal), 4);
     expect_end(&hal);
     hal_linux_close(&hal);
 }
@@ -376,11 +377,11 @@ static void test_rx_overlong(void **state)
     static const uint8_t d0[] = {0x00};
     static const uint8_t d22[] = {0x22};
     expect_frame(&hal, 0x123, 0, 1, d0, 1000000);
-    assert_int_equal(hal_can_rx_malformed(&hal), 0);
+    assert_int_equal(hal_can_rx_lost(&hal), 0);
     expect_frame(&hal, 0x222, 0, 1, d22, 2000000);
-    assert_int_equal(hal_can_rx_malformed(&hal), 2);
+    assert_int_equal(hal_can_rx_lost(&hal), 2);
     expect_end(&hal);
-    assert_int_equal(hal_can_rx_malformed(&hal), 3);
+    assert_int_equal(hal_can_rx_lost(&hal), 3);
     hal_linux_close(&hal);
 }
 
@@ -395,7 +396,7 @@ static void test_rx_blank_lines_not_counted(void **state)
                  " \t ");
     expect_frame(&hal, 0x123, 0, 0, NULL, 1000000);
     expect_end(&hal);
-    assert_int_equal(hal_can_rx_malformed(&hal), 0);
+    assert_int_equal(hal_can_rx_lost(&hal), 0);
     hal_linux_close(&hal);
 }
 
@@ -476,7 +477,7 @@ static void test_tx_format(void **state)
     expect_frame(&hal, 0x5, 1, 0, NULL, 42000007);
     expect_frame(&hal, 0x123, 0, 4, std.data, 42000007);
     expect_end(&hal);
-    assert_int_equal(hal_can_rx_malformed(&hal), 0);
+    assert_int_equal(hal_can_rx_lost(&hal), 0);
     hal_linux_close(&hal);
 }
 
@@ -871,11 +872,11 @@ static void test_rx_fuzz(void **state)
     assert_int_equal(rc, HAL_ENODATA);
     assert_int_equal(n_marker, n_good);
     assert_true(n_rx >= n_good);
-    assert_true((uint64_t)n_rx + hal_can_rx_malformed(&hal) <= N_LINES);
+    assert_true((uint64_t)n_rx + hal_can_rx_lost(&hal) <= N_LINES);
     /* nearly every random line is malformed rather than blank */
-    assert_true(hal_can_rx_malformed(&hal) > N_LINES / 2);
+    assert_true(hal_can_rx_lost(&hal) > N_LINES / 2);
     print_message("fuzz: %u lines, %u frames, %u malformed\n", (unsigned)N_LINES,
-                  (unsigned)n_rx, (unsigned)hal_can_rx_malformed(&hal));
+                  (unsigned)n_rx, (unsigned)hal_can_rx_lost(&hal));
     hal_linux_close(&hal);
 }
 

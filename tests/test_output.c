@@ -179,6 +179,30 @@ static void test_state_flags(void **state)
     assert_int_equal(flags_now(), NAVECU_HEALTH_REACQUIRE);
 }
 
+/* The board's faults (hal_faults): WATCHDOG_OFF in every NAV_Status while the watchdog is not
+ * running; BUS_OFF in the first NAV_Status after a bus-off, then clear; each confirms its
+ * DTC at once (C1108-47, U0001-88: confirm_s 0), and the receive losses go to CntRxLost. */
+static void test_board_fault_flags(void **state)
+{
+    (void)state;
+    app_stamp(&app.keep.gnss, 0u);
+    app.run.align.heading_valid = 1u;
+    assert_int_equal(flags_now(), 0u);
+    assert_int_equal(dtc_status(&app.keep.dtc, DTC_WATCHDOG_OFF) & DTC_TF, 0u);
+    hal.faults = HAL_FAULT_WATCHDOG;
+    assert_int_equal(flags_now(), NAVECU_HEALTH_WATCHDOG_OFF);
+    assert_int_equal(flags_now(), NAVECU_HEALTH_WATCHDOG_OFF); /* a state: held */
+    assert_true((dtc_status(&app.keep.dtc, DTC_WATCHDOG_OFF) & (DTC_TF | DTC_CDTC)) ==
+                (DTC_TF | DTC_CDTC));
+    hal.faults = HAL_FAULT_BUS_OFF; /* an event: the fake clears it when read */
+    assert_int_equal(flags_now(), NAVECU_HEALTH_BUS_OFF);
+    assert_true((dtc_status(&app.keep.dtc, DTC_BUS_OFF) & DTC_CDTC) != 0u);
+    assert_int_equal(flags_now(), 0u);
+    assert_int_equal(dtc_status(&app.keep.dtc, DTC_BUS_OFF) & DTC_TF, 0u); /* passed again */
+    assert_true((dtc_status(&app.keep.dtc, DTC_BUS_OFF) & DTC_CDTC) != 0u); /* kept */
+    assert_int_equal(dtc_status(&app.keep.dtc, DTC_WATCHDOG_OFF) & DTC_TF, 0u);
+}
+
 /* IMU_RATE_MISMATCH while the rate check says so, with the measured rate in page 0's
  * ImuRateMeasured (2 Hz steps, rounded; saturated at 510 Hz); 0 without a mismatch, even
  * with a rate measured before. */
@@ -282,7 +306,7 @@ static void test_counter_pages(void **state)
     st = counter_page(3u);
     assert_int_equal(st.cnt_bad_value, 3u);
     assert_int_equal(st.cnt_gnss_rejected, 4u);
-    assert_int_equal(st.cnt_log_line_bad, 9u);
+    assert_int_equal(st.cnt_rx_lost, 9u);
     st = counter_page(4u);
     assert_int_equal(st.cnt_cmd_rejected, 5u);
     assert_int_equal(st.cnt_core_rejected, 6u);
@@ -559,6 +583,7 @@ int main(void)
         cmocka_unit_test_setup(test_no_gnss_survives_reset, setup),
         cmocka_unit_test_setup(test_flag_imu_stale, setup),
         cmocka_unit_test_setup(test_state_flags, setup),
+        cmocka_unit_test_setup(test_board_fault_flags, setup),
         cmocka_unit_test_setup(test_imu_rate_mismatch_flag, setup),
         cmocka_unit_test_setup(test_page_rotation, setup),
         cmocka_unit_test_setup(test_counter_pages, setup),

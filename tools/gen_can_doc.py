@@ -162,7 +162,7 @@ MEANING = {
     "CntImuSaturated": "IMU samples with an axis at its configured range",
     "CntOdoRejected": "odometer/standstill updates refused by the filter's gate",
     "CntImuStuck": "IMU axes found stuck (a raw value repeated 2 s while another axis of the sensor showed its noise)",
-    "CntLogLineBad": "unreadable lines of a replayed candump log (host build)",
+    "CntRxLost": "received frames lost (a receive overrun; a replayed log's unreadable lines)",
     "HeadingCorrection": "heading correction from the calibration at a known point",
     "OdoScaleError": "odometer scale factor error (relative)",
     "CalValid": "1: a calibration is in use",

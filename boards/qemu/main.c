@@ -92,7 +92,7 @@ void board_main(void)
     bench_puts("navecu-qemu: ");
     bench_put_u64(frames_in);
     bench_puts(" frames in, ");
-    bench_put_u64(hal_can_rx_malformed(&hal));
+    bench_put_u64(hal_can_rx_lost(&hal));
     bench_puts(" malformed lines skipped, ");
     bench_put_u64(app.keep.tx.frames_sent);
     bench_puts(" frames out, ");

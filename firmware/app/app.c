@@ -701,7 +701,6 @@ static void wheels_directed(const app_t *a, nav_real_t wheel_mps[4])
 
 void app_handle_frame(app_t *a, hal_t *hal, const hal_can_frame_t *f)
 {
-    a->keep.health.log_line_bad = hal_can_rx_malformed(hal);
     if (app_uds_frame(a, hal, f)) {
         return; /* diagnostics: never navecu's input, never foreign */
     }

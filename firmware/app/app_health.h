@@ -23,7 +23,8 @@ typedef struct {
     uint32_t imu_lost;         /* IMU samples missing (counter steps > 1), bridged */
     uint32_t bad_value;        /* out-of-range or implausible physical value */
     uint32_t gnss_rejected;    /* GNSS epochs refused (impossible position, bad fix) */
-    uint32_t log_line_bad;     /* malformed source frames skipped by the HAL */
+    uint32_t rx_lost;          /* received frames the HAL lost (hal_can_rx_lost): overruns,
+                                  a replayed log's malformed lines */
     uint32_t cmd_rejected;     /* commands refused (missing known position, bad state) */
     uint32_t nav_rejected;     /* IMU samples the strapdown core refused */
     uint32_t time_jumps;       /* receive time going backwards; IMU gaps seen only in time;

@@ -275,7 +275,14 @@ static int no_gnss(const app_t *a)
                              (uint64_t)APP_NO_GNSS_S * a->cfg.imu_rate_hz);
 }
 
-static uint16_t health_flags(const app_t *a, const hal_t *hal)
+/* HealthFlags WATCHDOG_OFF and BUS_OFF are hal.h's HAL_FAULT_WATCHDOG and HAL_FAULT_BUS_OFF
+ * moved up by one factor */
+#define BOARD_TO_HEALTH (NAVECU_HEALTH_WATCHDOG_OFF / HAL_FAULT_WATCHDOG)
+_Static_assert(NAVECU_HEALTH_BUS_OFF == HAL_FAULT_BUS_OFF * BOARD_TO_HEALTH,
+               "HealthFlags' board faults in hal.h's order");
+
+/* board: what hal_faults said now */
+static uint16_t health_flags(const app_t *a, const hal_t *hal, uint32_t board)
 {
     const app_keep_t *k = &a->keep;
     const app_run_t *r = &a->run;
@@ -325,6 +332,8 @@ static uint16_t health_flags(const app_t *a, const hal_t *hal)
     if (imu_rate_mismatch(&k->rate)) {
         fl |= NAVECU_HEALTH_IMU_RATE_MISMATCH;
     }
+    /* the board's faults: the watchdog not running, a bus-off since the last NAV_Status */
+    fl |= (board & (HAL_FAULT_WATCHDOG | HAL_FAULT_BUS_OFF)) * BOARD_TO_HEALTH;
     return (uint16_t)fl;
 }
 
@@ -368,7 +377,7 @@ static void fill_counter_page(struct navecu_can_nav_status_t *st, const app_heal
     case 3u:
         st->cnt_bad_value = sat16(h->bad_value);
         st->cnt_gnss_rejected = sat16(h->gnss_rejected);
-        st->cnt_log_line_bad = sat8(h->log_line_bad);
+        st->cnt_rx_lost = sat8(h->rx_lost);
         break;
     case 4u:
         st->cnt_cmd_rejected = sat16(h->cmd_rejected);
@@ -404,14 +413,15 @@ void output_status(app_t *a, hal_t *hal)
     tx_state_t *tx = &a->keep.tx;
     const ekf_t *ekf = app_filter(a);
     uint8_t d[8];
-    a->keep.health.log_line_bad = hal_can_rx_malformed(hal);
+    a->keep.health.rx_lost = hal_can_rx_lost(hal);
+    const uint32_t board = hal_faults(hal);
     tx->last_status_t_us = hal_time_us(hal);
     struct navecu_can_nav_status_t st;
     memset(&st, 0, sizeof st);
     st.status_page = NAVECU_NAV_STATUS_PAGE_STATE;
     st.mode = output_mode(a);
     tx->last_mode = st.mode;
-    st.health_flags = health_flags(a, hal);
+    st.health_flags = health_flags(a, hal, board);
     /* the DTCs' tests (app_dtc.h); those of waits of normal operation (dtc.toml
      * while_moving) only while the car moves (a car standing after power-on may wait for a
      * fix or a heading for as long as it stands) */

@@ -143,10 +143,28 @@ int hal_can_send(hal_t *hal, const hal_can_frame_t *f)
     return rc;
 }
 
-uint32_t hal_can_rx_malformed(const hal_t *hal)
+uint32_t hal_can_rx_lost(const hal_t *hal)
 {
-    (void)hal;
-    return 0u; /* a CAN controller delivers only well-formed frames */
+    /* a controller delivers only well-formed frames: what it loses is overruns, the ring's
+     * frames and the FIFO's events (at least one frame each); wraps, as the driver's counts */
+    bxcan_stats_t s;
+    (void)bxcan_stats(&hal->can, &s);
+    return s.rx_ring_overruns + s.rx_fifo_overruns;
+}
+
+uint32_t hal_faults(hal_t *hal)
+{
+    bxcan_stats_t s;
+    (void)bxcan_stats(&hal->can, &s);
+    uint32_t f = 0u;
+    if ((hal->init_faults & HAL_STM32_FAULT_WATCHDOG) != 0u) {
+        f = HAL_FAULT_WATCHDOG;
+    }
+    if (s.bus_off_events != hal->bus_off_told) {
+        hal->bus_off_told = s.bus_off_events;
+        f |= HAL_FAULT_BUS_OFF;
+    }
+    return f;
 }
 
 uint64_t hal_time_us(const hal_t *hal)

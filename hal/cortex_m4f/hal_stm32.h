@@ -33,6 +33,7 @@ struct hal {
     stm32_clock_status_t clock; /* what stm32_clock_init reached */
     uint32_t init_faults;       /* bit 0 clock (running on HSI), 1 CAN, 2 NVM, 3 watchdog */
     uint32_t can_tx_full;       /* sends refused: every mailbox pending */
+    uint32_t bus_off_told;      /* the driver's bus-off count hal_faults last reported */
 };
 
 #define HAL_STM32_FAULT_CLOCK 0x1u

@@ -56,9 +56,21 @@ int hal_can_receive(hal_t *hal, hal_can_frame_t *f)
     return candump_replay(&hal->rx_log, file_next_byte, hal->rx, hal->line, HAL_LINUX_LINE_MAX, f);
 }
 
-uint32_t hal_can_rx_malformed(const hal_t *hal)
+uint32_t hal_can_rx_lost(const hal_t *hal)
 {
-    return hal->rx_log.malformed;
+    /* a log's malformed lines (saturating), a live socket's drops too (wrapping) */
+    return hal->rx_log.malformed + hal->can_rx_dropped;
+}
+
+uint32_t hal_faults(hal_t *hal)
+{
+    /* no watchdog on the host; a live controller's bus-off is an error frame */
+    uint32_t f = 0u;
+    if (hal->can_bus_off != hal->can_bus_off_told) {
+        hal->can_bus_off_told = hal->can_bus_off;
+        f = HAL_FAULT_BUS_OFF;
+    }
+    return f;
 }
 
 uint64_t hal_time_us(const hal_t *hal)
@@ -318,6 +330,11 @@ uint64_t hal_linux_watchdog_kicks(const hal_t *hal)
 uint32_t hal_linux_rx_frames(const hal_t *hal)
 {
     return hal->rx_log.frames;
+}
+
+uint32_t hal_linux_rx_malformed(const hal_t *hal)
+{
+    return hal->rx_log.malformed;
 }
 
 uint32_t hal_linux_tx_frames(const hal_t *hal)

@@ -9,7 +9,7 @@
  * Log format: the candump line of hal/common/candump.h (parsed and written there). Any
  * interface name is accepted on receive (no filtering by interface). A line of only
  * blanks is skipped without counting. A malformed line is counted in
- * hal_can_rx_malformed() and skipped, and so is a line longer than HAL_LINUX_LINE_MAX
+ * hal_can_rx_lost() and skipped, and so is a line longer than HAL_LINUX_LINE_MAX
  * characters before its newline (the rest of it is read and dropped; counted once). A
  * last line without a newline is parsed like any other.
  */
@@ -52,6 +52,9 @@ struct hal {
     uint8_t nvm[HAL_LINUX_NVM_SIZE];      /* the NVM region (mirror of nvm_file) */
     int can_fd;               /* live SocketCAN socket (hal_socketcan.c); -1: log replay */
     uint32_t can_error_frames; /* CAN error frames received on the socket */
+    uint32_t can_bus_off;     /* of them, bus-off reports (CAN_ERR_BUSOFF); wraps */
+    uint32_t can_bus_off_told; /* can_bus_off as hal_faults last reported it */
+    uint32_t can_rx_dropped;  /* frames the socket's receive queue dropped (SO_RXQ_OVFL) */
     uint32_t can_io_errors;   /* failed socket reads/writes (interface down, queue full) */
     hal_linux_file_t open_failed; /* the file a failed hal_linux_open could not use */
 };
@@ -107,6 +110,7 @@ int hal_linux_watchdog_expired(const hal_t *hal);
 /* Frames returned by hal_can_receive / accepted by hal_can_send since hal_linux_open
  * (saturating at UINT32_MAX). */
 uint32_t hal_linux_rx_frames(const hal_t *hal);
+uint32_t hal_linux_rx_malformed(const hal_t *hal); /* of hal_can_rx_lost: the malformed */
 uint32_t hal_linux_tx_frames(const hal_t *hal);
 
 /*

@@ -4,6 +4,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <linux/can.h>
+#include <linux/can/error.h>
 #include <linux/can/raw.h>
 #include <net/if.h>
 #include <poll.h>
@@ -71,6 +72,7 @@ int hal_socketcan_open(hal_t *hal, const char *ifname, const uint32_t *rx_ids, s
                                   (socklen_t)(n_ids * sizeof filters[0])) != 0) ||
         setsockopt(fd, SOL_CAN_RAW, CAN_RAW_ERR_FILTER, &err_mask, sizeof err_mask) != 0 ||
         setsockopt(fd, SOL_SOCKET, SO_TIMESTAMP, &one, sizeof one) != 0 ||
+        setsockopt(fd, SOL_SOCKET, SO_RXQ_OVFL, &one, sizeof one) != 0 ||
         bind(fd, (struct sockaddr *)&addr, sizeof addr) != 0) {
         const int e = errno;
         close(fd);
@@ -99,7 +101,7 @@ int hal_socketcan_receive(hal_t *hal, hal_can_frame_t *f)
         struct can_frame cf;
         struct iovec iov = {&cf, sizeof cf};
         union {
-            char buf[CMSG_SPACE(sizeof(struct timeval))];
+            char buf[CMSG_SPACE(sizeof(struct timeval)) + CMSG_SPACE(sizeof(uint32_t))];
             struct cmsghdr align;
         } ctrl;
         struct msghdr msg;
@@ -121,8 +123,11 @@ int hal_socketcan_receive(hal_t *hal, hal_can_frame_t *f)
             continue;
         }
         if (cf.can_id & CAN_ERR_FLAG) {
+            /* the controller's report (linux/can/error.h), not a frame lost */
             hal->can_error_frames = sat_inc(hal->can_error_frames);
-            hal->rx_log.malformed = sat_inc(hal->rx_log.malformed);
+            if (cf.can_id & CAN_ERR_BUSOFF) {
+                hal->can_bus_off++;
+            }
             continue;
         }
         if ((cf.can_id & CAN_RTR_FLAG) || cf.can_dlc > 8u) {
@@ -136,6 +141,12 @@ int hal_socketcan_receive(hal_t *hal, hal_can_frame_t *f)
                 struct timeval tv;
                 memcpy(&tv, CMSG_DATA(c), sizeof tv);
                 t = (uint64_t)tv.tv_sec * 1000000u + (uint64_t)tv.tv_usec;
+            } else if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SO_RXQ_OVFL &&
+                       c->cmsg_len >= CMSG_LEN(sizeof(uint32_t))) {
+                /* frames the socket's queue dropped since it opened (wraps at 2^32) */
+                memcpy(&hal->can_rx_dropped, CMSG_DATA(c), sizeof hal->can_rx_dropped);
+            } else {
+                /* no other control message is asked for */
             }
         }
         memset(f, 0, sizeof *f);
@@ -177,6 +188,11 @@ void hal_socketcan_close(hal_t *hal)
 uint32_t hal_socketcan_error_frames(const hal_t *hal)
 {
     return hal->can_error_frames;
+}
+
+uint32_t hal_socketcan_rx_dropped(const hal_t *hal)
+{
+    return hal->can_rx_dropped;
 }
 
 uint32_t hal_socketcan_io_errors(const hal_t *hal)

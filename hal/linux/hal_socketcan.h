@@ -38,5 +38,6 @@ void hal_socketcan_close(hal_t *hal);
 /* Counters of the live backend. */
 uint32_t hal_socketcan_error_frames(const hal_t *hal);  /* CAN error frames received */
 uint32_t hal_socketcan_io_errors(const hal_t *hal);     /* failed reads/writes (down, full) */
+uint32_t hal_socketcan_rx_dropped(const hal_t *hal);    /* frames the socket's queue dropped */
 
 #endif

@@ -16,7 +16,7 @@
  *  - the log reader returns exactly the frames a reference splitter finds (the input cut
  *    at each '\n', a last line without newline included, lines over HAL_LINUX_LINE_MAX
  *    characters malformed, each line through candump_parse_line), in order, with
- *    hal_time_us() the frame's time; hal_can_rx_malformed() and hal_linux_rx_frames()
+ *    hal_time_us() the frame's time; hal_can_rx_lost() and hal_linux_rx_frames()
  *    count what the reference counts; HAL_ENODATA at the end and after it;
  *  - candump_format_line writes what parses back to the same frame, and returns 0 for a
  *    frame a classic bus cannot carry.
@@ -153,9 +153,9 @@ static void check_reader(const uint8_t *data, size_t size)
             fuzz_fail("hal_can_receive after %u frames: %d, not HAL_ENODATA", ref_frames, rc);
         }
     }
-    if (hal_can_rx_malformed(&hal) != ref_malformed || hal_linux_rx_frames(&hal) != ref_frames) {
+    if (hal_can_rx_lost(&hal) != ref_malformed || hal_linux_rx_frames(&hal) != ref_frames) {
         fuzz_fail("log reader counted %u malformed lines and %u frames, the reference %u and %u",
-                  hal_can_rx_malformed(&hal), hal_linux_rx_frames(&hal), ref_malformed, ref_frames);
+                  hal_can_rx_lost(&hal), hal_linux_rx_frames(&hal), ref_malformed, ref_frames);
     }
     hal_linux_close(&hal);
     close(fd);

@@ -288,7 +288,7 @@ def nav_log(tmp_path, n, sigma, rejected=None, t0=30.0, dt=0.1):
         if rejected is not None:
             msgs.append(tx.encode("NAV_Status", {"StatusPage": 3, "CntBadValue": 0,
                                                  "CntGnssRejected": int(rejected[k]),
-                                                 "CntLogLineBad": 0}, ts))
+                                                 "CntRxLost": 0}, ts))
     p = tmp_path / "nav.log"
     nc.write_candump(p, msgs)
     return report.read_nav_log(p)

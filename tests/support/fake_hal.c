@@ -53,9 +53,16 @@ int hal_can_send(hal_t *hal, const hal_can_frame_t *f)
     return 0;
 }
 
-uint32_t hal_can_rx_malformed(const hal_t *hal)
+uint32_t hal_can_rx_lost(const hal_t *hal)
 {
     return hal->malformed;
+}
+
+uint32_t hal_faults(hal_t *hal)
+{
+    const uint32_t f = hal->faults;
+    hal->faults &= ~HAL_FAULT_BUS_OFF; /* an event: reading clears it */
+    return f;
 }
 
 uint64_t hal_time_us(const hal_t *hal)

@@ -20,7 +20,9 @@
 #define DTC_ODO_REJECTED 10u /* C1107-64 ODO_REJECTED */
 #define DTC_REACQUIRE 11u /* C1106-00 REACQUIRE */
 #define DTC_IMU_RATE_MISMATCH 12u /* C1101-38 IMU_RATE_MISMATCH */
-#define DTC_N 13u /* DTCs in the table */
+#define DTC_WATCHDOG_OFF 13u /* C1108-47 WATCHDOG_OFF */
+#define DTC_BUS_OFF 14u /* U0001-88 BUS_OFF */
+#define DTC_N 15u /* DTCs in the table */
 
 #define DTC_MAX 16u /* status bytes the NVM record holds */
 

@@ -4510,7 +4510,7 @@ int navecu_can_nav_status_pack(
         dst_p[2] |= pack_right_shift_u16(src_p->cnt_bad_value, 8u, 0xffu);
         dst_p[3] |= pack_left_shift_u16(src_p->cnt_gnss_rejected, 0u, 0xffu);
         dst_p[4] |= pack_right_shift_u16(src_p->cnt_gnss_rejected, 8u, 0xffu);
-        dst_p[5] |= pack_left_shift_u8(src_p->cnt_log_line_bad, 0u, 0xffu);
+        dst_p[5] |= pack_left_shift_u8(src_p->cnt_rx_lost, 0u, 0xffu);
         break;
 
     case 4:
@@ -4589,7 +4589,7 @@ int navecu_can_nav_status_unpack(
         dst_p->cnt_bad_value |= unpack_left_shift_u16(src_p[2], 8u, 0xffu);
         dst_p->cnt_gnss_rejected = unpack_right_shift_u16(src_p[3], 0u, 0xffu);
         dst_p->cnt_gnss_rejected |= unpack_left_shift_u16(src_p[4], 8u, 0xffu);
-        dst_p->cnt_log_line_bad = unpack_right_shift_u8(src_p[5], 0u, 0xffu);
+        dst_p->cnt_rx_lost = unpack_right_shift_u8(src_p[5], 0u, 0xffu);
         break;
 
     case 4:
@@ -5046,24 +5046,24 @@ bool navecu_can_nav_status_cnt_imu_lost_is_in_phys_range(float value)
     return ((value >= 0.0f) && (value <= 255.0f));
 }
 
-uint8_t navecu_can_nav_status_cnt_log_line_bad_encode(float value)
+uint8_t navecu_can_nav_status_cnt_rx_lost_encode(float value)
 {
     return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
 }
 
-float navecu_can_nav_status_cnt_log_line_bad_decode(uint8_t value)
+float navecu_can_nav_status_cnt_rx_lost_decode(uint8_t value)
 {
     return ((float)value);
 }
 
-bool navecu_can_nav_status_cnt_log_line_bad_is_in_range(uint8_t value)
+bool navecu_can_nav_status_cnt_rx_lost_is_in_range(uint8_t value)
 {
     (void)value;
 
     return (true);
 }
 
-bool navecu_can_nav_status_cnt_log_line_bad_is_in_phys_range(float value)
+bool navecu_can_nav_status_cnt_rx_lost_is_in_phys_range(float value)
 {
     return ((value >= 0.0f) && (value <= 255.0f));
 }

@@ -386,7 +386,7 @@ extern "C" {
 #define NAVECU_CAN_NAV_STATUS_IMU_RATE_MEASURED_NAME "ImuRateMeasured"
 #define NAVECU_CAN_NAV_STATUS_CNT_BAD_CRC_NAME "CntBadCrc"
 #define NAVECU_CAN_NAV_STATUS_CNT_IMU_LOST_NAME "CntImuLost"
-#define NAVECU_CAN_NAV_STATUS_CNT_LOG_LINE_BAD_NAME "CntLogLineBad"
+#define NAVECU_CAN_NAV_STATUS_CNT_RX_LOST_NAME "CntRxLost"
 #define NAVECU_CAN_NAV_STATUS_CNT_TIME_JUMPS_NAME "CntTimeJumps"
 #define NAVECU_CAN_NAV_STATUS_CNT_NON_FINITE_NAME "CntNonFinite"
 #define NAVECU_CAN_NAV_STATUS_CNT_IMU_STUCK_NAME "CntImuStuck"
@@ -1709,11 +1709,13 @@ struct navecu_can_nav_status_t {
     uint8_t cnt_imu_lost;
 
     /**
+     * Received frames the ECU lost before the application read them: frames lost to a receive overrun (the CAN controller's FIFO or the driver's ring full, or a host socket's queue: the main loop late), and on a replayed candump log its unreadable lines.
+     *
      * Range: 0..255 (0..255 -)
      * Scale: 1
      * Offset: 0
      */
-    uint8_t cnt_log_line_bad;
+    uint8_t cnt_rx_lost;
 
     /**
      * Range: 0..255 (0..255 -)
@@ -8738,7 +8740,7 @@ bool navecu_can_nav_status_cnt_imu_lost_is_in_phys_range(float value);
  *
  * @return Encoded signal.
  */
-uint8_t navecu_can_nav_status_cnt_log_line_bad_encode(float value);
+uint8_t navecu_can_nav_status_cnt_rx_lost_encode(float value);
 
 /**
  * Decode given signal by applying scaling and offset.
@@ -8747,7 +8749,7 @@ uint8_t navecu_can_nav_status_cnt_log_line_bad_encode(float value);
  *
  * @return Decoded signal.
  */
-float navecu_can_nav_status_cnt_log_line_bad_decode(uint8_t value);
+float navecu_can_nav_status_cnt_rx_lost_decode(uint8_t value);
 
 /**
  * Check that given signal is in allowed range.
@@ -8756,7 +8758,7 @@ float navecu_can_nav_status_cnt_log_line_bad_decode(uint8_t value);
  *
  * @return true if in range, false otherwise.
  */
-bool navecu_can_nav_status_cnt_log_line_bad_is_in_range(uint8_t value);
+bool navecu_can_nav_status_cnt_rx_lost_is_in_range(uint8_t value);
 
 /**
  * Check that given physical value is in allowed range before encoding.
@@ -8769,7 +8771,7 @@ bool navecu_can_nav_status_cnt_log_line_bad_is_in_range(uint8_t value);
  *
  * @return true if in range, false otherwise.
  */
-bool navecu_can_nav_status_cnt_log_line_bad_is_in_phys_range(float value);
+bool navecu_can_nav_status_cnt_rx_lost_is_in_phys_range(float value);
 
 /**
  * Encode given signal by applying scaling and offset.

@@ -17,6 +17,8 @@
 #define NAVECU_HEALTH_ODO_REJECTED 0x0400u /* the wheel speeds disagreed with the filter (locked or spinning wheels) in the last second */
 #define NAVECU_HEALTH_REACQUIRE 0x0800u /* after an IMU gap too long to bridge, a filter reset or an IMU rate mismatch while navigating, waiting for a GNSS epoch to re-acquire position, velocity and heading */
 #define NAVECU_HEALTH_IMU_RATE_MISMATCH 0x1000u /* the IMU samples counted between GNSS epochs (received and lost, by the IMU counter) disagree with the configured IMU rate over their TimeOfWeek interval: navigation refused (Mode Fault) until they match again */
+#define NAVECU_HEALTH_WATCHDOG_OFF 0x2000u /* the ECU's watchdog did not start at power-on: a hung application would not be reset (held until the next power-on) */
+#define NAVECU_HEALTH_BUS_OFF 0x4000u /* navecu's CAN controller went bus-off since the previous NAV_Status (its own transmissions failed until it left the bus; it rejoins by itself after 128 x 11 recessive bits, ISO 11898-1) */
 
 /* navecu's messages: index, stock identifier, direction */
 typedef enum {
@@ -440,9 +442,9 @@ typedef enum {
 #define NAVECU_NAV_STATUS_CNT_IMU_LOST_MIN ((float)(0.0))
 #define NAVECU_NAV_STATUS_CNT_IMU_LOST_MAX ((float)(255.0))
 #define NAVECU_NAV_STATUS_CNT_IMU_LOST_RAW_MAX 255u
-#define NAVECU_NAV_STATUS_CNT_LOG_LINE_BAD_MIN ((float)(0.0))
-#define NAVECU_NAV_STATUS_CNT_LOG_LINE_BAD_MAX ((float)(255.0))
-#define NAVECU_NAV_STATUS_CNT_LOG_LINE_BAD_RAW_MAX 255u
+#define NAVECU_NAV_STATUS_CNT_RX_LOST_MIN ((float)(0.0))
+#define NAVECU_NAV_STATUS_CNT_RX_LOST_MAX ((float)(255.0))
+#define NAVECU_NAV_STATUS_CNT_RX_LOST_RAW_MAX 255u
 #define NAVECU_NAV_STATUS_CNT_TIME_JUMPS_MIN ((float)(0.0))
 #define NAVECU_NAV_STATUS_CNT_TIME_JUMPS_MAX ((float)(255.0))
 #define NAVECU_NAV_STATUS_CNT_TIME_JUMPS_RAW_MAX 255u
