@@ -23,6 +23,12 @@
 #include "app_config.h"
 #include "app_rx.h"
 #include "vehicle.h"
+#include "app_fixture.h"
+#include "can_frames.h"
+#include "dr.h"
+#include "e2e.h"
+#include "fake_hal.h"
+#include "sins.h"
 
 static rx_state_t rx;
 static rx_input_t in;
@@ -189,6 +195,57 @@ static void test_app_init_forgets_the_held_half(void **state)
     assert_sample(NAV_C(1.0), 604u, 605u, 602u, 603u);
 }
 
+/* The odometer's timeout forgets a held half too: navigating, a pair makes the wheel speeds
+ * fresh; then a front half arrives alone and both axles go quiet for 1.6 s of IMU time
+ * (the timeout 1.5 s, WheelsMissing). The rear half after the silence is held, not paired
+ * with the front half from before it; with the next front half it makes one sample. */
+static void test_wheel_timeout_forgets_the_held_half(void **state)
+{
+    (void)state;
+    static app_t app;
+    static hal_t hal;
+    assert_int_equal(fx_fresh_app(&app, &hal), NAV_OK);
+    const geo_pos_t p = {450000000LL * GEO_LSB_PER_DEG_E7, 100000000LL * GEO_LSB_PER_DEG_E7,
+                         100000LL * GEO_LSB_PER_MM};
+    const nav_real_t q[4] = {NAV_C(1.0), NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)};
+    const nav_real_t v0[3] = {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)};
+    const sins_config_t scfg = sins_default_config();
+    assert_int_equal(sins_init(&app.run.nav, &scfg, &p, v0, q), NAV_OK);
+    assert_int_equal(dr_init(&app.run.dr, &p, NAV_C(0.0), NAV_C(0.0)), NAV_OK);
+    app.run.mode = APP_MODE_NAVIGATING; /* the dead reckoning's path: it ticks the odometer */
+    uint8_t counter = 0u;
+    const int32_t w[3] = {0, 0, 0};
+    const int32_t v[3] = {0, 0, -402}; /* 1 g up over 10 ms, 2^-12 m/s LSB (FRD z down) */
+    hal_can_frame_t f = gear(4u); /* D */
+    app_handle_frame(&app, &hal, &f);
+    f = front(1000u, 1000u);
+    app_handle_frame(&app, &hal, &f);
+    f = rear(1000u, 1000u);
+    app_handle_frame(&app, &hal, &f);
+    for (int k = 0; k < 161; k++) {
+        if (k == 1) {
+            assert_int_equal(app.keep.odo.valid, 1u); /* the pair's speeds, fresh */
+            f = front(2000u, 2000u);                   /* held: its rear never comes */
+            app_handle_frame(&app, &hal, &f);
+        }
+        hal_can_frame_t rate, accel;
+        hal.t_us += 10000u;
+        cf_imu_pair(w, v, counter, 0u, hal.t_us, &rate, &accel);
+        counter = e2e_counter_next(counter);
+        app_handle_frame(&app, &hal, &rate);
+        app_handle_frame(&app, &hal, &accel);
+    }
+    assert_int_equal(app.run.mode, APP_MODE_NAVIGATING);
+    assert_int_equal(app.keep.odo.valid, 0u); /* timed out */
+    f = rear(3000u, 3000u);
+    in.kind = RX_WHEELS;
+    assert_int_equal(app_rx_decode(&app.keep.rx, ids, &f, &in), RX_OK);
+    assert_int_equal(in.kind, RX_NONE); /* held: the front from before the silence is gone */
+    f = front(3002u, 3004u);
+    assert_int_equal(app_rx_decode(&app.keep.rx, ids, &f, &in), RX_OK);
+    assert_sample(NAV_C(1.0), 3002u, 3004u, 3000u, 3000u);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -198,6 +255,7 @@ int main(void)
         cmocka_unit_test_setup(test_a_stopped_axle_gives_no_sample, setup),
         cmocka_unit_test_setup(test_a_refused_half_is_not_held, setup),
         cmocka_unit_test_setup(test_app_init_forgets_the_held_half, setup),
+        cmocka_unit_test_setup(test_wheel_timeout_forgets_the_held_half, setup),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -373,6 +373,9 @@ static void process_sample(app_t *a, hal_t *hal, const int32_t w_raw[3], const i
         app_rx_imu_increment(w_raw, v_raw, dt_s, &inc);
         mounting_apply(&a->keep.mount, &inc);
         const app_diag_t d = app_diag_of(a);
+#if VEHICLE_SPLIT_WHEELS
+        const uint8_t wheels_were_fresh = a->keep.odo.valid;
+#endif
         calib_trip_odo(&a->run.cal, a->keep.odo.valid, a->keep.odo.speed_mps, dt_s);
         if (a->run.fusion.on) {
             const fusion_ctx_t c = fusion_ctx(a, &d);
@@ -394,6 +397,13 @@ static void process_sample(app_t *a, hal_t *hal, const int32_t w_raw[3], const i
         if (a->run.mode == APP_MODE_NAVIGATING) {
             dynamics_sample(&a->run.dyn, &a->run.nav, &inc);
         }
+#if VEHICLE_SPLIT_WHEELS
+        if (wheels_were_fresh != 0u && a->keep.odo.valid == 0u) {
+            /* the wheel speeds timed out (the odometer's timeout, IMU time): an axle's half
+             * held from before the silence must not pair with the first after it */
+            vehicle_reset();
+        }
+#endif
     }
     output_due(a, hal);
 }

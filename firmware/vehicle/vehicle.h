@@ -101,7 +101,8 @@ vehicle_verdict_t vehicle_decode(const hal_can_frame_t *f, vehicle_counters_t *c
 
 /* Forget what vehicle_decode holds of its own: the held half of split wheel speeds and the
  * rolling counters the caller's vehicle_counters_t has no room for (the rear axle's).
- * Called where the caller clears the state it keeps (app_init: power-on, ECUReset). Generated
+ * Called where the caller clears the state it keeps (app_init: power-on, ECUReset), and when
+ * the wheel speeds time out while navigating (the odometer's timeout, app.c). Generated
  * for profiles with split wheel speeds only; every other profile's vehicle layer holds
  * nothing, and app.c's default (weak, empty) is taken. */
 void vehicle_reset(void);

@@ -11,7 +11,8 @@
  * replaces the held one (the newer speeds; the older half is dropped: it was counted as a
  * frame read, rx_state_t.car_read, and no sample counts it). A refused half (DLC, checksum, counter, range) is
  * never given to it. If one axle's message stops, no sample is made: the odometer's timeout
- * says so (docs/vehicles.md).
+ * says so, and the application then forgets the held half (vehicle_reset, app.c), so a half
+ * from before a silence of both axles never pairs with one after it (docs/vehicles.md).
  */
 #ifndef NAVECU_VEHICLE_PAIR_H
 #define NAVECU_VEHICLE_PAIR_H
