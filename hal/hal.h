@@ -56,9 +56,10 @@ uint32_t hal_can_rx_lost(const hal_t *hal);
 #define HAL_FAULT_WATCHDOG 0x1u
 #define HAL_FAULT_BUS_OFF 0x2u
 
-/* The HAL_FAULT_* bits that hold now; reading clears the events (HAL_FAULT_BUS_OFF).
- * A board without a fault source returns 0 for its bit (the host: no watchdog, and a
- * SocketCAN or log bus reports no bus-off). */
+/* The HAL_FAULT_* bits that hold now; reading clears the events (HAL_FAULT_BUS_OFF:
+ * several bus-offs between two calls are one). A board without a fault source returns 0
+ * for its bit: the host has no watchdog, and a log replay no bus-off (a live SocketCAN
+ * interface reports its controller's bus-off as an error frame, hal_socketcan.c). */
 uint32_t hal_faults(hal_t *hal);
 
 /* Time in microseconds since an arbitrary origin, monotonic on real hardware. On a log

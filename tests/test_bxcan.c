@@ -503,8 +503,7 @@ static void test_bus_off_counted_and_reported(void **state)
     bxcan_sce_irq(&dev);
     assert_int_equal(regs.MSR, 1u << 2); /* rc_w1 write of ERRI alone */
     assert_int_equal(stats().bus_off_events, 1);
-    /* the same bus-off seen again is not a new event */
-    bxcan_sce_irq(&dev);
+    /* the same bus-off polled again is not a new event */
     assert_int_equal(bxcan_error_state(&dev, &e), 0);
     assert_int_equal(e.state, BXCAN_ERR_BUS_OFF);
     assert_int_equal(e.tec, 0xF8);
@@ -521,6 +520,20 @@ static void test_bus_off_counted_and_reported(void **state)
     assert_int_equal(e.bus_off_events, 2);
     assert_int_equal(stats().bus_off_events, 2);
     assert_int_equal(bxcan_error_state(&dev, NULL), HAL_EINVAL);
+}
+
+/* As on the ECU, where nothing polls: bus-offs signalled by the SCE interrupt alone, each
+ * recovered silently (MCR.ABOM clears BOFF, no interrupt): every one is counted. */
+static void test_bus_offs_by_interrupt_alone(void **state)
+{
+    (void)state;
+    for (uint32_t k = 1u; k <= 3u; k++) {
+        regs.ESR = (0xF8u << 16) | 0x7u; /* BOFF */
+        regs.MSR |= 1u << 2;             /* ERRI */
+        bxcan_sce_irq(&dev);
+        assert_int_equal(stats().bus_off_events, k);
+        regs.ESR = 0u; /* recovered: no interrupt, no poll */
+    }
 }
 
 int main(void)
@@ -544,6 +557,7 @@ int main(void)
         cmocka_unit_test_setup(test_send_all_full, setup),
         cmocka_unit_test_setup(test_send_invalid, setup),
         cmocka_unit_test_setup(test_bus_off_counted_and_reported, setup),
+        cmocka_unit_test_setup(test_bus_offs_by_interrupt_alone, setup),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

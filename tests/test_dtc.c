@@ -61,7 +61,7 @@ static void test_table_from_dtc_toml(void **state)
     assert_int_equal(all, 0x7FFFu); /* every HealthFlags bit of the DBC has one */
     assert_int_equal(dtc_table[DTC_WATCHDOG_OFF].number, 0x510847u); /* C1108-47 */
     assert_int_equal(dtc_table[DTC_BUS_OFF].number, 0xC00188u);      /* U0001-88 */
-    assert_int_equal(dtc_table[DTC_BUS_OFF].confirm_ds, 0u);
+    assert_int_equal(dtc_table[DTC_BUS_OFF].confirm_ds, 10u); /* 1 s, not debounced */
 }
 
 /* a fresh ECU: never tested since the clear (nothing in NVM) */

@@ -157,6 +157,14 @@ static void test_rx_valid_forms(void **state)
     assert_int_equal(hal_can_rx_lost(&hal), 0);
     assert_int_equal(hal_linux_rx_frames(&hal), 10);
     assert_int_equal(hal_faults(&hal), 0u); /* a log: no watchdog to fail, no bus-off */
+    /* what a live socket counts (hal_socketcan.c): two bus-off error frames are one event,
+     * cleared by reading; its drops and the controller's overflows are frames lost */
+    hal.can_bus_off = 2u;
+    assert_int_equal(hal_faults(&hal), HAL_FAULT_BUS_OFF);
+    assert_int_equal(hal_faults(&hal), 0u);
+    hal.can_rx_dropped = 5u;
+    hal.can_rx_overflow = 1u;
+    assert_int_equal(hal_can_rx_lost(&hal), 6u);
     hal_linux_close(&hal);
 }
 

@@ -181,7 +181,8 @@ static void test_state_flags(void **state)
 
 /* The board's faults (hal_faults): WATCHDOG_OFF in every NAV_Status while the watchdog is not
  * running; BUS_OFF in the first NAV_Status after a bus-off, then clear; each confirms its
- * DTC at once (C1108-47, U0001-88: confirm_s 0), and the receive losses go to CntRxLost. */
+ * DTC (C1108-47 confirmed at once; U0001-88 pending at once, confirmed by a second
+ * operation cycle, test_dtc's rule). */
 static void test_board_fault_flags(void **state)
 {
     (void)state;
@@ -196,11 +197,29 @@ static void test_board_fault_flags(void **state)
                 (DTC_TF | DTC_CDTC));
     hal.faults = HAL_FAULT_BUS_OFF; /* an event: the fake clears it when read */
     assert_int_equal(flags_now(), NAVECU_HEALTH_BUS_OFF);
-    assert_true((dtc_status(&app.keep.dtc, DTC_BUS_OFF) & DTC_CDTC) != 0u);
+    assert_int_equal(dtc_status(&app.keep.dtc, DTC_BUS_OFF) & (DTC_TF | DTC_PDTC | DTC_CDTC),
+                     DTC_TF | DTC_PDTC); /* one bus-off: pending, not confirmed */
     assert_int_equal(flags_now(), 0u);
-    assert_int_equal(dtc_status(&app.keep.dtc, DTC_BUS_OFF) & DTC_TF, 0u); /* passed again */
-    assert_true((dtc_status(&app.keep.dtc, DTC_BUS_OFF) & DTC_CDTC) != 0u); /* kept */
+    assert_int_equal(dtc_status(&app.keep.dtc, DTC_BUS_OFF) & (DTC_TF | DTC_PDTC | DTC_CDTC),
+                     DTC_PDTC); /* passed again, still pending */
     assert_int_equal(dtc_status(&app.keep.dtc, DTC_WATCHDOG_OFF) & DTC_TF, 0u);
+}
+
+/* Before the first IMU sample (output_dtc_tests: an ECU whose IMU never speaks) the board's
+ * faults are tested too: a watchdog that did not start confirms C1108-47, a bus-off makes
+ * U0001-88 pending (a review found neither tested there). */
+static void test_board_faults_tested_without_imu(void **state)
+{
+    (void)state;
+    hal.faults = HAL_FAULT_WATCHDOG | HAL_FAULT_BUS_OFF;
+    output_dtc_tests(&app, &hal);
+    assert_true((dtc_status(&app.keep.dtc, DTC_WATCHDOG_OFF) & (DTC_TF | DTC_CDTC)) ==
+                (DTC_TF | DTC_CDTC));
+    assert_true((dtc_status(&app.keep.dtc, DTC_BUS_OFF) & (DTC_TF | DTC_PDTC)) ==
+                (DTC_TF | DTC_PDTC));
+    output_dtc_tests(&app, &hal);
+    assert_int_equal(dtc_status(&app.keep.dtc, DTC_BUS_OFF) & DTC_TF, 0u); /* event gone */
+    assert_int_equal(dtc_status(&app.keep.dtc, DTC_WATCHDOG_OFF) & DTC_TF, DTC_TF);
 }
 
 /* IMU_RATE_MISMATCH while the rate check says so, with the measured rate in page 0's
@@ -285,7 +304,7 @@ static void test_counter_pages(void **state)
     h->imu_lost = 255u;
     h->bad_value = 3u;
     h->gnss_rejected = 4u;
-    hal.malformed = 9u; /* the HAL's malformed lines are CntLogLineBad */
+    hal.malformed = 9u; /* the HAL's lost frames (hal_can_rx_lost) are CntRxLost */
     h->cmd_rejected = 5u;
     h->nav_rejected = 6u;
     h->time_jumps = 256u;
@@ -584,6 +603,7 @@ int main(void)
         cmocka_unit_test_setup(test_flag_imu_stale, setup),
         cmocka_unit_test_setup(test_state_flags, setup),
         cmocka_unit_test_setup(test_board_fault_flags, setup),
+        cmocka_unit_test_setup(test_board_faults_tested_without_imu, setup),
         cmocka_unit_test_setup(test_imu_rate_mismatch_flag, setup),
         cmocka_unit_test_setup(test_page_rotation, setup),
         cmocka_unit_test_setup(test_counter_pages, setup),

@@ -280,8 +280,16 @@ static int no_gnss(const app_t *a)
 #define BOARD_TO_HEALTH (NAVECU_HEALTH_WATCHDOG_OFF / HAL_FAULT_WATCHDOG)
 _Static_assert(NAVECU_HEALTH_BUS_OFF == HAL_FAULT_BUS_OFF * BOARD_TO_HEALTH,
                "HealthFlags' board faults in hal.h's order");
+#define BOARD_FLAGS (NAVECU_HEALTH_WATCHDOG_OFF | NAVECU_HEALTH_BUS_OFF)
 
-/* board: what hal_faults said now */
+/* HealthFlags WATCHDOG_OFF and BUS_OFF now: the board's faults (hal_faults: the watchdog
+ * not running, a bus-off since the last call), read once per NAV_Status or DTC test */
+__attribute__((noinline)) static uint32_t board_flags(hal_t *hal)
+{
+    return (hal_faults(hal) & (HAL_FAULT_WATCHDOG | HAL_FAULT_BUS_OFF)) * BOARD_TO_HEALTH;
+}
+
+/* board: board_flags now */
 static uint16_t health_flags(const app_t *a, const hal_t *hal, uint32_t board)
 {
     const app_keep_t *k = &a->keep;
@@ -332,8 +340,7 @@ static uint16_t health_flags(const app_t *a, const hal_t *hal, uint32_t board)
     if (imu_rate_mismatch(&k->rate)) {
         fl |= NAVECU_HEALTH_IMU_RATE_MISMATCH;
     }
-    /* the board's faults: the watchdog not running, a bus-off since the last NAV_Status */
-    fl |= (board & (HAL_FAULT_WATCHDOG | HAL_FAULT_BUS_OFF)) * BOARD_TO_HEALTH;
+    fl |= board; /* the watchdog not running, a bus-off since the last NAV_Status */
     return (uint16_t)fl;
 }
 
@@ -404,8 +411,9 @@ void output_dtc_tests(app_t *a, hal_t *hal)
      * number of IMU samples: with none, one refused frame would stay REJECTED for good,
      * a review found) */
     const uint32_t nvm = a->keep.cal.nvm_error ? NAVECU_HEALTH_NVM_ERROR : 0u;
-    app_dtc_cycle_tested(a, hal, NAVECU_HEALTH_IMU_STALE | nvm,
-                         NAVECU_HEALTH_IMU_STALE | NAVECU_HEALTH_NVM_ERROR);
+    /* and the board's, which an ECU whose IMU never speaks must store too (a review) */
+    app_dtc_cycle_tested(a, hal, NAVECU_HEALTH_IMU_STALE | nvm | board_flags(hal),
+                         NAVECU_HEALTH_IMU_STALE | NAVECU_HEALTH_NVM_ERROR | BOARD_FLAGS);
 }
 
 void output_status(app_t *a, hal_t *hal)
@@ -414,7 +422,7 @@ void output_status(app_t *a, hal_t *hal)
     const ekf_t *ekf = app_filter(a);
     uint8_t d[8];
     a->keep.health.rx_lost = hal_can_rx_lost(hal);
-    const uint32_t board = hal_faults(hal);
+    const uint32_t board = board_flags(hal);
     tx->last_status_t_us = hal_time_us(hal);
     struct navecu_can_nav_status_t st;
     memset(&st, 0, sizeof st);

@@ -248,7 +248,9 @@ int bxcan_send(bxcan_t *dev, const hal_can_frame_t *f)
     return 0;
 }
 
-/* Read ESR, count a transition into bus-off; returns the ESR value. */
+/* Read ESR, count a transition into bus-off; returns the ESR value. A poll sees a bus-off
+ * end only if it reads ESR after the recovery (MCR.ABOM clears BOFF without an interrupt),
+ * so the interrupt does not rely on the latch (bxcan_sce_irq). */
 static uint32_t poll_esr(bxcan_t *dev)
 {
     uint32_t esr = dev->regs->ESR;
@@ -262,6 +264,11 @@ static uint32_t poll_esr(bxcan_t *dev)
 
 void bxcan_sce_irq(bxcan_t *dev)
 {
+    /* with only BOFIE of the error interrupts enabled, ERRI is set when BOFF is set: each
+     * interrupt that finds BOFF is a new bus-off, whether or not a poll saw the last one
+     * end (a review found every bus-off after a power-on's first uncounted: the latch
+     * stayed 1 through the silent recovery, and nothing on the ECU polls) */
+    dev->bus_off = 0u;
     (void)poll_esr(dev);
     dev->regs->MSR = BXCAN_MSR_ERRI; /* rc_w1: only ERRI is cleared */
 }

@@ -58,8 +58,9 @@ int hal_can_receive(hal_t *hal, hal_can_frame_t *f)
 
 uint32_t hal_can_rx_lost(const hal_t *hal)
 {
-    /* a log's malformed lines (saturating), a live socket's drops too (wrapping) */
-    return hal->rx_log.malformed + hal->can_rx_dropped;
+    /* a log's malformed lines (saturating); a live socket's drops (wrapping) and its
+     * controller's receive overflows too */
+    return hal->rx_log.malformed + hal->can_rx_dropped + hal->can_rx_overflow;
 }
 
 uint32_t hal_faults(hal_t *hal)

@@ -55,6 +55,7 @@ struct hal {
     uint32_t can_bus_off;     /* of them, bus-off reports (CAN_ERR_BUSOFF); wraps */
     uint32_t can_bus_off_told; /* can_bus_off as hal_faults last reported it */
     uint32_t can_rx_dropped;  /* frames the socket's receive queue dropped (SO_RXQ_OVFL) */
+    uint32_t can_rx_overflow; /* the controller's receive overflows (error frames) */
     uint32_t can_io_errors;   /* failed socket reads/writes (interface down, queue full) */
     hal_linux_file_t open_failed; /* the file a failed hal_linux_open could not use */
 };

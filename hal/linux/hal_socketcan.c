@@ -128,6 +128,9 @@ int hal_socketcan_receive(hal_t *hal, hal_can_frame_t *f)
             if (cf.can_id & CAN_ERR_BUSOFF) {
                 hal->can_bus_off++;
             }
+            if ((cf.can_id & CAN_ERR_CRTL) && (cf.data[1] & CAN_ERR_CRTL_RX_OVERFLOW)) {
+                hal->can_rx_overflow = sat_inc(hal->can_rx_overflow); /* its FIFO: >= 1 lost */
+            }
             continue;
         }
         if ((cf.can_id & CAN_RTR_FLAG) || cf.can_dlc > 8u) {

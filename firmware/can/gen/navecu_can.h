@@ -1709,7 +1709,7 @@ struct navecu_can_nav_status_t {
     uint8_t cnt_imu_lost;
 
     /**
-     * Received frames the ECU lost before the application read them: frames lost to a receive overrun (the CAN controller's FIFO or the driver's ring full, or a host socket's queue: the main loop late), and on a replayed candump log its unreadable lines.
+     * Received frames the ECU lost before the application read them: frames lost to a receive overrun (the driver's ring full, or a host socket's queue, one each; the CAN controller's FIFO full, one for each overrun, which loses at least one frame: the main loop late), the remote and FD frames a host socket cannot deliver, and on a replayed candump log its unreadable lines.
      *
      * Range: 0..255 (0..255 -)
      * Scale: 1
