@@ -42,7 +42,8 @@ int hal_can_send(hal_t *hal, const hal_can_frame_t *f);
 /* Received frames the board lost before hal_can_receive could return them, since it
  * started: on a log replay the malformed lines skipped (garbage, truncated); on a CAN
  * controller the frames lost to a receive overrun (its hardware FIFO or the driver's ring
- * full: the main loop did not read them in time). Saturating or wrapping at 2^32, as the
+ * full: the main loop did not read them in time); on a live host socket its queue's drops,
+ * its controller's receive overflows and the remote or FD frames it cannot deliver. Saturating or wrapping at 2^32, as the
  * implementation says; NAV_Status CntRxLost reports it (saturating at 255). */
 uint32_t hal_can_rx_lost(const hal_t *hal);
 

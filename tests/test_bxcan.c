@@ -503,6 +503,10 @@ static void test_bus_off_counted_and_reported(void **state)
     bxcan_sce_irq(&dev);
     assert_int_equal(regs.MSR, 1u << 2); /* rc_w1 write of ERRI alone */
     assert_int_equal(stats().bus_off_events, 1);
+    regs.MSR &= ~(1u << 2); /* the hardware's rc_w1: ERRI cleared */
+    /* the handler run again in the same bus-off (its clear late): not a new event */
+    bxcan_sce_irq(&dev);
+    assert_int_equal(stats().bus_off_events, 1);
     /* the same bus-off polled again is not a new event */
     assert_int_equal(bxcan_error_state(&dev, &e), 0);
     assert_int_equal(e.state, BXCAN_ERR_BUS_OFF);
@@ -532,8 +536,18 @@ static void test_bus_offs_by_interrupt_alone(void **state)
         regs.MSR |= 1u << 2;             /* ERRI */
         bxcan_sce_irq(&dev);
         assert_int_equal(stats().bus_off_events, k);
-        regs.ESR = 0u; /* recovered: no interrupt, no poll */
+        regs.MSR &= ~(1u << 2); /* rc_w1 */
+        regs.ESR = 0u;          /* recovered: no interrupt, no poll */
     }
+    /* an interrupt served late, after the recovery (a flash erase stalls the CPU for up to
+     * 500 ms, the recovery takes 3 ms): BOFF clear, ERRI still says a bus-off began */
+    regs.MSR |= 1u << 2;
+    bxcan_sce_irq(&dev);
+    assert_int_equal(stats().bus_off_events, 4);
+    bxcan_error_t e;
+    assert_int_equal(bxcan_error_state(&dev, &e), 0);
+    assert_int_equal(e.state, BXCAN_ERR_ACTIVE);
+    assert_int_equal(e.bus_off_events, 4); /* the poll after it counts nothing more */
 }
 
 int main(void)

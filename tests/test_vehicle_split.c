@@ -195,55 +195,103 @@ static void test_app_init_forgets_the_held_half(void **state)
     assert_sample(NAV_C(1.0), 604u, 605u, 602u, 603u);
 }
 
-/* The odometer's timeout forgets a held half too: navigating, a pair makes the wheel speeds
- * fresh; then a front half arrives alone and both axles go quiet for 1.6 s of IMU time
- * (the timeout 1.5 s, WheelsMissing). The rear half after the silence is held, not paired
- * with the front half from before it; with the next front half it makes one sample. */
-static void test_wheel_timeout_forgets_the_held_half(void **state)
+/* a frame to the application */
+static void feed(app_t *app, hal_t *hal, hal_can_frame_t f)
 {
-    (void)state;
-    static app_t app;
-    static hal_t hal;
-    assert_int_equal(fx_fresh_app(&app, &hal), NAV_OK);
+    app_handle_frame(app, hal, &f);
+}
+
+/* navigating on the dead reckoning's path (it ticks the odometer), level at 45 N 10 E, with
+ * the gear in D */
+static void navigating(app_t *app, hal_t *hal)
+{
+    assert_int_equal(fx_fresh_app(app, hal), NAV_OK);
     const geo_pos_t p = {450000000LL * GEO_LSB_PER_DEG_E7, 100000000LL * GEO_LSB_PER_DEG_E7,
                          100000LL * GEO_LSB_PER_MM};
     const nav_real_t q[4] = {NAV_C(1.0), NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)};
     const nav_real_t v0[3] = {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)};
     const sins_config_t scfg = sins_default_config();
-    assert_int_equal(sins_init(&app.run.nav, &scfg, &p, v0, q), NAV_OK);
-    assert_int_equal(dr_init(&app.run.dr, &p, NAV_C(0.0), NAV_C(0.0)), NAV_OK);
-    app.run.mode = APP_MODE_NAVIGATING; /* the dead reckoning's path: it ticks the odometer */
-    uint8_t counter = 0u;
+    assert_int_equal(sins_init(&app->run.nav, &scfg, &p, v0, q), NAV_OK);
+    assert_int_equal(dr_init(&app->run.dr, &p, NAV_C(0.0), NAV_C(0.0)), NAV_OK);
+    app->run.mode = APP_MODE_NAVIGATING;
+    feed(app, hal, gear(4u)); /* D */
+}
+
+/* one IMU sample 10 ms after the last (level, at rest: 1 g up, FRD z down) */
+static void imu_sample(app_t *app, hal_t *hal, uint8_t *counter)
+{
     const int32_t w[3] = {0, 0, 0};
-    const int32_t v[3] = {0, 0, -402}; /* 1 g up over 10 ms, 2^-12 m/s LSB (FRD z down) */
-    hal_can_frame_t f = gear(4u); /* D */
-    app_handle_frame(&app, &hal, &f);
-    f = front(1000u, 1000u);
-    app_handle_frame(&app, &hal, &f);
-    f = rear(1000u, 1000u);
-    app_handle_frame(&app, &hal, &f);
+    const int32_t v[3] = {0, 0, -402}; /* 9.81 m/s^2 x 10 ms in 2^-12 m/s LSB */
+    hal_can_frame_t rate, accel;
+    hal->t_us += 10000u;
+    cf_imu_pair(w, v, *counter, 0u, hal->t_us, &rate, &accel);
+    *counter = e2e_counter_next(*counter);
+    app_handle_frame(app, hal, &rate);
+    app_handle_frame(app, hal, &accel);
+}
+
+/* after a silence: the rear half is held (the front from before the silence is gone), and
+ * with the next front half it makes one sample */
+static void assert_fresh_pairing(app_t *app)
+{
+    hal_can_frame_t f = rear(3000u, 3000u);
+    in.kind = RX_WHEELS;
+    assert_int_equal(app_rx_decode(&app->keep.rx, ids, &f, &in), RX_OK);
+    assert_int_equal(in.kind, RX_NONE);
+    f = front(3002u, 3004u);
+    assert_int_equal(app_rx_decode(&app->keep.rx, ids, &f, &in), RX_OK);
+    assert_sample(NAV_C(1.0), 3002u, 3004u, 3000u, 3000u);
+}
+
+/* The odometer's timeout forgets a held half too: navigating, a pair makes the wheel speeds
+ * fresh; then a front half arrives alone and both axles go quiet for 1.6 s of IMU time
+ * (the timeout 1.5 s, WheelsMissing). The rear half after the silence is held, not paired
+ * with the front half from before it. */
+static void test_wheel_timeout_forgets_the_held_half(void **state)
+{
+    (void)state;
+    static app_t app;
+    static hal_t hal;
+    navigating(&app, &hal);
+    uint8_t counter = 0u;
+    feed(&app, &hal, front(1000u, 1000u));
+    feed(&app, &hal, rear(1000u, 1000u));
     for (int k = 0; k < 161; k++) {
         if (k == 1) {
             assert_int_equal(app.keep.odo.valid, 1u); /* the pair's speeds, fresh */
-            f = front(2000u, 2000u);                   /* held: its rear never comes */
-            app_handle_frame(&app, &hal, &f);
+            feed(&app, &hal, front(2000u, 2000u));     /* held: its rear never comes */
         }
-        hal_can_frame_t rate, accel;
-        hal.t_us += 10000u;
-        cf_imu_pair(w, v, counter, 0u, hal.t_us, &rate, &accel);
-        counter = e2e_counter_next(counter);
-        app_handle_frame(&app, &hal, &rate);
-        app_handle_frame(&app, &hal, &accel);
+        imu_sample(&app, &hal, &counter);
     }
     assert_int_equal(app.run.mode, APP_MODE_NAVIGATING);
     assert_int_equal(app.keep.odo.valid, 0u); /* timed out */
-    f = rear(3000u, 3000u);
-    in.kind = RX_WHEELS;
-    assert_int_equal(app_rx_decode(&app.keep.rx, ids, &f, &in), RX_OK);
-    assert_int_equal(in.kind, RX_NONE); /* held: the front from before the silence is gone */
-    f = front(3002u, 3004u);
-    assert_int_equal(app_rx_decode(&app.keep.rx, ids, &f, &in), RX_OK);
-    assert_sample(NAV_C(1.0), 3002u, 3004u, 3000u, 3000u);
+    assert_fresh_pairing(&app);
+}
+
+/* A silence of the whole bus stops the IMU too (no odometer timeout then): the IMU gap too
+ * long to bridge forgets the held half (a review's case: 2 s of nothing, then the rear half
+ * paired with the front from before). */
+static void test_bus_silence_forgets_the_held_half(void **state)
+{
+    (void)state;
+    static app_t app;
+    static hal_t hal;
+    navigating(&app, &hal);
+    uint8_t counter = 0u;
+    imu_sample(&app, &hal, &counter);
+    feed(&app, &hal, front(1000u, 1000u));
+    feed(&app, &hal, rear(1000u, 1000u));
+    imu_sample(&app, &hal, &counter);
+    feed(&app, &hal, front(2000u, 2000u)); /* held, then nothing at all for 2 s */
+    hal.t_us += 2000000u;
+    for (int k = 0; k < 200; k++) {
+        counter = e2e_counter_next(counter); /* the IMU's counter ran on */
+    }
+    for (int k = 0; k < 5; k++) { /* a jump of the counter is confirmed by its followers */
+        imu_sample(&app, &hal, &counter);
+    }
+    assert_int_not_equal(app.run.mode, APP_MODE_NAVIGATING); /* re-acquiring */
+    assert_fresh_pairing(&app);
 }
 
 int main(void)
@@ -256,6 +304,7 @@ int main(void)
         cmocka_unit_test_setup(test_a_refused_half_is_not_held, setup),
         cmocka_unit_test_setup(test_app_init_forgets_the_held_half, setup),
         cmocka_unit_test_setup(test_wheel_timeout_forgets_the_held_half, setup),
+        cmocka_unit_test_setup(test_bus_silence_forgets_the_held_half, setup),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

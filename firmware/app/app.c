@@ -199,6 +199,11 @@ static void hold_for_rate(app_t *a)
  * will say it moved and stop it, docs/can.md) */
 static void gap_unbridged(app_t *a)
 {
+#if VEHICLE_SPLIT_WHEELS
+    /* a silence of the whole bus stops the IMU too, and with it the odometer's timeout:
+     * a wheel-speed half held from before it must not pair with one after (a review) */
+    vehicle_reset();
+#endif
     if (a->run.mode == APP_MODE_NAVIGATING) {
         begin_reacquire(a);
     } else if (a->run.mode == APP_MODE_LEVELLING) {

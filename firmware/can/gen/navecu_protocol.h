@@ -18,7 +18,7 @@
 #define NAVECU_HEALTH_REACQUIRE 0x0800u /* after an IMU gap too long to bridge, a filter reset or an IMU rate mismatch while navigating, waiting for a GNSS epoch to re-acquire position, velocity and heading */
 #define NAVECU_HEALTH_IMU_RATE_MISMATCH 0x1000u /* the IMU samples counted between GNSS epochs (received and lost, by the IMU counter) disagree with the configured IMU rate over their TimeOfWeek interval: navigation refused (Mode Fault) until they match again */
 #define NAVECU_HEALTH_WATCHDOG_OFF 0x2000u /* the ECU's watchdog did not start at power-on: a hung application would not be reset (held until the next power-on) */
-#define NAVECU_HEALTH_BUS_OFF 0x4000u /* navecu's CAN controller went bus-off since the previous NAV_Status (its own transmissions failed until it left the bus; it rejoins by itself after 128 x 11 recessive bits, ISO 11898-1) */
+#define NAVECU_HEALTH_BUS_OFF 0x4000u /* navecu's CAN controller went bus-off since the previous NAV_Status or DTC test (before the first IMU sample the DTC U0001-88 alone records it; its own transmissions failed until it left the bus; it rejoins by itself after 128 x 11 recessive bits, ISO 11898-1) */
 
 /* navecu's messages: index, stock identifier, direction */
 typedef enum {
