@@ -64,6 +64,9 @@ int hal_socketcan_open(hal_t *hal, const char *ifname, const uint32_t *rx_ids, s
     if (setsockopt(fd, SOL_SOCKET, SO_RCVBUFFORCE, &rcvbuf, sizeof rcvbuf) != 0) {
         (void)setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &rcvbuf, sizeof rcvbuf);
     }
+    /* the queue's drop count with each frame (CntRxLost): a count, not a need, so a
+     * kernel without it still gives the bus */
+    (void)setsockopt(fd, SOL_SOCKET, SO_RXQ_OVFL, &one, sizeof one);
     struct sockaddr_can addr;
     memset(&addr, 0, sizeof addr);
     addr.can_family = AF_CAN;
@@ -72,7 +75,6 @@ int hal_socketcan_open(hal_t *hal, const char *ifname, const uint32_t *rx_ids, s
                                   (socklen_t)(n_ids * sizeof filters[0])) != 0) ||
         setsockopt(fd, SOL_CAN_RAW, CAN_RAW_ERR_FILTER, &err_mask, sizeof err_mask) != 0 ||
         setsockopt(fd, SOL_SOCKET, SO_TIMESTAMP, &one, sizeof one) != 0 ||
-        setsockopt(fd, SOL_SOCKET, SO_RXQ_OVFL, &one, sizeof one) != 0 ||
         bind(fd, (struct sockaddr *)&addr, sizeof addr) != 0) {
         const int e = errno;
         close(fd);
