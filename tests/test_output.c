@@ -304,7 +304,7 @@ static void test_counter_pages(void **state)
     h->imu_lost = 255u;
     h->bad_value = 3u;
     h->gnss_rejected = 4u;
-    hal.malformed = 9u; /* the HAL's lost frames (hal_can_rx_lost) are CntRxLost */
+    hal.rx_lost = 9u; /* the HAL's lost frames (hal_can_rx_lost) are CntRxLost */
     h->cmd_rejected = 5u;
     h->nav_rejected = 6u;
     h->time_jumps = 256u;

@@ -111,8 +111,11 @@ int hal_linux_watchdog_expired(const hal_t *hal);
 /* Frames returned by hal_can_receive / accepted by hal_can_send since hal_linux_open
  * (saturating at UINT32_MAX). */
 uint32_t hal_linux_rx_frames(const hal_t *hal);
-uint32_t hal_linux_rx_malformed(const hal_t *hal); /* of hal_can_rx_lost: the malformed */
 uint32_t hal_linux_tx_frames(const hal_t *hal);
+
+/* Of hal_can_rx_lost, the source's malformed frames alone: a log's unreadable lines, a live
+ * socket's remote, FD or short frames (saturating at UINT32_MAX). */
+uint32_t hal_linux_rx_malformed(const hal_t *hal);
 
 /*
  * What hal.h leaves to the implementation, on this host:

@@ -55,7 +55,7 @@ int hal_can_send(hal_t *hal, const hal_can_frame_t *f)
 
 uint32_t hal_can_rx_lost(const hal_t *hal)
 {
-    return hal->malformed;
+    return hal->rx_lost;
 }
 
 uint32_t hal_faults(hal_t *hal)

@@ -36,7 +36,7 @@ struct hal {
     uint32_t tx_n;
     uint32_t tx_dropped;   /* sends beyond FAKE_TX_MAX */
     uint64_t t_us;         /* what hal_time_us returns */
-    uint32_t malformed;    /* what hal_can_rx_lost returns */
+    uint32_t rx_lost;      /* what hal_can_rx_lost returns */
     uint32_t faults;       /* what hal_faults returns (HAL_FAULT_BUS_OFF cleared on read) */
     uint8_t nvm[FAKE_NVM_SIZE];
     int nvm_fail;          /* 1: NVM operations return HAL_EIO */
