@@ -1,6 +1,7 @@
 /* test_vehicle_checksum.c - the car makers' frame checksums (firmware/vehicle/vehicle_checksum.c)
  * on known frames: a real one of the RAV4's bus for Toyota's, frames summed by hand from the
- * definitions for Subaru's and Honda's (no recording of either car in the project). */
+ * definitions for Subaru's and Honda's (no recording of either car in the project), frames
+ * whose CRC opendbc's own implementation computed for Volkswagen's. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -81,12 +82,50 @@ static void test_honda_frames(void **state)
     assert_false(vehicle_checksum_honda(0x800u, z, 8u)); /* not a standard identifier */
 }
 
+/* Volkswagen MQB, Getriebe_11 (0x0AD): byte 0 the CRC-8H2F of bytes 1..7 and the data ID
+ * of byte 1's low nibble. Each CRC is what opendbc 0.3.1's volkswagen_mqb_meb_checksum
+ * (car/volkswagen/mqbcan.py) returns for the frame, 0x0AD and its
+ * VOLKSWAGEN_MQB_MEB_CONSTANTS, the data IDs of vehicles/vw_mqb.toml. */
+static const uint8_t GETRIEBE_11_IDS[VEHICLE_VW_DATA_IDS] = {
+    0x3F, 0x69, 0x39, 0xDC, 0x94, 0xF9, 0x14, 0x64,
+    0xD8, 0x6A, 0x34, 0xCE, 0xA2, 0x55, 0xB5, 0x2C};
+
+static int vw_getriebe_11(uint32_t id, const uint8_t *data, uint8_t dlc)
+{
+    return vehicle_checksum_vw_mqb(id, data, dlc, GETRIEBE_11_IDS);
+}
+
+static void test_vw_mqb_frames(void **state)
+{
+    (void)state;
+    uint8_t a[8] = {0x4A, 0x05, 0x01, 0x02, 0x03, 0x04, 0x05, 0x06}; /* counter 5 */
+    uint8_t z[8] = {0x66, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00}; /* counter 0 */
+    uint8_t f[8] = {0x1C, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF}; /* counter 15 */
+    uint8_t h[8] = {0xAF, 0x30, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00}; /* counter 0 */
+    assert_true(vw_getriebe_11(0x0ADu, a, 8u));
+    assert_true(vw_getriebe_11(0x0ADu, z, 8u));
+    assert_true(vw_getriebe_11(0x0ADu, f, 8u));
+    assert_true(vw_getriebe_11(0x0ADu, h, 8u));
+    /* a CRC catches every single-bit error; the counter's bits choose the data ID too */
+    assert_single_bit_errors_caught(vw_getriebe_11, 0x0ADu, a, 8u);
+    assert_single_bit_errors_caught(vw_getriebe_11, 0x0ADu, f, 8u);
+    /* the data ID is the message's: another message's (ESP_02's 0xAA for every counter)
+     * refuses the frame */
+    static const uint8_t esp_02[VEHICLE_VW_DATA_IDS] = {
+        0xAA, 0xAA, 0xAA, 0xAA, 0xAA, 0xAA, 0xAA, 0xAA,
+        0xAA, 0xAA, 0xAA, 0xAA, 0xAA, 0xAA, 0xAA, 0xAA};
+    assert_false(vehicle_checksum_vw_mqb(0x0ADu, a, 8u, esp_02));
+    assert_false(vw_getriebe_11(0x0ADu, a, 1u));
+    assert_false(vw_getriebe_11(0x0ADu, a, 9u));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_toyota_recorded_frame),
         cmocka_unit_test(test_subaru_frames),
         cmocka_unit_test(test_honda_frames),
+        cmocka_unit_test(test_vw_mqb_frames),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -57,20 +57,42 @@ def _honda_checksum(frame_id: int, data: bytearray) -> None:
     data[-1] = (data[-1] & 0xF0) | ((8 - nibbles) & 0xF)
 
 
+def _crc8h2f(crc: int, byte: int) -> int:
+    """One byte into a CRC-8H2F (AUTOSAR: polynomial 0x2F, most significant bit first)."""
+    crc ^= byte
+    for _ in range(8):
+        crc = ((crc << 1) ^ 0x2F) & 0xFF if crc & 0x80 else (crc << 1) & 0xFF
+    return crc
+
+
+def _vw_mqb_checksum(frame_id: int, data: bytearray, data_ids: tuple) -> None:
+    """Volkswagen MQB (AUTOSAR E2E profile 2): the first byte is the CRC-8H2F (initial value
+    and final XOR 0xFF) of bytes 1.. and then the message's data ID for the frame's counter
+    (byte 1's low nibble), data_ids[counter]. frame_id: in the data IDs, not summed."""
+    crc = 0xFF
+    for b in data[1:]:
+        crc = _crc8h2f(crc, b)
+    data[0] = _crc8h2f(crc, data_ids[data[1] & 0x0F]) ^ 0xFF
+
+
 @dataclass(frozen=True)
 class CarChecksum:
     """A car maker's frame checksum: fill(frame_id, data) writes it (the test encoder,
     CarEncoder), in data[byte] under mask; the firmware checks it with
-    vehicle_checksum_NAME (firmware/vehicle/vehicle_checksum.c)."""
+    vehicle_checksum_NAME (firmware/vehicle/vehicle_checksum.c). A keyed checksum also
+    takes the message's data IDs (the profile's checksum_data_ids, data_ids of them):
+    fill(frame_id, data, ids), and the firmware's function a table of them."""
     fill: object
     byte: int      # the checksum's byte (-1: the last)
     mask: int      # its bits in that byte
+    data_ids: int = 0   # how many data IDs the message needs (0: none)
 
 
 #: the car makers' checksums a profile may name
 CAR_CHECKSUMS = {"toyota": CarChecksum(_toyota_checksum, -1, 0xFF),
                  "subaru": CarChecksum(_subaru_checksum, 0, 0xFF),
-                 "honda": CarChecksum(_honda_checksum, -1, 0x0F)}
+                 "honda": CarChecksum(_honda_checksum, -1, 0x0F),
+                 "vw_mqb": CarChecksum(_vw_mqb_checksum, 0, 0xFF, 16)}
 CHECKSUMS = ("none",) + tuple(CAR_CHECKSUMS)
 DIRECTIONS = {"signed": "VEHICLE_DIR_SIGNED", "gear": "VEHICLE_DIR_GEAR",
               "none": "VEHICLE_DIR_NONE"}
@@ -95,6 +117,7 @@ class CarSignalSet:
     checksum: str = "none"
     counter: object = None  # the rolling counter's cantools Signal, or None
     counter_modulus: int = 0   # it runs 0..modulus-1 (2^length unless the profile says)
+    checksum_data_ids: tuple = ()  # a keyed checksum's data IDs (CarChecksum.data_ids)
 
 
 @dataclass
@@ -358,15 +381,17 @@ SCHEMA = {
          "recordings": (False, list)},
     "wheels": {"native": (False, bool), "direction": (False, str), "message": (False, str),
                "messages": (False, dict), "signals": (False, dict), "unit": (False, str), "scale": (False, _NUM),
-               "checksum": (False, str), "counter": (False, str),
-               "counter_modulus": (False, int), "range": (False, list)},
+               "checksum": (False, str), "checksum_data_ids": (False, list),
+               "counter": (False, str), "counter_modulus": (False, int),
+               "range": (False, list)},
     "gear": {"message": (True, str), "signal": (True, str), "forward": (False, list),
              "reverse": (True, list), "stopped": (False, list), "hold": (False, list),
-             "checksum": (False, str), "counter": (False, str),
+             "checksum": (False, str), "checksum_data_ids": (False, list),
+             "counter": (False, str),
              "counter_modulus": (False, int)},
     "yaw_rate": {"message": (True, str), "signal": (True, str), "unit": (False, str),
                  "left_positive": (False, bool), "checksum": (False, str),
-                 "counter": (False, str), "counter_modulus": (False, int),
+                 "checksum_data_ids": (False, list), "counter": (False, str), "counter_modulus": (False, int),
                  "range": (False, list)},
     "geometry": {"track_m": (True, _NUM), "wheelbase_m": (True, _NUM)},
     "recordings": {"file": (True, str), "channels": (True, dict)},
@@ -397,7 +422,8 @@ def _check_shape(t: dict, fname: str) -> None:
             _check_table(t[sect], SCHEMA[sect], f"{fname} [{sect}]")
     w = t["wheels"]
     if w.get("native", False):
-        for key in ("checksum", "counter", "counter_modulus", "message", "messages"):
+        for key in ("checksum", "checksum_data_ids", "counter", "counter_modulus", "message",
+                    "messages"):
             if key in w:
                 raise ProfileError(f"{fname} [wheels]: {key} is for a car message; navecu's "
                                    "WheelSpeeds (native = true) carry their own E2E CRC and "
@@ -709,12 +735,38 @@ def _checksum(spec: dict, fname: str) -> str:
     return c
 
 
+def _data_ids(spec: dict, checksum: str, msg, role: str, where: str) -> tuple:
+    """The table's checksum_data_ids: as many bytes as its keyed checksum needs, and only
+    with one; one message's (an axle's half would need its own)."""
+    ids = spec.get("checksum_data_ids")
+    n = CAR_CHECKSUMS[checksum].data_ids if checksum != "none" else 0
+    if n == 0:
+        if ids is not None:
+            raise ProfileError(f"{where}: checksum_data_ids is for a keyed checksum "
+                               f"({', '.join(k for k, c in CAR_CHECKSUMS.items() if c.data_ids)})"
+                               f", not {checksum}")
+        return ()
+    if ids is None:
+        raise ProfileError(f"{where}: the {checksum} checksum needs checksum_data_ids, its "
+                           f"{n} data IDs of {msg.name} (one per counter value)")
+    if role in ("wheels_front", "wheels_rear"):
+        raise ProfileError(f"{where}: a keyed checksum on wheel speeds split over two "
+                           "messages is not supported (each message has its own data IDs)")
+    if len(ids) != n or any(isinstance(x, bool) or not isinstance(x, int) or not 0 <= x <= 255
+                            for x in ids):
+        raise ProfileError(f"{where}: checksum_data_ids must be {n} bytes (0..255), not "
+                           f"{ids!r}")
+    return tuple(ids)
+
+
 def _signal_set(role: str, spec: dict, msg, sigs: list, fname: str) -> CarSignalSet:
     """The message of the profile's table `role` (spec) and the signals read from it, with
-    its checksum and rolling counter."""
+    its checksum (and a keyed checksum's data IDs) and rolling counter."""
     checksum = _checksum(spec, fname)
+    where = f"{fname} [{role}]"
     return CarSignalSet(role, msg, sigs, checksum,
-                        *_counter(spec, msg, sigs, f"{fname} [{role}]", checksum))
+                        *_counter(spec, msg, sigs, where, checksum),
+                        checksum_data_ids=_data_ids(spec, checksum, msg, role, where))
 
 
 # ----------------------------------------------------------------------- collisions
@@ -849,7 +901,11 @@ class CarEncoder:
             self.counters[role] = (value + 1) % r.counter_modulus
         data = bytearray(msg.encode(full, scaling=True, strict=False))
         if r.checksum != "none":
-            CAR_CHECKSUMS[r.checksum].fill(msg.frame_id, data)
+            cs = CAR_CHECKSUMS[r.checksum]
+            if cs.data_ids:
+                cs.fill(msg.frame_id, data, r.checksum_data_ids)
+            else:
+                cs.fill(msg.frame_id, data)
         return can.Message(timestamp=t, arbitration_id=msg.frame_id, is_extended_id=False,
                            dlc=msg.length, data=bytes(data))
 
@@ -922,6 +978,12 @@ def vehicle_profile_c(p: Profile) -> str:
         L += [""]
     if p.split_wheels:
         L += _split_state_c(p)
+    for r in p.reads:
+        if r.checksum_data_ids:
+            L += [f"/* {r.message.name}'s {r.checksum} checksum data IDs, by its counter "
+                  "(checksum_data_ids) */",
+                  f"static const uint8_t {_c_name(r.message)}_data_ids[{len(r.checksum_data_ids)}] = {{",
+                  "    " + ", ".join(f"0x{x:02X}u" for x in r.checksum_data_ids) + "};", ""]
     L += [f"const vehicle_profile_t vehicle_profile = {{\"{p.name}\", {DIRECTIONS[p.direction]}, "
           f"{1 if p.native_wheels else 0}u, {_c_float(p.track_m)}, {_c_float(p.wheelbase_m)}, "
           f"{_c_float(p.wheel_step_mps)},",
@@ -991,7 +1053,8 @@ def _decode_case(p: Profile, r: CarSignalSet) -> list:
     L = [f"    case {up}_FRAME_ID: {{", f"        m->kind = {kind};",
          f"        if (f->dlc != {up}_LENGTH) {{", "            return VEHICLE_BAD_DLC;", "        }"]
     if r.checksum != "none":
-        L += [f"        if (!vehicle_checksum_{r.checksum}(f->id, f->data, f->dlc)) {{",
+        keyed = f", {_c_name(r.message)}_data_ids" if r.checksum_data_ids else ""
+        L += [f"        if (!vehicle_checksum_{r.checksum}(f->id, f->data, f->dlc{keyed})) {{",
               "            return VEHICLE_BAD_CHECKSUM;", "        }"]
     L += [f"        struct {fn}_t s;",
           f"        if ({fn}_unpack(&s, f->data, f->dlc) != 0) {{",

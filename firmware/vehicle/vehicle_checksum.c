@@ -37,3 +37,28 @@ int vehicle_checksum_honda(uint32_t id, const uint8_t *data, uint8_t dlc)
     sum += (uint32_t)(data[dlc - 1u] >> 4); /* the last byte's high nibble; the low one is it */
     return ((8u - sum) & 0xFu) == (data[dlc - 1u] & 0xFu);
 }
+
+/* one byte into a CRC-8H2F, most significant bit first */
+static uint8_t crc8h2f_byte(uint8_t crc_in, uint8_t byte)
+{
+    uint8_t crc = (uint8_t)(crc_in ^ byte);
+    for (unsigned bit = 0u; bit < 8u; bit++) {
+        crc = (crc & 0x80u) != 0u ? (uint8_t)((uint8_t)(crc << 1) ^ 0x2Fu) : (uint8_t)(crc << 1);
+    }
+    return crc;
+}
+
+int vehicle_checksum_vw_mqb(uint32_t id, const uint8_t *data, uint8_t dlc,
+                            const uint8_t data_id[VEHICLE_VW_DATA_IDS])
+{
+    (void)id; /* the identifier is in the data ID, which the profile gives */
+    if (dlc < 2u || dlc > 8u) {
+        return 0;
+    }
+    uint8_t crc = 0xFFu;
+    for (uint8_t i = 1u; i < dlc; i++) {
+        crc = crc8h2f_byte(crc, data[i]);
+    }
+    crc = (uint8_t)(crc8h2f_byte(crc, data_id[data[1] & 0x0Fu]) ^ 0xFFu);
+    return crc == data[0];
+}

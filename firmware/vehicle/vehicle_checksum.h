@@ -25,4 +25,16 @@ int vehicle_checksum_subaru(uint32_t id, const uint8_t *data, uint8_t dlc);
  * definition of the checksum; no Honda recording in the project. */
 int vehicle_checksum_honda(uint32_t id, const uint8_t *data, uint8_t dlc);
 
+/* The E2E data IDs of a Volkswagen MQB message, one per value of its 4-bit counter. */
+#define VEHICLE_VW_DATA_IDS 16u
+
+/* Volkswagen MQB (opendbc's vw_mqb DBC, signal CHECKSUM, byte 0): AUTOSAR E2E profile 2's
+ * CRC-8H2F (polynomial 0x2F, MSB first, initial value and final XOR 0xFF) over bytes
+ * 1..dlc-1 and then the message's data ID for the frame's counter (byte 1's low nibble),
+ * data_id[that counter] (the profile's checksum_data_ids, from opendbc's
+ * VOLKSWAGEN_MQB_MEB_CONSTANTS). 1 if data[0..dlc) carries it (dlc 2..8), else 0. No
+ * Volkswagen recording in the project: tested against opendbc's own implementation. */
+int vehicle_checksum_vw_mqb(uint32_t id, const uint8_t *data, uint8_t dlc,
+                            const uint8_t data_id[VEHICLE_VW_DATA_IDS]);
+
 #endif /* NAVECU_VEHICLE_CHECKSUM_H */

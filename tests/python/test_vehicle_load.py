@@ -58,6 +58,11 @@ CASES = [
     ("a hold that is not a value", lambda s: s.replace('stopped = ["P", "N"]', 'stopped = ["P", "N"]\nhold = [true]'), "hold must be a list"),
     ("a placeholder wheel range", lambda s: s.replace('unit = "km/h"', 'unit = "km/h"\nrange = [0.0, 15.0]'), "refuses speeds above 15 km/h"),
     ("a wheel range without 0", lambda s: s.replace('unit = "km/h"', 'unit = "km/h"\nrange = [1.0, 300.0]'), "refuses a standing car"),
+    ("a keyed checksum without its data IDs", lambda s: s.replace('stopped = ["P", "N"]', 'stopped = ["P", "N"]\nchecksum = "vw_mqb"'), "needs checksum_data_ids"),
+    ("15 data IDs", lambda s: s.replace('stopped = ["P", "N"]', 'stopped = ["P", "N"]\nchecksum = "vw_mqb"\nchecksum_data_ids = [' + ', '.join(['1'] * 15) + ']'), "must be 16 bytes"),
+    ("a data ID beyond a byte", lambda s: s.replace('stopped = ["P", "N"]', 'stopped = ["P", "N"]\nchecksum = "vw_mqb"\nchecksum_data_ids = [256' + ', 1' * 15 + ']'), "must be 16 bytes"),
+    ("data IDs for an unkeyed checksum", lambda s: s.replace('stopped = ["P", "N"]', 'stopped = ["P", "N"]\nchecksum = "subaru"\nchecksum_data_ids = [' + ', '.join(['1'] * 16) + ']'), "not subaru"),
+    ("data IDs without a checksum", lambda s: s.replace('stopped = ["P", "N"]', 'stopped = ["P", "N"]\nchecksum_data_ids = [' + ', '.join(['1'] * 16) + ']'), "not none"),
     ("a recording without its channels", lambda s: s + '[[recordings]]\nfile = "data/comma2k19-rav4/car_bus.log"\n', "channels"),
 ]
 
@@ -291,6 +296,52 @@ def test_a_counter_on_the_checksum_is_refused(profiles):
     (profiles / "sub.toml").write_text(bad.replace('name = "subaru_global_2017"', 'name = "sub"'))
     with pytest.raises(vehicle.ProfileError, match="counter CHECKSUM overlaps the subaru"):
         vehicle.load("sub")
+
+
+def _opendbc_vw_mqb():
+    """opendbc's own Volkswagen MQB checksum module (car/volkswagen/mqbcan.py), loaded
+    without its package's __init__, which needs openpilot's message schema (pycapnp) for
+    the rest of opendbc.car; the module itself needs only car/crc.py."""
+    import os
+    import types
+    import opendbc
+    car = os.path.join(os.path.dirname(opendbc.__file__), "car")
+    saved = {k: sys.modules.get(k) for k in ("opendbc.car", "opendbc.car.volkswagen",
+                                             "opendbc.car.crc",
+                                             "opendbc.car.volkswagen.mqbcan")}
+    try:
+        for name, path in (("opendbc.car", car),
+                           ("opendbc.car.volkswagen", os.path.join(car, "volkswagen"))):
+            if name not in sys.modules:
+                pkg = types.ModuleType(name)
+                pkg.__path__ = [path]
+                sys.modules[name] = pkg
+        import importlib
+        return importlib.import_module("opendbc.car.volkswagen.mqbcan")
+    finally:
+        for k, v in saved.items():
+            if v is None:
+                sys.modules.pop(k, None)
+            else:
+                sys.modules[k] = v
+
+
+def test_the_vw_checksum_is_opendbcs():
+    """vehicles/vw_mqb.toml's data IDs are opendbc's for Getriebe_11 (0x0AD), and the test
+    encoder's CRC (tools/vehicle.py, which the firmware's is tested against in
+    test_vehicle_profiles) is opendbc's volkswagen_mqb_meb_checksum on 2,000 random frames,
+    every counter value."""
+    import numpy as np
+    vw = _opendbc_vw_mqb()
+    r = next(x for x in vehicle.load("vw_mqb").reads if x.role == "gear")
+    assert r.checksum == "vw_mqb" and r.message.frame_id == 0x0AD
+    assert list(r.checksum_data_ids) == vw.VOLKSWAGEN_MQB_MEB_CONSTANTS[0x0AD]
+    rng = np.random.default_rng(3)
+    fill = vehicle.CAR_CHECKSUMS["vw_mqb"].fill
+    for _ in range(2000):
+        data = bytearray(rng.integers(0, 256, 8, dtype=np.uint8).tobytes())
+        fill(0x0AD, data, r.checksum_data_ids)
+        assert data[0] == vw.volkswagen_mqb_meb_checksum(0x0AD, None, data), data.hex()
 
 
 # ------------------------------------------- wheel speeds in two messages, one per axle
