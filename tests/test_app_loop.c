@@ -171,6 +171,48 @@ static void test_heartbeat_from_boot(void **state)
     assert_int_equal(hb[4].mode, NAVECU_CAN_NAV_HEARTBEAT_MODE_WAIT_INIT_CHOICE);
 }
 
+/* The wheel speeds stop before navigation (docs/can.md: WheelsMissing is the odometer's
+ * timeout, 1.5 s of IMU time, in every mode). GIVEN an ECU waiting for GNSS (WaitInit),
+ * IMU samples at 100 Hz for 4 s and WheelSpeeds at 50 Hz (standing) for the first second
+ * only WHEN the heartbeat goes out at 1.01, 2.01, 3.01 and 4.01 s THEN it says wheels
+ * present while the last reading is younger than 1.5 s (1.01 and 2.01 s: 0.01 and 1.01 s
+ * old) and missing after (3.01, 4.01 s). (Until 2026-12-06 the odometer aged only while
+ * navigating, and a wheel speed once read stayed valid for good before it.) */
+static void test_wheels_missing_before_navigation(void **state)
+{
+    (void)state;
+    hal.rx_empty_rc = HAL_EAGAIN;
+    uint8_t counter = 0u;
+    uint8_t wheel_counter = 0u;
+    for (uint64_t k = 1u; k <= 401u; k++) {
+        const int32_t w[3] = {0, 0, 0};
+        const int32_t v[3] = {0, 0, 402};
+        hal_can_frame_t fr, fa;
+        cf_imu_pair(w, v, counter, 0u, k * 10000u, &fr, &fa);
+        counter = e2e_counter_next(counter);
+        hal.rx_head = hal.rx_n = 0u;
+        assert_int_equal(fake_hal_rx_push(&hal, &fr), 0);
+        assert_int_equal(fake_hal_rx_push(&hal, &fa), 0);
+        if (k <= 100u && k % 2u == 0u) {
+            const int16_t still[4] = {0, 0, 0, 0};
+            const hal_can_frame_t fw = cf_wheels(still, wheel_counter, k * 10000u);
+            wheel_counter = e2e_counter_next(wheel_counter);
+            assert_int_equal(fake_hal_rx_push(&hal, &fw), 0);
+        }
+        (void)pass(10u, 1u);
+    }
+    assert_int_equal(app_samples(&app), 401u);
+    struct navecu_can_nav_heartbeat_t hb[8];
+    uint64_t t[8];
+    assert_int_equal(heartbeats(hb, t, 8u), 5u);
+    const uint8_t missing[5] = {1u, 0u, 0u, 1u, 1u}; /* at 0.01 s none read yet */
+    for (uint32_t i = 0u; i < 5u; i++) {
+        assert_int_equal(t[i], 10000u + i * 1000000u);
+        assert_int_equal(hb[i].mode, NAVECU_CAN_NAV_HEARTBEAT_MODE_WAIT_INIT_CHOICE);
+        assert_int_equal(hb[i].wheels_missing, missing[i]);
+    }
+}
+
 /* A silent bus (HAL_EAGAIN at once): app_poll once, then the kick. */
 static void test_silent_bus_polls_once(void **state)
 {
@@ -262,6 +304,7 @@ int main(void)
         cmocka_unit_test_setup(test_no_kick_when_prediction_late, setup),
         cmocka_unit_test_setup(test_end_of_input_no_kick, setup),
         cmocka_unit_test_setup(test_heartbeat_from_boot, setup),
+        cmocka_unit_test_setup(test_wheels_missing_before_navigation, setup),
     };
     return cmocka_run_group_tests_name("app_loop", tests, NULL, NULL);
 }

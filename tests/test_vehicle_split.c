@@ -243,16 +243,23 @@ static void assert_fresh_pairing(app_t *app)
     assert_sample(NAV_C(1.0), 3002u, 3004u, 3000u, 3000u);
 }
 
-/* The odometer's timeout forgets a held half too: navigating, a pair makes the wheel speeds
- * fresh; then a front half arrives alone and both axles go quiet for 1.6 s of IMU time
- * (the timeout 1.5 s, WheelsMissing). The rear half after the silence is held, not paired
- * with the front half from before it. */
-static void test_wheel_timeout_forgets_the_held_half(void **state)
+/* The odometer's timeout forgets a held half too: a pair makes the wheel speeds fresh;
+ * then a front half arrives alone and both axles go quiet for 1.6 s of IMU time (the
+ * timeout 1.5 s, WheelsMissing). The rear half after the silence is held, not paired with
+ * the front half from before it: navigating, and before navigation (waiting for GNSS, in
+ * mode WaitInit), where the odometer ages as well (until 2026-12-06 it aged only while
+ * navigating, and the pair was made). */
+static void wheel_timeout_forgets_the_held_half(int navigate)
 {
-    (void)state;
     static app_t app;
     static hal_t hal;
-    navigating(&app, &hal);
+    if (navigate != 0) {
+        navigating(&app, &hal);
+    } else {
+        assert_int_equal(fx_fresh_app(&app, &hal), NAV_OK);
+        feed(&app, &hal, gear(4u)); /* D */
+    }
+    const app_mode_t mode = app.run.mode;
     uint8_t counter = 0u;
     feed(&app, &hal, front(1000u, 1000u));
     feed(&app, &hal, rear(1000u, 1000u));
@@ -263,9 +270,21 @@ static void test_wheel_timeout_forgets_the_held_half(void **state)
         }
         imu_sample(&app, &hal, &counter);
     }
-    assert_int_equal(app.run.mode, APP_MODE_NAVIGATING);
+    assert_int_equal(app.run.mode, mode);
     assert_int_equal(app.keep.odo.valid, 0u); /* timed out */
     assert_fresh_pairing(&app);
+}
+
+static void test_wheel_timeout_forgets_the_held_half(void **state)
+{
+    (void)state;
+    wheel_timeout_forgets_the_held_half(1);
+}
+
+static void test_wheel_timeout_before_navigation_forgets_the_held_half(void **state)
+{
+    (void)state;
+    wheel_timeout_forgets_the_held_half(0);
 }
 
 /* A silence of the whole bus stops the IMU too (no odometer timeout then): the IMU gap too
@@ -304,6 +323,7 @@ int main(void)
         cmocka_unit_test_setup(test_a_refused_half_is_not_held, setup),
         cmocka_unit_test_setup(test_app_init_forgets_the_held_half, setup),
         cmocka_unit_test_setup(test_wheel_timeout_forgets_the_held_half, setup),
+        cmocka_unit_test_setup(test_wheel_timeout_before_navigation_forgets_the_held_half, setup),
         cmocka_unit_test_setup(test_bus_silence_forgets_the_held_half, setup),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

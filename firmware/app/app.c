@@ -233,11 +233,9 @@ static void release_for_rate(app_t *a)
  * start held for it goes on from GNSS while driving (the course is the heading; roll and
  * pitch start level, the filter takes them from there). */
 static void mount_auto_sample(app_t *a, const int32_t w_raw[3], const int32_t v_raw[3],
-                              uint32_t dt_us)
+                              nav_real_t dt_s)
 {
     imu_inc_t inc;
-    const nav_real_t dt_s = dt_us != 0u ? (nav_real_t)dt_us * NAV_C(1e-6)
-                                        : NAV_C(1.0) / (nav_real_t)a->cfg.imu_rate_hz;
     app_rx_imu_increment(w_raw, v_raw, dt_s, &inc);
     const odo_t *o = &a->keep.odo;
     const int rc = mount_est_sample(&a->keep.mest, &inc, o->speed_mps, o->valid ? 1 : 0);
@@ -352,13 +350,23 @@ static void process_sample(app_t *a, hal_t *hal, const int32_t w_raw[3], const i
     a->keep.n_samples++;
     const uint32_t step_us = dt_us != 0u ? dt_us : 1000000u / a->cfg.imu_rate_hz;
     a->keep.imu_t_us += step_us;
+    /* stamped: the increments over their own interval (no resampling) */
+    const nav_real_t dt_s = dt_us != 0u ? (nav_real_t)dt_us * NAV_C(1e-6)
+                                        : NAV_C(1.0) / (nav_real_t)a->cfg.imu_rate_hz;
+#if VEHICLE_SPLIT_WHEELS
+    const uint8_t wheels_were_fresh = a->keep.odo.valid;
+#endif
+    if (a->run.mode != APP_MODE_NAVIGATING) {
+        /* the odometer's timeout in every mode (WheelsMissing, the in-motion alignment,
+         * the mounting estimate, the re-acquisition's "the car moves"); navigating, the
+         * navigator's step ages it with the standstill (odo_tick) */
+        odo_age(&a->keep.odo, dt_s);
+    }
     if (a->keep.mount_state != (uint8_t)APP_MOUNT_FIXED) {
-        mount_auto_sample(a, w_raw, v_raw, dt_us);
+        mount_auto_sample(a, w_raw, v_raw, dt_s);
     }
     if (motion_align_waits(a)) {
         imu_inc_t inc;
-        const nav_real_t dt_s = dt_us != 0u ? (nav_real_t)dt_us * NAV_C(1e-6)
-                                            : NAV_C(1.0) / (nav_real_t)a->cfg.imu_rate_hz;
         app_rx_imu_increment(w_raw, v_raw, dt_s, &inc);
         mounting_apply(&a->keep.mount, &inc);
         align_motion_sample(&a->run.align, &inc);
@@ -372,15 +380,9 @@ static void process_sample(app_t *a, hal_t *hal, const int32_t w_raw[3], const i
         }
     } else if (a->run.mode == APP_MODE_NAVIGATING) {
         imu_inc_t inc;
-        /* stamped: the increments over their own interval (no resampling) */
-        const nav_real_t dt_s = dt_us != 0u ? (nav_real_t)dt_us * NAV_C(1e-6)
-                                            : NAV_C(1.0) / (nav_real_t)a->cfg.imu_rate_hz;
         app_rx_imu_increment(w_raw, v_raw, dt_s, &inc);
         mounting_apply(&a->keep.mount, &inc);
         const app_diag_t d = app_diag_of(a);
-#if VEHICLE_SPLIT_WHEELS
-        const uint8_t wheels_were_fresh = a->keep.odo.valid;
-#endif
         calib_trip_odo(&a->run.cal, a->keep.odo.valid, a->keep.odo.speed_mps, dt_s);
         if (a->run.fusion.on) {
             const fusion_ctx_t c = fusion_ctx(a, &d);
@@ -402,14 +404,14 @@ static void process_sample(app_t *a, hal_t *hal, const int32_t w_raw[3], const i
         if (a->run.mode == APP_MODE_NAVIGATING) {
             dynamics_sample(&a->run.dyn, &a->run.nav, &inc);
         }
-#if VEHICLE_SPLIT_WHEELS
-        if (wheels_were_fresh != 0u && a->keep.odo.valid == 0u) {
-            /* the wheel speeds timed out (the odometer's timeout, IMU time): an axle's half
-             * held from before the silence must not pair with the first after it */
-            vehicle_reset();
-        }
-#endif
     }
+#if VEHICLE_SPLIT_WHEELS
+    if (wheels_were_fresh != 0u && a->keep.odo.valid == 0u) {
+        /* the wheel speeds timed out (the odometer's timeout, IMU time, in every mode): an
+         * axle's half held from before the silence must not pair with the first after it */
+        vehicle_reset();
+    }
+#endif
     output_due(a, hal);
 }
 

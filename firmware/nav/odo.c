@@ -112,12 +112,17 @@ int odo_wheels(odo_t *o, const nav_real_t wheel_mps[4], nav_real_t yaw_rate_rps)
     return NAV_OK;
 }
 
-void odo_tick(odo_t *o, nav_real_t dt_s, nav_real_t yaw_rate_rps)
+void odo_age(odo_t *o, nav_real_t dt_s)
 {
     o->age_s += dt_s;
     if (o->age_s > o->cfg.timeout_s) {
         o->valid = 0u;
     }
+}
+
+void odo_tick(odo_t *o, nav_real_t dt_s, nav_real_t yaw_rate_rps)
+{
+    odo_age(o, dt_s);
     const int still = o->valid && o->zero &&
                       nav_fabs(yaw_rate_rps) < o->cfg.still_rate_rps;
     if (still) {

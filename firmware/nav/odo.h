@@ -56,6 +56,7 @@ typedef struct {
 #define odo_init NAV_SYM(odo_init)
 #define odo_wheels NAV_SYM(odo_wheels)
 #define odo_tick NAV_SYM(odo_tick)
+#define odo_age NAV_SYM(odo_age)
 
 /* Rear axle, wheelbase 2.7 m, track 1.6 m, zero below 0.01 m/s, standstill after 0.5 s
  * below 0.5 deg/s, timeout 1.5 s (covers 1 Hz OBD-II speed sources), 90 m/s maximum,
@@ -74,7 +75,12 @@ int odo_init(odo_t *o, const odo_config_t *cfg);
 int odo_wheels(odo_t *o, const nav_real_t wheel_mps[4], nav_real_t yaw_rate_rps);
 
 /* Advance time by dt_s (one IMU interval) with the body's yaw rate (rad/s): ages the
- * speed and updates standstill. */
+ * speed (odo_age) and updates standstill. */
 void odo_tick(odo_t *o, nav_real_t dt_s, nav_real_t yaw_rate_rps);
+
+/* Age the speed by dt_s (one IMU interval) without the standstill's update: valid ends
+ * timeout_s after the last accepted frame (the caller's odometer before navigation, when
+ * nothing calls odo_tick). */
+void odo_age(odo_t *o, nav_real_t dt_s);
 
 #endif /* NAVECU_ODO_H */
