@@ -746,12 +746,15 @@ def _data_ids(spec: dict, checksum: str, msg, role: str, where: str) -> tuple:
                                f"({', '.join(k for k, c in CAR_CHECKSUMS.items() if c.data_ids)})"
                                f", not {checksum}")
         return ()
-    if ids is None:
-        raise ProfileError(f"{where}: the {checksum} checksum needs checksum_data_ids, its "
-                           f"{n} data IDs of {msg.name} (one per counter value)")
     if role in ("wheels_front", "wheels_rear"):
         raise ProfileError(f"{where}: a keyed checksum on wheel speeds split over two "
                            "messages is not supported (each message has its own data IDs)")
+    if msg.length < 2:
+        raise ProfileError(f"{where}: the {checksum} checksum needs a counter byte after its "
+                           f"own: {msg.name} has {msg.length} byte(s)")
+    if ids is None:
+        raise ProfileError(f"{where}: the {checksum} checksum needs checksum_data_ids, its "
+                           f"{n} data IDs of {msg.name} (one per counter value)")
     if len(ids) != n or any(isinstance(x, bool) or not isinstance(x, int) or not 0 <= x <= 255
                             for x in ids):
         raise ProfileError(f"{where}: checksum_data_ids must be {n} bytes (0..255), not "

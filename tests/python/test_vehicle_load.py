@@ -62,6 +62,7 @@ CASES = [
     ("15 data IDs", lambda s: s.replace('stopped = ["P", "N"]', 'stopped = ["P", "N"]\nchecksum = "vw_mqb"\nchecksum_data_ids = [' + ', '.join(['1'] * 15) + ']'), "must be 16 bytes"),
     ("a data ID beyond a byte", lambda s: s.replace('stopped = ["P", "N"]', 'stopped = ["P", "N"]\nchecksum = "vw_mqb"\nchecksum_data_ids = [256' + ', 1' * 15 + ']'), "must be 16 bytes"),
     ("data IDs for an unkeyed checksum", lambda s: s.replace('stopped = ["P", "N"]', 'stopped = ["P", "N"]\nchecksum = "subaru"\nchecksum_data_ids = [' + ', '.join(['1'] * 16) + ']'), "not subaru"),
+    ("data IDs on navecu's own WheelSpeeds", lambda s: s.replace('message = "ESP_19"', 'native = true\nchecksum_data_ids = [' + ', '.join(['1'] * 16) + ']').replace('direction = "gear"', 'direction = "signed"'), "E2E"),
     ("data IDs without a checksum", lambda s: s.replace('stopped = ["P", "N"]', 'stopped = ["P", "N"]\nchecksum_data_ids = [' + ', '.join(['1'] * 16) + ']'), "not none"),
     ("a recording without its channels", lambda s: s + '[[recordings]]\nfile = "data/comma2k19-rav4/car_bus.log"\n', "channels"),
 ]
@@ -364,6 +365,7 @@ SPLIT_CASES = [
     ("a rear wheel's signal in the front message", lambda s: s.replace('rr = "WHEEL_SPEED_RR"', 'rr = "WHEEL_SPEED_FR"'), "WHEEL_SPEEDS_REAR has no signal WHEEL_SPEED_FR"),
     ("one message for both axles", lambda s: s.replace('rear = "WHEEL_SPEEDS_REAR"', 'rear = "WHEEL_SPEEDS_FRONT"'), "both axles"),
     ("a counter neither message has", lambda s: s.replace('direction = "gear"', 'direction = "gear"\ncounter = "COUNTER"'), "no signal COUNTER"),
+    ("a keyed checksum on both axles", lambda s: s.replace('direction = "gear"', 'direction = "gear"\nchecksum = "vw_mqb"'), "split over two messages is not supported"),
     ("navecu's own WheelSpeeds with messages", lambda s: s.replace('direction = "gear"', 'native = true').replace('unit = "kph"\n', ""), "messages"),
 ]
 
