@@ -335,6 +335,32 @@ static void test_odo_standstill(void **state)
     assert_false(o.standing); /* one wheel moves: not standing */
 }
 
+/* odo_age (outside navigation): the timeout as odo_tick's, and with the reading the
+ * standstill it had (a car whose wheels stop reporting is not known to stand: a review
+ * found a stale standstill keeping the DTCs tested only while moving untested). */
+static void test_odo_age_ends_the_standstill_with_the_reading(void **state)
+{
+    (void)state;
+    odo_t o;
+    const odo_config_t c = odo_default_config();
+    assert_int_equal(odo_init(&o, &c), NAV_OK);
+    const nav_real_t zero[4] = {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)};
+    assert_int_equal(odo_wheels(&o, zero, NAV_C(0.0)), NAV_OK);
+    for (int k = 0; k < 60; k++) {
+        odo_tick(&o, NAV_C(0.01), NAV_C(0.0));
+    }
+    assert_true(o.standing);
+    for (int k = 0; k < 89; k++) {
+        odo_age(&o, NAV_C(0.01));
+    }
+    assert_true(o.valid); /* 1.49 s old */
+    assert_true(o.standing);
+    odo_age(&o, NAV_C(0.02));
+    assert_false(o.valid); /* older than 1.5 s */
+    assert_false(o.standing);
+    assert_near(o.still_for_s, 0.0, 0.0);
+}
+
 /* ------------------------------------------------ the dead reckoning's accuracy ----
  * dr_acc.h propagates a covariance of linear errors. With a single error source of size
  * x given as its sigma (the others 0), the covariance is rank one, J x^2 J', and its
@@ -552,6 +578,7 @@ int main(void)
         cmocka_unit_test(test_odo_axles),
         cmocka_unit_test(test_odo_refusals_and_timeout),
         cmocka_unit_test(test_odo_standstill),
+        cmocka_unit_test(test_odo_age_ends_the_standstill_with_the_reading),
         cmocka_unit_test(test_acc_single_errors_are_the_drive_error),
         cmocka_unit_test(test_acc_move_is_f_p_ft),
         cmocka_unit_test(test_acc_hold_and_calibration),

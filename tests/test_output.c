@@ -205,6 +205,41 @@ static void test_board_fault_flags(void **state)
     assert_int_equal(dtc_status(&app.keep.dtc, DTC_WATCHDOG_OFF) & DTC_TF, 0u);
 }
 
+/* NAV_Status every 100 ms of the HAL clock for s seconds, each saying NO_GNSS */
+static void statuses_without_gnss(int s)
+{
+    for (int k = 0; k < 10 * s; k++) {
+        hal.t_us += 100000u;
+        assert_int_equal(flags_now() & NAVECU_HEALTH_NO_GNSS, NAVECU_HEALTH_NO_GNSS);
+    }
+}
+
+/* The DTCs tested only while the car moves (dtc.toml while_moving: U1102-87 NO_GNSS,
+ * debounced over 60 s) before navigation, where the odometer's standstill is not updated:
+ * GIVEN an ECU waiting for GNSS (WaitInit, NO_GNSS) WHEN its wheels read zero for 70 s
+ * THEN U1102-87 is not tested (a review found a car parked at power-on confirming it after
+ * 60 s); WHEN they read a speed, or none at all (the odometer not valid), for 61 s THEN
+ * it is tested and fails. */
+static void test_waits_untested_while_parked_before_navigation(void **state)
+{
+    (void)state;
+    assert_int_equal(app.run.mode, APP_MODE_WAIT_INIT);
+    app.keep.odo.valid = 1u;
+    app.keep.odo.zero = 1u;
+    app.keep.odo.standing = 0u; /* as before navigation: nothing updates it */
+    statuses_without_gnss(70);
+    assert_int_equal(dtc_status(&app.keep.dtc, DTC_NO_GNSS) & (DTC_TF | DTC_TFTOC), 0u);
+    app.keep.odo.zero = 0u; /* the wheels turn */
+    statuses_without_gnss(61);
+    assert_int_equal(dtc_status(&app.keep.dtc, DTC_NO_GNSS) & DTC_TF, DTC_TF);
+
+    setup(NULL);
+    app.keep.odo.valid = 0u; /* no wheel speeds: no standstill to see, every second tested */
+    app.keep.odo.zero = 1u;
+    statuses_without_gnss(61);
+    assert_int_equal(dtc_status(&app.keep.dtc, DTC_NO_GNSS) & DTC_TF, DTC_TF);
+}
+
 /* Before the first IMU sample (output_dtc_tests: an ECU whose IMU never speaks) the board's
  * faults are tested too: a watchdog that did not start confirms C1108-47, a bus-off makes
  * U0001-88 pending (a review found neither tested there). */
@@ -604,6 +639,7 @@ int main(void)
         cmocka_unit_test_setup(test_state_flags, setup),
         cmocka_unit_test_setup(test_board_fault_flags, setup),
         cmocka_unit_test_setup(test_board_faults_tested_without_imu, setup),
+        cmocka_unit_test_setup(test_waits_untested_while_parked_before_navigation, setup),
         cmocka_unit_test_setup(test_imu_rate_mismatch_flag, setup),
         cmocka_unit_test_setup(test_page_rotation, setup),
         cmocka_unit_test_setup(test_counter_pages, setup),

@@ -289,6 +289,17 @@ __attribute__((noinline)) static uint32_t board_flags(hal_t *hal)
     return (hal_faults(hal) & (HAL_FAULT_WATCHDOG | HAL_FAULT_BUS_OFF)) * BOARD_TO_HEALTH;
 }
 
+/* The car stands, for the DTCs tested only while it moves: navigating, the odometer's
+ * standstill (its wheels at zero and no turn for 0.5 s); outside navigation, where nothing
+ * updates that standstill (odo_tick runs in the navigator's step), its wheels reading zero
+ * (a review found a car parked at power-on, waiting for GNSS, confirming U1102-87 after
+ * 60 s). 0 or 1. */
+static uint32_t car_stands(const app_t *a)
+{
+    const odo_t *o = &a->keep.odo;
+    return a->run.mode == APP_MODE_NAVIGATING ? o->standing : (uint32_t)(o->valid & o->zero);
+}
+
 /* board: board_flags now */
 static uint16_t health_flags(const app_t *a, const hal_t *hal, uint32_t board)
 {
@@ -433,8 +444,8 @@ void output_status(app_t *a, hal_t *hal)
     /* the DTCs' tests (app_dtc.h); those of waits of normal operation (dtc.toml
      * while_moving) only while the car moves (a car standing after power-on may wait for a
      * fix or a heading for as long as it stands) */
-    app_dtc_cycle_tested(a, hal, st.health_flags, /* standing is 0 or 1 */
-                         ~((uint32_t)DTC_WHILE_MOVING_FLAGS * a->keep.odo.standing));
+    app_dtc_cycle_tested(a, hal, st.health_flags, /* car_stands is 0 or 1 */
+                         ~((uint32_t)DTC_WHILE_MOVING_FLAGS * car_stands(a)));
 
     /* the filter's; without it the dead reckoning's while it is the output and its error
      * model holds (dr_acc.h); else "unknown" */

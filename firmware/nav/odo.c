@@ -117,6 +117,9 @@ void odo_age(odo_t *o, nav_real_t dt_s)
     o->age_s += dt_s;
     if (o->age_s > o->cfg.timeout_s) {
         o->valid = 0u;
+        /* no wheel speeds, no standstill (as odo_tick: "still" needs a valid reading) */
+        o->standing = 0u;
+        o->still_for_s = NAV_C(0.0);
     }
 }
 

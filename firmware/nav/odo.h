@@ -79,8 +79,9 @@ int odo_wheels(odo_t *o, const nav_real_t wheel_mps[4], nav_real_t yaw_rate_rps)
 void odo_tick(odo_t *o, nav_real_t dt_s, nav_real_t yaw_rate_rps);
 
 /* Age the speed by dt_s (one IMU interval) without the standstill's update: valid ends
- * timeout_s after the last accepted frame (the caller's odometer before navigation, when
- * nothing calls odo_tick). */
+ * timeout_s after the last accepted frame, and with it the standstill (the caller's
+ * odometer outside navigation, before it and while it re-acquires, when nothing calls
+ * odo_tick). */
 void odo_age(odo_t *o, nav_real_t dt_s);
 
 #endif /* NAVECU_ODO_H */
