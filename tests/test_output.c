@@ -219,7 +219,7 @@ static void statuses_without_gnss(int s)
  * GIVEN an ECU waiting for GNSS (WaitInit, NO_GNSS) WHEN its wheels read zero for 70 s
  * THEN U1102-87 is not tested (a review found a car parked at power-on confirming it after
  * 60 s); WHEN they read a speed, or none at all (the odometer not valid), for 61 s THEN
- * it is tested and fails. */
+ * it is tested and fails. Navigating, the odometer's standstill decides. */
 static void test_waits_untested_while_parked_before_navigation(void **state)
 {
     (void)state;
@@ -236,6 +236,19 @@ static void test_waits_untested_while_parked_before_navigation(void **state)
     setup(NULL);
     app.keep.odo.valid = 0u; /* no wheel speeds: no standstill to see, every second tested */
     app.keep.odo.zero = 1u;
+    statuses_without_gnss(61);
+    assert_int_equal(dtc_status(&app.keep.dtc, DTC_NO_GNSS) & DTC_TF, DTC_TF);
+
+    /* navigating, the standstill is the odometer's (zero wheels and no turn for 0.5 s,
+     * odo_tick): zero wheels without it are tested, with it untested */
+    setup(NULL);
+    navigate(0.0);
+    app.keep.odo.valid = 1u;
+    app.keep.odo.zero = 1u;
+    app.keep.odo.standing = 1u;
+    statuses_without_gnss(70);
+    assert_int_equal(dtc_status(&app.keep.dtc, DTC_NO_GNSS) & (DTC_TF | DTC_TFTOC), 0u);
+    app.keep.odo.standing = 0u; /* turning on the spot, or not yet 0.5 s */
     statuses_without_gnss(61);
     assert_int_equal(dtc_status(&app.keep.dtc, DTC_NO_GNSS) & DTC_TF, DTC_TF);
 }
