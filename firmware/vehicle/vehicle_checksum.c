@@ -43,7 +43,11 @@ static uint8_t crc8h2f_byte(uint8_t crc_in, uint8_t byte)
 {
     uint8_t crc = (uint8_t)(crc_in ^ byte);
     for (unsigned bit = 0u; bit < 8u; bit++) {
-        crc = (crc & 0x80u) != 0u ? (uint8_t)((uint8_t)(crc << 1) ^ 0x2Fu) : (uint8_t)(crc << 1);
+        const uint8_t top = (uint8_t)(crc & 0x80u);
+        crc = (uint8_t)(crc << 1);
+        if (top != 0u) {
+            crc = (uint8_t)(crc ^ 0x2Fu);
+        }
     }
     return crc;
 }
