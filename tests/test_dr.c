@@ -310,17 +310,24 @@ static void test_odo_refusals_and_timeout(void **state)
     assert_false(o.valid); /* older than 1.5 s */
 }
 
+/* an odometer of the default configuration whose one frame read every wheel at zero, then
+ * n ticks of 10 ms without a turn */
+static void odo_zero_for(odo_t *o, int n)
+{
+    const odo_config_t c = odo_default_config();
+    assert_int_equal(odo_init(o, &c), NAV_OK);
+    const nav_real_t zero[4] = {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)};
+    assert_int_equal(odo_wheels(o, zero, NAV_C(0.0)), NAV_OK);
+    for (int k = 0; k < n; k++) {
+        odo_tick(o, NAV_C(0.01), NAV_C(0.0));
+    }
+}
+
 static void test_odo_standstill(void **state)
 {
     (void)state;
     odo_t o;
-    const odo_config_t c = odo_default_config();
-    assert_int_equal(odo_init(&o, &c), NAV_OK);
-    const nav_real_t zero[4] = {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)};
-    assert_int_equal(odo_wheels(&o, zero, NAV_C(0.0)), NAV_OK);
-    for (int k = 0; k < 49; k++) {
-        odo_tick(&o, NAV_C(0.01), NAV_C(0.0));
-    }
+    odo_zero_for(&o, 49);
     assert_false(o.standing);
     odo_tick(&o, NAV_C(0.01), NAV_C(0.0));
     odo_tick(&o, NAV_C(0.01), NAV_C(0.0));
@@ -342,13 +349,7 @@ static void test_odo_age_ends_the_standstill_with_the_reading(void **state)
 {
     (void)state;
     odo_t o;
-    const odo_config_t c = odo_default_config();
-    assert_int_equal(odo_init(&o, &c), NAV_OK);
-    const nav_real_t zero[4] = {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)};
-    assert_int_equal(odo_wheels(&o, zero, NAV_C(0.0)), NAV_OK);
-    for (int k = 0; k < 60; k++) {
-        odo_tick(&o, NAV_C(0.01), NAV_C(0.0));
-    }
+    odo_zero_for(&o, 60);
     assert_true(o.standing);
     for (int k = 0; k < 89; k++) {
         odo_age(&o, NAV_C(0.01));

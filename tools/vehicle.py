@@ -374,6 +374,9 @@ def _ids(spec: dict) -> dict:
 #: what a profile's tables may hold: key -> (required, type(s)); a key not listed is refused
 #: (a misspelt `checksum` would otherwise leave the checksum unchecked without a word)
 _NUM = (int, float)
+#: the keys of every table that reads a car message: its checksum and rolling counter
+_MSG_CHECKS = {"checksum": (False, str), "checksum_data_ids": (False, list),
+               "counter": (False, str), "counter_modulus": (False, int)}
 SCHEMA = {
     "": {"name": (True, str), "description": (False, str), "ecu_bus": (False, str),
          "buses": (False, dict), "wheels": (True, dict), "gear": (False, dict),
@@ -381,18 +384,12 @@ SCHEMA = {
          "recordings": (False, list)},
     "wheels": {"native": (False, bool), "direction": (False, str), "message": (False, str),
                "messages": (False, dict), "signals": (False, dict), "unit": (False, str), "scale": (False, _NUM),
-               "checksum": (False, str), "checksum_data_ids": (False, list),
-               "counter": (False, str), "counter_modulus": (False, int),
-               "range": (False, list)},
+               **_MSG_CHECKS, "range": (False, list)},
     "gear": {"message": (True, str), "signal": (True, str), "forward": (False, list),
              "reverse": (True, list), "stopped": (False, list), "hold": (False, list),
-             "checksum": (False, str), "checksum_data_ids": (False, list),
-             "counter": (False, str),
-             "counter_modulus": (False, int)},
+             **_MSG_CHECKS},
     "yaw_rate": {"message": (True, str), "signal": (True, str), "unit": (False, str),
-                 "left_positive": (False, bool), "checksum": (False, str),
-                 "checksum_data_ids": (False, list), "counter": (False, str), "counter_modulus": (False, int),
-                 "range": (False, list)},
+                 "left_positive": (False, bool), **_MSG_CHECKS, "range": (False, list)},
     "geometry": {"track_m": (True, _NUM), "wheelbase_m": (True, _NUM)},
     "recordings": {"file": (True, str), "channels": (True, dict)},
 }
@@ -422,8 +419,7 @@ def _check_shape(t: dict, fname: str) -> None:
             _check_table(t[sect], SCHEMA[sect], f"{fname} [{sect}]")
     w = t["wheels"]
     if w.get("native", False):
-        for key in ("checksum", "checksum_data_ids", "counter", "counter_modulus", "message",
-                    "messages"):
+        for key in (*_MSG_CHECKS, "message", "messages"):
             if key in w:
                 raise ProfileError(f"{fname} [wheels]: {key} is for a car message; navecu's "
                                    "WheelSpeeds (native = true) carry their own E2E CRC and "
