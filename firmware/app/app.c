@@ -365,10 +365,12 @@ static void process_sample(app_t *a, hal_t *hal, const int32_t w_raw[3], const i
     if (a->keep.mount_state != (uint8_t)APP_MOUNT_FIXED) {
         mount_auto_sample(a, w_raw, v_raw, dt_s);
     }
+    /* the increments in the car's frame, for the in-motion alignment or the navigator
+     * (never both in one sample) */
+    imu_inc_t inc;
+    app_rx_imu_increment(w_raw, v_raw, dt_s, &inc);
+    mounting_apply(&a->keep.mount, &inc);
     if (motion_align_waits(a)) {
-        imu_inc_t inc;
-        app_rx_imu_increment(w_raw, v_raw, dt_s, &inc);
-        mounting_apply(&a->keep.mount, &inc);
         align_motion_sample(&a->run.align, &inc);
     }
     if (a->run.mode == APP_MODE_LEVELLING) {
@@ -379,9 +381,6 @@ static void process_sample(app_t *a, hal_t *hal, const int32_t w_raw[3], const i
             commands_start_navigation(a, roll, pitch);
         }
     } else if (a->run.mode == APP_MODE_NAVIGATING) {
-        imu_inc_t inc;
-        app_rx_imu_increment(w_raw, v_raw, dt_s, &inc);
-        mounting_apply(&a->keep.mount, &inc);
         const app_diag_t d = app_diag_of(a);
         calib_trip_odo(&a->run.cal, a->keep.odo.valid, a->keep.odo.speed_mps, dt_s);
         if (a->run.fusion.on) {
