@@ -285,6 +285,48 @@ static void test_deterministic(void **state)
 }
 
 /*
+ * GIVEN a navigating application whose filter has not started (no GNSS yet)
+ * WHEN two IMU samples are lost between two whose increments differ by dw and dv (LSB)
+ * THEN the filter's next prediction is given 2 |dw|^2 and 2 |dv|^2 (in rad^2 and
+ *      (m/s)^2) of process noise on each axis: the two bridged samples, each off by as
+ *      much as the increment changed across the gap (app.c bridge_noise); a sample that
+ *      follows its predecessor adds none (test_ekf: the prediction spends it)
+ */
+static void test_bridged_samples_carry_process_noise(void **state)
+{
+    (void)state;
+    send_init_commands(30.0);
+    run_still(32);
+    assert_int_equal(app.run.mode, APP_MODE_NAVIGATING);
+    assert_false(app.run.fusion.on);
+    const nav_real_t *q = app.run.fusion.ekf.q_inc;
+    assert_near(q[0], 0.0, 0.0); /* no gap so far */
+    assert_near(q[1], 0.0, 0.0);
+    int32_t w[3], v[3];
+    imu_src_next(w, v);
+    send_imu_pair(w, v, src.counter);
+    src.counter = e2e_counter_next(src.counter);
+    assert_near(q[0], 0.0, 0.0);
+    assert_near(q[1], 0.0, 0.0);
+    const int32_t dw[3] = {300, -400, 1200};
+    const int32_t dv[3] = {50, 0, -120};
+    int32_t w1[3], v1[3];
+    for (int i = 0; i < 3; i++) {
+        w1[i] = w[i] + dw[i];
+        v1[i] = v[i] + dv[i];
+    }
+    src.counter = e2e_counter_next(e2e_counter_next(src.counter));
+    send_imu_pair(w1, v1, src.counter);
+    src.counter = e2e_counter_next(src.counter);
+    assert_int_equal(app.keep.health.imu_lost, 2);
+    const double lsb_a = ldexp(1.0, -21), lsb_v = ldexp(1.0, -12); /* docs/can.md */
+    const double want_a = 2.0 * (300.0 * 300.0 + 400.0 * 400.0 + 1200.0 * 1200.0) * lsb_a * lsb_a;
+    const double want_v = 2.0 * (50.0 * 50.0 + 120.0 * 120.0) * lsb_v * lsb_v;
+    assert_near((double)q[0], want_a, 1e-5 * want_a);
+    assert_near((double)q[1], want_v, 1e-5 * want_v);
+}
+
+/*
  * GIVEN a navigating application
  * WHEN every kind of bad input arrives
  * THEN each is counted in its health counter (and reported in NAV_Status), none changes
@@ -1814,6 +1856,7 @@ int main(void)
         cmocka_unit_test_setup(test_output_rates_not_dividing, setup),
         cmocka_unit_test_setup(test_deterministic, setup),
         cmocka_unit_test_setup(test_bad_input_counted, setup),
+        cmocka_unit_test_setup(test_bridged_samples_carry_process_noise, setup),
         cmocka_unit_test_setup(test_init_needs_known_position, setup),
         cmocka_unit_test_setup(test_rejected_frames_change_nothing, setup),
         cmocka_unit_test_setup(test_replayed_command_rejected, setup),

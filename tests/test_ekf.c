@@ -638,6 +638,50 @@ static void test_hold_heading(void **state)
     }
 }
 
+/* Extra process noise (ekf_add_increment_noise, for bridged IMU samples): GIVEN two
+ * filters alike, one given qa rad^2 and qv (m/s)^2 in two calls before a prediction,
+ * WHEN both predict THEN the one's P differs from the other's by exactly qa on the three
+ * attitude variances and qv on the three velocity variances, nowhere else; AND WHEN both
+ * predict again from the same state THEN their P are equal (the noise was spent). */
+static void test_increment_noise_once(void **state)
+{
+    (void)state;
+    const double v[3] = {3.0, 4.0, 0.0};
+    sins_t s;
+    nav_at(&s, 0.02, -0.01, 0.5, v);
+    const nav_real_t fn[3] = {NAV_C(0.3), NAV_C(-0.2), NAV_C(9.8)};
+    const ekf_config_t c = ekf_default_config();
+    ekf_t a, b;
+    assert_int_equal(ekf_init(&a, &c, NAV_C(0.0)), NAV_OK);
+    assert_int_equal(ekf_init(&b, &c, NAV_C(0.0)), NAV_OK);
+    const double qa = 4e-8, qv = 9e-6;
+    ekf_add_increment_noise(&b, (nav_real_t)(0.25 * qa), (nav_real_t)(0.25 * qv));
+    ekf_add_increment_noise(&b, (nav_real_t)(0.75 * qa), (nav_real_t)(0.75 * qv));
+    ekf_predict(&a, &s, fn, NAV_C(0.01), NAV_C(0.1));
+    ekf_predict(&b, &s, fn, NAV_C(0.01), NAV_C(0.1));
+    for (int i = 0; i < EKF_N; i++) {
+        for (int j = 0; j < EKF_N; j++) {
+            double want = 0.0;
+            if (i == j && i >= EKF_PSI && i < EKF_PSI + 3) {
+                want = qa;
+            } else if (i == j && i >= EKF_DV && i < EKF_DV + 3) {
+                want = qv;
+            }
+            const double got = (double)b.P[i][j] - (double)a.P[i][j];
+            /* float32 sums: a few ulps of the entry */
+            assert_near(got, want, 1e-6 * fabs((double)a.P[i][j]) + 1e-4 * want + 1e-30);
+        }
+    }
+    a = b;
+    ekf_predict(&a, &s, fn, NAV_C(0.01), NAV_C(0.1));
+    ekf_predict(&b, &s, fn, NAV_C(0.01), NAV_C(0.1));
+    for (int i = 0; i < EKF_N; i++) {
+        for (int j = 0; j < EKF_N; j++) {
+            assert_near(b.P[i][j], a.P[i][j], 0.0);
+        }
+    }
+}
+
 /* Covariance health: a NaN is reset and counted; a negative variance is floored. */
 static void test_covariance_health(void **state)
 {
@@ -663,6 +707,7 @@ int main(void)
         cmocka_unit_test(test_lever_arm_observes_heading),
         cmocka_unit_test(test_gnss_correlated_error_state),
         cmocka_unit_test(test_state_ok_sees_the_estimates),
+        cmocka_unit_test(test_increment_noise_once),
         cmocka_unit_test(test_recent_correlated_sigma),
         cmocka_unit_test(test_odometer_scale_and_mounting),
         cmocka_unit_test(test_odometer_lever_arm_in_a_turn),

@@ -342,6 +342,32 @@ static int motion_align_epoch(app_t *a, const gnss_fix_t *fix)
     return 1;
 }
 
+/* A gap about to be bridged: process noise for the filter's next prediction. A bridged
+ * sample's increment is the straight line between the gap's ends and the motion in
+ * between is unknown: each is taken to be off by as much as the increment changed across
+ * the gap (the sample after it less the one before), that change's length 1 sigma on
+ * every axis, independently from sample to sample. Without it the filter took bridged
+ * samples for measured ones: with 36 % of them bridged (docs/reliability.md, frame loss
+ * 20 %) it gated 719 fixes and adopted a mounting yaw 0.52 deg off at a sigma of 0.03 deg.
+ * While the filter is off, its next start (ekf_init) clears it. */
+static void bridge_noise(app_t *a, const imu_sample_t *s)
+{
+    nav_real_t sum_a = NAV_C(0.0);
+    nav_real_t sum_v = NAV_C(0.0);
+    for (int i = 0; i < 3; i++) {
+        /* raw values of 20 and 17 bits (docs/can.md): exact in float32 */
+        const nav_real_t da = (nav_real_t)s->raw[i] - (nav_real_t)s->prev_raw[i];
+        const nav_real_t dv = (nav_real_t)s->raw[i + 3] - (nav_real_t)s->prev_raw[i + 3];
+        sum_a += da * da;
+        sum_v += dv * dv;
+    }
+    const nav_real_t n = (nav_real_t)(uint32_t)s->lost; /* at most APP_MAX_BRIDGE_MS of samples */
+    const nav_real_t lsb_a = app_rx_angle_lsb_rad();
+    const nav_real_t lsb_v = app_rx_vel_lsb_mps();
+    ekf_add_increment_noise(&a->run.fusion.ekf, n * sum_a * lsb_a * lsb_a,
+                            n * sum_v * lsb_v * lsb_v);
+}
+
 /* One IMU sample (raw LSB) of dt_us (stamped; 0: the nominal period): levelling, or a
  * navigation step with or without the filter, then the outputs due. */
 static void process_sample(app_t *a, hal_t *hal, const int32_t w_raw[3], const int32_t v_raw[3],
@@ -474,6 +500,7 @@ static void on_imu_accel(app_t *a, hal_t *hal, const rx_input_t *in, uint64_t t_
             a->keep.n_samples += s.lost;
             a->keep.imu_t_us += (uint64_t)s.dt_us - imu_stream_dt_us(&s, s.lost);
         } else {
+            bridge_noise(a, &s);
             for (uint64_t k = 0u; k < s.lost; k++) {
                 int32_t w[3];
                 int32_t v3[3];

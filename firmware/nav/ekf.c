@@ -231,8 +231,8 @@ void ekf_predict(ekf_t *k, const sins_t *s, const nav_real_t f_n_mps2[3],
     }
     const ekf_config_t *c = &k->cfg;
     for (int i = 0; i < 3; i++) {
-        k->P[EKF_DV + i][EKF_DV + i] += c->vrw_mps_rts * c->vrw_mps_rts * dt_s;
-        k->P[EKF_PSI + i][EKF_PSI + i] += c->arw_rad_rts * c->arw_rad_rts * dt_s;
+        k->P[EKF_DV + i][EKF_DV + i] += c->vrw_mps_rts * c->vrw_mps_rts * dt_s + k->q_inc[1];
+        k->P[EKF_PSI + i][EKF_PSI + i] += c->arw_rad_rts * c->arw_rad_rts * dt_s + k->q_inc[0];
         k->P[EKF_BA + i][EKF_BA + i] += c->ba_rw_mps2_rts * c->ba_rw_mps2_rts * dt_s;
     }
     /* x and y: a random walk; z: the turn-on bias, constant, and its in-run part the
@@ -240,6 +240,8 @@ void ekf_predict(ekf_t *k, const sins_t *s, const nav_real_t f_n_mps2[3],
     for (int i = 0; i < 2; i++) {
         k->P[EKF_BG + i][EKF_BG + i] += c->bg_rw_rps_rts * c->bg_rw_rps_rts * dt_s;
     }
+    k->q_inc[0] = NAV_C(0.0); /* spent */
+    k->q_inc[1] = NAV_C(0.0);
     k->P[EKF_K][EKF_K] += c->k_rw_rts * c->k_rw_rts * dt_s;
     k->P[EKF_OB][EKF_OB] += c->odo_offset_rw_mps_rts * c->odo_offset_rw_mps_rts * dt_s;
     k->P[EKF_SG][EKF_SG] += c->gyro_scale_rw_rts * c->gyro_scale_rw_rts * dt_s;
@@ -628,6 +630,12 @@ int ekf_set_mount_yaw(ekf_t *k, nav_real_t yaw_rad)
     }
     k->mount_yaw_rad = yaw_rad;
     return NAV_OK;
+}
+
+void ekf_add_increment_noise(ekf_t *k, nav_real_t var_angle_rad2, nav_real_t var_vel_m2ps2)
+{
+    k->q_inc[0] += var_angle_rad2;
+    k->q_inc[1] += var_vel_m2ps2;
 }
 
 int ekf_widen_mount(ekf_t *k, nav_real_t pitch_sigma_rad, nav_real_t yaw_sigma_rad)

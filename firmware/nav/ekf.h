@@ -158,6 +158,9 @@ typedef struct {
                                     a measurement's heading information is below its noise */
     nav_real_t fp[EKF_N][EKF_N]; /* scratch for F P in ekf_predict: too large for an ECU's
                                     stack, and the core keeps no globals */
+    nav_real_t q_inc[2];         /* process noise for the next prediction beyond the IMU's:
+                                    angle (rad^2), velocity ((m/s)^2) per axis
+                                    (ekf_add_increment_noise) */
 } ekf_t;
 
 #define ekf_default_config NAV_SYM(ekf_default_config)
@@ -468,6 +471,7 @@ void ekf_clock_advance(ekf_t *k, nav_real_t dt_s);
 #define ekf_set_odo_scale NAV_SYM(ekf_set_odo_scale)
 #define ekf_set_mount_yaw NAV_SYM(ekf_set_mount_yaw)
 #define ekf_widen_mount NAV_SYM(ekf_widen_mount)
+#define ekf_add_increment_noise NAV_SYM(ekf_add_increment_noise)
 
 /* 1-sigma of error state i (0 <= i < EKF_N): sqrt(P_ii), in that state's unit. */
 nav_real_t ekf_state_sigma(const ekf_t *k, int i);
@@ -494,5 +498,11 @@ int ekf_set_mount_yaw(ekf_t *k, nav_real_t yaw_rad);
  * right after ekf_init, whose P is diagonal. A sigma of 0 leaves its state alone.
  * NAV_EINVAL for a sigma not finite or < 0. */
 int ekf_widen_mount(ekf_t *k, nav_real_t pitch_sigma_rad, nav_real_t yaw_sigma_rad);
+
+/* Process noise beyond the IMU's own for the next ekf_predict: var_angle_rad2 added to
+ * each attitude error's variance, var_vel_m2ps2 to each velocity error's (isotropic, so
+ * the same in any frame). For increments known less well than the IMU's noise says: the
+ * bridged samples of an IMU gap (app.c). */
+void ekf_add_increment_noise(ekf_t *k, nav_real_t var_angle_rad2, nav_real_t var_vel_m2ps2);
 
 #endif /* NAVECU_EKF_H */
