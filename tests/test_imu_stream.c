@@ -378,6 +378,28 @@ static void test_bridge_halves_and_extremes(void **state)
 
 /* ---- plausibility ---- */
 
+/* GIVEN samples taken, then the stream's state cleared (a navigation reset: app_reset
+ * clears run.imu, the link's counter goes on) WHEN the next sample comes after a gap
+ * THEN the gap is seen and bridged from that sample itself (prev_raw = raw), not from
+ * zeros (a bridge from 0 to the sample would step the increments, gravity's included). */
+static void test_bridge_after_a_reset_starts_at_the_sample(void **state)
+{
+    (void)state;
+    assert_int_equal(nth(0u), IMU_SAMPLE);
+    assert_int_equal(nth(1u), IMU_SAMPLE);
+    for (int i = 0; i < 3; i++) {
+        assert_int_equal(out.prev_raw[i], W0[i]);
+        assert_int_equal(out.prev_raw[i + 3], V0[i]);
+    }
+    memset(&s, 0, sizeof s);
+    assert_int_equal(nth(3u), IMU_SAMPLE);
+    assert_int_equal(out.lost, 1u);
+    for (int i = 0; i < 3; i++) {
+        assert_int_equal(out.prev_raw[i], W0[i]);
+        assert_int_equal(out.prev_raw[i + 3], V0[i]);
+    }
+}
+
 /* GIVEN the ranges above THEN a gyro axis at +-109696 LSB or an accelerometer axis at
  * +-3210 LSB is saturated, one LSB less is not. */
 static void test_saturation_at_configured_range(void **state)
@@ -567,6 +589,7 @@ int main(void)
         cmocka_unit_test_setup(test_bridge_interpolation, setup),
         cmocka_unit_test_setup(test_bridge_halves_and_extremes, setup),
         cmocka_unit_test_setup(test_saturation_at_configured_range, setup),
+        cmocka_unit_test_setup(test_bridge_after_a_reset_starts_at_the_sample, setup),
         cmocka_unit_test_setup(test_stuck_axis_while_another_moves, setup),
         cmocka_unit_test_setup(test_not_stuck_while_still, setup),
         cmocka_unit_test_setup(test_not_stuck_on_ideal_data, setup),

@@ -307,7 +307,10 @@ imu_verdict_t imu_stream_accel(imu_stream_t *s, imu_link_t *l, uint8_t counter, 
         out->raw[i + 3] = raw[i];
     }
     for (int i = 0; i < 6; i++) {
-        out->prev_raw[i] = l->have_sample ? s->plaus.last_raw[i] : out->raw[i];
+        /* the last sample this stream took: none since a navigation reset cleared it
+         * (app_reset; the link's counter goes on, so a gap across the reset is still
+         * bridged, flat from this sample) */
+        out->prev_raw[i] = s->plaus.hist > 0u ? s->plaus.last_raw[i] : out->raw[i];
     }
     plausibility(&s->plaus, l, out->raw, out);
     l->have_sample = 1u;
