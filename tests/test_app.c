@@ -289,8 +289,11 @@ static void test_deterministic(void **state)
  * WHEN two IMU samples are lost between two whose increments differ by dw and dv (LSB)
  * THEN the filter's next prediction is given 2 |dw|^2 and 2 |dv|^2 (in rad^2 and
  *      (m/s)^2) of process noise on each axis: the two bridged samples, each off by as
- *      much as the increment changed across the gap (app.c bridge_noise); a sample that
+ *      much as the increment changed across the gap (app.c sample_noise); a sample that
  *      follows its predecessor adds none (test_ekf: the prediction spends it)
+ * AND WHEN eight are bridged THEN (8 |d|)^2 / 4 more (a long gap's errors are correlated)
+ * AND WHEN a gyro axis, then an accelerometer axis, is at its range THEN that sensor's
+ *      range squared, on its own increments only
  */
 static void test_bridged_samples_carry_process_noise(void **state)
 {
@@ -324,6 +327,39 @@ static void test_bridged_samples_carry_process_noise(void **state)
     const double want_v = 2.0 * (50.0 * 50.0 + 120.0 * 120.0) * lsb_v * lsb_v;
     assert_near((double)q[0], want_a, 1e-5 * want_a);
     assert_near((double)q[1], want_v, 1e-5 * want_v);
+
+    /* six lost after the last one: a counter step of 7 is held with the next one until a
+     * third follows (docs/can.md), so 8 are bridged at the third; a long gap's errors are
+     * correlated: (8 |d|)^2 / 4 = 16 |d|^2 (the same increments back: d = -dw, -dv) */
+    for (int i = 0; i < 6; i++) {
+        src.counter = e2e_counter_next(src.counter);
+    }
+    for (int i = 0; i < 3; i++) {
+        send_imu_pair(w, v, src.counter);
+        src.counter = e2e_counter_next(src.counter);
+    }
+    assert_int_equal(app.keep.health.imu_lost, 2 + 8);
+    const double want_a6 = want_a + 16.0 * want_a / 2.0;
+    const double want_v6 = want_v + 16.0 * want_v / 2.0;
+    assert_near((double)q[0], want_a6, 1e-5 * want_a6);
+    assert_near((double)q[1], want_v6, 1e-5 * want_v6);
+
+    /* a gyro axis at its range: the range's square on the angle, nothing on the velocity;
+     * then an accelerometer axis at its range */
+    int32_t ws[3] = {w[0], w[1], app.keep.imu.sat_raw[0]};
+    send_imu_pair(ws, v, src.counter);
+    src.counter = e2e_counter_next(src.counter);
+    const double ra = (double)app.keep.imu.sat_raw[0] * lsb_a;
+    const double rv = (double)app.keep.imu.sat_raw[1] * lsb_v;
+    assert_int_equal(app.keep.health.imu_saturated, 1);
+    assert_near((double)q[0], want_a6 + ra * ra, 1e-5 * (want_a6 + ra * ra));
+    assert_near((double)q[1], want_v6, 1e-5 * want_v6);
+    int32_t vs[3] = {-app.keep.imu.sat_raw[1], v[1], v[2]};
+    send_imu_pair(w, vs, src.counter);
+    src.counter = e2e_counter_next(src.counter);
+    assert_int_equal(app.keep.health.imu_saturated, 2);
+    assert_near((double)q[0], want_a6 + ra * ra, 1e-5 * (want_a6 + ra * ra));
+    assert_near((double)q[1], want_v6 + rv * rv, 1e-5 * (want_v6 + rv * rv));
 }
 
 /*

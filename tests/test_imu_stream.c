@@ -401,7 +401,8 @@ static void test_bridge_after_a_reset_starts_at_the_sample(void **state)
 }
 
 /* GIVEN the ranges above THEN a gyro axis at +-109696 LSB or an accelerometer axis at
- * +-3210 LSB is saturated, one LSB less is not. */
+ * +-3210 LSB is saturated (IMU_SAT_GYRO, IMU_SAT_ACCEL, both when both), one LSB less is
+ * not. */
 static void test_saturation_at_configured_range(void **state)
 {
     (void)state;
@@ -418,14 +419,18 @@ static void test_saturation_at_configured_range(void **state)
         ws[axis_w[i]] = i == 1 ? -109696 : 109696;
         k++;
         assert_int_equal(pair((uint8_t)(k % 15u), ws, v, k * PERIOD_US), IMU_SAMPLE);
-        assert_int_equal(out.saturated, 1);
+        assert_int_equal(out.saturated, IMU_SAT_GYRO);
     }
     for (int i = 0; i < 3; i++) {
         int32_t vs[3] = {0, 0, 0};
         vs[i] = i == 2 ? -3210 : 3210;
         k++;
         assert_int_equal(pair((uint8_t)(k % 15u), w, vs, k * PERIOD_US), IMU_SAMPLE);
-        assert_int_equal(out.saturated, 1);
+        assert_int_equal(out.saturated, IMU_SAT_ACCEL);
+        int32_t ws[3] = {0, -109696, 0};
+        k++;
+        assert_int_equal(pair((uint8_t)(k % 15u), ws, vs, k * PERIOD_US), IMU_SAMPLE);
+        assert_int_equal(out.saturated, IMU_SAT_GYRO | IMU_SAT_ACCEL);
     }
     k++;
     assert_int_equal(pair((uint8_t)(k % 15u), w, v, k * PERIOD_US), IMU_SAMPLE);

@@ -125,12 +125,14 @@ int imu_stream_rate(imu_stream_t *s, uint8_t counter, const int32_t raw[3],
 static void plausibility(imu_plaus_t *p, const imu_link_t *l, const int32_t raw[6],
                          imu_sample_t *out)
 {
-    int saturated = 0;
+    uint8_t saturated = 0u;
     for (int i = 0; i < 6; i++) {
         const int32_t lim = l->sat_raw[i < 3 ? 0 : 1];
-        saturated |= raw[i] >= lim || raw[i] <= -lim;
+        if (raw[i] >= lim || raw[i] <= -lim) {
+            saturated |= i < 3 ? IMU_SAT_GYRO : IMU_SAT_ACCEL;
+        }
     }
-    out->saturated = saturated ? 1u : 0u;
+    out->saturated = saturated;
     const uint32_t n_stuck = APP_IMU_STUCK_S * l->rate_hz;
     /* blocks of half the window: the last block and the one before lie within the last
      * n_stuck samples, i.e. within the time the stuck axis has been repeating */

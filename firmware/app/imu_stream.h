@@ -84,13 +84,17 @@ typedef enum {
                            one, bridged by the next (bad_value, of it imu_timing) */
 } imu_verdict_t;
 
+/* imu_sample_t.saturated: which sensor had an axis at its range */
+#define IMU_SAT_GYRO 1u
+#define IMU_SAT_ACCEL 2u
+
 typedef struct {
     int32_t raw[6];      /* this sample: angle x y z, velocity x y z, LSB */
     int32_t prev_raw[6]; /* the last sample before it: where a bridge starts */
     uint64_t lost;       /* samples missing before this one */
     uint64_t lost_by_time; /* of lost, the whole counter cycles seen only in receive time */
     uint8_t time_gap;    /* some were seen missing only in receive time */
-    uint8_t saturated;   /* an axis is at its range */
+    uint8_t saturated;   /* an axis at its range: IMU_SAT_GYRO, IMU_SAT_ACCEL (0: none) */
     uint8_t stuck_new;   /* axes found stuck this sample (each counted once per episode) */
     uint8_t stuck;       /* an axis repeats while the car moves */
     uint8_t dropped;     /* IMU_Rate frames that waited before the one paired: no IMU_Accel
