@@ -101,7 +101,7 @@ typedef struct {
     nav_real_t mount_est_sigma_rad;  /* the automatic estimate's convergence sigma */
     nav_real_t mount_est_excite_m2ps3; /* and its excitation */
     nav_real_t gyro_range_rps;    /* the IMU's measurement range: a rate at or beyond it is */
-    nav_real_t accel_range_mps2;  /* saturated (counted, flagged) */
+    nav_real_t accel_range_mps2;  /* saturated (counted, flagged, uncertain by the range) */
     uint16_t uds_request_id;      /* the UDS server's physical request ID (11-bit) */
     uint16_t uds_response_id;     /* its response ID (11-bit) */
     /* navecu's own CAN identifiers (11-bit, all different), indexed by navecu_msg_t
