@@ -362,6 +362,9 @@ static int motion_align_epoch(app_t *a, const gnss_fix_t *fix)
  *   and adopted a mounting yaw 0.33 deg off. */
 static void sample_noise(app_t *a, const imu_sample_t *s, int bridged)
 {
+    /* run for every sample (adding zeros when it is as measured): skipping those cost
+     * 32 B of flash the RAV4 image does not have, and the sum is cheap (make target-bench
+     * 2.976 -> 2.98 % with it) */
     nav_real_t var[2] = {NAV_C(0.0), NAV_C(0.0)}; /* raw LSB^2 */
     for (int k = 0; k < 2; k++) {
         const uint8_t sensor = k == 0 ? IMU_SAT_GYRO : IMU_SAT_ACCEL;

@@ -502,7 +502,7 @@ int ekf_widen_mount(ekf_t *k, nav_real_t pitch_sigma_rad, nav_real_t yaw_sigma_r
 /* Process noise beyond the IMU's own for the next ekf_predict: var_angle_rad2 added to
  * each attitude error's variance, var_vel_m2ps2 to each velocity error's (isotropic, so
  * the same in any frame). For increments known less well than the IMU's noise says: the
- * bridged samples of an IMU gap (app.c). */
+ * bridged samples of an IMU gap and the saturated ones (app.c sample_noise). */
 void ekf_add_increment_noise(ekf_t *k, nav_real_t var_angle_rad2, nav_real_t var_vel_m2ps2);
 
 #endif /* NAVECU_EKF_H */
