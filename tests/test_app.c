@@ -780,6 +780,20 @@ static void test_imu_stuck_and_saturated(void **state)
     assert_int_equal(app.keep.health.imu_stuck, 2u); /* the z gyro and the frozen y gyro */
     const int32_t v[3] = {0, 1, 2048};
     assert_true(health_flags_now() & NAVECU_HEALTH_IMU_SUSPECT);
+    /* a stuck axis's samples say nothing of the motion: each adds the gyro's range squared
+     * to the angle's process noise and nothing to the velocity's (app.c sample_noise),
+     * also once the x gyro goes quiet: the episode lasts while the value repeats */
+    const nav_real_t *q = app.run.fusion.ekf.q_inc;
+    const double ra = (double)app.keep.imu.sat_raw[0] * ldexp(1.0, -21); /* docs/can.md */
+    for (int k = 0; k < 3; k++) {
+        const double q0 = (double)q[0];
+        const double q1 = (double)q[1];
+        const int32_t wq[3] = {5, 0, 1234};
+        const int32_t vq[3] = {k % 2, 0, 2048};
+        feed_raw_sample(wq, vq);
+        assert_near((double)q[0] - q0, ra * ra, 1e-4 * ra * ra);
+        assert_near((double)q[1], q1, 0.0);
+    }
     /* saturation: 300 deg/s = 5.236 rad/s, 0.05236 rad per sample = 109 805 LSB */
     const uint32_t sat0 = app.keep.health.imu_saturated;
     const int32_t w_sat[3] = {0, 0, 109805};

@@ -120,8 +120,10 @@ int imu_stream_rate(imu_stream_t *s, uint8_t counter, const int32_t raw[3],
  * with probability 0.07, 20 times in a row at 10 Hz below 1e-22). An axis that repeats
  * on ideal, noiseless data (a rate exactly 0 on a flat road, a lateral acceleration
  * exactly 0 in a straight line) is not stuck: the other axes show no noise either. Counted
- * once per episode, flagged while it lasts. The samples are still used, since neither
- * says what the true value was. */
+ * once per episode, flagged while it lasts (a stuck axis: while its value repeats, even
+ * when the noise shown stops, as it may with the motion). The samples are still used,
+ * since neither says what the true value was; the filter takes either as a sample of
+ * unknown motion (app.c, sample_noise). */
 static void plausibility(imu_plaus_t *p, const imu_link_t *l, const int32_t raw[6],
                          imu_sample_t *out)
 {
@@ -129,7 +131,7 @@ static void plausibility(imu_plaus_t *p, const imu_link_t *l, const int32_t raw[
     for (int i = 0; i < 6; i++) {
         const int32_t lim = l->sat_raw[i < 3 ? 0 : 1];
         if (raw[i] >= lim || raw[i] <= -lim) {
-            saturated |= i < 3 ? IMU_SAT_GYRO : IMU_SAT_ACCEL;
+            saturated |= (uint8_t)(1u << i);
         }
     }
     out->saturated = saturated;
@@ -180,14 +182,15 @@ static void plausibility(imu_plaus_t *p, const imu_link_t *l, const int32_t raw[
         }
     }
     for (int i = 0; i < 6; i++) {
-        if (p->same_n[i] >= n_stuck && noisy[i / 3]) {
-            out->stuck = 1u;
-            if ((p->stuck_seen & (1u << i)) == 0u) {
-                p->stuck_seen |= (uint8_t)(1u << i); /* counted once per episode */
-                out->stuck_new++;
-            }
+        const uint8_t bit = (uint8_t)(1u << i);
+        if (p->same_n[i] >= n_stuck && noisy[i / 3] && (p->stuck_seen & bit) == 0u) {
+            p->stuck_seen |= bit; /* counted once per episode */
+            out->stuck_new++;
         }
     }
+    /* found stuck while its sensor showed the noise, an axis stays stuck until it moves
+     * (stuck_seen is cleared above; the noise shown may come and go with the motion) */
+    out->stuck = p->stuck_seen;
 }
 
 imu_verdict_t imu_stream_accel(imu_stream_t *s, imu_link_t *l, uint8_t counter, uint8_t fault,

@@ -84,9 +84,9 @@ typedef enum {
                            one, bridged by the next (bad_value, of it imu_timing) */
 } imu_verdict_t;
 
-/* imu_sample_t.saturated: which sensor had an axis at its range */
-#define IMU_SAT_GYRO 1u
-#define IMU_SAT_ACCEL 2u
+/* imu_sample_t.saturated and .stuck, bit i for raw[i]: each sensor's axes */
+#define IMU_AXES_GYRO 0x07u
+#define IMU_AXES_ACCEL 0x38u
 
 typedef struct {
     int32_t raw[6];      /* this sample: angle x y z, velocity x y z, LSB */
@@ -94,9 +94,10 @@ typedef struct {
     uint64_t lost;       /* samples missing before this one */
     uint64_t lost_by_time; /* of lost, the whole counter cycles seen only in receive time */
     uint8_t time_gap;    /* some were seen missing only in receive time */
-    uint8_t saturated;   /* an axis at its range: IMU_SAT_GYRO, IMU_SAT_ACCEL (0: none) */
+    uint8_t saturated;   /* the axes at their range (bit i: raw[i]; 0: none) */
     uint8_t stuck_new;   /* axes found stuck this sample (each counted once per episode) */
-    uint8_t stuck;       /* an axis repeats while the car moves */
+    uint8_t stuck;       /* the axes found stuck whose value still repeats (bit i: raw[i];
+                            0: none) */
     uint8_t dropped;     /* IMU_Rate frames that waited before the one paired: no IMU_Accel
                             came for them (count imu_pair_broken); a newer one waits on */
     uint32_t dt_us;      /* stamped: the IMU_Time interval from the previous sample to this
