@@ -400,6 +400,26 @@ static void test_bridge_after_a_reset_starts_at_the_sample(void **state)
     }
 }
 
+/* GIVEN a stream after a navigation reset (its state cleared, the link's kept)
+ * WHEN the first sample has axes at 0, the cleared state's value
+ * THEN none counts as a repeat (its stuck count stays 0); the next, equal, does (1). */
+static void test_first_sample_after_a_reset_repeats_nothing(void **state)
+{
+    (void)state;
+    assert_int_equal(nth(0u), IMU_SAMPLE);
+    memset(&s, 0, sizeof s);
+    const int32_t w[3] = {0, 5, 0};
+    const int32_t v[3] = {0, 0, 401};
+    assert_int_equal(pair(1u, w, v, PERIOD_US), IMU_SAMPLE);
+    for (int i = 0; i < 6; i++) {
+        assert_int_equal(s.plaus.same_n[i], 0u);
+    }
+    assert_int_equal(pair(2u, w, v, 2u * PERIOD_US), IMU_SAMPLE);
+    for (int i = 0; i < 6; i++) {
+        assert_int_equal(s.plaus.same_n[i], 1u);
+    }
+}
+
 /* GIVEN the ranges above THEN a gyro axis at +-109696 LSB or an accelerometer axis at
  * +-3210 LSB is saturated (its bit in saturated: raw[i], bit i), one LSB less is not. */
 static void test_saturation_at_configured_range(void **state)
@@ -630,6 +650,7 @@ int main(void)
         cmocka_unit_test_setup(test_bridge_halves_and_extremes, setup),
         cmocka_unit_test_setup(test_saturation_at_configured_range, setup),
         cmocka_unit_test_setup(test_bridge_after_a_reset_starts_at_the_sample, setup),
+        cmocka_unit_test_setup(test_first_sample_after_a_reset_repeats_nothing, setup),
         cmocka_unit_test_setup(test_stuck_axis_while_another_moves, setup),
         cmocka_unit_test_setup(test_stuck_axis_stays_stuck_while_it_repeats, setup),
         cmocka_unit_test_setup(test_not_stuck_while_still, setup),

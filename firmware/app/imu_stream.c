@@ -156,7 +156,9 @@ static void plausibility(imu_plaus_t *p, const imu_link_t *l, const int32_t raw[
             p->blk_jit[i] += (uint32_t)(m < (int64_t)2097152 ? m : (int64_t)2097152);
         }
         p->last2_raw[i] = p->last_raw[i];
-        p->same_n[i] = (l->have_sample && raw[i] == p->last_raw[i])
+        /* the stream's own last sample (hist): after a navigation reset cleared it, the
+         * first sample repeats nothing */
+        p->same_n[i] = (p->hist > 0u && raw[i] == p->last_raw[i])
                            ? (p->same_n[i] < UINT32_MAX ? p->same_n[i] + 1u : UINT32_MAX)
                            : 0u;
         p->last_raw[i] = raw[i];
