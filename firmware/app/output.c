@@ -168,44 +168,43 @@ static void emit_dynamics(app_t *a, hal_t *hal)
     if (!sins_finite(&a->run.nav) || dynamics_take(&a->run.dyn, &a->run.nav, my, mp, &m) != 0) {
         return;
     }
-    uint8_t d[8];
+    /* NAV_Rates, NAV_AttitudeRates, NAV_Accel and NAV_AccelEnu, in the order of their
+     * message and alive-counter indices: each three signed 16-bit signals, a counter and a
+     * CRC in the same layout (the DBC's), packed as NAV_Rates; the rates in deg/s, the
+     * accelerations in m/s^2, each pair with one range and resolution. One loop, not four
+     * copies of the same encode and send (flash, docs/target.md). */
+    const nav_real_t *const src[4] = {m.rate_v_rps, m.att_rate_rps, m.accel_v_mps2,
+                                      m.accel_n_mps2};
     const nav_real_t rlo = NAVECU_NAV_RATES_RATE_X_MIN, rhi = NAVECU_NAV_RATES_RATE_X_MAX;
-    struct navecu_can_nav_rates_t r;
-    r.rate_x = navecu_can_nav_rates_rate_x_encode(nav_clamp(m.rate_v_rps[0] * NAV_DEG_PER_RAD, rlo, rhi));
-    r.rate_y = navecu_can_nav_rates_rate_y_encode(nav_clamp(m.rate_v_rps[1] * NAV_DEG_PER_RAD, rlo, rhi));
-    r.rate_z = navecu_can_nav_rates_rate_z_encode(nav_clamp(m.rate_v_rps[2] * NAV_DEG_PER_RAD, rlo, rhi));
-    r.nav_counter = next_counter(tx, TX_RATES);
-    r.nav_crc = 0u;
-    navecu_can_nav_rates_pack(d, &r, sizeof d);
-    send_protected(tx, hal, a->cfg.can_ids[NAVECU_MSG_NAV_RATES], d);
-    {
-        struct navecu_can_nav_attitude_rates_t ar;
-        ar.roll_rate = navecu_can_nav_attitude_rates_roll_rate_encode(nav_clamp(m.att_rate_rps[0] * NAV_DEG_PER_RAD, rlo, rhi));
-        ar.pitch_rate = navecu_can_nav_attitude_rates_pitch_rate_encode(nav_clamp(m.att_rate_rps[1] * NAV_DEG_PER_RAD, rlo, rhi));
-        ar.heading_rate = navecu_can_nav_attitude_rates_heading_rate_encode(nav_clamp(m.att_rate_rps[2] * NAV_DEG_PER_RAD, rlo, rhi));
-        ar.nav_counter = next_counter(tx, TX_ATT_RATES);
-        ar.nav_crc = 0u;
-        navecu_can_nav_attitude_rates_pack(d, &ar, sizeof d);
-        send_protected(tx, hal, a->cfg.can_ids[NAVECU_MSG_NAV_ATTITUDE_RATES], d);
-    }
     const nav_real_t alo = NAVECU_NAV_ACCEL_ACCEL_X_MIN, ahi = NAVECU_NAV_ACCEL_ACCEL_X_MAX;
-    struct navecu_can_nav_accel_t ac;
-    ac.accel_x = navecu_can_nav_accel_accel_x_encode(nav_clamp(m.accel_v_mps2[0], alo, ahi));
-    ac.accel_y = navecu_can_nav_accel_accel_y_encode(nav_clamp(m.accel_v_mps2[1], alo, ahi));
-    ac.accel_z = navecu_can_nav_accel_accel_z_encode(nav_clamp(m.accel_v_mps2[2], alo, ahi));
-    ac.nav_counter = next_counter(tx, TX_ACCEL);
-    ac.nav_crc = 0u;
-    navecu_can_nav_accel_pack(d, &ac, sizeof d);
-    send_protected(tx, hal, a->cfg.can_ids[NAVECU_MSG_NAV_ACCEL], d);
-    struct navecu_can_nav_accel_enu_t ae;
-    ae.accel_east = navecu_can_nav_accel_enu_accel_east_encode(nav_clamp(m.accel_n_mps2[0], alo, ahi));
-    ae.accel_north = navecu_can_nav_accel_enu_accel_north_encode(nav_clamp(m.accel_n_mps2[1], alo, ahi));
-    ae.accel_up = navecu_can_nav_accel_enu_accel_up_encode(nav_clamp(m.accel_n_mps2[2], alo, ahi));
-    ae.nav_counter = next_counter(tx, TX_ACCEL_ENU);
-    ae.nav_crc = 0u;
-    navecu_can_nav_accel_enu_pack(d, &ae, sizeof d);
-    send_protected(tx, hal, a->cfg.can_ids[NAVECU_MSG_NAV_ACCEL_ENU], d);
+    for (int k = 0; k < 4; k++) {
+        int16_t e[3];
+        for (int i = 0; i < 3; i++) {
+            if (k < 2) {
+                e[i] = navecu_can_nav_rates_rate_x_encode(
+                    nav_clamp(src[k][i] * NAV_DEG_PER_RAD, rlo, rhi));
+            } else {
+                e[i] = navecu_can_nav_accel_accel_x_encode(nav_clamp(src[k][i], alo, ahi));
+            }
+        }
+        struct navecu_can_nav_rates_t r;
+        r.rate_x = e[0];
+        r.rate_y = e[1];
+        r.rate_z = e[2];
+        r.nav_counter = next_counter(tx, TX_RATES + k);
+        r.nav_crc = 0u;
+        uint8_t d[8];
+        navecu_can_nav_rates_pack(d, &r, sizeof d);
+        send_protected(tx, hal, a->cfg.can_ids[(int)NAVECU_MSG_NAV_RATES + k], d);
+    }
 }
+_Static_assert(TX_ATT_RATES == TX_RATES + 1 && TX_ACCEL == TX_RATES + 2 &&
+                   TX_ACCEL_ENU == TX_RATES + 3,
+               "emit_dynamics' counters in message order");
+_Static_assert((int)NAVECU_MSG_NAV_ATTITUDE_RATES == (int)NAVECU_MSG_NAV_RATES + 1 &&
+                   (int)NAVECU_MSG_NAV_ACCEL == (int)NAVECU_MSG_NAV_RATES + 2 &&
+                   (int)NAVECU_MSG_NAV_ACCEL_ENU == (int)NAVECU_MSG_NAV_RATES + 3,
+               "emit_dynamics' messages in this order");
 
 /* an accuracy of NAV_Accuracy: never below one LSB (a sigma smaller than the resolution is
  * sent as the resolution, not as zero) */
