@@ -117,12 +117,14 @@ static void emit_navigation(app_t *a, hal_t *hal)
     send_protected(tx, hal, a->cfg.can_ids[NAVECU_MSG_NAV_HEIGHT], d);
 
     struct navecu_can_nav_velocity_t v;
-    v.vel_east = navecu_can_nav_velocity_vel_east_encode(nav_clamp(
-        s->v_n_mps[0], NAVECU_NAV_VELOCITY_VEL_EAST_MIN, NAVECU_NAV_VELOCITY_VEL_EAST_MAX));
-    v.vel_north = navecu_can_nav_velocity_vel_north_encode(nav_clamp(
-        s->v_n_mps[1], NAVECU_NAV_VELOCITY_VEL_NORTH_MIN, NAVECU_NAV_VELOCITY_VEL_NORTH_MAX));
-    v.vel_up = navecu_can_nav_velocity_vel_up_encode(
-        nav_clamp(s->v_n_mps[2], NAVECU_NAV_VELOCITY_VEL_UP_MIN, NAVECU_NAV_VELOCITY_VEL_UP_MAX));
+    int16_t ve[3]; /* the three axes have one range and resolution (the DBC's) */
+    for (int i = 0; i < 3; i++) {
+        ve[i] = navecu_can_nav_velocity_vel_east_encode(nav_clamp(
+            s->v_n_mps[i], NAVECU_NAV_VELOCITY_VEL_EAST_MIN, NAVECU_NAV_VELOCITY_VEL_EAST_MAX));
+    }
+    v.vel_east = ve[0];
+    v.vel_north = ve[1];
+    v.vel_up = ve[2];
     v.nav_counter = next_counter(tx, TX_VEL);
     v.nav_crc = 0u;
     navecu_can_nav_velocity_pack(d, &v, sizeof d);
