@@ -369,10 +369,22 @@ static int start(fusion_t *fu, const fusion_ctx_t *c, const fusion_prior_t *prio
     return 1;
 }
 
+/* *p moved by (e, n, u) m east, north and up, with the earth's radii of curvature at
+ * latitude lat and height h (the callers': the navigator's position): geo_pos_add's
+ * result. One function for the three such moves of start_at_fix and epoch_then, which
+ * each formed the radii and the divisions (flash, docs/target.md). */
+static int move_enu(geo_pos_t *p, nav_real_t lat, nav_real_t h, nav_real_t e, nav_real_t n,
+                    nav_real_t u)
+{
+    nav_real_t R_M, R_N;
+    earth_radii(nav_sin(lat), &R_M, &R_N);
+    return geo_pos_add(p, n / (R_M + h), e / ((R_N + h) * nav_cos(lat)), u);
+}
+
 /* The navigator may have drifted far more than the receiver's error before the filter:
  * it starts at the fix (moved on by the motion d (ENU, m) since its time of validity,
  * less the antenna lever arm), and the filter's position sigma is the receiver's.
- * lat, h, R_M, R_N: the navigator's now. Returns 0 when the fix is refused. */
+ * lat, h: the navigator's now. Returns 0 when the fix is refused. */
 static int start_at_fix(fusion_t *fu, const fusion_ctx_t *c, const fusion_prior_t *prior,
                         const gnss_fix_t *fix, const nav_real_t d[3], nav_real_t sh,
                         geo_pos_t *then)
@@ -380,8 +392,6 @@ static int start_at_fix(fusion_t *fu, const fusion_ctx_t *c, const fusion_prior_
     sins_t *nav = c->nav;
     const nav_real_t lat = geo_lat_rad(&nav->pos);
     const nav_real_t h = geo_h_m(&nav->pos);
-    nav_real_t R_M, R_N;
-    earth_radii(nav_sin(lat), &R_M, &R_N);
     mat3_t C;
     quat_to_dcm(nav->q_bn, &C);
     nav_real_t l_n[3];
@@ -391,14 +401,13 @@ static int start_at_fix(fusion_t *fu, const fusion_ctx_t *c, const fusion_prior_
         p.h = nav->pos.h;
     }
     const nav_real_t dh_m = fix->has_h ? d[2] - l_n[2] : d[2];
-    if (geo_pos_add(&p, (d[1] - l_n[1]) / (R_M + h), (d[0] - l_n[0]) / ((R_N + h) * nav_cos(lat)),
-                    dh_m) != NAV_OK ||
+    if (move_enu(&p, lat, h, d[0] - l_n[0], d[1] - l_n[1], dh_m) != NAV_OK ||
         sins_set_position(nav, &p) != NAV_OK) {
         app_diag_reject(c->diag, &c->diag->health->gnss_rejected);
         return 0;
     }
     *then = p;
-    (void)geo_pos_add(then, -d[1] / (R_M + h), -d[0] / ((R_N + h) * nav_cos(lat)), -d[2]);
+    (void)move_enu(then, lat, h, -d[0], -d[1], -d[2]);
     return start(fu, c, prior, sh);
 }
 
@@ -437,12 +446,7 @@ static int epoch_then(const fusion_ctx_t *c, const gnss_when_t *when, nav_real_t
     }
     gnss_time_displacement(c->time, when, d);
     *then = c->nav->pos;
-    const nav_real_t lat = geo_lat_rad(then);
-    const nav_real_t h = geo_h_m(then);
-    nav_real_t R_M, R_N;
-    earth_radii(nav_sin(lat), &R_M, &R_N);
-    if (geo_pos_add(then, -d[1] / (R_M + h), -d[0] / ((R_N + h) * nav_cos(lat)), -d[2]) !=
-        NAV_OK) {
+    if (move_enu(then, geo_lat_rad(then), geo_h_m(then), -d[0], -d[1], -d[2]) != NAV_OK) {
         app_diag_reject(c->diag, &c->diag->health->gnss_rejected);
         return 0;
     }
