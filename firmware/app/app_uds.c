@@ -176,17 +176,20 @@ static size_t put_mount_est(const app_t *a, uint8_t *buf, size_t cap)
 static size_t read_did(void *user, uint16_t did, uint8_t *buf, size_t cap)
 {
     const app_t *a = (const app_t *)user;
+    const char *str = NULL; /* the DIDs whose value is a string */
     if (did == APP_UDS_DID_SW_VERSION) {
-        return put_string(buf, cap, NAVECU_SW_VERSION);
+        str = NAVECU_SW_VERSION;
+    } else if (did == APP_UDS_DID_SERIAL) {
+        str = NAVECU_ECU_SERIAL;
+    } else if (did == APP_UDS_DID_VEHICLE) {
+        str = vehicle_profile.name;
+    } else if (did == APP_UDS_DID_BUILD) {
+        str = NAVECU_BUILD;
+    } else {
+        /* not a string */
     }
-    if (did == APP_UDS_DID_SERIAL) {
-        return put_string(buf, cap, NAVECU_ECU_SERIAL);
-    }
-    if (did == APP_UDS_DID_VEHICLE) {
-        return put_string(buf, cap, vehicle_profile.name);
-    }
-    if (did == APP_UDS_DID_BUILD) {
-        return put_string(buf, cap, NAVECU_BUILD);
+    if (str != NULL) {
+        return put_string(buf, cap, str);
     }
     if (did == APP_UDS_DID_MOUNT_EST) {
         return put_mount_est(a, buf, cap);
