@@ -156,19 +156,11 @@ int nvstore_put_dtc_status(hal_t *hal, calstore_t *store, const uint8_t status[C
     if (rc < 0) {
         return rc;
     }
-    if (rc != (int)CALSTORE_OK) {
-        rec.dh_rad = 0.0f; /* no record: one with no calibration and no parameters */
-        rec.odo_scale_err = 0.0f;
-        rec.base_m = 0.0f;
-        rec.source = (uint8_t)CAL_SRC_NONE;
-    }
-    if (ext.status != (uint8_t)CALSTORE_EXT_OK) {
-        memset(ext.dtc, 0xFF, sizeof ext.dtc);
-        ext.params_len = 0u;
-    } else if (memcmp(ext.dtc, status, CALSTORE_DTC_N) == 0) {
+    /* no record, or no usable extension: calstore_load_ext gave the defaults (no
+     * calibration) and an extension with no parameters and DTC bytes 0xFF (calstore.h),
+     * the record to write */
+    if (ext.status == (uint8_t)CALSTORE_EXT_OK && memcmp(ext.dtc, status, CALSTORE_DTC_N) == 0) {
         return 0;
-    } else {
-        /* changed below */
     }
     memcpy(ext.dtc, status, CALSTORE_DTC_N);
     return calstore_save_ext(hal, store, &rec, &ext);
