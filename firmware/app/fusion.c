@@ -4,6 +4,11 @@
 #include "app.h"
 #include "app_tuning.h"
 
+/* clear_interval, corr_spans, bias_is_state, bias_step and rr_sigma_mps out of line
+ * (noinline): GCC inlined them at each of their two or three calls, 176 bytes more of the
+ * ECU's flash in all (docs/target.md); they run per prediction (10 Hz), GNSS epoch or
+ * satellite, not per IMU sample. */
+
 uint32_t fusion_pred_div(uint32_t imu_rate_hz)
 {
     return imu_rate_hz >= APP_EKF_PRED_HZ ? imu_rate_hz / APP_EKF_PRED_HZ : 1u;
@@ -22,7 +27,7 @@ void fusion_stop(fusion_t *fu)
     fu->clock_valid = 0u; /* a new filter starts from an unknown clock (ekf_init) */
 }
 
-static void clear_interval(fusion_t *fu)
+__attribute__((noinline)) static void clear_interval(fusion_t *fu)
 {
     fu->pred_n = 0u;
     fu->pred_t_s = NAV_C(0.0);
@@ -132,7 +137,8 @@ static void odo_refused(const fusion_ctx_t *c)
  * readings closer than the correlation carry less than independent ones, and their
  * variance is multiplied by this (docs/kalman.md; the receiver's velocity, a slow
  * odometer, the raw ranges, one zero reading's updates). */
-static nav_real_t corr_spans(nav_real_t corr_s, nav_real_t interval_s)
+__attribute__((noinline)) static nav_real_t corr_spans(nav_real_t corr_s,
+                                                      nav_real_t interval_s)
 {
     return corr_s > interval_s ? corr_s / interval_s : NAV_C(1.0);
 }
@@ -455,7 +461,7 @@ static int epoch_then(const fusion_ctx_t *c, const gnss_when_t *when, nav_real_t
 
 /* The correlated GNSS error is the filter's state when gnss_corr_s spans
  * APP_GNSS_STATE_MIN_FIXES of the receiver's usual epoch intervals (fusion_gnss) */
-static int bias_is_state(const fusion_t *fu, const app_config_t *cfg)
+__attribute__((noinline)) static int bias_is_state(const fusion_t *fu, const app_config_t *cfg)
 {
     return fu->gnss_ep_typ_s > NAV_C(0.0) &&
            cfg->gnss_corr_s >= APP_GNSS_STATE_MIN_FIXES * fu->gnss_ep_typ_s;
@@ -478,7 +484,8 @@ nav_real_t fusion_sigma_h_m(const fusion_t *fu, const app_config_t *cfg)
 }
 
 /* the correlated error state moved on to sample n, its stationary sigma now shc_m */
-static void bias_step(fusion_t *fu, const app_config_t *cfg, uint64_t n, nav_real_t shc_m)
+__attribute__((noinline)) static void bias_step(fusion_t *fu, const app_config_t *cfg,
+                                                uint64_t n, nav_real_t shc_m)
 {
     const uint64_t since = n - fu->gnss_bias_sample;
     ekf_gnss_bias_step(&fu->ekf, (nav_real_t)since / (nav_real_t)cfg->imu_rate_hz,
@@ -656,7 +663,7 @@ static nav_real_t pr_sigma_m(const gnss_raw_sat_t *m)
     return d > floor_m ? d : floor_m;
 }
 
-static nav_real_t rr_sigma_mps(const gnss_raw_sat_t *m)
+__attribute__((noinline)) static nav_real_t rr_sigma_mps(const gnss_raw_sat_t *m)
 {
     const nav_real_t d = (nav_real_t)m->rr_sigma_lsb * NAV_C(0.01);
     return d > APP_RAW_RR_SIGMA_MIN_MPS ? d : APP_RAW_RR_SIGMA_MIN_MPS;
