@@ -43,8 +43,10 @@ static int64_t offset_us(uint64_t imu_t_us, uint32_t tow_ms)
 
 /* The time of week restarts at 0 every week: an offset a week (more than half of one)
  * away from the minimum is the same clock, not a jump (it was counted as one, and the
- * learnt latency forgotten). The week that the minimum is of: +-1 week to reach off. */
-static int64_t week_step_us(const gnss_time_t *g, int64_t off)
+ * learnt latency forgotten). The week that the minimum is of: +-1 week to reach off.
+ * Out of line (noinline), as when_late: 56 bytes of the ECU's flash inlined at its two
+ * calls, per GNSS epoch. */
+__attribute__((noinline)) static int64_t week_step_us(const gnss_time_t *g, int64_t off)
 {
     const int64_t week_us = (int64_t)APP_WEEK_MS * 1000;
     if (g->off_valid && off - g->off_min_us > week_us / 2) {
