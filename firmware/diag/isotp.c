@@ -474,7 +474,11 @@ int isotp_poll(isotp_t *c, uint64_t now_us, isotp_tx_fn tx, void *user)
     return sent;
 }
 
-int isotp_send(isotp_t *c, const uint8_t *data, size_t len, uint64_t now_us)
+/* Out of line (noinline), as count_up: the link inlined it at its calls (the server's
+ * response, isotp_send_now), 16 bytes more of the application's flash and 20 of the
+ * bootloader's (docs/target.md); per diagnostic response only. */
+__attribute__((noinline)) int isotp_send(isotp_t *c, const uint8_t *data, size_t len,
+                                         uint64_t now_us)
 {
     if ((c == NULL) || (data == NULL) || (len == 0u) || (len > ISOTP_MAX_LEN)) {
         return HAL_EINVAL;
