@@ -780,11 +780,14 @@ static void test_imu_stuck_and_saturated(void **state)
     assert_int_equal(app.keep.health.imu_stuck, 2u); /* the z gyro and the frozen y gyro */
     const int32_t v[3] = {0, 1, 2048};
     assert_true(health_flags_now() & NAVECU_HEALTH_IMU_SUSPECT);
-    /* a stuck axis's samples say nothing of the motion: each adds the gyro's range squared
-     * to the angle's process noise and nothing to the velocity's (app.c sample_noise),
-     * also once the x gyro goes quiet: the episode lasts while the value repeats */
+    /* a stuck axis's samples say nothing of the motion: each adds a car's yaw rate
+     * (APP_STUCK_RATE_RPS: 30 deg/s, 0.005236 rad per sample, under the 300 deg/s range),
+     * squared, to the angle's process noise and nothing to the velocity's (app.c
+     * sample_noise; the filter is off here: the noise waits in q_inc); the episode itself
+     * is test_imu_stream's */
     const nav_real_t *q = app.run.fusion.ekf.q_inc;
-    const double ra = (double)app.keep.imu.sat_raw[0] * ldexp(1.0, -21); /* docs/can.md */
+    assert_int_equal(app.keep.imu.stuck_raw[0], 10980); /* 0.005236 rad / 2^-21 rad */
+    const double ra = (double)app.keep.imu.stuck_raw[0] * ldexp(1.0, -21); /* docs/can.md */
     for (int k = 0; k < 3; k++) {
         const double q0 = (double)q[0];
         const double q1 = (double)q[1];

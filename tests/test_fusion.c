@@ -576,6 +576,44 @@ static void fixes_at_rest(int n, int every, int early)
     }
 }
 
+/* GIVEN the filter on the fixes at P0 (5 fixes at 1 Hz taken) WHEN every fix from then on
+ * is 100 m north, the car standing (neither the odometer nor the GNSS course can tell
+ * which of the two is wrong) THEN each is refused and the filter reopened, its position
+ * sigma still under 100 m / 3; once no fix has been taken for APP_FILTER_LOCKOUT_S (60 s)
+ * the filter is found diverged: REACQUIRE, counted (the fixes win: not a filter that
+ * refuses them for good), and not before. */
+static void test_refused_for_a_minute_reacquires(void **state)
+{
+    (void)state;
+    start_filter();
+    fixes_at_rest(5, 100, -1);
+    assert_int_equal(health.gnss_rejected, 0u);
+    const nav_real_t v0[3] = {0.0f, 0.0f, 0.0f};
+    uint32_t tow = 105000u;
+    fusion_action_t act = FUSION_GO_ON;
+    uint32_t s = 0u; /* seconds since the last fix taken */
+    while (act == FUSION_GO_ON && s < 100u) {
+        for (int j = 0; j < 100 && act == FUSION_GO_ON; j++) {
+            act = rest_sample();
+        }
+        if (act == FUSION_GO_ON) {
+            s++;
+            tow += 1000u;
+            gnss_fix_t f = fix_at(450009000, 100000000, v0); /* 100 m north */
+            f.tow_ms = tow;
+            int adopt;
+            act = fusion_gnss(&fu, &ctx, &PRIOR, &f, &adopt);
+            app_stamp(&gnss, diag.n_samples);
+        }
+    }
+    assert_int_equal(act, FUSION_REACQUIRE);
+    assert_in_range(s, APP_FILTER_LOCKOUT_S, APP_FILTER_LOCKOUT_S + 1u);
+    assert_int_equal(health.filter_resets, 1u);
+    assert_true(health.gnss_rejected >= APP_FILTER_LOCKOUT_S - 1u);
+    assert_true(fu.ekf.n_reopened >= APP_FILTER_REOPEN_LIMIT);
+    assert_int_equal(fu.on, 0);
+}
+
 /* The receiver's correlated error is a filter state when its correlation time spans 10
  * of its fix intervals (docs/kalman.md). GIVEN 1 Hz fixes and a correlation time of 4 s,
  * one epoch 50 ms after the one before THEN the usual interval comes back to about 1 s
@@ -1032,6 +1070,7 @@ int main(void)
         cmocka_unit_test_setup(test_fix_accuracy_weighs_the_start, setup),
         cmocka_unit_test_setup(test_note_course_and_stop, setup),
         cmocka_unit_test_setup(test_outlier_fix_refused, setup),
+        cmocka_unit_test_setup(test_refused_for_a_minute_reacquires, setup),
         cmocka_unit_test_setup(test_correlated_error_model_by_fix_rate, setup),
         cmocka_unit_test_setup(test_odometer_reading_moved_on_by_its_latency, setup),
         cmocka_unit_test_setup(test_odometer_reading_moved_through_a_stop_not_used, setup),

@@ -361,11 +361,13 @@ static int motion_align_epoch(app_t *a, const gnss_fix_t *fix)
  *   (docs/reliability.md, gyro saturation), the filter was reset 5 times, ended 36.5 m RMS
  *   and adopted a mounting yaw 0.33 deg off.
  * - A sensor with a stuck axis (s->stuck: from APP_IMU_STUCK_S into the episode, while its
- *   value repeats): that axis says nothing of the motion; the same noise as at the range.
- *   Without it, with the z gyro stuck through a roundabout (docs/reliability.md, stuck
- *   gyro axis), the position went 41 m off while its reported accuracy stayed 3.6 m, and
- *   the filter was reset (72.3 m at most, 2.99 m RMS); with it, the car's constraints and
- *   the fixes hold the heading: 2.38 m at most, 1.29 m RMS, the clean drive's. */
+ *   value repeats): that axis says nothing of the motion; a car's motion as the 1 sigma
+ *   of every axis of that sensor (stuck_raw: APP_STUCK_RATE_RPS, APP_STUCK_ACCEL_MPS2, at
+ *   most the range). Without it, with the z gyro stuck through a roundabout
+ *   (docs/reliability.md, stuck gyro axis), the position went 41 m off while its reported
+ *   accuracy stayed 3.6 m, and the filter was reset (72.3 m at most, 2.99 m RMS); with it,
+ *   the car's constraints and the fixes hold the heading: 2.38 m at most, 0.99 m RMS. A
+ *   saturated axis takes the range (the larger) when both. */
 static void sample_noise(app_t *a, const imu_sample_t *s, int bridged)
 {
     /* run for every sample (adding zeros when it is as measured): skipping those cost
@@ -374,10 +376,14 @@ static void sample_noise(app_t *a, const imu_sample_t *s, int bridged)
     nav_real_t var[2] = {NAV_C(0.0), NAV_C(0.0)}; /* raw LSB^2 */
     for (int k = 0; k < 2; k++) {
         const uint8_t axes = k == 0 ? IMU_AXES_GYRO : IMU_AXES_ACCEL;
-        if (((s->saturated | s->stuck) & axes) != 0u) {
-            const nav_real_t r = (nav_real_t)a->keep.imu.sat_raw[k];
-            var[k] = r * r;
+        nav_real_t r = NAV_C(0.0);
+        if ((s->stuck & axes) != 0u) {
+            r = (nav_real_t)a->keep.imu.stuck_raw[k];
         }
+        if ((s->saturated & axes) != 0u) {
+            r = (nav_real_t)a->keep.imu.sat_raw[k];
+        }
+        var[k] = r * r;
     }
     if (bridged) {
         const nav_real_t nl = (nav_real_t)(uint32_t)s->lost; /* at most APP_MAX_BRIDGE_MS */

@@ -266,6 +266,18 @@
 
 /* ---- filter supervision (docs/reliability.md) ---- */
 #define APP_FILTER_REOPEN_LIMIT 3u /* covariance reopens without a fix taken: diverged */
+/* ... and diverged whatever the odometer and the course say once no fix has been taken
+ * for this long (fusion.c diverged; the fault drive's GNSS jumps last 26 s) */
+#define APP_FILTER_LOCKOUT_S 60u
+/* A stuck IMU axis's samples (app.c sample_noise): the motion's 1 sigma per sample is a
+ * car's, not the sensor's range: a yaw rate of 30 deg/s (a roundabout 15-20 deg/s, a
+ * parking turn up to 40 deg/s) and a specific force change of 3 m/s^2 (brisk braking or
+ * cornering), each at most the sensor's range. With the range instead (300 deg/s), a z
+ * gyro stuck for good grew the attitude errors to radians, beyond the error model's small
+ * angles, and the filter learnt the mounting 5 deg and the odometer scale 4.6 % off
+ * (a review, seed 1: 349 m RMS against 80 m without the noise). */
+#define APP_STUCK_RATE_RPS NAV_C(0.5236)
+#define APP_STUCK_ACCEL_MPS2 NAV_C(3.0)
 /* GNSS course vs the filter's heading: 10 deg */
 #define APP_COURSE_MISMATCH_RAD NAV_C(0.17453)
 /* angles beyond this are not the navigator's (a non-finite or runaway value) */

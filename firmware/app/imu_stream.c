@@ -17,6 +17,10 @@ void imu_link_init(imu_link_t *l, uint32_t rate_hz, nav_real_t gyro_range_rps,
     const nav_real_t v_lim = accel_range_mps2 * dt * APP_IMU_SAT_FRACTION / app_rx_vel_lsb_mps();
     l->sat_raw[0] = (int32_t)w_lim;
     l->sat_raw[1] = (int32_t)v_lim;
+    const nav_real_t w_car = APP_STUCK_RATE_RPS * dt / app_rx_angle_lsb_rad();
+    const nav_real_t v_car = APP_STUCK_ACCEL_MPS2 * dt / app_rx_vel_lsb_mps();
+    l->stuck_raw[0] = w_car < w_lim ? (int32_t)w_car : l->sat_raw[0];
+    l->stuck_raw[1] = v_car < v_lim ? (int32_t)v_car : l->sat_raw[1];
     l->noise_lsb[0] = APP_IMU_NOISE_MIN_LSB;
     l->noise_lsb[1] = APP_IMU_NOISE_MIN_LSB;
 }

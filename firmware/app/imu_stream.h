@@ -25,6 +25,8 @@ typedef struct {
     uint64_t last_t_us;    /* HAL time of the last sample (staleness, time gaps) */
     uint8_t fault;         /* the last sample's ImuFault bit */
     int32_t sat_raw[2];    /* gyro and accelerometer range in raw LSB per sample */
+    int32_t stuck_raw[2];  /* a stuck axis's 1 sigma per sample: a car's motion, at most
+                              the range (APP_STUCK_RATE_RPS, APP_STUCK_ACCEL_MPS2) */
     uint32_t noise_lsb[2]; /* gyro and accelerometer noise shown (APP_IMU_NOISE_MIN_LSB) */
     uint32_t rate_hz;      /* the configured IMU rate */
     uint32_t accel_id;     /* IMU_Accel's CAN identifier: the pair CRC covers it */
