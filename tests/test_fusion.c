@@ -614,6 +614,42 @@ static void test_refused_for_a_minute_reacquires(void **state)
     assert_int_equal(fu.on, 0);
 }
 
+/* GIVEN the filter on the fixes at P0, the navigator heading north WHEN every fix from
+ * then on is 100 m north and says the car drives east at 10 m/s (its course, noted as
+ * app.c notes it, 90 deg off the filter's heading, above APP_GNSS_COURSE_MIN_MPS) THEN
+ * the fixes are refused, the filter reopened, and after APP_FILTER_REOPEN_LIMIT reopens
+ * the course mismatch finds it diverged: REACQUIRE, counted, well before the 60-s
+ * lock-out limit. */
+static void test_course_mismatch_reacquires(void **state)
+{
+    (void)state;
+    start_filter();
+    fixes_at_rest(5, 100, -1);
+    const nav_real_t v_east[3] = {10.0f, 0.0f, 0.0f};
+    uint32_t tow = 105000u;
+    fusion_action_t act = FUSION_GO_ON;
+    uint32_t s = 0u;
+    while (act == FUSION_GO_ON && s < 100u) {
+        for (int j = 0; j < 100 && act == FUSION_GO_ON; j++) {
+            act = rest_sample();
+        }
+        if (act == FUSION_GO_ON) {
+            s++;
+            tow += 1000u;
+            gnss_fix_t f = fix_at(450009000, 100000000, v_east); /* 100 m north */
+            f.tow_ms = tow;
+            fusion_note_course(&fu, 10.0f, (nav_real_t)(M_PI / 2.0));
+            int adopt;
+            act = fusion_gnss(&fu, &ctx, &PRIOR, &f, &adopt);
+            app_stamp(&gnss, diag.n_samples);
+        }
+    }
+    assert_int_equal(act, FUSION_REACQUIRE);
+    assert_true(s < APP_FILTER_LOCKOUT_S / 2u);
+    assert_int_equal(health.filter_resets, 1u);
+    assert_true(fu.ekf.n_reopened >= APP_FILTER_REOPEN_LIMIT);
+}
+
 /* The receiver's correlated error is a filter state when its correlation time spans 10
  * of its fix intervals (docs/kalman.md). GIVEN 1 Hz fixes and a correlation time of 4 s,
  * one epoch 50 ms after the one before THEN the usual interval comes back to about 1 s
@@ -1071,6 +1107,7 @@ int main(void)
         cmocka_unit_test_setup(test_note_course_and_stop, setup),
         cmocka_unit_test_setup(test_outlier_fix_refused, setup),
         cmocka_unit_test_setup(test_refused_for_a_minute_reacquires, setup),
+        cmocka_unit_test_setup(test_course_mismatch_reacquires, setup),
         cmocka_unit_test_setup(test_correlated_error_model_by_fix_rate, setup),
         cmocka_unit_test_setup(test_odometer_reading_moved_on_by_its_latency, setup),
         cmocka_unit_test_setup(test_odometer_reading_moved_through_a_stop_not_used, setup),
