@@ -360,6 +360,19 @@ static void test_bridged_samples_carry_process_noise(void **state)
     assert_int_equal(app.keep.health.imu_saturated, 2);
     assert_near((double)q[0], want_a6 + ra * ra, 1e-5 * (want_a6 + ra * ra));
     assert_near((double)q[1], want_v6 + rv * rv, 1e-5 * (want_v6 + rv * rv));
+
+    /* two lost before a saturated gyro sample: the two bridged samples lead up to it and
+     * are as unknown (3 ra^2), beside the gap's own noise (2 |d|^2) */
+    src.counter = e2e_counter_next(e2e_counter_next(src.counter));
+    send_imu_pair(ws, v, src.counter);
+    src.counter = e2e_counter_next(src.counter);
+    assert_int_equal(app.keep.health.imu_lost, 2 + 8 + 2);
+    const double dz = (double)(ws[2] - w[2]) * lsb_a;
+    const double dvx = (double)(v[0] - vs[0]) * lsb_v;
+    const double want_a7 = want_a6 + ra * ra + 3.0 * ra * ra + 2.0 * dz * dz;
+    const double want_v7 = want_v6 + rv * rv + 2.0 * dvx * dvx;
+    assert_near((double)q[0], want_a7, 1e-5 * want_a7);
+    assert_near((double)q[1], want_v7, 1e-5 * want_v7);
 }
 
 /*

@@ -388,6 +388,9 @@ static void sample_noise(app_t *a, const imu_sample_t *s, int bridged)
     if (bridged) {
         const nav_real_t nl = (nav_real_t)(uint32_t)s->lost; /* at most APP_MAX_BRIDGE_MS */
         const nav_real_t n = nl > NAV_C(4.0) ? NAV_C(0.25) * nl * nl : nl;
+        /* the bridged samples lead up to a saturated or stuck value: as unknown */
+        var[0] *= nl + NAV_C(1.0);
+        var[1] *= nl + NAV_C(1.0);
         for (int i = 0; i < 6; i++) {
             /* raw values of 20 and 17 bits (docs/can.md): exact in float32 */
             const nav_real_t d = (nav_real_t)s->raw[i] - (nav_real_t)s->prev_raw[i];
