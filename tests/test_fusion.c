@@ -576,42 +576,63 @@ static void fixes_at_rest(int n, int every, int early)
     }
 }
 
-/* GIVEN the filter on the fixes at P0 (5 fixes at 1 Hz taken) WHEN every fix from then on
- * is 100 m north, the car standing (neither the odometer nor the GNSS course can tell
- * which of the two is wrong) THEN each is refused and the filter reopened, its position
- * sigma still under 100 m / 3; once no fix has been taken for APP_FILTER_LOCKOUT_S (60 s)
- * the filter is found diverged: REACQUIRE, counted (the fixes win: not a filter that
- * refuses them for good), and not before. */
-static void test_refused_for_a_minute_reacquires(void **state)
+/* After 5 fixes at 1 Hz taken at P0 and gap_s seconds without fixes (a tunnel), fixes
+ * at lat_e7 every second until the filter reacquires (or 100 s): the seconds of refused
+ * fixes it took, the final action in *act */
+static uint32_t refused_until_reacquired(uint32_t gap_s, int32_t lat_e7, fusion_action_t *act)
 {
-    (void)state;
     start_filter();
     fixes_at_rest(5, 100, -1);
     assert_int_equal(health.gnss_rejected, 0u);
     const nav_real_t v0[3] = {0.0f, 0.0f, 0.0f};
-    uint32_t tow = 105000u;
-    fusion_action_t act = FUSION_GO_ON;
-    uint32_t s = 0u; /* seconds since the last fix taken */
-    while (act == FUSION_GO_ON && s < 100u) {
-        for (int j = 0; j < 100 && act == FUSION_GO_ON; j++) {
-            act = rest_sample();
+    uint32_t tow = 105000u + gap_s * 1000u;
+    *act = FUSION_GO_ON;
+    for (uint32_t k = 0u; k < gap_s * 100u && *act == FUSION_GO_ON; k++) {
+        *act = rest_sample();
+    }
+    uint32_t s = 0u;
+    while (*act == FUSION_GO_ON && s < 100u) {
+        for (int j = 0; j < 100 && *act == FUSION_GO_ON; j++) {
+            *act = rest_sample();
         }
-        if (act == FUSION_GO_ON) {
+        if (*act == FUSION_GO_ON) {
             s++;
             tow += 1000u;
-            gnss_fix_t f = fix_at(450009000, 100000000, v0); /* 100 m north */
+            gnss_fix_t f = fix_at(lat_e7, 100000000, v0);
             f.tow_ms = tow;
             int adopt;
-            act = fusion_gnss(&fu, &ctx, &PRIOR, &f, &adopt);
+            *act = fusion_gnss(&fu, &ctx, &PRIOR, &f, &adopt);
             app_stamp(&gnss, diag.n_samples);
         }
     }
+    return s;
+}
+
+/* GIVEN the filter on the fixes at P0 WHEN every fix from then on is 100 m north, the car
+ * standing (neither the odometer nor the GNSS course can tell which of the two is wrong)
+ * THEN each is refused and the filter reopened, its position sigma still under
+ * 100 m / 3; once the fixes have been refused for APP_FILTER_LOCKOUT_S (60 s) the
+ * filter is found diverged: REACQUIRE, counted (the fixes win: not a filter that refuses
+ * them for good), and not before.
+ * AND GIVEN 70 s without fixes first (a tunnel: its sigma grows to hundreds of metres,
+ * so the fixes are 10 km off) THEN the same 60 s of refusals: the outage is not counted
+ * as refusals (a review found 6 refused fixes enough after it). */
+static void test_refused_for_a_minute_reacquires(void **state)
+{
+    fusion_action_t act;
+    uint32_t s = refused_until_reacquired(0u, 450009000, &act); /* 100 m north */
     assert_int_equal(act, FUSION_REACQUIRE);
-    assert_in_range(s, APP_FILTER_LOCKOUT_S, APP_FILTER_LOCKOUT_S + 1u);
+    assert_in_range(s, APP_FILTER_LOCKOUT_S + 1u, APP_FILTER_LOCKOUT_S + 2u); /* from the first refused */
     assert_int_equal(health.filter_resets, 1u);
     assert_true(health.gnss_rejected >= APP_FILTER_LOCKOUT_S - 1u);
     assert_true(fu.ekf.n_reopened >= APP_FILTER_REOPEN_LIMIT);
     assert_int_equal(fu.on, 0);
+
+    assert_int_equal(setup(state), 0);
+    s = refused_until_reacquired(70u, 450900000, &act); /* 10 km north */
+    assert_int_equal(act, FUSION_REACQUIRE);
+    assert_in_range(s, APP_FILTER_LOCKOUT_S + 1u, APP_FILTER_LOCKOUT_S + 2u); /* from the first refused */
+    assert_int_equal(health.filter_resets, 1u);
 }
 
 /* GIVEN the filter on the fixes at P0, the navigator heading north WHEN every fix from

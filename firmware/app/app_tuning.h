@@ -266,8 +266,9 @@
 
 /* ---- filter supervision (docs/reliability.md) ---- */
 #define APP_FILTER_REOPEN_LIMIT 3u /* covariance reopens without a fix taken: diverged */
-/* ... and diverged whatever the odometer and the course say once no fix has been taken
- * for this long (fusion.c diverged; the fault drive's GNSS jumps last 26 s) */
+/* ... and diverged whatever the odometer and the course say once the fixes have been
+ * refused for this long, without a gap of APP_GNSS_REOPEN_S between them (fusion.c
+ * gate_run, diverged; the fault drive's GNSS jumps last 26 s) */
 #define APP_FILTER_LOCKOUT_S 60u
 /* A stuck IMU axis's samples (app.c sample_noise): the motion's 1 sigma per sample is a
  * car's, not the sensor's range: a yaw rate of 30 deg/s (a roundabout 15-20 deg/s, a

@@ -69,11 +69,11 @@ static int diverged(fusion_t *fu, const fusion_ctx_t *c)
     const int gnss_fresh = app_stamp_within(c->gnss, n, rate);
     const int course_disagrees = gnss_fresh && fu->speed_mps >= APP_GNSS_COURSE_MIN_MPS &&
                                  angle_exceeds(course_err, APP_COURSE_MISMATCH_RAD);
-    /* and, whatever the rest says, when no fix has been taken for APP_FILTER_LOCKOUT_S
-     * while they keep coming: a receiver's fixes are not metres off for that long at the
-     * accuracy they declare, and a filter that drifted beyond its own gate (its heading a
-     * degree off after a stuck gyro, the odometer agreeing) would refuse them for good,
-     * its reopened sigma claiming metres while it is 100 m off */
+    /* and, whatever the rest says, when the fixes have been refused for
+     * APP_FILTER_LOCKOUT_S while they keep coming: a receiver's fixes are seldom that long
+     * metres off at the accuracy they declare, and a filter that drifted beyond its own
+     * gate (its heading a degree off after a stuck gyro, the odometer agreeing) would
+     * refuse them for good, its reopened sigma claiming metres while it is 100 m off */
     const int aiding_disagrees = gnss_fresh && fu->reopen_run >= APP_FILTER_REOPEN_LIMIT &&
                                  (odo_disagrees || course_disagrees || fu->locked_out);
     const int bad = fu->state_lost || k->n_nonfinite != fu->nonfinite_seen ||
@@ -371,6 +371,7 @@ static int start(fusion_t *fu, const fusion_ctx_t *c, const fusion_prior_t *prio
     fu->raw_have_tow = 0u;
     fu->odo_frames_used = c->odo->n_frames;
     fu->start_sample = c->diag->n_samples;
+    fu->refused_since = fu->start_sample; /* no refusals yet (gate_run) */
     fu->nonfinite_seen = fu->ekf.n_nonfinite; /* the supervision's reference: a new filter */
     fu->negative_seen = fu->ekf.n_negative_var;
     /* the filter owns the height now: the core's damping toward a held reference is a
@@ -430,13 +431,19 @@ static void gate_run(fusion_t *fu, const fusion_ctx_t *c, int taken, nav_real_t 
     const uint64_t n = c->diag->n_samples;
     fu->gated_run = !taken ? (uint8_t)(fu->gated_run < 255u ? fu->gated_run + 1u : 255u) : 0u;
     const uint64_t since = fu->fix.seen ? fu->fix.sample : fu->start_sample;
-    const uint64_t quiet = n - since; /* samples since the last fix taken */
+    const uint64_t reopen_n = (uint64_t)APP_GNSS_REOPEN_S * c->cfg->imu_rate_hz;
+    /* the refusals' run starts at the first fix refused after one taken or after a gap
+     * in the fixes: a GNSS outage is not a refusal (a review: counted from the last fix
+     * taken, a tunnel of a minute made the first refused fixes after it a lock-out) */
+    if (taken || n - fu->gate_prev_sample > reopen_n) {
+        fu->refused_since = n;
+    }
+    fu->gate_prev_sample = n;
     fu->locked_out = 0u;
-    if (quiet > (uint64_t)APP_FILTER_LOCKOUT_S * c->cfg->imu_rate_hz) {
+    if (n - fu->refused_since > (uint64_t)APP_FILTER_LOCKOUT_S * c->cfg->imu_rate_hz) {
         fu->locked_out = 1u;
     }
-    if (fu->gated_run >= APP_GNSS_REOPEN_AFTER &&
-        quiet > (uint64_t)APP_GNSS_REOPEN_S * c->cfg->imu_rate_hz) {
+    if (fu->gated_run >= APP_GNSS_REOPEN_AFTER && n - since > reopen_n) {
         ekf_reopen(&fu->ekf, APP_GNSS_REOPEN_POS_SIGMAS * sh, APP_GNSS_REOPEN_VEL_MPS);
         fu->gated_run = 0u;
         fu->reopen_run = (uint8_t)(fu->reopen_run < 255u ? fu->reopen_run + 1u : 255u);

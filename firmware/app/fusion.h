@@ -68,7 +68,9 @@ typedef struct {
     app_stamp_t fix;            /* the last GNSS fix the filter took */
     uint8_t gated_run;          /* consecutive fixes refused by the gate */
     uint8_t reopen_run;         /* covariance reopens since the last fix taken */
-    uint8_t locked_out;         /* no fix taken for APP_FILTER_LOCKOUT_S (gate_run) */
+    uint8_t locked_out;         /* fixes refused for APP_FILTER_LOCKOUT_S (gate_run) */
+    uint64_t refused_since;     /* sample of the first fix refused in the current run */
+    uint64_t gate_prev_sample;  /* sample of the previous fix gate_run saw */
     uint64_t prev_fix_sample;   /* sample of the previous fix offered (fix interval) */
     nav_real_t gnss_sc_prev_m;  /* the correlated part of the previous fix's accuracy */
     uint64_t gnss_bias_sample;  /* sample of the last step of the correlated error state */
