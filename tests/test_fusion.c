@@ -577,14 +577,15 @@ static void fixes_at_rest(int n, int every, int early)
 }
 
 /* After 5 fixes at 1 Hz taken at P0 and gap_s seconds without fixes (a tunnel), fixes
- * at lat_e7 every second until the filter reacquires (or 100 s): the seconds of refused
- * fixes it took, the final action in *act */
-static uint32_t refused_until_reacquired(uint32_t gap_s, int32_t lat_e7, fusion_action_t *act)
+ * at lat_e7 with the velocity v_enu every second, each with its course noted as app.c
+ * notes it, until the filter reacquires (or 100 s): the seconds of refused fixes it took,
+ * the final action in *act */
+static uint32_t refused_until_reacquired(uint32_t gap_s, int32_t lat_e7,
+                                         const nav_real_t v_enu[3], fusion_action_t *act)
 {
     start_filter();
     fixes_at_rest(5, 100, -1);
     assert_int_equal(health.gnss_rejected, 0u);
-    const nav_real_t v0[3] = {0.0f, 0.0f, 0.0f};
     uint32_t tow = 105000u + gap_s * 1000u;
     *act = FUSION_GO_ON;
     for (uint32_t k = 0u; k < gap_s * 100u && *act == FUSION_GO_ON; k++) {
@@ -598,8 +599,9 @@ static uint32_t refused_until_reacquired(uint32_t gap_s, int32_t lat_e7, fusion_
         if (*act == FUSION_GO_ON) {
             s++;
             tow += 1000u;
-            gnss_fix_t f = fix_at(lat_e7, 100000000, v0);
+            gnss_fix_t f = fix_at(lat_e7, 100000000, v_enu);
             f.tow_ms = tow;
+            fusion_note_course(&fu, f.speed_mps, atan2f(v_enu[0], v_enu[1]));
             int adopt;
             *act = fusion_gnss(&fu, &ctx, &PRIOR, &f, &adopt);
             app_stamp(&gnss, diag.n_samples);
@@ -619,8 +621,9 @@ static uint32_t refused_until_reacquired(uint32_t gap_s, int32_t lat_e7, fusion_
  * as refusals (a review found 6 refused fixes enough after it). */
 static void test_refused_for_a_minute_reacquires(void **state)
 {
+    const nav_real_t v0[3] = {0.0f, 0.0f, 0.0f};
     fusion_action_t act;
-    uint32_t s = refused_until_reacquired(0u, 450009000, &act); /* 100 m north */
+    uint32_t s = refused_until_reacquired(0u, 450009000, v0, &act); /* 100 m north */
     assert_int_equal(act, FUSION_REACQUIRE);
     assert_in_range(s, APP_FILTER_LOCKOUT_S + 1u, APP_FILTER_LOCKOUT_S + 2u); /* from the first refused */
     assert_int_equal(health.filter_resets, 1u);
@@ -629,7 +632,7 @@ static void test_refused_for_a_minute_reacquires(void **state)
     assert_int_equal(fu.on, 0);
 
     assert_int_equal(setup(state), 0);
-    s = refused_until_reacquired(70u, 450900000, &act); /* 10 km north */
+    s = refused_until_reacquired(70u, 450900000, v0, &act); /* 10 km north */
     assert_int_equal(act, FUSION_REACQUIRE);
     assert_in_range(s, APP_FILTER_LOCKOUT_S + 1u, APP_FILTER_LOCKOUT_S + 2u); /* from the first refused */
     assert_int_equal(health.filter_resets, 1u);
@@ -644,27 +647,9 @@ static void test_refused_for_a_minute_reacquires(void **state)
 static void test_course_mismatch_reacquires(void **state)
 {
     (void)state;
-    start_filter();
-    fixes_at_rest(5, 100, -1);
     const nav_real_t v_east[3] = {10.0f, 0.0f, 0.0f};
-    uint32_t tow = 105000u;
-    fusion_action_t act = FUSION_GO_ON;
-    uint32_t s = 0u;
-    while (act == FUSION_GO_ON && s < 100u) {
-        for (int j = 0; j < 100 && act == FUSION_GO_ON; j++) {
-            act = rest_sample();
-        }
-        if (act == FUSION_GO_ON) {
-            s++;
-            tow += 1000u;
-            gnss_fix_t f = fix_at(450009000, 100000000, v_east); /* 100 m north */
-            f.tow_ms = tow;
-            fusion_note_course(&fu, 10.0f, (nav_real_t)(M_PI / 2.0));
-            int adopt;
-            act = fusion_gnss(&fu, &ctx, &PRIOR, &f, &adopt);
-            app_stamp(&gnss, diag.n_samples);
-        }
-    }
+    fusion_action_t act;
+    const uint32_t s = refused_until_reacquired(0u, 450009000, v_east, &act);
     assert_int_equal(act, FUSION_REACQUIRE);
     assert_true(s < APP_FILTER_LOCKOUT_S / 2u);
     assert_int_equal(health.filter_resets, 1u);
