@@ -163,7 +163,7 @@ void calib_adopt_filter(calib_t *c, calib_trip_t *t, hal_t *hal, uint64_t n,
         return;
     }
     const nav_real_t sy = ekf_state_sigma(ekf, EKF_MY);
-    if (sk > APP_CAL_ADOPT_SIGMA || sy > APP_CAL_ADOPT_SIGMA ||
+    if (sk * sk + sy * sy > APP_CAL_ADOPT_SIGMA * APP_CAL_ADOPT_SIGMA ||
         dr_set_compensation(dr, ekf->mount_yaw_rad, mu) != NAV_OK) {
         return; /* not converged, or outside what the store accepts */
     }
@@ -198,8 +198,9 @@ void calib_sigmas(const calib_t *c, const ekf_config_t *ec, nav_real_t gnss_sigm
     *mu_sigma = ec->k;
     *mount_sigma_rad = ec->mount_rad;
     if (c->source == CAL_SRC_FILTER) {
-        *mu_sigma = APP_CAL_ADOPT_SIGMA;
-        *mount_sigma_rad = APP_CAL_ADOPT_SIGMA;
+        /* adopted within a root sum square: that sum split evenly */
+        *mu_sigma = APP_CAL_ADOPT_SIGMA * NAV_C(0.70710678);
+        *mount_sigma_rad = *mu_sigma;
     } else if ((c->source == CAL_SRC_KNOWN_POSITION || c->source == CAL_SRC_GNSS) &&
                c->base_m > NAV_C(0.0)) {
         const nav_real_t s_pt =

@@ -1945,7 +1945,7 @@ struct navecu_can_nav_calibration_t {
     uint8_t cal_source;
 
     /**
-     * Calibrations adopted since boot (saturates): one-point calibrations, and the filter's estimate each time it is stored (CalSource Filter: odometer scale and mounting yaw each within 0.1 % of distance, 1 sigma, stored at a standstill when it moved by more than 2 sigma, at most every 600 s).
+     * Calibrations adopted since boot (saturates): one-point calibrations, and the filter's estimate each time it is stored (CalSource Filter: the odometer scale's and mounting yaw's 1-sigma errors within 0.15 % of distance in root sum square, stored at a standstill when it moved by more than 2 sigma, at most every 600 s).
      *
      * Range: 0..255 (0..255 -)
      * Scale: 1
