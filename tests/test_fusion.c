@@ -723,6 +723,38 @@ static void test_reported_accuracy_keeps_the_correlated_error(void **state)
     }
 }
 
+/* A standing car's fixes share their error (fix_corr_s: the correlation time grows with
+ * the time standing). GIVEN a car at rest at P0 whose wheels read zero every 0.1 s, the
+ * filter started by a fix there, then 60 fixes at 1 Hz each 2 m north of it (180e-7 deg),
+ * 2 m declared (1.41 m per axis), a correlation time of 4 s THEN the k-th fix counts as
+ * 1 / (4 + k) of an independent one (about its time standing), 60 of them as
+ * H(64) - H(4) = 2.66, and the north sigma ends near 1.41 / sqrt(1 + 2.66) = 0.74 m (the
+ * standstill updates hold the velocity): between 0.55 and 0.9 m. Taken as independent
+ * every 4 s (as before) they were 15 fixes' worth: 1.41 / sqrt(16) = 0.35 m. */
+static void test_standing_fixes_share_their_error(void **state)
+{
+    assert_int_equal(setup(state), 0);
+    cfg.gnss_corr_s = 4.0f;
+    start_filter();
+    const nav_real_t v0[3] = {0.0f, 0.0f, 0.0f};
+    const nav_real_t zero[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+    for (int k = 1; k <= 60; k++) {
+        for (int j = 0; j < 100; j++) {
+            if (j % 10 == 0) {
+                assert_int_equal(odo_wheels(&odo, zero, 0.0f), NAV_OK);
+            }
+            (void)rest_sample();
+        }
+        assert_int_equal(odo.standing, 1);
+        gnss_fix_t f = fix_at(450000180, 100000000, v0);
+        f.tow_ms = 100000u + (uint32_t)k * 1000u;
+        int adopt;
+        assert_int_equal(fusion_gnss(&fu, &ctx, &PRIOR, &f, &adopt), FUSION_GO_ON);
+    }
+    const double s_north = (double)ekf_state_sigma(&fu.ekf, EKF_DR + 1);
+    assert_true(s_north > 0.55 && s_north < 0.9);
+}
+
 /* the filter started by a fix at P0 on a car heading north at v_n_mps, odo_latency_s
  * latency_s */
 static void start_driving_north(double v_n_mps, float latency_s)
@@ -1119,6 +1151,7 @@ int main(void)
         cmocka_unit_test_setup(test_odometer_reading_moved_through_a_stop_not_used, setup),
         cmocka_unit_test_setup(test_locked_wheels_under_braking_refused, setup),
         cmocka_unit_test(test_reported_accuracy_keeps_the_correlated_error),
+        cmocka_unit_test(test_standing_fixes_share_their_error),
         cmocka_unit_test(test_biases_learnt_only_moving_with_good_fixes),
         cmocka_unit_test(test_learning_needs_a_fix_taken),
         cmocka_unit_test(test_raw_declared_elevation_must_be_the_geometrys),

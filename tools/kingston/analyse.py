@@ -360,6 +360,48 @@ def gnss_vs_reference(drive) -> dict:
             "max_m": float(e.max()), "height_minus_reference_median_m": float(np.median(dh))}
 
 
+def gnss_error_correlation(drive, lags=(1, 2, 4, 10, 20)) -> dict:
+    """The receiver's position error (fix less the reference, north and east pooled) against
+    itself lag seconds later, moving and standing apart: pairs of epochs k s apart of which
+    every second in between is moving (the odometer above 0), or standing in one stop (the
+    odometer at 0), the first stop (the drive's start) apart from the others. A moving
+    antenna passes through its multipath; a standing one's changes only with the
+    satellites' motion (firmware/app/fusion.c, rx_corr_s)."""
+    g, r, o = drive.gnss, drive.ref, drive.odo
+    common, gi, ri = np.intersect1d(np.rint(g["time_s"]), np.rint(r["time_s"]),
+                                    return_indices=True)
+    e, n = local_en_m(drive, g["lat_deg"][gi], g["lon_deg"][gi])
+    er, nr = local_en_m(drive, r["lat_deg"][ri], r["lon_deg"][ri])
+    err = {int(t): (a, b) for t, a, b in zip(common, e - er, n - nr)}
+    zero = {int(t): v == 0.0 for t, v in zip(np.rint(o["time_s"]), o["speed_mps"])}
+    # each second's class: 0 moving, 1 the first stop, 2 the other stops; a stop's number
+    t_all = sorted(zero)
+    stop_of, k_stop, prev = {}, 0, False
+    for t in t_all:
+        if zero[t] and not prev:
+            k_stop += 1
+        stop_of[t] = k_stop if zero[t] else 0
+        prev = zero[t]
+    out = {}
+    for name, want in (("moving", lambda s: s == 0), ("first_stop", lambda s: s == 1),
+                       ("other_stops", lambda s: s > 1)):
+        acf = {}
+        for k in lags:
+            a, b = [], []
+            for t in t_all:
+                s0 = stop_of.get(t)
+                if s0 is None or not want(s0) or t not in err or t + k not in err:
+                    continue
+                if any(stop_of.get(t + j) != s0 for j in range(1, k + 1)):
+                    continue
+                a += list(err[t])
+                b += list(err[t + k])
+            acf[k] = {"pairs": len(a) // 2,
+                      "r": float(np.corrcoef(a, b)[0, 1]) if len(a) > 4 else None}
+        out[name] = acf
+    return out
+
+
 def analyse(drive) -> dict:
     return {"imu_timing": imu_timing(drive), "stops": stops(drive),
             "odometer": odometer_vs_reference(drive), "initial_attitude": initial_attitude(drive),
@@ -369,7 +411,8 @@ def analyse(drive) -> dict:
             "gnss_vs_reference": gnss_vs_reference(drive),
             "odometer_error_model": odometer_error_model(drive),
             "gnss_velocity_errors": gnss_velocity_errors(drive),
-            "reference_consistency": reference_consistency(drive)}
+            "reference_consistency": reference_consistency(drive),
+            "gnss_error_correlation": gnss_error_correlation(drive)}
 
 
 def text(a: dict) -> str:
@@ -451,6 +494,11 @@ def text(a: dict) -> str:
         f"GNSS velocity vs reference: {gv['n']} epochs, horizontal error median "
         f"{gv['median_mps']:.3f} m/s, p95 {gv['p95_mps']:.3f}, RMS {gv['rms_mps']:.3f}; east "
         "error autocorrelation " + ", ".join(f"{k} s {v:.2f}" for k, v in gv["east_acf"].items()),
+        "GNSS position error (north and east) against itself k s later: " + "; ".join(
+            f"{name.replace('_', ' ')} " + ", ".join(
+                f"{k} s {v['r']:.2f} ({v['pairs']})" for k, v in acf.items()
+                if v["r"] is not None)
+            for name, acf in a["gnss_error_correlation"].items()),
         f"reference against itself (positions' motion - its velocities' integral over "
         f"{rc['window_s']} s): median {rc['median_m']:.2f} m, p95 {rc['p95_m']:.2f} m, max "
         f"{rc['max_m']:.2f} m (window from {rc['max_at_s']:.0f} s)",

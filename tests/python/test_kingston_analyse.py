@@ -1,0 +1,48 @@
+"""tools/kingston/analyse.py's GNSS error correlation (gnss_error_correlation) on a
+synthetic drive: a receiver whose error is white while the car moves and one constant
+offset per stop must come out uncorrelated moving and fully correlated standing, with the
+first stop apart and no pair spanning a stop's start or end."""
+import types
+
+import numpy as np
+
+from tools.kingston import analyse
+
+LAT0, LON0 = 44.23, -76.47
+M_PER_DEG_LAT = 111_100.0
+
+
+def _drive(seed=1):
+    """600 s at 1 Hz, standing 0-99 s and 300-359 s (zero odometer), moving otherwise; the
+    reference at a fixed point, the fixes off it by white noise moving and by one offset per
+    stop (2 m and 3 m north, 1 m and -1 m east) standing."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(0.0, 600.0) + 1000.0
+    standing = ((t - 1000.0) < 100.0) | (((t - 1000.0) >= 300.0) & ((t - 1000.0) < 360.0))
+    de = rng.normal(0.0, 1.0, t.size)
+    dn = rng.normal(0.0, 1.0, t.size)
+    first = (t - 1000.0) < 100.0
+    second = standing & ~first
+    de[first], dn[first] = 1.0, 2.0
+    de[second], dn[second] = -1.0, 3.0
+    coslat = np.cos(np.radians(LAT0))
+    gnss = {"time_s": t, "lat_deg": LAT0 + dn / M_PER_DEG_LAT,
+            "lon_deg": LON0 + de / (M_PER_DEG_LAT * coslat)}
+    ref = {"time_s": t, "lat_deg": np.full(t.size, LAT0), "lon_deg": np.full(t.size, LON0)}
+    odo = {"time_s": t, "speed_mps": np.where(standing, 0.0, 10.0)}
+    return types.SimpleNamespace(gnss=gnss, ref=ref, odo=odo)
+
+
+def test_moving_white_standing_one_offset():
+    acf = analyse.gnss_error_correlation(_drive(), lags=(1, 4, 10))
+    for k in (1, 4, 10):
+        assert abs(acf["moving"][k]["r"]) < 0.1  # white: |r| ~ 1/sqrt(2 x ~440 pairs)
+    # within a stop the error is one constant: pairs (t, t + k) in the first stop are
+    # 100 - k, each giving its (east, north) pair; the two offsets differ, so pooled over
+    # the second stop alone the correlation is 1 too
+    assert acf["first_stop"][4]["pairs"] == 96
+    assert acf["first_stop"][4]["r"] > 0.999
+    assert acf["other_stops"][10]["pairs"] == 50
+    assert acf["other_stops"][10]["r"] > 0.999
+    # no moving pair spans a stop: 100..299 and 360..599 give 200 - k and 240 - k
+    assert acf["moving"][10]["pairs"] == (200 - 10) + (240 - 10)
