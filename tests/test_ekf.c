@@ -448,7 +448,7 @@ static void test_odometer_scale_and_mounting(void **state)
     filter_with(&f, sd);
     const nav_real_t w0[3] = {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)};
     assert_int_equal(ekf_odometer(&f, &s, w0, w0, NAV_C(10.2), NAV_C(0.001), NAV_C(0.001),
-                                  NAV_C(0.0)), 3);
+                                  NAV_C(0.001), NAV_C(0.0)), 3);
     assert_int_equal(ekf_feedback(&f, &s), NAV_OK);
     assert_near(f.k, 0.02, 2e-4);
     assert_near(f.mount_yaw_rad, 1.0 * DEG, 0.02 * DEG);
@@ -459,7 +459,7 @@ static void test_odometer_scale_and_mounting(void **state)
     sd[EKF_DV] = sd[EKF_DV + 1] = sd[EKF_DV + 2] = 1.0;
     filter_with(&f, sd);
     assert_int_equal(ekf_odometer(&f, &s, w0, w0, NAV_C(10.0), NAV_C(0.01), NAV_C(0.01),
-                                  NAV_C(0.0)), 3);
+                                  NAV_C(0.01), NAV_C(0.0)), 3);
     assert_int_equal(ekf_feedback(&f, &s), NAV_OK);
     assert_near(s.v_n_mps[0], v[0], 0.01);
     assert_near(s.v_n_mps[1], v[1], 0.01);
@@ -490,7 +490,8 @@ static void test_odometer_lever_arm_in_a_turn(void **state)
         ekf_t f;
         filter_with(&f, sd);
         assert_int_equal(ekf_odometer(&f, &s, w, with_lever ? lever : none, (nav_real_t)speed,
-                                      NAV_C(0.01), NAV_C(0.01), NAV_C(0.0)), 3);
+                                      NAV_C(0.01), NAV_C(0.01), NAV_C(0.01), NAV_C(0.0)),
+                         3);
         assert_int_equal(ekf_feedback(&f, &s), NAV_OK);
         if (with_lever) {
             assert_near(f.mount_yaw_rad, 0.0, 1e-5);
@@ -530,6 +531,22 @@ static void test_standstill_updates(void **state)
     assert_int_equal(f.n_gated, 1u);
     assert_int_equal(ekf_feedback(&f, &s), NAV_OK);
     assert_near(s.v_n_mps[1], 8.0, 1e-6);
+
+    /* a standing car whose filter took a braking dive for a climb: up 0.09 m/s, known to
+     * 0.01 m/s; the horizontal off by 0.05 m/s, known to 0.1 m/s. The vertical row is
+     * 0.09 / sqrt(0.01^2 + 0.012^2) = 5.8 sigma off: refused alone (counted); the
+     * horizontal zero is taken (before, the three were refused together, and the stop
+     * with them) */
+    const double vz[3] = {0.05, 0.0, 0.09};
+    nav_at(&s, 0.0, 0.0, 0.0, vz);
+    sd[EKF_DV] = sd[EKF_DV + 1] = 0.1;
+    sd[EKF_DV + 2] = 0.01;
+    filter_with(&f, sd);
+    assert_int_equal(ekf_zero_velocity(&f, &s, NAV_C(0.012), NAV_C(5.0)), 2);
+    assert_int_equal(f.n_gated, 1u);
+    assert_int_equal(ekf_feedback(&f, &s), NAV_OK);
+    assert_near(s.v_n_mps[0], 0.0, 2e-3);
+    assert_near(s.v_n_mps[2], 0.09, 1e-6);
 }
 
 /* The z gyro's in-run bias (state 24, ekf.h) is a first-order Gauss-Markov process:

@@ -183,6 +183,11 @@
  * samples (Gaussian, 4 sigma), a turn beyond it is still seen in one sample. */
 #define APP_STILL_RATE_SIGMAS NAV_C(4.0)
 #define APP_NHC_SIGMA_MPS NAV_C(0.1)     /* side slip in turns, suspension motion */
+/* a car body's pitch on its suspension per m/s^2 of acceleration along the track (dive
+ * under braking, squat under acceleration): about 0.5 deg per m/s^2 for a passenger car
+ * (1.5-3 deg at a 0.5 g stop; the simulator's default body 0.4 deg); the vertical
+ * constraint's sigma grows by it times the speed and the acceleration (fusion.c) */
+#define APP_DIVE_RAD_PER_MPS2 NAV_C(0.0087)
 #define APP_ODO_MIN_SPEED_MPS NAV_C(0.5) /* below this the speed rows are not used */
 /* odo_direction = navigator: reversing once the navigator moves backward faster than this
  * (half the slowest speed the rows use) */

@@ -226,6 +226,8 @@ static void odometer_updates(fusion_t *fu, const fusion_ctx_t *c, nav_real_t T,
 {
     const odo_t *odo = c->odo;
     nav_real_t acc = NAV_C(0.0);
+    const nav_real_t *vp = fu->v_prev_pred_mps;
+    const nav_real_t speed_prev = nav_sqrt(vp[0] * vp[0] + vp[1] * vp[1]);
     for (int i = 0; i < 2; i++) {
         const nav_real_t d = c->nav->v_n_mps[i] - fu->v_prev_pred_mps[i];
         acc += d * d;
@@ -256,9 +258,21 @@ static void odometer_updates(fusion_t *fu, const fusion_ctx_t *c, nav_real_t T,
          * sideways by the yaw rate times the error of that lever arm (Kingston, lever arm
          * unknown: without this term the full fusion was worse than GNSS alone) */
         const nav_real_t s_nhc = APP_NHC_SIGMA_MPS + c->cfg->odo_lever_sigma_m * nav_fabs(w_b[2]);
+        /* and the body pitches on its suspension as the car brakes or accelerates (dive
+         * and squat, APP_DIVE_RAD_PER_MPS2 per m/s^2 along the track), turning that much of
+         * the speed into the body's vertical: 0.6 m/s braking at 2 m/s^2 from 36 m/s. With
+         * the lateral row's sigma there, the filter took it as a climb: the height sank
+         * 12 m through the next stop and its zero-velocity update was refused for all of it
+         * (a simulated motorway drive, tools/sim/scenarios/motorway.toml, 1510 refusals) */
+        const nav_real_t *v = c->nav->v_n_mps;
+        const nav_real_t v_h = nav_sqrt(v[0] * v[0] + v[1] * v[1]);
+        /* along the track: the change of the speed over the interval, not of the velocity
+         * (a turn's centripetal acceleration pitches nothing) */
+        const nav_real_t a_along = (v_h - speed_prev) / T;
+        const nav_real_t s_vert = s_nhc + APP_DIVE_RAD_PER_MPS2 * v_h * nav_fabs(a_along);
         app_trace(APP_TRACE_ODOMETER_UPDATE, 0u);
         const int n_used = ekf_odometer(&fu->ekf, c->nav, w_b, c->cfg->odo_lever_b_m,
-                                        speed, sf, s_nhc, APP_ODO_GATE_SIGMA);
+                                        speed, sf, s_nhc, s_vert, APP_ODO_GATE_SIGMA);
         app_trace(APP_TRACE_ODOMETER_UPDATE, 1u);
         if (n_used == 0) {
             odo_refused(c); /* the odometer disagrees beyond its gate */

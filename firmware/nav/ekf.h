@@ -360,15 +360,17 @@ int ekf_gnss_velocity_horizontal(ekf_t *k, const nav_real_t v_then_mps[3],
  * of the car): three scalar updates. The car's axes are the IMU's turned by the mounting
  * estimates. The reference point (the rear axle's middle) is at lever_b (body axes, m)
  * from the IMU; its velocity is the IMU's plus w_b x lever_b with the body rate w_b
- * (rad/s): in a turn a point ahead of the rear axle slides sideways. */
+ * (rad/s): in a turn a point ahead of the rear axle slides sideways. The lateral row's
+ * 1-sigma is sigma_nhc_mps, the vertical's sigma_vert_mps. */
 int ekf_odometer(ekf_t *k, const sins_t *s, const nav_real_t w_b_rps[3],
                  const nav_real_t lever_b_m[3], nav_real_t speed_mps, nav_real_t sigma_fwd_mps,
-                 nav_real_t sigma_nhc_mps, nav_real_t gate_sigma);
+                 nav_real_t sigma_nhc_mps, nav_real_t sigma_vert_mps, nav_real_t gate_sigma);
 
-/* Standstill: zero velocity (ENU) with 1-sigma sigma_mps; refused as a whole (and counted
- * in n_gated) when a row's innovation is beyond gate_sigma standard deviations (0: no
- * gate): a wheel that locks while the car still moves reads "standing". Returns the rows
- * used (0: refused). */
+/* Standstill: zero velocity (ENU) with 1-sigma sigma_mps; the horizontal pair refused as a
+ * whole (and counted in n_gated) when a row's innovation is beyond gate_sigma standard
+ * deviations (0: no gate): a wheel that locks while the car still moves reads "standing";
+ * the vertical row, after a horizontal pair taken, is gated alone (a refused one counted
+ * in n_gated too). Returns the rows used (0: the horizontal pair refused). */
 int ekf_zero_velocity(ekf_t *k, const sins_t *s, nav_real_t sigma_mps, nav_real_t gate_sigma);
 
 /* Standstill: the bias-compensated z gyro rate minus the Earth's rate seen by the body z

@@ -207,11 +207,12 @@ void ekf_rows_odometer(const ekf_t *k, const sins_t *s, const nav_real_t w_b_rps
 
 int ekf_odometer(ekf_t *k, const sins_t *s, const nav_real_t w_b_rps[3],
                  const nav_real_t lever_b_m[3], nav_real_t speed_mps, nav_real_t sigma_fwd_mps,
-                 nav_real_t sigma_nhc_mps, nav_real_t gate_sigma)
+                 nav_real_t sigma_nhc_mps, nav_real_t sigma_vert_mps, nav_real_t gate_sigma)
 {
     nav_real_t H[MAX_ROWS][EKF_N], z[3], r[3];
     ekf_rows_odometer(k, s, w_b_rps, lever_b_m, speed_mps, H, z);
-    r[EKF_ODO_LATERAL] = r[EKF_ODO_VERTICAL] = sigma_nhc_mps * sigma_nhc_mps;
+    r[EKF_ODO_LATERAL] = sigma_nhc_mps * sigma_nhc_mps;
+    r[EKF_ODO_VERTICAL] = sigma_vert_mps * sigma_vert_mps;
     r[EKF_ODO_FORWARD] = sigma_fwd_mps * sigma_fwd_mps;
     return apply_rows(k, H, z, r, 3, gate_sigma);
 }
@@ -233,7 +234,10 @@ int ekf_zero_velocity(ekf_t *k, const sins_t *s, nav_real_t sigma_mps, nav_real_
     for (int m = 0; m < 3; m++) {
         r[m] = sigma_mps * sigma_mps;
     }
-    return apply_rows(k, H, z, r, 3, gate_sigma);
+    const int used = apply_rows(k, H, z, r, 2, gate_sigma);
+    /* the vertical apart: a vertical velocity the filter got wrong (a braking dive taken as
+     * a climb) must not cost the standstill its horizontal zero */
+    return used > 0 ? used + apply_rows(k, &H[2], &z[2], &r[2], 1, gate_sigma) : used;
 }
 
 void ekf_rows_zero_rate(nav_real_t residual_rate_z_rps, nav_real_t h[EKF_ZARU_ROWS][EKF_N],
