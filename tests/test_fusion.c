@@ -263,15 +263,16 @@ static void start_filter(void)
     app_stamp(&gnss, diag.n_samples);
 }
 
-/* one IMU sample of a level car heading north at 45 N, braking at a_mps2 (body y forward) */
-static fusion_action_t braking_sample(double a_mps2)
+/* one IMU sample of a level car heading north at 45 N, braking at a_mps2 (body y forward),
+ * its z gyro reading yaw_rps more than the Earth's rate */
+static fusion_action_t imu_sample(double a_mps2, double yaw_rps)
 {
     const double lat = 45.0 * DEG;
     const float g = earth_gravity((nav_real_t)sin(lat), (nav_real_t)H0_M);
     imu_inc_t inc;
     inc.dtheta_b_rad[0] = 0.0f;
     inc.dtheta_b_rad[1] = (float)(7.292115e-5 * cos(lat) * 0.01);
-    inc.dtheta_b_rad[2] = (float)(7.292115e-5 * sin(lat) * 0.01);
+    inc.dtheta_b_rad[2] = (float)((7.292115e-5 * sin(lat) + yaw_rps) * 0.01);
     inc.dv_b_mps[0] = 0.0f;
     inc.dv_b_mps[1] = (float)(-a_mps2 * 0.01);
     inc.dv_b_mps[2] = g * 0.01f;
@@ -281,10 +282,22 @@ static fusion_action_t braking_sample(double a_mps2)
     return fusion_imu_step(&fu, &ctx, &inc, &yaw);
 }
 
+static fusion_action_t braking_sample(double a_mps2)
+{
+    return imu_sample(a_mps2, 0.0);
+}
+
 /* one IMU sample of a car at rest, level, heading north at 45 N */
 static fusion_action_t rest_sample(void)
 {
     return braking_sample(0.0);
+}
+
+/* one sample of a car at rest whose z gyro reads yaw_rps more (its noise): above the
+ * standstill's still_rate_rps, it ends "standing" for still_time_s */
+static fusion_action_t yaw_noise_sample(double yaw_rps)
+{
+    return imu_sample(0.0, yaw_rps);
 }
 
 /* The prediction runs every imu_rate / 10 samples (at least every sample): GIVEN the
@@ -723,9 +736,10 @@ static void test_reported_accuracy_keeps_the_correlated_error(void **state)
     }
 }
 
-/* A standing car's fixes share their error (fix_corr_s: the correlation time grows with
- * the time standing). GIVEN a car at rest at P0 whose wheels read zero every 0.1 s, the
- * filter started by a fix there, then 60 fixes at 1 Hz each 2 m north of it (180e-7 deg),
+/* A standing car's fixes share their error (rx_corr_s: the correlation time grows with
+ * the time standing). GIVEN a car at rest at P0 whose wheels read zero every 0.1 s (and
+ * whose z gyro's noise ends the standstill test for 0.5 s every 10 s), the filter started
+ * by a fix there, then 60 fixes at 1 Hz each 2 m north of it (180e-7 deg),
  * 2 m declared (1.41 m per axis), a correlation time of 4 s THEN the k-th fix counts as
  * 1 / (4 + k) of an independent one (about its time standing), 60 of them as
  * H(64) - H(4) = 2.66, and the north sigma ends near 1.41 / sqrt(1 + 2.66) = 0.74 m (the
@@ -743,7 +757,14 @@ static void test_standing_fixes_share_their_error(void **state)
             if (j % 10 == 0) {
                 assert_int_equal(odo_wheels(&odo, zero, 0.0f), NAV_OK);
             }
-            (void)rest_sample();
+            /* every 10 s one sample of yaw-rate noise (1 deg/s) ends "standing" for
+             * 0.5 s, not the stop: the time standing goes on (odo zero_for_s) */
+            if (k % 10 == 5 && j == 10) {
+                (void)yaw_noise_sample(1.0 * DEG);
+                assert_int_equal(odo.standing, 0);
+            } else {
+                (void)rest_sample();
+            }
         }
         assert_int_equal(odo.standing, 1);
         gnss_fix_t f = fix_at(450000180, 100000000, v0);

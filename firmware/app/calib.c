@@ -198,9 +198,10 @@ void calib_sigmas(const calib_t *c, const ekf_config_t *ec, nav_real_t gnss_sigm
     *mu_sigma = ec->k;
     *mount_sigma_rad = ec->mount_rad;
     if (c->source == CAL_SRC_FILTER) {
-        /* adopted within a root sum square: that sum split evenly */
-        *mu_sigma = APP_CAL_ADOPT_SIGMA * NAV_C(0.70710678);
-        *mount_sigma_rad = *mu_sigma;
+        /* adopted within a root sum square: each part at most that (a review: split
+         * evenly, the scale's sigma was understated by up to 29 %) */
+        *mu_sigma = APP_CAL_ADOPT_SIGMA;
+        *mount_sigma_rad = APP_CAL_ADOPT_SIGMA;
     } else if ((c->source == CAL_SRC_KNOWN_POSITION || c->source == CAL_SRC_GNSS) &&
                c->base_m > NAV_C(0.0)) {
         const nav_real_t s_pt =

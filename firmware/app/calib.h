@@ -107,7 +107,7 @@ int calib_start_dr(const calib_t *c, dr_t *dr, const geo_pos_t *pos);
  * known to APP_KNOWN_POS_SIGMA_M, or to gnss_sigma_axis_m per axis when GNSS gave them: the
  * caller's, a fix's per-axis sigma as the filter takes it, fusion_fix_sigma_axis_m); the
  * filter's: the bound it was adopted within (APP_CAL_ADOPT_SIGMA, a root sum square of the
- * two: each its 1 / sqrt(2)). */
+ * two: each at most that). */
 void calib_sigmas(const calib_t *c, const ekf_config_t *ec, nav_real_t gnss_sigma_axis_m,
                   nav_real_t *mu_sigma, nav_real_t *mount_sigma_rad);
 

@@ -514,20 +514,27 @@ nav_real_t fusion_sigma_h_m(const fusion_t *fu, const app_config_t *cfg)
     return nav_sqrt(s * s + NAV_C(2.0) * sc * sc);
 }
 
-/* The correlation time of the receiver's errors, its fixes' and its ranges' (s): gnss_corr_s
- * while the car moves, and that plus the time it has stood while it stands. A receiver's errors decorrelate as its
- * antenna moves through the multipath around it; standing, they change only with the
- * satellites' slow motion. Measured on the Kingston drive (gnss.csv against the reference):
- * the fixes' error correlated 0.22 at 4 s and 0.06 at 10 s while driving, 0.74 and 0.36 at
- * the stops, 0.93 at 10 s and 0.85 at 20 s at the first one; one stop's fixes held one
- * offset (at 1839 s 3.7 m north, spread 0.06 m). Taken as independent every 4 s, a 20-s stop
- * counted as 5 fixes of that offset: the filter's error rose from 0.67 to 1.83 m while its
- * sigma fell from 2.03 to 1.03 m (python -m tools.kingston.run with outages 60 s every
- * 240 s from 100 s, the stop at 1371-1392 s). With the time standing added, a stop's fixes
- * carry about the logarithm of its length in independent ones. */
+/* The correlation time of the receiver's errors, its fixes' and its ranges' (s):
+ * gnss_corr_s while the car moves, plus the time its wheels have read zero while they do.
+ * A receiver's errors decorrelate as its antenna moves through the multipath around it;
+ * standing, they change only with the satellites' slow motion. Measured on the Kingston
+ * drive (python -m tools.kingston.analyse): the fixes' error correlates 0.22 at 4 s and
+ * 0.06 at 10 s while driving, 0.75 and 0.40 in the stops, 0.93 at 10 s and 0.85 at 20 s in
+ * the first one. Taken as independent every 4 s, a 20-s stop counted as 5 fixes of one
+ * offset: the filter's error rose from 0.67 to 1.83 m while its sigma fell from 2.03 to
+ * 1.03 m (python -m tools.kingston.run with outages 60 s every 240 s from 100 s, the stop
+ * at 1371-1392 s). With the time standing added, a stop's fixes carry about the logarithm
+ * of its length in independent ones. The time is odo zero_for_s, which a sample of
+ * yaw-rate noise does not end as it ends "standing" (a review: each such sample restarted
+ * the sum, about every 160 s with an automotive IMU), and at most
+ * APP_GNSS_STAND_CORR_MAX_S (the satellites move on, and a standing antenna's multipath
+ * with them; without a bound the reported accuracy of a car parked for hours kept
+ * falling). */
 __attribute__((noinline)) static nav_real_t rx_corr_s(const fusion_ctx_t *c)
 {
-    return c->cfg->gnss_corr_s + (c->odo->standing != 0u ? c->odo->still_for_s : NAV_C(0.0));
+    const odo_t *o = c->odo;
+    const nav_real_t t = (o->valid != 0u && o->zero != 0u) ? o->zero_for_s : NAV_C(0.0);
+    return c->cfg->gnss_corr_s + (t < APP_GNSS_STAND_CORR_MAX_S ? t : APP_GNSS_STAND_CORR_MAX_S);
 }
 
 /* the correlated error state moved on to sample n, its stationary sigma now shc_m, its

@@ -42,6 +42,7 @@ int odo_init(odo_t *o, const odo_config_t *cfg)
     o->age_s = NAV_C(0.0);
     o->period_s = NAV_C(0.0);
     o->still_for_s = NAV_C(0.0);
+    o->zero_for_s = NAV_C(0.0);
     o->valid = 0u;
     o->standing = 0u;
     o->zero = 0u;
@@ -106,6 +107,7 @@ int odo_wheels(odo_t *o, const nav_real_t wheel_mps[4], nav_real_t yaw_rate_rps)
     o->valid = 1u;
     if (!all_zero) {
         o->still_for_s = NAV_C(0.0);
+        o->zero_for_s = NAV_C(0.0);
         o->standing = 0u;
     }
     o->n_frames++;
@@ -120,6 +122,7 @@ void odo_age(odo_t *o, nav_real_t dt_s)
         /* no wheel speeds, no standstill (as odo_tick: "still" needs a valid reading) */
         o->standing = 0u;
         o->still_for_s = NAV_C(0.0);
+        o->zero_for_s = NAV_C(0.0);
     }
 }
 
@@ -132,6 +135,13 @@ void odo_tick(odo_t *o, nav_real_t dt_s, nav_real_t yaw_rate_rps)
         o->still_for_s += dt_s;
     } else {
         o->still_for_s = NAV_C(0.0);
+    }
+    /* a yaw rate above still_rate_rps for a sample (noise) ends "still", not the stop */
+    if (o->valid && o->zero) {
+        o->zero_for_s = o->zero_for_s < ODO_ZERO_FOR_MAX_S ? o->zero_for_s + dt_s
+                                                           : ODO_ZERO_FOR_MAX_S;
+    } else {
+        o->zero_for_s = NAV_C(0.0);
     }
     o->standing = (still && o->still_for_s >= o->cfg.still_time_s) ? 1u : 0u;
 }

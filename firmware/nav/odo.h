@@ -40,12 +40,16 @@ typedef struct {
     nav_real_t track_m;         /* for the turn's inner/outer wheel difference */
 } odo_config_t;
 
+/* zero_for_s stops growing here (an hour: float32 steps of a 100 Hz sample stay exact) */
+#define ODO_ZERO_FOR_MAX_S NAV_C(3600.0)
+
 typedef struct {
     odo_config_t cfg;
     nav_real_t speed_mps;      /* forward speed of the reference point, reverse negative */
     nav_real_t age_s;          /* time since the last accepted wheel frame */
     nav_real_t period_s;       /* mean interval between accepted frames (slow average) */
     nav_real_t still_for_s;    /* time all wheels have read zero */
+    nav_real_t zero_for_s;     /* the same, whatever the yaw rate (ODO_ZERO_FOR_MAX_S at most) */
     uint8_t valid;             /* a speed was accepted and is younger than timeout_s */
     uint8_t standing;          /* standstill */
     uint8_t zero;              /* the last accepted frame had every wheel at zero */
