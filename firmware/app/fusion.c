@@ -532,8 +532,8 @@ nav_real_t fusion_sigma_h_m(const fusion_t *fu, const app_config_t *cfg)
  * falling). */
 __attribute__((noinline)) static nav_real_t rx_corr_s(const fusion_ctx_t *c)
 {
-    const odo_t *o = c->odo;
-    const nav_real_t t = (o->valid != 0u && o->zero != 0u) ? o->zero_for_s : NAV_C(0.0);
+    /* zero unless the wheels read zero (odo.c clears it on a moving or stale reading) */
+    const nav_real_t t = c->odo->zero_for_s;
     return c->cfg->gnss_corr_s + (t < APP_GNSS_STAND_CORR_MAX_S ? t : APP_GNSS_STAND_CORR_MAX_S);
 }
 
