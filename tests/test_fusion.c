@@ -837,6 +837,45 @@ static void test_odometer_reading_moved_through_a_stop_not_used(void **state)
 }
 
 
+/* GIVEN a car driving north at 15 m/s whose 1 Hz wheel-speed source has run for 3 s before
+ * the filter starts (its period 1 s), the filter started at a fix WHEN the first interval
+ * brings a reading of 14.5 m/s THEN that reading is used as any other: the velocity moves
+ * toward it by more than 0.05 m/s (0.07: the reading's sigma 0.34 m/s, 0.195 m/s x
+ * sqrt(3) for a slow source's correlated error, against the velocity's 0.19 m/s). The
+ * interval's change of velocity is counted from the start: counted from the 0 m/s a
+ * filter never run had, it was 150 m/s^2 over the 0.1 s, the reading's sigma 130 m/s, and
+ * the velocity stayed at 15.0000 m/s. */
+static void test_first_odometer_update_after_a_start_while_moving(void **state)
+{
+    (void)state;
+    static const fusion_prior_t still = {0.0f, 0.0f, 1u, 0.0f, {0.0f, 0.0f}};
+    const nav_real_t v[3] = {0.0f, 15.0f, 0.0f};
+    start_at(0.0, v);
+    const nav_real_t w15[4] = {15.0f, 15.0f, 15.0f, 15.0f};
+    for (int s = 0; s < 3; s++) {
+        assert_int_equal(odo_wheels(&odo, w15, 0.0f), NAV_OK);
+        for (int k = 0; k < 100; k++) {
+            odo_tick(&odo, 0.01f, 0.0f);
+        }
+    }
+    assert_near(odo.period_s, 1.0, 1e-3);
+    const gnss_fix_t f = fix_at(450000000, 100000000, v);
+    int adopt = 0;
+    assert_int_equal(fusion_gnss(&fu, &ctx, &still, &f, &adopt), FUSION_GO_ON);
+    assert_int_equal(fu.on, 1);
+    const nav_real_t w[4] = {14.5f, 14.5f, 14.5f, 14.5f};
+    for (int k = 0; k < 10; k++) {
+        if (k == 5) {
+            assert_int_equal(odo_wheels(&odo, w, 0.0f), NAV_OK);
+        }
+        assert_int_equal(braking_sample(0.0), FUSION_GO_ON);
+    }
+    assert_int_equal(fu.odo_frames_used, odo.n_frames);
+    assert_int_equal(health.odo_rejected, 0u);
+    assert_true((double)nav.v_n_mps[1] < 14.95);
+    assert_true((double)nav.v_n_mps[1] > 14.5);
+}
+
 /* the filter started on a car heading north at v_n_mps, braking at brake_mps2, its wheels
  * reading zero every 10 ms (a 100 Hz source) for 2 s: the odometer's refusals */
 static uint32_t zero_wheels_braking(double v_n_mps, double brake_mps2)
@@ -1171,6 +1210,7 @@ int main(void)
         cmocka_unit_test_setup(test_odometer_reading_moved_on_by_its_latency, setup),
         cmocka_unit_test_setup(test_odometer_reading_moved_through_a_stop_not_used, setup),
         cmocka_unit_test_setup(test_locked_wheels_under_braking_refused, setup),
+        cmocka_unit_test_setup(test_first_odometer_update_after_a_start_while_moving, setup),
         cmocka_unit_test(test_reported_accuracy_keeps_the_correlated_error),
         cmocka_unit_test(test_standing_fixes_share_their_error),
         cmocka_unit_test(test_biases_learnt_only_moving_with_good_fixes),

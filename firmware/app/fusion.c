@@ -381,6 +381,12 @@ static int start(fusion_t *fu, const fusion_ctx_t *c, const fusion_prior_t *prio
         app_diag_reject(c->diag, &c->diag->health->nav_rejected);
     }
     clear_interval(fu);
+    /* the first interval's change of velocity is from here: one left from before (a
+     * filter stopped long ago, or never run, at 0) put a car started moving 15 m/s ahead
+     * of itself, 150 m/s^2 over 0.1 s, into its first odometer update's sigma */
+    for (int i = 0; i < 2; i++) {
+        fu->v_prev_pred_mps[i] = c->nav->v_n_mps[i];
+    }
     fu->clock_valid = 0u; /* ekf_init's clock is an unknown one: estimated afresh */
     fu->raw_have_tow = 0u;
     fu->odo_frames_used = c->odo->n_frames;
