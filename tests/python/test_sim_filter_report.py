@@ -268,10 +268,12 @@ def test_fault_log_and_errors(tmp_path):
 
 
 # --- report: sigma consistency, filter calibration, fault neighbourhoods ---------------------
-def nav_log(tmp_path, n, sigma, rejected=None, t0=30.0, dt=0.1):
-    """A synthetic firmware output: per set NAV_Position, NAV_Height (TimeOfValidity),
-    NAV_Status page 0 with HorizAccuracy sigma[k], and page 3 with rejected[k]; read back
-    with read_nav_log. The log's own timestamps are off by 1000 s: times come from
+def nav_log(tmp_path, n, sigma, rejected=None, t0=30.0, dt=0.1, height=None, vacc=None,
+            odo_rejected=None):
+    """A synthetic firmware output: per set NAV_Position, NAV_Height (TimeOfValidity;
+    Height height[k], VertAccuracy vacc[k], default 100 m and 1 m), NAV_Status page 0 with
+    HorizAccuracy sigma[k], page 3 with rejected[k] and page 6 with odo_rejected[k]; read
+    back with read_nav_log. The log's own timestamps are off by 1000 s: times come from
     TimeOfValidity."""
     db = nc.load_db()
     tx = nc.E2ESender(db)
@@ -280,7 +282,9 @@ def nav_log(tmp_path, n, sigma, rejected=None, t0=30.0, dt=0.1):
         t = t0 + k * dt
         ts = 1000.0 + t
         msgs.append(tx.encode("NAV_Position", {"Latitude": 45.0, "Longitude": 10.0}, ts))
-        msgs.append(tx.encode("NAV_Height", {"Height": 100.0, "VertAccuracy": 1.0,
+        msgs.append(tx.encode("NAV_Height", {
+            "Height": 100.0 if height is None else float(height[k]),
+            "VertAccuracy": 1.0 if vacc is None else float(vacc[k]),
                                              "TimeOfValidity": int(round(t * 1000)) % 65536}, ts))
         msgs.append(tx.encode("NAV_Status", {"StatusPage": 0, "Mode": 5, "HealthFlags": 0,
                                              "HorizAccuracy": float(sigma[k]),
@@ -289,6 +293,10 @@ def nav_log(tmp_path, n, sigma, rejected=None, t0=30.0, dt=0.1):
             msgs.append(tx.encode("NAV_Status", {"StatusPage": 3, "CntBadValue": 0,
                                                  "CntGnssRejected": int(rejected[k]),
                                                  "CntRxLost": 0}, ts))
+        if odo_rejected is not None:
+            msgs.append(tx.encode("NAV_Status", {"StatusPage": 6, "CntImuSaturated": 0,
+                                                 "CntOdoRejected": int(odo_rejected[k]),
+                                                 "CntImuStuck": 0}, ts))
     p = tmp_path / "nav.log"
     nc.write_candump(p, msgs)
     return report.read_nav_log(p)
@@ -352,6 +360,39 @@ def test_compute_report_fields_and_summary(tmp_path):
     assert "sigma consistency: 100.0 % within 2 sigma" in text
     assert f"({o['end_error_pct_of_distance']:.2f} % of the distance)" in text
     assert "filter calibration: none" in text and "mounting yaw +0.300 deg" in text
+
+
+def test_height_and_odometer_refusals_reported(tmp_path):
+    """The height against truth.npz's h_m: the truth 100 m, NAV_Height 100 + e with e 0.5 m
+    at 3 of 4 sets and 3 m at every 4th, VertAccuracy 1 m (unknown, 25.5, for the first
+    20 sets): |error| RMS, max, mean and the share within 2 sigma of the known sets; the
+    last CntOdoRejected of page 6. Without h_m (an older truth.npz): unknown, said so."""
+    n = 100
+    e = np.where(np.arange(n) % 4 == 0, 3.0, 0.5)
+    vacc = np.where(np.arange(n) < 20, 25.5, 1.0)
+    nav = nav_log(tmp_path, n, np.full(n, 1.0), height=100.0 + e, vacc=vacc,
+                  odo_rejected=np.arange(n) // 10)
+    t = np.linspace(0.0, 50.0, 501)
+    truth = {"t_s": t, "lat_rad": np.full(t.size, math.radians(45.0)),
+             "lon_rad": np.full(t.size, math.radians(10.0)), "heading_rad": np.zeros(t.size),
+             "dist_m": 10.0 * t, "h_m": np.full(t.size, 100.0)}
+    rep, _ = report.compute(truth, nav, [])
+    hr = rep["height"]
+    assert hr["status"] == "ok" and hr["epochs"] == n and hr["epochs_used"] == 80
+    assert hr["error_m"]["rms"] == pytest.approx(math.sqrt(np.mean(e ** 2)), abs=0.01)
+    assert hr["error_m"]["max"] == pytest.approx(3.0, abs=0.01)
+    assert hr["error_m"]["mean"] == pytest.approx(np.mean(e), abs=0.01)
+    assert hr["frac_within_2sigma"] == pytest.approx(0.75)
+    assert hr["median_error_over_sigma"] == pytest.approx(0.5, abs=0.01)
+    assert rep["odo_rejected"] == 9
+    text = report.summary_table(rep)
+    assert "75.0 % within 2 VertAccuracy" in text
+    assert "odometer updates refused (CntOdoRejected): 9" in text
+    del truth["h_m"]
+    rep, _ = report.compute(truth, nav_log(tmp_path, 10, np.full(10, 1.0)), [])
+    assert rep["height"]["status"] == "unknown" and rep["odo_rejected"] is None
+    text = report.summary_table(rep)
+    assert "height error:     unknown" in text and "CntOdoRejected): never reported" in text
 
 
 def test_filter_calibration_after_600_s_of_gnss_driving():

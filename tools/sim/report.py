@@ -315,6 +315,48 @@ def sigma_consistency(t, herr, status) -> dict:
     return out
 
 
+VERT_ACCURACY_UNKNOWN_M = 25.5   # NAV_Height VertAccuracy raw 255: the filter not running
+# a consistent per-axis sigma: P(|e| <= 2 sigma) of a Gaussian, median |e| / sigma
+VERT_CONSISTENT = {"frac_within_2sigma": math.erf(2.0 / math.sqrt(2.0)),
+                   "median_error_over_sigma": 0.6744897501960817}
+
+
+def height_report(truth: dict, nav: dict) -> dict:
+    """The height against the truth's (truth.npz h_m, the same ellipsoid): NAV_Height's
+    Height at its time of validity, |error| statistics, and the share within 2
+    VertAccuracy (NAV_Height's own 1-sigma; 25.5 "unknown" skipped, a saturated 25.4 taken
+    as it is, a claim no larger than the firmware's). status "unknown" without a truth
+    height (an older truth.npz) or a NAV_Height."""
+    out = {"status": "unknown", "error_m": _stats([]), "epochs": 0, "epochs_used": 0,
+           "frac_within_2sigma": None, "median_error_over_sigma": None,
+           "if_consistent": VERT_CONSISTENT}
+    hgt = nav.get("NAV_Height")
+    if "h_m" not in truth or hgt is None:
+        return out
+    ok_t = np.isfinite(hgt["t_s"])
+    t, h, sv = hgt["t_s"][ok_t], hgt["Height"][ok_t], hgt["VertAccuracy"][ok_t]
+    if not t.size:
+        return out
+    err = h - np.interp(t, truth["t_s"], truth["h_m"])
+    st = _stats(np.abs(err))
+    st["final"] = float(err[-1])
+    st["mean"] = float(np.mean(err))
+    out.update({"status": "ok", "error_m": st, "epochs": int(t.size)})
+    known = (sv < VERT_ACCURACY_UNKNOWN_M - 0.05) & (sv > 0.0)
+    if known.any():
+        r = np.abs(err[known]) / sv[known]
+        out.update({"epochs_used": int(known.sum()),
+                    "frac_within_2sigma": float(np.mean(r <= 2.0)),
+                    "median_error_over_sigma": float(np.median(r))})
+    return out
+
+
+def last_counter(status, page: int, signal: str):
+    """The last value of a NAV_Status counter page's signal, None when never sent."""
+    _, v = status_page(status, page, signal)
+    return int(v[-1]) if v.size else None
+
+
 def modes_seen(status) -> dict:
     """NAV_Status page-0 Mode by its DBC name (VAL_ 784): number of frames and share."""
     _, mode = status_page(status, 0, "Mode")
@@ -326,6 +368,9 @@ def modes_seen(status) -> dict:
             for m in np.unique(mode)}
 
 
+# NAV_Status's multiplexed page that carries CntOdoRejected (the DBC's multiplexer id)
+ODO_REJECTED_PAGE = nc.load_db().get_message_by_name("NAV_Status").get_signal_by_name(
+    "CntOdoRejected").multiplexer_ids[0]
 FILTER_CAL_SOURCE = nc.choice_value("NAV_Calibration", "CalSource", "Filter")  # VAL_ 785
 FILTER_CAL_GNSS_DRIVING_S = 600.0
 MOVING_MPS = 0.1
@@ -517,6 +562,8 @@ def compute(truth: dict, nav: dict, outages) -> tuple[dict, dict]:
         rep["outages"].append(entry)
     status = nav.get("NAV_Status")
     rep["sigma_consistency"] = sigma_consistency(t, herr, status)
+    rep["height"] = height_report(truth, nav)
+    rep["odo_rejected"] = last_counter(status, ODO_REJECTED_PAGE, "CntOdoRejected")
     rep["modes_seen"] = modes_seen(status)
     series.update({"t": t, "herr": herr, "de": de, "dn": dn, "lat_e": lat_e, "lon_e": lon_e})
     return rep, series
@@ -738,6 +785,21 @@ def summary_table(rep: dict) -> str:
               f"final {f(h['final'])} ({f(rep['final_error_pct_of_distance'], '%')} of distance)",
               f"heading error:    rms {f(rep['heading_error_deg']['rms'], 'deg')}, "
               f"max {f(rep['heading_error_deg']['max'], 'deg')}"]
+    hr = rep.get("height")
+    if hr and hr["status"] == "ok":
+        e = hr["error_m"]
+        within = ("no VertAccuracy known" if hr["frac_within_2sigma"] is None else
+                  f"{hr['frac_within_2sigma'] * 100:.1f} % within 2 VertAccuracy, median "
+                  f"|error|/sigma {hr['median_error_over_sigma']:.2f} (95.4 %, 0.67 if "
+                  "consistent)")
+        lines.append(f"height error:     rms {f(e['rms'])}, max {f(e['max'])}, mean "
+                     f"{e['mean']:+.2f} m, final {e['final']:+.2f} m; {within}")
+    elif hr:
+        lines.append("height error:     unknown (no truth height or no NAV_Height)")
+    if "odo_rejected" in rep:
+        n_odo = rep["odo_rejected"]
+        lines.append("odometer updates refused (CntOdoRejected): "
+                     + ("never reported" if n_odo is None else f"{n_odo}"))
     for o in rep["outages"]:
         pct = o.get("end_error_pct_of_distance")
         lines.append(f"outage {o['label'] or ''} {o['start_s']:.0f}-{o['end_s']:.0f} s "

@@ -392,7 +392,7 @@ def main(argv=None) -> int:
         for cols in nav.values():
             cols["t_s"] = cols["t_s"] + a.power_on_s
     truth_r = {"t_s": truth.t_s, "lat_rad": truth.lat_rad, "lon_rad": truth.lon_rad,
-               "heading_rad": truth.heading_rad, "dist_m": truth.dist_m}
+               "heading_rad": truth.heading_rad, "dist_m": truth.dist_m, "h_m": truth.h_m}
     rep, series = report.compute(truth_r, nav, truth.outages)
     rep.update({"scenario": name, "imu": imu_name, "gnss": gnss_name, "seed": a.seed,
                 "imu_rate_hz": a.imu_rate_hz, "navecu_summary": res.stderr.strip().splitlines(),
