@@ -776,6 +776,41 @@ static void test_standing_fixes_share_their_error(void **state)
     assert_true(s_north > 0.55 && s_north < 0.9);
 }
 
+/* GIVEN gnss_corr_s 4 s WHEN the wheels have read zero for 0, 100 and 1000 s (a zero
+ * reading every 0.1 s) THEN the receiver's correlation time is 4, 104 and 304 s: the time
+ * standing is bounded at APP_GNSS_STAND_CORR_MAX_S (300 s); a moving reading ends it (4 s
+ * again), and so does a source gone stale (no reading for longer than its timeout). */
+static void test_standing_correlation_time_bounded(void **state)
+{
+    (void)state;
+    cfg.gnss_corr_s = 4.0f;
+    assert_near(fusion_rx_corr_s(&cfg, &odo), 4.0, 1e-6);
+    const nav_real_t zero[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+    const nav_real_t moving[4] = {3.0f, 3.0f, 3.0f, 3.0f};
+    const int at_s[2] = {100, 1000};
+    const double expect_s[2] = {104.0, 304.0};
+    int done_s = 0;
+    for (int i = 0; i < 2; i++) {
+        for (; done_s < at_s[i] * 10; done_s++) {
+            assert_int_equal(odo_wheels(&odo, zero, 0.0f), NAV_OK);
+            for (int k = 0; k < 10; k++) {
+                odo_tick(&odo, 0.01f, 0.0f);
+            }
+        }
+        /* float32 sums of 0.01 s: within 0.1 % */
+        assert_near(fusion_rx_corr_s(&cfg, &odo), expect_s[i], 1e-3 * expect_s[i]);
+    }
+    assert_int_equal(odo_wheels(&odo, moving, 0.0f), NAV_OK);
+    odo_tick(&odo, 0.01f, 0.0f);
+    assert_near(fusion_rx_corr_s(&cfg, &odo), 4.0, 1e-6);
+    assert_int_equal(odo_wheels(&odo, zero, 0.0f), NAV_OK);
+    for (int k = 0; k < 1000; k++) { /* 10 s without a reading */
+        odo_tick(&odo, 0.01f, 0.0f);
+    }
+    assert_int_equal(odo.valid, 0);
+    assert_near(fusion_rx_corr_s(&cfg, &odo), 4.0, 1e-6);
+}
+
 /* the filter started by a fix at P0 on a car heading north at v_n_mps, odo_latency_s
  * latency_s */
 static void start_driving_north(double v_n_mps, float latency_s)
@@ -1211,6 +1246,7 @@ int main(void)
         cmocka_unit_test_setup(test_odometer_reading_moved_through_a_stop_not_used, setup),
         cmocka_unit_test_setup(test_locked_wheels_under_braking_refused, setup),
         cmocka_unit_test_setup(test_first_odometer_update_after_a_start_while_moving, setup),
+        cmocka_unit_test_setup(test_standing_correlation_time_bounded, setup),
         cmocka_unit_test(test_reported_accuracy_keeps_the_correlated_error),
         cmocka_unit_test(test_standing_fixes_share_their_error),
         cmocka_unit_test(test_biases_learnt_only_moving_with_good_fixes),

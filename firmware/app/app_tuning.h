@@ -189,7 +189,7 @@
  * constraint's sigma grows by it times the speed and the acceleration (fusion.c) */
 #define APP_DIVE_RAD_PER_MPS2 NAV_C(0.0087)
 /* the longest time standing added to the receiver's error correlation time (fusion.c
- * rx_corr_s): the satellites' motion changes a standing antenna's multipath within
+ * fusion_rx_corr_s): the satellites' motion changes a standing antenna's multipath within
  * minutes (not measured beyond 20 s: the Kingston drive's stops) */
 #define APP_GNSS_STAND_CORR_MAX_S NAV_C(300.0)
 #define APP_ODO_MIN_SPEED_MPS NAV_C(0.5) /* below this the speed rows are not used */

@@ -536,15 +536,15 @@ nav_real_t fusion_sigma_h_m(const fusion_t *fu, const app_config_t *cfg)
  * APP_GNSS_STAND_CORR_MAX_S (the satellites move on, and a standing antenna's multipath
  * with them; without a bound the reported accuracy of a car parked for hours kept
  * falling). */
-__attribute__((noinline)) static nav_real_t rx_corr_s(const fusion_ctx_t *c)
+__attribute__((noinline)) nav_real_t fusion_rx_corr_s(const app_config_t *cfg, const odo_t *odo)
 {
     /* zero unless the wheels read zero (odo.c clears it on a moving or stale reading) */
-    const nav_real_t t = c->odo->zero_for_s;
-    return c->cfg->gnss_corr_s + (t < APP_GNSS_STAND_CORR_MAX_S ? t : APP_GNSS_STAND_CORR_MAX_S);
+    const nav_real_t t = odo->zero_for_s;
+    return cfg->gnss_corr_s + (t < APP_GNSS_STAND_CORR_MAX_S ? t : APP_GNSS_STAND_CORR_MAX_S);
 }
 
 /* the correlated error state moved on to sample n, its stationary sigma now shc_m, its
- * correlation time corr_s (rx_corr_s) */
+ * correlation time corr_s (fusion_rx_corr_s) */
 __attribute__((noinline)) static void bias_step(fusion_t *fu, const app_config_t *cfg,
                                                 uint64_t n, nav_real_t shc_m, nav_real_t corr_s)
 {
@@ -591,7 +591,7 @@ fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_pr
         (nav_real_t)(n - fu->prev_fix_sample) / (nav_real_t)cfg->imu_rate_hz;
     nav_real_t ep_s = dt_fix_s;
     fu->prev_fix_sample = n;
-    const nav_real_t corr_rx_s = rx_corr_s(c);
+    const nav_real_t corr_rx_s = fusion_rx_corr_s(c->cfg, c->odo);
     const nav_real_t corr_s = corr_rx_s > ep_s ? corr_rx_s : ep_s;
     ep_s = nav_clamp(ep_s, APP_GNSS_EPOCH_MIN_S, corr_s);
     const nav_real_t r_scale = corr_s / ep_s;
@@ -1061,14 +1061,14 @@ static fusion_action_t raw_fuse(fusion_t *fu, const raw_epoch_t *e, nav_real_t d
         return FUSION_GO_ON;
     }
     /* 4. the updates: the pseudoranges' errors correlated over gnss_corr_s (longer while
-     * the car stands: rx_corr_s), as the state db (its stationary sigma the correlated
+     * the car stands: fusion_rx_corr_s), as the state db (its stationary sigma the correlated
      * part of the epoch's median range sigma) or by inflating their variance. A standing
      * antenna's multipath holds for its ranges as for its fixes: with the ranges left at
      * gnss_corr_s at a stop, gnss_input both with two satellites ended the Kingston drive's
      * first two 60-s outages (in its first standstill) 1.30 and 1.37 m off instead of 0.52
      * and 0.47 m, its ranges counting for more than the fixes before them. */
     const nav_real_t ep_s = dt_s > APP_GNSS_EPOCH_MIN_S ? dt_s : APP_GNSS_EPOCH_MIN_S;
-    const nav_real_t corr_s = rx_corr_s(c);
+    const nav_real_t corr_s = fusion_rx_corr_s(c->cfg, c->odo);
     nav_real_t r_scale = corr_spans(corr_s, ep_s);
     if (e->use_bias != 0) {
         nav_real_t sg[RAW_MAX];

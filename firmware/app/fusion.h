@@ -165,6 +165,11 @@ uint32_t fusion_pred_div(uint32_t imu_rate_hz);
  * docs/kalman.md, correlated GNSS errors). */
 nav_real_t fusion_sigma_h_m(const fusion_t *fu, const app_config_t *cfg);
 
+/* The receiver's error correlation time (s): gnss_corr_s plus the time the wheels have
+ * read zero (odo zero_for_s), that at most APP_GNSS_STAND_CORR_MAX_S: a standing antenna
+ * sits in its multipath (fusion.c; docs/kalman.md, a standing receiver). */
+nav_real_t fusion_rx_corr_s(const app_config_t *cfg, const odo_t *odo);
+
 /* A fix's horizontal sigma per axis (m) from its HorizAccuracy (the radial 1-sigma),
  * clamped to APP_GNSS_SIGMA_FLOOR_M..APP_GNSS_SIGMA_MAX_M: the filter's, and a GNSS
  * calibration point's */
