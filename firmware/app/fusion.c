@@ -524,8 +524,8 @@ nav_real_t fusion_sigma_h_m(const fusion_t *fu, const app_config_t *cfg)
  * gnss_corr_s while the car moves, plus the time its wheels have read zero while they do.
  * A receiver's errors decorrelate as its antenna moves through the multipath around it;
  * standing, they change only with the satellites' slow motion. Measured on the Kingston
- * drive (python -m tools.kingston.analyse): the fixes' error correlates 0.22 at 4 s and
- * 0.06 at 10 s while driving, 0.75 and 0.40 in the stops, 0.93 at 10 s and 0.85 at 20 s in
+ * drive (python -m tools.kingston.analyse): the fixes' error correlates 0.24 at 4 s and
+ * 0.08 at 10 s while driving, 0.74 and 0.37 in the stops, 0.93 at 10 s and 0.86 at 20 s in
  * the first one. Taken as independent every 4 s, a 20-s stop counted as 5 fixes of one
  * offset: the filter's error rose from 0.67 to 1.83 m while its sigma fell from 2.03 to
  * 1.03 m (python -m tools.kingston.run with outages 60 s every 240 s from 100 s, the stop

@@ -46,3 +46,15 @@ def test_moving_white_standing_one_offset():
     assert acf["other_stops"][10]["r"] > 0.999
     # no moving pair spans a stop: 100..299 and 360..599 give 200 - k and 240 - k
     assert acf["moving"][10]["pairs"] == (200 - 10) + (240 - 10)
+
+
+def test_correlation_about_zero_none_without_error():
+    """_pooled_axes_corr: about zero, not the pairs' own means (a constant error persists:
+    1); no error at all or too few pairs: None, not a nan."""
+    const = [(1.0, -2.0)] * 10
+    assert analyse._pooled_axes_corr(const, const) == 1.0
+    zero = [(0.0, 0.0)] * 10
+    assert analyse._pooled_axes_corr(zero, zero) is None
+    assert analyse._pooled_axes_corr(const[:2], const[:2]) is None
+    flip = [(-1.0, 2.0)] * 10
+    assert analyse._pooled_axes_corr(const, flip) == -1.0

@@ -360,13 +360,30 @@ def gnss_vs_reference(drive) -> dict:
             "max_m": float(e.max()), "height_minus_reference_median_m": float(np.median(dh))}
 
 
+def _pooled_axes_corr(a, b, min_pairs: int = 3):
+    """How much of an error is still there k s later: sum(a b) / sqrt(sum(a^2) sum(b^2))
+    over the pairs (a[i], b[i]), each an (east, north) error against the reference, the two
+    axes pooled, about zero (the reference), which is what the filter's fixes are wrong by.
+    About the pairs' own means instead, one stop's constant error would have no variance
+    and count as none; about one mean of both axes pooled (as before), an east bias and
+    another north passed for a correlation. None with fewer than min_pairs pairs or no
+    error at all."""
+    if len(a) < min_pairs:
+        return None
+    a = np.asarray(a, dtype=float)
+    b = np.asarray(b, dtype=float)
+    den = math.sqrt(float(np.sum(a * a)) * float(np.sum(b * b)))
+    return float(np.sum(a * b)) / den if den > 0.0 else None
+
+
 def gnss_error_correlation(drive, lags=(1, 2, 4, 10, 20)) -> dict:
-    """The receiver's position error (fix less the reference, north and east pooled) against
+    """The receiver's position error (fix less the reference, north and east pooled, about
+    zero: _pooled_axes_corr) against
     itself lag seconds later, moving and standing apart: pairs of epochs k s apart of which
     every second in between is moving (the odometer above 0), or standing in one stop (the
     odometer at 0), the first stop (the drive's start) apart from the others. A moving
     antenna passes through its multipath; a standing one's changes only with the
-    satellites' motion (firmware/app/fusion.c, rx_corr_s)."""
+    satellites' motion (firmware/app/fusion.c, fusion_rx_corr_s)."""
     g, r, o = drive.gnss, drive.ref, drive.odo
     common, gi, ri = np.intersect1d(np.rint(g["time_s"]), np.rint(r["time_s"]),
                                     return_indices=True)
@@ -394,10 +411,9 @@ def gnss_error_correlation(drive, lags=(1, 2, 4, 10, 20)) -> dict:
                     continue
                 if any(stop_of.get(t + j) != s0 for j in range(1, k + 1)):
                     continue
-                a += list(err[t])
-                b += list(err[t + k])
-            acf[k] = {"pairs": len(a) // 2,
-                      "r": float(np.corrcoef(a, b)[0, 1]) if len(a) > 4 else None}
+                a.append(err[t])
+                b.append(err[t + k])
+            acf[k] = {"pairs": len(a), "r": _pooled_axes_corr(a, b)}
         out[name] = acf
     return out
 
