@@ -75,24 +75,76 @@ def _vw_mqb_checksum(frame_id: int, data: bytearray, data_ids: tuple) -> None:
     data[0] = _crc8h2f(crc, data_ids[data[1] & 0x0F]) ^ 0xFF
 
 
+#: Hyundai/Kia WHL_SPD11's fields (byte, mask): its checksum's, least significant first
+#: (Checksum_LSB, Checksum_MSB), and its rolling counter's (AliveCounter_LSB, _MSB)
+_HKG_WHL_SPD_CHECKSUM = ((5, 0xC0), (7, 0xC0))
+_HKG_WHL_SPD_COUNTER = ((1, 0xC0), (3, 0xC0))
+
+
+def _hkg_whl_spd_checksum(frame_id: int, data: bytearray) -> None:
+    """Hyundai/Kia WHL_SPD11 (opendbc's hyundai_kia_generic, 0x386): a 4-bit checksum split
+    over the top 2 bits of bytes 5 (low half) and 7 (high half), the number of bits set
+    in the frame but the top 2 bits of bytes 1, 3, 5 and 7 (its counter's and its own),
+    XOR 9, modulo 16. frame_id: not in it."""
+    skip = dict(_HKG_WHL_SPD_CHECKSUM + _HKG_WHL_SPD_COUNTER)
+    ones = sum(bin(b & ~skip.get(i, 0) & 0xFF).count("1") for i, b in enumerate(data))
+    _field_set(_HKG_WHL_SPD_CHECKSUM, data, (ones ^ 9) & 0xF)
+
+
+def _field_get(fields: tuple, data) -> int:
+    """The value of bit fields ((byte, mask), ...), least significant first, in data."""
+    value, shift = 0, 0
+    for byte, mask in fields:
+        low = (mask & -mask).bit_length() - 1
+        value |= ((data[byte] & mask) >> low) << shift
+        shift += bin(mask).count("1")
+    return value
+
+
+def _field_set(fields: tuple, data: bytearray, value: int) -> None:
+    """Write value into the bit fields ((byte, mask), ...), least significant first."""
+    for byte, mask in fields:
+        low = (mask & -mask).bit_length() - 1
+        width = bin(mask).count("1")
+        data[byte] = (data[byte] & ~mask & 0xFF) | (((value & ((1 << width) - 1)) << low) & mask)
+        value >>= width
+
+
 @dataclass(frozen=True)
 class CarChecksum:
     """A car maker's frame checksum: fill(frame_id, data) writes it (the test encoder,
-    CarEncoder), in data[byte] under mask; the firmware checks it with
-    vehicle_checksum_NAME (firmware/vehicle/vehicle_checksum.c). A keyed checksum also
-    takes the message's data IDs (the profile's checksum_data_ids, data_ids of them):
-    fill(frame_id, data, ids), and the firmware's function a table of them."""
+    CarEncoder), in its fields ((byte, mask), ... least significant first; byte -1 the
+    last); the firmware checks it with vehicle_checksum_NAME
+    (firmware/vehicle/vehicle_checksum.c). A keyed checksum also takes the message's data
+    IDs (the profile's checksum_data_ids, data_ids of them): fill(frame_id, data, ids),
+    and the firmware's function a table of them. length: the one frame length it is
+    defined for (0: any). uncovered: other bits it does not see (Hyundai/Kia's counter):
+    a flip there passes it."""
     fill: object
-    byte: int      # the checksum's byte (-1: the last)
-    mask: int      # its bits in that byte
+    fields: tuple
     data_ids: int = 0   # how many data IDs the message needs (0: none)
+    length: int = 0
+    uncovered: tuple = ()
+
+    @property
+    def width(self) -> int:
+        """its bits"""
+        return sum(bin(m).count("1") for _, m in self.fields)
+
+    def get(self, data) -> int:
+        return _field_get(self.fields, data)
+
+    def put(self, data: bytearray, value: int) -> None:
+        _field_set(self.fields, data, value)
 
 
 #: the car makers' checksums a profile may name
-CAR_CHECKSUMS = {"toyota": CarChecksum(_toyota_checksum, -1, 0xFF),
-                 "subaru": CarChecksum(_subaru_checksum, 0, 0xFF),
-                 "honda": CarChecksum(_honda_checksum, -1, 0x0F),
-                 "vw_mqb": CarChecksum(_vw_mqb_checksum, 0, 0xFF, 16)}
+CAR_CHECKSUMS = {"toyota": CarChecksum(_toyota_checksum, ((-1, 0xFF),)),
+                 "subaru": CarChecksum(_subaru_checksum, ((0, 0xFF),)),
+                 "honda": CarChecksum(_honda_checksum, ((-1, 0x0F),)),
+                 "vw_mqb": CarChecksum(_vw_mqb_checksum, ((0, 0xFF),), 16),
+                 "hkg_whl_spd": CarChecksum(_hkg_whl_spd_checksum, _HKG_WHL_SPD_CHECKSUM,
+                                            length=8, uncovered=_HKG_WHL_SPD_COUNTER)}
 CHECKSUMS = ("none",) + tuple(CAR_CHECKSUMS)
 DIRECTIONS = {"signed": "VEHICLE_DIR_SIGNED", "gear": "VEHICLE_DIR_GEAR",
               "none": "VEHICLE_DIR_NONE"}
@@ -108,6 +160,29 @@ class ProfileError(ValueError):
     """A profile that cannot be used, with the reason."""
 
 
+@dataclass(frozen=True)
+class CarCounter:
+    """A message's rolling counter: one DBC signal, or several that together make one
+    number (Hyundai/Kia WHL_SPD11's AliveCounter_MSB and _LSB), most significant first."""
+    parts: tuple   # cantools Signals
+
+    @property
+    def name(self) -> str:
+        return "+".join(p.name for p in self.parts)
+
+    @property
+    def length(self) -> int:
+        return sum(p.length for p in self.parts)
+
+    def values(self, value: int) -> dict:
+        """Each part's raw value for the counter's value."""
+        out, shift = {}, 0
+        for p in reversed(self.parts):
+            out[p.name] = (value >> shift) & ((1 << p.length) - 1)
+            shift += p.length
+        return out
+
+
 @dataclass
 class CarSignalSet:
     """One car message navecu reads, and the signals it takes from it."""
@@ -115,7 +190,7 @@ class CarSignalSet:
     message: object         # cantools Message
     signals: list           # cantools Signals, in the firmware's order
     checksum: str = "none"
-    counter: object = None  # the rolling counter's cantools Signal, or None
+    counter: object = None  # the rolling counter (CarCounter), or None
     counter_modulus: int = 0   # it runs 0..modulus-1 (2^length unless the profile says)
     checksum_data_ids: tuple = ()  # a keyed checksum's data IDs (CarChecksum.data_ids)
 
@@ -375,8 +450,9 @@ def _ids(spec: dict) -> dict:
 #: (a misspelt `checksum` would otherwise leave the checksum unchecked without a word)
 _NUM = (int, float)
 #: the keys of every table that reads a car message: its checksum and rolling counter
+_STR_OR_LIST = (str, list)
 _MSG_CHECKS = {"checksum": (False, str), "checksum_data_ids": (False, list),
-               "counter": (False, str), "counter_modulus": (False, int)}
+               "counter": (False, _STR_OR_LIST), "counter_modulus": (False, int)}
 SCHEMA = {
     "": {"name": (True, str), "description": (False, str), "ecu_bus": (False, str),
          "buses": (False, dict), "wheels": (True, dict), "gear": (False, dict),
@@ -394,7 +470,8 @@ SCHEMA = {
     "recordings": {"file": (True, str), "channels": (True, dict)},
 }
 _TYPE_NAMES = {str: "a string", dict: "a table", list: "a list", bool: "true or false",
-               _NUM: "a number", int: "an integer"}
+               _NUM: "a number", int: "an integer",
+               _STR_OR_LIST: "a signal name or a list of them"}
 
 
 def _check_table(tab, schema: dict, where: str) -> None:
@@ -687,47 +764,66 @@ COUNTER_MAX_BITS = 8
 
 
 def _counter(spec: dict, msg, data_sigs: list, where: str, checksum: str) -> tuple:
-    """(signal, modulus) of the table's `counter`, the message's rolling counter, or
-    (None, 0). It is a DBC signal of the message, unsigned, unscaled, of at most
-    COUNTER_MAX_BITS bits, none of the values read and none of the checksum's bits (a
-    checksum taken for a counter would refuse a good frame whenever it repeats); it runs
-    0..modulus-1, modulus = 2^its length (the DBC's) unless `counter_modulus` says
-    otherwise (2..2^length: 15 for a 4-bit counter that never sends 15)."""
-    name = spec.get("counter")
-    if name is None:
+    """(CarCounter, modulus) of the table's `counter`, the message's rolling counter, or
+    (None, 0). It is a DBC signal of the message, or a list of them that together make
+    one number, most significant first (Hyundai/Kia's counter split over two 2-bit
+    fields); each unsigned, unscaled, none of the values read and none of the checksum's
+    bits (a checksum taken for a counter would refuse a good frame whenever it repeats),
+    at most COUNTER_MAX_BITS bits together; it runs 0..modulus-1, modulus = 2^its length
+    (the DBC's) unless `counter_modulus` says otherwise (2..2^length: 15 for a 4-bit
+    counter that never sends 15)."""
+    names = spec.get("counter")
+    if names is None:
         if "counter_modulus" in spec:
             raise ProfileError(f"{where}: counter_modulus without a counter")
         return None, 0
-    sig = _signal(msg, name, where)
-    if any(sig is d for d in data_sigs):
-        raise ProfileError(f"{where}: counter {name} is a signal the profile reads as a value")
-    if not 1 <= sig.length <= COUNTER_MAX_BITS:
-        raise ProfileError(f"{where}: counter {name} has {sig.length} bits; at most "
-                           f"{COUNTER_MAX_BITS} are supported")
-    if sig.is_signed or sig.scale != 1 or sig.offset != 0 or sig.is_float:
-        raise ProfileError(f"{where}: counter {name} must be an unsigned integer signal "
-                           f"(scale 1, offset 0), not {'signed ' if sig.is_signed else ''}"
-                           f"({sig.scale:g}, {sig.offset:g})")
-    if checksum != "none":
-        cs = CAR_CHECKSUMS[checksum]
-        raw = {x.name: 0 for x in msg.signals}
-        raw[sig.name] = (1 << sig.length) - 1
-        bits = msg.encode(raw, scaling=False, strict=False, padding=False)
-        if bits[cs.byte] & cs.mask:
-            raise ProfileError(f"{where}: counter {name} overlaps the {checksum} checksum's "
-                               f"bits")
-    full = 1 << sig.length
+    if isinstance(names, str):
+        names = [names]
+    if not names or not all(isinstance(n, str) for n in names) or len(set(names)) != len(names):
+        raise ProfileError(f"{where}: counter must be a signal name or a list of different "
+                           f"ones, not {names!r}")
+    parts = []
+    for name in names:
+        sig = _signal(msg, name, where)
+        if any(sig is d for d in data_sigs):
+            raise ProfileError(f"{where}: counter {name} is a signal the profile reads as a "
+                               "value")
+        if sig.length > COUNTER_MAX_BITS:
+            raise ProfileError(f"{where}: counter {name} has {sig.length} bits; at most "
+                               f"{COUNTER_MAX_BITS} are supported")
+        if sig.is_signed or sig.scale != 1 or sig.offset != 0 or sig.is_float:
+            raise ProfileError(f"{where}: counter {name} must be an unsigned integer signal "
+                               f"(scale 1, offset 0), not {'signed ' if sig.is_signed else ''}"
+                               f"({sig.scale:g}, {sig.offset:g})")
+        if checksum != "none":
+            cs = CAR_CHECKSUMS[checksum]
+            raw = {x.name: 0 for x in msg.signals}
+            raw[sig.name] = (1 << sig.length) - 1
+            bits = msg.encode(raw, scaling=False, strict=False, padding=False)
+            if any(bits[byte] & mask for byte, mask in cs.fields):
+                raise ProfileError(f"{where}: counter {name} overlaps the {checksum} "
+                                   "checksum's bits")
+        parts.append(sig)
+    counter = CarCounter(tuple(parts))
+    if not 1 <= counter.length <= COUNTER_MAX_BITS:
+        raise ProfileError(f"{where}: counter {counter.name} has {counter.length} bits; at "
+                           f"most {COUNTER_MAX_BITS} are supported")
+    full = 1 << counter.length
     modulus = spec.get("counter_modulus", full)
     if not 2 <= modulus <= full:
         raise ProfileError(f"{where}: counter_modulus {modulus} is not 2..{full} (what "
-                           f"{name}'s {sig.length} bits count through)")
-    return sig, int(modulus)
+                           f"{counter.name}'s {counter.length} bits count through)")
+    return counter, int(modulus)
 
 
-def _checksum(spec: dict, fname: str) -> str:
+def _checksum(spec: dict, fname: str, msg=None) -> str:
     c = spec.get("checksum", "none")
     if c not in CHECKSUMS:
         raise ProfileError(f"{fname}: checksum must be one of {', '.join(CHECKSUMS)}")
+    need = CAR_CHECKSUMS[c].length if c != "none" else 0
+    if need and msg is not None and msg.length != need:
+        raise ProfileError(f"{fname}: the {c} checksum is defined for {need}-byte frames; "
+                           f"{msg.name} has {msg.length}")
     return c
 
 
@@ -761,8 +857,8 @@ def _data_ids(spec: dict, checksum: str, msg, role: str, where: str) -> tuple:
 def _signal_set(role: str, spec: dict, msg, sigs: list, fname: str) -> CarSignalSet:
     """The message of the profile's table `role` (spec) and the signals read from it, with
     its checksum (and a keyed checksum's data IDs) and rolling counter."""
-    checksum = _checksum(spec, fname)
     where = f"{fname} [{role}]"
+    checksum = _checksum(spec, where, msg)
     return CarSignalSet(role, msg, sigs, checksum,
                         *_counter(spec, msg, sigs, where, checksum),
                         checksum_data_ids=_data_ids(spec, checksum, msg, role, where))
@@ -896,7 +992,7 @@ class CarEncoder:
         full.update(values)
         if r.counter is not None:
             value = self.counters[role] if counter is None else int(counter)
-            full[r.counter.name] = value
+            full.update(r.counter.values(value))
             self.counters[role] = (value + 1) % r.counter_modulus
         data = bytearray(msg.encode(full, scaling=True, strict=False))
         if r.checksum != "none":
@@ -1059,11 +1155,18 @@ def _decode_case(p: Profile, r: CarSignalSet) -> list:
           f"        if ({fn}_unpack(&s, f->data, f->dlc) != 0) {{",
           "            return VEHICLE_BAD_DLC;", "        }"]
     if r.counter is not None:
-        cx = camel_to_snake_case(r.counter.name)
         counters = f"&{REAR_COUNTERS}" if r.role == "wheels_rear" else "c"
+        # the parts, most significant first, joined into one number
+        terms, shift = [], 0
+        for part in reversed(r.counter.parts):
+            x = f"(uint32_t)s.{camel_to_snake_case(part.name)}"
+            terms.insert(0, f"({x} << {shift}u)" if shift else x)
+            shift += part.length
+        value = (f"s.{camel_to_snake_case(r.counter.parts[0].name)}"
+                 if len(terms) == 1 else "(uint8_t)(" + " | ".join(terms) + ")")
         L += [f"        /* {r.counter.name}: {r.counter.length} bits, modulo {r.counter_modulus}: a "
               "repeat or a value it never takes is refused, lost frames are not */",
-              f"        if (vehicle_counter_step({counters}, {kind}, s.{cx}, {r.counter_modulus}u) <= 0) {{",
+              f"        if (vehicle_counter_step({counters}, {kind}, {value}, {r.counter_modulus}u) <= 0) {{",
               "            return VEHICLE_BAD_COUNTER;", "        }"]
     fields = [camel_to_snake_case(s.name) for s in r.signals]
     cond = " ||\n            ".join(f"!{fn}_{x}_is_in_range(s.{x})" for x in fields)

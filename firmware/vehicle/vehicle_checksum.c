@@ -66,3 +66,31 @@ int vehicle_checksum_vw_mqb(uint32_t id, const uint8_t *data, uint8_t dlc,
     crc = (uint8_t)(crc8h2f_byte(crc, data_id[data[1] & 0x0Fu]) ^ 0xFFu);
     return crc == data[0];
 }
+
+/* the bits set in a byte (no table: one byte at a time, 8 steps) */
+static uint32_t bits_set(uint8_t b)
+{
+    uint32_t n = 0u;
+    for (uint8_t v = b; v != 0u; v = (uint8_t)(v >> 1)) {
+        if ((v & 1u) != 0u) {
+            n++;
+        }
+    }
+    return n;
+}
+
+int vehicle_checksum_hkg_whl_spd(uint32_t id, const uint8_t *data, uint8_t dlc)
+{
+    (void)id; /* not in it */
+    if (dlc != 8u) {
+        return 0;
+    }
+    uint32_t ones = 0u;
+    for (uint8_t i = 0u; i < 8u; i++) {
+        /* bytes 1, 3, 5, 7: their top 2 bits are the counter's and the checksum's */
+        const uint8_t keep = (i & 1u) != 0u ? (uint8_t)0x3Fu : (uint8_t)0xFFu;
+        ones += bits_set((uint8_t)(data[i] & keep));
+    }
+    const uint32_t sent = ((uint32_t)(data[7] >> 6) << 2) | (uint32_t)(data[5] >> 6);
+    return ((ones ^ 9u) & 0xFu) == sent;
+}

@@ -37,4 +37,13 @@ int vehicle_checksum_honda(uint32_t id, const uint8_t *data, uint8_t dlc);
 int vehicle_checksum_vw_mqb(uint32_t id, const uint8_t *data, uint8_t dlc,
                             const uint8_t data_id[VEHICLE_VW_DATA_IDS]);
 
+/* Hyundai/Kia WHL_SPD11 (opendbc's hyundai_kia_generic DBC, 0x386, 8 bytes): a 4-bit
+ * checksum split over the top 2 bits of byte 5 (WHL_SPD_Checksum_LSB) and of byte 7
+ * (_MSB): the number of bits set in the frame but the top 2 bits of bytes 1, 3, 5 and 7
+ * (the rolling counter's two halves and the checksum's), XOR 9, modulo 16. The counter is
+ * not covered (the profile checks it apart). 1 if data[0..8) carries it (dlc 8), else 0.
+ * From opendbc's definition (its safety code and the checksum of its safety tests); no
+ * Hyundai or Kia recording in the project. */
+int vehicle_checksum_hkg_whl_spd(uint32_t id, const uint8_t *data, uint8_t dlc);
+
 #endif /* NAVECU_VEHICLE_CHECKSUM_H */

@@ -47,6 +47,10 @@ CASES = [
     ("a counter that is a value read", lambda s: s.replace('stopped = ["P", "N"]', 'stopped = ["P", "N"]\ncounter = "GE_Fahrstufe"'), "value"),
     ("a counter wider than 8 bits", lambda s: s.replace('stopped = ["P", "N"]', 'stopped = ["P", "N"]\ncounter = "GE_MMom_Soll_02"'), "10 bits"),
     ("a counter modulus beyond its bits", lambda s: s.replace('stopped = ["P", "N"]', 'stopped = ["P", "N"]\ncounter = "COUNTER_DISABLED"\ncounter_modulus = 17'), "2..16"),
+    ("a counter of parts, one twice", lambda s: s.replace('stopped = ["P", "N"]', 'stopped = ["P", "N"]\ncounter = ["COUNTER_DISABLED", "COUNTER_DISABLED"]'), "different"),
+    ("a counter of parts wider than 8 bits", lambda s: s.replace('stopped = ["P", "N"]', 'stopped = ["P", "N"]\ncounter = ["COUNTER_DISABLED", "GE_Status_Kraftschluss", "GE_MMom_Status_02"]'), "10 bits"),
+    ("a counter of parts, one on the checksum", lambda s: s.replace('stopped = ["P", "N"]', 'stopped = ["P", "N"]\nchecksum = "vw_mqb"\nchecksum_data_ids = [1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16]\ncounter = ["COUNTER_DISABLED", "CHECKSUM"]'), "overlaps"),
+    ("a counter that is no name", lambda s: s.replace('stopped = ["P", "N"]', 'stopped = ["P", "N"]\ncounter = 3'), "a signal name or a list"),
     ("a counter modulus of 1", lambda s: s.replace('stopped = ["P", "N"]', 'stopped = ["P", "N"]\ncounter = "COUNTER_DISABLED"\ncounter_modulus = 1'), "counter_modulus"),
     ("a counter modulus without a counter", lambda s: s.replace('stopped = ["P", "N"]', 'stopped = ["P", "N"]\ncounter_modulus = 15'), "without a counter"),
     ("a counter on navecu's own WheelSpeeds", lambda s: s.replace('message = "ESP_19"', 'native = true\ncounter = "WheelCounter"').replace('direction = "gear"', 'direction = "signed"'), "E2E"),
@@ -343,6 +347,59 @@ def test_the_vw_checksum_is_opendbcs():
         data = bytearray(rng.integers(0, 256, 8, dtype=np.uint8).tobytes())
         fill(0x0AD, data, r.checksum_data_ids)
         assert data[0] == vw.volkswagen_mqb_meb_checksum(0x0AD, None, data), data.hex()
+
+
+def _opendbc_hkg_checksum():
+    """opendbc's own Hyundai/Kia checksum of its safety tests (safety/tests/test_hyundai.py,
+    the function `checksum`, which fills WHL_SPD11's): taken out of the file by its syntax
+    tree and run alone, the module itself needing opendbc's compiled safety library."""
+    import ast
+    import os
+    import opendbc
+    path = os.path.join(os.path.dirname(opendbc.__file__), "safety", "tests", "test_hyundai.py")
+    with open(path) as f:
+        tree = ast.parse(f.read())
+    fn = next(n for n in tree.body if isinstance(n, ast.FunctionDef) and n.name == "checksum")
+    scope = {}
+    exec(compile(ast.Module(body=[fn], type_ignores=[]), path, "exec"), scope)
+    return scope["checksum"]
+
+
+def test_a_checksum_for_one_frame_length_refuses_another():
+    """Hyundai/Kia's WHL_SPD11 checksum is defined on 8 bytes: named on a message of
+    another length, the profile is refused, saying so."""
+    import types
+    with pytest.raises(vehicle.ProfileError, match="8-byte frames; M has 4"):
+        vehicle._checksum({"checksum": "hkg_whl_spd"}, "p.toml [gear]",
+                          types.SimpleNamespace(length=4, name="M"))
+    assert vehicle._checksum({"checksum": "hkg_whl_spd"}, "p.toml [wheels]",
+                             types.SimpleNamespace(length=8, name="M")) == "hkg_whl_spd"
+
+
+def test_the_hyundai_kia_checksum_is_opendbcs():
+    """The test encoder's Hyundai/Kia WHL_SPD11 checksum (tools/vehicle.py, which the
+    firmware's is tested against in test_vehicle_profiles) is opendbc's on 2,000 random
+    frames (its function ORs the checksum into cleared fields), and the profile's counter
+    is the one opendbc's safety code reads: (byte 3 >> 6) << 2 | byte 1 >> 6."""
+    import numpy as np
+    ref = _opendbc_hkg_checksum()
+    fill = vehicle.CAR_CHECKSUMS["hkg_whl_spd"].fill
+    r = vehicle.load("hyundai_sonata_2020").reads[0]
+    assert (r.role, r.message.frame_id, r.checksum) == ("wheels", 0x386, "hkg_whl_spd")
+    rng = np.random.default_rng(5)
+    for _ in range(2000):
+        data = bytearray(rng.integers(0, 256, 8, dtype=np.uint8).tobytes())
+        data[5] &= 0x3F
+        data[7] &= 0x3F
+        _, want, _ = ref((0x386, bytes(data), 0))
+        fill(0x386, data)
+        assert bytes(data) == bytes(want), data.hex()
+        value = int(rng.integers(0, 16))
+        raw = r.message.decode(r.message.encode({**{x.name: 0 for x in r.message.signals},
+                                                 **r.counter.values(value)},
+                                                scaling=False), scaling=False)
+        frame = r.message.encode(raw, scaling=False)
+        assert ((frame[3] >> 6) << 2) | (frame[1] >> 6) == value
 
 
 # ------------------------------------------- wheel speeds in two messages, one per axle

@@ -235,21 +235,27 @@ def test_wrong_dlc(name, role, tmp_path):
 
 @pytest.mark.parametrize("name,role", CHECKSUMMED)
 def test_bad_car_checksum(name, role, tmp_path):
-    """A frame whose checksum field is off, or with any one bit flipped: BAD_CHECKSUM. (A
-    byte changed by more than a bit may pass a nibble sum: Honda's checksum does not see
-    0x0F added to its last byte, a nibble moved from its checksum to the data.)"""
+    """A frame whose checksum field is off, or with any one bit flipped that the checksum
+    covers (each of them in turn): BAD_CHECKSUM. (A byte changed by more than a bit may pass
+    a nibble sum: Honda's checksum does not see 0x0F added to its last byte, a nibble moved
+    from its checksum to the data. Hyundai/Kia's WHL_SPD11 checksum does not cover its
+    counter's bits: the counter check sees those, test_every_step_of_the_counter.)"""
     r = read(name, role)
     cs = vehicle.CAR_CHECKSUMS[r.checksum]
     car = vehicle.CarEncoder(profile(name))
+    n = r.message.length
+    covered = [(b, j) for b in range(n) for j in range(8)
+               if not any(ub % n == b and um >> j & 1 for ub, um in cs.uncovered)]
+    top = (1 << cs.width) - 1
     msgs = []
     for i, v in enumerate(random_values(r.message, np.random.default_rng(7), 255)):
         m = car.message(role, v)
         data = bytearray(m.data)
         if i % 2:   # the checksum field off by 1..its largest value
-            k = 1 + (i // 2) % cs.mask
-            data[cs.byte] = (data[cs.byte] & ~cs.mask & 0xFF) | ((data[cs.byte] + k) & cs.mask)
-        else:       # one bit flipped anywhere: a byte or nibble sum changes by +-2^b
-            data[(i // 2) % len(data)] ^= 1 << (i % 8)
+            cs.put(data, (cs.get(data) + 1 + (i // 2) % top) & top)
+        else:       # one bit flipped: a byte or nibble sum, a bit count change by it
+            byte, bit = covered[(i // 2) % len(covered)]
+            data[byte] ^= 1 << bit
         msgs.append(can.Message(arbitration_id=m.arbitration_id, is_extended_id=False,
                                 dlc=m.dlc, data=bytes(data)))
     for m, d in zip(msgs, decode(name, msgs, tmp_path)):
@@ -661,7 +667,8 @@ def test_odo_step_default_is_the_wheel_signals_resolution(name):
 #: the counters the profiles name: (profile, role) -> (bits, modulus)
 COUNTERS = {("subaru_global_2017", "wheels"): (4, 16),
             ("subaru_global_2017", "gear"): (4, 16),
-            ("honda_civic_2016", "gear"): (2, 4)}
+            ("honda_civic_2016", "gear"): (2, 4),
+            ("hyundai_sonata_2020", "wheels"): (4, 16)}
 COUNTED = sorted(COUNTERS)
 
 
