@@ -106,6 +106,8 @@ typedef struct {
     X(gyro_range_0, c->gyro_range_rps = 0.0f, 0) \
     X(gyro_range_5000dps, c->gyro_range_rps = 87.2664f, 1) \
     X(gyro_range_5001dps, c->gyro_range_rps = 87.28f, 0) \
+    X(accel_range_1g, c->accel_range_mps2 = 9.80665f, 1) \
+    X(accel_range_below_1g, c->accel_range_mps2 = 9.8f, 0) \
     X(accel_range_2000, c->accel_range_mps2 = 2000.0f, 1) \
     X(accel_range_2001, c->accel_range_mps2 = 2001.0f, 0) \
     X(accel_range_nan, c->accel_range_mps2 = NAN, 0)
