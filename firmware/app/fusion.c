@@ -381,12 +381,6 @@ static int start(fusion_t *fu, const fusion_ctx_t *c, const fusion_prior_t *prio
         app_diag_reject(c->diag, &c->diag->health->nav_rejected);
     }
     clear_interval(fu);
-    /* the first interval's change of velocity is from here: one left from before (a
-     * filter stopped long ago, or never run, at 0) put a car started moving 15 m/s ahead
-     * of itself, 150 m/s^2 over 0.1 s, into its first odometer update's sigma */
-    for (int i = 0; i < 2; i++) {
-        fu->v_prev_pred_mps[i] = c->nav->v_n_mps[i];
-    }
     fu->clock_valid = 0u; /* ekf_init's clock is an unknown one: estimated afresh */
     fu->raw_have_tow = 0u;
     fu->odo_frames_used = c->odo->n_frames;
@@ -624,7 +618,8 @@ fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_pr
          * receiver's clock, latency and usual interval (above) */
         return FUSION_GO_ON;
     }
-    if (!fu->on) {
+    const uint8_t starting = fu->on != 0u ? (uint8_t)0u : (uint8_t)1u;
+    if (starting != 0u) {
         if (!start_at_fix(fu, c, prior, fix, d, sh, &then)) {
             return FUSION_GO_ON;
         }
@@ -668,6 +663,15 @@ fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_pr
     fu->ekf.hold_heading = 0u;
     gate_run(fu, c, rp >= 2, sh); /* rp >= 2: the horizontal fix was taken */
     feed_back(fu, c);
+    if (starting != 0u) {
+        /* the first interval's change of velocity is from here, the start's own fix taken:
+         * one left from before (a filter stopped long ago, or never run, at 0) put a car
+         * started moving 15 m/s ahead of itself, 150 m/s^2 over 0.1 s, into its first
+         * odometer update's sigma, and so did the start fix's correction of the velocity */
+        for (int i = 0; i < 2; i++) {
+            fu->v_prev_pred_mps[i] = c->nav->v_n_mps[i];
+        }
+    }
     int was_reset;
     const fusion_action_t act = supervise(fu, c, &was_reset);
     *adopt = !was_reset;
