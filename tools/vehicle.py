@@ -854,13 +854,45 @@ def _data_ids(spec: dict, checksum: str, msg, role: str, where: str) -> tuple:
     return tuple(ids)
 
 
+def _bits_of(msg, sigs) -> dict:
+    """{byte: mask} of the bits the signals sigs take in msg."""
+    raw = {x.name: 0 for x in msg.signals}
+    for sig in sigs:
+        raw[sig.name] = (1 << sig.length) - 1
+    data = msg.encode(raw, scaling=False, strict=False, padding=False)
+    return {i: b for i, b in enumerate(data) if b}
+
+
+def _fixed_layout(checksum: str, msg, counter, where: str) -> None:
+    """A checksum defined for one message's layout (CarChecksum.length: Hyundai/Kia's
+    WHL_SPD11) needs that layout: a signal of the message on each of its fields, and the
+    bits it does not cover (the rolling counter's) the profile's counter, which then checks
+    them: named on another message of that length it would refuse every frame, and a
+    counter left unnamed would go unchecked."""
+    cs = CAR_CHECKSUMS.get(checksum)
+    if cs is None or cs.length == 0:
+        return
+    for byte, mask in cs.fields:
+        if not any(_bits_of(msg, [x]) == {byte % msg.length: mask} for x in msg.signals):
+            raise ProfileError(f"{where}: the {checksum} checksum is in byte {byte}'s bits "
+                               f"0x{mask:02X}, where {msg.name} has no signal of its own")
+    want = {}
+    for byte, mask in cs.uncovered:
+        want[byte % msg.length] = want.get(byte % msg.length, 0) | mask
+    if want and (counter is None or _bits_of(msg, counter.parts) != want):
+        raise ProfileError(f"{where}: the {checksum} checksum does not cover "
+                           + ", ".join(f"byte {b}'s bits 0x{m:02X}" for b, m in want.items())
+                           + f": name {msg.name}'s rolling counter there as `counter`")
+
+
 def _signal_set(role: str, spec: dict, msg, sigs: list, fname: str) -> CarSignalSet:
     """The message of the profile's table `role` (spec) and the signals read from it, with
     its checksum (and a keyed checksum's data IDs) and rolling counter."""
     where = f"{fname} [{role}]"
     checksum = _checksum(spec, where, msg)
-    return CarSignalSet(role, msg, sigs, checksum,
-                        *_counter(spec, msg, sigs, where, checksum),
+    counter, modulus = _counter(spec, msg, sigs, where, checksum)
+    _fixed_layout(checksum, msg, counter, where)
+    return CarSignalSet(role, msg, sigs, checksum, counter, modulus,
                         checksum_data_ids=_data_ids(spec, checksum, msg, role, where))
 
 

@@ -376,6 +376,50 @@ def test_a_checksum_for_one_frame_length_refuses_another():
                              types.SimpleNamespace(length=8, name="M")) == "hkg_whl_spd"
 
 
+def _hyundai_text(name: str) -> str:
+    text = (vehicle.ROOT / "vehicles" / "hyundai_sonata_2020.toml").read_text()
+    return text.replace('name = "hyundai_sonata_2020"', f'name = "{name}"')
+
+
+HKG_COUNTER = 'counter = ["WHL_SPD_AliveCounter_MSB", "WHL_SPD_AliveCounter_LSB"]'
+
+
+def test_a_counter_of_parts_is_joined_most_significant_first(profiles):
+    """Hyundai/Kia's counter of two 2-bit signals: the generated decoder joins them MSB
+    first (byte 3's top bits above byte 1's), and with counter_modulus 15 a joined 15 is
+    refused: the order matters once the modulus is not the full 2^4 (test_vehicle_profiles'
+    counter tests, with the full 16, cannot see a swap). Listed the other way round the
+    generated expression swaps too."""
+    (profiles / "hkg15.toml").write_text(_hyundai_text("hkg15").replace(
+        HKG_COUNTER, HKG_COUNTER + "\ncounter_modulus = 15"))
+    src = vehicle.vehicle_profile_c(vehicle.load("hkg15"))
+    assert ("(uint8_t)(((uint32_t)s.whl_spd_alive_counter_msb << 2u) | "
+            "(uint32_t)s.whl_spd_alive_counter_lsb), 15u)") in src
+    r = vehicle.load("hkg15").reads[0]
+    assert r.counter.values(14) == {"WHL_SPD_AliveCounter_MSB": 3, "WHL_SPD_AliveCounter_LSB": 2}
+    (profiles / "hkgrev.toml").write_text(_hyundai_text("hkgrev").replace(
+        HKG_COUNTER, 'counter = ["WHL_SPD_AliveCounter_LSB", "WHL_SPD_AliveCounter_MSB"]'))
+    assert ("(uint8_t)(((uint32_t)s.whl_spd_alive_counter_lsb << 2u) | "
+            "(uint32_t)s.whl_spd_alive_counter_msb), 16u)") in vehicle.vehicle_profile_c(
+                vehicle.load("hkgrev"))
+
+
+@pytest.mark.parametrize("what,change,word", [
+    ("without its counter", lambda s: s.replace(HKG_COUNTER + "\n", ""),
+     "name WHL_SPD11's rolling counter"),
+    ("with half its counter", lambda s: s.replace(HKG_COUNTER, 'counter = "WHL_SPD_AliveCounter_MSB"'),
+     "name WHL_SPD11's rolling counter"),
+    ("on another 8-byte message", lambda s: s.replace('signal = "CF_Lvr_Gear"', 'signal = "CF_Lvr_Gear"\nchecksum = "hkg_whl_spd"'),
+     "LVR12 has no signal of its own"),
+])
+def test_the_hyundai_kia_checksum_needs_its_layout(profiles, what, change, word):
+    """hkg_whl_spd is WHL_SPD11's layout: named on a message without signals on its fields,
+    or without the counter on the bits it does not cover, the profile is refused."""
+    (profiles / "hkgbad.toml").write_text(change(_hyundai_text("hkgbad")))
+    with pytest.raises(vehicle.ProfileError, match=word):
+        vehicle.load("hkgbad")
+
+
 def test_the_hyundai_kia_checksum_is_opendbcs():
     """The test encoder's Hyundai/Kia WHL_SPD11 checksum (tools/vehicle.py, which the
     firmware's is tested against in test_vehicle_profiles) is opendbc's on 2,000 random
