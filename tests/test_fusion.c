@@ -736,7 +736,7 @@ static void test_reported_accuracy_keeps_the_correlated_error(void **state)
     }
 }
 
-/* A standing car's fixes share their error (rx_corr_s: the correlation time grows with
+/* A standing car's fixes share their error (fusion_rx_corr_s: the correlation time grows with
  * the time standing). GIVEN a car at rest at P0 whose wheels read zero every 0.1 s (and
  * whose z gyro's noise ends the standstill test for 0.5 s every 10 s), the filter started
  * by a fix there, then 60 fixes at 1 Hz each 2 m north of it (180e-7 deg),

@@ -364,10 +364,11 @@ def _pooled_axes_corr(a, b, min_pairs: int = 3):
     """How much of an error is still there k s later: sum(a b) / sqrt(sum(a^2) sum(b^2))
     over the pairs (a[i], b[i]), each an (east, north) error against the reference, the two
     axes pooled, about zero (the reference), which is what the filter's fixes are wrong by.
-    About the pairs' own means instead, one stop's constant error would have no variance
-    and count as none; about one mean of both axes pooled (as before), an east bias and
-    another north passed for a correlation. None with fewer than min_pairs pairs or no
-    error at all."""
+    Every bias is kept on purpose (a bias is an error the filter cannot average out):
+    about the pairs' own means, one stop's constant error would have no variance and
+    count as none; np.corrcoef of both axes pooled (as before) took out one mean common
+    to both axes, and printed nan without variance. None with fewer than min_pairs pairs
+    or no error at all."""
     if len(a) < min_pairs:
         return None
     a = np.asarray(a, dtype=float)
