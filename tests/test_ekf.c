@@ -315,12 +315,12 @@ static void test_gnss_correlated_error_state(void **state)
     const double sw = 0.3, sc = 2.0, sh = sqrt(sw * sw + sc * sc);
     sd[0] = sd[1] = sd[2] = sh;
     filter_with(&f, sd);
-    ekf_gnss_bias_start(&f, (nav_real_t)sc);
+    ekf_gnss_bias_start(&f, (nav_real_t)sc, NAV_C(0.0));
     assert_near(f.P[EKF_GB][EKF_GB], sc * sc, 1e-4);
     assert_near(f.P[EKF_DR][EKF_GB], -sc * sc, 1e-4); /* dr = -db + white */
     const nav_real_t lever[3] = {NAV_C(0.0), NAV_C(0.0), NAV_C(0.0)};
     for (int i = 0; i < 600; i++) {
-        ekf_gnss_bias_step(&f, NAV_C(0.2), NAV_C(120.0), (nav_real_t)sc, (nav_real_t)sc);
+        ekf_gnss_bias_step(&f, NAV_C(0.2), NAV_C(120.0), (nav_real_t)sc, (nav_real_t)sc, NAV_C(0.0));
         assert_int_equal(ekf_gnss_position(&f, &s, &s.pos, &fix, lever, (nav_real_t)sh,
                                            (nav_real_t)sw, NAV_C(1.0), NAV_C(5.0), NAV_C(1.0),
                                            0, 1),
@@ -338,7 +338,7 @@ static void test_gnss_correlated_error_state(void **state)
     assert_true(fabs(east) < 2.0 * sig_e);
     /* a gap of 10 correlation times */
     const double b0 = (double)f.gnss_bias_m[0];
-    ekf_gnss_bias_step(&f, NAV_C(1200.0), NAV_C(120.0), (nav_real_t)sc, (nav_real_t)sc);
+    ekf_gnss_bias_step(&f, NAV_C(1200.0), NAV_C(120.0), (nav_real_t)sc, (nav_real_t)sc, NAV_C(0.0));
     assert_near((double)f.gnss_bias_m[0], b0 * exp(-10.0), fabs(b0) * exp(-10.0) * 2e-3 + 1e-7);
     assert_near(f.P[EKF_GB][EKF_GB], sc * sc, 0.01);
     /* a declared accuracy that grows adds its variance (a new error, the estimate kept);
@@ -347,13 +347,13 @@ static void test_gnss_correlated_error_state(void **state)
      * estimate of 6 m held with the better fixes' 1 m sigma would put the navigator 6 m
      * off them) */
     const double b1 = (double)f.gnss_bias_m[0];
-    ekf_gnss_bias_step(&f, NAV_C(0.0), NAV_C(120.0), NAV_C(3.0), (nav_real_t)sc);
+    ekf_gnss_bias_step(&f, NAV_C(0.0), NAV_C(120.0), NAV_C(3.0), (nav_real_t)sc, NAV_C(0.0));
     assert_near(f.P[EKF_GB][EKF_GB], 9.0, 0.01);
     assert_near((double)f.gnss_bias_m[0], b1, 1e-9);
     f.gnss_bias_m[0] = NAV_C(6.0); /* as estimated from fixes declared that poor */
     const double c_dr = (double)f.P[EKF_DR][EKF_GB];
     const double p_gb = (double)f.P[EKF_GB][EKF_GB];
-    ekf_gnss_bias_step(&f, NAV_C(0.0), NAV_C(120.0), NAV_C(1.0), NAV_C(3.0));
+    ekf_gnss_bias_step(&f, NAV_C(0.0), NAV_C(120.0), NAV_C(1.0), NAV_C(3.0), NAV_C(0.0));
     assert_near((double)f.gnss_bias_m[0], 2.0, 1e-5);
     assert_near((double)f.P[EKF_GB][EKF_GB], p_gb / 9.0, 1e-4);
     assert_near((double)f.P[EKF_DR][EKF_GB], c_dr / 3.0, 1e-5 + fabs(c_dr) * 1e-5);
@@ -390,19 +390,47 @@ static void test_recent_correlated_sigma(void **state)
     const ekf_config_t c = ekf_default_config();
     assert_int_equal(ekf_init(&f, &c, NAV_C(0.0)), NAV_OK);
     assert_near(ekf_gnss_sc_m(&f), 0.0, 0.0);
-    ekf_gnss_bias_start(&f, NAV_C(2.0));
+    ekf_gnss_bias_start(&f, NAV_C(2.0), NAV_C(0.0));
     assert_near(ekf_gnss_sc_m(&f), 2.0, 1e-6);
-    ekf_gnss_bias_step(&f, NAV_C(0.0), NAV_C(20.0), NAV_C(4.0), NAV_C(2.0));
+    ekf_gnss_bias_step(&f, NAV_C(0.0), NAV_C(20.0), NAV_C(4.0), NAV_C(2.0), NAV_C(0.0));
     assert_near(ekf_gnss_sc_m(&f), sqrt(2.0 / (0.25 + 1.0 / 16.0)), 1e-5);
-    ekf_gnss_bias_start(&f, NAV_C(2.0));
-    ekf_gnss_bias_step(&f, NAV_C(800.0), NAV_C(20.0), NAV_C(4.0), NAV_C(2.0));
+    ekf_gnss_bias_start(&f, NAV_C(2.0), NAV_C(0.0));
+    ekf_gnss_bias_step(&f, NAV_C(800.0), NAV_C(20.0), NAV_C(4.0), NAV_C(2.0), NAV_C(0.0));
     assert_near(ekf_gnss_sc_m(&f), 4.0, 1e-5);
-    ekf_gnss_bias_start(&f, NAV_C(2.0));
-    ekf_gnss_bias_step(&f, NAV_C(20.0), NAV_C(20.0), NAV_C(4.0), NAV_C(2.0));
+    ekf_gnss_bias_start(&f, NAV_C(2.0), NAV_C(0.0));
+    ekf_gnss_bias_step(&f, NAV_C(20.0), NAV_C(20.0), NAV_C(4.0), NAV_C(2.0), NAV_C(0.0));
     /* phi by the filter's exp_neg: within 5.2e-4 of e^-1 at x = 1 (2 y^5 / 120, y = 0.5) */
     const double phi = exp(-1.0);
     const double sc = sqrt((phi + 1.0) / (phi * 0.25 + 1.0 / 16.0));
     assert_near(ekf_gnss_sc_m(&f), sc, 5.2e-4 * sc);
+}
+
+/* The vertical's (ekf_gnss_scv_m), counted apart: GIVEN a start without a height (0) THEN
+ * 0; a fix with a vertical part of 3 m THEN 3 m; one of 6 m at once THEN the two weigh
+ * equally, sqrt(2 / (1/9 + 1/36)) = 3.79 m; then a fix without a height after one
+ * correlation time THEN both decay by phi alike and the sigma stays 3.79 m (it is a ratio),
+ * while the horizontal count takes the fix; a fix of 6 m after 40 correlation times THEN
+ * only it counts. */
+static void test_recent_correlated_vertical_sigma(void **state)
+{
+    (void)state;
+    ekf_t f;
+    const ekf_config_t c = ekf_default_config();
+    assert_int_equal(ekf_init(&f, &c, NAV_C(0.0)), NAV_OK);
+    assert_near(ekf_gnss_scv_m(&f), 0.0, 0.0);
+    ekf_gnss_bias_start(&f, NAV_C(2.0), NAV_C(0.0));
+    assert_near(ekf_gnss_scv_m(&f), 0.0, 0.0);
+    ekf_gnss_bias_step(&f, NAV_C(0.0), NAV_C(20.0), NAV_C(2.0), NAV_C(2.0), NAV_C(3.0));
+    assert_near(ekf_gnss_scv_m(&f), 3.0, 1e-5);
+    ekf_gnss_bias_step(&f, NAV_C(0.0), NAV_C(20.0), NAV_C(2.0), NAV_C(2.0), NAV_C(6.0));
+    const double two = sqrt(2.0 / (1.0 / 9.0 + 1.0 / 36.0));
+    assert_near(ekf_gnss_scv_m(&f), two, 1e-5 * two);
+    ekf_gnss_bias_step(&f, NAV_C(20.0), NAV_C(20.0), NAV_C(2.0), NAV_C(2.0), NAV_C(0.0));
+    assert_near(ekf_gnss_scv_m(&f), two, 1e-5 * two);
+    ekf_gnss_bias_step(&f, NAV_C(800.0), NAV_C(20.0), NAV_C(2.0), NAV_C(2.0), NAV_C(6.0));
+    assert_near(ekf_gnss_scv_m(&f), 6.0, 1e-4);
+    ekf_gnss_bias_start(&f, NAV_C(2.0), NAV_C(1.5));
+    assert_near(ekf_gnss_scv_m(&f), 1.5, 1e-6);
 }
 
 /* The heading error shows in the lever arm: an antenna 2 m ahead, the heading 2 deg off,
@@ -730,6 +758,7 @@ int main(void)
         cmocka_unit_test(test_state_ok_sees_the_estimates),
         cmocka_unit_test(test_increment_noise_once),
         cmocka_unit_test(test_recent_correlated_sigma),
+        cmocka_unit_test(test_recent_correlated_vertical_sigma),
         cmocka_unit_test(test_odometer_scale_and_mounting),
         cmocka_unit_test(test_odometer_lever_arm_in_a_turn),
         cmocka_unit_test(test_standstill_updates),

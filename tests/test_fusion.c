@@ -703,7 +703,8 @@ static void test_correlated_error_model_by_fix_rate(void **state)
  * the filter's sqrt(P_EE + P_NN) with 2 x 1.335^2 added, so at least 1.888 m, whatever
  * the fixes' average says, and one more fix declared 60 m leaves it below 3 m (the recent
  * fixes' information-weighted correlated sigma); with 1 s (the inflation) it is the
- * filter's own. */
+ * filter's own. The vertical accuracy likewise: the filter's sqrt(P_UU) with, with the
+ * state, the fixes' correlated vertical part added. */
 static void test_reported_accuracy_keeps_the_correlated_error(void **state)
 {
     for (int as_state = 0; as_state < 2; as_state++) {
@@ -716,6 +717,13 @@ static void test_reported_accuracy_keeps_the_correlated_error(void **state)
                                                          (double)cfg.gnss_white_ratio);
         const double expect = sqrt(p_h + (as_state ? 2.0 * shc * shc : 0.0));
         assert_near(fusion_sigma_h_m(&fu, &cfg), expect, 1e-4 * expect);
+        /* the height's: its fixes' 3 m, correlated part 3 sqrt(1 - w^2) = 2.83 m, added to
+         * the filter's sqrt(P_UU) with the state, not without (fusion_sigma_v_m) */
+        const double p_u = (double)fu.ekf.P[EKF_DR + 2][EKF_DR + 2];
+        const double svc = 3.0 * sqrt(1.0 - (double)cfg.gnss_white_ratio *
+                                                (double)cfg.gnss_white_ratio);
+        const double expect_v = sqrt(p_u + (as_state ? svc * svc : 0.0));
+        assert_near(fusion_sigma_v_m(&fu, &cfg), expect_v, 1e-4 * expect_v);
         if (as_state) {
             assert_true(fusion_sigma_h_m(&fu, &cfg) > 1.888f);
             assert_true(ekf_sigma_h_m(&fu.ekf) < 1.888f);

@@ -165,6 +165,11 @@ uint32_t fusion_pred_div(uint32_t imu_rate_hz);
  * docs/kalman.md, correlated GNSS errors). */
 nav_real_t fusion_sigma_h_m(const fusion_t *fu, const app_config_t *cfg);
 
+/* The vertical accuracy the navigator reports (NAV_Height VertAccuracy), m: the filter's
+ * height sigma with, while the receiver's correlated error is the filter's state, the
+ * recent fixes' correlated vertical variance added (ekf_gnss_scv_m). */
+nav_real_t fusion_sigma_v_m(const fusion_t *fu, const app_config_t *cfg);
+
 /* The receiver's error correlation time (s): gnss_corr_s plus the time the wheels have
  * read zero (odo zero_for_s), that at most APP_GNSS_STAND_CORR_MAX_S: a standing antenna
  * sits in its multipath (fusion.c; docs/kalman.md, a standing receiver). */

@@ -106,8 +106,9 @@ static void emit_navigation(app_t *a, hal_t *hal)
     h.height = (int32_t)lsb_div_round(s->pos.h, 10 * GEO_LSB_PER_MM); /* 0.01 m */
     h.vert_accuracy = NAVECU_NAV_HEIGHT_VERT_ACCURACY_RAW_MAX; /* "unknown" without the filter */
     if (ekf != NULL) {
-        h.vert_accuracy = (uint8_t)accuracy_raw(ekf_state_sigma(ekf, EKF_DR + 2) * NAV_C(10.0),
-                                                NAVECU_NAV_HEIGHT_VERT_ACCURACY_RAW_MAX);
+        h.vert_accuracy =
+            (uint8_t)accuracy_raw(fusion_sigma_v_m(&a->run.fusion, &a->cfg) * NAV_C(10.0),
+                                  NAVECU_NAV_HEIGHT_VERT_ACCURACY_RAW_MAX);
     }
     /* time of validity on the IMU time base, so that a recorder need not trust arrival
      * times: a vcan recording and a --can-log run carry the same value */

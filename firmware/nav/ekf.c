@@ -479,7 +479,7 @@ static nav_real_t sc_var(nav_real_t s2)
 }
 
 void ekf_gnss_bias_step(ekf_t *k, nav_real_t dt_s, nav_real_t tau_s, nav_real_t sigma_c_m,
-                        nav_real_t prev_sigma_c_m)
+                        nav_real_t prev_sigma_c_m, nav_real_t sigma_cv_m)
 {
     const nav_real_t phi =
         tau_s > NAV_C(0.0) && dt_s >= NAV_C(0.0) ? exp_neg(dt_s / tau_s) : NAV_C(0.0);
@@ -495,6 +495,9 @@ void ekf_gnss_bias_step(ekf_t *k, nav_real_t dt_s, nav_real_t tau_s, nav_real_t 
                                   : NAV_C(1.0);
     k->gnss_sc_count = k->gnss_sc_count * phi + NAV_C(1.0);
     k->gnss_sc_info = k->gnss_sc_info * phi + NAV_C(1.0) / sc_var(s2);
+    const nav_real_t has_v = sigma_cv_m > NAV_C(0.0) ? NAV_C(1.0) : NAV_C(0.0);
+    k->gnss_scv_count = k->gnss_scv_count * phi + has_v;
+    k->gnss_scv_info = k->gnss_scv_info * phi + has_v / sc_var(sigma_cv_m * sigma_cv_m);
     for (int a = 0; a < 2; a++) {
         const int i = EKF_GB + a;
         k->gnss_bias_m[a] *= phi * shrink;
@@ -513,11 +516,14 @@ void ekf_gnss_bias_step(ekf_t *k, nav_real_t dt_s, nav_real_t tau_s, nav_real_t 
     }
 }
 
-void ekf_gnss_bias_start(ekf_t *k, nav_real_t sigma_c_m)
+void ekf_gnss_bias_start(ekf_t *k, nav_real_t sigma_c_m, nav_real_t sigma_cv_m)
 {
     const nav_real_t s2 = sigma_c_m * sigma_c_m;
     k->gnss_sc_count = NAV_C(1.0);
     k->gnss_sc_info = NAV_C(1.0) / sc_var(s2);
+    const nav_real_t has_v = sigma_cv_m > NAV_C(0.0) ? NAV_C(1.0) : NAV_C(0.0);
+    k->gnss_scv_count = has_v;
+    k->gnss_scv_info = has_v / sc_var(sigma_cv_m * sigma_cv_m);
     for (int a = 0; a < 2; a++) {
         const int i = EKF_GB + a;
         for (int j = 0; j < EKF_N; j++) {
@@ -534,10 +540,20 @@ void ekf_gnss_bias_start(ekf_t *k, nav_real_t sigma_c_m)
     }
 }
 
+/* sqrt(count / info) of an information-weighted sigma, 0 without any */
+static nav_real_t weighted_sigma(nav_real_t count, nav_real_t info)
+{
+    return info > NAV_C(0.0) ? nav_sqrt(count / info) : NAV_C(0.0);
+}
+
 nav_real_t ekf_gnss_sc_m(const ekf_t *k)
 {
-    return k->gnss_sc_info > NAV_C(0.0) ? nav_sqrt(k->gnss_sc_count / k->gnss_sc_info)
-                                        : NAV_C(0.0);
+    return weighted_sigma(k->gnss_sc_count, k->gnss_sc_info);
+}
+
+nav_real_t ekf_gnss_scv_m(const ekf_t *k)
+{
+    return weighted_sigma(k->gnss_scv_count, k->gnss_scv_info);
 }
 
 void ekf_clock_start(ekf_t *k, nav_real_t shift_m, nav_real_t drift_shift_mps,

@@ -142,6 +142,10 @@ typedef struct {
      * ekf_gnss_bias_step (ekf_gnss_sc_m) */
     nav_real_t gnss_sc_count;
     nav_real_t gnss_sc_info;
+    /* the same of the fixes' correlated vertical sigmas (the fixes with a height; the
+     * height's correlated error is not a state: ekf_gnss_scv_m) */
+    nav_real_t gnss_scv_count;
+    nav_real_t gnss_scv_info;
     /* the receiver clock as estimated: its bias in 0.1 mm units (c times seconds: a clock of
      * 1 ms is 3e5 m, beyond what float32 keeps to millimetres) and its drift, m/s */
     int64_t clock_dmm;
@@ -330,20 +334,25 @@ int ekf_gnss_position(ekf_t *k, const sins_t *s, const geo_pos_t *pos_then,
  * the covariance rows scaled with it, so P stays a covariance). */
 #define ekf_gnss_bias_step NAV_SYM(ekf_gnss_bias_step)
 void ekf_gnss_bias_step(ekf_t *k, nav_real_t dt_s, nav_real_t tau_s, nav_real_t sigma_c_m,
-                        nav_real_t prev_sigma_c_m);
+                        nav_real_t prev_sigma_c_m, nav_real_t sigma_cv_m);
 
 /* The filter started at a fix (its position is the fix's): the position error is the
  * fix's, white part and correlated part sigma_c_m: db = 0 (the estimate) minus the
  * receiver's error, variance sigma_c^2, and dr = -db + white: their covariance
  * -sigma_c^2. */
 #define ekf_gnss_bias_start NAV_SYM(ekf_gnss_bias_start)
-void ekf_gnss_bias_start(ekf_t *k, nav_real_t sigma_c_m);
+void ekf_gnss_bias_start(ekf_t *k, nav_real_t sigma_c_m, nav_real_t sigma_cv_m);
 
 /* The correlated part's sigma of the recent fixes (m per axis): sqrt(count / sum of
  * 1 / sigma_c^2) over about one correlation time, so that one poorly declared fix among
  * many good ones weighs as little as it did in the updates; 0 before any. */
 #define ekf_gnss_sc_m NAV_SYM(ekf_gnss_sc_m)
 nav_real_t ekf_gnss_sc_m(const ekf_t *k);
+
+/* The same of the fixes' correlated vertical sigmas (sigma_cv_m of ekf_gnss_bias_step and
+ * ekf_gnss_bias_start, a fix with a height: above 0; 0 before any). */
+#define ekf_gnss_scv_m NAV_SYM(ekf_gnss_scv_m)
+nav_real_t ekf_gnss_scv_m(const ekf_t *k);
 
 /* GNSS velocity (ENU m/s) against the navigator's velocity at the fix's time v_then. */
 int ekf_gnss_velocity(ekf_t *k, const nav_real_t v_then_mps[3], const nav_real_t meas_mps[3],

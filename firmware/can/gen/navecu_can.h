@@ -1259,7 +1259,7 @@ struct navecu_can_nav_height_t {
     int32_t height;
 
     /**
-     * The filter's height 1-sigma; 25.5 (raw 255) unknown (the filter not running), a known value saturates at 25.4.
+     * The filter's height 1-sigma with, while the receiver's correlated error is a filter state, the recent fixes' correlated vertical part added (docs/kalman.md, Correlated GNSS errors); 25.5 (raw 255) unknown (the filter not running), a known value saturates at 25.4.
      *
      * Range: 0..255 (0..25.5 m)
      * Scale: 0.1
