@@ -410,7 +410,7 @@ static void test_recent_correlated_sigma(void **state)
  * equally, sqrt(2 / (1/9 + 1/36)) = 3.79 m; then a fix without a height after one
  * correlation time THEN both decay by phi alike and the sigma stays 3.79 m (it is a ratio),
  * while the horizontal count takes the fix; a fix of 6 m after 40 correlation times THEN
- * only it counts. */
+ * only it counts; without a height for 14 correlation times THEN forgotten. */
 static void test_recent_correlated_vertical_sigma(void **state)
 {
     (void)state;
@@ -431,6 +431,12 @@ static void test_recent_correlated_vertical_sigma(void **state)
     assert_near(ekf_gnss_scv_m(&f), 6.0, 1e-4);
     ekf_gnss_bias_start(&f, NAV_C(2.0), NAV_C(1.5));
     assert_near(ekf_gnss_scv_m(&f), 1.5, 1e-6);
+    /* 13 correlation times without a height: held; 15: forgotten, 0 (not the wandering
+     * ratio of two denormals) */
+    ekf_gnss_bias_step(&f, NAV_C(260.0), NAV_C(20.0), NAV_C(2.0), NAV_C(2.0), NAV_C(0.0));
+    assert_near(ekf_gnss_scv_m(&f), 1.5, 1e-4);
+    ekf_gnss_bias_step(&f, NAV_C(40.0), NAV_C(20.0), NAV_C(2.0), NAV_C(2.0), NAV_C(0.0));
+    assert_near(ekf_gnss_scv_m(&f), 0.0, 0.0);
 }
 
 /* The heading error shows in the lever arm: an antenna 2 m ahead, the heading 2 deg off,

@@ -740,6 +740,18 @@ static void test_reported_accuracy_keeps_the_correlated_error(void **state)
             assert_int_equal(fusion_gnss(&fu, &ctx, &PRIOR, &f, &adopt), FUSION_GO_ON);
             assert_true(fusion_sigma_h_m(&fu, &cfg) < 3.0f);
             assert_true(fusion_sigma_h_m(&fu, &cfg) > ekf_sigma_h_m(&fu.ekf));
+            /* a 2D fix (no height) declaring 30 m vertically: the height's correlated part
+             * is not its (has_h 0 adds nothing) */
+            const double scv = (double)ekf_gnss_scv_m(&fu.ekf);
+            for (int j = 0; j < 20; j++) {
+                (void)rest_sample();
+            }
+            f.hacc_m = 2.0f;
+            f.has_h = 0u;
+            f.vacc_m = 30.0f;
+            f.tow_ms += 200u;
+            assert_int_equal(fusion_gnss(&fu, &ctx, &PRIOR, &f, &adopt), FUSION_GO_ON);
+            assert_near((double)ekf_gnss_scv_m(&fu.ekf), scv, 1e-4 * scv);
         }
     }
 }

@@ -1099,10 +1099,12 @@ static fusion_action_t raw_fuse(fusion_t *fu, const raw_epoch_t *e, nav_real_t d
         for (int i = 0; i < e->n; i++) {
             sg[i] = pr_sigma_m(&e->g->sat[e->slot[i]]);
         }
-        bias_step(fu, cfg, c->diag->n_samples,
-                  median_of(sg, e->n) *
-                      nav_sqrt(NAV_C(1.0) - cfg->gnss_white_ratio * cfg->gnss_white_ratio),
-                  corr_s, NAV_C(0.0)); /* no height of its own: the vertical part decays */
+        /* the ranges see the height as the horizontal (taken as if the geometry's DOP were
+         * 1 per axis, as the horizontal's): the same correlated part for both */
+        const nav_real_t sc_raw =
+            median_of(sg, e->n) *
+            nav_sqrt(NAV_C(1.0) - cfg->gnss_white_ratio * cfg->gnss_white_ratio);
+        bias_step(fu, cfg, c->diag->n_samples, sc_raw, corr_s, sc_raw);
         r_scale = NAV_C(1.0);
     }
     const nav_real_t v_min = APP_GNSS_HEADING_SPEED_SIGMAS * APP_RAW_RR_SIGMA_MIN_MPS;

@@ -498,6 +498,12 @@ void ekf_gnss_bias_step(ekf_t *k, nav_real_t dt_s, nav_real_t tau_s, nav_real_t 
     const nav_real_t has_v = sigma_cv_m > NAV_C(0.0) ? NAV_C(1.0) : NAV_C(0.0);
     k->gnss_scv_count = k->gnss_scv_count * phi + has_v;
     k->gnss_scv_info = k->gnss_scv_info * phi + has_v / sc_var(sigma_cv_m * sigma_cv_m);
+    if (k->gnss_scv_count < NAV_C(1e-6)) {
+        /* no height for 14 correlation times: forgotten (the claim then P_UU's alone),
+         * before the sums reach float32's denormals, where their ratio wanders */
+        k->gnss_scv_count = NAV_C(0.0);
+        k->gnss_scv_info = NAV_C(0.0);
+    }
     for (int a = 0; a < 2; a++) {
         const int i = EKF_GB + a;
         k->gnss_bias_m[a] *= phi * shrink;

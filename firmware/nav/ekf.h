@@ -350,7 +350,10 @@ void ekf_gnss_bias_start(ekf_t *k, nav_real_t sigma_c_m, nav_real_t sigma_cv_m);
 nav_real_t ekf_gnss_sc_m(const ekf_t *k);
 
 /* The same of the fixes' correlated vertical sigmas (sigma_cv_m of ekf_gnss_bias_step and
- * ekf_gnss_bias_start, a fix with a height: above 0; 0 before any). */
+ * ekf_gnss_bias_start, a fix with a height: above 0; 0 before any). A step without one
+ * (0) decays both sums alike, so the sigma holds (the height unobserved, its last
+ * correlated part still the best figure) until 14 correlation times without one forget
+ * it (0). */
 #define ekf_gnss_scv_m NAV_SYM(ekf_gnss_scv_m)
 nav_real_t ekf_gnss_scv_m(const ekf_t *k);
 
