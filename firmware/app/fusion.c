@@ -202,13 +202,12 @@ static void standstill_updates(fusion_t *fu, const fusion_ctx_t *c, nav_real_t T
 
 /* The odometer's reading moved on to now: it describes the car odo_latency_s before it
  * arrived, and it arrived age_s ago; moved with the interval's mean along-track
- * acceleration (the horizontal specific force along the navigator's velocity; a reading
- * ahead (1) or reversing (0); issue #18). */
+ * acceleration (the horizontal specific force along the navigator's velocity, v_h its
+ * horizontal speed; a reading ahead (1) or reversing (0); issue #18). */
 static nav_real_t odo_speed_now(const fusion_ctx_t *c, const nav_real_t f_mean_n[3],
-                                uint8_t ahead)
+                                uint8_t ahead, nav_real_t v_h)
 {
     const nav_real_t *v = c->nav->v_n_mps;
-    const nav_real_t v_h = nav_sqrt(v[0] * v[0] + v[1] * v[1]);
     nav_real_t speed = c->odo->speed_mps;
     if (v_h > APP_ODO_MIN_SPEED_MPS) {
         const nav_real_t a_along = (f_mean_n[0] * v[0] + f_mean_n[1] * v[1]) / v_h;
@@ -225,15 +224,12 @@ static void odometer_updates(fusion_t *fu, const fusion_ctx_t *c, nav_real_t T,
                              const nav_real_t f_mean_n[3])
 {
     const odo_t *odo = c->odo;
-    nav_real_t acc = NAV_C(0.0);
-    const nav_real_t *vp = fu->v_prev_pred_mps;
-    const nav_real_t speed_prev = nav_sqrt(vp[0] * vp[0] + vp[1] * vp[1]);
-    for (int i = 0; i < 2; i++) {
-        const nav_real_t d = c->nav->v_n_mps[i] - fu->v_prev_pred_mps[i];
-        acc += d * d;
-        fu->v_prev_pred_mps[i] = c->nav->v_n_mps[i];
-    }
-    acc = nav_sqrt(acc) / T;
+    const nav_real_t *v = c->nav->v_n_mps;
+    /* the velocity at the previous prediction, kept for this one's odometer update (the
+     * interval's change of velocity and of speed, computed only when one comes) */
+    const nav_real_t vp[2] = {fu->v_prev_pred_mps[0], fu->v_prev_pred_mps[1]};
+    fu->v_prev_pred_mps[0] = v[0];
+    fu->v_prev_pred_mps[1] = v[1];
     const nav_real_t per = odo->period_s;
     if (odo->valid && odo->standing) {
         standstill_updates(fu, c, T, per, f_mean_n);
@@ -241,11 +237,18 @@ static void odometer_updates(fusion_t *fu, const fusion_ctx_t *c, nav_real_t T,
                nav_fabs(odo->speed_mps) > APP_ODO_MIN_SPEED_MPS) {
         fu->odo_frames_used = odo->n_frames;
         const uint8_t ahead = odo->speed_mps > NAV_C(0.0) ? 1u : 0u;
-        const nav_real_t speed = odo_speed_now(c, f_mean_n, ahead);
+        const nav_real_t v_h = nav_sqrt(v[0] * v[0] + v[1] * v[1]);
+        const nav_real_t speed = odo_speed_now(c, f_mean_n, ahead, v_h);
         /* moved on to a stop or through it, the reading tells no speed to update with */
         if (!(ahead != 0u ? speed > APP_ODO_MIN_SPEED_MPS : speed < -APP_ODO_MIN_SPEED_MPS)) {
             return;
         }
+        nav_real_t acc = NAV_C(0.0);
+        for (int i = 0; i < 2; i++) {
+            const nav_real_t d = v[i] - vp[i];
+            acc += d * d;
+        }
+        acc = nav_sqrt(acc) / T;
         nav_real_t sf = APP_ODO_SIGMA_MPS + APP_ODO_SIGMA_SPEED_FRAC * nav_fabs(odo->speed_mps) +
                         APP_ODO_SIGMA_ACC_PERIOD * acc * per;
         if (per > T) {
@@ -264,10 +267,9 @@ static void odometer_updates(fusion_t *fu, const fusion_ctx_t *c, nav_real_t T,
          * the lateral row's sigma there, the filter took it as a climb: the height sank
          * 12 m through the next stop and its zero-velocity update was refused for all of it
          * (a simulated motorway drive, tools/sim/scenarios/motorway.toml, 1510 refusals) */
-        const nav_real_t *v = c->nav->v_n_mps;
-        const nav_real_t v_h = nav_sqrt(v[0] * v[0] + v[1] * v[1]);
         /* along the track: the change of the speed over the interval, not of the velocity
          * (a turn's centripetal acceleration pitches nothing) */
+        const nav_real_t speed_prev = nav_sqrt(vp[0] * vp[0] + vp[1] * vp[1]);
         const nav_real_t a_along = (v_h - speed_prev) / T;
         const nav_real_t s_vert = s_nhc + APP_DIVE_RAD_PER_MPS2 * v_h * nav_fabs(a_along);
         app_trace(APP_TRACE_ODOMETER_UPDATE, 0u);
@@ -554,6 +556,12 @@ __attribute__((noinline)) nav_real_t fusion_rx_corr_s(const app_config_t *cfg, c
     return cfg->gnss_corr_s + (t < APP_GNSS_STAND_CORR_MAX_S ? t : APP_GNSS_STAND_CORR_MAX_S);
 }
 
+/* the correlated part of a declared GNSS sigma: sqrt(1 - gnss_white_ratio^2) of it */
+__attribute__((noinline)) static nav_real_t gnss_corr_part(const app_config_t *cfg)
+{
+    return nav_sqrt(NAV_C(1.0) - cfg->gnss_white_ratio * cfg->gnss_white_ratio);
+}
+
 /* the correlated error state moved on to sample n, its stationary sigma now shc_m, its
  * correlation time corr_s (fusion_rx_corr_s) */
 __attribute__((noinline)) static void bias_step(fusion_t *fu, const app_config_t *cfg,
@@ -629,7 +637,7 @@ fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_pr
     const uint8_t as_state = bias_is_state(fu, cfg) ? 1u : 0u;
     const nav_real_t shw =
         as_state != 0u ? cfg->gnss_white_ratio * sh : sh * nav_sqrt(r_scale);
-    const nav_real_t corr_part = nav_sqrt(NAV_C(1.0) - cfg->gnss_white_ratio * cfg->gnss_white_ratio);
+    const nav_real_t corr_part = gnss_corr_part(cfg);
     const nav_real_t shc = sh * corr_part;
     /* the fix's correlated vertical part, for the height's claim (fusion_sigma_v_m) */
     const nav_real_t svc = fix->has_h ? sv * corr_part : NAV_C(0.0);
@@ -1101,9 +1109,7 @@ static fusion_action_t raw_fuse(fusion_t *fu, const raw_epoch_t *e, nav_real_t d
         }
         /* the ranges see the height as the horizontal (taken as if the geometry's DOP were
          * 1 per axis, as the horizontal's): the same correlated part for both */
-        const nav_real_t sc_raw =
-            median_of(sg, e->n) *
-            nav_sqrt(NAV_C(1.0) - cfg->gnss_white_ratio * cfg->gnss_white_ratio);
+        const nav_real_t sc_raw = median_of(sg, e->n) * gnss_corr_part(cfg);
         bias_step(fu, cfg, c->diag->n_samples, sc_raw, corr_s, sc_raw);
         r_scale = NAV_C(1.0);
     }
