@@ -796,11 +796,9 @@ def _counter(spec: dict, msg, data_sigs: list, where: str, checksum: str) -> tup
                                f"(scale 1, offset 0), not {'signed ' if sig.is_signed else ''}"
                                f"({sig.scale:g}, {sig.offset:g})")
         if checksum != "none":
-            cs = CAR_CHECKSUMS[checksum]
-            raw = {x.name: 0 for x in msg.signals}
-            raw[sig.name] = (1 << sig.length) - 1
-            bits = msg.encode(raw, scaling=False, strict=False, padding=False)
-            if any(bits[byte] & mask for byte, mask in cs.fields):
+            bits = _bits_of(msg, [sig])
+            if any(bits.get(byte % msg.length, 0) & mask
+                   for byte, mask in CAR_CHECKSUMS[checksum].fields):
                 raise ProfileError(f"{where}: counter {name} overlaps the {checksum} "
                                    "checksum's bits")
         parts.append(sig)
