@@ -375,6 +375,37 @@ static void test_nonfinite_navigator_restarts(void **state)
     assert_int_equal(fu.on, 0);
 }
 
+/* GIVEN the filter running on a car standing still (its wheels read zero every 0.1 s)
+ * WHEN the mechanization refuses 3 samples of 10 ms (a velocity increment of 2000 m/s,
+ * beyond the core's 1000 m/s: the navigator stays finite) THEN each is counted, the
+ * filter goes on, and their 30 ms still pass for the wheel speeds (the odometer's age,
+ * IMU time: its timeout and period), while its standstill neither ends nor grows: a
+ * refused sample's rates are no evidence. Before, a refused sample skipped odo_tick and
+ * the wheel speeds' clock stopped. */
+static void test_refused_sample_ages_the_wheel_speeds(void **state)
+{
+    (void)state;
+    start_filter();
+    const nav_real_t zero[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+    for (int j = 0; j < 300; j++) {
+        if (j % 10 == 0) {
+            assert_int_equal(odo_wheels(&odo, zero, 0.0f), NAV_OK);
+        }
+        assert_int_equal(rest_sample(), FUSION_GO_ON);
+    }
+    assert_int_equal(odo.standing, 1);
+    const double age0_s = (double)odo.age_s;
+    const double still0_s = (double)odo.still_for_s;
+    for (int j = 0; j < 3; j++) {
+        assert_int_equal(braking_sample(-2e5), FUSION_GO_ON);
+    }
+    assert_int_equal(health.nav_rejected, 3u);
+    assert_int_equal(fu.on, 1);
+    assert_near((double)odo.age_s, age0_s + 0.03, 1e-6);
+    assert_near((double)odo.still_for_s, still0_s, 1e-9);
+    assert_int_equal(odo.standing, 1);
+}
+
 /* GIVEN the filter running WHEN a fix comes with a NaN speed accuracy (nav_clamp passes
  * NaN through, so the velocity update's noise is NaN) THEN the core refuses that update
  * (ekf_update checks its noise): the NaN never reaches the state, the position update is
@@ -1262,6 +1293,7 @@ int main(void)
         cmocka_unit_test_setup(test_diverged_with_gnss_reacquires, setup),
         cmocka_unit_test_setup(test_diverged_without_gnss_goes_on, setup),
         cmocka_unit_test_setup(test_nonfinite_navigator_restarts, setup),
+        cmocka_unit_test_setup(test_refused_sample_ages_the_wheel_speeds, setup),
         cmocka_unit_test_setup(test_nan_measurement_noise_refused, setup),
         cmocka_unit_test_setup(test_nan_state_found_at_gnss_update, setup),
         cmocka_unit_test_setup(test_vel_up_none_not_fused, setup),

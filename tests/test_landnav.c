@@ -232,15 +232,23 @@ static void test_release_and_restart(void **state)
     assert_int_equal(ln.output_dr, 0);
 }
 
-/* A step the strapdown core refuses (an interval longer than its 0.2 s) is counted. */
+/* A step the strapdown core refuses (an interval longer than its 0.2 s) is counted. GIVEN
+ * the wheels reading zero THEN its time passes for them (the odometer's age, IMU time)
+ * but does not count as time standing still: its zero rates were refused. */
 static void test_refused_step_counted(void **state)
 {
     (void)state;
+    wheels(0.0f);
+    (void)step(0.0f, 0.0f);
+    const double age0_s = (double)odo.age_s;
+    const double still0_s = (double)odo.still_for_s;
     imu_inc_t inc;
     memset(&inc, 0, sizeof inc);
     inc.dt_s = 0.5f;
     nav_real_t yaw;
     assert_int_equal(landnav_step(&ln, &zb, &PRIOR, &nav, &dr, &odo, &inc, &yaw), 1);
+    assert_near((double)odo.age_s, age0_s + 0.5, 1e-6);
+    assert_near((double)odo.still_for_s, still0_s, 1e-9);
 }
 
 /* GIVEN the dead reckoning's accuracy started at 1 m per axis, scale 0.02, heading 0.05

@@ -298,6 +298,9 @@ fusion_action_t fusion_imu_step(fusion_t *fu, const fusion_ctx_t *c, imu_inc_t *
     app_trace(APP_TRACE_MECHANIZATION, 1u);
     if (mech_rc != NAV_OK) {
         app_diag_reject(c->diag, &c->diag->health->nav_rejected);
+        /* the sample's time still passes for the wheel speeds (their timeout and period
+         * are IMU time); its rates, refused, are no evidence of standing still */
+        odo_age(c->odo, dt);
         /* every later sample would be refused too */
         return sins_finite(c->nav) ? FUSION_GO_ON : reset(fu, c);
     }

@@ -84,8 +84,10 @@ int landnav_step(landnav_t *ln, zbias_t *zb, const zbias_prior_t *prior, sins_t 
     *yaw_rate_rps = inc->dtheta_b_rad[2] / inc->dt_s;
     if (sins_step(nav, inc) != NAV_OK) {
         refused++;
+        odo_age(odo, inc->dt_s); /* as fusion_imu_step: time passes, no standstill evidence */
+    } else {
+        odo_tick(odo, inc->dt_s, *yaw_rate_rps);
     }
-    odo_tick(odo, inc->dt_s, *yaw_rate_rps);
     if (odo->standing) {
         standstill_step(ln, zb, prior, nav, raw_z, inc->dt_s);
         ln->output_dr = 1u;
