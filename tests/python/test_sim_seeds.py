@@ -72,9 +72,16 @@ def test_sweep_writes_every_seed_and_its_summary(sweep):
         assert r["error"] is None and r["rc"] == 0
         assert (out / "tiny" / f"seed{r['seed']}" / "report.json").exists()
         for k in ("rms_m", "outage_pct", "within_2sigma_pct", "hacc_spearman",
-                  "hacc_cv_ratio", "epochs", "run_s", "ideal_rms_m"):
+                  "hacc_cv_ratio", "epochs", "run_s", "ideal_rms_m", "height_rms_m",
+                  "height_within_2sigma_pct"):
             assert k in r, k
         assert r["rms_m"] is not None and r["outage_pct"] is not None
+        # the height's figures are its report.json's
+        rep = json.loads((out / "tiny" / f"seed{r['seed']}" / "report.json").read_text())
+        assert r["height_rms_m"] == rep["height"]["error_m"]["rms"] > 0.0
+        assert r["height_within_2sigma_pct"] == pytest.approx(
+            100.0 * rep["height"]["frac_within_2sigma"])
+        assert 0.0 <= r["height_within_2sigma_pct"] <= 100.0
         assert r["ideal_rms_m"] is not None and r["ideal_rms_m"] > 0.0
         assert r["epochs"] > 0
     # the two seeds are different drives' sensor errors
@@ -84,11 +91,12 @@ def test_sweep_writes_every_seed_and_its_summary(sweep):
         vals = [r[fig] for r in sc["seeds"] if r[fig] is not None]
         assert s["seeds"] == len(vals)
         assert s["median"] == pytest.approx(float(np.median(vals)))
-        worst = min(vals) if fig in ("within_2sigma_pct", "hacc_spearman",
-                                     "hacc_cv_ratio") else max(vals)
+        worst = min(vals) if fig in ("within_2sigma_pct", "height_within_2sigma_pct",
+                                     "hacc_spearman", "hacc_cv_ratio") else max(vals)
         assert s["worst"] == pytest.approx(worst)
         assert s["limits"] == {} and s["result"] is None   # no limits for this scenario
-    assert {"rms_m", "outage_pct", "within_2sigma_pct"} <= set(sc["summary"])
+    assert {"rms_m", "outage_pct", "within_2sigma_pct", "height_rms_m",
+            "height_within_2sigma_pct"} <= set(sc["summary"])
     a = sc["across_seeds"]
     assert a["seeds"] == 2
     assert a["rms_m"] == [pytest.approx(min(r["rms_m"] for r in sc["seeds"])),

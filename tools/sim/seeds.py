@@ -15,6 +15,10 @@ The figures of merit, from each run's report.json (tools/sim/report.py):
                 (longest) GNSS outage as % of the distance driven in it
   within_2sigma_pct  sigma_consistency.frac_within_2sigma x 100: share of the epochs whose
                 error <= 2 x NAV_Status HorizAccuracy
+  height_rms_m  height.error_m.rms: RMS of NAV_Height's Height against the truth's
+  height_within_2sigma_pct  height.frac_within_2sigma x 100: share of the NAV_Height epochs
+                with a known VertAccuracy whose |error| <= 2 x VertAccuracy (no limit in
+                issue #18; the vertical claim checked as the horizontal one is)
 and, per seed, whether the reported accuracy follows the error (recomputed from nav.log and
 truth.npz over the same epochs as the sigma consistency):
   hacc_spearman Spearman rank correlation of HorizAccuracy and the horizontal error over the
@@ -71,6 +75,8 @@ FIGURES = {
     "ideal_rms_m": (max, "m", "RMS of a perfect dead reckoning from the fixes (model-matched)"),
     "outage_pct": (max, "%", "error at the outage's end, % of its distance"),
     "within_2sigma_pct": (min, "%", "epochs within 2 x HorizAccuracy"),
+    "height_rms_m": (max, "m", "RMS height error"),
+    "height_within_2sigma_pct": (min, "%", "epochs within 2 x VertAccuracy"),
     "hacc_spearman": (min, "", "Spearman(HorizAccuracy, error)"),
     "hacc_cv_ratio": (min, "", "CV(HorizAccuracy) / CV(error)"),
 }
@@ -166,7 +172,11 @@ def figures_of(rep: dict) -> dict:
     outs = [o for o in rep.get("outages") or [] if o.get("distance_m")]
     longest = max(outs, key=lambda o: o["distance_m"]) if outs else None
     frac = sc.get("frac_within_2sigma")
+    hgt = rep.get("height") or {}
+    hfrac = hgt.get("frac_within_2sigma")
     return {"rms_m": (rep.get("horizontal_error_m") or {}).get("rms"),
+            "height_rms_m": (hgt.get("error_m") or {}).get("rms"),
+            "height_within_2sigma_pct": None if hfrac is None else 100.0 * hfrac,
             "outage_pct": longest.get("end_error_pct_of_distance") if longest else None,
             "outage_m": longest.get("end_error_m") if longest else None,
             "outage_distance_m": longest.get("distance_m") if longest else None,
@@ -283,12 +293,13 @@ def tables(result: dict) -> str:
         lines.append(f"| {name} | {a['sigma_mean_m'][0]:.3f}-{a['sigma_mean_m'][1]:.3f} m "
                      f"| {a['rms_m'][0]:.2f}-{a['rms_m'][1]:.2f} m | {_f(a['cv_ratio'], '.4f')} |")
     lines += ["", "| scenario | seed | RMS | perfect DR's RMS | outage end | within 2 sigma "
-              "| Spearman(sigma, error) | CV ratio | sigma min-max | error min-max | run |",
-              "|---|---|---|---|---|---|---|---|---|---|---|"]
+              "| Spearman(sigma, error) | CV ratio | sigma min-max | error min-max "
+              "| height: RMS, within 2 VertAccuracy | run |",
+              "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for name, sc in result["scenarios"].items():
         for r in sc["seeds"]:
             if r.get("error"):
-                lines.append(f"| {name} | {r['seed']} | ERROR: {r['error']} ||||||||| ")
+                lines.append(f"| {name} | {r['seed']} | ERROR: {r['error']} |||||||||| ")
                 continue
             outage = ("-" if r.get("outage_pct") is None else
                       f"{r['outage_m']:.2f} m, {r['outage_pct']:.3f} %"
@@ -300,7 +311,9 @@ def tables(result: dict) -> str:
                 f"| {outage} "
                 f"| {_f(r['within_2sigma_pct'], '.1f')} % | {_f(r['hacc_spearman'])} "
                 f"| {_f(r['hacc_cv_ratio'])} | {_f(r['sigma_min_m'])}-{_f(r['sigma_max_m'])} m "
-                f"| {_f(r['error_min_m'])}-{_f(r['error_max_m'])} m | {r['run_s']:.0f} s |")
+                f"| {_f(r['error_min_m'])}-{_f(r['error_max_m'])} m "
+                f"| {_f(r.get('height_rms_m'))} m, {_f(r.get('height_within_2sigma_pct'), '.1f')} % "
+                f"| {r['run_s']:.0f} s |")
     return "\n".join(lines)
 
 
