@@ -341,9 +341,9 @@ static int32_t interpolate_raw(int32_t from, int32_t to, uint64_t num, uint64_t 
 
 void imu_stream_bridge(const imu_sample_t *smp, uint64_t k, int32_t w_raw[3], int32_t v_raw[3])
 {
-    for (int i = 0; i < 3; i++) {
-        w_raw[i] = interpolate_raw(smp->prev_raw[i], smp->raw[i], k + 1u, smp->lost + 1u);
-        v_raw[i] = interpolate_raw(smp->prev_raw[i + 3], smp->raw[i + 3], k + 1u, smp->lost + 1u);
+    for (int i = 0; i < 6; i++) {
+        int32_t *out = i < 3 ? &w_raw[i] : &v_raw[i - 3];
+        *out = interpolate_raw(smp->prev_raw[i], smp->raw[i], k + 1u, smp->lost + 1u);
     }
 }
 
