@@ -347,7 +347,9 @@ void imu_stream_bridge(const imu_sample_t *smp, uint64_t k, int32_t w_raw[3], in
     }
 }
 
-uint32_t imu_stream_dt_us(const imu_sample_t *smp, uint64_t k)
+/* out of line (noinline): the link inlined it, two 64-bit divisions, at its three calls
+ * (app.c's on_imu_accel): 64 bytes of the ECU's flash */
+__attribute__((noinline)) uint32_t imu_stream_dt_us(const imu_sample_t *smp, uint64_t k)
 {
     const uint64_t n = smp->lost + 1u;
     const uint64_t dt = smp->dt_us;
