@@ -501,6 +501,44 @@ static void test_initial_attitude_decoded(void **state)
     assert_int_equal(decode(&f), RX_BAD_VALUE);
 }
 
+/* GNSS_RawSatX, Y and Z: each axis's frame packed with its own codec, decoded to its part
+ * with the position and velocity in their LSB (app_rx.c unpacks the three with X's
+ * layout: the DBC gives them one) */
+static void test_raw_sat_axes_decoded(void **state)
+{
+    (void)state;
+    const uint32_t ids[3] = {NAVECU_CAN_GNSS_RAW_SAT_X_FRAME_ID, NAVECU_CAN_GNSS_RAW_SAT_Y_FRAME_ID,
+                             NAVECU_CAN_GNSS_RAW_SAT_Z_FRAME_ID};
+    const uint8_t parts[3] = {RX_RAW_PART_X, RX_RAW_PART_Y, RX_RAW_PART_Z};
+    const int32_t pos[3] = {INT32_MIN, -123456789, INT32_MAX};
+    const int16_t vel[3] = {INT16_MAX, INT16_MIN, -2};
+    for (int k = 0; k < 3; k++) {
+        uint8_t d[8];
+        const uint8_t slot = (uint8_t)(15 - k);
+        const uint8_t epoch = (uint8_t)(14 - 3 * k);
+        if (k == 0) {
+            struct navecu_can_gnss_raw_sat_x_t m = {pos[k], vel[k], slot, epoch, 0u};
+            navecu_can_gnss_raw_sat_x_pack(d, &m, 8u);
+        } else if (k == 1) {
+            struct navecu_can_gnss_raw_sat_y_t m = {pos[k], vel[k], slot, epoch, 0u};
+            navecu_can_gnss_raw_sat_y_pack(d, &m, 8u);
+        } else {
+            struct navecu_can_gnss_raw_sat_z_t m = {pos[k], vel[k], slot, epoch, 0u};
+            navecu_can_gnss_raw_sat_z_pack(d, &m, 8u);
+        }
+        e2e_protect(ids[k], d);
+        const hal_can_frame_t f = cf_frame(ids[k], d, 0u);
+        memset(&in, 0xA5, sizeof in);
+        assert_int_equal(decode(&f), RX_OK);
+        assert_int_equal(in.kind, RX_GNSS_RAW_SAT);
+        assert_int_equal(in.u.raw_sat.part, parts[k]);
+        assert_int_equal(in.u.raw_sat.epoch, epoch);
+        assert_int_equal(in.u.raw_sat.slot, slot);
+        assert_int_equal(in.u.raw_sat.pos_lsb, pos[k]);
+        assert_int_equal(in.u.raw_sat.vel_lsb, vel[k]);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -523,6 +561,7 @@ int main(void)
         cmocka_unit_test_setup(test_gnss_status_decoded, setup),
         cmocka_unit_test_setup(test_command_decoded, setup),
         cmocka_unit_test_setup(test_initial_attitude_decoded, setup),
+        cmocka_unit_test_setup(test_raw_sat_axes_decoded, setup),
     };
     return cmocka_run_group_tests_name("app_rx", tests, NULL, NULL);
 }

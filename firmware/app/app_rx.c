@@ -249,18 +249,14 @@ static rx_verdict_t decode_raw(int msg, const uint8_t d[8], rx_input_t *in)
         r->rr_sigma_lsb = m.range_rate_sigma;
         r->cn0_dbhz = m.cn0;
         r->rr_valid = m.range_rate_valid;
-    } else if (msg == (int)NAVECU_MSG_GNSS_RAW_SAT_X) {
+    } else {
+        /* GNSS_RawSatX, Y and Z share one layout (navecu.dbc): X's unpacks all three */
         struct navecu_can_gnss_raw_sat_x_t m;
         (void)navecu_can_gnss_raw_sat_x_unpack(&m, d, 8u);
-        raw_axis(r, RX_RAW_PART_X, m.gnss_epoch, m.raw_slot, m.sat_pos_x, m.sat_vel_x);
-    } else if (msg == (int)NAVECU_MSG_GNSS_RAW_SAT_Y) {
-        struct navecu_can_gnss_raw_sat_y_t m;
-        (void)navecu_can_gnss_raw_sat_y_unpack(&m, d, 8u);
-        raw_axis(r, RX_RAW_PART_Y, m.gnss_epoch, m.raw_slot, m.sat_pos_y, m.sat_vel_y);
-    } else {
-        struct navecu_can_gnss_raw_sat_z_t m;
-        (void)navecu_can_gnss_raw_sat_z_unpack(&m, d, 8u);
-        raw_axis(r, RX_RAW_PART_Z, m.gnss_epoch, m.raw_slot, m.sat_pos_z, m.sat_vel_z);
+        const uint8_t part = msg == (int)NAVECU_MSG_GNSS_RAW_SAT_X   ? RX_RAW_PART_X
+                             : msg == (int)NAVECU_MSG_GNSS_RAW_SAT_Y ? RX_RAW_PART_Y
+                                                                      : RX_RAW_PART_Z;
+        raw_axis(r, part, m.gnss_epoch, m.raw_slot, m.sat_pos_x, m.sat_vel_x);
     }
     return r->epoch > E2E_COUNTER_MAX ? RX_BAD_COUNTER : RX_OK;
 }
