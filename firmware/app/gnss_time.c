@@ -223,7 +223,10 @@ void gnss_time_displacement(const gnss_time_t *g, const gnss_when_t *w, nav_real
     }
 }
 
-const nav_real_t *gnss_time_velocity_then(const gnss_time_t *g, const gnss_when_t *w)
+/* out of line (noinline), as when_late: inlined at its two calls (fusion.c's GNSS and raw
+ * epochs), 24 bytes more of the ECU's flash */
+__attribute__((noinline)) const nav_real_t *gnss_time_velocity_then(const gnss_time_t *g,
+                                                                    const gnss_when_t *w)
 {
     return g->vhist[(g->vhist_n - 1u - (uint32_t)(w->back + NAV_C(0.5))) % APP_VHIST];
 }
