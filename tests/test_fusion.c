@@ -380,8 +380,9 @@ static void test_nonfinite_navigator_restarts(void **state)
  * beyond the core's 1000 m/s: the navigator stays finite) THEN each is counted, the
  * filter goes on, and their 30 ms still pass for the wheel speeds (the odometer's age,
  * IMU time: its timeout and period), while its standstill neither ends nor grows: a
- * refused sample's rates are no evidence. Before, a refused sample skipped odo_tick and
- * the wheel speeds' clock stopped. */
+ * refused sample's rates are no evidence; and the velocity history (GNSS latency, by
+ * sample count) keeps its entry. Before, a refused sample skipped odo_tick and
+ * gnss_time_record: the wheel speeds' clock stopped and the history slipped a sample. */
 static void test_refused_sample_ages_the_wheel_speeds(void **state)
 {
     (void)state;
@@ -396,9 +397,14 @@ static void test_refused_sample_ages_the_wheel_speeds(void **state)
     assert_int_equal(odo.standing, 1);
     const double age0_s = (double)odo.age_s;
     const double still0_s = (double)odo.still_for_s;
+    const uint32_t vhist0 = gtime.vhist_n;
     for (int j = 0; j < 3; j++) {
         assert_int_equal(braking_sample(-2e5), FUSION_GO_ON);
     }
+    /* the velocity history keeps one entry a sample at 100 Hz (the GNSS latency looks
+     * back by sample count): the navigator's velocity, unchanged, at rest */
+    assert_int_equal(gtime.vhist_n, vhist0 + 3u);
+    assert_near((double)gtime.vhist[(gtime.vhist_n - 1u) % APP_VHIST][1], 0.0, 1e-3);
     assert_int_equal(health.nav_rejected, 3u);
     assert_int_equal(fu.on, 1);
     assert_near((double)odo.age_s, age0_s + 0.03, 1e-6);

@@ -234,7 +234,11 @@ static void test_release_and_restart(void **state)
 
 /* A step the strapdown core refuses (an interval longer than its 0.2 s) is counted. GIVEN
  * the wheels reading zero THEN its time passes for them (the odometer's age, IMU time)
- * but does not count as time standing still: its zero rates were refused. */
+ * but does not count as time standing still: its zero rates were refused. GIVEN then a
+ * standstill declared (its z bias learnt) WHEN a refused step says 0.5 rad/s THEN the
+ * bias learns nothing from it (neither its count nor its value move; before, the
+ * refused rate went into the bias, 1e-4 -> 1e-2 rad/s, a review's probe) and the
+ * standstill stands. */
 static void test_refused_step_counted(void **state)
 {
     (void)state;
@@ -249,6 +253,22 @@ static void test_refused_step_counted(void **state)
     assert_int_equal(landnav_step(&ln, &zb, &PRIOR, &nav, &dr, &odo, &inc, &yaw), 1);
     assert_near((double)odo.age_s, age0_s + 0.5, 1e-6);
     assert_near((double)odo.still_for_s, still0_s, 1e-9);
+
+    for (int k = 0; k < 100; k++) {
+        if (k % 10 == 0) {
+            wheels(0.0f);
+        }
+        (void)step(1e-4f, 0.0f);
+    }
+    assert_int_equal(odo.standing, 1);
+    const uint32_t n0 = zb.n;
+    const double bias0_rps = (double)zb.bias_rps;
+    assert_true(n0 > 0u);
+    inc.dtheta_b_rad[2] = 0.5f * 0.5f;
+    assert_int_equal(landnav_step(&ln, &zb, &PRIOR, &nav, &dr, &odo, &inc, &yaw), 1);
+    assert_int_equal(zb.n, n0);
+    assert_near((double)zb.bias_rps, bias0_rps, 1e-12);
+    assert_int_equal(odo.standing, 1);
 }
 
 /* GIVEN the dead reckoning's accuracy started at 1 m per axis, scale 0.02, heading 0.05

@@ -424,7 +424,8 @@ static void process_sample(app_t *a, hal_t *hal, const int32_t w_raw[3], const i
     if (a->run.mode != APP_MODE_NAVIGATING) {
         /* the odometer's timeout in every mode (WheelsMissing, the in-motion alignment,
          * the mounting estimate, the re-acquisition's "the car moves"); navigating, the
-         * navigator's step ages it with the standstill (odo_tick) */
+         * navigator's step ages it with the standstill (odo_tick), or without it for a
+         * sample the strapdown core refused (odo_age) */
         odo_age(&a->keep.odo, dt_s);
     }
     if (a->keep.mount_state != (uint8_t)APP_MOUNT_FIXED) {

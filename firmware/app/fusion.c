@@ -301,8 +301,14 @@ fusion_action_t fusion_imu_step(fusion_t *fu, const fusion_ctx_t *c, imu_inc_t *
         /* the sample's time still passes for the wheel speeds (their timeout and period
          * are IMU time); its rates, refused, are no evidence of standing still */
         odo_age(c->odo, dt);
-        /* every later sample would be refused too */
-        return sins_finite(c->nav) ? FUSION_GO_ON : reset(fu, c);
+        if (!sins_finite(c->nav)) {
+            return reset(fu, c); /* every later sample would be refused too */
+        }
+        /* the velocity history keeps its entry per sample count (the navigator's velocity,
+         * unchanged), as the navigation without the filter records it: the GNSS epochs'
+         * latency looks back by sample count */
+        gnss_time_record(c->time, c->diag->n_samples, c->cfg->imu_rate_hz, c->nav->v_n_mps);
+        return FUSION_GO_ON;
     }
     odo_tick(c->odo, dt, *yaw_rate_rps);
     mat3_t C;

@@ -83,11 +83,13 @@ int landnav_step(landnav_t *ln, zbias_t *zb, const zbias_prior_t *prior, sins_t 
     inc->dtheta_b_rad[2] -= zb->bias_rps * inc->dt_s;
     *yaw_rate_rps = inc->dtheta_b_rad[2] / inc->dt_s;
     if (sins_step(nav, inc) != NAV_OK) {
-        refused++;
-        odo_age(odo, inc->dt_s); /* as fusion_imu_step: time passes, no standstill evidence */
-    } else {
-        odo_tick(odo, inc->dt_s, *yaw_rate_rps);
+        /* as fusion_imu_step: the sample's time passes for the wheel speeds, and nothing
+         * else takes its refused increments (not the standstill's bias, not the dead
+         * reckoning's heading) */
+        odo_age(odo, inc->dt_s);
+        return 1;
     }
+    odo_tick(odo, inc->dt_s, *yaw_rate_rps);
     if (odo->standing) {
         standstill_step(ln, zb, prior, nav, raw_z, inc->dt_s);
         ln->output_dr = 1u;

@@ -85,7 +85,8 @@ void odo_tick(odo_t *o, nav_real_t dt_s, nav_real_t yaw_rate_rps);
 /* Age the speed by dt_s (one IMU interval) without the standstill's update: valid ends
  * timeout_s after the last accepted frame, and with it the standstill (the caller's
  * odometer outside navigation, before it and while it re-acquires, when nothing calls
- * odo_tick). */
+ * odo_tick; and navigating, for a sample the strapdown core refused, whose rates are no
+ * evidence of standing still). */
 void odo_age(odo_t *o, nav_real_t dt_s);
 
 #endif /* NAVECU_ODO_H */
