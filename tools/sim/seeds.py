@@ -272,6 +272,14 @@ def _lim(s, stat):
     return "" if lim is None else f" ({lim['op']} {lim['value']:g} {lim['result']})"
 
 
+def _height(r: dict) -> str:
+    """A seed's height cell: its RMS and share within 2 VertAccuracy, '-' for either
+    missing (a seeds.json of before the height, merged)."""
+    rms, frac = r.get("height_rms_m"), r.get("height_within_2sigma_pct")
+    return ("-" if rms is None else f"{rms:.2f} m") + ", " + ("-" if frac is None else
+                                                                f"{frac:.2f} %")
+
+
 def tables(result: dict) -> str:
     """The summary table (median, worst, limits) and the per-seed table, as markdown."""
     lines = ["| scenario | figure | seeds | median | worst (seed) | result |",
@@ -312,7 +320,7 @@ def tables(result: dict) -> str:
                 f"| {_f(r['within_2sigma_pct'], '.1f')} % | {_f(r['hacc_spearman'])} "
                 f"| {_f(r['hacc_cv_ratio'])} | {_f(r['sigma_min_m'])}-{_f(r['sigma_max_m'])} m "
                 f"| {_f(r['error_min_m'])}-{_f(r['error_max_m'])} m "
-                f"| {_f(r.get('height_rms_m'))} m, {_f(r.get('height_within_2sigma_pct'), '.1f')} % "
+                f"| {_height(r)} "
                 f"| {r['run_s']:.0f} s |")
     return "\n".join(lines)
 
