@@ -25,7 +25,6 @@
 
 static hal_t hal;
 static app_t app;
-static app_config_t cfg; /* off the stack, as on the ECU */
 
 void board_main(void) __attribute__((noreturn));
 void board_fault(void);
@@ -56,8 +55,7 @@ void board_main(void)
             /* more than the usage allows: ignored */
         }
     }
-    app_config_defaults(&cfg);
-    if (argc < 3u || app_init(&app, &cfg) != 0) {
+    if (argc < 3u || app_init_defaults(&app) != 0) { /* as on the ECU */
         bench_puts("usage: navecu-qemu IN.log OUT.log [TRACE.txt] [nvm=FILE] (semihosting "
                    "arguments)\n");
         semihost_exit(2u);

@@ -18,8 +18,7 @@
 #define BATCH_MAX 64u /* the RX ring's length */
 
 static app_t app;
-static app_config_t cfg;            /* static, as the receive list: off the 2 KiB stack */
-static uint32_t rx_ids[RX_IDS_MAX];
+static uint32_t rx_ids[RX_IDS_MAX]; /* static: off the 2 KiB stack */
 
 void board_main(void) __attribute__((noreturn));
 void SysTick_Handler(void);
@@ -31,8 +30,7 @@ void SysTick_Handler(void)
 
 void board_main(void)
 {
-    app_config_defaults(&cfg);
-    (void)app_init(&app, &cfg); /* the defaults are valid (test_app) */
+    (void)app_init_defaults(&app); /* the defaults are valid (test_app) */
     const size_t n_ids = app_uds_rx_ids(&app.cfg, rx_ids, RX_IDS_MAX);
     hal_t *hal = hal_stm32_init(rx_ids, n_ids);
     /* the layers: defaults, then the NVM's parameters (the receive list above is the

@@ -100,12 +100,23 @@ __attribute__((weak)) int app_board_layer(app_config_t *cfg)
     return 0;
 }
 
+/* the configuration app_init gets from app_init_defaults and app_start: off the stack, and
+ * one copy for both (each fills it whole before app_init copies it, and it is read nowhere
+ * else) */
+static app_config_t layered;
+
+int app_init_defaults(app_t *a)
+{
+    app_config_defaults(&layered);
+    return app_init(a, &layered);
+}
+
 int app_start(app_t *a, hal_t *hal)
 {
-    static app_config_t cfg; /* off the stack, as the boards keep theirs */
+    app_config_t *const cfg = &layered;
     nvstore_status_t st;
-    (void)nvstore_layer(hal, &cfg, &st); /* any failure leaves valid defaults */
-    if (app_board_layer(&cfg) != 0 || app_init(a, &cfg) != NAV_OK) {
+    (void)nvstore_layer(hal, cfg, &st); /* any failure leaves valid defaults */
+    if (app_board_layer(cfg) != 0 || app_init(a, cfg) != NAV_OK) {
         return NAV_EINVAL;
     }
     a->nvm = st;

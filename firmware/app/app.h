@@ -150,6 +150,11 @@ struct app {
 /* Start in APP_MODE_WAIT_INIT. Returns NAV_OK, or NAV_EINVAL for a config out of range. */
 int app_init(app_t *app, const app_config_t *cfg);
 
+/* app_init with the table's defaults (app_config_defaults), in app_start's copy of the
+ * configuration: a board's first start, without a copy of its own in RAM. NAV_OK (the
+ * defaults are valid: test_app). */
+int app_init_defaults(app_t *app);
+
 /*
  * The boot of every board, in layers: the table's defaults, the parameters stored in NVM
  * over them (nvstore.h), then the board's own layer app_board_layer over both; app_init
