@@ -34,6 +34,8 @@ static const uint8_t ext_magic[4] = {'N', 'P', 'A', 'R'};
 /* the extension image of a save or a load: off the stack (calstore is not reentrant) */
 static uint8_t ext_img[CALSTORE_EXT_MAX_BYTES];
 
+calstore_ext_t calstore_ext_buf; /* calstore.h */
+
 typedef enum { SLOT_ERASED, SLOT_VALID, SLOT_INVALID } slot_state_t;
 
 /* Both slots as read: the newest valid one (-1: none) and how many are erased. */
@@ -477,12 +479,12 @@ int calstore_save(hal_t *hal, calstore_t *cs, const cal_record_t *rec)
         return HAL_EINVAL;
     }
     /* the newest record's extension goes on with the new calibration (off the stack) */
-    static calstore_ext_t carried;
+    calstore_ext_t *const carried = &calstore_ext_buf;
     calstore_t now;
     cal_record_t old;
-    const int rc = calstore_load_ext(hal, &now, &old, &carried);
-    if (rc == (int)CALSTORE_OK && carried.status == (uint8_t)CALSTORE_EXT_OK) {
-        return save_record(hal, cs, rec, &carried);
+    const int rc = calstore_load_ext(hal, &now, &old, carried);
+    if (rc == (int)CALSTORE_OK && carried->status == (uint8_t)CALSTORE_EXT_OK) {
+        return save_record(hal, cs, rec, carried);
     }
     return save_record(hal, cs, rec, NULL);
 }

@@ -158,6 +158,12 @@ int calstore_load_ext(hal_t *hal, calstore_t *cs, cal_record_t *rec, calstore_ex
 int calstore_save_ext(hal_t *hal, calstore_t *cs, const cal_record_t *rec,
                       const calstore_ext_t *ext);
 
+/* The one extension buffer of calstore_save (the newest record's extension, carried on
+ * with the new calibration) and of nvstore.c (the record it reads or writes): static, off
+ * the stack, one for both as calstore is not reentrant. Each call that uses it fills it
+ * (calstore_load_ext, with a hal) before it reads it: nothing in it outlives the call. */
+extern calstore_ext_t calstore_ext_buf;
+
 /*
  * Read both slots and return the newest valid record.
  *   hal: its NVM region must have >= 2 sectors of >= CALSTORE_SLOT_BYTES bytes.

@@ -5,8 +5,9 @@
 
 #include "app_uds.h"
 
-/* the record being read or written: off the stack (not reentrant, as calstore) */
-static calstore_ext_t ext;
+/* the record being read or written: calstore's one extension buffer (calstore.h), off the
+ * stack (not reentrant, as calstore) */
+static calstore_ext_t *const ext = &calstore_ext_buf;
 
 size_t nvstore_params_encode(const app_config_t *cfg, uint8_t *buf, size_t cap)
 {
@@ -83,36 +84,37 @@ int nvstore_layer(hal_t *hal, app_config_t *cfg, nvstore_status_t *st)
     cal_record_t rec;
     *cfg = app_default_config();
     memset(st, 0, sizeof *st);
-    const int rc = calstore_load_ext(hal, &cs, &rec, &ext);
+    const int rc = calstore_load_ext(hal, &cs, &rec, ext);
     st->seq = cs.seq;
     if (rc < 0) {
         st->source = (uint8_t)NVSTORE_SRC_ERROR;
         return rc;
     }
-    if (ext.status == (uint8_t)CALSTORE_EXT_NEWER || ext.status == (uint8_t)CALSTORE_EXT_CORRUPT) {
-        st->version = ext.version;
+    if (ext->status == (uint8_t)CALSTORE_EXT_NEWER ||
+        ext->status == (uint8_t)CALSTORE_EXT_CORRUPT) {
+        st->version = ext->version;
         st->source = (uint8_t)NVSTORE_SRC_REFUSED;
     } else if (rc != (int)CALSTORE_OK) {
         st->source = (uint8_t)NVSTORE_SRC_DEFAULTS;
-    } else if (ext.status == (uint8_t)CALSTORE_EXT_NONE) {
+    } else if (ext->status == (uint8_t)CALSTORE_EXT_NONE) {
         st->version = (uint8_t)CALSTORE_VERSION;
         st->source = (uint8_t)NVSTORE_SRC_MIGRATED;
     } else {
         st->version = (uint8_t)CALSTORE_EXT_VERSION;
         st->source = (uint8_t)NVSTORE_SRC_NVM;
-        nvstore_params_decode(cfg, ext.params, ext.params_len, st); /* over the defaults */
+        nvstore_params_decode(cfg, ext->params, ext->params_len, st); /* over the defaults */
     }
     return rc;
 }
 
-/* the newest record's DTC bytes into ext.dtc (0xFF: none) */
+/* the newest record's DTC bytes into ext->dtc (0xFF: none) */
 static void load_dtc(hal_t *hal)
 {
     calstore_t cs;
     cal_record_t rec;
-    (void)calstore_load_ext(hal, &cs, &rec, &ext);
-    if (ext.status != (uint8_t)CALSTORE_EXT_OK) {
-        memset(ext.dtc, 0xFF, sizeof ext.dtc);
+    (void)calstore_load_ext(hal, &cs, &rec, ext);
+    if (ext->status != (uint8_t)CALSTORE_EXT_OK) {
+        memset(ext->dtc, 0xFF, sizeof ext->dtc);
     }
 }
 
@@ -122,12 +124,12 @@ int nvstore_save(hal_t *hal, calstore_t *cs, const app_config_t *cfg, const cal_
         return HAL_EINVAL;
     }
     load_dtc(hal);
-    const size_t n = nvstore_params_encode(cfg, ext.params, sizeof ext.params);
+    const size_t n = nvstore_params_encode(cfg, ext->params, sizeof ext->params);
     if (n == 0u) {
         return HAL_ENOSPC;
     }
-    ext.params_len = (uint16_t)n;
-    return calstore_save_ext(hal, cs, cal, &ext);
+    ext->params_len = (uint16_t)n;
+    return calstore_save_ext(hal, cs, cal, ext);
 }
 
 int nvstore_erase_calibration(hal_t *hal, calstore_t *cs)
@@ -137,10 +139,10 @@ int nvstore_erase_calibration(hal_t *hal, calstore_t *cs)
     }
     cal_record_t rec;
     calstore_t now;
-    const int rc = calstore_load_ext(hal, &now, &rec, &ext);
-    if (rc == (int)CALSTORE_OK && ext.status == (uint8_t)CALSTORE_EXT_OK) {
+    const int rc = calstore_load_ext(hal, &now, &rec, ext);
+    if (rc == (int)CALSTORE_OK && ext->status == (uint8_t)CALSTORE_EXT_OK) {
         const cal_record_t none = {0.0f, 0.0f, 0.0f, (uint8_t)CAL_SRC_NONE};
-        return calstore_save_ext(hal, cs, &none, &ext);
+        return calstore_save_ext(hal, cs, &none, ext);
     }
     return calstore_erase(hal, cs);
 }
@@ -152,25 +154,25 @@ int nvstore_put_dtc_status(hal_t *hal, calstore_t *store, const uint8_t status[C
     }
     cal_record_t rec;
     calstore_t now;
-    const int rc = calstore_load_ext(hal, &now, &rec, &ext);
+    const int rc = calstore_load_ext(hal, &now, &rec, ext);
     if (rc < 0) {
         return rc;
     }
     /* no record, or no usable extension: calstore_load_ext gave the defaults (no
      * calibration) and an extension with no parameters and DTC bytes 0xFF (calstore.h),
      * the record to write */
-    if (ext.status == (uint8_t)CALSTORE_EXT_OK && memcmp(ext.dtc, status, CALSTORE_DTC_N) == 0) {
+    if (ext->status == (uint8_t)CALSTORE_EXT_OK && memcmp(ext->dtc, status, CALSTORE_DTC_N) == 0) {
         return 0;
     }
-    memcpy(ext.dtc, status, CALSTORE_DTC_N);
-    return calstore_save_ext(hal, store, &rec, &ext);
+    memcpy(ext->dtc, status, CALSTORE_DTC_N);
+    return calstore_save_ext(hal, store, &rec, ext);
 }
 
 int nvstore_dtc_status(hal_t *hal, uint8_t out[CALSTORE_DTC_N])
 {
     cal_record_t rec;
     calstore_t cs;
-    const int rc = calstore_load_ext(hal, &cs, &rec, &ext);
-    memcpy(out, ext.dtc, CALSTORE_DTC_N);
+    const int rc = calstore_load_ext(hal, &cs, &rec, ext);
+    memcpy(out, ext->dtc, CALSTORE_DTC_N);
     return rc < 0 ? rc : 0;
 }
