@@ -155,7 +155,8 @@ static nav_real_t fp_at(const ekf_t *k, int r, int c)
 static int add_entry(f_entry_t *f, int n, int r, int c, nav_real_t v)
 {
     const int fr = fp_row(r);
-    if (n < F_MAX && fr >= 0) { /* every row ekf_predict gives has its row of fp */
+    if (n < F_MAX && fr >= 0) { /* every row ekf_predict gives has its row of fp (a new
+                                   state's row of F: EKF_FP_ROWS and fp_row first) */
         f[n].r = (uint8_t)r;
         f[n].c = (uint8_t)c;
         f[n].fr = (uint8_t)fr;

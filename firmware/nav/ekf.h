@@ -99,7 +99,9 @@ enum {
     EKF_GZ = 24, /* body z gyro in-run bias, first-order Gauss-Markov */
 };
 /* The rows of F with entries in ekf_predict: dr, dv, psi, the clock bias and gz; the
- * other states' rows of F are zeros (the dynamics above) */
+ * other states' rows of F are zeros (the dynamics above). A state given dynamics of its
+ * own (a row of F) needs its row here and in ekf.c fp_row: ekf_predict drops an entry in
+ * a row without one. */
 #define EKF_FP_ROWS 11
 
 typedef struct {
