@@ -131,35 +131,16 @@ static void scale_state(ekf_t *k, int i, nav_real_t a)
 
 typedef struct {
     uint8_t r, c;
-    uint8_t fr; /* r's row of F P in k->fp (fp_row) */
     nav_real_t v;
 } f_entry_t;
 
 #define F_MAX 52
 
-/* The row of k->fp that holds row r of F P: dr, dv and psi (0..8), then the clock bias and
- * gz, F's only rows with entries (ekf.h); -1 for the others, rows of zeros */
-_Static_assert(EKF_PSI + 3 + 2 == EKF_FP_ROWS, "fp: dr, dv, psi, the clock bias, gz");
-static int fp_row(int r)
-{
-    return r < EKF_PSI + 3 ? r : r == EKF_CB ? EKF_PSI + 3 : r == EKF_GZ ? EKF_PSI + 4 : -1;
-}
-
-/* (F P)_rc: what a dense F P held there, 0 in a row of zeros */
-static nav_real_t fp_at(const ekf_t *k, int r, int c)
-{
-    const int fr = fp_row(r);
-    return fr >= 0 ? k->fp[fr][c] : NAV_C(0.0);
-}
-
 static int add_entry(f_entry_t *f, int n, int r, int c, nav_real_t v)
 {
-    const int fr = fp_row(r);
-    if (n < F_MAX && fr >= 0) { /* every row ekf_predict gives has its row of fp (a new
-                                   state's row of F: EKF_FP_ROWS and fp_row first) */
+    if (n < F_MAX) {
         f[n].r = (uint8_t)r;
         f[n].c = (uint8_t)c;
-        f[n].fr = (uint8_t)fr;
         f[n].v = v;
         n++;
     }
@@ -226,28 +207,26 @@ void ekf_predict(ekf_t *k, const sins_t *s, const nav_real_t f_n_mps2[3],
     n = add_entry(F, n, EKF_GZ, EKF_GZ, -NAV_C(1.0) / k->cfg.gz_tau_s); /* decay */
 
     /* P <- (I + F dt) P (I + F dt)^T = P + dt (FP + (FP)^T) + dt^2 F (FP)^T */
-    /* F P's rows of zeros are not stored (fp_row), but added and multiplied as zeros, so
-     * P gets the same operations as with a dense F P */
     nav_real_t (*fp)[EKF_N] = k->fp;
-    for (int i = 0; i < EKF_FP_ROWS; i++) {
+    for (int i = 0; i < EKF_N; i++) {
         for (int j = 0; j < EKF_N; j++) {
             fp[i][j] = NAV_C(0.0);
         }
     }
     for (int q = 0; q < n; q++) {
         for (int j = 0; j < EKF_N; j++) {
-            fp[F[q].fr][j] += F[q].v * k->P[F[q].c][j];
+            fp[F[q].r][j] += F[q].v * k->P[F[q].c][j];
         }
     }
     for (int i = 0; i < EKF_N; i++) {
         for (int j = 0; j < EKF_N; j++) {
-            k->P[i][j] += dt_s * (fp_at(k, i, j) + fp_at(k, j, i));
+            k->P[i][j] += dt_s * (fp[i][j] + fp[j][i]);
         }
     }
     const nav_real_t dt2 = dt_s * dt_s;
     for (int q = 0; q < n; q++) {
         for (int j = 0; j < EKF_N; j++) {
-            k->P[F[q].r][j] += dt2 * F[q].v * fp_at(k, j, F[q].c);
+            k->P[F[q].r][j] += dt2 * F[q].v * fp[j][F[q].c];
         }
     }
     const ekf_config_t *c = &k->cfg;

@@ -98,11 +98,6 @@ enum {
     EKF_SG = 23, /* body z gyro scale factor error */
     EKF_GZ = 24, /* body z gyro in-run bias, first-order Gauss-Markov */
 };
-/* The rows of F with entries in ekf_predict: dr, dv, psi, the clock bias and gz; the
- * other states' rows of F are zeros (the dynamics above). A state given dynamics of its
- * own (a row of F) needs its row here and in ekf.c fp_row: ekf_predict drops an entry in
- * a row without one. */
-#define EKF_FP_ROWS 11
 
 typedef struct {
     /* initial 1-sigma */
@@ -165,10 +160,8 @@ typedef struct {
                                     mounting yaw alone (a Schmidt "consider" update: their
                                     gains are 0, the Joseph form keeps P right): set while
                                     a measurement's heading information is below its noise */
-    /* scratch for F P in ekf_predict: too large for an ECU's stack, and the core keeps no
-     * globals. Only F's rows with entries, the others' rows of F P being zeros: dr, dv and
-     * psi (0..8), the clock bias and gz (EKF_FP_ROWS; ekf.c fp_row) */
-    nav_real_t fp[EKF_FP_ROWS][EKF_N];
+    nav_real_t fp[EKF_N][EKF_N]; /* scratch for F P in ekf_predict: too large for an ECU's
+                                    stack, and the core keeps no globals */
     nav_real_t q_inc[2];         /* process noise for the next prediction beyond the IMU's:
                                     angle (rad^2), velocity ((m/s)^2) per axis
                                     (ekf_add_increment_noise) */
