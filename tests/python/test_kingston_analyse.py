@@ -5,6 +5,7 @@ first stop apart and no pair spanning a stop's start or end."""
 import types
 
 import numpy as np
+import pytest
 
 from tools.kingston import analyse
 
@@ -58,3 +59,35 @@ def test_correlation_about_zero_none_without_error():
     assert analyse._pooled_axes_corr(const[:2], const[:2]) is None
     flip = [(-1.0, 2.0)] * 10
     assert analyse._pooled_axes_corr(const, flip) == -1.0
+
+
+def test_allan_axes_white_noise_and_a_wandering_bias():
+    """allan_axes on 530 s of 10 Hz samples: white noise of sd s per sample has the Allan
+    deviation s sqrt(dt / tau) (IEEE Std 952 annex C), to the estimator's spread (about
+    1 / sqrt(n / m) of it: 4 % at 1 s, 14 % at 10 s); a Gauss-Markov bias (1 mg, 50 s) on
+    another axis gives a deviation rising beyond 10 s, largest at 30 s or later, well
+    above the white axis's there; accelerometers in mg, gyros in deg/h."""
+    rng = np.random.default_rng(7)
+    dt, n = 0.1, 5300
+    t = 1000.0 + dt * np.arange(n)
+    s_f, s_w = analyse.MG, 1e-5      # 1 mg and 1e-5 rad/s per sample
+    gm = np.zeros(n)
+    a = np.exp(-dt / 50.0)
+    for k in range(1, n):
+        gm[k] = a * gm[k - 1] + analyse.MG * np.sqrt(1.0 - a * a) * rng.normal()
+    imu = {"time_s": t, "fx_mps2": s_f * rng.normal(size=n),
+           "fy_mps2": s_f * rng.normal(size=n) + gm, "fz_mps2": s_f * rng.normal(size=n),
+           "wx_radps": s_w * rng.normal(size=n), "wy_radps": s_w * rng.normal(size=n),
+           "wz_radps": s_w * rng.normal(size=n)}
+    al = analyse.allan_axes(imu, t[0], t[-1])
+    assert al["samples"] == n and al["taus_s"] == list(analyse.ALLAN_TAUS_S)
+    for i, (tau, tol) in enumerate(((1.0, 0.06), (3.0, 0.10), (10.0, 0.20))):
+        assert al["fx"]["adev"][i] == pytest.approx(1.0 * np.sqrt(dt / tau), rel=tol)
+        assert al["wz"]["adev"][i] == pytest.approx(
+            s_w * analyse.DEG_PER_H * np.sqrt(dt / tau), rel=tol)
+    assert al["fx"]["unit"] == "mg" and al["wz"]["unit"] == "deg/h"
+    assert al["fy"]["largest_at_s"] >= 30.0
+    assert al["fy"]["largest_beyond_10s"] > 3.0 * al["fx"]["largest_beyond_10s"]
+    # the white axis falls beyond 10 s: its largest there is at 10 s
+    assert al["fx"]["largest_at_s"] == 10.0
+    assert al["fx"]["smallest_at_s"] >= 100.0

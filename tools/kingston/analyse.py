@@ -348,6 +348,47 @@ def gyro_noise_at_first_stop(drive) -> dict:
     return out
 
 
+ALLAN_TAUS_S = (1.0, 3.0, 10.0, 30.0, 100.0, 170.0)
+MG = 9.80665e-3
+
+
+def allan_axes(imu: dict, t0_s: float, t1_s: float, taus_s=ALLAN_TAUS_S) -> dict:
+    """The overlapping Allan deviation (tools.sim.sensors.allan_deviation) of each IMU axis
+    over the rows with t0_s <= time_s <= t1_s (10 Hz), accelerometers in mg and gyros in
+    deg/h, at taus_s; and per axis the largest beyond 10 s with its tau: what an in-run
+    instability (a data sheet's floor, a Gauss-Markov process's peak at 1.89 correlation
+    times) can be read as from a stop this long. A largest at the last tau is a deviation
+    still rising (or not yet at its floor, for a falling one: 'smallest')."""
+    from tools.sim.sensors import allan_deviation   # the simulator's one estimator
+    t = np.asarray(imu["time_s"], dtype=float)
+    sel = (t >= t0_s) & (t <= t1_s)
+    dt = float(np.median(np.diff(t[sel])))
+    out = {"window_s": [t0_s, t1_s], "samples": int(sel.sum()), "taus_s": list(taus_s)}
+    for name, unit, per in (("fx_mps2", "mg", 1.0 / MG), ("fy_mps2", "mg", 1.0 / MG),
+                            ("fz_mps2", "mg", 1.0 / MG), ("wx_radps", "deg/h", DEG_PER_H),
+                            ("wy_radps", "deg/h", DEG_PER_H), ("wz_radps", "deg/h", DEG_PER_H)):
+        ad = np.asarray(allan_deviation(np.asarray(imu[name], dtype=float)[sel], dt,
+                                        taus_s)).ravel() * per
+        beyond = [(a, tau) for a, tau in zip(ad, taus_s) if tau >= 10.0 and np.isfinite(a)]
+        big = max(beyond) if beyond else (None, None)
+        small = min(beyond) if beyond else (None, None)
+        out[name.split("_")[0]] = {
+            "unit": unit, "adev": [None if not np.isfinite(a) else float(a) for a in ad],
+            "largest_beyond_10s": None if big[0] is None else float(big[0]),
+            "largest_at_s": big[1],
+            "smallest_beyond_10s": None if small[0] is None else float(small[0]),
+            "smallest_at_s": small[1]}
+    return out
+
+
+def imu_allan_at_first_stop(drive) -> dict:
+    """allan_axes over the first stop (the 529 s before the drive), its last second left
+    out as gyro_noise_at_first_stop does."""
+    st = stops(drive)["stops"][0]
+    t0 = drive.t0_gps + st["start_s"]
+    return allan_axes(drive.imu, t0, t0 + st["duration_s"] - 1.0)
+
+
 def gnss_vs_reference(drive) -> dict:
     g, r = drive.gnss, drive.ref
     common, gi, ri = np.intersect1d(np.rint(g["time_s"]), np.rint(r["time_s"]),
@@ -425,11 +466,22 @@ def analyse(drive) -> dict:
             "gyro_z_vs_reference_heading": gyro_z_timing(drive),
             "gyro_heading_vs_reference": gyro_heading_vs_reference(drive),
             "gyro_noise_at_first_stop": gyro_noise_at_first_stop(drive),
+            "imu_allan_at_first_stop": imu_allan_at_first_stop(drive),
             "gnss_vs_reference": gnss_vs_reference(drive),
             "odometer_error_model": odometer_error_model(drive),
             "gnss_velocity_errors": gnss_velocity_errors(drive),
             "reference_consistency": reference_consistency(drive),
             "gnss_error_correlation": gnss_error_correlation(drive)}
+
+
+def _allan_line(al: dict) -> str:
+    taus = "/".join(f"{t:g}" for t in al["taus_s"])
+    return (f"IMU Allan deviation at the first stop ({al['samples']} samples), at {taus} s: "
+            + "; ".join(
+                f"{ax} " + " ".join("-" if v is None else f"{v:.3g}" for v in al[ax]["adev"])
+                + f" {al[ax]['unit']} (largest beyond 10 s {al[ax]['largest_beyond_10s']:.3g}"
+                f" at {al[ax]['largest_at_s']:g} s)"
+                for ax in ("fx", "fy", "fz", "wx", "wy", "wz")))
 
 
 def text(a: dict) -> str:
@@ -483,6 +535,7 @@ def text(a: dict) -> str:
             f"{a['gyro_noise_at_first_stop'][ax]['sd_deg_h']:.1f} deg/h (ARW "
             f"{a['gyro_noise_at_first_stop'][ax]['arw_deg_sqrt_h']:.3f} deg/sqrt(h))"
             for ax in ("x", "y", "z")),
+        _allan_line(a["imu_allan_at_first_stop"]),
         f"GNSS vs reference: {g['n']} epochs, rms {g['rms_m']:.2f} m, "
         f"median {g['median_m']:.2f} m, "
         f"p95 {g['p95_m']:.2f} m, max {g['max_m']:.1f} m; height - reference median "
