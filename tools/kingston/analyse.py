@@ -355,13 +355,17 @@ MG = 9.80665e-3
 def allan_axes(imu: dict, t0_s: float, t1_s: float, taus_s=ALLAN_TAUS_S) -> dict:
     """The overlapping Allan deviation (tools.sim.sensors.allan_deviation) of each IMU axis
     over the rows with t0_s <= time_s <= t1_s (10 Hz), accelerometers in mg and gyros in
-    deg/h, at taus_s; and per axis the largest beyond 10 s with its tau: what an in-run
-    instability (a data sheet's floor, a Gauss-Markov process's peak at 1.89 correlation
-    times) can be read as from a stop this long. A largest at the last tau is a deviation
-    still rising (or not yet at its floor, for a falling one: 'smallest')."""
+    deg/h, at taus_s; and per axis the largest and the smallest from 10 s on with their
+    taus: what an in-run instability (a data sheet's floor, a Gauss-Markov process's peak
+    at 1.89 correlation times) can be read as from a stop this long: a rising deviation's
+    largest, a falling one's smallest (an upper bound of its floor at the last tau). Where
+    a peak lies is not determined by a stop a few correlation times long: the estimates at
+    the last taus spread by tens of percent. ValueError for fewer than 2 rows."""
     from tools.sim.sensors import allan_deviation   # the simulator's one estimator
     t = np.asarray(imu["time_s"], dtype=float)
     sel = (t >= t0_s) & (t <= t1_s)
+    if sel.sum() < 2:
+        raise ValueError(f"allan_axes: {int(sel.sum())} IMU rows in {t0_s:g}..{t1_s:g} s")
     dt = float(np.median(np.diff(t[sel])))
     out = {"window_s": [t0_s, t1_s], "samples": int(sel.sum()), "taus_s": list(taus_s)}
     for name, unit, per in (("fx_mps2", "mg", 1.0 / MG), ("fy_mps2", "mg", 1.0 / MG),
@@ -474,13 +478,19 @@ def analyse(drive) -> dict:
             "gnss_error_correlation": gnss_error_correlation(drive)}
 
 
+def _allan_extremes(a: dict) -> str:
+    if a["largest_beyond_10s"] is None:
+        return "no tau of 10 s or more in the window"
+    return (f"from 10 s on largest {a['largest_beyond_10s']:.3g} at {a['largest_at_s']:g} s, "
+            f"smallest {a['smallest_beyond_10s']:.3g} at {a['smallest_at_s']:g} s")
+
+
 def _allan_line(al: dict) -> str:
     taus = "/".join(f"{t:g}" for t in al["taus_s"])
     return (f"IMU Allan deviation at the first stop ({al['samples']} samples), at {taus} s: "
             + "; ".join(
                 f"{ax} " + " ".join("-" if v is None else f"{v:.3g}" for v in al[ax]["adev"])
-                + f" {al[ax]['unit']} (largest beyond 10 s {al[ax]['largest_beyond_10s']:.3g}"
-                f" at {al[ax]['largest_at_s']:g} s)"
+                + f" {al[ax]['unit']} ({_allan_extremes(al[ax])})"
                 for ax in ("fx", "fy", "fz", "wx", "wy", "wz")))
 
 

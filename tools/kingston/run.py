@@ -55,8 +55,8 @@ RATES = ["--imu-rate-hz", "10", "--nav-rate-hz", "10", "--status-rate-hz", "10"]
 # (tools/kingston/analyse.py, "IMU Allan deviation at the first stop": the horizontal
 # accelerometers' deviation largest at 100 s, 0.70 and 0.27 mg; the gyros' still falling
 # at 170 s, z 0.28 deg/h), with the MEMS class's correlation time, the automotive
-# preset's 100 s (the accelerometers' peak near 100 s implies about 53 s, 100 / 1.89: the
-# same order, on a grid of 30, 100 and 170 s);
+# preset's 100 s (not measured: a 529-s stop cannot place the accelerometers' Allan peak,
+# flat and uncertain by tens of percent between 100 and 170 s);
 # ranges those of that preset (the default,
 # firmware/app/params.toml); the receiver's fixes are stamped with their time of validity
 # (latency 0) and their errors against the reference decorrelate in 3..5 s (measured). The
