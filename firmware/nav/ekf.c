@@ -478,6 +478,20 @@ static nav_real_t sc_var(nav_real_t s2)
     return s2 > NAV_C(1e-6) ? s2 : NAV_C(1e-6);
 }
 
+/* The vertical sums (ekf_gnss_scv_m) decayed by phi (0 at a start) and a fix's correlated
+ * vertical part taken in (none: sigma_cv_m 0); forgotten after 14 correlation times
+ * without a height, before the sums reach float32's denormals, where their ratio wanders */
+static void scv_take(ekf_t *k, nav_real_t phi, nav_real_t sigma_cv_m)
+{
+    const nav_real_t has_v = sigma_cv_m > NAV_C(0.0) ? NAV_C(1.0) : NAV_C(0.0);
+    k->gnss_scv_count = k->gnss_scv_count * phi + has_v;
+    k->gnss_scv_info = k->gnss_scv_info * phi + has_v / sc_var(sigma_cv_m * sigma_cv_m);
+    if (k->gnss_scv_count < NAV_C(1e-6)) {
+        k->gnss_scv_count = NAV_C(0.0); /* the claim then P_UU's alone */
+        k->gnss_scv_info = NAV_C(0.0);
+    }
+}
+
 void ekf_gnss_bias_step(ekf_t *k, nav_real_t dt_s, nav_real_t tau_s, nav_real_t sigma_c_m,
                         nav_real_t prev_sigma_c_m, nav_real_t sigma_cv_m)
 {
@@ -495,15 +509,7 @@ void ekf_gnss_bias_step(ekf_t *k, nav_real_t dt_s, nav_real_t tau_s, nav_real_t 
                                   : NAV_C(1.0);
     k->gnss_sc_count = k->gnss_sc_count * phi + NAV_C(1.0);
     k->gnss_sc_info = k->gnss_sc_info * phi + NAV_C(1.0) / sc_var(s2);
-    const nav_real_t has_v = sigma_cv_m > NAV_C(0.0) ? NAV_C(1.0) : NAV_C(0.0);
-    k->gnss_scv_count = k->gnss_scv_count * phi + has_v;
-    k->gnss_scv_info = k->gnss_scv_info * phi + has_v / sc_var(sigma_cv_m * sigma_cv_m);
-    if (k->gnss_scv_count < NAV_C(1e-6)) {
-        /* no height for 14 correlation times: forgotten (the claim then P_UU's alone),
-         * before the sums reach float32's denormals, where their ratio wanders */
-        k->gnss_scv_count = NAV_C(0.0);
-        k->gnss_scv_info = NAV_C(0.0);
-    }
+    scv_take(k, phi, sigma_cv_m);
     for (int a = 0; a < 2; a++) {
         const int i = EKF_GB + a;
         k->gnss_bias_m[a] *= phi * shrink;
@@ -527,9 +533,7 @@ void ekf_gnss_bias_start(ekf_t *k, nav_real_t sigma_c_m, nav_real_t sigma_cv_m)
     const nav_real_t s2 = sigma_c_m * sigma_c_m;
     k->gnss_sc_count = NAV_C(1.0);
     k->gnss_sc_info = NAV_C(1.0) / sc_var(s2);
-    const nav_real_t has_v = sigma_cv_m > NAV_C(0.0) ? NAV_C(1.0) : NAV_C(0.0);
-    k->gnss_scv_count = has_v;
-    k->gnss_scv_info = has_v / sc_var(sigma_cv_m * sigma_cv_m);
+    scv_take(k, NAV_C(0.0), sigma_cv_m);
     for (int a = 0; a < 2; a++) {
         const int i = EKF_GB + a;
         for (int j = 0; j < EKF_N; j++) {
