@@ -78,6 +78,7 @@ static ekf_config_t quiet_config(void)
     ekf_config_t c = ekf_default_config();
     c.arw_rad_rts = c.vrw_mps_rts = c.bg_rw_rps_rts = c.ba_rw_mps2_rts = NAV_C(1e-15);
     c.k_rw_rts = c.mount_rw_rad_rts = c.gyro_scale_rw_rts = NAV_C(1e-15);
+    c.af_sigma_mps2 = NAV_C(1e-15);
     c.var_floor = NAV_C(1e-30);
     return c;
 }
@@ -583,6 +584,21 @@ static void test_standstill_updates(void **state)
     assert_near(s.v_n_mps[2], 0.09, 1e-6);
 }
 
+/* every state known to 1e-9 (sd_quiet), uncorrelated, but state i at its steady sigma */
+static void filter_known_but(ekf_t *f, const ekf_config_t *c, int i, double sigma)
+{
+    assert_int_equal(ekf_init(f, c, NAV_C(0.0)), NAV_OK);
+    double sd[EKF_N];
+    sd_quiet(sd);
+    sd[i] = sigma;
+    for (int r = 0; r < EKF_N; r++) {
+        for (int j = 0; j < EKF_N; j++) {
+            f->P[r][j] = NAV_C(0.0);
+        }
+        f->P[r][r] = (nav_real_t)(sd[r] * sd[r]);
+    }
+}
+
 /* The z gyro's in-run bias (state 24, ekf.h) is a first-order Gauss-Markov process:
  * GIVEN a level car standing still for 600 s, the in-run state at its steady sigma s
  * (correlation time T = 100 s), every other state known and no other noise, and an
@@ -608,16 +624,7 @@ static void test_gyro_in_run_bias_is_gauss_markov(void **state)
     c.gz_sigma_rps = (nav_real_t)sigma;
     c.gz_tau_s = (nav_real_t)tau;
     ekf_t f;
-    assert_int_equal(ekf_init(&f, &c, NAV_C(0.0)), NAV_OK);
-    double sd[EKF_N];
-    sd_quiet(sd);
-    for (int i = 0; i < EKF_N; i++) {
-        for (int j = 0; j < EKF_N; j++) {
-            f.P[i][j] = NAV_C(0.0);
-        }
-        f.P[i][i] = (nav_real_t)(sd[i] * sd[i]);
-    }
-    f.P[EKF_GZ][EKF_GZ] = (nav_real_t)(sigma * sigma);
+    filter_known_but(&f, &c, EKF_GZ, sigma);
     f.gz_rps = NAV_C(1e-4);
     const nav_real_t fn[3] = {NAV_C(0.0), NAV_C(0.0), NAV_C(9.80665)};
     const int n = (int)(t_end / dt + 0.5);
@@ -635,6 +642,67 @@ static void test_gyro_in_run_bias_is_gauss_markov(void **state)
     assert_near((double)f.gz_rps, 1e-4 * exp(-t_end / tau), 0.02 * 1e-4 * exp(-t_end / tau));
     const double want_c = -sigma * sigma * tau * (1.0 - exp(-t_end / tau));
     assert_near((double)f.P[EKF_PSI + 2][EKF_GZ], want_c, 0.02 * fabs(want_c));
+}
+
+/* State 25, the forward accelerometer's in-run bias (ekf.h), on a standing car pitched
+ * 5 deg nose up and heading 30 deg, over 300 s = 3 T with sigma s = 1e-3 m/s^2 and
+ * T = 100 s, the other states known (1e-9) and quiet, the estimate started at 1e-2 m/s^2:
+ * - the state's variance stays s^2 (a random walk of the same driving noise would reach
+ *   7 s^2);
+ * - the estimate decays as exp(-t / T);
+ * - the velocity error along the body's forward axis u = C_bn e_y (east, north and up: the
+ *   pitch puts 8.7 % of it into the height's rate) is the integrated process,
+ *   2 s^2 T (t - T (1 - exp(-t / T))) = 4.1 s^2 T^2 in variance, and its covariance with
+ *   the state has the sign of d(dv)/dt = +C_bn e_y af: +s^2 T (1 - exp(-t / T));
+ * - nothing of it is across u (the Coriolis term turns 2 w_ie sin(lat) t = 0.03 rad of it).
+ * Tolerance 2 %: Phi = I + F dt's error is dt / (2 T) = 5e-4 per correlation time, the
+ * Coriolis turn's cos is 0.9996, the vertical channel's instability (2 g / R) t^2 / 2 =
+ * 0.14 on the 0.76 % of the variance that is vertical. */
+static void test_accel_in_run_bias_is_gauss_markov(void **state)
+{
+    (void)state;
+    const double v[3] = {0.0, 0.0, 0.0};
+    sins_t s;
+    nav_at(&s, 0.0, 5.0 * DEG, 30.0 * DEG, v);
+    ekf_config_t c = quiet_config();
+    const double sigma = 1e-3, tau = 100.0, dt = 0.1, t_end = 300.0;
+    c.af_sigma_mps2 = (nav_real_t)sigma;
+    c.af_tau_s = (nav_real_t)tau;
+    ekf_t f;
+    filter_known_but(&f, &c, EKF_AF, sigma);
+    f.af_mps2 = NAV_C(1e-2);
+    mat3_t C;
+    quat_to_dcm(s.q_bn, &C);
+    const double u[3] = {(double)C.m[0][1], (double)C.m[1][1], (double)C.m[2][1]};
+    /* the specific force of a standing car: gravity's reaction, up */
+    const nav_real_t fn[3] = {NAV_C(0.0), NAV_C(0.0), NAV_C(9.80665)};
+    const int n = (int)(t_end / dt + 0.5);
+    for (int k = 0; k < n; k++) {
+        ekf_predict(&f, &s, fn, NAV_C(0.0), (nav_real_t)dt);
+    }
+    double var_u = 0.0, cov_u = 0.0, trace_v = 0.0;
+    for (int i = 0; i < 3; i++) {
+        for (int j = 0; j < 3; j++) {
+            var_u += u[i] * (double)f.P[EKF_DV + i][EKF_DV + j] * u[j];
+        }
+        cov_u += u[i] * (double)f.P[EKF_DV + i][EKF_AF];
+        trace_v += (double)f.P[EKF_DV + i][EKF_DV + i];
+    }
+    const double var_af = (double)f.P[EKF_AF][EKF_AF];
+    const double want_v = 2.0 * sigma * sigma * tau * (t_end - tau * (1.0 - exp(-t_end / tau)));
+    const double want_c = sigma * sigma * tau * (1.0 - exp(-t_end / tau));
+    const double want_x = 1e-2 * exp(-t_end / tau);
+    print_message("in-run forward accelerometer bias: variance %.4g (steady %.4g), forward "
+                  "velocity variance %.4g (want %.4g), across %.3g, up share %.4f, covariance "
+                  "%.4g (want %.4g), estimate %.4g (want %.4g)\n",
+                  var_af, sigma * sigma, var_u, want_v, trace_v - var_u, u[2] * u[2], cov_u,
+                  want_c, (double)f.af_mps2, want_x);
+    assert_true(u[2] > 0.08); /* the pitch reaches the height's rate */
+    assert_near(var_af, sigma * sigma, 0.02 * sigma * sigma);
+    assert_near(var_u, want_v, 0.02 * want_v);
+    assert_near(trace_v - var_u, 0.0, 0.02 * want_v);
+    assert_near(cov_u, want_c, 0.02 * want_c);
+    assert_near((double)f.af_mps2, want_x, 0.02 * want_x);
 }
 
 /* The application's factor from the stored bias instability to the in-run state's sigma
@@ -769,6 +837,7 @@ int main(void)
         cmocka_unit_test(test_odometer_lever_arm_in_a_turn),
         cmocka_unit_test(test_standstill_updates),
         cmocka_unit_test(test_gyro_in_run_bias_is_gauss_markov),
+        cmocka_unit_test(test_accel_in_run_bias_is_gauss_markov),
         cmocka_unit_test(test_app_gm_factor_is_the_filters),
         cmocka_unit_test(test_hold_heading),
         cmocka_unit_test(test_covariance_health),

@@ -76,7 +76,7 @@ static const char *const STATE_NAME[EKF_N] = {
     "dr_E", "dr_N", "dr_U", "dv_E", "dv_N", "dv_U", "psi_E", "psi_N", "psi_U",
     "bg_x", "bg_y", "bg_z", "ba_x", "ba_y", "ba_z", "k", "mount_pitch", "mount_yaw",
     "gnss_bias_E", "gnss_bias_N", "clock_bias", "clock_drift", "odo_offset", "gyro_scale_z",
-    "gyro_bias_z_in_run"};
+    "gyro_bias_z_in_run", "accel_bias_y_in_run"};
 
 /* A true state as the filter sees it at x = 0: the navigator, the estimates (k and the
  * mounting, in the ekf_t), the body rate the odometer rows get. */
@@ -318,8 +318,8 @@ static double perturb(const state_t *truth, int j, double d, state_t *comp)
     nav_real_t *e = NULL;
     if (j < EKF_BA) {
         e = &comp->w_b_rps[j - EKF_BG]; /* the compensated rate = true + residual bias */
-    } else if (j < EKF_K) {
-        return d; /* the accelerometer bias enters no measurement */
+    } else if (j < EKF_K || j == EKF_AF) {
+        return d; /* the accelerometer bias (turn-on or in-run) enters no measurement */
     } else if (j == EKF_K) {
         e = &comp->kf.k;
     } else if (j == EKF_MP) {
@@ -361,7 +361,7 @@ static double step_of(int j)
         STEP_PSI_RAD, STEP_PSI_RAD, STEP_PSI_RAD, STEP_BG_RPS,  STEP_BG_RPS,  STEP_BG_RPS,
         STEP_BA_MPS2, STEP_BA_MPS2, STEP_BA_MPS2, STEP_K,       STEP_MOUNT_RAD,
         STEP_MOUNT_RAD, STEP_DR_M,    STEP_DR_M,    STEP_DR_M,    STEP_DV_MPS,  STEP_OB_MPS,
-        STEP_SG,      STEP_BG_RPS};
+        STEP_SG,      STEP_BG_RPS,  STEP_BA_MPS2};
     return step[j];
 }
 

@@ -270,7 +270,7 @@ static void test_read_did_count_limit_and_response_too_long(void **state)
         req[1u + 2u * i] = 0x01;
         req[2u + 2u * i] = 0x00;
     }
-    uint8_t big[256];
+    uint8_t big[1u + 4u * UDS_MAX_READ_DIDS];
     /* UDS_MAX_READ_DIDS DIDs: allowed, 4 bytes each */
     assert_int_equal(uds_handle(&srv, req, 1u + 2u * UDS_MAX_READ_DIDS, 0, big, sizeof big),
                      1u + 4u * UDS_MAX_READ_DIDS);

@@ -76,6 +76,8 @@ typedef struct {
     nav_real_t gyro_bias_rw_rps_rts;    /* in-run gyro bias random walk, rad/s/sqrt(s) */
     nav_real_t gyro_bias_corr_time_s;   /* the z gyro's in-run bias correlation time, s */
     nav_real_t accel_bias_rw_mps2_rts;  /* in-run accelerometer bias random walk */
+    nav_real_t accel_fwd_instability_mps2; /* the forward (y) accelerometer's bias
+                                              instability, its Allan floor */
     nav_real_t gyro_scale;        /* 1-sigma of the z gyro's scale factor error (a ratio) */
     nav_real_t gnss_latency_s;    /* receiver output latency: fix time of validity to
                                      arrival (more when TimeOfWeek shows a late epoch) */

@@ -291,6 +291,7 @@ fusion_action_t fusion_imu_step(fusion_t *fu, const fusion_ctx_t *c, imu_inc_t *
         inc->dv_b_mps[i] -= fu->ekf.ba_mps2[i] * dt;
     }
     inc->dtheta_b_rad[2] -= fu->ekf.gz_rps * dt; /* ekf.h, state 24 */
+    inc->dv_b_mps[1] -= fu->ekf.af_mps2 * dt;    /* ekf.h, state 25 */
     inc->dtheta_b_rad[2] /= NAV_C(1.0) + fu->ekf.gyro_scale_z; /* ekf.h, state 23 */
     *yaw_rate_rps = inc->dtheta_b_rad[2] / dt;
     app_trace(APP_TRACE_MECHANIZATION, 0u);
@@ -364,6 +365,10 @@ static int start(fusion_t *fu, const fusion_ctx_t *c, const fusion_prior_t *prio
     ec.bg_rw_rps_rts = cfg->gyro_bias_rw_rps_rts;
     ec.gz_sigma_rps = cfg->gyro_bias_rw_rps_rts * APP_GYRO_GM_SIGMA_PER_RW;
     ec.gz_tau_s = cfg->gyro_bias_corr_time_s;
+    /* the forward accelerometer's in-run part (ekf.h, state 25): its data sheet's Allan
+     * floor as a Gauss-Markov process of that peak, the IMU's one correlation time */
+    ec.af_sigma_mps2 = cfg->accel_fwd_instability_mps2 / EKF_GM_ADEV_PEAK;
+    ec.af_tau_s = cfg->gyro_bias_corr_time_s;
     ec.ba_rw_mps2_rts = cfg->accel_bias_rw_mps2_rts;
     ec.gyro_scale = cfg->gyro_scale;
     ec.pos_m = hacc_m > APP_EKF_POS_SIGMA_MIN_M ? hacc_m : APP_EKF_POS_SIGMA_MIN_M;

@@ -89,7 +89,7 @@
 #define UDS_KEY_XOR 0x4E415645u       /* "NAVE" */
 #define UDS_KEY_ADD 0x43553136u       /* "CU16" */
 
-#define UDS_MAX_READ_DIDS 48u         /* DIDs one 0x22 request may name (every parameter
+#define UDS_MAX_READ_DIDS 64u         /* DIDs one 0x22 request may name (every parameter
                                          and identification DID at once, with room) */
 
 /*

@@ -1,5 +1,5 @@
 /*
- * ekf.c - the 25-state error-state Kalman filter (ekf.h, docs/kalman.md).
+ * ekf.c - the 26-state error-state Kalman filter (ekf.h, docs/kalman.md).
  */
 #include "ekf.h"
 
@@ -57,6 +57,10 @@ ekf_config_t ekf_default_config(void)
      * application sets its IMU's: fusion.c) */
     c.gz_sigma_rps = NAV_C(0.005) / EKF_GM_ADEV_PEAK * DEG_RAD / NAV_C(3600.0);
     c.gz_tau_s = NAV_C(300.0);
+    /* the forward accelerometer's in-run wander: a 0.01 mg Allan floor over 300 s (the
+     * navigation grade's; the application sets its IMU's: fusion.c) */
+    c.af_sigma_mps2 = NAV_C(1e-4) / EKF_GM_ADEV_PEAK;
+    c.af_tau_s = NAV_C(300.0);
     /* a TCXO (Brown & Hwang, 4th ed., table 9.2: h0 = 2e-19 s, h-2 = 2e-20 1/s):
      * c^2 h0 / 2 = 9.0e-3 m^2/s, 2 pi^2 c^2 h-2 = 3.5e-2 m^2/s^3 */
     c.clk_b_psd_m2ps = NAV_C(9.0e-3);
@@ -75,7 +79,7 @@ __attribute__((noinline)) static int cfg_ok(const ekf_config_t *c)
                             c->clk_bias_m, c->clk_drift_mps, c->clk_b_psd_m2ps,
                             c->clk_d_psd_m2ps3, c->odo_offset_mps, c->odo_offset_rw_mps_rts,
                             c->gyro_scale, c->gyro_scale_rw_rts, c->gz_sigma_rps,
-                            c->gz_tau_s};
+                            c->gz_tau_s, c->af_sigma_mps2, c->af_tau_s};
     for (size_t i = 0u; i < sizeof v / sizeof v[0]; i++) {
         if (!(v[i] > NAV_C(0.0)) || !nav_isfinite(v[i])) {
             return 0;
@@ -98,7 +102,7 @@ static void reset_cov(ekf_t *k, nav_real_t heading_sigma_rad)
                                   c->ba_mps2,  c->ba_mps2,  c->ba_mps2,  c->k,
                                   c->mount_rad, c->mount_rad, c->gnss_bias_m, c->gnss_bias_m,
                                   c->clk_bias_m, c->clk_drift_mps, c->odo_offset_mps,
-                                  c->gyro_scale, c->gz_sigma_rps};
+                                  c->gyro_scale, c->gz_sigma_rps, c->af_sigma_mps2};
     for (int i = 0; i < EKF_N; i++) {
         k->P[i][i] = sd[i] * sd[i];
     }
@@ -134,7 +138,7 @@ typedef struct {
     nav_real_t v;
 } f_entry_t;
 
-#define F_MAX 52
+#define F_MAX 52 /* all used (ekf.h) */
 
 static int add_entry(f_entry_t *f, int n, int r, int c, nav_real_t v)
 {
@@ -205,6 +209,10 @@ void ekf_predict(ekf_t *k, const sins_t *s, const nav_real_t f_n_mps2[3],
         n = add_entry(F, n, EKF_PSI + i, EKF_GZ, -C.m[i][2]);
     }
     n = add_entry(F, n, EKF_GZ, EKF_GZ, -NAV_C(1.0) / k->cfg.gz_tau_s); /* decay */
+    for (int i = 0; i < 3; i++) {                                /* C_bn e_y af */
+        n = add_entry(F, n, EKF_DV + i, EKF_AF, C.m[i][1]);
+    }
+    n = add_entry(F, n, EKF_AF, EKF_AF, -NAV_C(1.0) / k->cfg.af_tau_s); /* decay */
 
     /* P <- (I + F dt) P (I + F dt)^T = P + dt (FP + (FP)^T) + dt^2 F (FP)^T */
     nav_real_t (*fp)[EKF_N] = k->fp;
@@ -233,8 +241,11 @@ void ekf_predict(ekf_t *k, const sins_t *s, const nav_real_t f_n_mps2[3],
     for (int i = 0; i < 3; i++) {
         k->P[EKF_DV + i][EKF_DV + i] += c->vrw_mps_rts * c->vrw_mps_rts * dt_s + k->q_inc[1];
         k->P[EKF_PSI + i][EKF_PSI + i] += c->arw_rad_rts * c->arw_rad_rts * dt_s + k->q_inc[0];
-        k->P[EKF_BA + i][EKF_BA + i] += c->ba_rw_mps2_rts * c->ba_rw_mps2_rts * dt_s;
     }
+    /* accelerometers x and z: a random walk; y: the turn-on bias, constant, and its in-run
+     * part the Gauss-Markov state 25 (ekf.h) */
+    k->P[EKF_BA][EKF_BA] += c->ba_rw_mps2_rts * c->ba_rw_mps2_rts * dt_s;
+    k->P[EKF_BA + 2][EKF_BA + 2] += c->ba_rw_mps2_rts * c->ba_rw_mps2_rts * dt_s;
     /* x and y: a random walk; z: the turn-on bias, constant, and its in-run part the
      * Gauss-Markov state 24 (ekf.h) */
     for (int i = 0; i < 2; i++) {
@@ -247,6 +258,8 @@ void ekf_predict(ekf_t *k, const sins_t *s, const nav_real_t f_n_mps2[3],
     k->P[EKF_SG][EKF_SG] += c->gyro_scale_rw_rts * c->gyro_scale_rw_rts * dt_s;
     k->P[EKF_GZ][EKF_GZ] += NAV_C(2.0) * c->gz_sigma_rps * c->gz_sigma_rps * dt_s / c->gz_tau_s;
     k->gz_rps -= k->gz_rps * dt_s / c->gz_tau_s; /* the estimate's mean decays as the state */
+    k->P[EKF_AF][EKF_AF] += NAV_C(2.0) * c->af_sigma_mps2 * c->af_sigma_mps2 * dt_s / c->af_tau_s;
+    k->af_mps2 -= k->af_mps2 * dt_s / c->af_tau_s;
     k->P[EKF_MP][EKF_MP] += c->mount_rw_rad_rts * c->mount_rw_rad_rts * dt_s;
     k->P[EKF_MY][EKF_MY] += c->mount_rw_rad_rts * c->mount_rw_rad_rts * dt_s;
     /* the two-state clock's discrete noise (Brown & Hwang sec. 9.3): the drift's white
@@ -423,6 +436,7 @@ int ekf_feedback(ekf_t *k, sins_t *s)
     k->odo_offset_mps -= x[EKF_OB];
     k->gyro_scale_z += x[EKF_SG];
     k->gz_rps += x[EKF_GZ];
+    k->af_mps2 += x[EKF_AF];
     k->mount_pitch_rad -= x[EKF_MP];
     k->mount_yaw_rad -= x[EKF_MY];
     k->gnss_bias_m[0] -= x[EKF_GB];
@@ -616,11 +630,11 @@ static int finite_n(const nav_real_t *v, int n)
 
 int ekf_state_ok(const ekf_t *k)
 {
-    const nav_real_t scalars[7] = {k->k, k->mount_yaw_rad, k->mount_pitch_rad,
+    const nav_real_t scalars[8] = {k->k, k->mount_yaw_rad, k->mount_pitch_rad,
                                    k->clock_drift_mps, k->odo_offset_mps, k->gyro_scale_z,
-                                   k->gz_rps};
+                                   k->gz_rps, k->af_mps2};
     if (!finite_n(k->x, EKF_N) || !finite_n(k->bg_rps, 3) || !finite_n(k->ba_mps2, 3) ||
-        !finite_n(scalars, 7) || !finite_n(k->gnss_bias_m, 2)) {
+        !finite_n(scalars, 8) || !finite_n(k->gnss_bias_m, 2)) {
         return 0;
     }
     for (int i = 0; i < EKF_N; i++) {

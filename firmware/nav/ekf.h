@@ -1,9 +1,10 @@
 /*
- * ekf.h - the compact error-state Kalman filter: 25 states, float32, fixed-size storage,
+ * ekf.h - the compact error-state Kalman filter: 26 states, float32, fixed-size storage,
  * closed loop (seed 001: "the INS solution is reconciled with the GNSS solution by a Kalman
  * filter with 18 parameters": those 18, the receiver's correlated horizontal error, the
  * receiver's clock for raw measurements (issue #20), the odometer's speed offset and the
- * yaw gyro's scale factor and its in-run bias (issue #18); docs/kalman.md).
+ * yaw gyro's scale factor and its in-run bias, the forward accelerometer's in-run bias
+ * (issue #18); docs/kalman.md).
  *
  * Error state x, all "computed minus true":
  *   0..2   dr    position error, ENU metres at the IMU
@@ -49,15 +50,26 @@
  *                growing past what the gyro ever does; this state lets the estimate decay
  *                with the process and bounds its variance. State 11 (bg z) is then the
  *                turn-on bias, constant.
+ *   25     af    residual in-run bias of the body y (forward) accelerometer, m/s^2, as ba
+ *                (the truth minus the estimate af_mps2, fed back into it): a first-order
+ *                Gauss-Markov process of steady-state sigma af_sigma_mps2 and correlation
+ *                time af_tau_s, as state 24 for the z gyro. Through a GNSS outage the
+ *                odometer sees the forward bias and the pitch only together (g dtheta -
+ *                dba_y), so a bias that wanders is taken for a pitch and the height
+ *                follows it at the speed times that pitch: a random walk cannot follow
+ *                the wander (docs/kalman.md, "The forward accelerometer's in-run bias").
+ *                State 13 (ba y) is then the turn-on bias, constant.
  * Dynamics (Titterton & Weston eqs 12.6, 12.8, 12.10, small terms of order v/R dropped):
  *   d(dr)/dt = dv
  *   d(dv)/dt = [f_n x] psi + C_bn ba - [(2 w_ie + w_en) x] dv + (0, 0, 2 g / R) dr_U
+ *              + C_bn e_y af
  *   d(psi)/dt = -[w_in x] psi - C_bn bg - C_bn e_z w_z sg  (w_z the compensated body z
  *   rate, the interval's mean)
  *   d(psi)/dt also gets -C_bn e_z gz; d(gz)/dt = -gz / gz_tau_s + white (psd
- *   2 gz_sigma^2 / gz_tau_s), the estimate gz_rps decaying with it.
- *   x and y gyro biases, accelerometer biases, k, mounting, sg: random walks; the z gyro's
- *   turn-on bias: constant.
+ *   2 gz_sigma^2 / gz_tau_s), the estimate gz_rps decaying with it; af likewise with
+ *   af_sigma_mps2 and af_tau_s, the estimate af_mps2.
+ *   x and y gyro biases, x and z accelerometer biases, k, mounting, sg: random walks; the
+ *   z gyro's and the y accelerometer's turn-on biases: constant.
  *   d(dcb)/dt = dcd + white (psd clk_b_psd), d(dcd)/dt = white (psd clk_d_psd): the clock
  *   states are coupled to nothing else until a raw measurement correlates them, so a filter
  *   fed only fixes computes the other states exactly as without them.
@@ -66,7 +78,7 @@
  *   driving noise are applied once per fix by ekf_gnss_bias_step, which is exact since
  *   the decay is a scaling of its own rows and columns only.
  * Prediction uses Phi = I + F dt over an interval of several IMU samples with the mean
- * specific force, and P = Phi P Phi^T + Q computed through F's 48 non-zero entries
+ * specific force, and P = Phi P Phi^T + Q computed through F's 52 non-zero entries
  * (ekf_predict). Updates are scalar and sequential (no matrix inverse), in the symmetric
  * expansion of the Joseph form, each gated by its normalised innovation (chi-square).
  */
@@ -76,11 +88,11 @@
 #include "gnss_geom.h"
 #include "sins.h"
 
-#define EKF_N 25
+#define EKF_N 26
 /* The Allan deviation of a first-order Gauss-Markov process of sigma s peaks at
  * EKF_GM_ADEV_PEAK s (at 1.89 correlation times; IEEE Std 952-1997 annex C; computed by
  * tools/sim/sensors.py as GM_ADEV_PEAK_FACTOR): a data sheet's bias instability B, the
- * floor of that deviation, is the process of sigma B / EKF_GM_ADEV_PEAK (state 24). */
+ * floor of that deviation, is the process of sigma B / EKF_GM_ADEV_PEAK (states 24, 25). */
 #define EKF_GM_ADEV_PEAK NAV_C(0.61736)
 enum {
     EKF_DR = 0,
@@ -97,6 +109,7 @@ enum {
     EKF_OB = 22, /* odometer speed offset, m/s */
     EKF_SG = 23, /* body z gyro scale factor error */
     EKF_GZ = 24, /* body z gyro in-run bias, first-order Gauss-Markov */
+    EKF_AF = 25, /* body y (forward) accelerometer in-run bias, first-order Gauss-Markov */
 };
 
 typedef struct {
@@ -117,6 +130,8 @@ typedef struct {
     nav_real_t gyro_scale_rw_rts; /* z gyro scale factor random walk, 1/sqrt(s) */
     nav_real_t gz_sigma_rps;     /* the z gyro's in-run bias: its steady-state 1-sigma */
     nav_real_t gz_tau_s;         /* and its correlation time, s */
+    nav_real_t af_sigma_mps2;    /* the forward accelerometer's in-run bias: its 1-sigma */
+    nav_real_t af_tau_s;         /* and its correlation time, s */
     nav_real_t clk_b_psd_m2ps;   /* clock bias white noise psd, m^2/s (c^2 h0 / 2) */
     nav_real_t clk_d_psd_m2ps3;  /* clock drift white noise psd, m^2/s^3 (2 pi^2 c^2 h-2) */
     nav_real_t var_floor;        /* smallest variance allowed on the diagonal */
@@ -132,6 +147,8 @@ typedef struct {
     nav_real_t odo_offset_mps; /* the odometer's speed offset, m/s (state 22) */
     nav_real_t gz_rps;         /* the body z gyro's in-run bias (state 24), decaying
                                   with gz_tau_s between updates */
+    nav_real_t af_mps2;        /* the body y accelerometer's in-run bias (state 25),
+                                  decaying with af_tau_s between updates */
     nav_real_t gyro_scale_z;   /* the body z gyro's scale factor error (state 23): the
                                   application divides the z increment by 1 + it */
     /* the receiver's correlated horizontal position error (E, N, m) as estimated: what

@@ -43,7 +43,8 @@ KEY_XOR, KEY_ADD = 0x4E415645, 0x43553136  # uds.h: the demonstration key
 # sim-options' parameters (tests/regression/cases.json) minus what sim-clean's run has
 OPTIONS = ["--imu-rate-hz", "100", "--gyro-arw-dpsh", "0.003", "--gyro-bias-dph", "0.015",
            "--accel-bias-mg", "0.101972", "--gyro-instability-dph", "0.005",
-           "--gyro-bias-corr-time-s", "300", "--accel-instability-mg", "0.0101972", "--gyro-scale-ppm", "50",
+           "--gyro-bias-corr-time-s", "300", "--accel-instability-mg", "0.0101972",
+           "--accel-fwd-instability-mg", "0.0101972", "--gyro-scale-ppm", "50",
            "--odo-lever-sigma-m", "0.1", "--gnss-latency-ms", "100",
            "--gnss-corr-s", "120", "--gnss-white-ratio", "0.335",
            "--nav-rate-hz", "25", "--status-rate-hz", "20",

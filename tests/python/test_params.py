@@ -116,7 +116,9 @@ def test_presets_are_the_simulators_grades(table):
                 # gyros' walk; the z gyro's Gauss-Markov state takes B / 0.61736 from it)
                 "gyro_bias_rw_rps_rts": spec.gyro_bias_instability_rps * math.sqrt(2 / 300),
                 "gyro_bias_corr_time_s": spec.gyro_bias_corr_time_s,
-                "accel_bias_rw_mps2_rts": spec.accel_bias_instability_mps2 * math.sqrt(2 / 300)}
+                "accel_bias_rw_mps2_rts": spec.accel_bias_instability_mps2 * math.sqrt(2 / 300),
+                # the forward axis's floor itself (its Gauss-Markov state, ekf.h state 25)
+                "accel_fwd_instability_mps2": spec.accel_bias_instability_mps2}
         for k, w in want.items():
             assert si[k] == pytest.approx(w, rel=1e-5), (name, k)
 

@@ -218,6 +218,9 @@ def firmware_args(imu: "sensors.ImuSpec", gnss: "sensors.GnssSpec",
             "--gyro-bias-corr-time-s", f"{imu.gyro_bias_corr_time_s:.6g}",
             "--accel-instability-mg",
             f"{max(imu.accel_bias_instability_mps2 / g * 1e3, 1e-4):.6g}",
+            # the forward axis's own (the simulator draws every axis alike)
+            "--accel-fwd-instability-mg",
+            f"{max(imu.accel_bias_instability_mps2 / g * 1e3, 1e-4):.6g}",
             "--gyro-scale-ppm", f"{max(imu.gyro_scale_factor_ppm, 0.1):.6g}",
             # the simulated car measures its speed at the IMU (no lever arm), and the
             # installation is measured: to a tape measure's 0.1 m

@@ -30,6 +30,7 @@ const app_param_t app_params[APP_PARAM_N] = {
     [APP_PARAM_GYRO_BIAS_RW_RPS_RTS] = {NAV_C(3.9584871301292103e-13), NAV_C(0.0039584871301292105), NAV_C(7.916974260258421e-06), 0x0233u, offsetof(app_config_t, gyro_bias_rw_rps_rts), APP_PARAM_REAL, 0u, 0u, 0u, 0u, sizeof(((app_config_t *)0)->gyro_bias_rw_rps_rts)},
     [APP_PARAM_GYRO_BIAS_CORR_TIME_S] = {NAV_C(10.0), NAV_C(100000.0), NAV_C(100.0), 0x0238u, offsetof(app_config_t, gyro_bias_corr_time_s), APP_PARAM_REAL, 0u, 0u, 0u, 0u, sizeof(((app_config_t *)0)->gyro_bias_corr_time_s)},
     [APP_PARAM_ACCEL_BIAS_RW_MPS2_RTS] = {NAV_C(8.007096195354886e-09), NAV_C(0.8007096195354885), NAV_C(0.0016329912193692611), 0x0234u, offsetof(app_config_t, accel_bias_rw_mps2_rts), APP_PARAM_REAL, 0u, 0u, 0u, 0u, sizeof(((app_config_t *)0)->accel_bias_rw_mps2_rts)},
+    [APP_PARAM_ACCEL_FWD_INSTABILITY_MPS2] = {NAV_C(9.806650000000001e-08), NAV_C(9.80665), NAV_C(0.0199999762095), 0x0239u, offsetof(app_config_t, accel_fwd_instability_mps2), APP_PARAM_REAL, 0u, 0u, 0u, 0u, sizeof(((app_config_t *)0)->accel_fwd_instability_mps2)},
     [APP_PARAM_GYRO_RANGE_RPS] = {NAV_C(0.017453292519943295), NAV_C(87.26646259971648), NAV_C(5.235987755982989), 0x0235u, offsetof(app_config_t, gyro_range_rps), APP_PARAM_REAL, 0u, 0u, 1u, 0u, sizeof(((app_config_t *)0)->gyro_range_rps)},
     [APP_PARAM_ACCEL_RANGE_MPS2] = {NAV_C(9.80665), NAV_C(2000.0), NAV_C(78.4532), 0x0236u, offsetof(app_config_t, accel_range_mps2), APP_PARAM_REAL, 0u, 0u, 1u, 0u, sizeof(((app_config_t *)0)->accel_range_mps2)},
     [APP_PARAM_GYRO_SCALE] = {NAV_C(1e-07), NAV_C(0.09999999999999999), NAV_C(0.01), 0x0237u, offsetof(app_config_t, gyro_scale), APP_PARAM_REAL, 0u, 0u, 0u, 0u, sizeof(((app_config_t *)0)->gyro_scale)},
@@ -75,6 +76,7 @@ const char *const app_param_names[APP_PARAM_N] = {
     [APP_PARAM_GYRO_BIAS_RW_RPS_RTS] = "gyro_bias_rw_rps_rts",
     [APP_PARAM_GYRO_BIAS_CORR_TIME_S] = "gyro_bias_corr_time_s",
     [APP_PARAM_ACCEL_BIAS_RW_MPS2_RTS] = "accel_bias_rw_mps2_rts",
+    [APP_PARAM_ACCEL_FWD_INSTABILITY_MPS2] = "accel_fwd_instability_mps2",
     [APP_PARAM_GYRO_RANGE_RPS] = "gyro_range_rps",
     [APP_PARAM_ACCEL_RANGE_MPS2] = "accel_range_mps2",
     [APP_PARAM_GYRO_SCALE] = "gyro_scale",
@@ -102,16 +104,17 @@ const app_param_id_t app_preset_params[APP_PRESET_PARAMS] = {
     APP_PARAM_GYRO_BIAS_RW_RPS_RTS,
     APP_PARAM_GYRO_BIAS_CORR_TIME_S,
     APP_PARAM_ACCEL_BIAS_RW_MPS2_RTS,
+    APP_PARAM_ACCEL_FWD_INSTABILITY_MPS2,
     APP_PARAM_GYRO_RANGE_RPS,
     APP_PARAM_ACCEL_RANGE_MPS2,
     APP_PARAM_GYRO_SCALE,
 };
 
 const app_preset_t app_presets[APP_PRESET_N] = {
-    [APP_PRESET_CONSUMER] = {{NAV_C(0.00012217304763960306), NAV_C(0.0017453292519943296), NAV_C(0.392266), NAV_C(1.1875461390387631e-05), NAV_C(100.0), NAV_C(0.003202838478141954), NAV_C(34.90658503988659), NAV_C(156.9064), NAV_C(0.02)}},
-    [APP_PRESET_AUTOMOTIVE] = {{NAV_C(0.0005817764173314432), NAV_C(0.0009999999697132222), NAV_C(0.199999762095), NAV_C(7.916974260258421e-06), NAV_C(100.0), NAV_C(0.0016329912193692611), NAV_C(5.235987755982989), NAV_C(78.4532), NAV_C(0.01)}},
-    [APP_PRESET_TACTICAL] = {{NAV_C(1.454441043328608e-05), NAV_C(4.99999984856611e-06), NAV_C(0.0300000133475), NAV_C(1.9792435650646052e-07), NAV_C(100.0), NAV_C(0.000244949083260199), NAV_C(6.981317007977318), NAV_C(98.0665), NAV_C(0.0003)}},
-    [APP_PRESET_NAVIGATION] = {{NAV_C(8.726646259971648e-07), NAV_C(7.272205216643039e-08), NAV_C(0.0010000037138), NAV_C(1.9792435650646052e-09), NAV_C(300.0), NAV_C(8.164996132327283e-06), NAV_C(5.235987755982989), NAV_C(78.4532), NAV_C(4.9999999999999996e-05)}},
+    [APP_PRESET_CONSUMER] = {{NAV_C(0.00012217304763960306), NAV_C(0.0017453292519943296), NAV_C(0.392266), NAV_C(1.1875461390387631e-05), NAV_C(100.0), NAV_C(0.003202838478141954), NAV_C(0.0392266), NAV_C(34.90658503988659), NAV_C(156.9064), NAV_C(0.02)}},
+    [APP_PRESET_AUTOMOTIVE] = {{NAV_C(0.0005817764173314432), NAV_C(0.0009999999697132222), NAV_C(0.199999762095), NAV_C(7.916974260258421e-06), NAV_C(100.0), NAV_C(0.0016329912193692611), NAV_C(0.0199999762095), NAV_C(5.235987755982989), NAV_C(78.4532), NAV_C(0.01)}},
+    [APP_PRESET_TACTICAL] = {{NAV_C(1.454441043328608e-05), NAV_C(4.99999984856611e-06), NAV_C(0.0300000133475), NAV_C(1.9792435650646052e-07), NAV_C(100.0), NAV_C(0.000244949083260199), NAV_C(0.00300000133475), NAV_C(6.981317007977318), NAV_C(98.0665), NAV_C(0.0003)}},
+    [APP_PRESET_NAVIGATION] = {{NAV_C(8.726646259971648e-07), NAV_C(7.272205216643039e-08), NAV_C(0.0010000037138), NAV_C(1.9792435650646052e-09), NAV_C(300.0), NAV_C(8.164996132327283e-06), NAV_C(0.00010000037138), NAV_C(5.235987755982989), NAV_C(78.4532), NAV_C(4.9999999999999996e-05)}},
 };
 
 #ifndef APP_PARAM_NO_NAMES
@@ -155,6 +158,7 @@ _Static_assert(sizeof(((app_config_t *)0)->accel_bias_mps2) == sizeof(nav_real_t
 _Static_assert(sizeof(((app_config_t *)0)->gyro_bias_rw_rps_rts) == sizeof(nav_real_t), "gyro_bias_rw_rps_rts: its type's size");
 _Static_assert(sizeof(((app_config_t *)0)->gyro_bias_corr_time_s) == sizeof(nav_real_t), "gyro_bias_corr_time_s: its type's size");
 _Static_assert(sizeof(((app_config_t *)0)->accel_bias_rw_mps2_rts) == sizeof(nav_real_t), "accel_bias_rw_mps2_rts: its type's size");
+_Static_assert(sizeof(((app_config_t *)0)->accel_fwd_instability_mps2) == sizeof(nav_real_t), "accel_fwd_instability_mps2: its type's size");
 _Static_assert(sizeof(((app_config_t *)0)->gyro_range_rps) == sizeof(nav_real_t), "gyro_range_rps: its type's size");
 _Static_assert(sizeof(((app_config_t *)0)->accel_range_mps2) == sizeof(nav_real_t), "accel_range_mps2: its type's size");
 _Static_assert(sizeof(((app_config_t *)0)->gyro_scale) == sizeof(nav_real_t), "gyro_scale: its type's size");
