@@ -705,6 +705,29 @@ static void test_accel_in_run_bias_is_gauss_markov(void **state)
     assert_near((double)f.af_mps2, want_x, 0.02 * want_x);
 }
 
+/* The in-run states are residuals, as b_g and b_a (ekf.h: what the compensated value still
+ * has): the feedback adds each to its estimate, which the application subtracts from the
+ * increments (test_fusion's test_in_run_estimates_compensate_the_sensor), and clears it. */
+static void test_in_run_feedback_adds_the_residual(void **state)
+{
+    (void)state;
+    const double v[3] = {0.0, 0.0, 0.0};
+    sins_t s;
+    nav_at(&s, 0.0, 0.0, 0.0, v);
+    const ekf_config_t c = quiet_config();
+    ekf_t f;
+    assert_int_equal(ekf_init(&f, &c, NAV_C(0.0)), NAV_OK);
+    f.gz_rps = NAV_C(1e-4);
+    f.af_mps2 = NAV_C(0.01);
+    f.x[EKF_GZ] = NAV_C(2e-5);
+    f.x[EKF_AF] = NAV_C(-0.003);
+    assert_int_equal(ekf_feedback(&f, &s), NAV_OK);
+    assert_near((double)f.gz_rps, 1.2e-4, 1e-9);
+    assert_near((double)f.af_mps2, 0.007, 1e-7);
+    assert_near((double)f.x[EKF_GZ], 0.0, 0.0);
+    assert_near((double)f.x[EKF_AF], 0.0, 0.0);
+}
+
 /* The application's factor from the stored bias instability to the in-run state's sigma
  * (app_tuning.h, a literal so that its float32 value stays the one the outputs were made
  * with) is sqrt(150 s) / EKF_GM_ADEV_PEAK, to its six digits (relative 1e-5). */
@@ -838,6 +861,7 @@ int main(void)
         cmocka_unit_test(test_standstill_updates),
         cmocka_unit_test(test_gyro_in_run_bias_is_gauss_markov),
         cmocka_unit_test(test_accel_in_run_bias_is_gauss_markov),
+        cmocka_unit_test(test_in_run_feedback_adds_the_residual),
         cmocka_unit_test(test_app_gm_factor_is_the_filters),
         cmocka_unit_test(test_hold_heading),
         cmocka_unit_test(test_covariance_health),

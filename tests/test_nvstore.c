@@ -8,6 +8,7 @@
  * are refused and counted, that parameter at its default; a calibration save and a
  * calibration erase keep the stored parameters; the DTC status bytes.
  */
+#include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -19,6 +20,7 @@
 #include "calstore.h"
 #include "fake_hal.h"
 #include "nvstore.h"
+#include "test_util.h"
 
 static hal_t hal;
 
@@ -364,6 +366,57 @@ static void test_low_imu_rate_loads_back(void **state)
     assert_true(app_config_valid(&c));
 }
 
+/* the stored entries in (n bytes) but those of DID did, into out: their length */
+static size_t drop_did(const uint8_t *in, size_t n, uint16_t did, uint8_t *out)
+{
+    size_t m = 0u;
+    for (size_t k = 0u; k < n; k += NVSTORE_ENTRY_HEAD + in[k + 2u]) {
+        if (((uint16_t)(in[k] << 8) | in[k + 1u]) != did) {
+            memcpy(&out[m], &in[k], NVSTORE_ENTRY_HEAD + in[k + 2u]);
+            m += NVSTORE_ENTRY_HEAD + in[k + 2u];
+        }
+    }
+    assert_true(m < n);
+    return m;
+}
+
+/* A record of the firmware before the forward accelerometer's own instability (DID 0x0239):
+ * GIVEN an ECU configured for a navigation-grade IMU (the accelerometers' 0.0102 mg, the
+ * automotive preset's default 2.04 mg) WHEN its record has no 0x0239 THEN the forward axis
+ * takes the stored accelerometers' figure (B = the field / sqrt(2 / 300 s), to the float's
+ * 1e-5), not the default; with 0x0239 stored its own value; a record with neither keeps
+ * the default. */
+static void test_forward_instability_of_an_older_record(void **state)
+{
+    (void)state;
+    app_config_t nav = app_default_config();
+    const double b_mps2 = 0.0101972 * 9.80665e-3;
+    nav.accel_bias_rw_mps2_rts = (nav_real_t)(b_mps2 * sqrt(2.0 / 300.0));
+    nav.accel_fwd_instability_mps2 = (nav_real_t)(3.0 * b_mps2);
+    const uint16_t fwd = app_params[APP_PARAM_ACCEL_FWD_INSTABILITY_MPS2].did;
+    uint8_t all[CALSTORE_PARAMS_MAX], buf[CALSTORE_PARAMS_MAX], neither[CALSTORE_PARAMS_MAX];
+    const size_t n_all = enc(&nav, all);
+    const size_t n_no_fwd = drop_did(all, n_all, fwd, buf);
+    app_config_t got;
+    nvstore_status_t st;
+    memset(&st, 0, sizeof st);
+    nvstore_params_decode(&got, buf, n_no_fwd, &st);
+    assert_int_equal(st.refused, 0);
+    print_message("older record: forward instability %.6g m/s^2 (the stored figure's B %.6g, "
+                  "the default %.6g)\n", (double)got.accel_fwd_instability_mps2, b_mps2,
+                  (double)app_default_config().accel_fwd_instability_mps2);
+    assert_near((double)got.accel_fwd_instability_mps2, b_mps2, 1e-5 * b_mps2);
+    memset(&st, 0, sizeof st);
+    nvstore_params_decode(&got, all, n_all, &st);
+    assert_near((double)got.accel_fwd_instability_mps2, 3.0 * b_mps2, 1e-6 * b_mps2);
+    const size_t m =
+        drop_did(buf, n_no_fwd, app_params[APP_PARAM_ACCEL_BIAS_RW_MPS2_RTS].did, neither);
+    memset(&st, 0, sizeof st);
+    nvstore_params_decode(&got, neither, m, &st);
+    assert_near((double)got.accel_fwd_instability_mps2,
+                (double)app_default_config().accel_fwd_instability_mps2, 0.0);
+}
+
 /* a calibration save (calib's policy) and a calibration erase keep the parameters; the
  * erase leaves no calibration; DTC status bytes round trip and survive both */
 static void test_calibration_keeps_params_and_dtc(void **state)
@@ -454,6 +507,7 @@ int main(void)
         cmocka_unit_test_setup(test_calibration_keeps_params_and_dtc, setup),
         cmocka_unit_test_setup(test_interrupted_first_save, setup),
         cmocka_unit_test_setup(test_low_imu_rate_loads_back, setup),
+        cmocka_unit_test_setup(test_forward_instability_of_an_older_record, setup),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -114,6 +114,10 @@
  * this factor (a literal: computed from EKF_GM_ADEV_PEAK in float32 it rounds differently
  * and changes the outputs; test_ekf checks the two agree) */
 #define APP_GYRO_GM_SIGMA_PER_RW NAV_C(19.8383)
+/* an instability's Allan floor B from its field stored as B sqrt(2 / 300 s) (params.toml
+ * accel_bias_rw_mps2_rts): sqrt(150 s) (nvstore.c, a record without the forward
+ * accelerometer's own figure) */
+#define APP_INSTABILITY_PER_RW NAV_C(12.24745)
 /* the speed sigma a fix's horizontal accuracy implies (1/s): range-rate noise over range
  * noise, both multiplied by the same DOP (0.05 m/s Doppler, 1.5 m code: 0.03) */
 #define APP_GNSS_SACC_PER_HACC NAV_C(0.03)

@@ -3,6 +3,7 @@
 
 #include <string.h>
 
+#include "app_tuning.h"
 #include "app_uds.h"
 
 /* the record being read or written: calstore's one extension buffer (calstore.h), off the
@@ -41,10 +42,21 @@ static void count_refused(nvstore_status_t *st)
     }
 }
 
+/* A record of a firmware before the forward accelerometer's own instability (DID 0x0239,
+ * ekf.h state 25) holds the accelerometers' one figure (0x0234, stored as B sqrt(2 / 300 s)):
+ * the forward axis takes that B, not the default preset's, within its parameter's range. */
+static void fwd_instability_from_rw(app_config_t *cfg)
+{
+    const app_param_t *p = &app_params[APP_PARAM_ACCEL_FWD_INSTABILITY_MPS2];
+    const nav_real_t b = cfg->accel_bias_rw_mps2_rts * APP_INSTABILITY_PER_RW;
+    cfg->accel_fwd_instability_mps2 = b < p->min_si ? p->min_si : (b > p->max_si ? p->max_si : b);
+}
+
 void nvstore_params_decode(app_config_t *cfg, const uint8_t *buf, size_t len,
                            nvstore_status_t *st)
 {
     *cfg = app_default_config();
+    int rw_loaded = 0, fwd_loaded = 0;
     size_t k = 0u;
     while (k < len) {
         if (len - k < NVSTORE_ENTRY_HEAD ||
@@ -58,12 +70,22 @@ void nvstore_params_decode(app_config_t *cfg, const uint8_t *buf, size_t len,
         if (id == APP_PARAM_N || app_params[id].uds_read_only ||
             app_uds_param_value(cfg, id, &buf[k + NVSTORE_ENTRY_HEAD], n) != UDS_NRC_OK) {
             count_refused(st);
-        } else if (st->loaded < UINT8_MAX) {
-            st->loaded++;
         } else {
-            /* loaded saturated */
+            if (id == APP_PARAM_ACCEL_BIAS_RW_MPS2_RTS) {
+                rw_loaded = 1;
+            } else if (id == APP_PARAM_ACCEL_FWD_INSTABILITY_MPS2) {
+                fwd_loaded = 1;
+            } else {
+                /* no other entry matters beyond its own value */
+            }
+            if (st->loaded < UINT8_MAX) {
+                st->loaded++;
+            }
         }
         k += NVSTORE_ENTRY_HEAD + n;
+    }
+    if (rw_loaded && !fwd_loaded) {
+        fwd_instability_from_rw(cfg);
     }
     /* A set stored valid is valid as a whole, not after each of its entries (with the IMU
      * at 20 Hz and the outputs at 10 Hz, the IMU rate's entry comes first and breaks "an

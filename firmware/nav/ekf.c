@@ -138,7 +138,9 @@ typedef struct {
     nav_real_t v;
 } f_entry_t;
 
-#define F_MAX 52 /* all used (ekf.h) */
+/* all 52 used (ekf.h): add_entry drops an entry beyond them, which the new state's own
+ * propagation test then finds (test_ekf: test_accel_in_run_bias_is_gauss_markov for the last) */
+#define F_MAX 52
 
 static int add_entry(f_entry_t *f, int n, int r, int c, nav_real_t v)
 {

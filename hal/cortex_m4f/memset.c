@@ -3,7 +3,7 @@
  *
  * newlib-nano's memset is its word-and-block C version (162 bytes of flash: an unrolled
  * 16-byte loop, a word loop, bytes). The firmware's calls clear structs and buffers at
- * start-up and on a reset, the 25 x 25 covariance at a filter reset, a CAN frame or an
+ * start-up and on a reset, the 26 x 26 covariance at a filter reset, a CAN frame or an
  * ISO-TP block before it is filled; GCC sets fixed small sizes inline without it. A word
  * loop when the destination is word-aligned (most structs are), else bytes: the same bytes
  * written, in a third of the flash. Built with

@@ -54,11 +54,12 @@ RATES = ["--imu-rate-hz", "10", "--nav-rate-hz", "10", "--status-rate-hz", "10"]
 # 0.5 mg), chosen before they were measured and consistent with the measurement since
 # (tools/kingston/analyse.py, "IMU Allan deviation at the first stop": the horizontal
 # accelerometers' deviation largest at 100 s, 0.70 and 0.27 mg; the gyros' still falling
-# at 170 s, z 0.28 deg/h); the forward (y) accelerometer's, which the filter takes as a
-# Gauss-Markov state of its own (ekf.h, state 25), is that axis's measured 0.27 mg: its
-# wander is what the odometer cannot tell from the pitch; with the MEMS class's correlation time, the automotive
+# at 170 s, z 0.28 deg/h), with the MEMS class's correlation time, the automotive
 # preset's 100 s (not measured: a 529-s stop cannot place the accelerometers' Allan peak,
-# flat and uncertain by tens of percent between 100 and 170 s);
+# flat and uncertain by tens of percent between 100 and 170 s); the forward (y)
+# accelerometer's, which the filter takes as a Gauss-Markov state of its own (ekf.h,
+# state 25), is that axis's measured 0.27 mg: its wander is what the odometer cannot tell
+# from the pitch;
 # ranges those of that preset (the default,
 # firmware/app/params.toml); the receiver's fixes are stamped with their time of validity
 # (latency 0) and their errors against the reference decorrelate in 3..5 s (measured). The

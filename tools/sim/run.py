@@ -211,6 +211,12 @@ def firmware_args(imu: "sensors.ImuSpec", gnss: "sensors.GnssSpec",
     figure)."""
     rad_dph = math.pi / 180.0 / 3600.0
     g = sensors.G0_MPS2
+    if imu.accel_bias_corr_time_s != imu.gyro_bias_corr_time_s:
+        # the firmware has one correlation time for the z gyro's and the forward
+        # accelerometer's in-run states (gyro_bias_corr_time_s, docs/kalman.md)
+        raise ValueError(f"the IMU's accelerometer and gyro in-run correlation times differ "
+                         f"({imu.accel_bias_corr_time_s:g} s, {imu.gyro_bias_corr_time_s:g} s): "
+                         f"the firmware is configured with one")
     args = ["--gyro-arw-dpsh", f"{max(imu.gyro_arw_deg_per_rth, 1e-4):.6g}",
             "--gyro-bias-dph", f"{max(imu.gyro_bias_turnon_rps / rad_dph, 1e-3):.6g}",
             "--accel-bias-mg", f"{max(imu.accel_bias_turnon_mps2 / g * 1e3, 1e-3):.6g}",
