@@ -175,6 +175,15 @@ static int add_mat(f_entry_t *f, int n, int r0, int c0, const mat3_t *M, nav_rea
     return n;
 }
 
+/* A first-order Gauss-Markov state i of sigma and tau over dt_s (ekf.h, states 24 and 25):
+ * its driving noise, 2 sigma^2 dt / tau, and its estimate's mean decaying as the state */
+static void gm_noise(ekf_t *k, int i, nav_real_t *estimate, nav_real_t sigma, nav_real_t tau,
+                     nav_real_t dt_s)
+{
+    k->P[i][i] += NAV_C(2.0) * sigma * sigma * dt_s / tau;
+    *estimate -= *estimate * dt_s / tau;
+}
+
 void ekf_predict(ekf_t *k, const sins_t *s, const nav_real_t f_n_mps2[3],
                  nav_real_t w_bz_rps, nav_real_t dt_s)
 {
@@ -258,10 +267,8 @@ void ekf_predict(ekf_t *k, const sins_t *s, const nav_real_t f_n_mps2[3],
     k->P[EKF_K][EKF_K] += c->k_rw_rts * c->k_rw_rts * dt_s;
     k->P[EKF_OB][EKF_OB] += c->odo_offset_rw_mps_rts * c->odo_offset_rw_mps_rts * dt_s;
     k->P[EKF_SG][EKF_SG] += c->gyro_scale_rw_rts * c->gyro_scale_rw_rts * dt_s;
-    k->P[EKF_GZ][EKF_GZ] += NAV_C(2.0) * c->gz_sigma_rps * c->gz_sigma_rps * dt_s / c->gz_tau_s;
-    k->gz_rps -= k->gz_rps * dt_s / c->gz_tau_s; /* the estimate's mean decays as the state */
-    k->P[EKF_AF][EKF_AF] += NAV_C(2.0) * c->af_sigma_mps2 * c->af_sigma_mps2 * dt_s / c->af_tau_s;
-    k->af_mps2 -= k->af_mps2 * dt_s / c->af_tau_s;
+    gm_noise(k, EKF_GZ, &k->gz_rps, c->gz_sigma_rps, c->gz_tau_s, dt_s);
+    gm_noise(k, EKF_AF, &k->af_mps2, c->af_sigma_mps2, c->af_tau_s, dt_s);
     k->P[EKF_MP][EKF_MP] += c->mount_rw_rad_rts * c->mount_rw_rad_rts * dt_s;
     k->P[EKF_MY][EKF_MY] += c->mount_rw_rad_rts * c->mount_rw_rad_rts * dt_s;
     /* the two-state clock's discrete noise (Brown & Hwang sec. 9.3): the drift's white
