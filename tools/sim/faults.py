@@ -552,6 +552,16 @@ def faults(drive: Drive) -> list:
                                              th[np.argmax(sel), 2]) / dt)}
     rows.append(Fault("stuck gyro axis", w_stuck, stuck))
 
+    # the same z gyro stuck for good: through the tunnel (625-715 s, 1,980 m without GNSS)
+    # only the car's own turn (app.c stuck_yaw) holds the heading
+    def stuck_for_good(d):
+        th = freeze_axis(d.dtheta, d.truth.t_s, w_stuck[0], math.inf, 2, nc.ANGLE_LSB_RAD)
+        msgs, n = d.imu_encoder.frames(d, th, d.dv)
+        return [m for _, _, m in msgs], {"injected": "z held to the drive's end (the tunnel "
+                                                     "included)", "samples_changed": n}
+    rows.append(Fault("z gyro stuck for good", (w_stuck[0], None), stuck_for_good,
+                      kind="step"))
+
     # A gyro of +-15 deg/s and an accelerometer of +-1.01 g on every axis (an IMU with too
     # small a range for the car): the gyro clips in turns, the accelerometer's z axis,
     # which carries gravity, clips on every crest and bump that pushes up by more than
@@ -712,11 +722,36 @@ def evaluate(drive: Drive, msgs: list, out_dir: Path, cmd_tail: list, navecu: st
     r.update({"navigating": bool(rep.get("navigating")),
               "t": series.get("t", np.zeros(0)), "herr": series.get("herr", np.zeros(0)),
               "status": {k: st[k] for k in keep if st is not None and k in st},
-              "decoded_finite": _decoded_finite(nav, cnt)})
+              "decoded_finite": _decoded_finite(nav, cnt),
+              "within_2sigma": rep["sigma_consistency"].get("frac_within_2sigma"),
+              "outages": _outage_claims(rep["outages"], st, series.get("heading"))})
     cal = report.read_calibration_log(nav_log)
     r["cal"] = {"t_s": cal["t_s"], "CalStatus": cal["CalStatus"]}
     r["decode_s"] = time.monotonic() - t
     return r
+
+
+def _outage_claims(outages: list, status, heading=None) -> list:
+    """report.compute's GNSS outages, each with the HorizAccuracy reported at its end (m),
+    what the error at the end was claimed to be, and the heading error there (deg; heading:
+    report.compute's (t, error deg) series)."""
+    out = []
+    for o in outages:
+        o = dict(o)
+        o["end_horiz_accuracy_m"] = None
+        o["end_heading_error_deg"] = None
+        if heading is not None and len(heading[0]):
+            k = np.nonzero(heading[0] <= o["end_s"])[0]
+            if k.size:
+                o["end_heading_error_deg"] = float(heading[1][k[-1]])
+        if status is not None and "HorizAccuracy" in status:
+            p0 = status["StatusPage"] == 0
+            t, h = status["t_s"][p0], status["HorizAccuracy"][p0]
+            k = np.nonzero(t <= o["end_s"])[0]
+            if k.size:
+                o["end_horiz_accuracy_m"] = float(h[k[-1]])
+        out.append(o)
+    return out
 
 
 def _child(conn, fn, args):
@@ -871,6 +906,8 @@ def summarize(drive: Drive, f: Optional[Fault], raw: dict, clean: dict, bits: di
                 "nonfinite_outputs": raw["nonfinite_outputs"],
                 "decoded_finite": raw["decoded_finite"], "rms_m": rms, "max_m": mx,
                 "rms_ratio": (rms / c_rms) if rms is not None and c_rms else None,
+                "within_2sigma": raw.get("within_2sigma"),
+                "outages": raw.get("outages"),
                 "firmware_s": raw["firmware_s"], "decode_s": raw.get("decode_s"),
                 "frames_in": raw["frames_in"],
                 "navecu_summary": raw["stderr"].strip().splitlines()})
@@ -930,10 +967,14 @@ def _injected_text(r) -> str:
     return (r.get("injected") or {}).get("injected", "-")
 
 
+def _pct(x) -> str:
+    return "-" if x is None else f"{100.0 * x:.1f} %"
+
+
 def markdown_table(rows: list) -> str:
     head = ("| fault | window (s) | injected | navecu exit | how detected | non-finite | "
-            "RMS (m) | max (m) | RMS / clean | recovery |\n"
-            "|---|---|---|---|---|---|---|---|---|---|\n")
+            "RMS (m) | max (m) | RMS / clean | within 2σ | recovery |\n"
+            "|---|---|---|---|---|---|---|---|---|---|---|\n")
     lines = []
     for r in rows:
         det = r["detected"]["text"] if isinstance(r.get("detected"), dict) else "-"
@@ -942,7 +983,8 @@ def markdown_table(rows: list) -> str:
         lines.append(
             f"| {r['name']} | {r['window']} | {_injected_text(r)} | {r['exit_status']} | "
             f"{det} | {_nonfinite_cell(r)} | {_f(r.get('rms_m'))} | {_f(r.get('max_m'))} | "
-            f"{_f(r.get('rms_ratio'))} | {r.get('recovery', '-')} |")
+            f"{_f(r.get('rms_ratio'))} | {_pct(r.get('within_2sigma'))} | "
+            f"{r.get('recovery', '-')} |")
     return head + "\n".join(lines) + "\n"
 
 
@@ -971,6 +1013,9 @@ the drive, while driving, with GNSS. Columns:
   NAV_* value is not finite;
 - **RMS, max**: horizontal error against the truth over the whole drive (every
   NAV_Position); **RMS / clean**: against the clean run's RMS;
+- **within 2σ**: the share of those epochs whose error is at most twice the reported
+  HorizAccuracy (NAV_Status), the claim's honesty (tools/sim/report.py
+  `sigma_consistency`);
 - **recovery**: from the end of the fault window until the horizontal error stays within
   max(1 m, 1.5 x the clean run's error at the same instant) for 10 s; "0 s": it was in that
   band from the window's end; "none": never again; "n/a": the fault lasts the whole drive.
