@@ -823,6 +823,86 @@ static void test_imu_stuck_and_saturated(void **state)
     assert_true(health_flags_now() & NAVECU_HEALTH_IMU_SATURATED);
 }
 
+/* the angle of the navigator's forward axis from east toward north (rad): a left turn
+ * raises it */
+static double forward_angle_rad(void)
+{
+    mat3_t C;
+    quat_to_dcm(app.run.nav.q_bn, &C);
+    return atan2((double)C.m[1][1], (double)C.m[0][1]);
+}
+
+/*
+ * GIVEN navigation, the car driving at 10 m/s round a left-hand curve of 100 m radius
+ *   (yaw rate 0.1 rad/s, a lateral specific force of -1 m/s^2), rolled 2 deg on a banked
+ *   road (gravity's share on x, 0.34 m/s^2, would be 0.034 rad/s of turn), its x gyro
+ *   showing its noise
+ * WHEN the z gyro freezes at 1234 LSB per sample (0.0588 rad/s)
+ * THEN once found stuck (2 s) the navigator turns at the car's own rate, the lateral force
+ *   over the forward speed (0.1 rad/s to the force's 0.1 % rounding, app.c stuck_yaw), not
+ *   at the frozen one; with the car standing it does not turn at all
+ */
+static void test_stuck_yaw_gyro_takes_the_cars_turn(void **state)
+{
+    (void)state;
+    send_init_commands(30.0);
+    run_still(31);
+    assert_int_equal(app.run.mode, APP_MODE_NAVIGATING);
+    /* the car rolled 2 deg more (a banked road; about its forward axis): the added share
+     * of gravity on the x accelerometer, 0.34 m/s^2, is the navigator's roll's, not a turn */
+    mat3_t C;
+    quat_to_dcm(app.run.nav.q_bn, &C);
+    const double c20_level = (double)C.m[2][0];
+    const nav_real_t q_roll[4] = {NAV_C(0.99984770), NAV_C(0.0), NAV_C(0.01745241), NAV_C(0.0)};
+    nav_real_t q[4];
+    quat_mul(app.run.nav.q_bn, q_roll, q);
+    memcpy(app.run.nav.q_bn, q, sizeof q);
+    quat_to_dcm(app.run.nav.q_bn, &C);
+    const int32_t g_x_lsb =
+        (int32_t)lround(9.80665 * ((double)C.m[2][0] - c20_level) * 0.01 * 4096.0);
+    assert_true(g_x_lsb >= 13 || g_x_lsb <= -13); /* 0.0349 g over 10 ms: 14.0 LSB */
+    for (int i = 0; i < 3; i++) {
+        app.run.nav.v_n_mps[i] = NAV_C(10.0) * C.m[i][1];
+        app.run.nav.v_n_prev_mps[i] = app.run.nav.v_n_mps[i];
+    }
+    uint32_t rng = 4711u;
+    double a0 = 0.0;
+    for (int k = 0; k < 3 * RATE_HZ; k++) {
+        if (k == 2 * RATE_HZ + 2) { /* found stuck at 2 s (test_imu_stream) */
+            assert_true(app.run.yaw_stuck);
+            a0 = forward_angle_rad();
+        }
+        int32_t w[3], v[3];
+        imu_src_next(w, v);
+        rng = rng * 1103515245u + 12345u;
+        w[0] += (int32_t)((rng >> 16) % 501u) - 250; /* the noise of test_imu_stuck_... */
+        w[2] = 1234;
+        v[0] += g_x_lsb - 41; /* -1 m/s^2 over 10 ms: 40.96 LSB of 2^-12 m/s */
+        feed_raw_sample(w, v);
+    }
+    const double turned = forward_angle_rad() - a0; /* over the last 98 samples */
+    const double expected = 0.98 * 41.0 / 4096.0 / 0.01 / 10.0;
+    /* the x gyro's noise tilts the navigator by about 1 mrad, 0.01 m/s^2 of gravity; the
+     * roll's share rounded to 14 LSB, 0.012 m/s^2 */
+    assert_near(turned, expected, 0.05 * expected);
+    /* standing: no turn at all, whatever the frozen value */
+    for (int i = 0; i < 3; i++) {
+        app.run.nav.v_n_mps[i] = NAV_C(0.0);
+        app.run.nav.v_n_prev_mps[i] = NAV_C(0.0);
+    }
+    const double a1 = forward_angle_rad();
+    for (int k = 0; k < RATE_HZ; k++) {
+        int32_t w[3], v[3];
+        imu_src_next(w, v);
+        w[2] = 1234;
+        rng = rng * 1103515245u + 12345u;
+        w[0] += (int32_t)((rng >> 16) % 501u) - 250;
+        feed_raw_sample(w, v);
+    }
+    assert_true(app.run.yaw_stuck);
+    assert_near(forward_angle_rad() - a1, 0.0, 1e-3); /* 0.0588 rad frozen */
+}
+
 /* While the IMU is silent, app_poll keeps NAV_Status going with the stale flag. */
 static void test_stale_imu_status(void **state)
 {
@@ -1930,6 +2010,7 @@ int main(void)
         cmocka_unit_test_setup(test_imu_gap_restarts_levelling, setup),
         cmocka_unit_test_setup(test_corrupt_imu_counter_is_not_a_gap, setup),
         cmocka_unit_test_setup(test_imu_stuck_and_saturated, setup),
+        cmocka_unit_test_setup(test_stuck_yaw_gyro_takes_the_cars_turn, setup),
         cmocka_unit_test_setup(test_reacquire_after_long_gap, setup),
         cmocka_unit_test_setup(test_gap_while_waiting_forgets_the_course, setup),
         cmocka_unit_test_setup(test_stale_imu_status, setup),

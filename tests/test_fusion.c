@@ -78,7 +78,7 @@ static void start_at(double heading_deg, const nav_real_t v[3])
     static fusion_raw_counts_t raw;
     memset(&raw, 0, sizeof raw);
     const fusion_ctx_t c = {&nav, &dr, &odo, &land, &cfg, &diag, &filter_reset, &gnss, &gtime,
-                            &raw};
+                            &raw, 0u};
     ctx = c;
     for (uint64_t n = N0 - 50u; n < N0; n++) {
         gnss_time_record(&gtime, n, cfg.imu_rate_hz, v);
@@ -333,6 +333,38 @@ static void test_in_run_estimates_compensate_the_sensor(void **state)
     }
     for (int i = 0; i < 4; i++) {
         assert_near(comp.q_bn[i], clean.q_bn[i], 1e-5);
+    }
+}
+
+/* the navigator after 50 samples (0.5 s) at rest with the yaw increment the car's
+ * (ctx.yaw_car: a stuck yaw gyro's, app.c stuck_yaw) and the filter's gyro z estimates
+ * (turn-on bias, in-run bias, scale factor) set to bz, gz and sz */
+static sins_t after_car_yaw_samples(nav_real_t bz, nav_real_t gz, nav_real_t sz)
+{
+    (void)setup(NULL);
+    start_filter();
+    ctx.yaw_car = 1u;
+    fu.ekf.bg_rps[2] = bz;
+    fu.ekf.gz_rps = gz;
+    fu.ekf.gyro_scale_z = sz;
+    for (int k = 0; k < 50; k++) {
+        assert_int_equal(rest_sample(), FUSION_GO_ON);
+    }
+    return nav;
+}
+
+/* A yaw increment that is the car's, not the gyro's (a stuck yaw gyro's replacement):
+ * GIVEN the filter started at rest WHEN its gyro z estimates are 1e-3 rad/s of turn-on
+ * bias, 1e-3 rad/s in-run and a 1 % scale THEN none of them turns the navigator: its
+ * attitude after 0.5 s is the one with all three 0, to 1e-6 (each would turn it 5e-4 rad,
+ * 2.5e-4 in q, were it taken off the increment). */
+static void test_car_yaw_takes_no_gyro_z_estimates(void **state)
+{
+    (void)state;
+    const sins_t clean = after_car_yaw_samples(NAV_C(0.0), NAV_C(0.0), NAV_C(0.0));
+    const sins_t est = after_car_yaw_samples(NAV_C(1e-3), NAV_C(1e-3), NAV_C(0.01));
+    for (int i = 0; i < 4; i++) {
+        assert_near(est.q_bn[i], clean.q_bn[i], 1e-6);
     }
 }
 
@@ -1328,6 +1360,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test_setup(test_start_at_fix_north, setup),
         cmocka_unit_test_setup(test_in_run_estimates_compensate_the_sensor, setup),
+        cmocka_unit_test_setup(test_car_yaw_takes_no_gyro_z_estimates, setup),
         cmocka_unit_test_setup(test_start_at_fix_east, setup),
         cmocka_unit_test_setup(test_start_takes_the_mounting_sigma, setup),
         cmocka_unit_test_setup(test_fix_before_history_skipped, setup),

@@ -290,9 +290,16 @@ fusion_action_t fusion_imu_step(fusion_t *fu, const fusion_ctx_t *c, imu_inc_t *
         inc->dtheta_b_rad[i] -= fu->ekf.bg_rps[i] * dt;
         inc->dv_b_mps[i] -= fu->ekf.ba_mps2[i] * dt;
     }
-    inc->dtheta_b_rad[2] -= fu->ekf.gz_rps * dt; /* ekf.h, state 24 */
     inc->dv_b_mps[1] -= fu->ekf.af_mps2 * dt;    /* ekf.h, state 25 */
-    inc->dtheta_b_rad[2] /= NAV_C(1.0) + fu->ekf.gyro_scale_z; /* ekf.h, state 23 */
+    if (c->yaw_car != 0u) {
+        /* the car's own rate (app.c stuck_yaw): the gyro's z errors are not in it; the
+         * filter's estimates of them, taken from a stuck gyro, turned the navigator 3 deg
+         * in the first 15 s of a tunnel (docs/kalman.md) */
+        inc->dtheta_b_rad[2] += fu->ekf.bg_rps[2] * dt;
+    } else {
+        inc->dtheta_b_rad[2] -= fu->ekf.gz_rps * dt; /* ekf.h, state 24 */
+        inc->dtheta_b_rad[2] /= NAV_C(1.0) + fu->ekf.gyro_scale_z; /* ekf.h, state 23 */
+    }
     *yaw_rate_rps = inc->dtheta_b_rad[2] / dt;
     app_trace(APP_TRACE_MECHANIZATION, 0u);
     const int mech_rc = sins_step(c->nav, inc);
