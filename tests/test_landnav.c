@@ -128,6 +128,42 @@ static void test_standstill_bias_closed_form(void **state)
     assert_int_equal(ln.output_dr, 1); /* standing: the dead reckoning is the output */
 }
 
+/* A stuck yaw gyro (ln.yaw_car, set by the application): GIVEN the car standing with a
+ * bias learnt (1 s of 2e-4 rad/s) WHEN the gyro is stuck at 0.1 rad/s and the car stands
+ * 2 s more THEN the bias and its count stay as they were and the yaw rate is the car's, 0
+ * (the Earth's about the body z is 0 at the equator); WHEN it drives north at 10 m/s with
+ * a lateral force of -1 m/s^2 THEN the yaw rate is 0.1 rad/s (landnav_car_yaw), the frozen
+ * 0.1 of the gyro playing no part (it reads 0.05 there). */
+static void test_stuck_yaw_gyro_learns_no_bias(void **state)
+{
+    (void)state;
+    for (int k = 0; k < 100; k++) {
+        if (k % 10 == 0) {
+            wheels(0.0f);
+        }
+        step(2e-4f, 0.0f);
+    }
+    assert_int_equal(odo.standing, 1);
+    const uint32_t n0 = zb.n;
+    const nav_real_t b0 = zb.bias_rps;
+    assert_true(n0 > 0u);
+    ln.yaw_car = 1u;
+    for (int k = 0; k < 200; k++) {
+        if (k % 10 == 0) {
+            wheels(0.0f);
+        }
+        assert_near(step(0.1f, 0.0f), 0.0, 1e-9);
+    }
+    assert_int_equal(zb.n, n0);
+    assert_near(zb.bias_rps, b0, 0.0);
+    /* driving */
+    const nav_real_t v_north[3] = {0.0f, 10.0f, 0.0f};
+    assert_int_equal(sins_set_velocity(&nav, v_north), NAV_OK);
+    wheels(10.0f);
+    /* the navigator's speed is 10 m/s to 1e-3 over the sample: 1e-4 rad/s */
+    assert_near(step(0.05f, -1.0f), 0.1, 2e-4);
+}
+
 /* GIVEN standstill with the z gyro reading 1e-3 rad/s and a 0.1 m/s^2 accelerometer error
  * WHEN 10 s pass THEN the heading stays where it was when the car stopped and the velocity
  * at zero; WHEN the same runs without an odometer THEN the free SINS turns by about
@@ -333,6 +369,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test_setup(test_standstill_bias_closed_form, setup),
+        cmocka_unit_test_setup(test_stuck_yaw_gyro_learns_no_bias, setup),
         cmocka_unit_test_setup(test_heading_held_at_standstill, setup),
         cmocka_unit_test_setup(test_dead_reckoning_on_odometer, setup),
         cmocka_unit_test_setup(test_dead_reckoning_heading_correction, setup),

@@ -5,7 +5,6 @@
 
 #include "app_tuning.h"
 #include "commands.h"
-#include "mount_est.h"
 #include "navecu_can.h"
 
 /* the default profiling hook: nothing (app.h; a board may define its own) */
@@ -145,8 +144,7 @@ __attribute__((noinline)) static fusion_ctx_t fusion_ctx(app_t *a, const app_dia
 {
     const fusion_ctx_t c = {&a->run.nav,          &a->run.dr,  &a->keep.odo, &a->run.land,
                             &a->cfg,              d,           &a->keep.filter_reset,
-                            &a->keep.gnss,        &a->keep.gnss_time, &a->keep.raw_counts,
-                            a->run.yaw_stuck};
+                            &a->keep.gnss,        &a->keep.gnss_time, &a->keep.raw_counts};
     return c;
 }
 
@@ -432,31 +430,6 @@ static unsigned yaw_gyro_axis(const mounting_t *m)
     return k;
 }
 
-/* A stuck yaw gyro (the gyro axis nearest the car's z found stuck, imu_stream.c): its
- * repeated value says nothing of the turns (frozen in a roundabout, it turns the
- * navigator at 20 deg/s down a straight road), so the car's yaw rate is taken from what a
- * car that does not slip sideways obeys, a lateral specific force of the forward speed
- * times the yaw rate: w_z = -(f_x - g C_bn[2][0]) / v_y (x right, y forward, z up; the
- * gravity's share by the navigator's roll and pitch; v_y signed, so reversing holds), 0
- * below APP_STUCK_YAW_MIN_MPS. The filter then leaves its gyro z estimates out of it
- * (fusion.c, yaw_car). The stuck axis's process noise (sample_noise) stays: what this rate
- * does not know (a side slip, the lever arm's yaw acceleration, a roll error) is within
- * it. */
-static void stuck_yaw(const sins_t *nav, imu_inc_t *inc)
-{
-    mat3_t C;
-    quat_to_dcm(nav->q_bn, &C);
-    nav_real_t v_fwd = NAV_C(0.0);
-    for (int i = 0; i < 3; i++) {
-        v_fwd += C.m[i][1] * nav->v_n_mps[i];
-    }
-    nav_real_t dtheta = NAV_C(0.0);
-    if (nav_fabs(v_fwd) > APP_STUCK_YAW_MIN_MPS) {
-        dtheta = -(inc->dv_b_mps[0] - MOUNT_EST_G_MPS2 * C.m[2][0] * inc->dt_s) / v_fwd;
-    }
-    inc->dtheta_b_rad[2] = dtheta;
-}
-
 /* One IMU sample (raw LSB) of dt_us (stamped; 0: the nominal period): levelling, or a
  * navigation step with or without the filter, then the outputs due. */
 static void process_sample(app_t *a, hal_t *hal, const int32_t w_raw[3], const int32_t v_raw[3],
@@ -486,9 +459,6 @@ static void process_sample(app_t *a, hal_t *hal, const int32_t w_raw[3], const i
     imu_inc_t inc;
     app_rx_imu_increment(w_raw, v_raw, dt_s, &inc);
     mounting_apply(&a->keep.mount, &inc);
-    if (a->run.yaw_stuck != 0u && a->run.mode == APP_MODE_NAVIGATING) {
-        stuck_yaw(&a->run.nav, &inc);
-    }
     if (motion_align_waits(a)) {
         align_motion_sample(&a->run.align, &inc);
     }
@@ -585,7 +555,8 @@ static void on_imu_accel(app_t *a, hal_t *hal, const rx_input_t *in, uint64_t t_
         bridged = 1;
     }
     sample_noise(a, &s, bridged);
-    a->run.yaw_stuck = (uint8_t)(((unsigned)s.stuck >> yaw_gyro_axis(&a->keep.mount)) & 1u);
+    /* a stuck yaw gyro: the navigator takes the car's yaw rate (landnav_car_yaw) */
+    a->run.land.yaw_car = (uint8_t)(((unsigned)s.stuck >> yaw_gyro_axis(&a->keep.mount)) & 1u);
     if (s.lost > 0u) {
         /* Lost samples are bridged by interpolating between the samples around the gap:
          * the motion in the gap is unknown, the straight line between its ends keeps time,

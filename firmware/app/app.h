@@ -131,7 +131,6 @@ typedef struct {
     calib_trip_t cal;       /* this trip's calibration storage policy */
     dynamics_t dyn;         /* the motion since the last dynamics output */
     nav_real_t yaw_rate_rps;/* body z rate of the last IMU sample */
-    uint8_t yaw_stuck;      /* the gyro axis nearest the car's z is stuck (app.c) */
     uint8_t rate_held;      /* mode Fault for an IMU rate mismatch, from rate_resume */
     app_mode_t rate_resume; /* WaitInit or Levelling: where it goes on when the rate matches */
     uint8_t mount_held;     /* mode Fault: the start waits for the mounting estimate */

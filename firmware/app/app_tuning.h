@@ -292,10 +292,11 @@
  * (a review, seed 1: 349 m RMS against 80 m without the noise). */
 #define APP_STUCK_RATE_RPS NAV_C(0.5236)
 #define APP_STUCK_ACCEL_MPS2 NAV_C(3.0)
-/* A stuck yaw gyro's rate replaced by the car's own (app.c stuck_yaw): the lateral
+/* A stuck yaw gyro's rate replaced by the car's own (landnav_car_yaw): the lateral
  * specific force over the forward speed (a car that does not slip sideways turns at
- * a_lat / v), from this speed; below it 0 (the lateral force's errors, 0.05 m/s^2 of an
- * accelerometer bias and a road's bank, are 1 deg/s at 3 m/s) */
+ * a_lat / v), from this speed; below it 0: what the force does not know, about 0.05 m/s^2
+ * with the filter's accelerometer bias taken off (a roll error, the bias's residual), is
+ * 1 deg/s at 3 m/s; without the filter the accelerometer's whole bias (docs/kalman.md) */
 #define APP_STUCK_YAW_MIN_MPS NAV_C(3.0)
 /* GNSS course vs the filter's heading: 10 deg */
 #define APP_COURSE_MISMATCH_RAD NAV_C(0.17453)

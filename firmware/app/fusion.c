@@ -194,6 +194,9 @@ static void standstill_updates(fusion_t *fu, const fusion_ctx_t *c, nav_real_t T
     if (zv == 0) {
         odo_refused(c); /* "standing" wheels while the car moves: a locked wheel */
     }
+    if (c->land->yaw_car != 0u) {
+        return; /* the yaw is the car's (a stuck gyro): nothing of the gyro's z errors */
+    }
     nav_real_t w_ie_b[3];
     sins_earth_rate_b(c->nav, w_ie_b);
     const nav_real_t resid = fu->w_sum_rad[2] / T - w_ie_b[2];
@@ -291,11 +294,10 @@ fusion_action_t fusion_imu_step(fusion_t *fu, const fusion_ctx_t *c, imu_inc_t *
         inc->dv_b_mps[i] -= fu->ekf.ba_mps2[i] * dt;
     }
     inc->dv_b_mps[1] -= fu->ekf.af_mps2 * dt;    /* ekf.h, state 25 */
-    if (c->yaw_car != 0u) {
-        /* the car's own rate (app.c stuck_yaw): the gyro's z errors are not in it; the
-         * filter's estimates of them, taken from a stuck gyro, turned the navigator 3 deg
-         * in the first 15 s of a tunnel (docs/kalman.md) */
-        inc->dtheta_b_rad[2] += fu->ekf.bg_rps[2] * dt;
+    if (c->land->yaw_car != 0u) {
+        /* a stuck yaw gyro: the car's own rate from the compensated lateral force; none of
+         * the gyro's z estimates are in it */
+        inc->dtheta_b_rad[2] = landnav_car_yaw(c->nav, inc);
     } else {
         inc->dtheta_b_rad[2] -= fu->ekf.gz_rps * dt; /* ekf.h, state 24 */
         inc->dtheta_b_rad[2] /= NAV_C(1.0) + fu->ekf.gyro_scale_z; /* ekf.h, state 23 */

@@ -118,8 +118,6 @@ typedef struct {
     gnss_time_t *time;          /* the receiver's clock and latency, the velocity history
                                    (app_keep_t: the receiver outlives a navigation reset) */
     fusion_raw_counts_t *raw;   /* the tightly coupled updates' counters */
-    uint8_t yaw_car;            /* the yaw increment is the car's, not the gyro's (app.c
-                                   stuck_yaw): no gyro z bias or scale to remove */
 } fusion_ctx_t;
 
 /* The estimates the filter starts from: what standstill and calibration already know. */

@@ -2,6 +2,7 @@
 #include "landnav.h"
 
 #include "app_tuning.h"
+#include "mount_est.h"
 
 /* the prior's weight in samples of the standstill average: n0 = ARW^2 / (dt sigma_b^2) */
 static nav_real_t zbias_n0(const zbias_prior_t *prior, nav_real_t dt_s)
@@ -29,6 +30,9 @@ static void standstill_step(landnav_t *ln, zbias_t *zb, const zbias_prior_t *pri
     }
     (void)sins_turn_heading(nav, dh);
     (void)sins_set_velocity(nav, zero_v);
+    if (ln->yaw_car != 0u) {
+        return; /* a stuck yaw gyro says nothing of its bias */
+    }
     nav_real_t w_ie_b[3];
     sins_earth_rate_b(nav, w_ie_b);
     nav_acc_add(&zb->sum_rps, &zb->sum_lo_rps, raw_rate_z_rad / dt - w_ie_b[2]);
@@ -75,12 +79,33 @@ static int odometer_step(landnav_t *ln, const zbias_prior_t *prior, sins_t *nav,
     return 0;
 }
 
+nav_real_t landnav_car_yaw(const sins_t *nav, const imu_inc_t *inc)
+{
+    mat3_t C;
+    quat_to_dcm(nav->q_bn, &C);
+    nav_real_t v_fwd = NAV_C(0.0);
+    for (int i = 0; i < 3; i++) {
+        v_fwd += C.m[i][1] * nav->v_n_mps[i];
+    }
+    nav_real_t w_ie_b[3];
+    sins_earth_rate_b(nav, w_ie_b);
+    nav_real_t dtheta = w_ie_b[2] * inc->dt_s;
+    if (nav_fabs(v_fwd) > APP_STUCK_YAW_MIN_MPS) {
+        dtheta -= (inc->dv_b_mps[0] - MOUNT_EST_G_MPS2 * C.m[2][0] * inc->dt_s) / v_fwd;
+    }
+    return dtheta;
+}
+
 int landnav_step(landnav_t *ln, zbias_t *zb, const zbias_prior_t *prior, sins_t *nav, dr_t *dr,
                  odo_t *odo, imu_inc_t *inc, nav_real_t *yaw_rate_rps)
 {
     int refused = 0;
     const nav_real_t raw_z = inc->dtheta_b_rad[2];
-    inc->dtheta_b_rad[2] -= zb->bias_rps * inc->dt_s;
+    if (ln->yaw_car != 0u) {
+        inc->dtheta_b_rad[2] = landnav_car_yaw(nav, inc);
+    } else {
+        inc->dtheta_b_rad[2] -= zb->bias_rps * inc->dt_s;
+    }
     *yaw_rate_rps = inc->dtheta_b_rad[2] / inc->dt_s;
     if (sins_step(nav, inc) != NAV_OK) {
         /* as fusion_imu_step: the sample's time passes for the wheel speeds, and nothing

@@ -38,6 +38,9 @@ typedef struct {
 typedef struct {
     uint8_t output_dr;          /* the dead-reckoned solution is the output (mode 4) */
     uint8_t holding;            /* standstill: heading held at hold_heading_rad */
+    uint8_t yaw_car;            /* the gyro axis nearest the car's z is stuck (the
+                                   application's, per sample): the yaw increment is the
+                                   car's, landnav_car_yaw, here and in the filter's step */
     nav_real_t hold_heading_rad;
     dr_acc_t acc;               /* the dead reckoning's accuracy (dr_acc.h), started by
                                    the application with the navigation */
@@ -58,10 +61,20 @@ typedef struct {
 nav_real_t zbias_sigma_rps(const zbias_t *zb, const zbias_prior_t *prior, nav_real_t dt_s,
                            nav_real_t elapsed_s);
 
-/* One IMU sample (SI increments; the z angle is bias-compensated here) without the
- * filter: the strapdown step, then standstill, dead reckoning, or the free SINS. *yaw_rate
- * gets the compensated body z rate (rad/s). Returns the number of steps the core refused
- * (count them in nav_rejected). */
+/* The yaw angle increment (rad) of a car that does not slip sideways, for a stuck yaw
+ * gyro (docs/kalman.md): its lateral specific force is the forward speed times the yaw
+ * rate, w_z = -(f_x - g C_bn[2][0]) / v_y (x right, y forward, z up; the gravity's share
+ * by the navigator's roll and pitch, a banked road's; v_y the navigator's forward speed,
+ * signed, so reversing holds), 0 below APP_STUCK_YAW_MIN_MPS; plus the Earth's rate about
+ * the body z, which the strapdown step takes off (the transport rate, 3e-6 rad/s at
+ * 20 m/s, left out). inc: the sample's increments in the car's axes, the accelerometer's
+ * bias already taken off where an estimate exists. */
+nav_real_t landnav_car_yaw(const sins_t *nav, const imu_inc_t *inc);
+
+/* One IMU sample (SI increments; the z angle is bias-compensated here, or the car's with
+ * ln->yaw_car) without the filter: the strapdown step, then standstill, dead reckoning, or
+ * the free SINS. *yaw_rate gets the compensated body z rate (rad/s). Returns the number of
+ * steps the core refused (count them in nav_rejected). */
 int landnav_step(landnav_t *ln, zbias_t *zb, const zbias_prior_t *prior, sins_t *nav, dr_t *dr,
                  odo_t *odo, imu_inc_t *inc, nav_real_t *yaw_rate_rps);
 

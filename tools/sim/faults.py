@@ -559,8 +559,7 @@ def faults(drive: Drive) -> list:
         msgs, n = d.imu_encoder.frames(d, th, d.dv)
         return [m for _, _, m in msgs], {"injected": "z held to the drive's end (the tunnel "
                                                      "included)", "samples_changed": n}
-    rows.append(Fault("z gyro stuck for good", (w_stuck[0], None), stuck_for_good,
-                      kind="step"))
+    rows.append(Fault("z gyro stuck for good", (w_stuck[0], None), stuck_for_good))
 
     # A gyro of +-15 deg/s and an accelerometer of +-1.01 g on every axis (an IMU with too
     # small a range for the car): the gyro clips in turns, the accelerometer's z axis,
@@ -724,6 +723,7 @@ def evaluate(drive: Drive, msgs: list, out_dir: Path, cmd_tail: list, navecu: st
               "status": {k: st[k] for k in keep if st is not None and k in st},
               "decoded_finite": _decoded_finite(nav, cnt),
               "within_2sigma": rep["sigma_consistency"].get("frac_within_2sigma"),
+              "error_over_sigma": rep["sigma_consistency"].get("median_error_over_sigma"),
               "outages": _outage_claims(rep["outages"], st, series.get("heading"))})
     cal = report.read_calibration_log(nav_log)
     r["cal"] = {"t_s": cal["t_s"], "CalStatus": cal["CalStatus"]}
@@ -732,24 +732,21 @@ def evaluate(drive: Drive, msgs: list, out_dir: Path, cmd_tail: list, navecu: st
 
 
 def _outage_claims(outages: list, status, heading=None) -> list:
-    """report.compute's GNSS outages, each with the HorizAccuracy reported at its end (m),
-    what the error at the end was claimed to be, and the heading error there (deg; heading:
-    report.compute's (t, error deg) series)."""
+    """report.compute's GNSS outages, each with the HorizAccuracy in force at its end (m;
+    the latest page-0 value at most report.SIGMA_MAX_AGE_S old, None if none or 655.35
+    "unknown", as report.sigma_consistency takes it) and the heading error there (deg;
+    heading: report.compute's (t, error deg) series)."""
+    t_h, h = report.status_page(status, 0, "HorizAccuracy")
     out = []
     for o in outages:
         o = dict(o)
-        o["end_horiz_accuracy_m"] = None
-        o["end_heading_error_deg"] = None
+        acc = float(report.latest_at(t_h, h, [o["end_s"]], report.SIGMA_MAX_AGE_S)[0])
+        o["end_horiz_accuracy_m"] = (acc if np.isfinite(acc)
+                                     and acc < report.HORIZ_ACCURACY_UNKNOWN_M else None)
+        hd = np.nan
         if heading is not None and len(heading[0]):
-            k = np.nonzero(heading[0] <= o["end_s"])[0]
-            if k.size:
-                o["end_heading_error_deg"] = float(heading[1][k[-1]])
-        if status is not None and "HorizAccuracy" in status:
-            p0 = status["StatusPage"] == 0
-            t, h = status["t_s"][p0], status["HorizAccuracy"][p0]
-            k = np.nonzero(t <= o["end_s"])[0]
-            if k.size:
-                o["end_horiz_accuracy_m"] = float(h[k[-1]])
+            hd = float(report.latest_at(heading[0], heading[1], [o["end_s"]])[0])
+        o["end_heading_error_deg"] = hd if np.isfinite(hd) else None
         out.append(o)
     return out
 
@@ -879,6 +876,8 @@ def _fmt_window(f: Fault) -> str:
         return "at boot"
     if f.kind == "step":
         return f"from {f.window[0]:g} on"
+    if f.window[1] is None:
+        return f"{f.window[0]:g} to the end"
     return f"{f.window[0]:g}-{f.window[1]:g}"
 
 
@@ -907,6 +906,7 @@ def summarize(drive: Drive, f: Optional[Fault], raw: dict, clean: dict, bits: di
                 "decoded_finite": raw["decoded_finite"], "rms_m": rms, "max_m": mx,
                 "rms_ratio": (rms / c_rms) if rms is not None and c_rms else None,
                 "within_2sigma": raw.get("within_2sigma"),
+                "error_over_sigma": raw.get("error_over_sigma"),
                 "outages": raw.get("outages"),
                 "firmware_s": raw["firmware_s"], "decode_s": raw.get("decode_s"),
                 "frames_in": raw["frames_in"],
@@ -915,7 +915,7 @@ def summarize(drive: Drive, f: Optional[Fault], raw: dict, clean: dict, bits: di
         row.update({"detected": {"text": "-"}, "recovery_s": None, "recovery": "-"})
         return row
     row["detected"] = detection(drive.db, raw, clean, f.window[0], bits)
-    if f.kind == "whole":
+    if f.kind == "whole" or (f.kind == "window" and f.window[1] is None):
         row.update({"recovery_s": None, "recovery": "n/a"})
     elif not len(t):
         row.update({"recovery_s": None, "recovery": "none"})
@@ -973,8 +973,8 @@ def _pct(x) -> str:
 
 def markdown_table(rows: list) -> str:
     head = ("| fault | window (s) | injected | navecu exit | how detected | non-finite | "
-            "RMS (m) | max (m) | RMS / clean | within 2σ | recovery |\n"
-            "|---|---|---|---|---|---|---|---|---|---|---|\n")
+            "RMS (m) | max (m) | RMS / clean | within 2σ | error / σ | recovery |\n"
+            "|---|---|---|---|---|---|---|---|---|---|---|---|\n")
     lines = []
     for r in rows:
         det = r["detected"]["text"] if isinstance(r.get("detected"), dict) else "-"
@@ -984,7 +984,7 @@ def markdown_table(rows: list) -> str:
             f"| {r['name']} | {r['window']} | {_injected_text(r)} | {r['exit_status']} | "
             f"{det} | {_nonfinite_cell(r)} | {_f(r.get('rms_m'))} | {_f(r.get('max_m'))} | "
             f"{_f(r.get('rms_ratio'))} | {_pct(r.get('within_2sigma'))} | "
-            f"{r.get('recovery', '-')} |")
+            f"{_f(r.get('error_over_sigma'))} | {r.get('recovery', '-')} |")
     return head + "\n".join(lines) + "\n"
 
 
@@ -1013,12 +1013,14 @@ the drive, while driving, with GNSS. Columns:
   NAV_* value is not finite;
 - **RMS, max**: horizontal error against the truth over the whole drive (every
   NAV_Position); **RMS / clean**: against the clean run's RMS;
-- **within 2σ**: the share of those epochs whose error is at most twice the reported
-  HorizAccuracy (NAV_Status), the claim's honesty (tools/sim/report.py
-  `sigma_consistency`);
+- **within 2σ**: the share of the epochs with a known HorizAccuracy (NAV_Status page 0,
+  at most 1 s old, not 655.35 "unknown") whose error is at most twice it: whether the
+  claim holds; **error / σ**: their median error over it, how much it claims beyond the
+  error (tools/sim/report.py `sigma_consistency`);
 - **recovery**: from the end of the fault window until the horizontal error stays within
   max(1 m, 1.5 x the clean run's error at the same instant) for 10 s; "0 s": it was in that
-  band from the window's end; "none": never again; "n/a": the fault lasts the whole drive.
+  band from the window's end; "none": never again; "n/a": the fault lasts to the drive's
+  end.
   When the error leaves the band again after that first return, the cell adds when it was
   back in the band for good (to the end of the drive).
 
