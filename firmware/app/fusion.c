@@ -7,9 +7,10 @@
 /* clear_interval, corr_spans, bias_is_state, bias_step and rr_sigma_mps out of line
  * (noinline): GCC inlined them at each of their two or three calls, 176 bytes more of the
  * ECU's flash in all (docs/target.md); they run per prediction (10 Hz), GNSS epoch or
- * satellite, not per IMU sample. */
+ * satellite, not per IMU sample. fusion_pred_div out of line too: inlined at its two calls
+ * (fusion.c's and app.c's, per IMU sample) it took 16 bytes more. */
 
-uint32_t fusion_pred_div(uint32_t imu_rate_hz)
+__attribute__((noinline)) uint32_t fusion_pred_div(uint32_t imu_rate_hz)
 {
     return imu_rate_hz >= APP_EKF_PRED_HZ ? imu_rate_hz / APP_EKF_PRED_HZ : 1u;
 }

@@ -121,7 +121,9 @@ static int64_t round_i64(nav_real_t x)
     return (int64_t)(x >= NAV_C(0.0) ? x + NAV_C(0.5) : x - NAV_C(0.5));
 }
 
-static int64_t geo_lsb_to_q61(int64_t lsb)
+/* geo_lsb_to_q61 and gnss_geom_pr_residual_m out of line (noinline): the link inlined them
+ * at their two calls each, 40 bytes more of the ECU's flash each */
+__attribute__((noinline)) static int64_t geo_lsb_to_q61(int64_t lsb)
 {
     return mul_shr(lsb, GEO_LSB_TO_Q61_M, GEO_LSB_TO_Q61_SHIFT);
 }
@@ -240,7 +242,8 @@ int gnss_geom_sat(const int64_t rx_dmm[3], const int32_t pos_lsb[3], const int16
     return NAV_OK;
 }
 
-nav_real_t gnss_geom_pr_residual_m(uint32_t pr_lsb, const gnss_geom_t *g, int64_t clock_dmm)
+__attribute__((noinline)) nav_real_t gnss_geom_pr_residual_m(uint32_t pr_lsb, const gnss_geom_t *g,
+                                                        int64_t clock_dmm)
 {
     const int64_t pr_dmm = (int64_t)pr_lsb * GNSS_GEOM_DMM_PER_RAW_POS;
     const int64_t z_dmm = pr_dmm - g->range_dmm - clock_dmm;

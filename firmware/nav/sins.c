@@ -25,13 +25,6 @@ static int pos_ok(const geo_pos_t *pos)
            pos->lon > -GEO_LSB_180DEG && pos->h <= GEO_H_MAX_LSB && pos->h >= GEO_H_MIN_LSB;
 }
 
-static void copy3(const nav_real_t in[3], nav_real_t out[3])
-{
-    out[0] = in[0];
-    out[1] = in[1];
-    out[2] = in[2];
-}
-
 int sins_init(sins_t *s, const sins_config_t *cfg, const geo_pos_t *pos,
               const nav_real_t v_n_mps[3], const nav_real_t q_bn[4])
 {
@@ -311,11 +304,13 @@ int sins_step(sins_t *s, const imu_inc_t *inc)
         s->q_bn[i] = q[i];
         s->q_bn_lo[i] = q_lo[i];
     }
-    copy3(s->v_n_mps, s->v_n_prev_mps);
-    copy3(v_new, s->v_n_mps);
-    copy3(v_new_lo, s->v_n_lo_mps);
-    copy3(dth, s->dtheta_prev_b_rad);
-    copy3(dv, s->dv_prev_b_mps);
+    for (int i = 0; i < 3; i++) {
+        s->v_n_prev_mps[i] = s->v_n_mps[i];
+        s->v_n_mps[i] = v_new[i];
+        s->v_n_lo_mps[i] = v_new_lo[i];
+        s->dtheta_prev_b_rad[i] = dth[i];
+        s->dv_prev_b_mps[i] = dv[i];
+    }
     s->dt_prev_s = dt;
     s->have_prev = 1u;
     s->n_steps++;
