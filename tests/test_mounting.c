@@ -72,6 +72,20 @@ static void test_pitched(void **state)
     expect(&m, 0, 0, 1, 0, -sin(30 * DEG), cos(30 * DEG));
 }
 
+/* the IMU axis nearest the vehicle's z (the gyro whose stuck value is the yaw's): z for
+ * the installs above, upside down too; y for an IMU on its back edge (pitched 90 deg: its
+ * forward axis points up); x for one on its side (rolled 90 deg) */
+static void test_yaw_axis(void **state)
+{
+    (void)state;
+    assert_int_equal(make(0.0, 0.0, 0.0).yaw_axis, 2);
+    assert_int_equal(make(0.0, 0.0, 90.0).yaw_axis, 2);
+    assert_int_equal(make(180.0, 0.0, 0.0).yaw_axis, 2);
+    assert_int_equal(make(0.0, 30.0, 0.0).yaw_axis, 2);
+    assert_int_equal(make(0.0, 90.0, 0.0).yaw_axis, 1);
+    assert_int_equal(make(90.0, 0.0, 0.0).yaw_axis, 0);
+}
+
 /* any angles: a rotation (lengths kept, determinant +1) */
 static void test_general_is_a_rotation(void **state)
 {
@@ -138,6 +152,7 @@ int main(void)
         cmocka_unit_test(test_turned_right),
         cmocka_unit_test(test_upside_down),
         cmocka_unit_test(test_pitched),
+        cmocka_unit_test(test_yaw_axis),
         cmocka_unit_test(test_general_is_a_rotation),
         cmocka_unit_test(test_identity_untouched),
         cmocka_unit_test(test_levelling_upside_down),

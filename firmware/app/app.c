@@ -419,18 +419,6 @@ static void sample_noise(app_t *a, const imu_sample_t *s, int bridged)
                             var[1] * lsb_v * lsb_v);
 }
 
-/* The gyro axis (0..2) nearest the car's z axis: the one whose stuck value is the yaw's */
-static unsigned yaw_gyro_axis(const mounting_t *m)
-{
-    unsigned k = 2u;
-    for (unsigned j = 0u; j < 2u; j++) {
-        if (nav_fabs(m->C_vi.m[2][j]) > nav_fabs(m->C_vi.m[2][k])) {
-            k = j;
-        }
-    }
-    return k;
-}
-
 /* One IMU sample (raw LSB) of dt_us (stamped; 0: the nominal period): levelling, or a
  * navigation step with or without the filter, then the outputs due. */
 static void process_sample(app_t *a, hal_t *hal, const int32_t w_raw[3], const int32_t v_raw[3],
@@ -557,7 +545,7 @@ static void on_imu_accel(app_t *a, hal_t *hal, const rx_input_t *in, uint64_t t_
     }
     sample_noise(a, &s, bridged);
     /* a stuck yaw gyro: the navigator takes the car's yaw rate (landnav_car_yaw) */
-    a->run.land.yaw_car = (uint8_t)(((unsigned)s.stuck >> yaw_gyro_axis(&a->keep.mount)) & 1u);
+    a->run.land.yaw_car = (uint8_t)(((unsigned)s.stuck >> a->keep.mount.yaw_axis) & 1u);
     if (s.lost > 0u) {
         /* Lost samples are bridged by interpolating between the samples around the gap:
          * the motion in the gap is unknown, the straight line between its ends keeps time,

@@ -13,6 +13,12 @@ void mounting_init(mounting_t *m, const nav_real_t rpy_rad[3])
     nav_real_t q[4];
     quat_from_euler(rpy_rad[0], rpy_rad[1], rpy_rad[2], q);
     quat_to_dcm(q, &m->C_vi);
+    m->yaw_axis = 2u;
+    for (uint8_t j = 0u; j < 2u; j++) {
+        if (nav_fabs(m->C_vi.m[2][j]) > nav_fabs(m->C_vi.m[2][m->yaw_axis])) {
+            m->yaw_axis = j;
+        }
+    }
 }
 
 void mounting_to_vehicle(const mounting_t *m, const nav_real_t imu[3], nav_real_t veh[3])

@@ -22,6 +22,8 @@
 typedef struct {
     mat3_t C_vi;    /* IMU axes -> vehicle axes */
     uint8_t rotate; /* 0: the identity, nothing to do */
+    uint8_t yaw_axis; /* the IMU axis (0..2) nearest the vehicle's z: its gyro is the yaw's
+                         (a stuck one is replaced by the car's rate, landnav_car_yaw) */
 } mounting_t;
 
 /* From roll, pitch, yaw (rad, as above). */
