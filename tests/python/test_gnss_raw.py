@@ -111,13 +111,9 @@ def test_kingston_satellite_velocities_are_the_positions_rate(kingston):
     5 mm/s south. The CSV's positions print 0.1 mm, so a central difference over 2 s is
     good to about 0.1 mm/s: 1 mm/s is the bound."""
     d, eps = kingston
-    fixes = d.gnss
     tracks = {}
     for t, ep in eps:
-        k = max(int(np.searchsorted(fixes["time_s"], t + 1e-6)) - 1, 0)
-        rx = gr.ecef_from_geodetic(math.radians(fixes["lat_deg"][k]),
-                                   math.radians(fixes["lon_deg"][k]),
-                                   float(fixes["height_m"][k]) - convert.GNSS_HEIGHT_ABOVE_REF_M)
+        rx = kraw.receiver_at(d.gnss, t, convert.GNSS_HEIGHT_ABOVE_REF_M)
         for m in ep.meas:
             _, _, tau = gr.sat_in_receive_axes(m.sat_pos_m, m.sat_vel_mps, rx)
             tracks.setdefault(m.sv_id, []).append((t, m.sat_pos_m, m.sat_vel_mps, tau))

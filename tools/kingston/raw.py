@@ -56,21 +56,23 @@ def read(data_dir: Path) -> np.ndarray:
     return read_csv(Path(data_dir) / "gnss_raw.csv", ("time_s",))
 
 
+def receiver_at(fixes: np.ndarray, t: float, height_offset_m: float = 0.0) -> np.ndarray:
+    """The receiver's ECEF position at GPS time t for the signal's travel time: the latest
+    fix at or before t (the first before any), its height less height_offset_m (the fixes'
+    datum, docs/kingston.md); an error of 100 m moves a satellite by under 1 mm."""
+    k = max(int(np.searchsorted(fixes["time_s"], t + 1e-6)) - 1, 0)
+    f = fixes[k]
+    return gr.ecef_from_geodetic(np.radians(f["lat_deg"]), np.radians(f["lon_deg"]),
+                                 float(f["height_m"]) - height_offset_m)
+
+
 def epochs(raw: np.ndarray, fixes: np.ndarray, height_offset_m: float = 0.0) -> list:
     """[(gps time of week s, RawEpoch)], one per time in gnss_raw.csv, satellites by PRN.
-    fixes: gnss.csv rows; the latest fix at or before an epoch is the receiver's position
-    for the signal's travel time (an error of 100 m moves a satellite by under 1 mm).
-    height_offset_m is subtracted from the fixes' heights (their datum, docs/kingston.md)."""
+    fixes: gnss.csv rows, the receiver's position (receiver_at)."""
     out = []
-    t_fix = fixes["time_s"]
     times = np.unique(raw["time_s"])
     for t in times:
-        k = int(np.searchsorted(t_fix, t + 1e-6)) - 1
-        if k < 0:
-            k = 0
-        f = fixes[k]
-        rx = gr.ecef_from_geodetic(np.radians(f["lat_deg"]), np.radians(f["lon_deg"]),
-                                   float(f["height_m"]) - height_offset_m)
+        rx = receiver_at(fixes, t, height_offset_m)
         rows = raw[raw["time_s"] == t]
         rows = rows[np.argsort(rows["prn"])]
         ep = gr.RawEpoch(tow_s=float(t))
@@ -110,8 +112,8 @@ def residuals(raw: np.ndarray, ref: np.ndarray, t0_gps_s: float, t0_s: float,
     receiver|. relative_to: a PRN whose residual replaces the median (epochs without it
     left out). rates: the pseudorange rates (-Doppler x the L1 wavelength) less the
     satellite's velocity (turned into the receive time's axes) less the reference's along
-    the line of sight, m/s; the median is
-    then the receiver's clock drift (and what the satellites' rates share)."""
+    the line of sight, m/s; the median is then the receiver's clock drift (and what the
+    satellites' rates share)."""
     out = []
     for t in np.unique(raw["time_s"]):
         t_s = float(t) - t0_gps_s
