@@ -219,7 +219,13 @@ def test_outage_specs():
     assert convert.parse_outages("100-160, 20-30", 3530.4) == [(20.0, 30.0), (100.0, 160.0)]
     sched = convert.parse_outages("default", 3530.4)
     assert len(sched) == 14 and sched[0] == (240.0, 300.0) and sched[-1] == (3360.0, 3420.0)
-    for bad in ("30-20", "a-b", "every:60:60"):
+    # the same schedule moved 120 s later: each outage 120 s on, the last one that still
+    # ends within the data (3360 + 120 + 60 = 3540 s does not)
+    moved = convert.parse_outages("every:240:60:120", 3530.4)
+    assert moved[0] == (360.0, 420.0) and moved[-1] == (3240.0, 3300.0) and len(moved) == 13
+    assert convert.parse_outages("every:240:60:0", 3530.4) == sched
+    for bad in ("30-20", "a-b", "every:60:60", "every:240:60:240", "every:240:60:-1",
+                "every:240:60:1:2"):
         with pytest.raises(ValueError):
             convert.parse_outages(bad, 3530.4)
 

@@ -1,7 +1,7 @@
 """The recorded Kingston 2008 drive -> one candump log through the project DBC.
 
     python -m tools.kingston.convert --out out/kingston/can_in.log [--data DIR]
-        [--no-gnss] [--outages "a-b,c-d" | every:PERIOD:LENGTH | default | none]
+        [--no-gnss] [--outages "a-b,c-d" | every:PERIOD:LENGTH[:OFFSET] | default | none]
         [--calibrate-at-km 5 | none] [--imu-rule rect|trapezoid] [--no-odometer] [--level]
         [--no-gnss-velocity]
 
@@ -60,7 +60,9 @@ docs/kingston.md explains every rule; in short:
   (with --no-gnss the firmware runs free-inertial); --no-gnss-velocity: no GNSS_Velocity
   frame (position-only GNSS). --outages: GNSS epochs with
   a <= t < b (seconds from t = 0) are dropped, for each a-b; "every:P:L" is the outages
-  [kP, kP + L) for k = 1, 2, ... that end within the data; "default" = every:240:60.
+  [kP, kP + L) for k = 1, 2, ... that end within the data, "every:P:L:O" the same moved
+  O seconds later (0 <= O < P: the same schedule at another phase of the drive);
+  "default" = every:240:60.
 """
 from __future__ import annotations
 
@@ -246,7 +248,7 @@ def imu_increments(imu: np.ndarray, t0_gps: float, rate_hz: int = IMU_RATE_HZ,
 # -------------------------------------------------------------------- options ----
 
 def parse_outages(spec, t_end_s: float) -> list:
-    """'a-b,c-d' | 'every:P:L' | 'default' | 'none' -> [(a, b), ...] in s from t = 0."""
+    """'a-b,c-d' | 'every:P:L[:O]' | 'default' | 'none' -> [(a, b), ...] in s from t = 0."""
     if spec is None:
         return []
     spec = str(spec).strip()
@@ -255,15 +257,20 @@ def parse_outages(spec, t_end_s: float) -> list:
     if spec == "default":
         spec = DEFAULT_OUTAGES
     if spec.startswith("every:"):
+        fields = spec.split(":")[1:]
         try:
-            period, length = (float(x) for x in spec.split(":")[1:])
+            if len(fields) not in (2, 3):
+                raise ValueError
+            period, length, offset = (float(x) for x in fields + ["0"] * (3 - len(fields)))
         except ValueError:
-            raise ValueError(f"outages: '{spec}' is not every:PERIOD:LENGTH") from None
+            raise ValueError(f"outages: '{spec}' is not every:PERIOD:LENGTH[:OFFSET]") from None
         if not 0 < length < period:
             raise ValueError(f"outages: '{spec}' needs 0 < LENGTH < PERIOD")
+        if not 0 <= offset < period:
+            raise ValueError(f"outages: '{spec}' needs 0 <= OFFSET < PERIOD")
         out, k = [], 1
-        while k * period + length <= t_end_s:
-            out.append((k * period, k * period + length))
+        while k * period + offset + length <= t_end_s:
+            out.append((k * period + offset, k * period + offset + length))
             k += 1
         return out
     out = []
@@ -535,7 +542,7 @@ def main(argv=None) -> int:
     ap.add_argument("--out", required=True, help="output candump log (sidecar: same name .json)")
     ap.add_argument("--no-gnss", action="store_true", help="omit every GNSS frame")
     ap.add_argument("--outages", default="none",
-                    help="'a-b,c-d' seconds from t = 0, every:P:L, default (every:240:60), none")
+                    help="'a-b,c-d' seconds from t = 0, every:P:L[:O], default (every:240:60), none")
     ap.add_argument("--calibrate-at-km", default=str(DEFAULT_CAL_KM), type=parse_km,
                     help="CalibrateHere at this reference distance (km), or none")
     ap.add_argument("--imu-rule", choices=IMU_RULES, default="rect",

@@ -457,7 +457,7 @@ def main(argv=None) -> int:
     ap.add_argument("--mode", choices=("dr", "full"), default="full",
                     help="dr: no GNSS frames (dead reckoning); full: GNSS with outages")
     ap.add_argument("--outages", default="default",
-                    help="full mode: 'a-b,c-d' s from the start, every:P:L, default "
+                    help="full mode: 'a-b,c-d' s from the start, every:P:L[:O], default "
                          f"({convert.DEFAULT_OUTAGES}), none")
     ap.add_argument("--calibrate-at-km", default=str(convert.DEFAULT_CAL_KM),
                     type=convert.parse_km, help="CalibrateHere at this distance (km), or none")
