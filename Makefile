@@ -101,7 +101,7 @@ help:
 	@echo "make sim           simulate a drive, run the firmware, report accuracy and plots"
 	@echo "                   (SCENARIO=name for another tools/sim/scenarios/name.toml;"
 	@echo "                   BUS=vcan0 runs the firmware live on vcan, docs/live-can.md)"
-	@echo "make kingston      the real Kingston 2008 drive (MODE=dr|full, OUTAGES=a-b,c-d|none)"
+	@echo "make kingston      the real Kingston 2008 drive (MODE=dr|full, OUTAGES=a-b,c-d|every:P:L[:O]|none)"
 	@echo "make drive DATA=data/comma2k19-rav4 VEHICLE=toyota_rav4_2017"
 	@echo "                   the real RAV4's whole bus through the RAV4 build, against its reference"
 	@echo "make uds ARGS=\"dump --toml ecu.toml\" [BUS=vcan0]"
@@ -673,7 +673,7 @@ grades: deps venv $(BUILD)/host/navecu
 
 # ---- the recorded Kingston 2008 drive (tools/kingston, docs/kingston.md): CSVs -> CAN log
 # -> firmware -> report against the SPAN reference. MODE=dr: no GNSS frames, out/kingston-dr/;
-# MODE=full (default): GNSS with OUTAGES ("a-b,c-d" s, every:P:L, none; default: 60 s every
+# MODE=full (default): GNSS with OUTAGES ("a-b,c-d" s, every:P:L[:O], none; default: 60 s every
 # 240 s, from 240 s on), out/kingston/
 .PHONY: kingston
 MODE ?= full

@@ -225,7 +225,8 @@ def test_outage_specs():
     assert moved[0] == (360.0, 420.0) and moved[-1] == (3240.0, 3300.0) and len(moved) == 13
     assert convert.parse_outages("every:240:60:0", 3530.4) == sched
     for bad in ("30-20", "a-b", "every:60:60", "every:240:60:240", "every:240:60:-1",
-                "every:240:60:1:2"):
+                "every:240:60:1:2", "every:240:60:", "every:240:60:nan", "every:240:60:inf",
+                "every:inf:60", "every:nan:60", "every:0.5:0.1"):
         with pytest.raises(ValueError):
             convert.parse_outages(bad, 3530.4)
 

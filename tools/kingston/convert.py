@@ -264,8 +264,9 @@ def parse_outages(spec, t_end_s: float) -> list:
             period, length, offset = (float(x) for x in fields + ["0"] * (3 - len(fields)))
         except ValueError:
             raise ValueError(f"outages: '{spec}' is not every:PERIOD:LENGTH[:OFFSET]") from None
-        if not 0 < length < period:
-            raise ValueError(f"outages: '{spec}' needs 0 < LENGTH < PERIOD")
+        if not (math.isfinite(period) and 1.0 <= period and 0 < length < period):
+            raise ValueError(f"outages: '{spec}' needs 0 < LENGTH < PERIOD, PERIOD a finite "
+                             "number of seconds, at least 1")
         if not 0 <= offset < period:
             raise ValueError(f"outages: '{spec}' needs 0 <= OFFSET < PERIOD")
         out, k = [], 1
