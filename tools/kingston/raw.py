@@ -66,6 +66,13 @@ def receiver_at(fixes: np.ndarray, t: float, height_offset_m: float = 0.0) -> np
                                  float(f["height_m"]) - height_offset_m)
 
 
+def travel_turn_rad(sat_rx_axes_m: np.ndarray, rx_m: np.ndarray) -> float:
+    """How far the Earth turns (rad) while the signal travels from a satellite given in the
+    receive time's axes to the receiver: omega tau, tau the range over c (no iteration:
+    the range is already the receive time's)."""
+    return WGS84_OMEGA_IE_RPS * float(np.linalg.norm(sat_rx_axes_m - rx_m)) / gr.C_MPS
+
+
 def epochs(raw: np.ndarray, fixes: np.ndarray, height_offset_m: float = 0.0) -> list:
     """[(gps time of week s, RawEpoch)], one per time in gnss_raw.csv, satellites by PRN.
     fixes: gnss.csv rows, the receiver's position (receiver_at)."""
@@ -79,10 +86,9 @@ def epochs(raw: np.ndarray, fixes: np.ndarray, height_offset_m: float = 0.0) -> 
         for r in rows[:gr.MAX_SATS]:
             s_rx = np.array([r["sat_x_m"], r["sat_y_m"], r["sat_z_m"]])
             v_tx = np.array([r["sat_vx_mps"], r["sat_vy_mps"], r["sat_vz_mps"]])
-            tau = float(np.linalg.norm(s_rx - rx)) / gr.C_MPS
-            a = -WGS84_OMEGA_IE_RPS * tau
             ep.meas.append(gr.RawMeas(
-                sv_id=int(r["prn"]), sat_pos_m=gr.rotate_z(s_rx, a), sat_vel_mps=v_tx,
+                sv_id=int(r["prn"]), sat_pos_m=gr.rotate_z(s_rx, -travel_turn_rad(s_rx, rx)),
+                sat_vel_mps=v_tx,
                 pseudorange_m=corrected_pseudorange_m(r),
                 range_rate_mps=range_rate_mps(r),
                 pr_sigma_m=float(r["pseudorange_std_m"]),
@@ -132,15 +138,14 @@ def residuals(raw: np.ndarray, ref: np.ndarray, t0_gps_s: float, t0_s: float,
                 [np.interp(t, ref["time_s"], ref[k]) for k in ("ve_mps", "vn_mps", "vu_mps")])
         res = []
         for r in rows:
-            los = np.array([r["sat_x_m"], r["sat_y_m"], r["sat_z_m"]]) - rx
+            sat = np.array([r["sat_x_m"], r["sat_y_m"], r["sat_z_m"]])
+            los = sat - rx
             if rates:
-                rng = float(np.linalg.norm(los))
-                u = los / rng
+                u = los / np.linalg.norm(los)
                 # the velocity is in the transmit time's axes (module docstring): turned
                 # into the receive time's, as the positions are
                 v_sat = gr.rotate_z(np.array([r["sat_vx_mps"], r["sat_vy_mps"],
-                                              r["sat_vz_mps"]]),
-                                    WGS84_OMEGA_IE_RPS * rng / gr.C_MPS)
+                                              r["sat_vz_mps"]]), travel_turn_rad(sat, rx))
                 res.append(range_rate_mps(r) - float(u @ (v_sat - v_rx)))
             else:
                 res.append(corrected_pseudorange_m(r) - float(np.linalg.norm(los)))
