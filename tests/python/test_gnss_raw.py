@@ -317,17 +317,24 @@ def test_a_scenario_receivers_figures_are_checked():
             scenario.load_scenario(f)
 
 
-def test_residuals_against_the_reference_show_one_satellites_error():
-    """tools.kingston.raw --residuals: ranges made from a known position, the receiver's
-    clock 1234.5 m and the corrections gnss_raw.csv carries, one satellite 5 m long: less
-    the median the others are 0 and it is +5 m (1 mm: float64); less that satellite's,
-    the others are -5 m; an epoch without it is left out."""
+def _five_satellites():
+    """A receiver at Kingston (44.23 N, 76.5 W, 40 m), five satellites' ECEF positions (m)
+    and the gnss_raw.csv columns of the range residual tests."""
     p = gr.ecef_from_geodetic(math.radians(44.23), math.radians(-76.5), 40.0)
     sats = [np.array(s) for s in ([2.0e7, 0.5e7, 1.2e7], [0.3e7, -2.1e7, 1.5e7],
                                   [1.1e7, -1.0e7, 2.1e7], [2.2e7, -0.4e7, 1.0e7],
                                   [0.9e7, -1.6e7, 1.9e7])]
     names = ["time_s", "prn", "sat_x_m", "sat_y_m", "sat_z_m", "sat_clock_corr_m",
              "iono_corr_m", "tropo_corr_m", "pseudorange_m", "elevation"]
+    return p, sats, names
+
+
+def test_residuals_against_the_reference_show_one_satellites_error():
+    """tools.kingston.raw --residuals: ranges made from a known position, the receiver's
+    clock 1234.5 m and the corrections gnss_raw.csv carries, one satellite 5 m long: less
+    the median the others are 0 and it is +5 m (1 mm: float64); less that satellite's,
+    the others are -5 m; an epoch without it is left out."""
+    p, sats, names = _five_satellites()
     rows = []
     for t in (100.0, 101.0):
         for i, s in enumerate(sats):
@@ -350,6 +357,44 @@ def test_residuals_against_the_reference_show_one_satellites_error():
         assert v == pytest.approx(0.0 if prn == 5 else -5.0, abs=1e-3)
 
 
+def test_correction_switches_show_the_common_and_the_satellite_steps():
+    """tools.kingston.raw --corrections: five epochs in one correction set (ionospheric
+    corrections negative), five in the other (positive) whose ranges are 4 m longer for
+    every satellite and 1 m more for one, and whose satellite clock corrections are 2 m
+    more: one switch; across it the median steps 4 m and the satellites less it
+    sqrt(1/5) m RMS (one of five by 1 m), the clock corrections 2 m; within a set nothing
+    moves (1 mm: float64); that satellite's mean is 0 in one set and +1 m in the other."""
+    p, sats, names = _five_satellites()
+    rows = []
+    for t in np.arange(100.0, 110.0):
+        second = t >= 105.0
+        for i, s in enumerate(sats):
+            geo = float(np.linalg.norm(s - p))
+            corr = (20.0 + i + (2.0 if second else 0.0), (2.0 if second else -3.0) + 0.1 * i,
+                    2.5)
+            step = (4.0 + (1.0 if i == 4 else 0.0)) if second else 0.0
+            pr = geo + 1234.5 - corr[0] + corr[1] + corr[2] + step
+            rows.append((t, i + 1, *s, *corr, pr, 0.5))
+    raw = np.array(rows, dtype=[(n, float) for n in names])
+    ref = np.array([(99.0, 44.23, -76.5, 40.0), (111.0, 44.23, -76.5, 40.0)],
+                   dtype=[(n, float) for n in ("time_s", "lat_deg", "lon_deg", "height_m")])
+    res = kraw.residuals(raw, ref, 90.0, 0.0, 30.0)
+    sw = kraw.correction_switches(raw, res, 90.0)
+    assert sw["epochs"] == {-1: 5, 1: 5}
+    assert sw["switches"] == 1
+    assert sw["pairs"] == (5, 40)
+    assert sw["common_m"][0] == pytest.approx(4.0, abs=1e-3)
+    assert sw["common_m"][1] == pytest.approx(0.0, abs=1e-3)
+    assert sw["sat_m"][0] == pytest.approx(math.sqrt(0.2), abs=1e-3)
+    assert sw["sat_m"][1] == pytest.approx(0.0, abs=1e-3)
+    assert sw["clock_m"] == pytest.approx((2.0, 0.0), abs=1e-9)
+    assert sw["mean_m"][5][-1] == (pytest.approx(0.0, abs=1e-3), 5)
+    assert sw["mean_m"][5][1] == (pytest.approx(1.0, abs=1e-3), 5)
+    assert sw["mean_m"][1][1] == (pytest.approx(0.0, abs=1e-3), 5)
+    assert kraw.correction_set(np.array([0.0, 0.0])) == 0
+    assert kraw.correction_set(np.array([-1.0, 2.0])) == 2
+
+
 def test_rate_residuals_against_the_reference_show_the_drift_and_one_satellite():
     """tools.kingston.raw --residuals --rates: Dopplers made from the reference's velocity
     (12 m/s east, 5 m/s north, 0.5 m/s up, through its ENU axes), the satellites' own and a
@@ -359,9 +404,7 @@ def test_rate_residuals_against_the_reference_show_the_drift_and_one_satellite()
     p = gr.ecef_from_geodetic(lat, lon, 40.0)
     v_enu = np.array([12.0, 5.0, 0.5])
     v_rx = gr.enu_axes(lat, lon).T @ v_enu
-    sats = [np.array(s) for s in ([2.0e7, 0.5e7, 1.2e7], [0.3e7, -2.1e7, 1.5e7],
-                                  [1.1e7, -1.0e7, 2.1e7], [2.2e7, -0.4e7, 1.0e7],
-                                  [0.9e7, -1.6e7, 1.9e7])]
+    _, sats, _ = _five_satellites()
     vels = [np.array(v) for v in ([100.0, -2000.0, 3000.0], [-1500.0, 200.0, 2500.0],
                                   [2500.0, 800.0, -1200.0], [-300.0, 3100.0, 100.0],
                                   [1800.0, -1800.0, 900.0])]

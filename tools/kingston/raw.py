@@ -38,6 +38,14 @@ not), and then each satellite's mean over the window. With --rates, the pseudora
 instead (m/s): each one less the satellite's velocity and the reference's along the line of
 sight, less the median, which is printed too (in brackets: the receiver's clock drift),
 and then how much one epoch's residual tells of the next's (their correlation 1 s apart).
+
+    python -m tools.kingston.raw --residuals T0 T1 --corrections
+
+prints instead what the receiver's switches between its two sets of corrections (told
+apart by the sign of the ionospheric corrections; the satellites' clock corrections step
+with them) do to the ranges: the common step and each satellite's, across a switch and
+within a set, and each satellite's mean residual in each set (docs/kalman.md, "Tightly
+coupled GNSS").
 """
 from __future__ import annotations
 
@@ -188,6 +196,64 @@ def epoch_to_epoch_correlation(rows: list, gap_s: float = 1.0, beyond: float = 1
     return float(np.corrcoef(a, b)[0, 1]), len(a), out
 
 
+def correction_set(iono_corr_m: np.ndarray) -> int:
+    """The correction set of one epoch's rows, by the sign of their ionospheric corrections:
+    -1 or +1 (the receiver's two sources, module docstring), 0 (none applied), 2 (mixed)."""
+    signs = set(int(v) for v in np.sign(iono_corr_m))
+    return signs.pop() if len(signs) == 1 else 2
+
+
+def correction_switches(raw: np.ndarray, rows: list, t0_gps_s: float) -> dict:
+    """What the receiver's switches of correction set do to its ranges. rows: residuals()
+    of the pseudoranges (each epoch's satellites less its median, and that median). From
+    one epoch to the next 1 s later, across a switch of set and within one: the RMS change
+    of the median (a step common to all ranges: what the clock takes) and of each
+    satellite's residual less the median (a step between satellites: what a learnt bias
+    keeps); and each satellite's mean residual in each set. The satellites' clock
+    corrections too: the median absolute change of each one's from one epoch to the next
+    1 s later, across a switch and within a set.
+    Returns {"epochs": {set: n}, "switches": n, "common_m": (across, within),
+    "sat_m": (across, within), "pairs": (across, within), "clock_m": (across, within),
+    "mean_m": {prn: {set: (mean, n)}}}."""
+    window = {t_s for t_s, _, _ in rows}
+    sets, clocks = {}, ([], [])
+    before = None
+    for t in np.unique(raw["time_s"]):
+        if float(t) - t0_gps_s not in window:
+            continue
+        ep = raw[raw["time_s"] == t]
+        cs = sets[float(t) - t0_gps_s] = correction_set(ep["iono_corr_m"])
+        clk = dict(zip(ep["prn"].astype(int), ep["sat_clock_corr_m"]))
+        if before is not None and abs(float(t) - before[0] - 1.0) < 0.05:
+            clocks[0 if cs != before[1] else 1].extend(
+                abs(c - before[2][p]) for p, c in clk.items() if p in before[2])
+        before = (float(t), cs, clk)
+    epochs, means = {}, {}
+    common = ([], [])
+    sat = ([], [])
+    prev = None
+    for t_s, sats, med in rows:
+        cs = sets[t_s]
+        epochs[cs] = epochs.get(cs, 0) + 1
+        cur = {p: v for p, _, v in sats}
+        for p, v in cur.items():
+            means.setdefault(p, {}).setdefault(cs, []).append(v)
+        if prev is not None and abs(t_s - prev[0] - 1.0) < 0.05:
+            k = 0 if cs != prev[1] else 1
+            common[k].append(med - prev[2])
+            sat[k].extend(cur[p] - prev[3][p] for p in cur if p in prev[3])
+        prev = (t_s, cs, med, cur)
+
+    def rms(v):
+        return float(np.sqrt(np.mean(np.square(v)))) if v else float("nan")
+    return {"epochs": epochs, "switches": len(common[0]),
+            "common_m": (rms(common[0]), rms(common[1])), "sat_m": (rms(sat[0]), rms(sat[1])),
+            "pairs": (len(sat[0]), len(sat[1])),
+            "clock_m": tuple(float(np.median(c)) if c else float("nan") for c in clocks),
+            "mean_m": {p: {cs: (float(np.mean(v)), len(v)) for cs, v in d.items()}
+                       for p, d in means.items()}}
+
+
 def main(argv=None) -> int:
     from tools.kingston import convert  # the drive's time base; not needed by epochs()
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -198,12 +264,33 @@ def main(argv=None) -> int:
     ap.add_argument("--rates", action="store_true",
                     help="the pseudorange rates (m/s) instead of the pseudoranges, and each "
                          "epoch's median (the receiver's clock drift)")
+    ap.add_argument("--corrections", action="store_true",
+                    help="instead of the epochs, what the receiver's switches of correction "
+                         "set (the sign of its ionospheric corrections) do to the ranges")
     ap.add_argument("--data", default=None, help=f"data folder (default {convert.DATA_DIR})")
     a = ap.parse_args(argv)
+    if a.corrections and (a.rates or a.relative_to):
+        ap.error("--corrections is of the pseudoranges less the median")
     drive = convert.load(a.data)
     raw = read(Path(a.data) if a.data else convert.DATA_DIR)
     rows = residuals(raw, drive.ref, drive.t0_gps, a.residuals[0], a.residuals[1],
                      a.relative_to, a.rates)
+    if a.corrections:
+        sw = correction_switches(raw, rows, drive.t0_gps)
+        names = {-1: "negative", 1: "positive", 0: "none", 2: "mixed"}
+        print("epochs by the sign of their ionospheric corrections: " +
+              ", ".join(f"{names[k]} {n}" for k, n in sorted(sw["epochs"].items())) +
+              f"; {sw['switches']} switches between epochs 1 s apart")
+        print(f"change 1 s later, across a switch / within a set (RMS): the median "
+              f"{sw['common_m'][0]:.2f} / {sw['common_m'][1]:.2f} m; each satellite less the "
+              f"median {sw['sat_m'][0]:.2f} / {sw['sat_m'][1]:.2f} m ({sw['pairs'][0]} / "
+              f"{sw['pairs'][1]} pairs); the satellites' clock corrections (median absolute) "
+              f"{sw['clock_m'][0]:.3f} / {sw['clock_m'][1]:.3f} m")
+        print("each satellite's mean residual less the median, by set (m, epochs):")
+        for p, d in sorted(sw["mean_m"].items()):
+            print(f"  PRN {p:2d}: " + "  ".join(f"{names[k]} {m:+.2f} ({n})"
+                                               for k, (m, n) in sorted(d.items())))
+        return 0
     less = f"PRN {a.relative_to}'s" if a.relative_to else "the epoch's median"
     what = ("pseudorange rate less the satellite's and the reference's velocity along the "
             "line of sight" if a.rates else
