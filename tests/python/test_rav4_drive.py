@@ -134,3 +134,67 @@ def test_self_start_without_a_reference_initial_state(tmp_path):
     assert bus["navigation_start_s"] <= 15.0
     # the u-blox fixes alone are 2.09 m rms against the reference on this segment
     assert bus["horizontal_error_m"]["rms"] <= 3.0
+
+
+def _zyx_deg(c):
+    """(heading or yaw, pitch, roll) deg of a Z-Y-X rotation matrix."""
+    import math
+    return (math.degrees(math.atan2(c[1, 0], c[0, 0])),
+            math.degrees(-math.asin(c[2, 0])), math.degrees(math.atan2(c[2, 1], c[2, 2])))
+
+
+def test_the_segments_mounting_and_gps_time_come_from_its_files():
+    """The converter takes a segment's facts from its files (tools/comma2k19/convert.py), so
+    another segment of the same format is converted as this one: on the RAV4's, the
+    README's mounting (yaw -0.90, pitch -3.75, roll +1.25 deg, to its 0.05 deg) and time
+    base (week 2012, GPS time of week = segment clock + 357697.849502 s)."""
+    from tools.comma2k19 import convert
+    ref = convert._csv(convert.DATA_DIR / "reference.csv")
+    gps = convert._csv(convert.DATA_DIR / "gnss_ublox.csv")
+    assert convert.device_mount_deg(ref) == {"roll": 1.25, "pitch": -3.75, "yaw": -0.9}
+    assert convert.gps_time_of(gps) == (2012, 357697.849502)
+
+
+def test_a_known_mounting_is_found_from_a_reference_pose():
+    """A made reference: a car turning through 270 deg of heading on a road whose grade
+    goes from -4 to +4 %, no roll, its velocity along its forward axis, and a device
+    mounted at roll 2.0, pitch -1.5, yaw 3.0 deg (Z-Y-X against the car, FRD): the
+    device's attitude and the velocity as reference.csv gives them give back exactly that
+    mounting (the forward axis is the velocity's, the down axis the vertical made square to
+    it, whatever the grade). Standing epochs are left out; fewer than MOUNT_MIN_EPOCHS
+    moving ones are refused."""
+    import numpy as np
+    from tools.comma2k19 import convert
+    mount = {"roll": 2.0, "pitch": -1.5, "yaw": 3.0}
+    c_car_dev = convert.zyx(mount["yaw"], mount["pitch"], mount["roll"])
+    names = ("vn_mps", "ve_mps", "vu_mps", "heading_deg", "pitch_deg", "roll_deg")
+    rows = []
+    for k in range(400):
+        heading, grade = 270.0 * k / 400.0, -4.0 + 8.0 * k / 400.0
+        speed = 0.0 if k < 50 else 12.0      # standing first: left out
+        c_ned_car = convert.zyx(heading, np.degrees(np.arctan(grade / 100.0)), 0.0)
+        v = c_ned_car @ np.array([speed, 0.0, 0.0])
+        rows.append((v[0], v[1], -v[2], *_zyx_deg(c_ned_car @ c_car_dev)))
+    ref = np.array(rows, dtype=[(n, float) for n in names])
+    assert convert.device_mount_deg(ref) == mount
+    with pytest.raises(ValueError, match="epochs"):
+        convert.device_mount_deg(ref[: 50 + convert.MOUNT_MIN_EPOCHS - 1])
+
+
+def test_fixes_that_disagree_on_the_time_base_are_refused():
+    """gps_tow_s - t_fix_s is one constant of a segment: a fix 1 ms off it, or fixes of two
+    weeks, are a corrupt file (ValueError naming it), not a time base picked from them."""
+    import numpy as np
+    from tools.comma2k19 import convert
+    names = ("gps_week", "gps_tow_s", "t_fix_s")
+    good = [(2012.0, 404106.4 + 0.1 * k, 46408.550498 + 0.1 * k) for k in range(10)]
+    gps = np.array(good, dtype=[(n, float) for n in names])
+    assert convert.gps_time_of(gps) == (2012, 357697.849502)
+    bad = gps.copy()
+    bad["gps_tow_s"][4] += 0.001
+    with pytest.raises(ValueError, match="gnss_ublox.csv"):
+        convert.gps_time_of(bad)
+    two = gps.copy()
+    two["gps_week"][9] = 2013.0
+    with pytest.raises(ValueError, match="week"):
+        convert.gps_time_of(two)

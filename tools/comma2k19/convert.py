@@ -15,10 +15,14 @@ are used. What navecu is given beyond the recording (none of it is in the car's 
   and specific forces at the device's stamps, interpolated to the grid, differenced (each
   grid increment holds exactly what the device measured over that interval); sent in the
   device's own axes (x forward, y right, z down): the firmware is configured with the
-  device's mounting in the car (--imu-mount-deg, MOUNT_312_DEG: its x forward / y right /
-  z down axes and the roll, pitch and yaw measured against the reference, MOUNT_DEG,
-  README "Mounting"), the rotation that navecu's own body axes (x right, y forward, z up)
-  need.
+  device's mounting in the car (--imu-mount-deg, the meta's imu_mount_deg_312: its x
+  forward / y right / z down axes and the roll, pitch and yaw of the segment's reference,
+  device_mount_deg, as README "Mounting" measures them; the RAV4's -0.90 / -3.75 / +1.25
+  deg), the rotation that navecu's own body axes (x right, y forward, z up) need.
+- **The segment's own facts** come from its files, not from constants: its GPS week and
+  time of week less the segment clock from the fixes (gps_time_of), the device's mounting
+  from the reference pose (device_mount_deg), so another comma2k19 segment in this
+  folder's format (another car, `--vehicle` its profile) is converted as this one is.
   With --imu-time stamped, no resampling: one sample per device sample after the first,
   its increments the trapezoidal integral over its own interval (the previous stamp to
   its own), and before its IMU_Rate an IMU_Time with the device's own stamp in
@@ -60,11 +64,15 @@ IMU_RATE_HZ = 100
 #: --imu-time stamped: the device's nominal rate, what the firmware is configured with
 #: (104.264 Hz measured, README "IMU"; a u16 parameter)
 STAMPED_RATE_HZ = 104
-GPS_WEEK = 2012
-#: GPS time of week = segment clock + this (README "Time base")
-GPS_TOW_MINUS_T_S = 357697.849502
-#: the device relative to the car, Z-Y-X in FRD (README "Mounting"), deg
-MOUNT_DEG = {"roll": 1.25, "pitch": -3.75, "yaw": -0.90}
+#: the mounting is derived to this step (deg): the reference's per-epoch scatter of the
+#: velocity's direction in the device's axes is 0.10 deg in yaw and 0.27 deg in elevation
+#: (README "Mounting"), its mean known to a few hundredths
+MOUNT_STEP_DEG = 0.05
+#: reference epochs used for the mounting: moving at least this fast (m/s)
+MOUNT_MIN_SPEED_MPS = 1.0
+MOUNT_MIN_EPOCHS = 100
+#: the fixes' GPS time of week less t_fix_s agree to this (s; the files carry 1 us)
+TOW_OFFSET_TOL_S = 2e-6
 # frame order within one timestamp: commands, then IMU halves, then GNSS epoch
 O_KNOWN, O_SETPOS, O_ATT, O_CAR, O_TIME, O_RATE, O_ACCEL = 0, 1, 2, 3, 4, 5, 6
 O_GPOS, O_GVEL, O_GHGT, O_GTIME, O_GSTAT = 7, 8, 9, 10, 11
@@ -94,16 +102,68 @@ def zyx(yaw_deg: float, pitch_deg: float, roll_deg: float) -> np.ndarray:
 
 #: FRD <-> RFU and NED <-> ENU (its own inverse)
 P_SWAP = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
-#: car RFU <- device FRD
-C_CAR_DEV = P_SWAP @ zyx(MOUNT_DEG["yaw"], MOUNT_DEG["pitch"], MOUNT_DEG["roll"])
 
 
-def car_attitude(roll_deg, pitch_deg, heading_deg) -> tuple:
+def car_from_device(mount_deg: dict) -> np.ndarray:
+    """car RFU <- device FRD, of the device's Z-Y-X angles against the car (FRD; README
+    "Mounting")."""
+    return P_SWAP @ zyx(mount_deg["yaw"], mount_deg["pitch"], mount_deg["roll"])
+
+
+def device_mount_deg(ref: np.ndarray) -> dict:
+    """The device's roll, pitch and yaw against the car (Z-Y-X in FRD, deg, to
+    MOUNT_STEP_DEG) from the segment's reference pose, as README "Mounting" measures them:
+    the car's forward axis the mean direction of the velocity in the device's axes over the
+    epochs moving at least MOUNT_MIN_SPEED_MPS, its down axis the mean local vertical made
+    square to it (the car's mean roll taken as 0). ValueError when fewer than
+    MOUNT_MIN_EPOCHS epochs move (a car that did not drive cannot tell its forward axis)."""
+    fwd, down = np.zeros(3), np.zeros(3)
+    n = 0
+    for r in ref:
+        v_ned = np.array([r["vn_mps"], r["ve_mps"], -r["vu_mps"]])
+        speed = float(np.linalg.norm(v_ned))
+        if speed < MOUNT_MIN_SPEED_MPS:
+            continue
+        c_dev_ned = zyx(r["heading_deg"], r["pitch_deg"], r["roll_deg"]).T
+        fwd += c_dev_ned @ v_ned / speed
+        down += c_dev_ned[:, 2]
+        n += 1
+    if n < MOUNT_MIN_EPOCHS:
+        raise ValueError(f"reference.csv: {n} epochs at {MOUNT_MIN_SPEED_MPS} m/s or more, "
+                         f"{MOUNT_MIN_EPOCHS} needed for the device's mounting")
+    fwd /= np.linalg.norm(fwd)
+    down -= fwd * float(fwd @ down)
+    down /= np.linalg.norm(down)
+    c_car_dev = np.vstack([fwd, np.cross(down, fwd), down])   # car FRD <- device FRD
+    angles = {"roll": math.atan2(c_car_dev[2, 1], c_car_dev[2, 2]),
+              "pitch": -math.asin(max(-1.0, min(1.0, c_car_dev[2, 0]))),
+              "yaw": math.atan2(c_car_dev[1, 0], c_car_dev[0, 0])}
+    return {k: round(round(math.degrees(a) / MOUNT_STEP_DEG) * MOUNT_STEP_DEG, 2) + 0.0
+            for k, a in angles.items()}
+
+
+def gps_time_of(gps: np.ndarray) -> tuple:
+    """(GPS week, GPS time of week less the segment clock, s) of the segment, from its
+    fixes: gps_tow_s - t_fix_s, one constant (README "Time base"). ValueError when the
+    fixes disagree by more than TOW_OFFSET_TOL_S or carry more than one week."""
+    d = gps["gps_tow_s"] - gps["t_fix_s"]
+    weeks = set(int(w) for w in gps["gps_week"])
+    if len(d) == 0 or len(weeks) != 1:
+        raise ValueError(f"gnss_ublox.csv: {len(d)} fixes in weeks {sorted(weeks)}: one "
+                         "week needed")
+    off = round(float(np.median(d)), 6)
+    if float(np.max(np.abs(d - off))) > TOW_OFFSET_TOL_S:
+        raise ValueError("gnss_ublox.csv: gps_tow_s - t_fix_s is not one constant (up to "
+                         f"{float(np.max(np.abs(d - off))):.6f} s from {off:.6f} s)")
+    return weeks.pop(), off
+
+
+def car_attitude(roll_deg, pitch_deg, heading_deg, c_car_dev) -> tuple:
     """The car's roll, pitch, heading (deg, docs/frames.md: 3-1-2, roll right side down,
     pitch nose up, heading clockwise from north) from the device's reference attitude
-    (Z-Y-X against NED) and the mounting."""
+    (Z-Y-X against NED) and the mounting (c_car_dev: car_from_device)."""
     c_ned_dev = zyx(heading_deg, pitch_deg, roll_deg)
-    c_bn = P_SWAP @ c_ned_dev @ C_CAR_DEV.T   # ENU <- car RFU
+    c_bn = P_SWAP @ c_ned_dev @ c_car_dev.T   # ENU <- car RFU
     pitch = math.asin(max(-1.0, min(1.0, c_bn[2, 1])))
     roll = math.atan2(-c_bn[2, 0], c_bn[2, 2])
     heading = math.atan2(c_bn[0, 1], c_bn[1, 1]) % (2 * math.pi)
@@ -120,9 +180,6 @@ def euler_312_deg(C) -> tuple:
     return tuple(round(math.degrees(x), 4) for x in (roll, pitch, yaw))
 
 
-#: the device's axes (x forward, y right, z down) in the car's (x right, y forward, z up):
-#: the firmware's --imu-mount-deg; the IMU samples are sent in the device's own axes
-MOUNT_312_DEG = euler_312_deg(C_CAR_DEV)
 
 
 def resample_increments(t_s, w, f, rate_hz: int = IMU_RATE_HZ) -> dict:
@@ -214,6 +271,9 @@ def build(data_dir=None, vehicle_name="toyota_rav4_2017", channels=None, car_bus
     imu = _csv(data / "imu.csv")
     gps = _csv(data / "gnss_ublox.csv")
     ref = _csv(data / "reference.csv")
+    gps_week, tow_minus_t_s = gps_time_of(gps)
+    mount_deg = device_mount_deg(ref)
+    c_car_dev = car_from_device(mount_deg)
 
     # IMU: device FRD -> car RFU, resampled
     w_dev = np.column_stack([imu["wx_radps"], imu["wy_radps"], imu["wz_radps"]])
@@ -229,7 +289,7 @@ def build(data_dir=None, vehicle_name="toyota_rav4_2017", channels=None, car_bus
     t_last = float(t_imu[-1])
     out = []
     meta = {"data_dir": str(data), "vehicle": vehicle_name, "t0_segment_s": t0,
-            "t0_gps_tow_s": t0 + GPS_TOW_MINUS_T_S, "gps_week": GPS_WEEK,
+            "t0_gps_tow_s": t0 + tow_minus_t_s, "gps_week": gps_week,
             "time_base": "t = segment clock - t0_segment_s (first IMU sample)",
             "imu": {"rows": int(len(imu)), "rate_measured_hz": rs["rate_measured_hz"],
                     "interval_min_s": rs["interval_min_s"],
@@ -238,15 +298,18 @@ def build(data_dir=None, vehicle_name="toyota_rav4_2017", channels=None, car_bus
                     "resampled_to_hz": IMU_RATE_HZ if imu_time == "grid" else None,
                     "configured_rate_hz": IMU_RATE_HZ if imu_time == "grid" else STAMPED_RATE_HZ,
                     "samples_sent": int(len(t_imu)),
-                    "mounting_deg": MOUNT_DEG, "axes": "the device's own (x forward, y right, z down)",
-                    "imu_mount_deg_312": list(MOUNT_312_DEG)},
+                    "mounting_deg": mount_deg,
+                    "axes": "the device's own (x forward, y right, z down)",
+                    # the device's axes in the car's (x right, y forward, z up): the
+                    # firmware's --imu-mount-deg; the samples go in the device's own axes
+                    "imu_mount_deg_312": list(euler_312_deg(c_car_dev))},
             "last_imu_sample_s": t_last}
 
     # initial state: the reference at t0
     def ref_at(col):
         return float(np.interp(t0, ref["t_s"], ref[col]))
     roll, pitch, heading = car_attitude(ref_at("roll_deg"), ref_at("pitch_deg"),
-                                        ref_at("heading_deg"))
+                                        ref_at("heading_deg"), c_car_dev)
     hdg_cmd = (round(heading * 100.0) % 36000) / 100.0
     init = {"lat_deg": ref_at("lat_deg"), "lon_deg": ref_at("lon_deg"),
             "height_m": ref_at("height_m"), "heading_deg": hdg_cmd, "roll_deg": roll,

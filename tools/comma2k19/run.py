@@ -186,18 +186,20 @@ def _c312(roll_deg, pitch_deg, yaw_deg) -> np.ndarray:
 
 def device_angles_deg(rpy_312) -> dict:
     """The README's mounting angles (the device's Z-Y-X roll, pitch, yaw against the car,
-    convert.MOUNT_DEG) of a firmware mounting (3-1-2, the device's FRD axes)."""
+    convert.device_mount_deg) of a firmware mounting (3-1-2, the device's FRD axes)."""
     z = convert.P_SWAP @ _c312(*rpy_312)
     return {"roll": math.degrees(math.atan2(z[2, 1], z[2, 2])),
             "pitch": math.degrees(-math.asin(max(-1.0, min(1.0, z[2, 0])))),
             "yaw": math.degrees(math.atan2(z[1, 0], z[0, 0]))}
 
 
-def mount_estimate(path, db) -> dict | None:
+def mount_estimate(path, db, imu_meta: dict) -> dict | None:
     """The automatic mounting estimate (NAV_Calibration pages 1 and 2) of a run: when it
     converged (log time), the last estimate in the firmware's 3-1-2 angles and as the
-    README's device angles against the reference's (convert.MOUNT_DEG); None when the run
-    sent no page 1 (a configured mounting)."""
+    README's device angles against the reference's (imu_meta: the converter's meta "imu",
+    its mounting_deg and imu_mount_deg_312); None when the run sent no page 1 (a
+    configured mounting)."""
+    ref_deg = imu_meta["mounting_deg"]
     cal_id = db.get_message_by_name("NAV_Calibration").frame_id
     last1 = last2 = at_conv = None
     conv_t = None
@@ -222,15 +224,15 @@ def mount_estimate(path, db) -> dict | None:
         crpy = (c1["MountRoll"], c1["MountPitch"], c1["MountYaw"])
         cdev = device_angles_deg(crpy)
         conv = {"estimate_device_deg": {k: round(v, 3) for k, v in cdev.items()},
-                "error_device_deg": {k: round(cdev[k] - convert.MOUNT_DEG[k], 3) for k in cdev},
+                "error_device_deg": {k: round(cdev[k] - ref_deg[k], 3) for k in cdev},
                 "sigma_roll_pitch_deg": c2["MountSigmaRollPitch"],
                 "sigma_yaw_deg": c2["MountSigmaYaw"]}
     return {"converged_at_log_s": conv_t, "state": int(last2["MountState"]),
             "at_convergence": conv,
-            "estimate_312_deg": rpy, "reference_312_deg": list(convert.MOUNT_312_DEG),
+            "estimate_312_deg": rpy, "reference_312_deg": list(imu_meta["imu_mount_deg_312"]),
             "estimate_device_deg": {k: round(v, 3) for k, v in dev.items()},
-            "reference_device_deg": convert.MOUNT_DEG,
-            "error_device_deg": {k: round(dev[k] - convert.MOUNT_DEG[k], 3) for k in dev},
+            "reference_device_deg": ref_deg,
+            "error_device_deg": {k: round(dev[k] - ref_deg[k], 3) for k in dev},
             "sigma_roll_pitch_deg": last2["MountSigmaRollPitch"],
             "sigma_yaw_deg": last2["MountSigmaYaw"],
             "excitation_m2ps3": last2["MountExcitation"]}
@@ -264,7 +266,7 @@ def run_one(stages, navecu, name, frames, meta, out: Path, opts, db, truth, outa
     _, cnt = report.status_page(nav.get("NAV_Status"), 1, "CntForeign")
     rep["cnt_foreign_last"] = int(cnt[-1]) if cnt.size else None
     rep["nav_time"] = nav_time_check(nav, meta)
-    rep["mount_estimate"] = mount_estimate(d / "nav.log", db)
+    rep["mount_estimate"] = mount_estimate(d / "nav.log", db, meta["imu"])
     rep["input_frames"] = meta["frames"]
     rep["car_frames"] = meta["car_bus"]["frames"]
     return rep, series, d
