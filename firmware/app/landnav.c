@@ -2,7 +2,7 @@
 #include "landnav.h"
 
 #include "app_tuning.h"
-#include "mount_est.h"
+#include "earth.h"
 
 /* the prior's weight in samples of the standstill average: n0 = ARW^2 / (dt sigma_b^2) */
 static nav_real_t zbias_n0(const zbias_prior_t *prior, nav_real_t dt_s)
@@ -91,7 +91,7 @@ nav_real_t landnav_car_yaw(const sins_t *nav, const imu_inc_t *inc)
     sins_earth_rate_b(nav, w_ie_b);
     nav_real_t dtheta = w_ie_b[2] * inc->dt_s;
     if (nav_fabs(v_fwd) > APP_STUCK_YAW_MIN_MPS) {
-        dtheta -= (inc->dv_b_mps[0] - MOUNT_EST_G_MPS2 * C.m[2][0] * inc->dt_s) / v_fwd;
+        dtheta -= (inc->dv_b_mps[0] - NAV_C(STD_GRAVITY_MPS2) * C.m[2][0] * inc->dt_s) / v_fwd;
     }
     return dtheta;
 }

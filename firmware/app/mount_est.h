@@ -35,12 +35,13 @@
 
 #include <stdint.h>
 
+#include "earth.h"
 #include "sins.h"
 
 #define MOUNT_EST_WINDOW_S NAV_C(0.5)     /* the averaging window */
 #define MOUNT_EST_MAX_F_MPS2 NAV_C(40.0)  /* a window's mean |f| beyond this is refused */
-#define MOUNT_EST_G_MPS2 NAV_C(9.80665)   /* gravity of the model (the latitude's is within
-                                             0.3 %: a scale, no angle) */
+#define MOUNT_EST_G_MPS2 NAV_C(STD_GRAVITY_MPS2) /* gravity of the model (the latitude's is
+                                                   within 0.3 %: a scale, no angle) */
 #define MOUNT_EST_MIN_WINDOWS 8u          /* below this no estimate */
 
 typedef struct {

@@ -21,6 +21,7 @@
 #define WGS84_GAMMA_P_MPS2 9.8321849378     /* normal gravity at the poles */
 #define WGS84_SOMIGLIANA_K 0.00193185265241 /* (b*gamma_p)/(a*gamma_e) - 1 */
 #define WGS84_M 0.00344978650684            /* omega^2 a^2 b / GM */
+#define STD_GRAVITY_MPS2 9.80665           /* standard acceleration of gravity (CGPM 1901) */
 
 /*
  * Geodetic position in 64-bit fixed point, so that it accumulates without loss on a
