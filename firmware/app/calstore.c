@@ -184,8 +184,9 @@ static int slot_read(hal_t *hal, size_t stride, unsigned slot, uint8_t img[CALST
     return hal_nvm_read(hal, (size_t)slot * stride, img, CALSTORE_SLOT_BYTES);
 }
 
-/* 1 if NVM [off, off + len) is erased, 0 if not, the HAL's error (< 0) */
-static int nvm_erased(hal_t *hal, size_t off, size_t len)
+/* 1 if NVM [off, off + len) reads back as data (as erased flash when data is NULL), 0 if
+ * not, the HAL's error (< 0) */
+static int nvm_reads_as(hal_t *hal, size_t off, const uint8_t *data, size_t len)
 {
     uint8_t buf[CHUNK];
     for (size_t k = 0u; k < len; k += CHUNK) {
@@ -194,24 +195,7 @@ static int nvm_erased(hal_t *hal, size_t off, size_t len)
         if (rc != 0) {
             return rc;
         }
-        if (!all_erased(buf, n)) {
-            return 0;
-        }
-    }
-    return 1;
-}
-
-/* 1 if NVM [off, off + len) reads back as data, 0 if not, the HAL's error (< 0) */
-static int nvm_equal(hal_t *hal, size_t off, const uint8_t *data, size_t len)
-{
-    uint8_t buf[CHUNK];
-    for (size_t k = 0u; k < len; k += CHUNK) {
-        const size_t n = len - k < CHUNK ? len - k : CHUNK;
-        const int rc = hal_nvm_read(hal, off + k, buf, n);
-        if (rc != 0) {
-            return rc;
-        }
-        if (memcmp(buf, data + k, n) != 0) {
+        if ((data == NULL) ? (all_erased(buf, n) == 0) : (memcmp(buf, data + k, n) != 0)) {
             return 0;
         }
     }
@@ -244,8 +228,8 @@ static int scan_slots(hal_t *hal, size_t stride, scan_t *s)
         slot_state_t st = slot_decode(img, &seq, &rec);
         if (st == SLOT_ERASED && ext_fits(stride)) {
             /* an interrupted first save may have written only the extension */
-            const int e = nvm_erased(hal, (size_t)k * stride + CALSTORE_EXT_OFFSET,
-                                     CALSTORE_EXT_MAX_BYTES);
+            const int e = nvm_reads_as(hal, (size_t)k * stride + CALSTORE_EXT_OFFSET, NULL,
+                                       CALSTORE_EXT_MAX_BYTES);
             if (e < 0) {
                 return e;
             }
@@ -430,7 +414,7 @@ static int save_record(hal_t *hal, calstore_t *cs, const cal_record_t *rec,
         if (rc != 0) {
             return rc;
         }
-        rc = nvm_equal(hal, base + CALSTORE_EXT_OFFSET, ext_img, n);
+        rc = nvm_reads_as(hal, base + CALSTORE_EXT_OFFSET, ext_img, n);
         if (rc <= 0) {
             return rc < 0 ? rc : HAL_EIO;
         }
