@@ -126,6 +126,57 @@ static gnss_fix_t fix_at(int32_t lat_e7, int32_t lon_e7, const nav_real_t v[3])
 
 static const fusion_prior_t PRIOR = {1e-5f, 0.01f, 1u, 0.02f, {0.0f, 0.0f}};
 
+/* the car's speed north, m/s, at t s: 10 m/s, +-3 m/s over an 8-s period (the acceleration
+ * changes, so the receiver's latency shows in its velocities) */
+static nav_real_t surging_mps(double t_s)
+{
+    return (nav_real_t)(10.0 + 3.0 * sin(2.0 * PI * t_s / 8.0));
+}
+
+/* 60 s of that drive, the navigator's velocity the truth at each IMU sample; each second a
+ * fix whose velocity is the truth 0.3 s before it arrives (the receiver's latency) while
+ * the parameter says 0; with_wheels: the car's wheel speeds (the truth) each second too.
+ * Returns the latency in use at the end. */
+static nav_real_t latency_after_surging_drive(int with_wheels)
+{
+    const nav_real_t v0[3] = {0.0f, surging_mps(0.0), 0.0f};
+    start_at(0.0, v0);
+    cfg.gnss_latency_s = 0.0f;
+    diag.t_us = 0u;
+    int adopt;
+    for (int s = 1; s <= 60; s++) {
+        for (int j = 1; j <= 100; j++) {
+            const nav_real_t v[3] = {0.0f, surging_mps((double)(s - 1) + 0.01 * j), 0.0f};
+            diag.n_samples++;
+            gnss_time_record(&gtime, diag.n_samples, cfg.imu_rate_hz, v);
+        }
+        diag.t_us += 1000000u;
+        if (with_wheels) {
+            const nav_real_t w = surging_mps((double)s);
+            const nav_real_t wheels[4] = {w, w, w, w};
+            assert_int_equal(odo_wheels(&odo, wheels, 0.0f), NAV_OK);
+        }
+        const nav_real_t v_then[3] = {0.0f, surging_mps((double)s - 0.3), 0.0f};
+        gnss_fix_t f = fix_at(450000000, 100000000, v_then);
+        f.tow_ms = 100000u + 1000u * (uint32_t)s;
+        (void)fusion_gnss(&fu, &ctx, &PRIOR, &f, &adopt);
+    }
+    return gnss_time_latency(&gtime, cfg.gnss_latency_s);
+}
+
+/* GIVEN a receiver whose fixes are 0.3 s older than the parameter says, on a drive whose
+ * acceleration changes WHEN the car's wheel speeds come THEN the latency is learnt from the
+ * fixes' velocities against the navigator's (0.30 s, the candidates' 10-ms step); WHEN
+ * they do not THEN the parameter stays in use: without the wheels the navigator's velocity
+ * is the fixes' own, and a steady acceleration turns a velocity error into a latency (the
+ * RAV4 without its wheel speeds learnt 0.3 s too much: docs/kalman.md) */
+static void test_latency_learnt_only_with_wheel_speeds(void **state)
+{
+    (void)state;
+    assert_float_equal(latency_after_surging_drive(1), 0.30f, 0.0051f);
+    assert_float_equal(latency_after_surging_drive(0), 0.0f, 0.0f);
+}
+
 /* metres north and east of a from b */
 static void offset_m(const geo_pos_t *a, const geo_pos_t *b, double *north, double *east)
 {
@@ -714,9 +765,11 @@ static void fixes_at_rest(int n, int every, int early)
 /* After 5 fixes at 1 Hz taken at P0 and gap_s seconds without fixes (a tunnel), fixes
  * at lat_e7 with the velocity v_enu every second, each with its course noted as app.c
  * notes it, until the filter reacquires (or 100 s): the seconds of refused fixes it took,
- * the final action in *act */
-static uint32_t refused_until_reacquired(uint32_t gap_s, int32_t lat_e7,
-                                         const nav_real_t v_enu[3], fusion_action_t *act)
+ * the final action in *act. With wheels_standing, the car's wheel speeds read 0 each
+ * second from then on (without, none come). */
+static uint32_t refused_until_reacquired_wheels(uint32_t gap_s, int32_t lat_e7,
+                                                const nav_real_t v_enu[3], fusion_action_t *act,
+                                                int wheels_standing)
 {
     start_filter();
     fixes_at_rest(5, 100, -1);
@@ -734,6 +787,10 @@ static uint32_t refused_until_reacquired(uint32_t gap_s, int32_t lat_e7,
         if (*act == FUSION_GO_ON) {
             s++;
             tow += 1000u;
+            if (wheels_standing) {
+                const nav_real_t zero[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+                assert_int_equal(odo_wheels(&odo, zero, 0.0f), NAV_OK);
+            }
             gnss_fix_t f = fix_at(lat_e7, 100000000, v_enu);
             f.tow_ms = tow;
             fusion_note_course(&fu, f.speed_mps, atan2f(v_enu[0], v_enu[1]));
@@ -743,6 +800,37 @@ static uint32_t refused_until_reacquired(uint32_t gap_s, int32_t lat_e7,
         }
     }
     return s;
+}
+
+static uint32_t refused_until_reacquired(uint32_t gap_s, int32_t lat_e7,
+                                         const nav_real_t v_enu[3], fusion_action_t *act)
+{
+    return refused_until_reacquired_wheels(gap_s, lat_e7, v_enu, act, 0);
+}
+
+/* GIVEN the filter on the fixes at P0, standing, heading north WHEN every fix from then on
+ * is 100 m north and says the car drives north at 10 m/s (its course the filter's heading:
+ * the course cannot tell) and no wheel speeds come THEN the fixes' position and velocity
+ * are both refused, the filter reopened, and after APP_FILTER_REOPEN_LIMIT reopens the
+ * receiver's velocity, refused too, finds it diverged: REACQUIRE, counted, well before
+ * the 60-s lock-out limit (a receiver's position jumps while its velocity agrees: test_
+ * refused_for_a_minute_reacquires). AND GIVEN the car's wheels reading 0 all along THEN
+ * they side with the filter: the fixes are the receiver's fault until the lock-out. */
+static void test_velocity_refused_too_reacquires_without_wheels(void **state)
+{
+    const nav_real_t v_north[3] = {0.0f, 10.0f, 0.0f};
+    fusion_action_t act;
+    uint32_t s = refused_until_reacquired(0u, 450009000, v_north, &act);
+    assert_int_equal(act, FUSION_REACQUIRE);
+    assert_true(s < 10u);
+    assert_int_equal(health.filter_resets, 1u);
+    assert_true(fu.ekf.n_reopened >= APP_FILTER_REOPEN_LIMIT);
+
+    assert_int_equal(setup(state), 0);
+    s = refused_until_reacquired_wheels(0u, 450009000, v_north, &act, 1);
+    assert_int_equal(act, FUSION_REACQUIRE);
+    assert_in_range(s, APP_FILTER_LOCKOUT_S + 1u, APP_FILTER_LOCKOUT_S + 2u);
+    assert_int_equal(health.filter_resets, 1u);
 }
 
 /* GIVEN the filter on the fixes at P0 WHEN every fix from then on is 100 m north, the car
@@ -1409,6 +1497,8 @@ int main(void)
         cmocka_unit_test(test_learning_needs_a_fix_taken),
         cmocka_unit_test(test_raw_declared_elevation_must_be_the_geometrys),
         cmocka_unit_test(test_raw_refusal_counted_in_a_learnt_epoch),
+        cmocka_unit_test(test_latency_learnt_only_with_wheel_speeds),
+        cmocka_unit_test_setup(test_velocity_refused_too_reacquires_without_wheels, setup),
     };
     return cmocka_run_group_tests_name("fusion", tests, NULL, NULL);
 }

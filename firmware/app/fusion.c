@@ -75,8 +75,17 @@ static int diverged(fusion_t *fu, const fusion_ctx_t *c)
      * metres off at the accuracy they declare, and a filter that drifted beyond its own
      * gate (its heading a degree off after a stuck gyro, the odometer agreeing) would
      * refuse them for good, its reopened sigma claiming metres while it is 100 m off */
-    const int aiding_disagrees = gnss_fresh && fu->reopen_run >= APP_FILTER_REOPEN_LIMIT &&
-                                 (odo_disagrees || course_disagrees || fu->locked_out);
+    /* without wheel speeds, the receiver's velocity is the other witness: a receiver's
+     * position jumps (multipath, a reset) while its velocity, from the Dopplers, agrees
+     * with the filter; both refused through the reopens, the filter is wrong (the RAV4's
+     * minute without its wheels left a 30-s outage 880 m off and refused every fix after
+     * it, its HorizAccuracy 10 m: docs/reliability.md) */
+    const int vel_disagrees = !c->odo->valid &&
+                              app_stamp_within(&fu->vel_refused, n,
+                                               (uint64_t)APP_GNSS_REOPEN_S * rate);
+    const int aiding_disagrees =
+        gnss_fresh && fu->reopen_run >= APP_FILTER_REOPEN_LIMIT &&
+        (odo_disagrees || course_disagrees || vel_disagrees || fu->locked_out);
     const int bad = fu->state_lost || k->n_nonfinite != fu->nonfinite_seen ||
                     k->n_negative_var != fu->negative_seen || aiding_disagrees;
     fu->state_lost = 0u;
@@ -613,7 +622,11 @@ fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_pr
     /* the accuracies are the receiver's or, with gnss_accuracy = declared, the declared
      * figures (app.c puts them into the fix) */
     const nav_real_t ss = nav_clamp(fix->sacc_mps, APP_GNSS_SACC_MIN_MPS, APP_GNSS_SACC_MAX_MPS);
-    if (fix->has_vel) {
+    /* the latency is learnt only while wheel speeds come: without them the navigator's
+     * velocity is the fixes' own, and while the car accelerates steadily a velocity error
+     * of dv reads as a latency of dv / a (the RAV4's minute without its wheels learnt
+     * 0.3 s too much and ran 5 m ahead: docs/kalman.md) */
+    if (fix->has_vel && c->odo->valid) {
         (void)gnss_time_learn(c->time, &when, fix->v_enu_mps, ss, cfg->gnss_latency_s);
     }
     nav_real_t d[3];
@@ -711,6 +724,9 @@ fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_pr
     }
     if (rp < 2 || rv == 0) {
         app_diag_reject(c->diag, &c->diag->health->gnss_rejected); /* beyond the gate */
+    }
+    if (rv == 0) {
+        app_stamp(&fu->vel_refused, n);
     }
     fu->ekf.hold_heading = 0u;
     gate_run(fu, c, rp >= 2, sh); /* rp >= 2: the horizontal fix was taken */

@@ -66,6 +66,7 @@ typedef struct {
     nav_real_t v_prev_pred_mps[2]; /* horizontal velocity at the last prediction */
     uint64_t start_sample;      /* sample at which the filter started */
     app_stamp_t fix;            /* the last GNSS fix the filter took */
+    app_stamp_t vel_refused;    /* the last GNSS velocity the gate refused */
     uint8_t gated_run;          /* consecutive fixes refused by the gate */
     uint8_t reopen_run;         /* covariance reopens since the last fix taken */
     uint8_t locked_out;         /* fixes refused for APP_FILTER_LOCKOUT_S (gate_run) */
