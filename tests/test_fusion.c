@@ -135,7 +135,7 @@ static nav_real_t surging_mps(double t_s)
 
 /* 60 s of that drive, the navigator's velocity the truth at each IMU sample; each second a
  * fix whose velocity is the truth 0.3 s before it arrives (the receiver's latency) while
- * the parameter says 0; with_wheels: the car's wheel speeds (the truth) each second too.
+ * the parameter says 0; with_wheels: an odometer update taken each second too.
  * Returns the latency in use at the end. */
 static nav_real_t latency_after_surging_drive(int with_wheels)
 {
@@ -152,9 +152,9 @@ static nav_real_t latency_after_surging_drive(int with_wheels)
         }
         diag.t_us += 1000000u;
         if (with_wheels) {
-            const nav_real_t w = surging_mps((double)s);
-            const nav_real_t wheels[4] = {w, w, w, w};
-            assert_int_equal(odo_wheels(&odo, wheels, 0.0f), NAV_OK);
+            /* the wheel speeds the filter took: an odometer update stamps this (fusion.c
+             * odometer_updates; no prediction runs here) */
+            app_stamp(&fu.odo_used, diag.n_samples);
         }
         const nav_real_t v_then[3] = {0.0f, surging_mps((double)s - 0.3), 0.0f};
         gnss_fix_t f = fix_at(450000000, 100000000, v_then);
@@ -165,9 +165,9 @@ static nav_real_t latency_after_surging_drive(int with_wheels)
 }
 
 /* GIVEN a receiver whose fixes are 0.3 s older than the parameter says, on a drive whose
- * acceleration changes WHEN the car's wheel speeds come THEN the latency is learnt from the
- * fixes' velocities against the navigator's (0.30 s, the candidates' 10-ms step); WHEN
- * they do not THEN the parameter stays in use: without the wheels the navigator's velocity
+ * acceleration changes WHEN the filter takes the car's wheel speeds THEN the latency is
+ * learnt from the fixes' velocities against the navigator's (0.30 s, the candidates' 10-ms
+ * step); WHEN it takes none THEN the parameter stays in use: without the wheels the navigator's velocity
  * is the fixes' own, and a steady acceleration turns a velocity error into a latency (the
  * RAV4 without its wheel speeds learnt 0.3 s too much: docs/kalman.md) */
 static void test_latency_learnt_only_with_wheel_speeds(void **state)
@@ -762,11 +762,16 @@ static void fixes_at_rest(int n, int every, int early)
     }
 }
 
+/* the second (from the first refused fix, 1) at which refused_until_reacquired_wheels
+ * gives one fix a velocity 2 m/s east more (a receiver's glitch); 0: none */
+static uint32_t glitch_at_s;
+
 /* After 5 fixes at 1 Hz taken at P0 and gap_s seconds without fixes (a tunnel), fixes
- * at lat_e7 with the velocity v_enu every second, each with its course noted as app.c
- * notes it, until the filter reacquires (or 100 s): the seconds of refused fixes it took,
- * the final action in *act. With wheels_standing, the car's wheel speeds read 0 each
- * second from then on (without, none come). */
+ * from lat_e7 on with the velocity v_enu every second, each moved on by it (a receiver
+ * whose positions and velocity agree) and with its course noted as app.c notes it, until
+ * the filter reacquires (or 100 s): the seconds of refused fixes it took, the final
+ * action in *act. With wheels_standing, the car's wheel speeds read 0 each second from
+ * then on (without, none come). */
 static uint32_t refused_until_reacquired_wheels(uint32_t gap_s, int32_t lat_e7,
                                                 const nav_real_t v_enu[3], fusion_action_t *act,
                                                 int wheels_standing)
@@ -791,7 +796,15 @@ static uint32_t refused_until_reacquired_wheels(uint32_t gap_s, int32_t lat_e7,
                 const nav_real_t zero[4] = {0.0f, 0.0f, 0.0f, 0.0f};
                 assert_int_equal(odo_wheels(&odo, zero, 0.0f), NAV_OK);
             }
-            gnss_fix_t f = fix_at(lat_e7, 100000000, v_enu);
+            /* 1e-7 deg per metre north, and east at 45 N */
+            const int32_t dn = (int32_t)lround((double)v_enu[1] * s * 1e7 / (RM_45 * DEG));
+            const int32_t de =
+                (int32_t)lround((double)v_enu[0] * s * 1e7 / (RN_45 * cos(45.0 * DEG) * DEG));
+            nav_real_t v_fix[3] = {v_enu[0], v_enu[1], v_enu[2]};
+            if (s == glitch_at_s) {
+                v_fix[0] += 2.0f;
+            }
+            gnss_fix_t f = fix_at(lat_e7 + dn, 100000000 + de, v_fix);
             f.tow_ms = tow;
             fusion_note_course(&fu, f.speed_mps, atan2f(v_enu[0], v_enu[1]));
             int adopt;
@@ -808,14 +821,16 @@ static uint32_t refused_until_reacquired(uint32_t gap_s, int32_t lat_e7,
     return refused_until_reacquired_wheels(gap_s, lat_e7, v_enu, act, 0);
 }
 
-/* GIVEN the filter on the fixes at P0, standing, heading north WHEN every fix from then on
- * is 100 m north and says the car drives north at 10 m/s (its course the filter's heading:
- * the course cannot tell) and no wheel speeds come THEN the fixes' position and velocity
- * are both refused, the filter reopened, and after APP_FILTER_REOPEN_LIMIT reopens the
- * receiver's velocity, refused too, finds it diverged: REACQUIRE, counted, well before
- * the 60-s lock-out limit (a receiver's position jumps while its velocity agrees: test_
- * refused_for_a_minute_reacquires). AND GIVEN the car's wheels reading 0 all along THEN
- * they side with the filter: the fixes are the receiver's fault until the lock-out. */
+/* GIVEN the filter on the fixes at P0, standing, heading north WHEN from then on the fixes
+ * say the car drives north at 10 m/s from 100 m north, moving as they say (a filter that
+ * lost the car: its course the filter's heading, so the course cannot tell) and no wheel
+ * speeds come THEN the fixes' position and velocity are both refused, the filter
+ * reopened, and once APP_FILTER_REOPEN_LIMIT velocities in a row are refused (and as many
+ * reopens) the receiver's velocity finds it diverged: REACQUIRE, counted, well before the
+ * 60-s lock-out limit. AND GIVEN the car's wheels reading 0 all along THEN they side with
+ * the filter: the fixes are the receiver's fault until the lock-out. AND GIVEN a receiver
+ * whose position jumped 100 m while its velocity agrees (0), one fix with a velocity
+ * glitch (2 m/s, 10 sigma) THEN one refused velocity is no witness: the lock-out limit. */
 static void test_velocity_refused_too_reacquires_without_wheels(void **state)
 {
     const nav_real_t v_north[3] = {0.0f, 10.0f, 0.0f};
@@ -831,6 +846,16 @@ static void test_velocity_refused_too_reacquires_without_wheels(void **state)
     assert_int_equal(act, FUSION_REACQUIRE);
     assert_in_range(s, APP_FILTER_LOCKOUT_S + 1u, APP_FILTER_LOCKOUT_S + 2u);
     assert_int_equal(health.filter_resets, 1u);
+
+    const nav_real_t v0[3] = {0.0f, 0.0f, 0.0f};
+    for (uint32_t g = 5u; g <= 12u; g++) {
+        assert_int_equal(setup(state), 0);
+        glitch_at_s = g;
+        s = refused_until_reacquired(0u, 450009000, v0, &act);
+        glitch_at_s = 0u;
+        assert_int_equal(act, FUSION_REACQUIRE);
+        assert_in_range(s, APP_FILTER_LOCKOUT_S + 1u, APP_FILTER_LOCKOUT_S + 2u);
+    }
 }
 
 /* GIVEN the filter on the fixes at P0 WHEN every fix from then on is 100 m north, the car
@@ -872,7 +897,8 @@ static void test_course_mismatch_reacquires(void **state)
     (void)state;
     const nav_real_t v_east[3] = {10.0f, 0.0f, 0.0f};
     fusion_action_t act;
-    const uint32_t s = refused_until_reacquired(0u, 450009000, v_east, &act);
+    /* the wheels reading 0 side with the filter: the course alone decides */
+    const uint32_t s = refused_until_reacquired_wheels(0u, 450009000, v_east, &act, 1);
     assert_int_equal(act, FUSION_REACQUIRE);
     assert_true(s < APP_FILTER_LOCKOUT_S / 2u);
     assert_int_equal(health.filter_resets, 1u);

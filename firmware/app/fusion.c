@@ -75,14 +75,16 @@ static int diverged(fusion_t *fu, const fusion_ctx_t *c)
      * metres off at the accuracy they declare, and a filter that drifted beyond its own
      * gate (its heading a degree off after a stuck gyro, the odometer agreeing) would
      * refuse them for good, its reopened sigma claiming metres while it is 100 m off */
-    /* without wheel speeds, the receiver's velocity is the other witness: a receiver's
+    /* without wheel speeds the filter takes (no odometer or standstill update within
+     * APP_GNSS_REOPEN_S), the receiver's velocity is the other witness: a receiver's
      * position jumps (multipath, a reset) while its velocity, from the Dopplers, agrees
-     * with the filter; both refused through the reopens, the filter is wrong (the RAV4's
-     * minute without its wheels left a 30-s outage 880 m off and refused every fix after
-     * it, its HorizAccuracy 10 m: docs/reliability.md) */
-    const int vel_disagrees = !c->odo->valid &&
-                              app_stamp_within(&fu->vel_refused, n,
-                                               (uint64_t)APP_GNSS_REOPEN_S * rate);
+     * with the filter; its velocity refused too, APP_FILTER_REOPEN_LIMIT fixes
+     * in a row, the filter is wrong (the RAV4's minute without its wheels refused every
+     * fix after a 30-s outage, its reopened HorizAccuracy 10 m: docs/reliability.md).
+     * Fixes only: raw epochs (gnss_input raw) wait for the lock-out limit */
+    const int vel_disagrees =
+        !app_stamp_within(&fu->odo_used, n, (uint64_t)APP_GNSS_REOPEN_S * rate) &&
+        fu->vel_gated_run >= APP_FILTER_REOPEN_LIMIT;
     const int aiding_disagrees =
         gnss_fresh && fu->reopen_run >= APP_FILTER_REOPEN_LIMIT &&
         (odo_disagrees || course_disagrees || vel_disagrees || fu->locked_out);
@@ -101,6 +103,7 @@ static fusion_action_t reset(fusion_t *fu, const fusion_ctx_t *c)
     fu->on = 0u;
     fu->gated_run = 0u;
     fu->reopen_run = 0u;
+    fu->vel_gated_run = 0u;
     fu->fix.seen = 0u;
     raw_bias_forget(&fu->raw_bias); /* learnt against the filter that diverged */
     if (!sins_finite(c->nav)) {
@@ -204,6 +207,9 @@ static void standstill_updates(fusion_t *fu, const fusion_ctx_t *c, nav_real_t T
     if (zv == 0) {
         odo_refused(c); /* "standing" wheels while the car moves: a locked wheel */
     }
+    if (zv > 0) {
+        app_stamp(&fu->odo_used, c->diag->n_samples);
+    }
     if (c->land->yaw_car != 0u) {
         return; /* the yaw is the car's (a stuck gyro): nothing of the gyro's z errors */
     }
@@ -291,6 +297,9 @@ static void odometer_updates(fusion_t *fu, const fusion_ctx_t *c, nav_real_t T,
         app_trace(APP_TRACE_ODOMETER_UPDATE, 1u);
         if (n_used == 0) {
             odo_refused(c); /* the odometer disagrees beyond its gate */
+        }
+        if (n_used > 0) {
+            app_stamp(&fu->odo_used, c->diag->n_samples);
         }
     }
 }
@@ -622,11 +631,14 @@ fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_pr
     /* the accuracies are the receiver's or, with gnss_accuracy = declared, the declared
      * figures (app.c puts them into the fix) */
     const nav_real_t ss = nav_clamp(fix->sacc_mps, APP_GNSS_SACC_MIN_MPS, APP_GNSS_SACC_MAX_MPS);
-    /* the latency is learnt only while wheel speeds come: without them the navigator's
-     * velocity is the fixes' own, and while the car accelerates steadily a velocity error
-     * of dv reads as a latency of dv / a (the RAV4's minute without its wheels learnt
-     * 0.3 s too much and ran 5 m ahead: docs/kalman.md) */
-    if (fix->has_vel && c->odo->valid) {
+    /* the latency is learnt only while the filter takes wheel speeds (an odometer or
+     * standstill update within APP_GNSS_REOPEN_S): without them the navigator's velocity
+     * is the fixes' own, and while the car accelerates steadily a velocity error of dv
+     * reads as a latency of dv / a (the RAV4's minute without its wheels learnt 0.3 s too
+     * much and ran 5 m ahead: docs/kalman.md); frames that decode but are never taken
+     * (another car's on the wheel-speed identifier) are no anchor either */
+    if (fix->has_vel &&
+        app_stamp_within(&fu->odo_used, n, (uint64_t)APP_GNSS_REOPEN_S * cfg->imu_rate_hz)) {
         (void)gnss_time_learn(c->time, &when, fix->v_enu_mps, ss, cfg->gnss_latency_s);
     }
     nav_real_t d[3];
@@ -721,12 +733,13 @@ fusion_action_t fusion_gnss(fusion_t *fu, const fusion_ctx_t *c, const fusion_pr
                                                 APP_GNSS_GATE_SIGMA)
                  : ekf_gnss_velocity(&fu->ekf, vthen, fix->v_enu_mps, sv_mps,
                                      APP_GNSS_VUP_SIGMA_RATIO * sv_mps, APP_GNSS_GATE_SIGMA);
+        /* refused: the witness of a diverged filter without wheel speeds (diverged); the
+         * rows are gated together, so 3 vertical refusals in a row count too */
+        fu->vel_gated_run =
+            rv == 0 ? (uint8_t)(fu->vel_gated_run < 255u ? fu->vel_gated_run + 1u : 255u) : 0u;
     }
     if (rp < 2 || rv == 0) {
         app_diag_reject(c->diag, &c->diag->health->gnss_rejected); /* beyond the gate */
-    }
-    if (rv == 0) {
-        app_stamp(&fu->vel_refused, n);
     }
     fu->ekf.hold_heading = 0u;
     gate_run(fu, c, rp >= 2, sh); /* rp >= 2: the horizontal fix was taken */

@@ -66,7 +66,9 @@ typedef struct {
     nav_real_t v_prev_pred_mps[2]; /* horizontal velocity at the last prediction */
     uint64_t start_sample;      /* sample at which the filter started */
     app_stamp_t fix;            /* the last GNSS fix the filter took */
-    app_stamp_t vel_refused;    /* the last GNSS velocity the gate refused */
+    uint8_t vel_gated_run;      /* GNSS velocities refused in a row (diverged: the
+                                   witness without wheel speeds) */
+    app_stamp_t odo_used;       /* the last odometer or standstill update the filter took */
     uint8_t gated_run;          /* consecutive fixes refused by the gate */
     uint8_t reopen_run;         /* covariance reopens since the last fix taken */
     uint8_t locked_out;         /* fixes refused for APP_FILTER_LOCKOUT_S (gate_run) */

@@ -1613,7 +1613,7 @@ struct navecu_can_nav_status_t {
     uint16_t cnt_cmd_rejected;
 
     /**
-     * Kalman filter resets: its state, covariance or navigator not finite, a negative variance, or, while GNSS is fresh, GNSS fixes beyond the gate through 3 covariance reopens in a row with the odometer refused too, the GNSS course (above 5 m/s) more than 10 deg off the filter's heading, or, without wheel speeds, the GNSS velocity refused too; or fixes refused for 60 s (docs/reliability.md).
+     * Kalman filter resets: its state, covariance or navigator not finite, a negative variance, or, while GNSS is fresh, GNSS fixes beyond the gate through 3 covariance reopens in a row with the odometer refused too, the GNSS course (above 5 m/s) more than 10 deg off the filter's heading, or, without wheel speeds taken, the GNSS velocity refused too, 3 fixes in a row; or fixes refused for 60 s (docs/reliability.md).
      *
      * Range: 0..65535 (0..65535 -)
      * Scale: 1
