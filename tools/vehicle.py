@@ -420,7 +420,7 @@ def _signal(msg, name: str, where: str):
 def _ids(spec: dict) -> dict:
     """navecu's identifiers: the DBC's, moved by `base` (the messages in DBC order from it)
     and then by the per-message map."""
-    db = navecu_can.load_db()
+    db = navecu_can.load_db(navecu_can.DBC_PATH)
     ids = {m.name: m.frame_id for m in db.messages}
     base = spec.get("base")
     if base is not None:
@@ -573,7 +573,7 @@ def load(name: str) -> Profile:
     if p.native_wheels:
         if p.direction != "signed":
             raise ProfileError(f"{path.name}: navecu's WheelSpeeds are signed")
-        ws = navecu_can.load_db().get_message_by_name("WheelSpeeds")
+        ws = navecu_can.load_db(navecu_can.DBC_PATH).get_message_by_name("WheelSpeeds")
         p.wheel_step_mps = abs(float(ws.signals[0].scale))  # navecu.dbc: m/s
     else:
         _car_reads(p, t, path.name)
@@ -978,7 +978,7 @@ def collisions(p: Profile, ids: dict | None = None) -> list:
 
 
 def stock_ids() -> dict:
-    return {m.name: m.frame_id for m in navecu_can.load_db().messages}
+    return {m.name: m.frame_id for m in navecu_can.load_db(navecu_can.DBC_PATH).messages}
 
 
 # ------------------------------------------------------------------- the car's frames
@@ -1090,7 +1090,7 @@ def _c_name(msg) -> str:
 
 def vehicle_profile_c(p: Profile) -> str:
     """The generated vehicle_profile.c: the profile's constants and vehicle_decode."""
-    stock = navecu_can.load_db().messages
+    stock = navecu_can.load_db(navecu_can.DBC_PATH).messages
     ids = ", ".join(f"0x{p.can_ids[m.name]:03X}u" for m in stock)
     L = ["/* GENERATED FILE - DO NOT EDIT. Source: vehicles/" + p.name + ".toml and the car's DBC",
          " * (tools/vehicle.py; firmware/vehicle/vehicle.h). */",

@@ -568,3 +568,19 @@ def test_a_wheel_range_that_refuses_a_car_is_named(sig, signed, refused):
     else:
         with pytest.raises(vehicle.ProfileError, match=refused):
             vehicle._check_wheel_range([sig], 1 / 3.6, signed, "w")
+
+
+def test_a_profile_loads_alike_after_another_was_selected():
+    """A profile's identifiers come from navecu.dbc as it is, not from the protocol another
+    profile made the tools speak (navecu_can.select_vehicle): with the Ford's selected (its
+    block from 0x106 puts NAV_Heartbeat on 0x124), the RAV4's GNSS_Height moved to 0x124
+    collided with it and the RAV4 was refused (found by tools/comma2k19/recar.py, which
+    reads the RAV4's recording while it speaks to another profile)."""
+    from tools import navecu_can
+    fresh = {n: vehicle.load(n).can_ids for n in ("toyota_rav4_2017", "vw_mqb")}
+    try:
+        navecu_can.select_vehicle("ford_escape_2020")
+        for n, ids in fresh.items():
+            assert vehicle.load(n).can_ids == ids
+    finally:
+        navecu_can.select_vehicle(None)
