@@ -11,7 +11,7 @@ of can0 (the four wheels, decoded with the RAV4 profile's DBC) sent at its recor
 the profile's own wheel-speed message(s), with its gear on every change and every second,
 its checksum and counter (tools/vehicle.py CarEncoder); the car's other traffic is left
 out (it is another car's). build/host/navecu-NAME (`make VEHICLE=NAME`) runs on it with the
-options `make drive` uses, and the horizontal error against the reference pose is printed
+options `make drive` uses (run.firmware_options, run.run_one), and the horizontal error against the reference pose is printed
 beside what the firmware read and refused. The same motion through every profile should
 navigate as the RAV4's own frames do: the profiles differ in resolution (0.005 to 0.0311
 km/h, the Ford's 0.01 rad/s of wheel speed), not in what they say.
@@ -20,15 +20,13 @@ from __future__ import annotations
 
 import argparse
 import json
-import subprocess
 import sys
 from pathlib import Path
-
 
 from tools import navecu_can as nc
 from tools import vehicle
 from tools.comma2k19 import convert, run
-from tools.sim import report
+from tools.sim.run import Stages
 
 ROOT = Path(__file__).resolve().parents[2]
 #: the recording's car and the bus its wheel speeds are on
@@ -75,7 +73,8 @@ def build(name: str, data_dir: Path | None = None) -> tuple:
 
 def run_profile(name: str, out: Path, data_dir: Path | None = None,
                 navecu: Path | None = None) -> dict:
-    """Build, run navecu-NAME, compare: the report (a dict, also out/report.json)."""
+    """Build, run navecu-NAME and compare as `make drive` does (run.run_one, into
+    out/NAME/): its report (a dict, also out/report.json) with the frames sent."""
     if vehicle.load(name).native_wheels:
         raise ValueError(f"profile {name} reads navecu's own WheelSpeeds, no car's message: "
                          "the simulator's drives have it (make sim)")
@@ -85,20 +84,14 @@ def run_profile(name: str, out: Path, data_dir: Path | None = None,
         if not p.exists():
             raise FileNotFoundError(f"{p} missing: make VEHICLE={name} first")
     out.mkdir(parents=True, exist_ok=True)
+    stages = Stages(2)
+    stages.start("convert the recording, re-encode its wheel speeds")
     frames, meta, n = build(name, data_dir)
-    convert.write(out / "input.log", frames, meta)
-    opts = [*run.rate_options("grid"), "--gnss-latency-ms", str(meta["gnss_latency_ms"]),
-            *run.IMU_OPTIONS, *run.GNSS_OPTIONS, "--imu-mount-deg",
-            ",".join(f"{x:g}" for x in meta["imu"]["imu_mount_deg_312"])]
-    res = subprocess.run([str(exe), "--can-log", str(out / "input.log"), "--out",
-                          str(out / "nav.log"), *opts], capture_output=True, text=True)
-    (out / "navecu.txt").write_text(res.stderr)
-    if res.returncode != 0:
-        raise RuntimeError(f"navecu-{name} failed (exit {res.returncode}): {out}/navecu.txt")
+    stages.done(f"{meta['frames']} frames, {n} of the profile's")
     truth = run.reference_truth(Path(data_dir or convert.DATA_DIR), meta["t0_segment_s"])
-    nav = report.read_nav_log(out / "nav.log", nc.load_db(dbc))
-    rep, series = report.compute(truth, nav, [])
-    rep.update(run.parse_summary(res.stderr))
+    opts = run.firmware_options(meta)
+    rep, _, _ = run.run_one(stages, exe, name, frames, meta, out, opts, nc.load_db(dbc),
+                            truth, None)
     rep["vehicle"] = name
     rep["profile_frames_sent"] = n
     rep["firmware_options"] = opts
@@ -114,7 +107,6 @@ def main(argv=None) -> int:
     ap.add_argument("--navecu", default=None)
     a = ap.parse_args(argv)
     try:
-        vehicle.load(a.vehicle)
         rep = run_profile(a.vehicle, Path(a.out or f"out/recar-{a.vehicle}"), a.data, a.navecu)
     except (vehicle.ProfileError, FileNotFoundError, RuntimeError, ValueError) as e:
         print(f"recar: {e}", file=sys.stderr)

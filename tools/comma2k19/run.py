@@ -74,6 +74,18 @@ def rate_options(imu_time: str) -> list:
             *RATES[2:]]
 
 
+def firmware_options(meta: dict, imu_time: str = "grid", mount: str = "configured") -> list:
+    """The firmware's options for a converted segment (meta: convert.build's): its rates,
+    the fixes' latency, the IMU's and receiver's declared figures, and the mounting,
+    configured from the reference (mount configured) or estimated (automatic)."""
+    opts = [*rate_options(imu_time), "--gnss-latency-ms", str(meta["gnss_latency_ms"]),
+            *IMU_OPTIONS, *GNSS_OPTIONS]
+    if mount == "configured":
+        return opts + ["--imu-mount-deg",
+                       ",".join(f"{x:g}" for x in meta["imu"]["imu_mount_deg_312"])]
+    return opts + ["--imu-mount-source", "automatic"]
+
+
 def reference_truth(data: Path, t0: float) -> dict:
     """reference.csv on the run's time base in the simulator's truth layout (report.compute):
     t_s, lat/lon in rad, the car's heading (direction of travel), distance along it."""
@@ -330,13 +342,7 @@ def main(argv=None) -> int:
     meta = built["bus"][1]
     stages.done(f"{meta['frames']} frames, {meta['car_bus']['frames']} of the car's bus")
     truth = reference_truth(data, meta["t0_segment_s"])
-    opts = [*rate_options(a.imu_time), "--gnss-latency-ms", str(meta["gnss_latency_ms"]),
-            *IMU_OPTIONS, *GNSS_OPTIONS]
-    if a.mount == "configured":
-        opts += ["--imu-mount-deg", ",".join(f"{x:g}" for x in meta["imu"]["imu_mount_deg_312"])]
-    else:
-        opts += ["--imu-mount-source", "automatic"]
-    opts += list(a.fw_arg)
+    opts = firmware_options(meta, a.imu_time, a.mount) + list(a.fw_arg)
     reps, series = {}, {}
     for k, (frames, m) in built.items():
         reps[k], series[k], _ = run_one(stages, navecu, k, frames, m, out, opts, db, truth,
